@@ -1,0 +1,85 @@
+// Warping functions from the unit square. Directions are in a local frame with the normal on +z;
+// each sampler has a matching pdf (solid-angle measure unless said otherwise).
+#pragma once
+#include <cmath>
+
+#include "lucent/core/math.h"
+
+namespace lucent {
+
+inline Vec2 sampleConcentricDisk(Vec2 u) {
+  const float ox = 2.0f * u.x - 1.0f, oy = 2.0f * u.y - 1.0f;
+  if (ox == 0 && oy == 0) return {0, 0};
+  float r, theta;
+  if (std::abs(ox) > std::abs(oy)) {
+    r = ox;
+    theta = (kPi / 4) * (oy / ox);
+  } else {
+    r = oy;
+    theta = kPi / 2 - (kPi / 4) * (ox / oy);
+  }
+  return {r * std::cos(theta), r * std::sin(theta)};
+}
+
+inline Vec3 sampleCosineHemisphere(Vec2 u) {
+  const Vec2 d = sampleConcentricDisk(u);
+  const float z = std::sqrt(std::max(0.0f, 1.0f - d.x * d.x - d.y * d.y));
+  return {d.x, d.y, z};
+}
+inline float cosineHemispherePdf(float cosTheta) { return cosTheta > 0 ? cosTheta * kInvPi : 0.0f; }
+
+inline Vec3 sampleUniformSphere(Vec2 u) {
+  const float z = 1.0f - 2.0f * u.x;
+  const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+  const float phi = 2.0f * kPi * u.y;
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+inline constexpr float kUniformSpherePdf = 1.0f / (4.0f * kPi);
+
+// Uniform over the cone of directions within acos(cosMax) of +z.
+inline Vec3 sampleUniformCone(Vec2 u, float cosMax) {
+  const float z = 1.0f - u.x * (1.0f - cosMax);
+  const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+  const float phi = 2.0f * kPi * u.y;
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+inline float uniformConePdf(float cosMax) { return 1.0f / (2.0f * kPi * (1.0f - cosMax)); }
+
+// Barycentrics (b1, b2) uniform over a triangle's area; b0 = 1 - b1 - b2 (square-root warp).
+inline Vec2 sampleUniformTriangle(Vec2 u) {
+  const float su = std::sqrt(u.x);
+  return {1.0f - su, u.y * su};
+}
+
+// Directions distributed as cos^n of the angle to +z (the normalized Phong lobe's shape).
+inline Vec3 samplePhongLobe(Vec2 u, float exponent) {
+  const float cosA = std::pow(1.0f - u.x, 1.0f / (exponent + 1.0f));
+  const float sinA = std::sqrt(std::max(0.0f, 1.0f - cosA * cosA));
+  const float phi = 2.0f * kPi * u.y;
+  return {sinA * std::cos(phi), sinA * std::sin(phi), cosA};
+}
+inline float phongLobePdf(float cosAlpha, float exponent) {
+  return cosAlpha > 0 ? (exponent + 1.0f) * (0.5f * kInvPi) * std::pow(cosAlpha, exponent) : 0.0f;
+}
+
+// Multiple importance sampling weight, power heuristic with beta = 2 (Veach 1997).
+inline float powerHeuristic(float pdfA, float pdfB) {
+  const float a = pdfA * pdfA, b = pdfB * pdfB;
+  return a + b > 0 ? a / (a + b) : 0.0f;
+}
+
+// Direction <-> (u, v) in [0,1)^2 for latitude-longitude maps: u along phi, v from +y down.
+inline Vec3 latLongToDirection(Vec2 uv) {
+  const float phi = 2.0f * kPi * uv.x;
+  const float theta = kPi * uv.y;
+  const float st = std::sin(theta);
+  return {st * std::sin(phi), std::cos(theta), -st * std::cos(phi)};
+}
+inline Vec2 directionToLatLong(Vec3 d) {
+  float phi = std::atan2(d.x, -d.z);
+  if (phi < 0) phi += 2.0f * kPi;
+  const float theta = std::acos(std::clamp(d.y, -1.0f, 1.0f));
+  return {std::min(phi * (0.5f * kInvPi), 0x1.fffffep-1f), std::min(theta * kInvPi, 0x1.fffffep-1f)};
+}
+
+}  // namespace lucent

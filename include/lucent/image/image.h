@@ -1,0 +1,48 @@
+// Float images with named channels (interleaved), and their EXR/PNG input and output.
+#pragma once
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lucent/core/math.h"
+
+namespace lucent {
+
+class Image {
+ public:
+  Image() = default;
+  // Channel names follow the EXR convention: "R","G","B" for the beauty image and
+  // "layer.R" etc. for extra layers (e.g. "albedo.R", "normal.X", "depth.Z").
+  Image(int width, int height, std::vector<std::string> channels);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int channelCount() const { return static_cast<int>(channels_.size()); }
+  const std::vector<std::string>& channels() const { return channels_; }
+  // Index of a channel by name, or -1.
+  int channelIndex(const std::string& name) const;
+
+  float& at(int x, int y, int c) { return pixels_[(size_t(y) * width_ + x) * channels_.size() + c]; }
+  float at(int x, int y, int c) const { return pixels_[(size_t(y) * width_ + x) * channels_.size() + c]; }
+  std::vector<float>& pixels() { return pixels_; }
+  const std::vector<float>& pixels() const { return pixels_; }
+
+ private:
+  int width_ = 0, height_ = 0;
+  std::vector<std::string> channels_;
+  std::vector<float> pixels_;
+};
+
+// String attributes stored in the EXR header (e.g. "lucent:method" -> "pt").
+using ImageMetadata = std::vector<std::pair<std::string, std::string>>;
+
+// Writes 32-bit float EXR with every channel and the metadata. The file is written under a
+// temporary name in the same directory and renamed, so no partial file is ever visible.
+// Throws std::runtime_error naming the path on failure.
+void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata = {});
+// Writes the R, G, B channels as 8-bit sRGB-encoded PNG, clamped to [0,1]; atomically, as writeExr.
+void writePng(const Image& image, const std::string& path);
+// Reads any image OpenImageIO reads, as float, with its channel names and string metadata.
+Image readImage(const std::string& path, ImageMetadata* metadata = nullptr);
+
+}  // namespace lucent

@@ -1,0 +1,25 @@
+// Image error metrics for comparing renders against references.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "lucent/image/image.h"
+
+namespace lucent {
+
+struct ChannelError {
+  std::string channel;
+  double rmse = 0, mae = 0, relmse = 0, smape = 0;
+};
+
+struct ImageError {
+  std::vector<ChannelError> perChannel;
+  ChannelError overall;  // over all pixels and the compared channels
+};
+
+// relMSE = mean((v - r)^2 / (r + 0.01)^2); SMAPE = mean(2|v - r| / (|v| + |r|)), 0 where both are 0.
+// Compares the channels both images have in common only if the sets are equal; throws
+// std::invalid_argument with a clear message for different sizes or channel sets.
+ImageError compareImages(const Image& image, const Image& reference);
+
+}  // namespace lucent

@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Fresh machine to first image: install, build, render the default scene (Cornell box) with the
+# reference path tracer to out/cornell-box.exr and out/cornell-box.png.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/build.sh
+mkdir -p out
+build/lucent render scenes/cornell-box.json --method pt --spp 256 -o out/cornell-box.exr --png out/cornell-box.png

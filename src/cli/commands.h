@@ -1,0 +1,9 @@
+// Subcommands of the lucent executable. Each registers itself on the app; its callback runs the
+// command and stores the process exit status in `exitCode`.
+#pragma once
+#include <CLI/CLI.hpp>
+
+namespace lucent::cli {
+void addRenderCommand(CLI::App& app, int& exitCode);
+void addCompareCommand(CLI::App& app, int& exitCode);
+}  // namespace lucent::cli

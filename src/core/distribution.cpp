@@ -1,0 +1,81 @@
+#include "lucent/core/distribution.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace lucent {
+
+Distribution1D::Distribution1D(std::span<const float> weights) : func_(weights.begin(), weights.end()) {
+  if (func_.empty()) throw std::invalid_argument("Distribution1D: no weights");
+  cdf_.resize(func_.size() + 1);
+  double sum = 0;
+  cdf_[0] = 0;
+  for (size_t i = 0; i < func_.size(); ++i) {
+    if (!(func_[i] >= 0) || !std::isfinite(func_[i]))
+      throw std::invalid_argument("Distribution1D: negative or non-finite weight");
+    sum += func_[i];
+    cdf_[i + 1] = sum;
+  }
+  total_ = static_cast<float>(sum);
+  if (sum == 0) {
+    for (size_t i = 0; i <= func_.size(); ++i) cdf_[i] = double(i) / func_.size();
+    weightedTotal_ = 0;
+  } else {
+    for (auto& c : cdf_) c /= sum;
+    weightedTotal_ = total_;
+  }
+  cdf_.back() = 1.0;
+}
+
+uint32_t Distribution1D::sampleDiscrete(float u, float* pmfOut, float* remapped) const {
+  // First i with cdf_[i+1] > u, skipping zero-weight bins.
+  const auto it = std::upper_bound(cdf_.begin() + 1, cdf_.end(), double(u));
+  auto i = static_cast<uint32_t>(std::min<ptrdiff_t>(it - cdf_.begin() - 1, ptrdiff_t(size()) - 1));
+  if (pmfOut) *pmfOut = pmf(i);
+  if (remapped) {
+    const double width = cdf_[i + 1] - cdf_[i];
+    const double r = width > 0 ? (u - cdf_[i]) / width : 0.0;
+    *remapped = std::clamp(static_cast<float>(r), 0.0f, 0x1.fffffep-1f);
+  }
+  return i;
+}
+
+float Distribution1D::sampleContinuous(float u, float* pdfOut, uint32_t* bin) const {
+  float offset;
+  const uint32_t i = sampleDiscrete(u, nullptr, &offset);
+  if (bin) *bin = i;
+  if (pdfOut) *pdfOut = pdfContinuous((i + offset) / size());
+  return std::min((i + offset) / size(), 0x1.fffffep-1f);
+}
+
+float Distribution1D::pdfContinuous(float x) const {
+  const auto i = std::min(static_cast<uint32_t>(x * size()), size() - 1);
+  return weightedTotal_ > 0 ? func_[i] * size() / weightedTotal_ : 1.0f;
+}
+
+Distribution2D::Distribution2D(std::span<const float> weights, uint32_t nu, uint32_t nv) : nu_(nu), nv_(nv) {
+  if (weights.size() != size_t(nu) * nv) throw std::invalid_argument("Distribution2D: size mismatch");
+  std::vector<float> rowSums(nv);
+  conditional_.reserve(nv);
+  for (uint32_t v = 0; v < nv; ++v) {
+    conditional_.emplace_back(weights.subspan(size_t(v) * nu, nu));
+    rowSums[v] = conditional_.back().total();
+  }
+  marginal_ = Distribution1D(rowSums);
+}
+
+Vec2 Distribution2D::sample(Vec2 u, float* pdfOut) const {
+  float pdfV, pdfU;
+  uint32_t row;
+  const float v = marginal_.sampleContinuous(u.y, &pdfV, &row);
+  const float x = conditional_[row].sampleContinuous(u.x, &pdfU);
+  if (pdfOut) *pdfOut = pdfU * pdfV;
+  return {x, v};
+}
+
+float Distribution2D::pdf(Vec2 uv) const {
+  const auto row = std::min(static_cast<uint32_t>(uv.y * nv_), nv_ - 1);
+  return marginal_.pdfContinuous(uv.y) * conditional_[row].pdfContinuous(uv.x);
+}
+
+}  // namespace lucent
