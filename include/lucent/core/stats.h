@@ -1,0 +1,34 @@
+// Per-stage timings and counters that every method reports (DESIGN.md "Kernels and data layout").
+#pragma once
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace lucent {
+
+struct RenderStats {
+  std::vector<std::pair<std::string, double>> stageSeconds;
+  std::vector<std::pair<std::string, uint64_t>> counters;
+  void addStage(const std::string& name, double seconds) { stageSeconds.emplace_back(name, seconds); }
+  void addCounter(const std::string& name, uint64_t value) { counters.emplace_back(name, value); }
+  double totalSeconds() const {
+    double s = 0;
+    for (const auto& st : stageSeconds) s += st.second;
+    return s;
+  }
+};
+
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace lucent

@@ -1,0 +1,36 @@
+// The unbiased reference path tracer (--method pt): next-event estimation combined with BSDF
+// sampling by multiple importance sampling, Russian roulette, box-filtered pixels.
+#pragma once
+#include <cstdint>
+#include <functional>
+
+#include "lucent/core/stats.h"
+#include "lucent/image/image.h"
+#include "lucent/scene/scene.h"
+#include "lucent/trace/visibility.h"
+
+namespace lucent {
+
+struct PathTraceOptions {
+  int spp = 64;                // samples per pixel (the maximum when a time budget is set)
+  int maxDepth = 64;           // path length in bounces: 1 is direct light, 2 adds one indirect bounce
+  int rouletteDepth = 3;       // Russian roulette from this bounce on
+  uint64_t seed = 0;
+  double timeBudget = 0;       // seconds; 0 for none. Stops after the sample pass that exceeds it
+  int tileSize = 16;           // pixels; does not change the image
+  bool layers = false;         // add albedo, normal, depth, direct and indirect layers
+};
+
+// Called from worker threads with the fraction of work done; must be thread-safe.
+using ProgressFn = std::function<void(double)>;
+
+struct RenderOutput {
+  Image image;
+  RenderStats stats;
+  int sppDone = 0;
+};
+
+RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, const PathTraceOptions& options,
+                              const ProgressFn& progress = {});
+
+}  // namespace lucent

@@ -1,0 +1,115 @@
+// The four materials' scattering functions, in the local shading frame (normal on +z, wo and wi
+// pointing away from the surface). Shared by every method.
+#pragma once
+#include <cmath>
+
+#include "lucent/core/sampling.h"
+#include "lucent/scene/scene.h"
+
+namespace lucent {
+
+// A material at a surface point, with the diffuse albedo already looked up in its texture.
+struct SurfaceBsdf {
+  MaterialType type = MaterialType::Diffuse;
+  Rgb kd, ks;
+  float ns = 1, ni = 1.5f;
+
+  bool isDelta() const { return type == MaterialType::Mirror || type == MaterialType::Glass; }
+  // Probability of choosing the diffuse lobe when sampling a Phong material.
+  float diffuseChoice() const {
+    const float d = kd.average(), s = ks.average();
+    return d + s > 0 ? d / (d + s) : 1.0f;
+  }
+};
+
+struct BsdfSample {
+  Vec3 wi;
+  Rgb weight;       // f * |cos| / pdf (for delta lobes, the lobe's weight)
+  float pdf = 0;    // solid angle; for delta lobes the discrete probability of the chosen lobe
+  bool delta = false;
+  bool valid = false;
+};
+
+// Fresnel reflectance of a smooth dielectric for unpolarised light; cosI > 0 on the side of eta_i.
+inline float fresnelDielectric(float cosI, float etaI, float etaT) {
+  const float sinT = etaI / etaT * std::sqrt(std::max(0.0f, 1.0f - cosI * cosI));
+  if (sinT >= 1.0f) return 1.0f;
+  const float cosT = std::sqrt(std::max(0.0f, 1.0f - sinT * sinT));
+  const float rs = (etaI * cosI - etaT * cosT) / (etaI * cosI + etaT * cosT);
+  const float rp = (etaT * cosI - etaI * cosT) / (etaT * cosI + etaI * cosT);
+  return 0.5f * (rs * rs + rp * rp);
+}
+
+// BSDF value for non-delta materials (zero for mirror and glass, whose lobes are Dirac deltas).
+inline Rgb evalBsdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
+  if (b.isDelta() || wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
+  Rgb f = b.kd * kInvPi;
+  if (b.type == MaterialType::Phong) {
+    const float cosAlpha = dot(reflect(wo, {0, 0, 1}), wi);
+    if (cosAlpha > 0) f += b.ks * ((b.ns + 2.0f) * 0.5f * kInvPi * std::pow(cosAlpha, b.ns));
+  }
+  return f;
+}
+
+inline float bsdfPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
+  if (b.isDelta() || wo.z <= 0 || wi.z <= 0) return 0.0f;
+  if (b.type == MaterialType::Diffuse) return cosineHemispherePdf(wi.z);
+  const float pd = b.diffuseChoice();
+  return pd * cosineHemispherePdf(wi.z) +
+         (1.0f - pd) * phongLobePdf(dot(reflect(wo, {0, 0, 1}), wi), b.ns);
+}
+
+// Samples wi given wo; `u` picks the lobe, `u2` the direction. For glass the outside (index 1) is
+// the +z side, so wo.z < 0 means the path is inside the dielectric.
+inline BsdfSample sampleBsdf(const SurfaceBsdf& b, Vec3 wo, float u, Vec2 u2) {
+  BsdfSample s;
+  switch (b.type) {
+    case MaterialType::Mirror:
+      if (wo.z <= 0) return s;
+      s.wi = {-wo.x, -wo.y, wo.z};
+      s.weight = b.ks;
+      s.pdf = 1;
+      s.delta = s.valid = true;
+      return s;
+    case MaterialType::Glass: {
+      const bool entering = wo.z > 0;
+      const float etaI = entering ? 1.0f : b.ni, etaT = entering ? b.ni : 1.0f;
+      const float cosI = std::abs(wo.z);
+      const float F = fresnelDielectric(cosI, etaI, etaT);
+      s.delta = s.valid = true;
+      if (u < F) {
+        s.wi = {-wo.x, -wo.y, wo.z};
+        s.weight = Rgb(1.0f);
+        s.pdf = F;
+      } else {
+        const float eta = etaI / etaT;
+        const float cosT = std::sqrt(std::max(0.0f, 1.0f - eta * eta * (1.0f - cosI * cosI)));
+        const float sign = entering ? -1.0f : 1.0f;
+        s.wi = {-eta * wo.x, -eta * wo.y, sign * cosT};
+        // Radiance is compressed into the denser medium: scale by (eta_i / eta_t)^2.
+        s.weight = Rgb(eta * eta);
+        s.pdf = 1.0f - F;
+      }
+      return s;
+    }
+    case MaterialType::Diffuse:
+    case MaterialType::Phong: {
+      if (wo.z <= 0) return s;
+      if (b.type == MaterialType::Diffuse || u < b.diffuseChoice()) {
+        s.wi = sampleCosineHemisphere(u2);
+      } else {
+        const Vec3 local = samplePhongLobe(u2, b.ns);
+        s.wi = Frame(reflect(wo, {0, 0, 1})).toWorld(local);
+      }
+      if (s.wi.z <= 0) return s;
+      s.pdf = bsdfPdf(b, wo, s.wi);
+      if (!(s.pdf > 0)) return s;
+      s.weight = evalBsdf(b, wo, s.wi) * (s.wi.z / s.pdf);
+      s.valid = true;
+      return s;
+    }
+  }
+  return s;
+}
+
+}  // namespace lucent

@@ -1,0 +1,97 @@
+// The loaded scene: flat arrays of plain data, indices instead of pointers (DESIGN.md "Data model").
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lucent/core/distribution.h"
+#include "lucent/core/math.h"
+
+namespace lucent {
+
+enum class MaterialType : uint32_t { Diffuse = 0, Phong = 1, Mirror = 2, Glass = 3 };
+
+// Lambertian Kd (optionally textured) plus a normalized Phong lobe Ks (n+2)/(2 pi) cos^Ns;
+// mirror reflects with tint Ks; glass is a smooth dielectric of index Ni. Ke is one-sided emission
+// on the side of the counter-clockwise winding normal.
+struct Material {
+  MaterialType type = MaterialType::Diffuse;
+  Rgb kd{0.5f};
+  Rgb ks{0.0f};
+  float ns = 1.0f;
+  float ni = 1.5f;
+  Rgb ke{0.0f};
+  int32_t kdTexture = -1;  // index into Scene::textures, -1 for none
+};
+static_assert(sizeof(Material) == 52, "Material is a fixed-size record shared with GPU backends");
+
+// An RGB texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1).
+struct Texture {
+  uint32_t offset = 0;
+  uint32_t width = 0, height = 0;
+};
+
+enum class LightType : uint32_t { Triangle = 0, Point = 1, Directional = 2, Environment = 3 };
+
+// One entry of the light list that next-event estimation chooses from.
+struct Light {
+  LightType type = LightType::Point;
+  uint32_t triangle = 0;  // Triangle lights: the emissive triangle
+  Vec3 vector;            // Point: position; Directional: direction the light travels
+  Rgb value;              // Point: intensity (W/sr); Directional: irradiance normal to it; others unused
+};
+
+struct Camera {
+  Vec3 eye{0, 0, 0}, lookAt{0, 0, -1}, up{0, 1, 0};
+  float fovY = 45.0f;  // degrees
+  int width = 512, height = 512;
+};
+
+// Constant radiance, or a latitude-longitude map (its radiance times `scale`), importance-sampled
+// by texel luminance times sin(theta).
+struct Environment {
+  bool present = false;
+  Rgb radiance{0.0f};  // constant environment
+  uint32_t width = 0, height = 0;
+  std::vector<Rgb> texels;  // lat-long map, empty for a constant environment
+  Distribution2D distribution;
+  std::string source;  // the map's path, for metadata
+};
+
+struct Scene {
+  // Vertices (one entry per unique position/normal/uv combination).
+  std::vector<Vec3> positions;
+  std::vector<Vec3> normals;    // shading normals; zero where the OBJ had none (geometric is used)
+  std::vector<Vec2> texcoords;  // zero where the OBJ had none
+  // Triangles.
+  std::vector<uint32_t> indices;      // 3 per triangle
+  std::vector<uint32_t> materialIds;  // 1 per triangle
+  std::vector<Material> materials;
+  std::vector<std::string> materialNames;
+  std::vector<Texture> textures;
+  std::vector<Rgb> texels;
+  // Lights: one per emissive triangle, then point and directional lights, then the environment.
+  std::vector<Light> lights;
+  Distribution1D lightDistribution;       // proportional to each light's estimated power
+  std::vector<int32_t> triangleLight;     // light index of each triangle, -1 if not emissive
+  Environment environment;
+  Camera camera;
+  Bounds3 bounds;
+  uint64_t contentHash = 0;  // hash of geometry, materials, lights, camera: for image metadata
+  uint32_t droppedDegenerateTriangles = 0;
+  std::string sourcePath;
+
+  uint32_t triangleCount() const { return static_cast<uint32_t>(materialIds.size()); }
+  Vec3 vertex(uint32_t tri, int k) const { return positions[indices[3 * tri + k]]; }
+  float triangleArea(uint32_t tri) const;
+  Vec3 geometricNormal(uint32_t tri) const;  // unit, counter-clockwise winding
+  // Bounding sphere of the scene, used to place directional and environment emission.
+  Vec3 boundingCenter() const { return bounds.center(); }
+  float boundingRadius() const { return 0.5f * length(bounds.extent()); }
+};
+
+// Builds the light list, light distribution and content hash after geometry and materials are set.
+// Used by the loader and by tests that build scenes in code.
+void finalizeScene(Scene& scene);
+
+}  // namespace lucent

@@ -1,0 +1,61 @@
+// Visibility queries against the scene's triangles: the only interface to Embree.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "lucent/core/math.h"
+#include "lucent/scene/scene.h"
+
+namespace lucent {
+
+inline constexpr uint32_t kNoHit = 0xffffffffu;
+
+struct Hit {
+  float t = kInf;
+  uint32_t triangle = kNoHit;
+  float b1 = 0, b2 = 0;  // barycentrics of vertices 1 and 2
+  bool found() const { return triangle != kNoHit; }
+};
+
+struct VisibilityOptions {
+  bool robust = false;  // Embree's robust traversal (watertight at edges), slower
+};
+
+// Rays in structure-of-arrays form for the packet queries; N is 8 or 16.
+template <int N>
+struct alignas(64) RayPacket {
+  float ox[N], oy[N], oz[N], dx[N], dy[N], dz[N], tMin[N], tMax[N];
+  int32_t valid[N];  // -1 active, 0 inactive
+};
+template <int N>
+struct alignas(64) HitPacket {
+  float t[N], b1[N], b2[N];
+  uint32_t triangle[N];
+};
+
+class Visibility {
+ public:
+  explicit Visibility(const Scene& scene, const VisibilityOptions& options = {});
+  ~Visibility();
+  Visibility(const Visibility&) = delete;
+  Visibility& operator=(const Visibility&) = delete;
+
+  Hit intersect(const Ray& ray) const;
+  bool occluded(const Ray& ray) const;
+  void intersect(const RayPacket<8>& rays, HitPacket<8>& hits) const;
+  void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const;
+  // occluded[i] is true for active rays that hit something.
+  void occluded(const RayPacket<8>& rays, bool occluded[8]) const;
+  void occluded(const RayPacket<16>& rays, bool occluded[16]) const;
+
+  static std::string embreeVersion();
+  // The widest ray packet Embree's kernels support natively here ("avx512", "avx2", "sse4.2").
+  std::string isa() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lucent

@@ -1,0 +1,215 @@
+#include "lucent/scene/loader.h"
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "json_fields.h"
+#include "lucent/image/image.h"
+#include "obj_import.h"
+
+namespace lucent {
+namespace fs = std::filesystem;
+using detail::JsonFields;
+
+namespace {
+
+// 8-bit image formats hold sRGB-encoded values; float formats hold linear radiometry.
+bool isSrgbEncoded(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".bmp" || ext == ".tga";
+}
+
+float srgbToLinear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
+
+// Reads an RGB (or grey) image into linear texels; row 0 is the top row.
+std::vector<Rgb> readTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h) {
+  Image image;
+  try {
+    image = readImage(path);
+  } catch (const std::exception& e) {
+    throw SceneError(context + ": cannot read image '" + path + "': " + e.what());
+  }
+  w = static_cast<uint32_t>(image.width());
+  h = static_cast<uint32_t>(image.height());
+  const int nc = image.channelCount();
+  if (nc < 1 || w == 0 || h == 0) throw SceneError(context + ": image '" + path + "' is empty");
+  const bool srgb = isSrgbEncoded(path);
+  std::vector<Rgb> texels(size_t(w) * h);
+  for (uint32_t y = 0; y < h; ++y)
+    for (uint32_t x = 0; x < w; ++x) {
+      Rgb c;
+      for (int k = 0; k < 3; ++k) {
+        float v = image.at(int(x), int(y), nc >= 3 ? k : 0);
+        if (srgb) v = srgbToLinear(v);
+        if (!std::isfinite(v) || v < 0) throw SceneError(context + ": image '" + path + "' has negative or non-finite texels");
+        c[k] = v;
+      }
+      texels[size_t(y) * w + x] = c;
+    }
+  return texels;
+}
+
+std::string resolve(const fs::path& base, const std::string& relative) {
+  return (base / relative).lexically_normal().string();
+}
+
+void loadCamera(JsonFields camera, Scene& scene) {
+  Camera& c = scene.camera;
+  c.eye = camera.vec3("eye");
+  c.lookAt = camera.vec3("look_at");
+  c.up = camera.vec3("up");
+  c.fovY = camera.number("fov_y");
+  if (!(c.fovY > 0 && c.fovY < 180)) camera.failKey("fov_y", "must be between 0 and 180 degrees (exclusive)");
+  if (!(length(c.lookAt - c.eye) > 0)) camera.failKey("look_at", "must differ from eye");
+  if (!(length(cross(c.up, c.lookAt - c.eye)) > 0)) camera.failKey("up", "must not be parallel to the view direction");
+  const auto& res = camera.raw("resolution");
+  if (!res.is_array() || res.size() != 2 || !res[0].is_number_integer() || !res[1].is_number_integer() ||
+      res[0].get<long>() < 1 || res[1].get<long>() < 1 || res[0].get<long>() > 65536 || res[1].get<long>() > 65536)
+    camera.failKey("resolution", "expected [width, height], positive integers up to 65536");
+  c.width = res[0].get<int>();
+  c.height = res[1].get<int>();
+  camera.finish();
+}
+
+void applyMaterialOverride(JsonFields fields, detail::MaterialSpec& spec, const fs::path& base) {
+  spec.origin = fields.file() + ": " + fields.keyPath("");
+  spec.origin.pop_back();  // the trailing '.'
+  if (fields.has("type")) {
+    const std::string type = fields.string("type");
+    if (type == "diffuse") spec.type = MaterialType::Diffuse;
+    else if (type == "phong") spec.type = MaterialType::Phong;
+    else if (type == "mirror") spec.type = MaterialType::Mirror;
+    else if (type == "glass") spec.type = MaterialType::Glass;
+    else fields.failKey("type", "expected one of diffuse, phong, mirror, glass");
+  }
+  if (fields.has("Kd")) spec.kd = fields.rgb("Kd");
+  if (fields.has("Ks")) spec.ks = fields.rgb("Ks");
+  if (fields.has("Ke")) spec.ke = fields.rgb("Ke");
+  if (fields.has("Ns")) spec.ns = fields.number("Ns");
+  if (fields.has("Ni")) spec.ni = fields.number("Ni");
+  if (fields.has("map_Kd")) {
+    spec.mapKd = resolve(base, fields.string("map_Kd"));
+    if (!fs::exists(spec.mapKd)) fields.failKey("map_Kd", "file '" + spec.mapKd + "' not found");
+  }
+  fields.finish();
+}
+
+void loadLight(JsonFields light, Scene& scene, const fs::path& base) {
+  const std::string type = light.string("type");
+  if (type == "point") {
+    Light l;
+    l.type = LightType::Point;
+    l.vector = light.vec3("position");
+    l.value = light.rgb("power") / (4.0f * kPi);  // isotropic: intensity = power / 4 pi
+    scene.lights.push_back(l);
+  } else if (type == "directional") {
+    Light l;
+    l.type = LightType::Directional;
+    const Vec3 d = light.vec3("direction");
+    if (!(length(d) > 0)) light.failKey("direction", "must not be zero");
+    l.vector = normalize(d);
+    l.value = light.rgb("irradiance");
+    scene.lights.push_back(l);
+  } else if (type == "environment") {
+    Environment& env = scene.environment;
+    if (env.present) light.fail("only one environment light is allowed");
+    env.present = true;
+    if (light.has("map")) {
+      env.source = resolve(base, light.string("map"));
+      if (!fs::exists(env.source)) light.failKey("map", "file '" + env.source + "' not found");
+      const float scale = light.number("scale", 1.0f);
+      if (!(scale >= 0)) light.failKey("scale", "must not be negative");
+      env.texels = readTexels(env.source, light.file() + ": " + light.keyPath("map"), env.width, env.height);
+      for (Rgb& t : env.texels) t *= scale;
+      std::vector<float> weights(env.texels.size());
+      for (uint32_t y = 0; y < env.height; ++y) {
+        const float sinTheta = std::sin(kPi * (y + 0.5f) / env.height);
+        for (uint32_t x = 0; x < env.width; ++x)
+          weights[size_t(y) * env.width + x] = env.texels[size_t(y) * env.width + x].luminance() * sinTheta;
+      }
+      env.distribution = Distribution2D(weights, env.width, env.height);
+    } else {
+      env.radiance = light.rgb("radiance");
+    }
+  } else {
+    light.failKey("type", "expected one of point, directional, environment");
+  }
+  light.finish();
+}
+
+}  // namespace
+
+Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
+  std::ifstream in(jsonPath);
+  if (!in) throw SceneError(jsonPath + ": cannot open scene file");
+  nlohmann::json root;
+  try {
+    root = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw SceneError(jsonPath + ": " + e.what());
+  }
+  const fs::path base = fs::absolute(jsonPath).parent_path();
+  Scene scene;
+  scene.sourcePath = jsonPath;
+  JsonFields top(root, jsonPath, "");
+
+  loadCamera(top.object("camera"), scene);
+
+  detail::ObjImport import;
+  const auto& meshes = top.raw("meshes");
+  if (!meshes.is_array() || meshes.empty()) top.failKey("meshes", "expected a non-empty array");
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    JsonFields mesh(meshes[i], jsonPath, "meshes[" + std::to_string(i) + "]");
+    const std::string obj = resolve(base, mesh.string("obj"));
+    if (!fs::exists(obj)) mesh.failKey("obj", "file '" + obj + "' not found");
+    mesh.finish();
+    detail::importObj(obj, scene, import);
+  }
+  if (scene.triangleCount() == 0) top.failKey("meshes", "the scene has no (non-degenerate) triangles");
+
+  if (top.has("materials")) {
+    JsonFields materials = top.object("materials");
+    for (const auto& [name, value] : root.at("materials").items()) {
+      const auto it = import.materialIndex.find(name);
+      if (it == import.materialIndex.end())
+        materials.failKey(name, "no mesh uses a material of this name");
+      applyMaterialOverride(materials.object(name), import.specs[it->second], base);
+    }
+    materials.finish();
+  }
+
+  for (const auto& spec : import.specs) {
+    Material m = detail::classifyMaterial(spec);
+    if (!spec.mapKd.empty()) {
+      Texture tex;
+      tex.offset = static_cast<uint32_t>(scene.texels.size());
+      const auto texels = readTexels(spec.mapKd, spec.origin + ": material '" + spec.name + "'", tex.width, tex.height);
+      scene.texels.insert(scene.texels.end(), texels.begin(), texels.end());
+      m.kdTexture = static_cast<int32_t>(scene.textures.size());
+      scene.textures.push_back(tex);
+    }
+    scene.materials.push_back(m);
+    scene.materialNames.push_back(spec.name);
+  }
+
+  if (top.has("lights")) {
+    const auto& lights = top.raw("lights");
+    if (!lights.is_array()) top.failKey("lights", "expected an array");
+    for (size_t i = 0; i < lights.size(); ++i)
+      loadLight(JsonFields(lights[i], jsonPath, "lights[" + std::to_string(i) + "]"), scene, base);
+  }
+  top.finish();
+
+  finalizeScene(scene);
+  if (scene.lights.empty())
+    throw SceneError(jsonPath + ": the scene has no light (no emissive material, no entry in 'lights')");
+  if (scene.droppedDegenerateTriangles > 0 && !options.quiet)
+    std::cerr << "lucent: warning: " << jsonPath << ": dropped " << scene.droppedDegenerateTriangles
+              << " degenerate (zero-area) triangles\n";
+  return scene;
+}
+
+}  // namespace lucent

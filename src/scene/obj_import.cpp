@@ -1,0 +1,310 @@
+#include "obj_import.h"
+
+#include <tiny_obj_loader.h>
+
+#include <charconv>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <unordered_map>
+
+#include "lucent/scene/loader.h"
+
+namespace lucent::detail {
+namespace fs = std::filesystem;
+
+namespace {
+
+[[noreturn]] void failAt(const std::string& file, int line, const std::string& what) {
+  throw SceneError(file + ":" + std::to_string(line) + ": " + what);
+}
+
+std::vector<std::string> tokens(const std::string& line) {
+  std::vector<std::string> out;
+  std::istringstream in(line.substr(0, line.find('#')));
+  for (std::string t; in >> t;) out.push_back(t);
+  return out;
+}
+
+bool parseFloat(const std::string& s, float& out) {
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+  return ec == std::errc() && ptr == s.data() + s.size();
+}
+
+bool parseInt(const std::string& s, long& out) {
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+  return ec == std::errc() && ptr == s.data() + s.size();
+}
+
+std::vector<std::string> readLines(const std::string& path, const std::string& what) {
+  std::ifstream in(path);
+  if (!in) throw SceneError(path + ": cannot open " + what);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    lines.push_back(line);
+  }
+  return lines;
+}
+
+// Checks that `count` finite numbers follow the keyword (OBJ v/vn/vt and MTL colours).
+void expectNumbers(const std::string& file, int line, const std::vector<std::string>& t, size_t minCount,
+                   size_t maxCount) {
+  if (t.size() - 1 < minCount || t.size() - 1 > maxCount)
+    failAt(file, line, "'" + t[0] + "' expects " + std::to_string(minCount) + " numbers");
+  for (size_t i = 1; i < t.size(); ++i) {
+    float f;
+    if (!parseFloat(t[i], f)) failAt(file, line, "'" + t[i] + "' is not a number");
+    if (!std::isfinite(f)) failAt(file, line, "'" + t[0] + "' has a non-finite value");
+  }
+}
+
+struct MtlScan {
+  std::map<std::string, int> definitionLine;
+};
+
+// MTL keys Lucent understands, and those it accepts but ignores (docs/scene-format.md).
+MtlScan scanMtl(const std::string& path) {
+  static const std::set<std::string> colourKeys = {"Kd", "Ks", "Ke", "Tf", "Ka"};
+  static const std::set<std::string> scalarKeys = {"Ns", "Ni", "illum", "d", "Tr"};
+  static const std::set<std::string> ignoredKeys = {"map_bump", "bump"};
+  MtlScan scan;
+  const auto lines = readLines(path, "material library");
+  bool inMaterial = false;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const int line = static_cast<int>(i + 1);
+    const auto t = tokens(lines[i]);
+    if (t.empty()) continue;
+    const std::string& key = t[0];
+    if (key == "newmtl") {
+      if (t.size() != 2) failAt(path, line, "'newmtl' expects one name");
+      scan.definitionLine.emplace(t[1], line);
+      inMaterial = true;
+      continue;
+    }
+    if (!inMaterial) failAt(path, line, "'" + key + "' before any 'newmtl'");
+    if (colourKeys.count(key)) {
+      expectNumbers(path, line, t, 1, 3);
+      for (size_t k = 1; k < t.size(); ++k)
+        if (std::stof(t[k]) < 0) failAt(path, line, "'" + key + "' must not be negative");
+    } else if (scalarKeys.count(key)) {
+      expectNumbers(path, line, t, 1, 1);
+    } else if (key == "map_Kd") {
+      if (t.size() != 2) failAt(path, line, "'map_Kd' expects one file name (options are not supported)");
+      if (!fs::exists(fs::path(path).parent_path() / t[1]))
+        failAt(path, line, "texture '" + t[1] + "' not found");
+    } else if (!ignoredKeys.count(key)) {
+      failAt(path, line, "unknown MTL key '" + key + "'");
+    }
+  }
+  return scan;
+}
+
+// Validates the OBJ statements Lucent reads, with line numbers tinyobjloader cannot give.
+std::vector<std::string> scanObj(const std::string& path) {
+  const auto lines = readLines(path, "OBJ file");
+  long nv = 0, nvt = 0, nvn = 0;
+  std::vector<std::string> mtllibs;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const int line = static_cast<int>(i + 1);
+    const auto t = tokens(lines[i]);
+    if (t.empty()) continue;
+    const std::string& key = t[0];
+    if (key == "v") {
+      expectNumbers(path, line, t, 3, 3);
+      ++nv;
+    } else if (key == "vn") {
+      expectNumbers(path, line, t, 3, 3);
+      ++nvn;
+    } else if (key == "vt") {
+      expectNumbers(path, line, t, 2, 3);
+      ++nvt;
+    } else if (key == "f") {
+      if (t.size() < 4) failAt(path, line, "a face needs at least 3 vertices");
+      for (size_t k = 1; k < t.size(); ++k) {
+        std::string part;
+        std::istringstream refs(t[k]);
+        const long counts[3] = {nv, nvt, nvn};
+        const char* names[3] = {"vertex", "texture coordinate", "normal"};
+        for (int slot = 0; std::getline(refs, part, '/'); ++slot) {
+          if (slot > 2) failAt(path, line, "malformed face vertex '" + t[k] + "'");
+          if (part.empty() && slot > 0) continue;
+          long idx;
+          if (!parseInt(part, idx) || idx == 0) failAt(path, line, "malformed face vertex '" + t[k] + "'");
+          if ((idx > 0 && idx > counts[slot]) || (idx < 0 && -idx > counts[slot]))
+            failAt(path, line, "face refers to " + std::string(names[slot]) + " " + std::to_string(idx) +
+                                   " but only " + std::to_string(counts[slot]) + " are defined");
+        }
+      }
+    } else if (key == "mtllib") {
+      if (t.size() < 2) failAt(path, line, "'mtllib' expects a file name");
+      for (size_t k = 1; k < t.size(); ++k) {
+        const fs::path mtl = fs::path(path).parent_path() / t[k];
+        if (!fs::exists(mtl)) failAt(path, line, "material library '" + t[k] + "' not found");
+        mtllibs.push_back(mtl.string());
+      }
+    } else if (key != "o" && key != "g" && key != "s" && key != "usemtl") {
+      failAt(path, line, "unsupported OBJ statement '" + key + "'");
+    }
+  }
+  return mtllibs;
+}
+
+Rgb toRgb(const float v[3]) { return {v[0], v[1], v[2]}; }
+
+}  // namespace
+
+void importObj(const std::string& objPath, Scene& scene, ObjImport& import) {
+  const auto mtllibs = scanObj(objPath);
+  std::map<std::string, std::string> materialOrigin;
+  for (const auto& mtl : mtllibs)
+    for (const auto& [name, line] : scanMtl(mtl).definitionLine)
+      materialOrigin.emplace(name, mtl + ":" + std::to_string(line));
+
+  tinyobj::ObjReaderConfig config;
+  config.triangulate = true;
+  config.vertex_color = false;
+  tinyobj::ObjReader reader;
+  if (!reader.ParseFromFile(objPath, config)) throw SceneError(objPath + ": " + reader.Error());
+  const auto& attrib = reader.GetAttrib();
+  const auto& materials = reader.GetMaterials();
+  const fs::path objDir = fs::path(objPath).parent_path();
+
+  // Map this file's material ids onto the scene-wide list (first definition of a name wins).
+  std::vector<uint32_t> materialMap(materials.size());
+  for (size_t m = 0; m < materials.size(); ++m) {
+    const auto& mat = materials[m];
+    auto [it, inserted] = import.materialIndex.emplace(mat.name, static_cast<uint32_t>(import.specs.size()));
+    materialMap[m] = it->second;
+    if (!inserted) continue;
+    MaterialSpec spec;
+    spec.name = mat.name;
+    spec.kd = toRgb(mat.diffuse);
+    spec.ks = toRgb(mat.specular);
+    spec.ke = toRgb(mat.emission);
+    spec.tf = toRgb(mat.transmittance);
+    spec.ns = mat.shininess;
+    spec.ni = mat.ior;
+    spec.illum = mat.illum;
+    const auto origin = materialOrigin.find(mat.name);
+    spec.origin = origin != materialOrigin.end() ? origin->second : objPath;
+    if (!mat.diffuse_texname.empty()) {
+      const auto mtlDir = fs::path(spec.origin.substr(0, spec.origin.rfind(':'))).parent_path();
+      spec.mapKd = fs::absolute(mtlDir / mat.diffuse_texname).lexically_normal().string();
+    }
+    import.specs.push_back(spec);
+  }
+
+  // Faces without a material get a neutral diffuse one, created on first use.
+  auto defaultMaterial = [&]() -> uint32_t {
+    auto [it, inserted] = import.materialIndex.emplace("(default)", static_cast<uint32_t>(import.specs.size()));
+    if (inserted) {
+      MaterialSpec spec;
+      spec.name = "(default)";
+      spec.kd = Rgb(0.5f);
+      spec.origin = objPath;
+      import.specs.push_back(spec);
+    }
+    return it->second;
+  };
+
+  struct KeyHash {
+    size_t operator()(const std::tuple<int, int, int>& k) const {
+      return std::hash<int64_t>()((int64_t(std::get<0>(k)) << 40) ^ (int64_t(std::get<1>(k)) << 20) ^
+                                  std::get<2>(k));
+    }
+  };
+  std::unordered_map<std::tuple<int, int, int>, uint32_t, KeyHash> vertexOf;
+  auto vertexIndex = [&](const tinyobj::index_t& idx) {
+    const auto key = std::make_tuple(idx.vertex_index, idx.normal_index, idx.texcoord_index);
+    auto [it, inserted] = vertexOf.emplace(key, static_cast<uint32_t>(scene.positions.size()));
+    if (inserted) {
+      const float* p = &attrib.vertices[3 * idx.vertex_index];
+      scene.positions.push_back({p[0], p[1], p[2]});
+      Vec3 n{0, 0, 0};
+      if (idx.normal_index >= 0) {
+        const float* q = &attrib.normals[3 * idx.normal_index];
+        n = {q[0], q[1], q[2]};
+        const float len = length(n);
+        n = len > 0 ? n / len : Vec3{0, 0, 0};
+      }
+      scene.normals.push_back(n);
+      Vec2 uv{0, 0};
+      if (idx.texcoord_index >= 0) uv = {attrib.texcoords[2 * idx.texcoord_index],
+                                         attrib.texcoords[2 * idx.texcoord_index + 1]};
+      scene.texcoords.push_back(uv);
+    }
+    return it->second;
+  };
+
+  for (const auto& shape : reader.GetShapes()) {
+    const auto& mesh = shape.mesh;
+    for (size_t f = 0; f < mesh.num_face_vertices.size(); ++f) {
+      const tinyobj::index_t* idx = &mesh.indices[3 * f];
+      auto pos = [&](int k) {
+        const float* p = &attrib.vertices[3 * idx[k].vertex_index];
+        return Vec3{p[0], p[1], p[2]};
+      };
+      const Vec3 p0 = pos(0);
+      const Vec3 e = cross(pos(1) - p0, pos(2) - p0);
+      if (!(length(e) > 0)) {
+        ++scene.droppedDegenerateTriangles;
+        continue;
+      }
+      for (int k = 0; k < 3; ++k) scene.indices.push_back(vertexIndex(idx[k]));
+      const int m = mesh.material_ids[f];
+      scene.materialIds.push_back(m >= 0 ? materialMap[m] : defaultMaterial());
+    }
+  }
+}
+
+Material classifyMaterial(const MaterialSpec& spec) {
+  const auto fail = [&](const std::string& what) {
+    throw SceneError(spec.origin + ": material '" + spec.name + "': " + what);
+  };
+  Material m;
+  m.kd = spec.kd;
+  m.ks = spec.ks;
+  m.ke = spec.ke;
+  m.ns = spec.ns;
+  m.ni = spec.ni;
+  if (spec.type) {
+    m.type = *spec.type;
+  } else {
+    const bool refracts = spec.illum == 4 || spec.illum == 6 || spec.illum == 7 || spec.illum == 9 ||
+                          (!spec.tf.isBlack() && spec.ni != 1.0f);
+    const bool reflects = spec.illum == 3 || spec.illum == 5 || spec.illum == 8 ||
+                          (spec.kd.isBlack() && !spec.ks.isBlack() && spec.ns >= 1000.0f);
+    m.type = refracts   ? MaterialType::Glass
+             : reflects ? MaterialType::Mirror
+             : !spec.ks.isBlack() ? MaterialType::Phong
+                                  : MaterialType::Diffuse;
+  }
+  for (int c = 0; c < 3; ++c) {
+    if (!(spec.kd[c] >= 0) || !(spec.ks[c] >= 0) || !(spec.ke[c] >= 0) || !std::isfinite(spec.ke[c]))
+      fail("Kd, Ks and Ke must be finite and non-negative");
+  }
+  switch (m.type) {
+    case MaterialType::Diffuse:
+      m.ks = Rgb(0.0f);
+      [[fallthrough]];
+    case MaterialType::Phong:
+      for (int c = 0; c < 3; ++c)
+        if (m.kd[c] + m.ks[c] > 1.0f + 1e-6f) fail("Kd + Ks exceeds 1 (the material would create energy)");
+      if (!(m.ns >= 0) || !std::isfinite(m.ns)) fail("Ns must be finite and non-negative");
+      break;
+    case MaterialType::Mirror:
+      if (spec.ks.maxComponent() > 1.0f) fail("mirror reflectance Ks exceeds 1");
+      m.kd = Rgb(0.0f);
+      break;
+    case MaterialType::Glass:
+      if (!(m.ni > 0) || !std::isfinite(m.ni)) fail("Ni must be a positive index of refraction");
+      m.kd = Rgb(0.0f);
+      m.ks = Rgb(0.0f);
+      break;
+  }
+  return m;
+}
+
+}  // namespace lucent::detail

@@ -1,0 +1,48 @@
+// Scenes built in code for tests with analytic answers.
+#pragma once
+#include "lucent/scene/scene.h"
+
+namespace lucent::test {
+
+// Adds an axis-aligned box of 12 triangles whose counter-clockwise normals face inward (for an
+// enclosure) or outward (for an object).
+inline void addBox(Scene& scene, Vec3 lo, Vec3 hi, uint32_t material, bool inward) {
+  const auto base = static_cast<uint32_t>(scene.positions.size());
+  for (int i = 0; i < 8; ++i) {
+    scene.positions.push_back({(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
+    scene.normals.push_back({0, 0, 0});
+    scene.texcoords.push_back({0, 0});
+  }
+  // Each face as a quad (a, b, c, d), counter-clockwise seen from outside.
+  const uint32_t faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    const uint32_t tris[2][3] = {{f[0], f[1], f[2]}, {f[0], f[2], f[3]}};
+    for (const auto& t : tris) {
+      if (inward) {
+        scene.indices.insert(scene.indices.end(), {base + t[0], base + t[2], base + t[1]});
+      } else {
+        scene.indices.insert(scene.indices.end(), {base + t[0], base + t[1], base + t[2]});
+      }
+      scene.materialIds.push_back(material);
+    }
+  }
+}
+
+inline uint32_t addMaterial(Scene& scene, const Material& m, const std::string& name) {
+  scene.materials.push_back(m);
+  scene.materialNames.push_back(name);
+  return static_cast<uint32_t>(scene.materials.size() - 1);
+}
+
+inline Camera testCamera(Vec3 eye, Vec3 lookAt, int width, int height, float fovY = 60.0f) {
+  Camera c;
+  c.eye = eye;
+  c.lookAt = lookAt;
+  c.up = {0, 1, 0};
+  c.fovY = fovY;
+  c.width = width;
+  c.height = height;
+  return c;
+}
+
+}  // namespace lucent::test
