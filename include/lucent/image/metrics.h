@@ -22,4 +22,16 @@ struct ImageError {
 // std::invalid_argument with a clear message for different sizes or channel sets.
 ImageError compareImages(const Image& image, const Image& reference);
 
+enum class ErrorMetric { Rmse, Mae, RelMse, Smape };
+// "rmse", "mae", "relmse", "smape"; parseErrorMetric throws std::invalid_argument for other names.
+ErrorMetric parseErrorMetric(const std::string& name);
+const char* errorMetricName(ErrorMetric metric);
+double errorValue(const ChannelError& error, ErrorMetric metric);
+
+// False-colour (viridis) R,G,B image of the per-pixel error: the metric over the pixel's channels,
+// divided by maxValue, or by the 99th percentile of the per-pixel errors when maxValue <= 0.
+// Non-finite errors are magenta. Same size and channel checks as compareImages.
+Image errorHeatmap(const Image& image, const Image& reference, ErrorMetric metric,
+                   double maxValue = 0);
+
 }  // namespace lucent

@@ -1,0 +1,131 @@
+#include "lucent/image/image.h"
+
+#include <unistd.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+namespace lucent {
+
+namespace fs = std::filesystem;
+
+Image::Image(int width, int height, std::vector<std::string> channels)
+    : width_(width), height_(height), channels_(std::move(channels)) {
+  if (width < 0 || height < 0) throw std::invalid_argument("image size must be non-negative");
+  pixels_.assign(size_t(width) * size_t(height) * channels_.size(), 0.0f);
+}
+
+int Image::channelIndex(const std::string& name) const {
+  for (size_t c = 0; c < channels_.size(); ++c)
+    if (channels_[c] == name) return static_cast<int>(c);
+  return -1;
+}
+
+namespace {
+
+// Same directory (so rename is atomic), hidden, unique per process and call, and keeping the
+// extension because OIIO picks the file format from it.
+fs::path temporaryPathFor(const fs::path& path) {
+  static std::atomic<unsigned> counter{0};
+  std::string name = ".";
+  name += path.stem().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
+          std::to_string(counter++) + path.extension().string();
+  return path.parent_path() / name;
+}
+
+// Writes `data` (interleaved, `format`) with `spec` to `path` via a temporary file and a rename.
+void writeAtomically(const std::string& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc format,
+                     const void* data) {
+  const fs::path tmp = temporaryPathFor(path);
+  auto fail = [&](const std::string& why) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw std::runtime_error("cannot write image '" + path + "': " + why);
+  };
+  auto out = OIIO::ImageOutput::create(tmp.string());
+  if (!out) fail(OIIO::geterror());
+  if (!out->open(tmp.string(), spec)) fail(out->geterror());
+  if (!out->write_image(format, data)) {
+    std::string why = out->geterror();
+    out->close();
+    fail(why);
+  }
+  if (!out->close()) fail(out->geterror());
+  out.reset();
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) fail(ec.message());
+}
+
+void checkPixelCount(const Image& image, const std::string& path) {
+  if (image.pixels().size() != size_t(image.width()) * image.height() * image.channelCount())
+    throw std::runtime_error("cannot write image '" + path + "': pixel buffer does not match " +
+                             std::to_string(image.width()) + "x" + std::to_string(image.height()) +
+                             "x" + std::to_string(image.channelCount()));
+  if (image.channelCount() == 0)
+    throw std::runtime_error("cannot write image '" + path + "': it has no channels");
+}
+
+// IEC 61966-2-1 sRGB encoding of a linear value in [0,1].
+float srgbEncode(float v) {
+  return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+}  // namespace
+
+void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata) {
+  checkPixelCount(image, path);
+  OIIO::ImageSpec spec(image.width(), image.height(), image.channelCount(), OIIO::TypeDesc::FLOAT);
+  spec.channelnames = image.channels();
+  spec.alpha_channel = image.channelIndex("A");
+  for (const auto& [key, value] : metadata) spec.attribute(key, value);
+  writeAtomically(path, spec, OIIO::TypeDesc::FLOAT, image.pixels().data());
+}
+
+void writePng(const Image& image, const std::string& path) {
+  checkPixelCount(image, path);
+  const int rgb[3] = {image.channelIndex("R"), image.channelIndex("G"), image.channelIndex("B")};
+  if (rgb[0] < 0 || rgb[1] < 0 || rgb[2] < 0)
+    throw std::runtime_error("cannot write image '" + path + "': it needs R, G and B channels");
+  std::vector<unsigned char> bytes(size_t(image.width()) * image.height() * 3);
+  size_t i = 0;
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x)
+      for (int c : rgb) {
+        float v = image.at(x, y, c);
+        v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
+        bytes[i++] = static_cast<unsigned char>(std::lround(srgbEncode(v) * 255.0f));
+      }
+  OIIO::ImageSpec spec(image.width(), image.height(), 3, OIIO::TypeDesc::UINT8);
+  spec.attribute("oiio:ColorSpace", "sRGB");
+  writeAtomically(path, spec, OIIO::TypeDesc::UINT8, bytes.data());
+}
+
+Image readImage(const std::string& path, ImageMetadata* metadata) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw std::runtime_error("image file not found: '" + path + "'");
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) throw std::runtime_error("cannot read image '" + path + "': " + OIIO::geterror());
+  const OIIO::ImageSpec& spec = in->spec();
+  std::vector<std::string> names = spec.channelnames;
+  for (int c = int(names.size()); c < spec.nchannels; ++c)
+    names.push_back("channel" + std::to_string(c));
+  names.resize(spec.nchannels);
+  Image image(spec.width, spec.height, names);
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels().data()))
+    throw std::runtime_error("cannot read image '" + path + "': " + in->geterror());
+  if (metadata) {
+    metadata->clear();
+    for (const OIIO::ParamValue& p : spec.extra_attribs)
+      if (p.type() == OIIO::TypeDesc::STRING)
+        metadata->emplace_back(p.name().string(), p.get_string());
+  }
+  in->close();
+  return image;
+}
+
+}  // namespace lucent

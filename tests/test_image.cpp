@@ -1,0 +1,313 @@
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "lucent/image/image.h"
+#include "lucent/image/metrics.h"
+
+namespace fs = std::filesystem;
+using namespace lucent;
+
+namespace {
+
+// A fresh directory per test, removed afterwards.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    std::random_device rd;
+    path = fs::temp_directory_path() /
+           ("lucent_test_image_" + std::to_string(::getpid()) + "_" + std::to_string(rd()));
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  std::string operator/(const std::string& name) const { return (path / name).string(); }
+  size_t entryCount() const {
+    return std::distance(fs::directory_iterator(path), fs::directory_iterator());
+  }
+};
+
+uint32_t bits(float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, 4);
+  return u;
+}
+
+Image makeImage(int w, int h, std::vector<std::string> channels, std::vector<float> pixels) {
+  Image image(w, h, std::move(channels));
+  REQUIRE(pixels.size() == image.pixels().size());
+  image.pixels() = std::move(pixels);
+  return image;
+}
+
+// Shell-quoted path (built with += to dodge a GCC 12 -Wrestrict false positive).
+std::string quoted(const std::string& path) {
+  std::string q = "'";
+  q += path;
+  q += "'";
+  return q;
+}
+
+struct RunResult {
+  int status;
+  std::string out;
+};
+
+// Runs the lucent executable with stderr appended to stdout.
+RunResult runLucent(const std::string& args) {
+  const std::string cmd = quoted(LUCENT_CLI) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  REQUIRE(pipe);
+  std::string out;
+  char buf[4096];
+  while (size_t n = fread(buf, 1, sizeof buf, pipe)) out.append(buf, n);
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+}  // namespace
+
+TEST_CASE("Image stores interleaved named channels") {
+  Image image(3, 2, {"R", "G", "B", "albedo.R"});
+  CHECK(image.pixels().size() == 3 * 2 * 4);
+  CHECK(image.channelIndex("albedo.R") == 3);
+  CHECK(image.channelIndex("A") == -1);
+  image.at(2, 1, 3) = 7;
+  CHECK(image.pixels()[(1 * 3 + 2) * 4 + 3] == 7);
+}
+
+TEST_CASE("EXR round-trip is bit-exact for every channel and keeps the metadata") {
+  TempDir dir;
+  const std::vector<std::string> channels = {"R", "G", "B", "albedo.R", "albedo.G", "albedo.B",
+                                             "depth.Z"};
+  Image image(5, 3, channels);
+  const float special[] = {0.0f, -0.0f, 1e-40f /* denormal */, -3.5f, 3.4e38f,
+                           std::numeric_limits<float>::infinity(), 0.1f};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> uniform(-10.0f, 10.0f);
+  for (size_t i = 0; i < image.pixels().size(); ++i)
+    image.pixels()[i] = i < std::size(special) ? special[i] : uniform(rng);
+  const ImageMetadata metadata = {{"lucent:method", "pt"}, {"lucent:spp", "1024"},
+                                  {"lucent:scene_hash", "9f86d081884c7d65"}};
+  const std::string path = dir / "out.exr";
+  writeExr(image, path, metadata);
+  CHECK(dir.entryCount() == 1);  // no temporary file left behind
+
+  ImageMetadata readBack;
+  const Image loaded = readImage(path, &readBack);
+  REQUIRE(loaded.width() == 5);
+  REQUIRE(loaded.height() == 3);
+  REQUIRE(loaded.channelCount() == int(channels.size()));
+  // EXR stores channels by name; compare by name rather than by position.
+  for (int c = 0; c < image.channelCount(); ++c) {
+    const int lc = loaded.channelIndex(channels[c]);
+    REQUIRE(lc >= 0);
+    for (int y = 0; y < 3; ++y)
+      for (int x = 0; x < 5; ++x) REQUIRE(bits(loaded.at(x, y, lc)) == bits(image.at(x, y, c)));
+  }
+  for (const auto& entry : metadata)
+    CHECK(std::find(readBack.begin(), readBack.end(), entry) != readBack.end());
+}
+
+TEST_CASE("EXR overwrite replaces the file") {
+  TempDir dir;
+  const std::string path = dir / "out.exr";
+  writeExr(makeImage(1, 1, {"Y"}, {1.0f}), path);
+  writeExr(makeImage(1, 1, {"Y"}, {2.0f}), path);
+  CHECK(readImage(path).at(0, 0, 0) == 2.0f);
+  CHECK(dir.entryCount() == 1);
+}
+
+TEST_CASE("PNG is sRGB-encoded, clamped and rounded") {
+  TempDir dir;
+  // Per pixel: grey 0, 0.5, 1, 2, then one with different R, G, B, and negative and NaN values.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  Image image = makeImage(6, 1, {"R", "G", "B", "A"},
+                          {0, 0, 0, 1, 0.5f, 0.5f, 0.5f, 1, 1, 1, 1, 1, 2, 2, 2, 1,
+                           0.0031308f, 0.2f, 0.8f, 1, -1, nan, 0.001f, 1});
+  const std::string path = dir / "out.png";
+  writePng(image, path);
+  const Image loaded = readImage(path);
+  REQUIRE(loaded.channels() == std::vector<std::string>{"R", "G", "B"});
+  auto byte = [&](int x, int c) { return std::lround(loaded.at(x, 0, c) * 255.0f); };
+  const long expected[6][3] = {{0, 0, 0}, {188, 188, 188}, {255, 255, 255}, {255, 255, 255},
+                               {10, 124, 231}, {0, 0, 3}};
+  for (int x = 0; x < 6; ++x)
+    for (int c = 0; c < 3; ++c) {
+      INFO("pixel " << x << " channel " << c);
+      CHECK(byte(x, c) == expected[x][c]);
+    }
+  CHECK(dir.entryCount() == 1);
+}
+
+TEST_CASE("PNG needs R, G and B") {
+  TempDir dir;
+  CHECK_THROWS_AS(writePng(makeImage(1, 1, {"R", "G"}, {0, 0}), dir / "x.png"), std::runtime_error);
+  CHECK(dir.entryCount() == 0);
+}
+
+TEST_CASE("Writing into a missing directory throws naming the path and leaves no file") {
+  TempDir dir;
+  const Image image = makeImage(1, 1, {"R", "G", "B"}, {1, 2, 3});
+  for (const std::string name : {"missing/out.exr", "missing/out.png"}) {
+    const std::string path = dir / name;
+    try {
+      name.ends_with(".exr") ? writeExr(image, path) : writePng(image, path);
+      FAIL("no exception for " << path);
+    } catch (const std::runtime_error& e) {
+      CHECK_THAT(e.what(), Catch::Contains(path));
+    }
+  }
+  CHECK(dir.entryCount() == 0);
+}
+
+TEST_CASE("A failed rename removes the temporary file") {
+  TempDir dir;
+  // The target is a non-empty directory: the temporary file is written, the rename fails.
+  fs::create_directories(dir.path / "out.exr" / "keep");
+  CHECK_THROWS_WITH(writeExr(makeImage(1, 1, {"Y"}, {1}), dir / "out.exr"),
+                    Catch::Contains(dir / "out.exr"));
+  CHECK(dir.entryCount() == 1);
+  CHECK(fs::is_directory(dir.path / "out.exr"));
+}
+
+TEST_CASE("Reading a missing or broken file names it") {
+  TempDir dir;
+  CHECK_THROWS_WITH(readImage(dir / "none.exr"), Catch::Contains(dir / "none.exr"));
+  std::ofstream(dir / "broken.exr") << "not an image";
+  CHECK_THROWS_WITH(readImage(dir / "broken.exr"), Catch::Contains(dir / "broken.exr"));
+}
+
+TEST_CASE("Metrics match hand-computed values on a 2x1 image") {
+  // Pixels (R,G): image (1,0) (3,0.5); reference (1,0) (2,1).
+  const Image image = makeImage(2, 1, {"R", "G"}, {1, 0, 3, 0.5f});
+  const Image reference = makeImage(2, 1, {"R", "G"}, {1, 0, 2, 1});
+  // The reference's channels in another order must give the same result.
+  const Image swapped = makeImage(2, 1, {"G", "R"}, {0, 1, 1, 2});
+  for (const Image* ref : {&reference, &swapped}) {
+    const ImageError e = compareImages(image, *ref);
+    REQUIRE(e.perChannel.size() == 2);
+    const ChannelError& r = e.perChannel[0];
+    const ChannelError& g = e.perChannel[1];
+    CHECK(r.channel == "R");
+    CHECK(g.channel == "G");
+    CHECK(r.rmse == Approx(std::sqrt(0.5)));
+    CHECK(r.mae == Approx(0.5));
+    CHECK(r.relmse == Approx(0.5 / (2.01 * 2.01)));
+    CHECK(r.smape == Approx(0.5 * 2.0 / 5.0));
+    CHECK(g.rmse == Approx(std::sqrt(0.125)));
+    CHECK(g.mae == Approx(0.25));
+    CHECK(g.relmse == Approx(0.5 * 0.25 / (1.01 * 1.01)));
+    CHECK(g.smape == Approx(0.5 * (2 * 0.5 / 1.5)));  // 0 where both are 0
+    CHECK(e.overall.rmse == Approx(std::sqrt(1.25 / 4)));
+    CHECK(e.overall.mae == Approx(1.5 / 4));
+    CHECK(e.overall.relmse == Approx((1 / (2.01 * 2.01) + 0.25 / (1.01 * 1.01)) / 4));
+    CHECK(e.overall.smape == Approx((0.4 + 2 * 0.5 / 1.5) / 4));
+  }
+  const ImageError same = compareImages(image, image);
+  CHECK(same.overall.rmse == 0);
+  CHECK(same.overall.smape == 0);
+}
+
+TEST_CASE("Metrics reject different sizes and channel sets") {
+  const Image a = makeImage(2, 1, {"R", "G"}, {0, 0, 0, 0});
+  CHECK_THROWS_AS(compareImages(a, Image(1, 2, {"R", "G"})), std::invalid_argument);
+  CHECK_THROWS_WITH(compareImages(a, Image(1, 2, {"R", "G"})),
+                    Catch::Contains("2x1") && Catch::Contains("1x2"));
+  CHECK_THROWS_AS(compareImages(a, Image(2, 1, {"R", "B"})), std::invalid_argument);
+  CHECK_THROWS_WITH(compareImages(a, Image(2, 1, {"R", "G", "B"})),
+                    Catch::Contains("[R, G]") && Catch::Contains("[R, G, B]"));
+  CHECK_THROWS_AS(errorHeatmap(a, Image(3, 1, {"R", "G"}), ErrorMetric::Mae),
+                  std::invalid_argument);
+}
+
+TEST_CASE("Metric names parse") {
+  for (const char* name : {"rmse", "mae", "relmse", "smape"})
+    CHECK(std::string(errorMetricName(parseErrorMetric(name))) == name);
+  CHECK_THROWS_AS(parseErrorMetric("psnr"), std::invalid_argument);
+}
+
+TEST_CASE("Error heatmap is monotonic in the error and clamps at the maximum") {
+  // Absolute errors 0, 1, 2, 4 (mean over one channel).
+  const Image reference = makeImage(4, 1, {"Y"}, {0, 0, 0, 0});
+  const Image image = makeImage(4, 1, {"Y"}, {0, 1, 2, 4});
+  const Image heat = errorHeatmap(image, reference, ErrorMetric::Mae, 2.0);
+  REQUIRE(heat.channels() == std::vector<std::string>{"R", "G", "B"});
+  REQUIRE(heat.width() == 4);
+  auto luminance = [&](int x) {
+    return 0.2126f * heat.at(x, 0, 0) + 0.7152f * heat.at(x, 0, 1) + 0.0722f * heat.at(x, 0, 2);
+  };
+  CHECK(luminance(0) < luminance(1));
+  CHECK(luminance(1) < luminance(2));
+  for (int c = 0; c < 3; ++c) CHECK(heat.at(3, 0, c) == heat.at(2, 0, c));
+  // Without a maximum the 99th percentile sets the scale: errors 0..100 saturate at 99.
+  Image ramp(101, 1, {"Y"});
+  for (int x = 0; x <= 100; ++x) ramp.at(x, 0, 0) = float(x);
+  const Image autoHeat = errorHeatmap(ramp, Image(101, 1, {"Y"}), ErrorMetric::Mae);
+  CHECK(autoHeat.at(98, 0, 1) < autoHeat.at(99, 0, 1));
+  CHECK(autoHeat.at(99, 0, 1) == autoHeat.at(100, 0, 1));
+}
+
+TEST_CASE("lucent compare reports metrics and exits by threshold") {
+  TempDir dir;
+  const Image reference = makeImage(2, 1, {"R", "G", "B"}, {1, 1, 1, 1, 1, 1});
+  const Image image = makeImage(2, 1, {"R", "G", "B"}, {1, 1, 1, 1.1f, 1, 1});
+  writeExr(reference, dir / "ref.exr");
+  writeExr(image, dir / "img.exr");
+  const std::string files = quoted(dir / "img.exr") + " " + quoted(dir / "ref.exr");
+  const double relmse = 0.01 / (1.01 * 1.01) / 6;  // one sample off by 0.1
+
+  SECTION("under the threshold, with a heatmap") {
+    const RunResult r = runLucent("compare " + files + " --max-error 0.01 --heatmap " +
+                                  quoted(dir / "heat.png"));
+    CHECK(r.status == 0);
+    const auto json = nlohmann::json::parse(r.out);
+    CHECK(json["metric"] == "relmse");
+    CHECK(json["value"].get<double>() == Approx(relmse).epsilon(1e-5));
+    CHECK(json["passed"] == true);
+    for (const char* m : {"rmse", "mae", "relmse", "smape"}) {
+      CHECK(json["overall"].contains(m));
+      for (const char* c : {"R", "G", "B"}) CHECK(json["channels"][c].contains(m));
+    }
+    CHECK(json["channels"]["G"]["mae"].get<double>() == 0);
+    const Image heat = readImage(dir / "heat.png");
+    CHECK(heat.width() == 2);
+    CHECK(heat.channelCount() == 3);
+  }
+  SECTION("above the threshold") {
+    const RunResult r = runLucent("compare " + files + " --metric mae --max-error 0.001");
+    CHECK(r.status == 1);
+    const auto json = nlohmann::json::parse(r.out);
+    CHECK(json["metric"] == "mae");
+    CHECK(json["passed"] == false);
+  }
+  SECTION("no threshold always passes") {
+    const RunResult r = runLucent("compare " + files);
+    CHECK(r.status == 0);
+    CHECK_FALSE(nlohmann::json::parse(r.out).contains("passed"));
+  }
+  SECTION("a missing file is an error naming it") {
+    const RunResult r = runLucent("compare " + quoted(dir / "img.exr") + " " +
+                                  quoted(dir / "nope.exr") + " --max-error 1");
+    CHECK(r.status == 2);
+    CHECK_THAT(r.out, Catch::Contains(dir / "nope.exr"));
+  }
+  SECTION("mismatched sizes are an error") {
+    writeExr(Image(3, 1, {"R", "G", "B"}), dir / "small.exr");
+    const RunResult r =
+        runLucent("compare " + quoted(dir / "small.exr") + " " + quoted(dir / "ref.exr"));
+    CHECK(r.status == 2);
+    CHECK_THAT(r.out, Catch::Contains("3x1") && Catch::Contains("2x1"));
+  }
+}
