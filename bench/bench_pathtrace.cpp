@@ -1,0 +1,147 @@
+// Path tracer throughput against a raw Embree loop over the same scene and the same kinds of rays.
+//
+// The raw loop first walks paths the way the path tracer does (camera ray, then at each hit one
+// shadow ray to a sampled light and one cosine-distributed continuation, Russian roulette by
+// albedo) and records every ray; only tracing the recorded rays is timed. The path tracer's rays
+// per second over the same scene, resolution and samples are then a fraction of that loop's: the
+// cost of shading, sampling and bookkeeping.
+#include <tbb/parallel_for.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "lucent/core/parallel.h"
+#include "lucent/core/rng.h"
+#include "lucent/methods/pathtrace.h"
+#include "lucent/scene/camera.h"
+#include "lucent/scene/light_sampling.h"
+#include "lucent/scene/loader.h"
+#include "lucent/scene/surface.h"
+
+using namespace lucent;
+
+namespace {
+
+struct RecordedRays {
+  std::vector<Ray> closest;
+  std::vector<Ray> shadow;
+};
+
+RecordedRays recordRays(const Scene& scene, const Visibility& vis, int spp, uint64_t seed) {
+  const PinholeCamera camera(scene.camera);
+  const int w = scene.camera.width, h = scene.camera.height;
+  std::vector<RecordedRays> perRow(h);
+  tbb::parallel_for(0, h, [&](int y) {
+    RecordedRays& out = perRow[y];
+    for (int x = 0; x < w; ++x)
+      for (int s = 0; s < spp; ++s) {
+        Rng rng(seed, uint64_t(y) * w + x, s);
+        Ray ray = camera.generate(x + rng.uniform(), y + rng.uniform());
+        for (int depth = 0; depth < 64; ++depth) {
+          out.closest.push_back(ray);
+          const Hit hit = vis.intersect(ray);
+          if (!hit.found()) break;
+          const SurfacePoint sp = surfaceAt(scene, hit.triangle, hit.b1, hit.b2);
+          Vec3 n = sp.geometricNormal;
+          if (dot(n, ray.direction) > 0) n = -n;
+          const LightSample ls = sampleLight(scene, sp.position, rng.uniform(), rng.uniform2());
+          if (ls.pdf > 0 && dot(ls.wi, n) > 0) {
+            Ray shadow{offsetOrigin(sp.position, n, ls.wi), ls.wi};
+            shadow.tMax = std::isfinite(ls.distance) ? ls.distance * (1 - 1e-4f) : kInf;
+            out.shadow.push_back(shadow);
+          }
+          const Vec3 wi = Frame(n).toWorld(sampleCosineHemisphere(rng.uniform2()));
+          ray = {offsetOrigin(sp.position, n, wi), wi};
+          const float albedo = bsdfAt(scene, sp).kd.maxComponent();
+          if (depth >= 2 && rng.uniform() >= albedo) break;
+        }
+      }
+  });
+  RecordedRays all;
+  for (auto& r : perRow) {
+    all.closest.insert(all.closest.end(), r.closest.begin(), r.closest.end());
+    all.shadow.insert(all.shadow.end(), r.shadow.begin(), r.shadow.end());
+  }
+  return all;
+}
+
+// Seconds to trace every recorded ray, in recorded order, in parallel chunks.
+double traceRecorded(const Visibility& vis, const RecordedRays& rays) {
+  Stopwatch clock;
+  std::atomic<uint64_t> sink{0};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.closest.size(), 4096), [&](const auto& r) {
+    uint64_t found = 0;
+    for (size_t i = r.begin(); i != r.end(); ++i) found += vis.intersect(rays.closest[i]).found();
+    sink += found;
+  });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.shadow.size(), 4096), [&](const auto& r) {
+    uint64_t blocked = 0;
+    for (size_t i = r.begin(); i != r.end(); ++i) blocked += vis.occluded(rays.shadow[i]);
+    sink += blocked;
+  });
+  return clock.seconds();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Path tracer throughput against raw Embree"};
+  std::vector<std::string> scenes;
+  std::string resolution = "256x256";
+  int spp = 16, repeats = 3;
+  app.add_option("scenes", scenes, "Scene files")->required();
+  app.add_option("--resolution", resolution, "WIDTHxHEIGHT")->capture_default_str();
+  app.add_option("--spp", spp, "Samples per pixel")->capture_default_str();
+  app.add_option("--repeats", repeats, "Timed repetitions (the best is reported)")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  int w = 0, h = 0;
+  if (std::sscanf(resolution.c_str(), "%dx%d", &w, &h) != 2 || w < 1 || h < 1) {
+    std::cerr << "bad --resolution\n";
+    return 1;
+  }
+
+  for (const auto& path : scenes) {
+    Scene scene = loadScene(path, {true});
+    scene.camera.width = w;
+    scene.camera.height = h;
+    nlohmann::json row;
+    row["scene"] = path;
+    row["resolution"] = resolution;
+    row["spp"] = spp;
+    double ptSeconds[3] = {}, rawSeconds[3] = {};
+    uint64_t ptRays = 0, rawRays = 0;
+    for (int threads : {1, 2}) {
+      ParallelScope scope(threads);
+      const Visibility vis(scene);
+      PathTraceOptions opt;
+      opt.spp = spp;
+      const RecordedRays rays = recordRays(scene, vis, spp, 1);
+      rawRays = rays.closest.size() + rays.shadow.size();
+      double bestPt = 1e30, bestRaw = 1e30;
+      for (int r = 0; r < repeats; ++r) {
+        // Interleaved, so that both see the same machine load.
+        const RenderOutput out = renderPathTraced(scene, vis, opt);
+        bestPt = std::min(bestPt, out.stats.stageSeconds.front().second);
+        for (const auto& [name, value] : out.stats.counters)
+          if (name == "rays") ptRays = value;
+        bestRaw = std::min(bestRaw, traceRecorded(vis, rays));
+      }
+      ptSeconds[threads] = bestPt;
+      rawSeconds[threads] = bestRaw;
+      const std::string t = std::to_string(threads) + "_threads";
+      row[t]["pt_seconds"] = bestPt;
+      row[t]["pt_samples_per_second"] = double(w) * h * spp / bestPt;
+      row[t]["pt_rays_per_second"] = ptRays / bestPt;
+      row[t]["raw_rays_per_second"] = rawRays / bestRaw;
+      row[t]["pt_over_raw"] = (ptRays / bestPt) / (rawRays / bestRaw);
+      row["embree_isa"] = vis.isa();
+    }
+    row["pt_speedup_2_over_1"] = ptSeconds[1] / ptSeconds[2];
+    row["raw_speedup_2_over_1"] = rawSeconds[1] / rawSeconds[2];
+    row["pt_rays"] = ptRays;
+    row["raw_rays"] = rawRays;
+    std::cout << row.dump() << std::endl;
+  }
+  return 0;
+}
