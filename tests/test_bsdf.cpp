@@ -1,0 +1,143 @@
+// The materials' scattering functions: reciprocity, energy conservation by numerical integration,
+// and agreement of the sampling weights with the integrated albedo.
+#include <catch2/catch.hpp>
+
+#include "lucent/core/rng.h"
+#include "lucent/scene/bsdf.h"
+
+using namespace lucent;
+
+namespace {
+
+Vec3 directionAt(float theta, float phi) {
+  return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+}
+
+SurfaceBsdf phong(float kd, float ks, float ns) {
+  SurfaceBsdf b;
+  b.type = MaterialType::Phong;
+  b.kd = Rgb(kd);
+  b.ks = Rgb(ks);
+  b.ns = ns;
+  return b;
+}
+
+// Directional albedo  a(wo) = integral of f(wo, wi) cos(theta_i) over the hemisphere, by the midpoint
+// rule in coordinates centred on the mirror direction (where the Phong lobe is narrow), fine enough
+// to resolve cos^1000.
+double albedo(const SurfaceBsdf& b, Vec3 wo) {
+  const Frame lobe(reflect(wo, {0, 0, 1}));
+  const int nAlpha = 6000, nPhi = 360;
+  double sum = 0;
+  for (int i = 0; i < nAlpha; ++i) {
+    const double alpha = (i + 0.5) * kPi / nAlpha;
+    double ring = 0;
+    for (int j = 0; j < nPhi; ++j) {
+      const Vec3 wi = lobe.toWorld(directionAt(float(alpha), float((j + 0.5) * 2 * kPi / nPhi)));
+      if (wi.z > 0) ring += evalBsdf(b, wo, wi).g * wi.z;
+    }
+    sum += ring * std::sin(alpha);
+  }
+  return sum * (kPi / nAlpha) * (2 * kPi / nPhi);
+}
+
+}  // namespace
+
+TEST_CASE("Diffuse and Phong BSDFs are reciprocal", "[bsdf]") {
+  Rng rng(42);
+  for (const SurfaceBsdf& b : {phong(0.8f, 0.0f, 1.0f), phong(0.3f, 0.7f, 5.0f), phong(0.1f, 0.9f, 200.0f)}) {
+    for (int k = 0; k < 1000; ++k) {
+      const Vec3 wo = sampleCosineHemisphere(rng.uniform2());
+      const Vec3 wi = sampleCosineHemisphere(rng.uniform2());
+      const Rgb a = evalBsdf(b, wo, wi), c = evalBsdf(b, wi, wo);
+      REQUIRE(a.g == Approx(c.g).epsilon(1e-4).margin(1e-6));
+    }
+  }
+}
+
+TEST_CASE("Normalized Phong conserves energy, and reaches Kd + Ks at normal incidence", "[bsdf]") {
+  for (float ns : {1.0f, 10.0f, 100.0f, 1000.0f}) {
+    const SurfaceBsdf b = phong(0.0f, 1.0f, ns);
+    for (float theta : {0.0f, 0.3f, 0.8f, 1.2f, 1.5f}) {
+      const double a = albedo(b, directionAt(theta, 0.4f));
+      INFO("Ns " << ns << ", theta " << theta << ": albedo " << a);
+      REQUIRE(a <= 1.0 + 2e-3);
+      if (theta == 0.0f) REQUIRE(a == Approx(1.0).epsilon(2e-3));
+    }
+  }
+  const SurfaceBsdf mixed = phong(0.4f, 0.6f, 20.0f);
+  REQUIRE(albedo(mixed, directionAt(0, 0)) == Approx(1.0).epsilon(2e-3));
+  const SurfaceBsdf diffuse = phong(0.7f, 0.0f, 1.0f);
+  REQUIRE(albedo(diffuse, directionAt(0.9f, 0)) == Approx(0.7).epsilon(2e-3));
+}
+
+TEST_CASE("BSDF sampling weights average to the integrated albedo", "[bsdf]") {
+  // E[weight] = albedo is the estimator the path tracer relies on; a pdf that does not match the
+  // sampled density shows up here. Tolerance: 5 standard errors of the sample mean.
+  Rng rng(9);
+  for (const SurfaceBsdf& b : {phong(0.7f, 0.0f, 1.0f), phong(0.5f, 0.5f, 8.0f), phong(0.2f, 0.8f, 300.0f)}) {
+    for (float theta : {0.2f, 0.9f, 1.4f}) {
+      const Vec3 wo = directionAt(theta, 1.0f);
+      const int n = 200000;
+      double sum = 0, sum2 = 0;
+      for (int k = 0; k < n; ++k) {
+        const BsdfSample s = sampleBsdf(b, wo, rng.uniform(), rng.uniform2());
+        const double w = s.valid ? s.weight.g : 0.0;
+        sum += w;
+        sum2 += w * w;
+      }
+      const double mean = sum / n, se = std::sqrt(std::max(0.0, sum2 / n - mean * mean) / n);
+      const double expected = albedo(b, wo);
+      INFO("Kd " << b.kd.g << " Ks " << b.ks.g << " Ns " << b.ns << " theta " << theta << ": " << mean << " +- " << se
+                 << " vs " << expected);
+      REQUIRE(std::abs(mean - expected) <= 5 * se + 1e-3);
+    }
+  }
+}
+
+TEST_CASE("Mirror reflects about the normal with weight Ks", "[bsdf]") {
+  SurfaceBsdf m;
+  m.type = MaterialType::Mirror;
+  m.ks = Rgb(0.9f, 0.8f, 0.7f);
+  const Vec3 wo = normalize(Vec3{0.3f, -0.2f, 0.8f});
+  const BsdfSample s = sampleBsdf(m, wo, 0.5f, {0.5f, 0.5f});
+  REQUIRE(s.valid);
+  REQUIRE(s.delta);
+  REQUIRE(s.wi.x == Approx(-wo.x));
+  REQUIRE(s.wi.y == Approx(-wo.y));
+  REQUIRE(s.wi.z == Approx(wo.z));
+  REQUIRE(s.weight == m.ks);
+  REQUIRE(evalBsdf(m, wo, s.wi).isBlack());
+}
+
+TEST_CASE("Glass: Snell's law, Fresnel split, total internal reflection", "[bsdf]") {
+  SurfaceBsdf g;
+  g.type = MaterialType::Glass;
+  g.ni = 1.5f;
+  // Fresnel at normal incidence: ((n-1)/(n+1))^2.
+  REQUIRE(fresnelDielectric(1.0f, 1.0f, 1.5f) == Approx(0.04f).epsilon(1e-4));
+  REQUIRE(fresnelDielectric(0.0f, 1.0f, 1.5f) == Approx(1.0f));
+  const float theta = 0.7f;
+  const Vec3 wo = directionAt(theta, 0.3f);
+  const float F = fresnelDielectric(std::cos(theta), 1.0f, 1.5f);
+  // u below F reflects, above refracts; the lobe probabilities are F and 1 - F.
+  const BsdfSample r = sampleBsdf(g, wo, 0.5f * F, {0, 0});
+  REQUIRE(r.wi.z == Approx(wo.z));
+  REQUIRE(r.pdf == Approx(F));
+  const BsdfSample t = sampleBsdf(g, wo, 0.5f + 0.5f * F, {0, 0});
+  REQUIRE(t.wi.z < 0);
+  REQUIRE(t.pdf == Approx(1 - F));
+  const float sinT = std::sqrt(1 - t.wi.z * t.wi.z);
+  REQUIRE(sinT * 1.5f == Approx(std::sin(theta)).epsilon(1e-5));  // Snell
+  REQUIRE(t.weight.g == Approx(1 / (1.5f * 1.5f)));                  // radiance compression
+  // Leaving the glass the way it came in restores the radiance: the weights multiply to 1.
+  const BsdfSample back = sampleBsdf(g, t.wi, 0.999f, {0, 0});
+  REQUIRE(back.wi.z > 0);
+  REQUIRE(back.weight.g * t.weight.g == Approx(1.0f));
+  REQUIRE(back.wi.x == Approx(wo.x).margin(1e-5));
+  // Beyond the critical angle (asin(1/1.5) = 0.7297) inside the glass, everything reflects.
+  const Vec3 inside = -directionAt(0.8f, 0.0f);
+  REQUIRE(fresnelDielectric(std::cos(0.8f), 1.5f, 1.0f) == 1.0f);
+  const BsdfSample tir = sampleBsdf(g, {-inside.x, -inside.y, inside.z}, 0.99f, {0, 0});
+  REQUIRE(tir.wi.z < 0);
+}
