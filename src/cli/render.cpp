@@ -121,7 +121,7 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("--seed", args->pt.seed, "Random seed")->capture_default_str();
   cmd->add_option("--threads", args->threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 4096));
   cmd->add_option("--resolution", args->resolution, "Override the camera resolution, WIDTHxHEIGHT");
-  cmd->add_option("--time-budget", args->pt.timeBudget, "Stop after the sample pass that exceeds this many seconds")
+  cmd->add_option("--time-budget", args->pt.timeBudget, "Stop sampling within this many seconds (at least 1 spp)")
       ->check(CLI::Range(0.0, 1e9));
   cmd->add_option("--max-depth", args->pt.maxDepth, "Path length in bounces (1: direct light only)")
       ->check(CLI::Range(0, 1 << 16))->capture_default_str();

@@ -16,7 +16,7 @@ struct PathTraceOptions {
   int maxDepth = 64;           // path length in bounces: 1 is direct light, 2 adds one indirect bounce
   int rouletteDepth = 3;       // Russian roulette from this bounce on
   uint64_t seed = 0;
-  double timeBudget = 0;       // seconds; 0 for none. Stops after the sample pass that exceeds it
+  double timeBudget = 0;       // seconds; 0 for none. At least one sample per pixel is taken
   int tileSize = 16;           // pixels; does not change the image
   bool layers = false;         // add albedo, normal, depth, direct and indirect layers
 };

@@ -163,10 +163,17 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
 
   Stopwatch clock;
   int sppDone = 0;
-  int passSize = 1;
   while (sppDone < options.spp) {
-    // Without a time budget everything is one pass; with one, passes double in size.
-    const int passEnd = options.timeBudget > 0 ? std::min(options.spp, sppDone + passSize) : options.spp;
+    // Without a time budget everything is one pass. With one, the first pass takes one sample per
+    // pixel and each later pass as many as the remaining time allows at the measured rate. The
+    // image depends only on the number of samples taken, never on how they were split into passes.
+    int passEnd = options.spp;
+    if (options.timeBudget > 0) {
+      const double elapsed = clock.seconds(), perSample = sppDone > 0 ? elapsed / sppDone : 0;
+      const double affordable = sppDone > 0 ? (options.timeBudget - elapsed) / perSample : 1;
+      if (affordable < 1) break;
+      passEnd = int(std::min<double>(options.spp, sppDone + std::min<double>(affordable, 2.0 * sppDone + 1)));
+    }
     tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& r) {
       Counters& local = counters.local();
       for (int tile = r.begin(); tile != r.end(); ++tile) {
@@ -198,8 +205,6 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
       }
     });
     sppDone = passEnd;
-    passSize *= 2;
-    if (options.timeBudget > 0 && clock.seconds() >= options.timeBudget) break;
   }
 
   RenderOutput out;
