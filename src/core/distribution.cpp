@@ -1,6 +1,7 @@
 #include "lucent/core/distribution.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace lucent {
@@ -43,14 +44,20 @@ uint32_t Distribution1D::sampleDiscrete(float u, float* pmfOut, float* remapped)
 float Distribution1D::sampleContinuous(float u, float* pdfOut, uint32_t* bin) const {
   float offset;
   const uint32_t i = sampleDiscrete(u, nullptr, &offset);
+  // Rounding in (i + offset) / size() can carry x into a neighbouring bin, possibly one of zero weight:
+  // nudge it back so that x, `bin` and pdfContinuous(x) agree.
+  float x = std::min((i + offset) / size(), 0x1.fffffep-1f);
+  while (binOf(x) > i) x = std::nextafter(x, 0.0f);
+  while (binOf(x) < i) x = std::nextafter(x, 1.0f);
   if (bin) *bin = i;
-  if (pdfOut) *pdfOut = pdfContinuous((i + offset) / size());
-  return std::min((i + offset) / size(), 0x1.fffffep-1f);
+  if (pdfOut) *pdfOut = pdfContinuous(x);
+  return x;
 }
 
+uint32_t Distribution1D::binOf(float x) const { return std::min(static_cast<uint32_t>(x * size()), size() - 1); }
+
 float Distribution1D::pdfContinuous(float x) const {
-  const auto i = std::min(static_cast<uint32_t>(x * size()), size() - 1);
-  return weightedTotal_ > 0 ? func_[i] * size() / weightedTotal_ : 1.0f;
+  return weightedTotal_ > 0 ? func_[binOf(x)] * size() / weightedTotal_ : 1.0f;
 }
 
 Distribution2D::Distribution2D(std::span<const float> weights, uint32_t nu, uint32_t nv) : nu_(nu), nv_(nv) {

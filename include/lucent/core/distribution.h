@@ -27,6 +27,8 @@ class Distribution1D {
   float pdfContinuous(float x) const;
 
  private:
+  uint32_t binOf(float x) const;
+
   std::vector<float> func_;
   std::vector<double> cdf_;  // size()+1 entries, cdf_[0] = 0, cdf_[size()] = 1
   float total_ = 0;          // sum of weights as given

@@ -78,7 +78,8 @@ inline Vec3 latLongToDirection(Vec2 uv) {
 inline Vec2 directionToLatLong(Vec3 d) {
   float phi = std::atan2(d.x, -d.z);
   if (phi < 0) phi += 2.0f * kPi;
-  const float theta = std::acos(std::clamp(d.y, -1.0f, 1.0f));
+  // Not acos(d.y), which loses a few 1e-5 of v near the poles.
+  const float theta = std::atan2(std::sqrt(d.x * d.x + d.z * d.z), d.y);
   return {std::min(phi * (0.5f * kInvPi), 0x1.fffffep-1f), std::min(theta * kInvPi, 0x1.fffffep-1f)};
 }
 

@@ -1,0 +1,463 @@
+// Statistical tests of the sampling core (rng.h, sampling.h, distribution.h, Frame): a chi-square test of
+// every sampler (tests/chi2.h), each paired with a negative control that a wrong sampler is rejected.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <vector>
+
+#include "chi2.h"
+#include "lucent/core/distribution.h"
+#include "lucent/core/rng.h"
+#include "lucent/core/sampling.h"
+
+using namespace lucent;
+using chi2::DirectionSample;
+using chi2::IndexSample;
+using chi2::PointSample;
+
+namespace {
+
+// The number of passing chi-square tests below (negative controls excluded). With the Sidak-corrected
+// level, all of them pass with probability 0.99 for correct samplers, whatever the seeds.
+constexpr int kChi2Tests = 21;
+const double kAlpha = chi2::sidak(0.01, kChi2Tests);
+
+// A negative control must be rejected by the histogram itself, not only by a consistency check.
+#define CHECK_CHI2_PASS(result)                                                                             \
+  do {                                                                                                        \
+    const chi2::Result r_ = (result);                                                                         \
+    INFO(r_.summary());                                                                                       \
+    CHECK(r_.passed(kAlpha));                                                                                 \
+  } while (0)
+#define CHECK_CHI2_REJECT(result)                                                                           \
+  do {                                                                                                        \
+    const chi2::Result r_ = (result);                                                                         \
+    INFO(r_.summary());                                                                                       \
+    CHECK(r_.pValue < kAlpha);                                                                                \
+  } while (0)
+
+std::vector<float> randomWeights(size_t n, uint64_t seed) {
+  Rng rng(seed);
+  std::vector<float> w(n);
+  for (float& x : w) x = rng.uniform() < 0.2f ? 0.0f : 0.1f + rng.uniform();
+  return w;
+}
+
+// Samples a direction sampler and claims the given pdf for it.
+template <class Warp, class Pdf>
+auto directionSampler(Warp warp, Pdf pdf) {
+  return [=](Rng& rng) {
+    const Vec3 d = warp(rng.uniform2());
+    return DirectionSample{d, pdf(d)};
+  };
+}
+
+}  // namespace
+
+TEST_CASE("chi2: incomplete gamma function matches closed forms", "[sampling][chi2]") {
+  for (double x : {1e-3, 0.5, 1.0, 2.5, 7.0, 30.0, 120.0}) {
+    CHECK(chi2::gammaQ(1, x) == Approx(std::exp(-x)).epsilon(1e-12));
+    CHECK(chi2::gammaQ(0.5, x) == Approx(std::erfc(std::sqrt(x))).epsilon(1e-10));
+    // Q(n, x) = e^-x sum_{k<n} x^k / k! for integer n.
+    for (int n : {2, 5, 40, 100}) {
+      double term = 1, sum = 0;
+      for (int k = 0; k < n; ++k) sum += term, term *= x / (k + 1);
+      CHECK(chi2::gammaQ(n, x) == Approx(std::exp(-x) * sum).epsilon(1e-10));
+    }
+  }
+  CHECK(chi2::chi2PValue(0, 10) == 1);
+  CHECK(chi2::chi2PValue(3.0, 2) == Approx(std::exp(-1.5)).epsilon(1e-12));
+}
+
+TEST_CASE("chi2: pooling and zero-probability cells", "[sampling][chi2]") {
+  chi2::Result r;
+  const std::vector<double> expected{1, 2, 3, 100, 200, 0};
+  chi2::pooledChi2(std::vector<double>{1, 2, 3, 100, 200, 0}, expected, 5, r);
+  CHECK(r.statistic == 0);
+  CHECK(r.dof == 2);  // {1,2,3} pooled, then 100 and 200
+  CHECK(r.error.empty());
+  chi2::Result stray;
+  chi2::pooledChi2(std::vector<double>{1, 2, 3, 100, 200, 1}, expected, 5, stray);
+  CHECK_FALSE(stray.error.empty());
+}
+
+TEST_CASE("chi2: samplers that fail where their pdf is zero", "[sampling][chi2]") {
+  auto upperPdf = [](Vec3 d) { return d.z > 0 ? kUniformSpherePdf : 0.0f; };
+  auto failingBelow = [](float zFail) {
+    return [=](Rng& rng) {
+      const Vec3 d = sampleUniformSphere(rng.uniform2());
+      return DirectionSample{d, d.z > zFail ? kUniformSpherePdf : 0.0f};
+    };
+  };
+  CHECK_CHI2_PASS(chi2::testSphere(failingBelow(0), upperPdf, {.mass = 0.5}));
+  CHECK_CHI2_PASS(chi2::testSphere(failingBelow(0), upperPdf, {.mass = std::nullopt}));
+  // Negative control: fails on 55% of the sphere instead of 50%.
+  CHECK_CHI2_REJECT(chi2::testSphere(failingBelow(0.1f), upperPdf, {.mass = std::nullopt}));
+  // A pdf that does not integrate to the claimed mass is an error.
+  CHECK_FALSE(chi2::testSphere(failingBelow(0), upperPdf).passed(0));
+}
+
+TEST_CASE("sampleCosineHemisphere", "[sampling]") {
+  SECTION("around +z") {
+    auto pdf = [](Vec3 d) { return cosineHemispherePdf(d.z); };
+    CHECK_CHI2_PASS(chi2::testSphere(directionSampler(sampleCosineHemisphere, pdf), pdf, {.zMin = 0}));
+  }
+
+  SECTION("around a normal near -z, through Frame") {
+    const Vec3 n = normalize(Vec3(1e-3f, -2e-3f, -1));
+    const Frame frame(n);
+    auto pdfN = [=](Vec3 d) { return cosineHemispherePdf(dot(d, n)); };
+    auto warp = [=](Vec2 u) { return frame.toWorld(sampleCosineHemisphere(u)); };
+    CHECK_CHI2_PASS(chi2::testSphere(directionSampler(warp, pdfN), pdfN, {.zMin = 0, .axis = n}));
+  }
+  SECTION("negative control: checked against the uniform hemisphere") {
+    auto uniform = [](Vec3 d) { return d.z > 0 ? 0.5f * kInvPi : 0.0f; };
+    CHECK_CHI2_REJECT(chi2::testSphere(directionSampler(sampleCosineHemisphere, uniform), uniform, {.zMin = 0}));
+  }
+}
+
+TEST_CASE("sampleUniformSphere", "[sampling]") {
+  auto pdf = [](Vec3) { return kUniformSpherePdf; };
+  SECTION("uniform") { CHECK_CHI2_PASS(chi2::testSphere(directionSampler(sampleUniformSphere, pdf), pdf)); }
+  SECTION("negative control: uniform in theta instead of cos(theta)") {
+    auto warp = [](Vec2 u) {
+      const float theta = kPi * u.x, phi = 2 * kPi * u.y;
+      return Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+    };
+    CHECK_CHI2_REJECT(chi2::testSphere(directionSampler(warp, pdf), pdf));
+  }
+}
+
+TEST_CASE("sampleUniformCone", "[sampling]") {
+  auto conePdf = [](float cosMax) { return [=](Vec3 d) { return d.z >= cosMax ? uniformConePdf(cosMax) : 0.0f; }; };
+  auto coneWarp = [](float cosMax) { return [=](Vec2 u) { return sampleUniformCone(u, cosMax); }; };
+  SECTION("cosMax 0.9 and 0.3") {
+    for (float cosMax : {0.9f, 0.3f}) {
+      INFO("cosMax = " << cosMax);
+      // The cap puts the cone's edge inside a theta bin, two thirds of the way down.
+      const chi2::Options opt{.seed = cosMax > 0.5f ? 1u : 2u, .zMin = 1 - 1.5 * (1 - cosMax)};
+      CHECK_CHI2_PASS(chi2::testSphere(directionSampler(coneWarp(cosMax), conePdf(cosMax)), conePdf(cosMax), opt));
+    }
+  }
+  SECTION("negative control: a cone of cosMax 0.92 checked as 0.9") {
+    const chi2::Options opt{.zMin = 0.85};
+    CHECK_CHI2_REJECT(chi2::testSphere(directionSampler(coneWarp(0.92f), conePdf(0.9f)), conePdf(0.9f), opt));
+  }
+}
+
+TEST_CASE("sampleUniformTriangle", "[sampling]") {
+  // Barycentrics (b1, b2) are uniform over the half b1 + b2 <= 1 of the unit square, density 2.
+  auto pdf = [](Vec2 b) { return b.x + b.y <= 1 ? 2.0f : 0.0f; };
+  SECTION("uniform") {
+    auto sampler = [&](Rng& rng) { return PointSample{sampleUniformTriangle(rng.uniform2()), 2.0f}; };
+    CHECK_CHI2_PASS(chi2::testSquare(sampler, pdf));
+  }
+
+  SECTION("negative control: b1 = u1, b2 = (1 - u1) u2 crowds the b1 = 1 corner") {
+    auto wrong = [](Rng& rng) {
+      const Vec2 u = rng.uniform2();
+      return PointSample{{u.x, (1 - u.x) * u.y}, 2.0f};
+    };
+    CHECK_CHI2_REJECT(chi2::testSquare(wrong, pdf));
+  }
+}
+
+TEST_CASE("samplePhongLobe", "[sampling]") {
+  auto pdf = [](float n) { return [=](Vec3 d) { return phongLobePdf(d.z, n); }; };
+  auto warp = [](float n) { return [=](Vec2 u) { return samplePhongLobe(u, n); }; };
+  // Bins in the cap holding all but 1e-3 of the lobe (cos^(n+1) = 1e-3), so that they resolve it.
+  auto capFor = [](float n) { return chi2::Options{.zMin = std::pow(1e-3, 1.0 / (n + 1))}; };
+  SECTION("exponents 1, 10, 100, 1000") {
+    for (float n : {1.0f, 10.0f, 100.0f, 1000.0f}) {
+      INFO("exponent " << n);
+      CHECK_CHI2_PASS(chi2::testSphere(directionSampler(warp(n), pdf(n)), pdf(n), capFor(n)));
+    }
+  }
+  SECTION("negative controls: exponent 10 checked as 12, 1000 as 1050") {
+    CHECK_CHI2_REJECT(chi2::testSphere(directionSampler(warp(10), pdf(12)), pdf(12), capFor(12)));
+    CHECK_CHI2_REJECT(chi2::testSphere(directionSampler(warp(1000), pdf(1050)), pdf(1050), capFor(1000)));
+  }
+}
+
+TEST_CASE("Distribution1D::sampleDiscrete", "[sampling][distribution]") {
+  const std::vector<float> weights = [] {
+    auto w = randomWeights(37, 11);
+    w.front() = w.back() = w[20] = w[21] = 0;  // zero bins at both ends and in a run
+    return w;
+  }();
+  auto test = [](const std::vector<float>& w, const Distribution1D& dist, uint64_t seed) {
+    double sum = 0;
+    for (float x : w) sum += x;
+    auto pmf = [&](uint32_t i) { return sum > 0 ? float(w[i] / sum) : 1.0f / float(w.size()); };
+    auto sampler = [&](Rng& rng) {
+      float p = 0;
+      const uint32_t i = dist.sampleDiscrete(rng.uniform(), &p);
+      return IndexSample{i, p};
+    };
+    return chi2::testDiscrete(sampler, pmf, uint32_t(w.size()), {.seed = seed});
+  };
+  SECTION("with zero-weight bins") {
+    const Distribution1D dist(weights);
+    CHECK_CHI2_PASS(test(weights, dist, 1));
+    for (uint32_t i = 0; i < dist.size(); ++i) CHECK(dist.pmf(i) == Approx(weights[i] / dist.total()));
+  }
+
+  SECTION("all-zero weights become uniform") {
+    const std::vector<float> zeros(9, 0.0f);
+    const Distribution1D uniform(zeros);
+    CHECK(uniform.total() == 0);
+    CHECK_CHI2_PASS(test(zeros, uniform, 2));
+  }
+  SECTION("negative control: the heaviest weight 5% too high") {
+    auto perturbed = weights;
+    *std::max_element(perturbed.begin(), perturbed.end()) *= 1.05f;
+    const Distribution1D wrong(perturbed);
+    // The claimed pmf of `wrong` differs only at index 7; what matters is the histogram.
+    CHECK_CHI2_REJECT(test(weights, wrong, 3));
+  }
+  SECTION("invalid weights are rejected") {
+    CHECK_THROWS(Distribution1D(std::vector<float>{}));
+    CHECK_THROWS(Distribution1D(std::vector<float>{1, -1}));
+    CHECK_THROWS(Distribution1D(std::vector<float>{1, NAN}));
+    CHECK_THROWS(Distribution1D(std::vector<float>{1, INFINITY}));
+  }
+}
+
+TEST_CASE("Distribution1D::sampleContinuous", "[sampling][distribution]") {
+  // 50 histogram cells over 37 bins: most bin edges fall inside cells.
+  auto test = [](const std::vector<float>& w, const Distribution1D& dist, uint64_t seed) {
+    double sum = 0;
+    for (float x : w) sum += x;
+    const auto n = uint32_t(w.size());
+    auto pdf = [&, sum](Vec2 p) {
+      const uint32_t i = std::min(uint32_t(p.x * n), n - 1);
+      return sum > 0 ? float(w[i] * n / sum) : 1.0f;
+    };
+    uint64_t wrongBins = 0;
+    auto sampler = [&](Rng& rng) {
+      float p = 0;
+      uint32_t bin = 0;
+      const float x = dist.sampleContinuous(rng.uniform(), &p, &bin);
+      wrongBins += bin != std::min(uint32_t(x * n), n - 1);
+      return PointSample{{x, rng.uniform()}, p};
+    };
+    const chi2::Result r = chi2::testSquare(sampler, pdf, {.seed = seed, .xBins = 50, .yBins = 1});
+    CHECK(wrongBins == 0);
+    return r;
+  };
+  const std::vector<float> weights = [] {
+    auto w = randomWeights(37, 12);
+    w.front() = w.back() = w[20] = w[21] = 0;
+    return w;
+  }();
+  SECTION("with zero-weight bins") { CHECK_CHI2_PASS(test(weights, Distribution1D(weights), 4)); }
+
+  SECTION("all-zero weights become uniform") {
+    const std::vector<float> zeros(37, 0.0f);
+    CHECK_CHI2_PASS(test(zeros, Distribution1D(zeros), 5));
+  }
+  SECTION("negative control: the heaviest weight 10% too high") {
+    auto perturbed = weights;
+    *std::max_element(perturbed.begin(), perturbed.end()) *= 1.1f;
+    CHECK_CHI2_REJECT(test(weights, Distribution1D(perturbed), 6));
+  }
+}
+
+TEST_CASE("Distribution1D::sampleContinuous stays in the bin it picked", "[sampling][distribution]") {
+  // Many bins, every other one empty: rounding x up into the next bin would give a zero pdf.
+  std::vector<float> weights(1000, 0.0f);
+  for (size_t i = 0; i < weights.size(); i += 2) weights[i] = 1;
+  const Distribution1D dist(weights);
+  Rng rng(7);
+  uint64_t strays = 0;
+  for (int k = 0; k < 1'000'000; ++k) {
+    float pdf;
+    uint32_t bin;
+    const float x = dist.sampleContinuous(rng.uniform(), &pdf, &bin);
+    strays += !(pdf > 0) || bin != uint32_t(x * weights.size()) || dist.pdfContinuous(x) != pdf;
+  }
+  CHECK(strays == 0);
+}
+
+TEST_CASE("Distribution2D", "[sampling][distribution]") {
+  constexpr uint32_t nu = 13, nv = 9;
+  std::vector<float> weights = randomWeights(nu * nv, 13);
+  for (uint32_t u = 0; u < nu; ++u) weights[0 * nu + u] = weights[4 * nu + u] = 0;  // zero rows
+  double sum = 0;
+  for (float x : weights) sum += x;
+  auto pdf = [&](Vec2 p) {
+    const uint32_t u = std::min(uint32_t(p.x * nu), nu - 1), v = std::min(uint32_t(p.y * nv), nv - 1);
+    return float(weights[v * nu + u] * nu * nv / sum);
+  };
+  const Distribution2D dist(weights, nu, nv);
+  auto sampler = [&](const Distribution2D& d) {
+    return [&](Rng& rng) {
+      PointSample s;
+      s.point = d.sample(rng.uniform2(), &s.pdf);
+      return s;
+    };
+  };
+  SECTION("with zero rows") {
+    CHECK_CHI2_PASS(chi2::testSquare(sampler(dist), pdf));
+    Rng rng(14);
+    for (int i = 0; i < 1000; ++i) {
+      const Vec2 p = rng.uniform2();
+      CHECK(dist.pdf(p) == Approx(pdf(p)).epsilon(1e-5));
+    }
+    CHECK_THROWS(Distribution2D(weights, nu, nv + 1));
+  }
+
+  SECTION("negative control: one row 10% too heavy") {
+    auto perturbed = weights;
+    for (uint32_t u = 0; u < nu; ++u) perturbed[2 * nu + u] *= 1.1f;
+    const Distribution2D wrong(perturbed, nu, nv);
+    auto claimingPdf = [&](Rng& rng) {
+      PointSample s = sampler(wrong)(rng);
+      s.pdf = pdf(s.point);
+      return s;
+    };
+    CHECK_CHI2_REJECT(chi2::testSquare(claimingPdf, pdf));
+  }
+}
+
+TEST_CASE("latitude-longitude mapping", "[sampling]") {
+  SECTION("directionToLatLong inverts latLongToDirection") {
+    std::vector<float> vs;
+    for (int j = 1; j < 1024; ++j) vs.push_back(j / 1024.0f);
+    for (float p = 1e-6f; p < 1e-2f; p *= 1.5f) vs.insert(vs.end(), {p, 1 - p});  // near the poles
+    for (float v : vs)
+      for (int k = 0; k < 64; ++k) {
+        const Vec2 uv{(k + 0.37f) / 64, v};
+        const Vec3 d = latLongToDirection(uv);
+        CHECK(length(d) == Approx(1).epsilon(1e-6));
+        const Vec2 back = directionToLatLong(d);
+        const float du = std::abs(back.x - uv.x);
+        INFO("uv = (" << uv.x << ", " << uv.y << "), back = (" << back.x << ", " << back.y << ")");
+        CHECK(std::min(du, 1 - du) < 1e-5f);  // u is periodic
+        CHECK(std::abs(back.y - uv.y) < 1e-5f);
+      }
+    // v = 0 is +y, u = 0 is -z, u = 1/4 is +x.
+    CHECK(latLongToDirection({0.3f, 0}).y == 1);
+    CHECK(latLongToDirection({0, 0.5f}).z == Approx(-1));
+    CHECK(latLongToDirection({0.25f, 0.5f}).x == Approx(1));
+  }
+
+  SECTION("directions sampled from a Distribution2D over the map") {
+    constexpr uint32_t nu = 24, nv = 12;
+    std::vector<float> weights = randomWeights(nu * nv, 15);
+    for (uint32_t u = 0; u < nu; ++u) weights[5 * nu + u] = 0;
+    double sum = 0;
+    for (float x : weights) sum += x;
+    const Distribution2D dist(weights, nu, nv);
+    // Solid-angle density: the map's density over [0,1)^2 divided by the Jacobian 2 pi^2 sin(theta).
+    auto pdf = [&](Vec3 d) {
+      const Vec2 uv = directionToLatLong(d);
+      const uint32_t u = std::min(uint32_t(uv.x * nu), nu - 1), v = std::min(uint32_t(uv.y * nv), nv - 1);
+      const double sinTheta = std::sqrt(double(d.x) * d.x + double(d.z) * d.z);
+      return sinTheta > 0 ? float(weights[v * nu + u] * nu * nv / sum / (2 * kPi * kPi * sinTheta)) : 0.0f;
+    };
+    auto sampler = [&](bool jacobian) {
+      return [&, jacobian](Rng& rng) {
+        float pdfUV;
+        const Vec2 uv = dist.sample(rng.uniform2(), &pdfUV);
+        const Vec3 d = latLongToDirection(uv);
+        const float sinTheta = std::sin(kPi * uv.y);
+        return DirectionSample{d, sinTheta > 0 ? pdfUV / (2 * kPi * kPi * (jacobian ? sinTheta : 1)) : 0};
+      };
+    };
+    // Binning around the map's pole (+y) puts the pdf's 1/sin(theta) pole where the harness's
+    // integration cancels it.
+    const chi2::Options opt{.axis = {0, 1, 0}};
+    CHECK_CHI2_PASS(chi2::testSphere(sampler(true), pdf, opt));
+
+    // Negative control: the sampler's density without the sin(theta) Jacobian.
+    auto noJacobian = [&](Vec3 d) {
+      const double sinTheta = std::sqrt(double(d.x) * d.x + double(d.z) * d.z);
+      return float(pdf(d) * sinTheta);
+    };
+    CHECK_CHI2_REJECT(chi2::testSphere(sampler(false), noJacobian, opt));
+  }
+}
+
+TEST_CASE("Rng", "[sampling][rng]") {
+  SECTION("uniform() is in [0, 1) and reaches both ends") {
+    Rng rng(21);
+    float lo = 1, hi = 0;
+    for (int i = 0; i < 1'000'000; ++i) {
+      const float u = rng.uniform();
+      lo = std::min(lo, u), hi = std::max(hi, u);
+    }
+    CHECK(lo >= 0);
+    CHECK(hi < 1);
+    CHECK(lo < 1e-5f);
+    CHECK(hi > 1 - 1e-5f);
+    CHECK(float(0xffffffffu >> 8) * 0x1p-24f < 1);  // the largest value uniform() can return
+  }
+  SECTION("keys select distinct streams; equal keys give equal streams") {
+    std::set<std::vector<uint32_t>> streams;
+    int count = 0;
+    for (uint64_t seed : {0, 1, 2})
+      for (uint64_t a : {0, 1, 2, 1000})
+        for (uint64_t b : {0, 1, 2, 1000}) {
+          Rng rng(seed, a, b), same(seed, a, b);
+          std::vector<uint32_t> first(4);
+          for (auto& x : first) {
+            x = rng.next();
+            CHECK(same.next() == x);
+          }
+          streams.insert(first);
+          ++count;
+        }
+    CHECK(streams.size() == size_t(count));
+  }
+  SECTION("uniform2() is uniform on the square") {
+    auto sampler = [](Rng& rng) { return PointSample{rng.uniform2(), 1.0f}; };
+    CHECK_CHI2_PASS(chi2::testSquare(sampler, [](Vec2) { return 1.0f; }, {.xBins = 32, .yBins = 32}));
+  }
+  SECTION("first numbers of neighbouring keys are independent") {
+    // Pixels and photons seed one generator each from consecutive keys.
+    uint64_t key = 0;
+    auto sampler = [&](Rng&) {
+      const Vec2 p{Rng(22, key).uniform(), Rng(22, key + 1).uniform()};
+      ++key;
+      return PointSample{p, 1.0f};
+    };
+    CHECK_CHI2_PASS(chi2::testSquare(sampler, [](Vec2) { return 1.0f; }, {.xBins = 32, .yBins = 32}));
+  }
+  SECTION("below(n) is uniform") {
+    constexpr uint32_t n = 37;
+    auto pmf = [](uint32_t) { return 1.0f / n; };
+    auto sampler = [](Rng& rng) { return IndexSample{rng.below(n), 1.0f / n}; };
+    CHECK_CHI2_PASS(chi2::testDiscrete(sampler, pmf, n));
+    // Negative control: 8 random bits spread over 37 values, 6 or 7 of 256 each.
+    auto coarse = [](Rng& rng) { return IndexSample{((rng.next() >> 24) * n) >> 8, 1.0f / n}; };
+    CHECK_CHI2_REJECT(chi2::testDiscrete(coarse, pmf, n));
+  }
+}
+
+TEST_CASE("Frame is orthonormal and inverts itself", "[sampling][frame]") {
+  std::vector<Vec3> normals{{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {-1, 0, 0}, {1, 0, -0.0f}};
+  for (Vec3 n : {Vec3(1e-4f, 0, -1), Vec3(0, 1e-6f, -1), Vec3(1e-3f, -2e-3f, -1), Vec3(-1e-7f, 1e-7f, -1),
+                 Vec3(1, 1, 1), Vec3(1e-4f, 0, 1), Vec3(1, 0, -1e-7f)})
+    normals.push_back(normalize(n));
+  Rng rng(31);
+  for (int i = 0; i < 2000; ++i) normals.push_back(sampleUniformSphere(rng.uniform2()));
+  // Directions within about 1e-3 radians of -z.
+  for (int i = 0; i < 2000; ++i) normals.push_back(-sampleUniformCone(rng.uniform2(), 1 - 1e-6f));
+
+  for (Vec3 n : normals) {
+    const Frame f(n);
+    INFO("n = (" << n.x << ", " << n.y << ", " << n.z << ")");
+    CHECK(length(f.s) == Approx(1).margin(1e-5));
+    CHECK(length(f.t) == Approx(1).margin(1e-5));
+    CHECK(std::abs(dot(f.s, f.t)) < 1e-5f);
+    CHECK(std::abs(dot(f.s, f.n)) < 1e-5f);
+    CHECK(std::abs(dot(f.t, f.n)) < 1e-5f);
+    CHECK(length(cross(f.s, f.t) - f.n) < 1e-5f);  // right-handed
+    const Vec3 v = sampleUniformSphere(rng.uniform2()) * 3.0f;
+    CHECK(length(f.toWorld(f.toLocal(v)) - v) < 1e-5f * 3);
+    CHECK(length(f.toLocal(f.n) - Vec3(0, 0, 1)) < 1e-5f);
+  }
+}
