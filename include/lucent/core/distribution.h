@@ -32,7 +32,7 @@ class Distribution1D {
   std::vector<float> func_;
   std::vector<double> cdf_;  // size()+1 entries, cdf_[0] = 0, cdf_[size()] = 1
   float total_ = 0;          // sum of weights as given
-  float weightedTotal_ = 0;  // sum used for normalisation (size() when all weights are zero)
+  float weightedTotal_ = 0;  // sum used for normalisation; 0 when all weights are zero (then uniform)
 };
 
 // Density over [0,1)^2 proportional to a row-major nu x nv grid of weights (u along columns).
