@@ -7,14 +7,6 @@
 
 namespace lucent {
 
-float Scene::triangleArea(uint32_t tri) const {
-  return 0.5f * length(cross(vertex(tri, 1) - vertex(tri, 0), vertex(tri, 2) - vertex(tri, 0)));
-}
-
-Vec3 Scene::geometricNormal(uint32_t tri) const {
-  return normalize(cross(vertex(tri, 1) - vertex(tri, 0), vertex(tri, 2) - vertex(tri, 0)));
-}
-
 namespace {
 template <class T>
 uint64_t hashArray(uint64_t h, const std::vector<T>& v) {
@@ -33,6 +25,14 @@ uint64_t hashArray(uint64_t h, const std::vector<T>& v) {
 void finalizeScene(Scene& scene) {
   scene.bounds = {};
   for (const Vec3& p : scene.positions) scene.bounds.extend(p);
+  const uint32_t n = scene.triangleCount();
+  scene.faceNormals.resize(n);
+  scene.faceAreas.resize(n);
+  for (uint32_t t = 0; t < n; ++t) {
+    const Vec3 c = cross(scene.vertex(t, 1) - scene.vertex(t, 0), scene.vertex(t, 2) - scene.vertex(t, 0));
+    scene.faceAreas[t] = 0.5f * length(c);
+    scene.faceNormals[t] = normalize(c);
+  }
 
   // Light power estimates decide how often next-event estimation picks each light.
   scene.lights.erase(std::remove_if(scene.lights.begin(), scene.lights.end(),

@@ -66,6 +66,8 @@ struct Scene {
   // Triangles.
   std::vector<uint32_t> indices;      // 3 per triangle
   std::vector<uint32_t> materialIds;  // 1 per triangle
+  std::vector<Vec3> faceNormals;      // unit counter-clockwise normal per triangle (finalizeScene)
+  std::vector<float> faceAreas;       // per triangle (finalizeScene)
   std::vector<Material> materials;
   std::vector<std::string> materialNames;
   std::vector<Texture> textures;
@@ -83,14 +85,15 @@ struct Scene {
 
   uint32_t triangleCount() const { return static_cast<uint32_t>(materialIds.size()); }
   Vec3 vertex(uint32_t tri, int k) const { return positions[indices[3 * tri + k]]; }
-  float triangleArea(uint32_t tri) const;
-  Vec3 geometricNormal(uint32_t tri) const;  // unit, counter-clockwise winding
+  float triangleArea(uint32_t tri) const { return faceAreas[tri]; }
+  Vec3 geometricNormal(uint32_t tri) const { return faceNormals[tri]; }
   // Bounding sphere of the scene, used to place directional and environment emission.
   Vec3 boundingCenter() const { return bounds.center(); }
   float boundingRadius() const { return 0.5f * length(bounds.extent()); }
 };
 
-// Builds the light list, light distribution and content hash after geometry and materials are set.
+// Computes face normals and areas, the light list, the light distribution and the content hash
+// once geometry and materials are set.
 // Used by the loader and by tests that build scenes in code.
 void finalizeScene(Scene& scene);
 
