@@ -1,0 +1,108 @@
+// Embree visibility against brute-force ray-triangle intersection, and packets against single rays.
+#include <catch2/catch.hpp>
+
+#include "lucent/core/rng.h"
+#include "lucent/core/sampling.h"
+#include "lucent/scene/loader.h"
+#include "lucent/trace/visibility.h"
+
+using namespace lucent;
+
+namespace {
+
+// Möller–Trumbore over every triangle: the nearest hit in (tMin, tMax).
+Hit bruteForce(const Scene& scene, const Ray& ray) {
+  Hit best;
+  best.t = ray.tMax;
+  for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
+    const Vec3 p0 = scene.vertex(t, 0), e1 = scene.vertex(t, 1) - p0, e2 = scene.vertex(t, 2) - p0;
+    const Vec3 pv = cross(ray.direction, e2);
+    const double det = dot(e1, pv);
+    if (std::abs(det) < 1e-12) continue;
+    const Vec3 tv = ray.origin - p0;
+    const double u = dot(tv, pv) / det;
+    const Vec3 qv = cross(tv, e1);
+    const double v = dot(ray.direction, qv) / det;
+    const double dist = dot(e2, qv) / det;
+    if (u < 0 || v < 0 || u + v > 1 || dist <= ray.tMin || dist >= best.t) continue;
+    best = {float(dist), t, float(u), float(v)};
+  }
+  if (best.triangle == kNoHit) best.t = kInf;
+  return best;
+}
+
+std::vector<Ray> randomRays(const Scene& scene, int n, uint64_t seed) {
+  Rng rng(seed);
+  std::vector<Ray> rays;
+  const Vec3 lo = scene.bounds.lo, ext = scene.bounds.extent();
+  for (int i = 0; i < n; ++i) {
+    const Vec3 o{lo.x + ext.x * rng.uniform(), lo.y + ext.y * rng.uniform(), lo.z + ext.z * rng.uniform()};
+    Ray r{o, sampleUniformSphere(rng.uniform2())};
+    r.tMax = (i % 3 == 0) ? 0.3f * length(ext) : kInf;  // some short rays for any-hit queries
+    rays.push_back(r);
+  }
+  return rays;
+}
+
+}  // namespace
+
+TEST_CASE("Closest-hit and any-hit queries agree with brute force", "[visibility]") {
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-glossy.json", {true});
+  const Visibility vis(scene);
+  int hits = 0;
+  for (const Ray& ray : randomRays(scene, 3000, 1)) {
+    const Hit expected = bruteForce(scene, ray);
+    const Hit hit = vis.intersect(ray);
+    REQUIRE(hit.found() == expected.found());
+    REQUIRE(vis.occluded(ray) == expected.found());
+    if (!hit.found()) continue;
+    ++hits;
+    REQUIRE(hit.t == Approx(expected.t).epsilon(1e-4));
+    // Rays may cross an edge shared by two triangles: then either is right, at the same distance.
+    if (hit.triangle == expected.triangle) {
+      REQUIRE(hit.b1 == Approx(expected.b1).margin(1e-4));
+      REQUIRE(hit.b2 == Approx(expected.b2).margin(1e-4));
+    }
+  }
+  REQUIRE(hits > 2000);
+}
+
+template <int N>
+void checkPackets(const Visibility& vis, const std::vector<Ray>& rays) {
+  for (size_t base = 0; base + N <= rays.size(); base += N) {
+    RayPacket<N> packet;
+    for (int i = 0; i < N; ++i) {
+      const Ray& r = rays[base + i];
+      packet.ox[i] = r.origin.x, packet.oy[i] = r.origin.y, packet.oz[i] = r.origin.z;
+      packet.dx[i] = r.direction.x, packet.dy[i] = r.direction.y, packet.dz[i] = r.direction.z;
+      packet.tMin[i] = r.tMin, packet.tMax[i] = r.tMax;
+      packet.valid[i] = (i % 5 == 4) ? 0 : -1;  // some inactive lanes
+    }
+    HitPacket<N> hits;
+    bool blocked[N];
+    vis.intersect(packet, hits);
+    vis.occluded(packet, blocked);
+    for (int i = 0; i < N; ++i) {
+      const Hit single = vis.intersect(rays[base + i]);
+      if (!packet.valid[i]) {
+        REQUIRE(hits.triangle[i] == kNoHit);
+        REQUIRE_FALSE(blocked[i]);
+        continue;
+      }
+      REQUIRE(hits.triangle[i] == single.triangle);
+      REQUIRE(hits.t[i] == single.t);
+      REQUIRE(blocked[i] == single.found());
+    }
+  }
+}
+
+TEST_CASE("8- and 16-wide packets give the single-ray answers", "[visibility]") {
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
+  const auto rays = randomRays(scene, 1600, 2);
+  for (bool robust : {false, true}) {
+    const Visibility vis(scene, {robust});
+    checkPackets<8>(vis, rays);
+    checkPackets<16>(vis, rays);
+  }
+  REQUIRE(Visibility::embreeVersion().rfind("3.", 0) == 0);
+}
