@@ -7,6 +7,7 @@
 
 #include "json_fields.h"
 #include "lucent/image/image.h"
+#include "lucent/scene/texture.h"
 #include "obj_import.h"
 
 namespace lucent {
@@ -21,8 +22,6 @@ bool isSrgbEncoded(const std::string& path) {
   for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".bmp" || ext == ".tga";
 }
-
-float srgbToLinear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
 
 // Reads an RGB (or grey) image into linear texels; row 0 is the top row.
 std::vector<Rgb> readTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h) {
@@ -187,7 +186,11 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
       Texture tex;
       tex.offset = static_cast<uint32_t>(scene.texels.size());
       const auto texels = readTexels(spec.mapKd, spec.origin + ": material '" + spec.name + "'", tex.width, tex.height);
-      scene.texels.insert(scene.texels.end(), texels.begin(), texels.end());
+      // Back to 8-bit sRGB: exact for 8-bit files; float files are clamped to [0, 1] (reflectance).
+      const auto encode = [](float linear) {
+        return uint32_t(std::lround(255.0f * linearToSrgb(std::clamp(linear, 0.0f, 1.0f))));
+      };
+      for (const Rgb& c : texels) scene.texels.push_back(encode(c.r) | encode(c.g) << 8 | encode(c.b) << 16 | 0xffu << 24);
       m.kdTexture = static_cast<int32_t>(scene.textures.size());
       scene.textures.push_back(tex);
     }

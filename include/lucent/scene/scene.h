@@ -25,7 +25,9 @@ struct Material {
 };
 static_assert(sizeof(Material) == 52, "Material is a fixed-size record shared with GPU backends");
 
-// An RGB texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1).
+// A reflectance texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1).
+// Texels are sRGB-encoded 8-bit RGBA packed in 32 bits (R in the low byte): reflectances lie in
+// [0, 1], the scenes' textures are 8-bit, and a third of the float size keeps lookups in cache.
 struct Texture {
   uint32_t offset = 0;
   uint32_t width = 0, height = 0;
@@ -71,7 +73,7 @@ struct Scene {
   std::vector<Material> materials;
   std::vector<std::string> materialNames;
   std::vector<Texture> textures;
-  std::vector<Rgb> texels;
+  std::vector<uint32_t> texels;
   // Lights: one per emissive triangle, then point and directional lights, then the environment.
   std::vector<Light> lights;
   Distribution1D lightDistribution;       // proportional to each light's estimated power

@@ -1,27 +1,48 @@
 // Texture and environment lookups.
 #pragma once
+#include <array>
+#include <cmath>
+
 #include "lucent/core/sampling.h"
 #include "lucent/scene/scene.h"
 
 namespace lucent {
 
-// Bilinear lookup with wrap-around; uv (0,0) is the bottom-left corner, as in OBJ.
-inline Rgb bilinear(const Rgb* texels, uint32_t width, uint32_t height, float u, float v) {
-  const float x = u * width - 0.5f, y = (1.0f - v) * height - 0.5f;
+// sRGB transfer function (IEC 61966-2-1).
+inline float srgbToLinear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
+inline float linearToSrgb(float v) { return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f; }
+
+// Linear value of every 8-bit sRGB code.
+inline const std::array<float, 256> kSrgb8ToLinear = [] {
+  std::array<float, 256> table{};
+  for (int i = 0; i < 256; ++i) table[i] = srgbToLinear(i / 255.0f);
+  return table;
+}();
+
+inline Rgb decodeTexel(uint32_t texel) {
+  return {kSrgb8ToLinear[texel & 0xff], kSrgb8ToLinear[(texel >> 8) & 0xff], kSrgb8ToLinear[(texel >> 16) & 0xff]};
+}
+
+// Bilinear lookup, in linear space, with wrap-around; uv (0,0) is the bottom-left corner, as in OBJ.
+inline Rgb bilinear(const Texture& t, const uint32_t* texels, Vec2 uv) {
+  const float x = (uv.x - std::floor(uv.x)) * t.width - 0.5f;
+  const float y = (std::ceil(uv.y) - uv.y) * t.height - 0.5f;
   const float fx = std::floor(x), fy = std::floor(y);
   const float tx = x - fx, ty = y - fy;
-  auto wrap = [](long i, uint32_t n) { const long m = i % long(n); return uint32_t(m < 0 ? m + n : m); };
-  const uint32_t x0 = wrap(long(fx), width), x1 = wrap(long(fx) + 1, width);
-  const uint32_t y0 = wrap(long(fy), height), y1 = wrap(long(fy) + 1, height);
-  const Rgb a = texels[size_t(y0) * width + x0] * (1 - tx) + texels[size_t(y0) * width + x1] * tx;
-  const Rgb b = texels[size_t(y1) * width + x0] * (1 - tx) + texels[size_t(y1) * width + x1] * tx;
+  // x lies in [-0.5, width - 0.5], so wrapping needs only the two edge cases.
+  const uint32_t x0 = fx < 0 ? t.width - 1 : std::min(uint32_t(fx), t.width - 1);
+  const uint32_t y0 = fy < 0 ? t.height - 1 : std::min(uint32_t(fy), t.height - 1);
+  const uint32_t x1 = x0 + 1 == t.width ? 0 : x0 + 1, y1 = y0 + 1 == t.height ? 0 : y0 + 1;
+  const uint32_t* row0 = texels + t.offset + size_t(y0) * t.width;
+  const uint32_t* row1 = texels + t.offset + size_t(y1) * t.width;
+  const Rgb a = decodeTexel(row0[x0]) * (1 - tx) + decodeTexel(row0[x1]) * tx;
+  const Rgb b = decodeTexel(row1[x0]) * (1 - tx) + decodeTexel(row1[x1]) * tx;
   return a * (1 - ty) + b * ty;
 }
 
 inline Rgb diffuseAlbedo(const Scene& scene, const Material& m, Vec2 uv) {
   if (m.kdTexture < 0) return m.kd;
-  const Texture& t = scene.textures[m.kdTexture];
-  return m.kd * bilinear(&scene.texels[t.offset], t.width, t.height, uv.x, uv.y);
+  return m.kd * bilinear(scene.textures[m.kdTexture], scene.texels.data(), uv);
 }
 
 // Radiance arriving from the environment along -direction (direction points away from the scene).
