@@ -29,7 +29,7 @@ std::vector<Rgb> readTexels(const std::string& path, const std::string& context,
   try {
     image = readImage(path);
   } catch (const std::exception& e) {
-    throw SceneError(context + ": cannot read image '" + path + "': " + e.what());
+    throw SceneError(context + ": " + e.what());  // the message names the image
   }
   w = static_cast<uint32_t>(image.width());
   h = static_cast<uint32_t>(image.height());
@@ -53,6 +53,12 @@ std::vector<Rgb> readTexels(const std::string& path, const std::string& context,
 
 std::string resolve(const fs::path& base, const std::string& relative) {
   return (base / relative).lexically_normal().string();
+}
+
+// The file a JSON key names must exist and be a regular file (a directory opens, then reads as empty).
+void requireFile(const JsonFields& fields, const std::string& key, const std::string& path) {
+  if (!fs::exists(path)) fields.failKey(key, "file '" + path + "' not found");
+  if (!fs::is_regular_file(path)) fields.failKey(key, "'" + path + "' is not a regular file");
 }
 
 void loadCamera(JsonFields camera, Scene& scene) {
@@ -91,7 +97,7 @@ void applyMaterialOverride(JsonFields fields, detail::MaterialSpec& spec, const 
   if (fields.has("Ni")) spec.ni = fields.number("Ni");
   if (fields.has("map_Kd")) {
     spec.mapKd = resolve(base, fields.string("map_Kd"));
-    if (!fs::exists(spec.mapKd)) fields.failKey("map_Kd", "file '" + spec.mapKd + "' not found");
+    requireFile(fields, "map_Kd", spec.mapKd);
   }
   fields.finish();
 }
@@ -118,7 +124,7 @@ void loadLight(JsonFields light, Scene& scene, const fs::path& base) {
     env.present = true;
     if (light.has("map")) {
       env.source = resolve(base, light.string("map"));
-      if (!fs::exists(env.source)) light.failKey("map", "file '" + env.source + "' not found");
+      requireFile(light, "map", env.source);
       const float scale = light.number("scale", 1.0f);
       if (!(scale >= 0)) light.failKey("scale", "must not be negative");
       env.texels = readTexels(env.source, light.file() + ": " + light.keyPath("map"), env.width, env.height);
@@ -142,13 +148,17 @@ void loadLight(JsonFields light, Scene& scene, const fs::path& base) {
 }  // namespace
 
 Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
+  if (!fs::is_regular_file(jsonPath)) throw SceneError(jsonPath + ": scene file not found");
   std::ifstream in(jsonPath);
   if (!in) throw SceneError(jsonPath + ": cannot open scene file");
   nlohmann::json root;
   try {
     root = nlohmann::json::parse(in);
   } catch (const nlohmann::json::parse_error& e) {
-    throw SceneError(jsonPath + ": " + e.what());
+    // what() is "[json.exception.parse_error.101] parse error at line 3, column 10: ...".
+    const std::string what = e.what();
+    const size_t start = what.rfind("] ", what.find("parse error"));
+    throw SceneError(jsonPath + ": invalid JSON: " + (start == std::string::npos ? what : what.substr(start + 2)));
   }
   const fs::path base = fs::absolute(jsonPath).parent_path();
   Scene scene;
@@ -163,7 +173,7 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
   for (size_t i = 0; i < meshes.size(); ++i) {
     JsonFields mesh(meshes[i], jsonPath, "meshes[" + std::to_string(i) + "]");
     const std::string obj = resolve(base, mesh.string("obj"));
-    if (!fs::exists(obj)) mesh.failKey("obj", "file '" + obj + "' not found");
+    requireFile(mesh, "obj", obj);
     mesh.finish();
     detail::importObj(obj, scene, import);
   }
@@ -206,7 +216,19 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
   }
   top.finish();
 
-  finalizeScene(scene);
+  // Light selection weighs lights by power; an emitter whose power overflows a float would break it.
+  for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
+    const uint32_t id = scene.materialIds[t];
+    const Rgb ke = scene.materials[id].ke;
+    if (!ke.isBlack() && !std::isfinite(ke.luminance() * scene.triangleArea(t) * kPi))
+      throw SceneError(import.specs[id].origin + ": material '" + import.specs[id].name +
+                       "': the emitted power of a triangle overflows (Ke or the triangle is too large)");
+  }
+  try {
+    finalizeScene(scene);
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(jsonPath + ": the light power overflows (a light or the scene is too large): " + e.what());
+  }
   if (scene.lights.empty())
     throw SceneError(jsonPath + ": the scene has no light (no emissive material, no entry in 'lights')");
   if (scene.droppedDegenerateTriangles > 0 && !options.quiet)

@@ -3,8 +3,10 @@
 #include <tiny_obj_loader.h>
 
 #include <charconv>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -27,9 +29,23 @@ std::vector<std::string> tokens(const std::string& line) {
   return out;
 }
 
-bool parseFloat(const std::string& s, float& out) {
-  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
-  return ec == std::errc() && ptr == s.data() + s.size();
+// Parses a whole token. Unlike from_chars alone it accepts a leading '+', reads values too small for a
+// float as zero, and reports values too large for a float as out of range.
+std::errc parseFloat(const std::string& s, float& out) {
+  const char* first = s.data() + (s.size() > 1 && s[0] == '+' && s[1] != '-' ? 1 : 0);
+  const char* last = s.data() + s.size();
+  double d = 0;
+  const auto [ptr, ec] = std::from_chars(first, last, d);
+  if (ptr != last) return std::errc::invalid_argument;
+  if (ec == std::errc::result_out_of_range) {
+    if (s.find("e-") == std::string::npos && s.find("E-") == std::string::npos) return ec;
+    d = 0;  // underflow
+  } else if (ec != std::errc()) {
+    return ec;
+  }
+  if (std::isfinite(d) && std::abs(d) > std::numeric_limits<float>::max()) return std::errc::result_out_of_range;
+  out = static_cast<float>(d);
+  return std::errc();
 }
 
 bool parseInt(const std::string& s, long& out) {
@@ -38,6 +54,7 @@ bool parseInt(const std::string& s, long& out) {
 }
 
 std::vector<std::string> readLines(const std::string& path, const std::string& what) {
+  if (!fs::is_regular_file(path)) throw SceneError(path + ": " + what + " is not a regular file");
   std::ifstream in(path);
   if (!in) throw SceneError(path + ": cannot open " + what);
   std::vector<std::string> lines;
@@ -48,20 +65,28 @@ std::vector<std::string> readLines(const std::string& path, const std::string& w
   return lines;
 }
 
-// Checks that `count` finite numbers follow the keyword (OBJ v/vn/vt and MTL colours).
-void expectNumbers(const std::string& file, int line, const std::vector<std::string>& t, size_t minCount,
-                   size_t maxCount) {
+// Checks that between minCount and maxCount finite numbers follow the keyword (OBJ v/vn/vt, MTL values)
+// and returns them.
+std::vector<float> expectNumbers(const std::string& file, int line, const std::vector<std::string>& t,
+                                 size_t minCount, size_t maxCount, const std::string& expected) {
   if (t.size() - 1 < minCount || t.size() - 1 > maxCount)
-    failAt(file, line, "'" + t[0] + "' expects " + std::to_string(minCount) + " numbers");
+    failAt(file, line, "'" + t[0] + "' expects " + expected + ", found " + std::to_string(t.size() - 1));
+  std::vector<float> values;
   for (size_t i = 1; i < t.size(); ++i) {
     float f;
-    if (!parseFloat(t[i], f)) failAt(file, line, "'" + t[i] + "' is not a number");
+    const std::errc ec = parseFloat(t[i], f);
+    if (ec == std::errc::result_out_of_range) failAt(file, line, "'" + t[i] + "' is out of range for a float");
+    if (ec != std::errc()) failAt(file, line, "'" + t[i] + "' is not a number");
     if (!std::isfinite(f)) failAt(file, line, "'" + t[0] + "' has a non-finite value");
+    values.push_back(f);
   }
+  return values;
 }
 
 struct MtlScan {
   std::map<std::string, int> definitionLine;
+  // Colours as we read them: tinyobjloader reads "Kd 0.5" as (0.5, 0, 0), the MTL format as grey.
+  std::map<std::string, std::map<std::string, Rgb>> colours;
 };
 
 // MTL keys Lucent understands, and those it accepts but ignores (docs/scene-format.md).
@@ -71,7 +96,7 @@ MtlScan scanMtl(const std::string& path) {
   static const std::set<std::string> ignoredKeys = {"map_bump", "bump"};
   MtlScan scan;
   const auto lines = readLines(path, "material library");
-  bool inMaterial = false;
+  std::string material;
   for (size_t i = 0; i < lines.size(); ++i) {
     const int line = static_cast<int>(i + 1);
     const auto t = tokens(lines[i]);
@@ -79,20 +104,25 @@ MtlScan scanMtl(const std::string& path) {
     const std::string& key = t[0];
     if (key == "newmtl") {
       if (t.size() != 2) failAt(path, line, "'newmtl' expects one name");
-      scan.definitionLine.emplace(t[1], line);
-      inMaterial = true;
+      const auto [it, inserted] = scan.definitionLine.emplace(t[1], line);
+      if (!inserted)
+        failAt(path, line,
+               "material '" + t[1] + "' is defined twice (first at line " + std::to_string(it->second) + ")");
+      material = t[1];
       continue;
     }
-    if (!inMaterial) failAt(path, line, "'" + key + "' before any 'newmtl'");
+    if (material.empty()) failAt(path, line, "'" + key + "' before any 'newmtl'");
     if (colourKeys.count(key)) {
-      expectNumbers(path, line, t, 1, 3);
-      for (size_t k = 1; k < t.size(); ++k)
-        if (std::stof(t[k]) < 0) failAt(path, line, "'" + key + "' must not be negative");
+      if (t.size() == 3) failAt(path, line, "'" + key + "' expects 3 numbers (r g b) or 1 (grey), found 2");
+      const auto v = expectNumbers(path, line, t, 1, 3, "3 numbers (r g b) or 1 (grey)");
+      for (float f : v)
+        if (f < 0) failAt(path, line, "'" + key + "' must not be negative");
+      scan.colours[material][key] = v.size() == 1 ? Rgb(v[0]) : Rgb{v[0], v[1], v[2]};
     } else if (scalarKeys.count(key)) {
-      expectNumbers(path, line, t, 1, 1);
+      expectNumbers(path, line, t, 1, 1, "1 number");
     } else if (key == "map_Kd") {
       if (t.size() != 2) failAt(path, line, "'map_Kd' expects one file name (options are not supported)");
-      if (!fs::exists(fs::path(path).parent_path() / t[1]))
+      if (!fs::is_regular_file(fs::path(path).parent_path() / t[1]))
         failAt(path, line, "texture '" + t[1] + "' not found");
     } else if (!ignoredKeys.count(key)) {
       failAt(path, line, "unknown MTL key '" + key + "'");
@@ -101,24 +131,30 @@ MtlScan scanMtl(const std::string& path) {
   return scan;
 }
 
-// Validates the OBJ statements Lucent reads, with line numbers tinyobjloader cannot give.
-std::vector<std::string> scanObj(const std::string& path) {
+struct ObjScan {
+  std::map<std::string, std::string> materialOrigin;  // name -> "file.mtl:line" (first definition wins)
+  std::map<std::string, std::map<std::string, Rgb>> colours;
+};
+
+// Validates the OBJ statements Lucent reads, and the material libraries they name, with line numbers
+// tinyobjloader cannot give.
+ObjScan scanObj(const std::string& path) {
   const auto lines = readLines(path, "OBJ file");
   long nv = 0, nvt = 0, nvn = 0;
-  std::vector<std::string> mtllibs;
+  ObjScan scan;
   for (size_t i = 0; i < lines.size(); ++i) {
     const int line = static_cast<int>(i + 1);
     const auto t = tokens(lines[i]);
     if (t.empty()) continue;
     const std::string& key = t[0];
     if (key == "v") {
-      expectNumbers(path, line, t, 3, 3);
+      expectNumbers(path, line, t, 3, 3, "3 numbers");
       ++nv;
     } else if (key == "vn") {
-      expectNumbers(path, line, t, 3, 3);
+      expectNumbers(path, line, t, 3, 3, "3 numbers");
       ++nvn;
     } else if (key == "vt") {
-      expectNumbers(path, line, t, 2, 3);
+      expectNumbers(path, line, t, 2, 3, "2 or 3 numbers");
       ++nvt;
     } else if (key == "f") {
       if (t.size() < 4) failAt(path, line, "a face needs at least 3 vertices");
@@ -141,14 +177,23 @@ std::vector<std::string> scanObj(const std::string& path) {
       if (t.size() < 2) failAt(path, line, "'mtllib' expects a file name");
       for (size_t k = 1; k < t.size(); ++k) {
         const fs::path mtl = fs::path(path).parent_path() / t[k];
-        if (!fs::exists(mtl)) failAt(path, line, "material library '" + t[k] + "' not found");
-        mtllibs.push_back(mtl.string());
+        if (!fs::is_regular_file(mtl)) failAt(path, line, "material library '" + t[k] + "' not found");
+        const MtlScan mtlScan = scanMtl(mtl.string());
+        for (const auto& [name, defLine] : mtlScan.definitionLine)
+          if (scan.materialOrigin.emplace(name, mtl.string() + ":" + std::to_string(defLine)).second &&
+              mtlScan.colours.count(name))
+            scan.colours[name] = mtlScan.colours.at(name);
       }
-    } else if (key != "o" && key != "g" && key != "s" && key != "usemtl") {
+    } else if (key == "usemtl") {
+      // tinyobjloader would give faces of an undefined material no material, silently.
+      if (t.size() != 2) failAt(path, line, "'usemtl' expects one material name");
+      if (!scan.materialOrigin.count(t[1]))
+        failAt(path, line, "material '" + t[1] + "' is not defined in a material library named before it");
+    } else if (key != "o" && key != "g" && key != "s") {
       failAt(path, line, "unsupported OBJ statement '" + key + "'");
     }
   }
-  return mtllibs;
+  return scan;
 }
 
 Rgb toRgb(const float v[3]) { return {v[0], v[1], v[2]}; }
@@ -156,11 +201,7 @@ Rgb toRgb(const float v[3]) { return {v[0], v[1], v[2]}; }
 }  // namespace
 
 void importObj(const std::string& objPath, Scene& scene, ObjImport& import) {
-  const auto mtllibs = scanObj(objPath);
-  std::map<std::string, std::string> materialOrigin;
-  for (const auto& mtl : mtllibs)
-    for (const auto& [name, line] : scanMtl(mtl).definitionLine)
-      materialOrigin.emplace(name, mtl + ":" + std::to_string(line));
+  const ObjScan scan = scanObj(objPath);
 
   tinyobj::ObjReaderConfig config;
   config.triangulate = true;
@@ -187,8 +228,14 @@ void importObj(const std::string& objPath, Scene& scene, ObjImport& import) {
     spec.ns = mat.shininess;
     spec.ni = mat.ior;
     spec.illum = mat.illum;
-    const auto origin = materialOrigin.find(mat.name);
-    spec.origin = origin != materialOrigin.end() ? origin->second : objPath;
+    const auto colours = scan.colours.find(mat.name);
+    if (colours != scan.colours.end()) {
+      const auto& c = colours->second;
+      for (auto [key, value] : {std::pair{"Kd", &spec.kd}, {"Ks", &spec.ks}, {"Ke", &spec.ke}, {"Tf", &spec.tf}})
+        if (c.count(key)) *value = c.at(key);
+    }
+    const auto origin = scan.materialOrigin.find(mat.name);
+    spec.origin = origin != scan.materialOrigin.end() ? origin->second : objPath;
     if (!mat.diffuse_texname.empty()) {
       const auto mtlDir = fs::path(spec.origin.substr(0, spec.origin.rfind(':'))).parent_path();
       spec.mapKd = fs::absolute(mtlDir / mat.diffuse_texname).lexically_normal().string();
