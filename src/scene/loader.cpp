@@ -220,7 +220,8 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
   for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
     const uint32_t id = scene.materialIds[t];
     const Rgb ke = scene.materials[id].ke;
-    if (!ke.isBlack() && !std::isfinite(ke.luminance() * scene.triangleArea(t) * kPi))
+    const Vec3 e = cross(scene.vertex(t, 1) - scene.vertex(t, 0), scene.vertex(t, 2) - scene.vertex(t, 0));
+    if (!ke.isBlack() && !std::isfinite(ke.luminance() * length(e) * kPi))
       throw SceneError(import.specs[id].origin + ": material '" + import.specs[id].name +
                        "': the emitted power of a triangle overflows (Ke or the triangle is too large)");
   }
