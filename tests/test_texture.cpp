@@ -1,0 +1,40 @@
+// Reflectance texture lookups: sRGB decoding and bilinear filtering with wrap-around.
+#include <catch2/catch.hpp>
+
+#include "lucent/scene/texture.h"
+
+using namespace lucent;
+
+namespace {
+uint32_t grey(uint8_t v) { return v | v << 8 | v << 16 | 0xffu << 24; }
+}  // namespace
+
+TEST_CASE("sRGB decoding table matches the transfer function and round-trips", "[texture]") {
+  REQUIRE(kSrgb8ToLinear[0] == 0.0f);
+  REQUIRE(kSrgb8ToLinear[255] == Approx(1.0f));
+  REQUIRE(kSrgb8ToLinear[188] == Approx(0.5029f).epsilon(1e-3));
+  for (int i = 0; i < 256; ++i) REQUIRE(std::lround(255 * linearToSrgb(kSrgb8ToLinear[i])) == i);
+  const Rgb c = decodeTexel(10 | 128 << 8 | 250 << 16);
+  REQUIRE(c.r == kSrgb8ToLinear[10]);
+  REQUIRE(c.g == kSrgb8ToLinear[128]);
+  REQUIRE(c.b == kSrgb8ToLinear[250]);
+}
+
+TEST_CASE("Bilinear lookup interpolates in linear space and wraps around", "[texture]") {
+  // 2x2 texture, row 0 at the top (v = 1): top row 0, 255; bottom row 255, 0.
+  const std::vector<uint32_t> texels = {grey(0), grey(255), grey(255), grey(0)};
+  const Texture t{0, 2, 2};
+  // Texel centres return texel values exactly.
+  REQUIRE(bilinear(t, texels.data(), {0.25f, 0.75f}).g == Approx(0.0f).margin(1e-6));
+  REQUIRE(bilinear(t, texels.data(), {0.75f, 0.75f}).g == Approx(1.0f));
+  REQUIRE(bilinear(t, texels.data(), {0.25f, 0.25f}).g == Approx(1.0f));
+  // Half-way between two texels: the mean of the linear values, not of the codes.
+  REQUIRE(bilinear(t, texels.data(), {0.5f, 0.75f}).g == Approx(0.5f));
+  // At u = 0 the lookup blends the last column with the first (wrap-around), as at u = 1 and u = -1.
+  REQUIRE(bilinear(t, texels.data(), {0.0f, 0.75f}).g == Approx(0.5f));
+  REQUIRE(bilinear(t, texels.data(), {1.0f, 0.75f}).g == Approx(0.5f));
+  REQUIRE(bilinear(t, texels.data(), {-0.75f, 0.75f}).g == Approx(0.0f).margin(1e-6));
+  REQUIRE(bilinear(t, texels.data(), {2.75f, 1.75f}).g == Approx(1.0f));
+  // The centre of the texture: all four texels equally.
+  REQUIRE(bilinear(t, texels.data(), {0.5f, 0.5f}).g == Approx(0.5f));
+}
