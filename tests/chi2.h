@@ -359,3 +359,19 @@ Result testDiscrete(Sampler&& sampler, Pmf&& pmf, uint32_t n, const Options& opt
 }
 
 }  // namespace lucent::chi2
+
+// Catch2 checks for test files, which declare `kAlpha`: the Sidak-corrected level for the number of
+// passing tests in the file. A negative control must be rejected by the histogram itself (its p-value),
+// not only by a consistency check.
+#define CHECK_CHI2_PASS(result)                 \
+  do {                                          \
+    const ::lucent::chi2::Result r_ = (result); \
+    INFO(r_.summary());                         \
+    CHECK(r_.passed(kAlpha));                   \
+  } while (0)
+#define CHECK_CHI2_REJECT(result)               \
+  do {                                          \
+    const ::lucent::chi2::Result r_ = (result); \
+    INFO(r_.summary());                         \
+    CHECK(r_.pValue < kAlpha);                  \
+  } while (0)

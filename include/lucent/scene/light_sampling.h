@@ -90,7 +90,9 @@ inline float environmentLightPdf(const Scene& scene, Vec3 wi) {
   const float pmf = scene.lightDistribution.pmf(scene.lightDistribution.size() - 1);
   if (env.texels.empty()) return pmf * kUniformSpherePdf;
   const Vec2 uv = directionToLatLong(wi);
-  const float sinTheta = std::sqrt(std::max(0.0f, 1.0f - wi.y * wi.y));
+  // Not sqrt(1 - y^2): near the poles it loses the digits that sampleLight's sin(pi v) keeps, and y
+  // rounds to 1 within 2.4e-4 rad of +y, where the pdf would be 0 for directions that can be sampled.
+  const float sinTheta = std::sqrt(wi.x * wi.x + wi.z * wi.z);
   if (!(sinTheta > 0)) return 0.0f;
   return pmf * env.distribution.pdf(uv) / (2.0f * kPi * kPi * sinTheta);
 }
