@@ -10,7 +10,7 @@ struct SurfacePoint {
   Vec3 position;
   Vec3 geometricNormal;  // counter-clockwise winding normal (the emitting side)
   Vec3 shadingNormal;    // interpolated normal, on the same side as geometricNormal
-  Vec2 uv;
+  float b1 = 0, b2 = 0;  // barycentrics, for texture coordinates when a material needs them
   uint32_t triangle = 0;
   uint32_t materialId = 0;
 };
@@ -19,22 +19,34 @@ inline SurfacePoint surfaceAt(const Scene& scene, uint32_t tri, float b1, float 
   SurfacePoint sp;
   sp.triangle = tri;
   sp.materialId = scene.materialIds[tri];
-  const uint32_t i0 = scene.indices[3 * tri], i1 = scene.indices[3 * tri + 1], i2 = scene.indices[3 * tri + 2];
+  sp.b1 = b1;
+  sp.b2 = b2;
+  const uint32_t* v = &scene.indices[3 * tri];
   const float b0 = 1.0f - b1 - b2;
-  sp.position = scene.positions[i0] * b0 + scene.positions[i1] * b1 + scene.positions[i2] * b2;
+  sp.position = scene.positions[v[0]] * b0 + scene.positions[v[1]] * b1 + scene.positions[v[2]] * b2;
   sp.geometricNormal = scene.geometricNormal(tri);
-  const Vec3 n = scene.normals[i0] * b0 + scene.normals[i1] * b1 + scene.normals[i2] * b2;
-  const float len = length(n);
-  sp.shadingNormal = len > 0 ? n / len : sp.geometricNormal;
-  if (dot(sp.shadingNormal, sp.geometricNormal) < 0) sp.shadingNormal = -sp.shadingNormal;
-  const Vec2 t0 = scene.texcoords[i0], t1 = scene.texcoords[i1], t2 = scene.texcoords[i2];
-  sp.uv = {t0.x * b0 + t1.x * b1 + t2.x * b2, t0.y * b0 + t1.y * b1 + t2.y * b2};
+  sp.shadingNormal = sp.geometricNormal;
+  // OBJ faces have normals at all their vertices or at none (then they are stored as zero).
+  if (!(scene.normals[v[0]] == Vec3{0, 0, 0})) {
+    const Vec3 n = scene.normals[v[0]] * b0 + scene.normals[v[1]] * b1 + scene.normals[v[2]] * b2;
+    const float len = length(n);
+    if (len > 0) sp.shadingNormal = n / len;
+    if (dot(sp.shadingNormal, sp.geometricNormal) < 0) sp.shadingNormal = -sp.shadingNormal;
+  }
   return sp;
+}
+
+inline Vec2 texcoordsAt(const Scene& scene, const SurfacePoint& sp) {
+  const uint32_t* v = &scene.indices[3 * sp.triangle];
+  const Vec2 t0 = scene.texcoords[v[0]], t1 = scene.texcoords[v[1]], t2 = scene.texcoords[v[2]];
+  const float b0 = 1.0f - sp.b1 - sp.b2;
+  return {t0.x * b0 + t1.x * sp.b1 + t2.x * sp.b2, t0.y * b0 + t1.y * sp.b1 + t2.y * sp.b2};
 }
 
 inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
   const Material& m = scene.materials[sp.materialId];
-  return {m.type, diffuseAlbedo(scene, m, sp.uv), m.ks, m.ns, m.ni};
+  const Rgb kd = m.kdTexture < 0 ? m.kd : diffuseAlbedo(scene, m, texcoordsAt(scene, sp));
+  return {m.type, kd, m.ks, m.ns, m.ni};
 }
 
 // Offsets a ray origin off the surface along the geometric normal, scaled to the coordinates'
