@@ -8,6 +8,7 @@
 #include "lucent/image/image.h"
 #include "lucent/methods/pathtrace.h"
 #include "lucent/scene/loader.h"
+#include "test_support.h"
 
 using namespace lucent;
 namespace fs = std::filesystem;
@@ -48,8 +49,8 @@ Rgb irradianceFacingUp(const Image& map) {
 }  // namespace
 
 TEST_CASE("Environment map: irradiance on a diffuse plane matches numerical integration", "[environment]") {
-  const fs::path dir = fs::temp_directory_path() / ("lucent-env-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::TempDir tmp("environment");
+  const fs::path& dir = tmp.path;
   const Image map = makeSkyMap(64, 32);
   writeExr(map, (dir / "sky.exr").string());
   std::ofstream(dir / "plane.obj") << "mtllib plane.mtl\nusemtl white\n"
@@ -60,7 +61,6 @@ TEST_CASE("Environment map: irradiance on a diffuse plane matches numerical inte
     "meshes": [ { "obj": "plane.obj" } ],
     "lights": [ { "type": "environment", "map": "sky.exr", "scale": 0.5 } ] })";
   const Scene scene = loadScene((dir / "scene.json").string(), {true});
-  fs::remove_all(dir);
 
   const Visibility vis(scene);
   PathTraceOptions opt;
@@ -69,18 +69,5 @@ TEST_CASE("Environment map: irradiance on a diffuse plane matches numerical inte
   opt.seed = 4;
   const RenderOutput out = renderPathTraced(scene, vis, opt);
   const Rgb expected = irradianceFacingUp(map) * (0.5f * 0.5f * kInvPi);  // scale * albedo / pi
-  for (int c = 0; c < 3; ++c) {
-    double sum = 0, sum2 = 0;
-    const size_t n = size_t(out.image.width()) * out.image.height();
-    for (int y = 0; y < out.image.height(); ++y)
-      for (int x = 0; x < out.image.width(); ++x) {
-        const double v = out.image.at(x, y, c);
-        sum += v;
-        sum2 += v * v;
-      }
-    const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / (n - 1));
-    INFO("channel " << c << ": " << mean << " +- " << se << " expected " << expected[c]);
-    REQUIRE(se < 0.02 * expected[c]);
-    REQUIRE(std::abs(mean - expected[c]) <= 4.5 * se);
-  }
+  test::requireImageMean(out.image, expected);
 }

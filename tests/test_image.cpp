@@ -13,30 +13,12 @@
 
 #include "lucent/image/image.h"
 #include "lucent/image/metrics.h"
+#include "test_support.h"
 
 namespace fs = std::filesystem;
 using namespace lucent;
 
 namespace {
-
-// A fresh directory per test, removed afterwards.
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    std::random_device rd;
-    path = fs::temp_directory_path() /
-           ("lucent_test_image_" + std::to_string(::getpid()) + "_" + std::to_string(rd()));
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string operator/(const std::string& name) const { return (path / name).string(); }
-  size_t entryCount() const {
-    return std::distance(fs::directory_iterator(path), fs::directory_iterator());
-  }
-};
 
 uint32_t bits(float f) {
   uint32_t u;
@@ -51,30 +33,9 @@ Image makeImage(int w, int h, std::vector<std::string> channels, std::vector<flo
   return image;
 }
 
-// Shell-quoted path (built with += to dodge a GCC 12 -Wrestrict false positive).
-std::string quoted(const std::string& path) {
-  std::string q = "'";
-  q += path;
-  q += "'";
-  return q;
-}
-
-struct RunResult {
-  int status;
-  std::string out;
-};
-
-// Runs the lucent executable with stderr appended to stdout.
-RunResult runLucent(const std::string& args) {
-  const std::string cmd = quoted(LUCENT_CLI) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  REQUIRE(pipe);
-  std::string out;
-  char buf[4096];
-  while (size_t n = fread(buf, 1, sizeof buf, pipe)) out.append(buf, n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+using test::quoted;
+using test::runLucent;
+using test::TempDir;
 
 }  // namespace
 
@@ -102,7 +63,7 @@ TEST_CASE("EXR round-trip is bit-exact for every channel and keeps the metadata"
                                   {"lucent:scene_hash", "9f86d081884c7d65"}};
   const std::string path = dir / "out.exr";
   writeExr(image, path, metadata);
-  CHECK(dir.entryCount() == 1);  // no temporary file left behind
+  CHECK(dir.entries().size() == 1);  // no temporary file left behind
 
   ImageMetadata readBack;
   const Image loaded = readImage(path, &readBack);
@@ -126,7 +87,7 @@ TEST_CASE("EXR overwrite replaces the file") {
   writeExr(makeImage(1, 1, {"Y"}, {1.0f}), path);
   writeExr(makeImage(1, 1, {"Y"}, {2.0f}), path);
   CHECK(readImage(path).at(0, 0, 0) == 2.0f);
-  CHECK(dir.entryCount() == 1);
+  CHECK(dir.entries().size() == 1);
 }
 
 TEST_CASE("PNG is sRGB-encoded, clamped and rounded") {
@@ -148,13 +109,13 @@ TEST_CASE("PNG is sRGB-encoded, clamped and rounded") {
       INFO("pixel " << x << " channel " << c);
       CHECK(byte(x, c) == expected[x][c]);
     }
-  CHECK(dir.entryCount() == 1);
+  CHECK(dir.entries().size() == 1);
 }
 
 TEST_CASE("PNG needs R, G and B") {
   TempDir dir;
   CHECK_THROWS_AS(writePng(makeImage(1, 1, {"R", "G"}, {0, 0}), dir / "x.png"), std::runtime_error);
-  CHECK(dir.entryCount() == 0);
+  CHECK(dir.entries().size() == 0);
 }
 
 TEST_CASE("Writing into a missing directory throws naming the path and leaves no file") {
@@ -169,7 +130,7 @@ TEST_CASE("Writing into a missing directory throws naming the path and leaves no
       CHECK_THAT(e.what(), Catch::Contains(path));
     }
   }
-  CHECK(dir.entryCount() == 0);
+  CHECK(dir.entries().size() == 0);
 }
 
 TEST_CASE("A failed rename removes the temporary file") {
@@ -178,7 +139,7 @@ TEST_CASE("A failed rename removes the temporary file") {
   fs::create_directories(dir.path / "out.exr" / "keep");
   CHECK_THROWS_WITH(writeExr(makeImage(1, 1, {"Y"}, {1}), dir / "out.exr"),
                     Catch::Contains(dir / "out.exr"));
-  CHECK(dir.entryCount() == 1);
+  CHECK(dir.entries().size() == 1);
   CHECK(fs::is_directory(dir.path / "out.exr"));
 }
 
@@ -269,10 +230,10 @@ TEST_CASE("lucent compare reports metrics and exits by threshold") {
   const double relmse = 0.01 / (1.01 * 1.01) / 6;  // one sample off by 0.1
 
   SECTION("under the threshold, with a heatmap") {
-    const RunResult r = runLucent("compare " + files + " --max-error 0.01 --heatmap " +
+    const test::CliRun r = runLucent("compare " + files + " --max-error 0.01 --heatmap " +
                                   quoted(dir / "heat.png"));
     CHECK(r.status == 0);
-    const auto json = nlohmann::json::parse(r.out);
+    const auto json = nlohmann::json::parse(r.output);
     CHECK(json["metric"] == "relmse");
     CHECK(json["value"].get<double>() == Approx(relmse).epsilon(1e-5));
     CHECK(json["passed"] == true);
@@ -286,28 +247,28 @@ TEST_CASE("lucent compare reports metrics and exits by threshold") {
     CHECK(heat.channelCount() == 3);
   }
   SECTION("above the threshold") {
-    const RunResult r = runLucent("compare " + files + " --metric mae --max-error 0.001");
+    const test::CliRun r = runLucent("compare " + files + " --metric mae --max-error 0.001");
     CHECK(r.status == 1);
-    const auto json = nlohmann::json::parse(r.out);
+    const auto json = nlohmann::json::parse(r.output);
     CHECK(json["metric"] == "mae");
     CHECK(json["passed"] == false);
   }
   SECTION("no threshold always passes") {
-    const RunResult r = runLucent("compare " + files);
+    const test::CliRun r = runLucent("compare " + files);
     CHECK(r.status == 0);
-    CHECK_FALSE(nlohmann::json::parse(r.out).contains("passed"));
+    CHECK_FALSE(nlohmann::json::parse(r.output).contains("passed"));
   }
   SECTION("a missing file is an error naming it") {
-    const RunResult r = runLucent("compare " + quoted(dir / "img.exr") + " " +
+    const test::CliRun r = runLucent("compare " + quoted(dir / "img.exr") + " " +
                                   quoted(dir / "nope.exr") + " --max-error 1");
     CHECK(r.status == 2);
-    CHECK_THAT(r.out, Catch::Contains(dir / "nope.exr"));
+    CHECK_THAT(r.output, Catch::Contains(dir / "nope.exr"));
   }
   SECTION("mismatched sizes are an error") {
     writeExr(Image(3, 1, {"R", "G", "B"}), dir / "small.exr");
-    const RunResult r =
+    const test::CliRun r =
         runLucent("compare " + quoted(dir / "small.exr") + " " + quoted(dir / "ref.exr"));
     CHECK(r.status == 2);
-    CHECK_THAT(r.out, Catch::Contains("3x1") && Catch::Contains("2x1"));
+    CHECK_THAT(r.output, Catch::Contains("3x1") && Catch::Contains("2x1"));
   }
 }

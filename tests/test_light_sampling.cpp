@@ -19,6 +19,7 @@
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/loader.h"
 #include "test_scenes.h"
+#include "test_support.h"
 
 using namespace lucent;
 using chi2::DirectionSample;
@@ -162,15 +163,7 @@ struct SampleChecks {
 
 bool relClose(double a, double b, double tol) { return std::abs(a - b) <= tol * std::max(std::abs(a), std::abs(b)); }
 
-// A directory for scene files that is removed at the end of the test.
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name)
-      : path(fs::temp_directory_path() / ("lucent-" + name + "-" + std::to_string(::getpid()))) {
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
+using test::TempDir;
 
 }  // namespace
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "lucent/scene/loader.h"
+#include "test_support.h"
 
 namespace fs = std::filesystem;
 using namespace lucent;
@@ -86,45 +87,10 @@ const std::vector<BadCase> kBadCases = {
 std::string badScene(const std::string& dir) { return kSource + "/tests/data/bad/" + dir + "/scene.json"; }
 std::string goodScene(const std::string& dir) { return kSource + "/tests/data/good/" + dir + "/scene.json"; }
 
-// A fresh, empty directory, removed afterwards.
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    std::random_device rd;
-    path = fs::temp_directory_path() /
-           ("lucent_test_loader_" + std::to_string(::getpid()) + "_" + std::to_string(rd()));
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string operator/(const std::string& name) const { return (path / name).string(); }
-  std::vector<std::string> entries() const {
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(path)) names.push_back(e.path().filename().string());
-    return names;
-  }
-};
+using test::quoted;
+using test::TempDir;
 
-struct Run {
-  int status = -1;
-  std::string output;
-};
-
-// Runs `lucent ARGS` with stderr folded into stdout.
-Run runCli(const std::string& args) {
-  Run run;
-  FILE* pipe = ::popen((std::string("'") + LUCENT_CLI + "' " + args + " 2>&1").c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  for (size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) run.output.append(buffer, n);
-  const int status = ::pclose(pipe);
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  return run;
-}
-
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+using test::runLucent;
 
 std::string renderArgs(const std::string& scene, const TempDir& out, const std::string& extra = "") {
   return "render " + quoted(scene) + " -o " + quoted(out / "out.exr") + " --png " + quoted(out / "out.png") +
@@ -164,7 +130,7 @@ TEST_CASE("loader: lucent render rejects every broken scene: message, non-zero s
   for (const BadCase& bad : kBadCases) {
     CAPTURE(bad.dir);
     TempDir out;
-    const Run run = runCli(renderArgs(badScene(bad.dir), out));
+    const test::CliRun run = runLucent(renderArgs(badScene(bad.dir), out));
     CAPTURE(run.output);
     CHECK(run.status == 1);
     CHECK_THAT(run.output, Catch::Matchers::Contains("lucent: error: "));
@@ -177,7 +143,7 @@ TEST_CASE("loader: lucent render rejects impossible options before writing anyth
   const std::string scene = goodScene("base");
   SECTION("the valid base scene renders, leaving exactly the two images") {
     TempDir out;
-    const Run run = runCli(renderArgs(scene, out));
+    const test::CliRun run = runLucent(renderArgs(scene, out));
     CAPTURE(run.output);
     CHECK(run.status == 0);
     auto names = out.entries();
@@ -188,7 +154,7 @@ TEST_CASE("loader: lucent render rejects impossible options before writing anyth
     for (const std::string extra : {"--resolution 10x0", "--resolution 10", "--spp 0", "--method nonsense"}) {
       CAPTURE(extra);
       TempDir out;
-      const Run run = runCli(renderArgs(scene, out, extra));
+      const test::CliRun run = runLucent(renderArgs(scene, out, extra));
       CAPTURE(run.output);
       CHECK(run.status != 0);
       CHECK(!run.output.empty());
@@ -197,7 +163,7 @@ TEST_CASE("loader: lucent render rejects impossible options before writing anyth
   }
   SECTION("an EXR output without .exr") {
     TempDir out;
-    const Run run = runCli("render " + quoted(scene) + " -o " + quoted(out / "out.png") + " --spp 1 --quiet");
+    const test::CliRun run = runLucent("render " + quoted(scene) + " -o " + quoted(out / "out.png") + " --spp 1 --quiet");
     CAPTURE(run.output);
     CHECK(run.status != 0);
     CHECK_THAT(run.output, Catch::Matchers::Contains("must end in .exr"));
@@ -205,7 +171,7 @@ TEST_CASE("loader: lucent render rejects impossible options before writing anyth
   }
   SECTION("an output directory that does not exist") {
     TempDir out;
-    const Run run = runCli("render " + quoted(scene) + " -o " + quoted(out / "missing/out.exr") +
+    const test::CliRun run = runLucent("render " + quoted(scene) + " -o " + quoted(out / "missing/out.exr") +
                            " --png " + quoted(out / "out.png") + " --spp 1 --quiet");
     CAPTURE(run.output);
     CHECK(run.status != 0);

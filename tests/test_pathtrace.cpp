@@ -7,43 +7,9 @@
 #include "lucent/methods/pathtrace.h"
 #include "lucent/scene/loader.h"
 #include "test_scenes.h"
+#include "test_support.h"
 
 using namespace lucent;
-
-namespace {
-
-struct ChannelStats {
-  double mean, standardError;
-};
-
-// Mean of a channel over the image, with the standard error estimated from the spread of the
-// (independent) pixel estimates.
-ChannelStats channelStats(const Image& image, int channel) {
-  const size_t n = size_t(image.width()) * image.height();
-  double sum = 0, sum2 = 0;
-  for (int y = 0; y < image.height(); ++y)
-    for (int x = 0; x < image.width(); ++x) {
-      const double v = image.at(x, y, channel);
-      sum += v;
-      sum2 += v * v;
-    }
-  const double mean = sum / n;
-  const double var = std::max(0.0, sum2 / n - mean * mean) * n / (n - 1);
-  return {mean, std::sqrt(var / n)};
-}
-
-// Checks the image mean against `expected` within 4.5 standard errors (two-sided p ~ 7e-6 per
-// channel for the fixed seed), and checks that every pixel is finite.
-void requireMean(const Image& image, Rgb expected) {
-  for (int c = 0; c < 3; ++c) {
-    const ChannelStats s = channelStats(image, c);
-    INFO("channel " << c << ": mean " << s.mean << " +- " << s.standardError << ", expected " << expected[c]);
-    REQUIRE(s.standardError < 0.02 * expected[c]);  // the test has the power to see a 10% error
-    REQUIRE(std::abs(s.mean - expected[c]) <= 4.5 * s.standardError + 1e-6 * expected[c]);
-  }
-}
-
-}  // namespace
 
 TEST_CASE("Closed diffuse furnace: radiance converges to Le / (1 - rho)", "[pathtrace][furnace]") {
   const Rgb rho(0.5f, 0.7f, 0.3f), le(1.0f, 2.0f, 0.5f);
@@ -60,7 +26,7 @@ TEST_CASE("Closed diffuse furnace: radiance converges to Le / (1 - rho)", "[path
   opt.maxDepth = 100000;
   opt.seed = 7;
   const RenderOutput out = renderPathTraced(scene, vis, opt);
-  requireMean(out.image, Rgb(le.r / (1 - rho.r), le.g / (1 - rho.g), le.b / (1 - rho.b)));
+  test::requireImageMean(out.image, Rgb(le.r / (1 - rho.r), le.g / (1 - rho.g), le.b / (1 - rho.b)));
 }
 
 TEST_CASE("Closed diffuse furnace with max depth: geometric series truncated", "[pathtrace][furnace]") {
@@ -83,7 +49,7 @@ TEST_CASE("Closed diffuse furnace with max depth: geometric series truncated", "
     float expected = 0, term = 1;
     for (int d = 0; d <= depth; ++d, term *= rho) expected += term;
     INFO("max depth " << depth);
-    requireMean(out.image, Rgb(expected));
+    test::requireImageMean(out.image, Rgb(expected));
   }
 }
 
@@ -101,7 +67,7 @@ TEST_CASE("White furnace: a convex white object under a constant environment van
   opt.spp = 64;
   opt.seed = 11;
   const RenderOutput out = renderPathTraced(scene, vis, opt);
-  requireMean(out.image, scene.environment.radiance);
+  test::requireImageMean(out.image, scene.environment.radiance);
 }
 
 TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "[pathtrace][determinism]") {

@@ -1,49 +1,27 @@
 // `lucent render` end to end: outputs, metadata, the JSON summary, layers and the time budget.
 #include <catch2/catch.hpp>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "lucent/image/image.h"
+#include "test_support.h"
 
 using namespace lucent;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Run {
-  int status;
-  std::string output;
-};
-
-Run run(const std::string& args) {
-  const std::string command = std::string(LUCENT_CLI) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  REQUIRE(pipe);
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
-
-fs::path freshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("lucent-" + name + "-" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+using test::runLucent;
 
 const std::string kScene = LUCENT_SOURCE_DIR "/scenes/cornell-box.json";
 
 }  // namespace
 
 TEST_CASE("render writes EXR and PNG with metadata and prints one JSON summary", "[cli][render]") {
-  const fs::path dir = freshDir("render");
-  const std::string exr = (dir / "out.exr").string(), png = (dir / "out.png").string();
-  const Run r = run("render " + kScene + " --method pt --spp 2 --seed 3 --threads 2 --resolution 40x30 -o " + exr +
+  const test::TempDir dir("render-cli");
+  const std::string exr = dir / "out.exr", png = dir / "out.png";
+  const test::CliRun r = runLucent("render " + kScene + " --method pt --spp 2 --seed 3 --threads 2 --resolution 40x30 -o " + exr +
                     " --png " + png + " --layers");
   INFO(r.output);
   REQUIRE(r.status == 0);
@@ -83,14 +61,13 @@ TEST_CASE("render writes EXR and PNG with metadata and prints one JSON summary",
   for (int y = 0; y < 30; ++y)
     for (int x = 0; x < 40; ++x)
       REQUIRE(image.at(x, y, r0) == Approx(image.at(x, y, d0) + image.at(x, y, i0)).margin(1e-5));
-  fs::remove_all(dir);
 }
 
 TEST_CASE("render: same seed gives the same pixels with 1 and 2 threads; another seed differs", "[cli][render][determinism]") {
-  const fs::path dir = freshDir("determinism");
+  const test::TempDir dir("render-cli");
   auto render = [&](const std::string& name, const std::string& extra) {
-    const std::string exr = (dir / name).string();
-    const Run r = run("render " + kScene + " --spp 4 --resolution 32x32 --quiet -o " + exr + " " + extra);
+    const std::string exr = dir / name;
+    const test::CliRun r = runLucent("render " + kScene + " --spp 4 --resolution 32x32 --quiet -o " + exr + " " + extra);
     INFO(r.output);
     REQUIRE(r.status == 0);
     return readImage(exr).pixels();
@@ -100,13 +77,12 @@ TEST_CASE("render: same seed gives the same pixels with 1 and 2 threads; another
   const auto c = render("c.exr", "--threads 2 --seed 1");
   REQUIRE(a == b);
   REQUIRE(a != c);
-  fs::remove_all(dir);
 }
 
 TEST_CASE("render: a time budget stops early and records the samples taken", "[cli][render]") {
-  const fs::path dir = freshDir("budget");
-  const std::string exr = (dir / "out.exr").string();
-  const Run r = run("render " + kScene + " --spp 1000000 --time-budget 0.5 --resolution 64x64 --quiet -o " + exr);
+  const test::TempDir dir("render-cli");
+  const std::string exr = dir / "out.exr";
+  const test::CliRun r = runLucent("render " + kScene + " --spp 1000000 --time-budget 0.5 --resolution 64x64 --quiet -o " + exr);
   INFO(r.output);
   REQUIRE(r.status == 0);
   const auto summary = nlohmann::json::parse(r.output);
@@ -119,5 +95,4 @@ TEST_CASE("render: a time budget stops early and records the samples taken", "[c
   bool found = false;
   for (const auto& [k, v] : meta) found |= (k == "lucent:spp" && v == std::to_string(spp));
   REQUIRE(found);
-  fs::remove_all(dir);
 }
