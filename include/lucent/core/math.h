@@ -92,6 +92,13 @@ struct Frame {
   Vec3 toWorld(Vec3 v) const { return s * v.x + t * v.y + n * v.z; }
 };
 
+// Offsets a ray origin off the surface along the geometric normal, scaled to the coordinates'
+// magnitude so that it works for scenes in millimetres and in metres alike.
+inline Vec3 offsetOrigin(Vec3 p, Vec3 ng, Vec3 w) {
+  const float scale = 1e-4f * std::max({1.0f, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  return p + ng * (dot(w, ng) > 0 ? scale : -scale);
+}
+
 struct Bounds3 {
   Vec3 lo{kInf, kInf, kInf};
   Vec3 hi{-kInf, -kInf, -kInf};

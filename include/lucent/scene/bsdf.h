@@ -22,6 +22,10 @@ struct SurfaceBsdf {
   }
 };
 
+// Radiance is transported from the camera; importance (photon flux) from the lights. They differ in
+// refraction, where radiance is scaled by (eta_i / eta_t)^2 and flux is not (Veach 1997, 5.2).
+enum class Transport { Radiance, Importance };
+
 struct BsdfSample {
   Vec3 wi;
   Rgb weight;       // f * |cos| / pdf (for delta lobes, the lobe's weight)
@@ -61,7 +65,8 @@ inline float bsdfPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
 
 // Samples wi given wo; `u` picks the lobe, `u2` the direction. For glass the outside (index 1) is
 // the +z side, so wo.z < 0 means the path is inside the dielectric.
-inline BsdfSample sampleBsdf(const SurfaceBsdf& b, Vec3 wo, float u, Vec2 u2) {
+inline BsdfSample sampleBsdf(const SurfaceBsdf& b, Vec3 wo, float u, Vec2 u2,
+                             Transport transport = Transport::Radiance) {
   BsdfSample s;
   switch (b.type) {
     case MaterialType::Mirror:
@@ -87,7 +92,7 @@ inline BsdfSample sampleBsdf(const SurfaceBsdf& b, Vec3 wo, float u, Vec2 u2) {
         const float sign = entering ? -1.0f : 1.0f;
         s.wi = {-eta * wo.x, -eta * wo.y, sign * cosT};
         // Radiance is compressed into the denser medium: scale by (eta_i / eta_t)^2.
-        s.weight = Rgb(eta * eta);
+        s.weight = Rgb(transport == Transport::Radiance ? eta * eta : 1.0f);
         s.pdf = 1.0f - F;
       }
       return s;

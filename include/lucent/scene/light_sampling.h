@@ -97,4 +97,71 @@ inline float environmentLightPdf(const Scene& scene, Vec3 wi) {
   return pmf * env.distribution.pdf(uv) / (2.0f * kPi * kPi * sinTheta);
 }
 
+// Emission: a ray leaving a light, for photon tracing and virtual point lights.
+struct EmissionSample {
+  Ray ray;      // origin on the light (or on a disc upstream of the scene), direction of travel
+  Rgb power;    // flux of this one sample: Le cos / (selection pmf * area pdf * direction pdf)
+  bool valid = false;
+};
+
+// Area lights emit cosine-distributed from a uniform point; point lights uniformly over the sphere;
+// directional and environment light enter through a disc of the scene's bounding radius R placed
+// upstream of the scene, perpendicular to the direction, so that it covers every surface.
+inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPosition, Vec2 uDirection) {
+  EmissionSample s;
+  if (scene.lights.empty()) return s;
+  float pmf;
+  const Light& light = scene.lights[scene.lightDistribution.sampleDiscrete(uLight, &pmf)];
+  if (!(pmf > 0)) return s;
+  const Vec3 center = scene.boundingCenter();
+  const float radius = std::max(scene.boundingRadius(), 1e-6f);
+  // Origin on a disc of radius R, perpendicular to `travel`, a distance R upstream of the centre.
+  auto discOrigin = [&](Vec3 travel) {
+    const Vec2 d = sampleConcentricDisk(uPosition);
+    return center - travel * radius + Frame(travel).toWorld({d.x * radius, d.y * radius, 0});
+  };
+  const float discArea = kPi * radius * radius;
+  switch (light.type) {
+    case LightType::Triangle: {
+      const uint32_t t = light.triangle;
+      const Vec2 b = sampleUniformTriangle(uPosition);
+      const Vec3 p = scene.vertex(t, 0) * (1 - b.x - b.y) + scene.vertex(t, 1) * b.x + scene.vertex(t, 2) * b.y;
+      const Vec3 n = scene.geometricNormal(t);
+      const Vec3 d = Frame(n).toWorld(sampleCosineHemisphere(uDirection));
+      s.ray = {offsetOrigin(p, n, d), d};
+      s.power = scene.materials[scene.materialIds[t]].ke * (kPi * scene.triangleArea(t) / pmf);
+      break;
+    }
+    case LightType::Point:
+      s.ray = {light.vector, sampleUniformSphere(uDirection)};
+      s.power = light.value * (4.0f * kPi / pmf);
+      break;
+    case LightType::Directional:
+      s.ray = {discOrigin(light.vector), light.vector};
+      s.power = light.value * (discArea / pmf);
+      break;
+    case LightType::Environment: {
+      const Environment& env = scene.environment;
+      Vec3 toLight;
+      float pdf;
+      if (env.texels.empty()) {
+        toLight = sampleUniformSphere(uDirection);
+        pdf = kUniformSpherePdf;
+      } else {
+        float pdf2;
+        const Vec2 uv = env.distribution.sample(uDirection, &pdf2);
+        toLight = latLongToDirection(uv);
+        const float sinTheta = std::sin(kPi * uv.y);
+        if (!(sinTheta > 0) || !(pdf2 > 0)) return s;
+        pdf = pdf2 / (2.0f * kPi * kPi * sinTheta);
+      }
+      s.ray = {discOrigin(-toLight), -toLight};
+      s.power = environmentRadiance(env, toLight) * (discArea / (pmf * pdf));
+      break;
+    }
+  }
+  s.valid = !s.power.isBlack() && isFinite(s.power);
+  return s;
+}
+
 }  // namespace lucent

@@ -49,11 +49,5 @@ inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
   return {m.type, kd, m.ks, m.ns, m.ni};
 }
 
-// Offsets a ray origin off the surface along the geometric normal, scaled to the coordinates'
-// magnitude so that it works for scenes in millimetres and in metres alike.
-inline Vec3 offsetOrigin(Vec3 p, Vec3 ng, Vec3 w) {
-  const float scale = 1e-4f * std::max({1.0f, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-  return p + ng * (dot(w, ng) > 0 ? scale : -scale);
-}
 
 }  // namespace lucent

@@ -1,0 +1,35 @@
+// Unit vectors in 32 bits by the octahedral mapping (two 16-bit coordinates).
+#pragma once
+#include <cmath>
+#include <cstdint>
+
+#include "lucent/core/math.h"
+
+namespace lucent {
+
+inline uint32_t encodeOctahedral(Vec3 v) {
+  const float l1 = std::abs(v.x) + std::abs(v.y) + std::abs(v.z);
+  float x = v.x / l1, y = v.y / l1;
+  if (v.z < 0) {
+    const float ox = (1 - std::abs(y)) * std::copysign(1.0f, x);
+    const float oy = (1 - std::abs(x)) * std::copysign(1.0f, y);
+    x = ox;
+    y = oy;
+  }
+  auto quantize = [](float f) { return uint32_t(std::lround((std::clamp(f, -1.0f, 1.0f) * 0.5f + 0.5f) * 65535.0f)); };
+  return quantize(x) | quantize(y) << 16;
+}
+
+inline Vec3 decodeOctahedral(uint32_t e) {
+  const float x = (e & 0xffff) / 65535.0f * 2 - 1, y = (e >> 16) / 65535.0f * 2 - 1;
+  Vec3 v{x, y, 1 - std::abs(x) - std::abs(y)};
+  if (v.z < 0) {
+    const float ox = (1 - std::abs(y)) * std::copysign(1.0f, x);
+    const float oy = (1 - std::abs(x)) * std::copysign(1.0f, y);
+    v.x = ox;
+    v.y = oy;
+  }
+  return normalize(v);
+}
+
+}  // namespace lucent

@@ -1,0 +1,120 @@
+#include "photon_tracing.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "lucent/core/rng.h"
+#include "lucent/scene/light_sampling.h"
+#include "lucent/scene/surface.h"
+
+namespace lucent {
+namespace {
+
+// A photon in flight between two stages: one work item of the wavefront.
+struct PhotonPath {
+  Ray ray;
+  Rgb power;
+  uint32_t index;         // the emitted photon's index: the key of its random streams
+  uint32_t specularOnly;  // 1 while every bounce so far was specular
+};
+static_assert(sizeof(PhotonPath) == 52, "PhotonPath is a fixed-size record");
+
+// What one work item of a bounce stage produces: at most one stored photon and one continuation.
+struct BounceResult {
+  Photon photon;
+  PhotonPath next;
+  uint8_t stored = 0, caustic = 0, alive = 0;
+};
+
+BounceResult bounce(const Scene& scene, const Visibility& vis, const PhotonPath& path, uint32_t depth, uint64_t seed) {
+  BounceResult out;
+  const Hit hit = vis.intersect(path.ray);
+  if (!hit.found()) return out;
+  const SurfacePoint sp = surfaceAt(scene, hit.triangle, hit.b1, hit.b2);
+  const SurfaceBsdf bsdf = bsdfAt(scene, sp);
+  const Vec3 wo = -path.ray.direction;
+  const bool frontFace = dot(wo, sp.geometricNormal) > 0;
+
+  if (!bsdf.isDelta() && !(bsdf.kd + bsdf.ks).isBlack()) {
+    out.photon = {sp.position, path.power, encodeOctahedral(wo), depth};
+    out.stored = 1;
+    out.caustic = path.specularOnly && depth > 0;
+  }
+
+  Rng rng(seed, path.index, depth + 1);
+  Vec3 n = sp.shadingNormal;
+  if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
+  const Frame frame(n);
+  const Vec3 woLocal = frame.toLocal(wo);
+  // Russian roulette by reflectance: a grey surface keeps the photon's power unchanged.
+  const float survival = bsdf.type == MaterialType::Glass    ? 1.0f
+                         : bsdf.type == MaterialType::Mirror ? std::min(1.0f, bsdf.ks.maxComponent())
+                                                             : std::min(1.0f, (bsdf.kd + bsdf.ks).maxComponent());
+  if (!(rng.uniform() < survival)) return out;
+  const float uLobe = rng.uniform();
+  const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, rng.uniform2(), Transport::Importance);
+  if (!bs.valid) return out;
+  const Vec3 wi = frame.toWorld(bs.wi);
+  const bool transmits = bs.wi.z * woLocal.z < 0;
+  if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) return out;
+  out.next = {{offsetOrigin(sp.position, sp.geometricNormal, wi), wi}, path.power * bs.weight * (1.0f / survival),
+              path.index, uint32_t(path.specularOnly && bs.delta)};
+  out.alive = !out.next.power.isBlack() && isFinite(out.next.power);
+  return out;
+}
+
+}  // namespace
+
+PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonTracingOptions& options) {
+  PhotonMaps maps;
+  maps.emitted = options.photons;
+  const float share = 1.0f / float(std::max<uint32_t>(1, options.photons));
+
+  // Stage 0: emission, one work item per photon.
+  Stopwatch emitClock;
+  std::vector<PhotonPath> paths(options.photons);
+  std::vector<uint8_t> emitted(options.photons);
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, options.photons, 1024), [&](const auto& r) {
+    for (uint32_t i = r.begin(); i != r.end(); ++i) {
+      Rng rng(options.seed, i, 0);
+      const float uLight = rng.uniform();
+      const Vec2 uPosition = rng.uniform2();
+      const EmissionSample e = sampleEmission(scene, uLight, uPosition, rng.uniform2());
+      paths[i] = {e.ray, e.power * share, i, 1};
+      emitted[i] = e.valid;
+    }
+  });
+  size_t live = 0;
+  for (uint32_t i = 0; i < options.photons; ++i)
+    if (emitted[i]) paths[live++] = paths[i];
+  paths.resize(live);
+  maps.stats.addStage("emit_photons", emitClock.seconds());
+
+  // One stage per bounce; the compaction keeps photon-index order, so the maps do not depend on
+  // the thread count (a GPU would compact with a prefix sum over the same flags).
+  Stopwatch traceClock;
+  std::vector<BounceResult> results;
+  for (uint32_t depth = 0; depth < options.maxBounces && !paths.empty(); ++depth) {
+    maps.alivePerBounce.push_back(static_cast<uint32_t>(paths.size()));
+    results.resize(paths.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, paths.size(), 256), [&](const auto& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) results[i] = bounce(scene, vis, paths[i], depth, options.seed);
+    });
+    size_t next = 0;
+    for (const BounceResult& b : results) {
+      if (b.stored) {
+        maps.global.push_back(b.photon);
+        if (b.caustic) maps.caustic.push_back(b.photon);
+      }
+      if (b.alive) paths[next++] = b.next;
+    }
+    paths.resize(next);
+  }
+  maps.stats.addStage("trace_photons", traceClock.seconds());
+  maps.stats.addCounter("photons_emitted", options.photons);
+  maps.stats.addCounter("global_photons", maps.global.size());
+  maps.stats.addCounter("caustic_photons", maps.caustic.size());
+  return maps;
+}
+
+}  // namespace lucent

@@ -1,0 +1,33 @@
+// Breadth-first photon tracing (Purcell et al. 2003, section 2.1): all photons advance one bounce per
+// stage, as a wavefront, so that every stage is one data-parallel pass over flat arrays.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "lucent/core/stats.h"
+#include "lucent/scene/scene.h"
+#include "lucent/trace/visibility.h"
+#include "photon.h"
+
+namespace lucent {
+
+struct PhotonTracingOptions {
+  uint32_t photons = 65000;  // photon paths emitted
+  uint32_t maxBounces = 64;  // interactions followed per path (Russian roulette ends most far earlier)
+  uint64_t seed = 0;
+};
+
+// Photons stored at non-specular surfaces. The caustic map holds those that reached a diffuse or
+// glossy surface through specular bounces only (L S+ D); the global map holds every stored photon
+// (L {S|D}* D), direct ones included.
+struct PhotonMaps {
+  std::vector<Photon> global;
+  std::vector<Photon> caustic;
+  uint32_t emitted = 0;
+  std::vector<uint32_t> alivePerBounce;  // photons entering each stage
+  RenderStats stats;
+};
+
+PhotonMaps tracePhotons(const Scene& scene, const Visibility& visibility, const PhotonTracingOptions& options);
+
+}  // namespace lucent

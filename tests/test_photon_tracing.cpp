@@ -1,0 +1,173 @@
+// Breadth-first photon tracing: emitted power, power conservation over bounces, caustic paths and
+// determinism.
+#include <catch2/catch.hpp>
+
+#include <cstring>
+
+#include "lucent/core/parallel.h"
+#include "lucent/scene/loader.h"
+#include "methods/photonmap/photon_tracing.h"
+#include "test_scenes.h"
+
+using namespace lucent;
+
+namespace {
+
+Rgb storedPower(const std::vector<Photon>& photons, int bounce = -1) {
+  double sum[3] = {0, 0, 0};
+  for (const Photon& p : photons)
+    if (bounce < 0 || int(p.flags & 0xff) == bounce)
+      for (int c = 0; c < 3; ++c) sum[c] += p.power[c];
+  return Rgb(float(sum[0]), float(sum[1]), float(sum[2]));
+}
+
+// A closed box (side 2) of grey albedo rho whose walls all emit Ke.
+Scene emissiveBox(float rho, Rgb ke) {
+  Scene scene;
+  Material m;
+  m.kd = Rgb(rho);
+  m.ke = ke;
+  test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, test::addMaterial(scene, m, "walls"), true);
+  scene.camera = test::testCamera({0, 0, 0}, {0, 0, -1}, 8, 8);
+  finalizeScene(scene);
+  return scene;
+}
+
+// A closed, non-emitting box of albedo rho, for lights placed in code.
+Scene darkBox(float rho) { return emissiveBox(rho, Rgb(0.0f)); }
+
+}  // namespace
+
+TEST_CASE("Photons leave area lights with the lights' total power", "[photons]") {
+  const Rgb ke(1.0f, 2.0f, 0.5f);
+  const Scene scene = emissiveBox(0.5f, ke);
+  const Visibility vis(scene);
+  PhotonTracingOptions opt;
+  opt.photons = 20000;
+  opt.maxBounces = 1;
+  const PhotonMaps maps = tracePhotons(scene, vis, opt);
+  // Every photon hits a wall of the closed box at its first bounce, carrying an equal share.
+  const Rgb total = ke * (kPi * 24.0f);  // Le * pi * area of 6 faces of side 2
+  const Rgb first = storedPower(maps.global, 0);
+  REQUIRE(maps.global.size() == opt.photons);
+  for (int c = 0; c < 3; ++c) REQUIRE(first[c] == Approx(total[c]).epsilon(1e-4));
+}
+
+TEST_CASE("Stored power over all bounces follows the geometric series of the albedo", "[photons]") {
+  // With Russian roulette by a grey albedo rho, each photon keeps its power Phi/N and is stored
+  // 1 + G times, G geometric with mean rho/(1-rho) and variance rho/(1-rho)^2.
+  for (float rho : {0.3f, 0.6f, 0.85f}) {
+    const Scene scene = emissiveBox(rho, Rgb(1.0f));
+    const Visibility vis(scene);
+    PhotonTracingOptions opt;
+    opt.photons = 50000;
+    opt.maxBounces = 10000;
+    opt.seed = 17;
+    const PhotonMaps maps = tracePhotons(scene, vis, opt);
+    const double phi = kPi * 24.0, expected = phi / (1 - rho);
+    const double sigma = phi * std::sqrt(rho) / (1 - rho) / std::sqrt(double(opt.photons));
+    const double total = storedPower(maps.global).g;
+    INFO("rho " << rho << ": stored " << total << ", expected " << expected << " +- " << sigma);
+    REQUIRE(std::abs(total - expected) <= 4.5 * sigma);
+    // Photons alive at bounce b: binomial with probability rho^b.
+    for (size_t b = 1; b < std::min<size_t>(maps.alivePerBounce.size(), 6); ++b) {
+      const double p = std::pow(rho, double(b)), n = opt.photons;
+      REQUIRE(std::abs(maps.alivePerBounce[b] - n * p) <= 4.5 * std::sqrt(n * p * (1 - p)) + 1);
+    }
+    REQUIRE(maps.caustic.empty());
+  }
+}
+
+TEST_CASE("Point, directional and environment lights emit their power", "[photons]") {
+  SECTION("a point light inside a closed box: every photon lands") {
+    Scene scene = darkBox(0.5f);
+    scene.lights.push_back({LightType::Point, 0, {0.2f, 0.3f, -0.1f}, Rgb(3.0f, 2.0f, 1.0f) / (4 * kPi)});
+    finalizeScene(scene);
+    const Visibility vis(scene);
+    PhotonTracingOptions opt;
+    opt.photons = 10000;
+    opt.maxBounces = 1;
+    const Rgb first = storedPower(tracePhotons(scene, vis, opt).global, 0);
+    REQUIRE(first.r == Approx(3.0f).epsilon(1e-4));
+    REQUIRE(first.g == Approx(2.0f).epsilon(1e-4));
+    REQUIRE(first.b == Approx(1.0f).epsilon(1e-4));
+  }
+  SECTION("directional and constant environment light on a small plane") {
+    // A 1x1 plane in a scene whose bounding sphere is set by a far-away tiny triangle, so the
+    // plane catches a small fraction of the photons: flux E cos(theta) A (directional) and
+    // pi L A per side (environment); binomial tolerances.
+    for (bool environment : {false, true}) {
+      Scene scene;
+      Material grey;
+      grey.kd = Rgb(0.5f);
+      const uint32_t m = test::addMaterial(scene, grey, "grey");
+      test::addBox(scene, {-0.5f, -0.001f, -0.5f}, {0.5f, 0.0f, 0.5f}, m, false);
+      test::addBox(scene, {3.0f, 0.0f, 0.0f}, {3.001f, 0.001f, 0.001f}, m, false);
+      const Vec3 dir = normalize(Vec3{0.3f, -1.0f, 0.2f});
+      if (environment) {
+        scene.environment.present = true;
+        scene.environment.radiance = Rgb(2.0f);
+      } else {
+        scene.lights.push_back({LightType::Directional, 0, dir, Rgb(5.0f)});
+      }
+      scene.camera = test::testCamera({0, 2, 2}, {0, 0, 0}, 8, 8);
+      finalizeScene(scene);
+      const Visibility vis(scene);
+      PhotonTracingOptions opt;
+      opt.photons = 200000;
+      opt.maxBounces = 1;
+      const PhotonMaps maps = tracePhotons(scene, vis, opt);
+      double onPlane = 0;
+      size_t hits = 0;
+      for (const Photon& p : maps.global)
+        if (p.position.x < 1.0f) onPlane += p.power.g, ++hits;
+      // Faces of the thin slab: top and bottom 1x1, sides negligible (0.001 high).
+      const double expected = environment ? 2 * kPi * 2.0 * 1.0 : 5.0 * std::abs(dir.y) * 1.0;
+      const double perPhoton = onPlane / std::max<size_t>(hits, 1);
+      const double sigma = perPhoton * std::sqrt(double(hits));  // Poisson-like count noise
+      INFO((environment ? "environment" : "directional") << ": " << onPlane << " vs " << expected);
+      REQUIRE(hits > 1000);
+      REQUIRE(std::abs(onPlane - expected) <= 4.5 * sigma + 0.02 * expected);
+    }
+  }
+}
+
+TEST_CASE("Caustic photons come through specular bounces only", "[photons]") {
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true});
+  const Visibility vis(scene);
+  PhotonTracingOptions opt;
+  opt.photons = 20000;
+  const PhotonMaps maps = tracePhotons(scene, vis, opt);
+  REQUIRE(maps.caustic.size() > 100);
+  for (const Photon& p : maps.caustic) REQUIRE((p.flags & 0xff) >= 1);
+  // Every caustic photon is in the global map too.
+  size_t found = 0;
+  for (const Photon& c : maps.caustic)
+    for (const Photon& g : maps.global)
+      if (g.position == c.position && g.power == c.power) {
+        ++found;
+        break;
+      }
+  REQUIRE(found == maps.caustic.size());
+  const Scene diffuse = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
+  const Visibility diffuseVis(diffuse);
+  REQUIRE(tracePhotons(diffuse, diffuseVis, opt).caustic.empty());
+}
+
+TEST_CASE("Photon maps are identical with 1 and 2 threads", "[photons][determinism]") {
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true});
+  PhotonTracingOptions opt;
+  opt.photons = 30000;
+  std::vector<Photon> reference;
+  for (int threads : {1, 2}) {
+    ParallelScope scope(threads);
+    const Visibility vis(scene);
+    const auto maps = tracePhotons(scene, vis, opt);
+    if (threads == 1) {
+      reference = maps.global;
+    } else {
+      REQUIRE(maps.global.size() == reference.size());
+      REQUIRE(std::memcmp(maps.global.data(), reference.data(), reference.size() * sizeof(Photon)) == 0);
+    }
+  }
+}
