@@ -46,11 +46,7 @@ RecordedRays recordRays(const Scene& scene, const Visibility& vis, int spp, uint
           Vec3 n = sp.geometricNormal;
           if (dot(n, ray.direction) > 0) n = -n;
           const LightSample ls = sampleLight(scene, sp.position, rng.uniform(), rng.uniform2());
-          if (ls.pdf > 0 && dot(ls.wi, n) > 0) {
-            Ray shadow{offsetOrigin(sp.position, n, ls.wi), ls.wi};
-            shadow.tMax = std::isfinite(ls.distance) ? ls.distance * (1 - 1e-4f) : kInf;
-            out.shadow.push_back(shadow);
-          }
+          if (ls.pdf > 0 && dot(ls.wi, n) > 0) out.shadow.push_back(shadowRay(sp.position, n, ls));
           const Vec3 wi = Frame(n).toWorld(sampleCosineHemisphere(rng.uniform2()));
           ray = {offsetOrigin(sp.position, n, wi), wi};
           const float albedo = bsdfAt(scene, sp).kd.maxComponent();

@@ -93,3 +93,121 @@ TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "
     }
   }
 }
+
+namespace {
+
+// Sum of per-pixel differences over the square root of the sum of their squares: close to a
+// standard normal when the two images estimate the same thing with independent pixels.
+double agreementZ(const Image& a, const Image& b, int channel) {
+  double sum = 0, sum2 = 0;
+  for (int y = 0; y < a.height(); ++y)
+    for (int x = 0; x < a.width(); ++x) {
+      const double d = double(a.at(x, y, channel)) - b.at(x, y, channel);
+      sum += d;
+      sum2 += d * d;
+    }
+  return sum / std::sqrt(sum2);
+}
+
+}  // namespace
+
+TEST_CASE("MIS, light sampling alone and BSDF sampling alone converge to the same image", "[pathtrace]") {
+  // Light sampling alone finds what BSDF sampling misses and vice versa: any error in a pdf, a
+  // MIS weight or a shadow ray (a light blocking its own samples) breaks the agreement.
+  for (const char* file : {"/scenes/cornell-box.json", "/scenes/cornell-box-glossy.json"}) {
+    Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + file, {true});
+    scene.camera.width = 64;
+    scene.camera.height = 64;
+    const Visibility vis(scene);
+    PathTraceOptions opt;
+    opt.spp = 256;
+    opt.maxDepth = 3;
+    std::vector<Image> images;
+    for (PathStrategy s : {PathStrategy::Mis, PathStrategy::LightSampling, PathStrategy::BsdfSampling}) {
+      opt.strategy = s;
+      opt.seed = images.size() + 1;  // independent images
+      images.push_back(renderPathTraced(scene, vis, opt).image);
+    }
+    for (const auto& [a, b] : {std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}})
+      for (int c = 0; c < 3; ++c) {
+        const double z = agreementZ(images[a], images[b], c);
+        INFO(file << ": strategy " << a << " against " << b << ", channel " << c << ": z = " << std::to_string(z));
+        CHECK(std::abs(z) < 4.5);
+      }
+  }
+}
+
+TEST_CASE("Furnace: convex mirror and glass objects under a constant environment vanish", "[pathtrace][furnace]") {
+  for (MaterialType type : {MaterialType::Mirror, MaterialType::Glass}) {
+    Scene scene;
+    Material m;
+    m.type = type;
+    m.kd = Rgb(0.0f);
+    m.ks = Rgb(1.0f);
+    m.ni = 1.5f;
+    test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, test::addMaterial(scene, m, "object"), false);
+    scene.camera = test::testCamera({2.5f, 1.5f, 3.5f}, {0, 0, 0}, 32, 32, 50);
+    scene.environment.present = true;
+    scene.environment.radiance = Rgb(0.8f, 1.0f, 1.2f);
+    finalizeScene(scene);
+    const Visibility vis(scene);
+    PathTraceOptions opt;
+    opt.spp = 64;
+    opt.seed = 2;
+    INFO((type == MaterialType::Mirror ? "mirror" : "glass"));
+    test::requireImageMean(renderPathTraced(scene, vis, opt).image, scene.environment.radiance);
+  }
+}
+
+TEST_CASE("A directional light on a diffuse plane gives rho E cos(theta) / pi", "[pathtrace]") {
+  Scene scene;
+  Material grey;
+  grey.kd = Rgb(0.6f);
+  test::addBox(scene, {-50, -1, -50}, {50, 0, 50}, test::addMaterial(scene, grey, "grey"), false);
+  const Vec3 direction = normalize(Vec3{0.4f, -1.0f, 0.3f});
+  scene.lights.push_back({LightType::Directional, 0, direction, Rgb(2.0f, 3.0f, 4.0f)});
+  scene.camera = test::testCamera({0, 5, 0}, {0, 0, 0.001f}, 16, 16, 30);
+  finalizeScene(scene);
+  const Visibility vis(scene);
+  PathTraceOptions opt;
+  opt.spp = 4;
+  opt.maxDepth = 1;
+  const Image image = renderPathTraced(scene, vis, opt).image;
+  const float scale = 0.6f * std::abs(direction.y) * kInvPi;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x)
+      for (int c = 0; c < 3; ++c) REQUIRE(image.at(x, y, c) == Approx(scale * (c + 2.0f)).epsilon(1e-4));
+}
+
+TEST_CASE("Layers: light seen through mirrors and glass is direct", "[pathtrace]") {
+  // An emitting enclosure with a mirror box and a glass box inside: every path reaches the emitter
+  // through specular bounces only, so all light is direct and the indirect layer is exactly zero.
+  Scene scene;
+  Material emitter, mirror, glass;
+  emitter.kd = Rgb(0.0f);
+  emitter.ke = Rgb(1.0f, 2.0f, 3.0f);
+  mirror.type = MaterialType::Mirror;
+  mirror.ks = Rgb(0.9f);
+  glass.type = MaterialType::Glass;
+  glass.ni = 1.5f;
+  test::addBox(scene, {-5, -5, -5}, {5, 5, 5}, test::addMaterial(scene, emitter, "emitter"), true);
+  test::addBox(scene, {-2, -1, -1}, {-0.2f, 1, 1}, test::addMaterial(scene, mirror, "mirror"), false);
+  test::addBox(scene, {0.2f, -1, -1}, {2, 1, 1}, test::addMaterial(scene, glass, "glass"), false);
+  scene.camera = test::testCamera({0, 0.5f, 4}, {0, 0, 0}, 24, 24, 60);
+  finalizeScene(scene);
+  const Visibility vis(scene);
+  PathTraceOptions opt;
+  opt.spp = 8;
+  opt.layers = true;
+  const Image image = renderPathTraced(scene, vis, opt).image;
+  const int beauty = image.channelIndex("G"), direct = image.channelIndex("direct.G"),
+            indirect = image.channelIndex("indirect.G");
+  double total = 0;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      REQUIRE(image.at(x, y, indirect) == 0.0f);
+      REQUIRE(image.at(x, y, direct) == image.at(x, y, beauty));
+      total += image.at(x, y, direct);
+    }
+  REQUIRE(total > 0);
+}

@@ -16,7 +16,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct RenderArgs {
-  std::string scene, method = "pt", output, png, resolution;
+  std::string scene, method = "pt", output, png, resolution, strategy = "mis";
   int threads = 0;
   bool quiet = false, robust = false;
   PathTraceOptions pt;
@@ -65,9 +65,12 @@ int runRender(RenderArgs& a) {
   {
     ProgressBar bar(!a.quiet);
     if (a.method == "pt") {
-      options = {{"spp", a.pt.spp},         {"max_depth", a.pt.maxDepth}, {"roulette_depth", a.pt.rouletteDepth},
-                 {"seed", a.pt.seed},       {"time_budget", a.pt.timeBudget}, {"layers", a.pt.layers},
-                 {"robust", a.robust}};
+      a.pt.strategy = a.strategy == "light" ? PathStrategy::LightSampling
+                      : a.strategy == "bsdf" ? PathStrategy::BsdfSampling
+                                             : PathStrategy::Mis;
+      options = {{"spp", a.pt.spp},           {"max_depth", a.pt.maxDepth}, {"roulette_depth", a.pt.rouletteDepth},
+                 {"seed", a.pt.seed},         {"time_budget", a.pt.timeBudget}, {"layers", a.pt.layers},
+                 {"strategy", a.strategy},    {"robust", a.robust}};
       out = renderPathTraced(scene, visibility, a.pt, [&](double f) { bar.update(f); });
     } else {
       throw std::invalid_argument("--method '" + a.method + "': unknown method (available: pt)");
@@ -129,6 +132,8 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
       ->check(CLI::Range(1, 1 << 16))->capture_default_str();
   cmd->add_option("--tile-size", args->pt.tileSize, "Tile size in pixels (does not change the image)")
       ->check(CLI::Range(1, 4096))->capture_default_str();
+  cmd->add_option("--strategy", args->strategy, "pt: mis (default), or light or bsdf sampling alone, for validation")
+      ->check(CLI::IsMember({"mis", "light", "bsdf"}));
   cmd->add_flag("--layers", args->pt.layers, "Add albedo, normal, depth, direct and indirect layers to the EXR");
   cmd->add_flag("--robust", args->robust, "Embree robust traversal mode");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar or warnings");

@@ -11,14 +11,20 @@
 
 namespace lucent {
 
+// How light is found: both strategies combined by MIS (the default), or one of them alone, for
+// validating the other two (all three converge to the same image).
+enum class PathStrategy { Mis, LightSampling, BsdfSampling };
+
 struct PathTraceOptions {
   int spp = 64;                // samples per pixel (the maximum when a time budget is set)
-  int maxDepth = 64;           // path length in bounces: 1 is direct light, 2 adds one indirect bounce
+  int maxDepth = 1024;         // path length in bounces: 1 is direct light, 2 adds one indirect bounce;
+                               // high enough by default that Russian roulette, not the cut, ends paths
   int rouletteDepth = 3;       // Russian roulette from this bounce on
   uint64_t seed = 0;
   double timeBudget = 0;       // seconds; 0 for none. At least one sample per pixel is taken
   int tileSize = 16;           // pixels; does not change the image
   bool layers = false;         // add albedo, normal, depth, direct and indirect layers
+  PathStrategy strategy = PathStrategy::Mis;
 };
 
 // Called from worker threads with the fraction of work done; must be thread-safe.

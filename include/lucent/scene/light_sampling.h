@@ -9,6 +9,7 @@ namespace lucent {
 
 struct LightSample {
   Vec3 wi;              // unit direction from the receiver towards the light
+  Vec3 point;           // the point on the light (area and point lights)
   float distance = 0;   // to the light point; kInf for directional and environment
   Rgb radiance;         // arriving radiance (intensity / d^2 for point lights)
   float pdf = 0;        // solid-angle density times the light's selection probability
@@ -28,6 +29,7 @@ inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, 
       const Vec3 q = scene.vertex(t, 0) * (1 - b.x - b.y) + scene.vertex(t, 1) * b.x + scene.vertex(t, 2) * b.y;
       const Vec3 d = q - receiver;
       const float dist2 = dot(d, d);
+      s.point = q;
       s.distance = std::sqrt(dist2);
       s.wi = d / s.distance;
       const float cosLight = -dot(s.wi, scene.geometricNormal(t));
@@ -39,6 +41,7 @@ inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, 
     case LightType::Point: {
       const Vec3 d = light.vector - receiver;
       const float dist2 = dot(d, d);
+      s.point = light.vector;
       s.distance = std::sqrt(dist2);
       s.wi = d / s.distance;
       s.radiance = light.value / dist2;
@@ -72,6 +75,21 @@ inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, 
     }
   }
   return s;
+}
+
+// A shadow ray from receiver p (geometric normal ng) towards a light sample. Towards a point on a
+// light it ends short of that point by the same scale-aware margin by which its origin is offset
+// from the receiver, so that it never counts the light itself as an occluder.
+inline Ray shadowRay(Vec3 p, Vec3 ng, const LightSample& ls) {
+  Ray r{offsetOrigin(p, ng, ls.wi), ls.wi};
+  if (std::isfinite(ls.distance)) {
+    const Vec3 to = ls.point - r.origin;
+    const float d = length(to);
+    r.direction = to / d;
+    const Vec3 q = ls.point;
+    r.tMax = d - 1e-4f * std::max({1.0f, std::abs(q.x), std::abs(q.y), std::abs(q.z)});
+  }
+  return r;
 }
 
 // Density (solid angle, with selection probability) of choosing direction wi towards emissive

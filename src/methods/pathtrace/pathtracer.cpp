@@ -4,6 +4,7 @@
 
 #include <atomic>
 
+#include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
 #include "lucent/methods/pathtrace.h"
 #include "lucent/scene/camera.h"
@@ -16,11 +17,13 @@ namespace {
 // What one camera path returns: radiance split by the bounce that gathered it, and the
 // first-hit features for the auxiliary layers.
 struct PathResult {
-  Rgb direct;    // emitters seen directly and light gathered at the first hit
-  Rgb indirect;  // light gathered at later hits
+  Rgb direct;    // emitters seen directly (also through mirrors and glass) and light gathered at the
+                 // first non-specular vertex
+  Rgb indirect;  // light gathered at later non-specular vertices
   Rgb albedo;
   Vec3 normal;
   float depth = 0;
+  bool valid = true;  // false when a ray became non-finite (the sample is dropped and counted)
 };
 
 struct Counters {
@@ -38,18 +41,24 @@ class PathTracer {
     bool lastDelta = true;  // the camera ray counts as specular: emission seen directly is not MIS'ed
     float lastPdf = 0;
     Vec3 lastPosition = ray.origin;
-    auto gather = [&](int bounce, Rgb contribution) {
-      (bounce <= 1 ? out.direct : out.indirect) += contribution;
+    int gatheringVertices = 0;  // non-specular vertices the path has scattered from so far
+    // Light arriving at the vertex the path came from is direct if that vertex was the first
+    // non-specular one.
+    auto gather = [&](int verticesBefore, Rgb contribution) {
+      (verticesBefore <= 1 ? out.direct : out.indirect) += contribution;
     };
 
     for (int bounce = 0;; ++bounce) {
+      if (!isFinite(ray.origin) || !isFinite(ray.direction)) {
+        out.valid = false;
+        return out;
+      }
       ++counters.rays;
       const Hit hit = vis_.intersect(ray);
       if (!hit.found()) {
         if (scene_.environment.present) {
           const Rgb le = environmentRadiance(scene_.environment, ray.direction);
-          const float w = lastDelta ? 1.0f : powerHeuristic(lastPdf, environmentLightPdf(scene_, ray.direction));
-          gather(bounce, beta * le * w);
+          gather(gatheringVertices, beta * le * emissionWeight(lastDelta, lastPdf, environmentLightPdf(scene_, ray.direction)));
         }
         break;
       }
@@ -59,12 +68,9 @@ class PathTracer {
       const bool frontFace = dot(wo, sp.geometricNormal) > 0;
 
       if (!material.ke.isBlack() && frontFace) {
-        float w = 1.0f;
-        if (!lastDelta) {
-          const float lightPdf = triangleLightPdf(scene_, hit.triangle, ray.direction, length(sp.position - lastPosition));
-          w = powerHeuristic(lastPdf, lightPdf);
-        }
-        gather(bounce, beta * material.ke * w);
+        const float lightPdf =
+            lastDelta ? 0.0f : triangleLightPdf(scene_, hit.triangle, ray.direction, length(sp.position - lastPosition));
+        gather(gatheringVertices, beta * material.ke * emissionWeight(lastDelta, lastPdf, lightPdf));
       }
       const SurfaceBsdf bsdf = bsdfAt(scene_, sp);
       if (bounce == 0) {
@@ -75,13 +81,18 @@ class PathTracer {
       }
       if (bounce + 1 > opt_.maxDepth) break;
 
-      // Glass keeps the winding orientation (inside/outside); other materials are two-sided.
-      Vec3 n = sp.shadingNormal;
+      // Glass keeps the winding orientation (inside/outside); other materials are two-sided. Where
+      // the shading normal puts the viewer on the other side than the geometric normal does (at
+      // silhouettes of smooth meshes), the geometric normal is used.
+      Vec3 n = dot(wo, sp.shadingNormal) * dot(wo, sp.geometricNormal) > 0 ? sp.shadingNormal : sp.geometricNormal;
       if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
       const Frame frame(n);
       const Vec3 woLocal = frame.toLocal(wo);
 
-      if (!bsdf.isDelta()) gather(bounce + 1, beta * estimateDirect(sp, bsdf, frame, woLocal, rng, counters));
+      if (!bsdf.isDelta()) {
+        gather(gatheringVertices + 1, beta * estimateDirect(sp, bsdf, frame, woLocal, rng, counters));
+        ++gatheringVertices;
+      }
 
       const float uLobe = rng.uniform();
       const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, rng.uniform2());
@@ -91,6 +102,7 @@ class PathTracer {
       const bool transmits = bs.wi.z * woLocal.z < 0;
       if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) break;
       beta *= bs.weight;
+      if (beta.isBlack()) break;
       lastDelta = bs.delta;
       lastPdf = bs.pdf;
       lastPosition = sp.position;
@@ -106,21 +118,34 @@ class PathTracer {
   }
 
  private:
-  // One light sample, weighted against BSDF sampling by the power heuristic.
+  // Weight of emission found by BSDF sampling, against light sampling of the same light.
+  float emissionWeight(bool lastDelta, float bsdfPdf, float lightPdf) const {
+    if (lastDelta) return 1.0f;
+    switch (opt_.strategy) {
+      case PathStrategy::Mis: return powerHeuristic(bsdfPdf, lightPdf);
+      case PathStrategy::LightSampling: return 0.0f;
+      case PathStrategy::BsdfSampling: return 1.0f;
+    }
+    return 1.0f;
+  }
+
+  // One light sample, weighted against BSDF sampling (lights that BSDF sampling cannot hit, point
+  // and directional, always have weight 1).
   Rgb estimateDirect(const SurfacePoint& sp, const SurfaceBsdf& bsdf, const Frame& frame, Vec3 woLocal, Rng& rng,
                      Counters& counters) const {
     const float uLight = rng.uniform();
     const LightSample ls = sampleLight(scene_, sp.position, uLight, rng.uniform2());
     if (!(ls.pdf > 0) || ls.radiance.isBlack()) return {};
+    if (opt_.strategy == PathStrategy::BsdfSampling && !ls.delta) return {};
     const Vec3 wiLocal = frame.toLocal(ls.wi);
     if (wiLocal.z <= 0 || dot(ls.wi, sp.geometricNormal) * dot(frame.n, sp.geometricNormal) <= 0) return {};
     const Rgb f = evalBsdf(bsdf, woLocal, wiLocal);
     if (f.isBlack()) return {};
-    Ray shadow{offsetOrigin(sp.position, sp.geometricNormal, ls.wi), ls.wi};
-    shadow.tMax = std::isfinite(ls.distance) ? ls.distance * (1.0f - 1e-4f) : kInf;
     ++counters.rays;
-    if (vis_.occluded(shadow)) return {};
-    const float w = ls.delta ? 1.0f : powerHeuristic(ls.pdf, bsdfPdf(bsdf, woLocal, wiLocal));
+    if (vis_.occluded(shadowRay(sp.position, sp.geometricNormal, ls))) return {};
+    const float w = ls.delta || opt_.strategy == PathStrategy::LightSampling
+                        ? 1.0f
+                        : powerHeuristic(ls.pdf, bsdfPdf(bsdf, woLocal, wiLocal));
     return f * ls.radiance * (wiLocal.z * w / ls.pdf);
   }
 
@@ -175,6 +200,7 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
       passEnd = int(std::min<double>(options.spp, sppDone + std::min<double>(affordable, 2.0 * sppDone + 1)));
     }
     tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& r) {
+      flushDenormals();  // every thread computes alike, whoever created it
       Counters& local = counters.local();
       for (int tile = r.begin(); tile != r.end(); ++tile) {
         const int x0 = (tile % tilesX) * options.tileSize, y0 = (tile / tilesX) * options.tileSize;
@@ -188,7 +214,7 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
               const Vec2 jitter = rng.uniform2();
               const PathResult p = tracer.trace(camera.generate(x + jitter.x, y + jitter.y), rng, local);
               const Rgb L = p.direct + p.indirect;
-              if (!isFinite(L)) {
+              if (!p.valid || !isFinite(L)) {
                 ++invalid[pixel];
                 continue;
               }
