@@ -54,7 +54,7 @@ const std::vector<BadCase> kBadCases = {
     {"mtl-missing-texture", {"mtl-missing-texture/mesh.mtl:3:", "texture 'wood.png' not found"}},
     {"mtl-texture-not-image", {"mtl-texture-not-image/mesh.mtl:1:", "material 'floor'", "cannot read image"}},
     {"mtl-energy", {"mtl-energy/mesh.mtl:1:", "material 'floor'", "Kd + Ks exceeds 1"}},
-    {"mtl-emission-overflow", {"mtl-emission-overflow/mesh.mtl:4:", "material 'light'", "overflows"}},
+    {"mtl-emission-overflow", {"mtl-emission-overflow/mesh.mtl:6:", "exceeds 1e15"}},
     // JSON syntax and structure
     {"json-malformed", {"json-malformed/scene.json", "invalid JSON", "line 3"}},
     {"json-not-object", {"json-not-object/scene.json", "top level: expected an object"}},
@@ -68,6 +68,9 @@ const std::vector<BadCase> kBadCases = {
     {"camera-zero-resolution", {"camera-zero-resolution/scene.json", "camera.resolution:"}},
     {"camera-up-parallel", {"camera-up-parallel/scene.json", "camera.up:", "parallel"}},
     {"camera-overflow", {"camera-overflow/scene.json", "camera.eye: must be finite"}},
+    {"camera-huge-eye", {"camera-huge-eye/scene.json", "camera.eye: must be finite and at most 1e15"}},
+    {"camera-huge-look-at", {"camera-huge-look-at/scene.json", "camera.look_at: must be finite and at most 1e15"}},
+    {"camera-huge-resolution", {"camera-huge-resolution/scene.json", "camera.resolution: more than 2^26 pixels"}},
     // material overrides
     {"material-unknown-key", {"material-unknown-key/scene.json", "materials.floor.Kr: unknown key"}},
     {"material-negative-ke", {"material-negative-ke/scene.json", "materials.light.Ke: must not be negative"}},
@@ -75,11 +78,13 @@ const std::vector<BadCase> kBadCases = {
     {"material-energy", {"material-energy/scene.json", "materials.floor:", "Kd + Ks exceeds 1"}},
     {"material-unused", {"material-unused/scene.json", "materials.ceiling: no mesh uses"}},
     {"material-unknown-type", {"material-unknown-type/scene.json", "materials.floor.type:"}},
+    {"material-glass-without-ni", {"material-glass-without-ni/scene.json", "materials.floor", "glass needs an index"}},
     // lights
     {"no-light", {"no-light/scene.json", "no light"}},
     {"light-unknown-key", {"light-unknown-key/scene.json", "lights[0].color: unknown key"}},
     {"light-unknown-type", {"light-unknown-type/scene.json", "lights[0].type:"}},
     {"light-negative-power", {"light-negative-power/scene.json", "lights[0].power: must not be negative"}},
+    {"light-huge-direction", {"light-huge-direction/scene.json", "lights[0].direction: must be finite and at most 1e15"}},
     {"env-map-missing", {"env-map-missing/scene.json", "lights[0].map:", "sky.exr", "not found"}},
     {"env-map-not-image", {"env-map-not-image/scene.json", "lights[0].map:", "cannot read image"}},
 };

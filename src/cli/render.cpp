@@ -48,8 +48,11 @@ int runRender(RenderArgs& a) {
     std::istringstream in(a.resolution);
     if (!(in >> w >> x >> h) || x != 'x' || (in >> rest) || w < 1 || h < 1 || w > 65536 || h > 65536)
       throw std::invalid_argument("--resolution '" + a.resolution + "': expected WIDTHxHEIGHT, e.g. 512x512");
+    if (uint64_t(w) * h > kMaxImagePixels)
+      throw std::invalid_argument("--resolution '" + a.resolution + "': more than 2^26 pixels");
     scene.camera.width = w;
     scene.camera.height = h;
+    scene.contentHash = sceneContentHash(scene);
   }
   stats.addStage("load_scene", loadClock.seconds());
 

@@ -37,9 +37,9 @@ class JsonFields {
   float number(const std::string& key) {
     const auto& v = raw(key);
     if (!v.is_number()) failKey(key, "expected a number");
-    const float f = v.get<float>();
-    if (!std::isfinite(f)) failKey(key, "must be finite");
-    return f;
+    const double f = v.get<double>();
+    if (!std::isfinite(f) || std::abs(f) > kMaxInputMagnitude) failKey(key, "must be finite and at most 1e15 in magnitude");
+    return float(f);
   }
   float number(const std::string& key, float fallback) { return has(key) ? number(key) : fallback; }
   std::string string(const std::string& key) {
@@ -51,9 +51,12 @@ class JsonFields {
     const auto& v = raw(key);
     if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
       failKey(key, "expected an array of 3 numbers");
-    const Vec3 r{v[0].get<float>(), v[1].get<float>(), v[2].get<float>()};
-    if (!isFinite(r)) failKey(key, "must be finite");
-    return r;
+    for (int i = 0; i < 3; ++i) {
+      const double f = v[i].get<double>();
+      if (!std::isfinite(f) || std::abs(f) > kMaxInputMagnitude)
+        failKey(key, "must be finite and at most 1e15 in magnitude");
+    }
+    return {v[0].get<float>(), v[1].get<float>(), v[2].get<float>()};
   }
   // Radiometric triple: finite and non-negative.
   Rgb rgb(const std::string& key) {

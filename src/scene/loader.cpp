@@ -76,6 +76,8 @@ void loadCamera(JsonFields camera, Scene& scene) {
     camera.failKey("resolution", "expected [width, height], positive integers up to 65536");
   c.width = res[0].get<int>();
   c.height = res[1].get<int>();
+  if (uint64_t(c.width) * c.height > kMaxImagePixels)
+    camera.failKey("resolution", "more than 2^26 pixels (the render buffers would not fit in memory)");
   camera.finish();
 }
 
@@ -128,14 +130,21 @@ void loadLight(JsonFields light, Scene& scene, const fs::path& base) {
       const float scale = light.number("scale", 1.0f);
       if (!(scale >= 0)) light.failKey("scale", "must not be negative");
       env.texels = readTexels(env.source, light.file() + ": " + light.keyPath("map"), env.width, env.height);
-      for (Rgb& t : env.texels) t *= scale;
+      for (Rgb& t : env.texels) {
+        t *= scale;
+        if (!isFinite(t)) light.failKey("scale", "makes the map's radiance overflow");
+      }
       std::vector<float> weights(env.texels.size());
       for (uint32_t y = 0; y < env.height; ++y) {
         const float sinTheta = std::sin(kPi * (y + 0.5f) / env.height);
         for (uint32_t x = 0; x < env.width; ++x)
           weights[size_t(y) * env.width + x] = env.texels[size_t(y) * env.width + x].luminance() * sinTheta;
       }
-      env.distribution = Distribution2D(weights, env.width, env.height);
+      try {
+        env.distribution = Distribution2D(weights, env.width, env.height);
+      } catch (const std::invalid_argument&) {
+        light.failKey("scale", "makes the map's total radiance overflow");
+      }
     } else {
       env.radiance = light.rgb("radiance");
     }

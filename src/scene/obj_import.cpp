@@ -78,6 +78,7 @@ std::vector<float> expectNumbers(const std::string& file, int line, const std::v
     if (ec == std::errc::result_out_of_range) failAt(file, line, "'" + t[i] + "' is out of range for a float");
     if (ec != std::errc()) failAt(file, line, "'" + t[i] + "' is not a number");
     if (!std::isfinite(f)) failAt(file, line, "'" + t[0] + "' has a non-finite value");
+    if (std::abs(f) > kMaxInputMagnitude) failAt(file, line, "'" + t[i] + "' exceeds 1e15 in magnitude");
     values.push_back(f);
   }
   return values;
@@ -346,7 +347,8 @@ Material classifyMaterial(const MaterialSpec& spec) {
       m.kd = Rgb(0.0f);
       break;
     case MaterialType::Glass:
-      if (!(m.ni > 0) || !std::isfinite(m.ni)) fail("Ni must be a positive index of refraction");
+      if (!(m.ni > 0) || !std::isfinite(m.ni) || m.ni == 1.0f)
+        fail("glass needs an index of refraction Ni > 0 other than 1 (index 1 is invisible; the MTL default)");
       m.kd = Rgb(0.0f);
       m.ks = Rgb(0.0f);
       break;

@@ -70,6 +70,11 @@ void finalizeScene(Scene& scene) {
   scene.lights = std::move(lights);
   if (!power.empty()) scene.lightDistribution = Distribution1D(power);
 
+  scene.contentHash = sceneContentHash(scene);
+}
+
+uint64_t sceneContentHash(const Scene& scene) {
+  const Environment& env = scene.environment;
   uint64_t h = 0x10CE47ull;
   h = hashArray(h, scene.positions);
   h = hashArray(h, scene.normals);
@@ -77,12 +82,14 @@ void finalizeScene(Scene& scene) {
   h = hashArray(h, scene.indices);
   h = hashArray(h, scene.materialIds);
   h = hashArray(h, scene.materials);
+  h = hashArray(h, scene.textures);
   h = hashArray(h, scene.texels);
   h = hashArray(h, scene.lights);
-  h = hashArray(h, scene.environment.texels);
-  h = hashArray(h, std::vector<Rgb>{scene.environment.radiance});
+  h = hashArray(h, env.texels);
+  h = hashArray(h, std::vector<uint32_t>{env.present, env.width, env.height});
+  h = hashArray(h, std::vector<Rgb>{env.radiance});
   h = hashArray(h, std::vector<Camera>{scene.camera});
-  scene.contentHash = h;
+  return h;
 }
 
 }  // namespace lucent

@@ -3,16 +3,24 @@
 #include <embree3/rtcore.h>
 
 #include <cstring>
+#include <mutex>
 #include <stdexcept>
 
 #include "lucent/core/parallel.h"
 
 namespace lucent {
 
+namespace {
+struct EmbreeError {
+  std::mutex mutex;  // Embree may report from any thread
+  std::string message;
+};
+}  // namespace
+
 struct Visibility::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
-  std::string error;
+  EmbreeError error;
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -21,8 +29,10 @@ struct Visibility::Impl {
 
 namespace {
 void recordError(void* user, RTCError code, const char* message) {
-  auto* error = static_cast<std::string*>(user);
-  if (error->empty()) *error = "Embree error " + std::to_string(int(code)) + ": " + (message ? message : "");
+  auto* error = static_cast<EmbreeError*>(user);
+  std::lock_guard lock(error->mutex);
+  if (error->message.empty())
+    error->message = "Embree error " + std::to_string(int(code)) + ": " + (message ? message : "");
 }
 
 template <class RayHitN, int N>
@@ -66,7 +76,7 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
   rtcAttachGeometry(impl_->scene, geom);
   rtcReleaseGeometry(geom);
   rtcCommitScene(impl_->scene);
-  if (!impl_->error.empty()) throw std::runtime_error(impl_->error);
+  if (!impl_->error.message.empty()) throw std::runtime_error(impl_->error.message);
 }
 
 Visibility::~Visibility() = default;

@@ -43,6 +43,9 @@ struct Light {
   Rgb value;              // Point: intensity (W/sr); Directional: irradiance normal to it; others unused
 };
 
+// Largest image a camera may ask for (the path tracer keeps about 40 bytes per pixel).
+inline constexpr uint64_t kMaxImagePixels = uint64_t(1) << 26;
+
 struct Camera {
   Vec3 eye{0, 0, 0}, lookAt{0, 0, -1}, up{0, 1, 0};
   float fovY = 45.0f;  // degrees
@@ -98,5 +101,9 @@ struct Scene {
 // once geometry and materials are set.
 // Used by the loader and by tests that build scenes in code.
 void finalizeScene(Scene& scene);
+
+// Hash of everything that determines an image: geometry, materials, textures, lights, environment
+// and camera. Recompute it after changing the scene (e.g. the camera resolution).
+uint64_t sceneContentHash(const Scene& scene);
 
 }  // namespace lucent
