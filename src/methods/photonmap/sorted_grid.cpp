@@ -56,41 +56,42 @@ void sortAndIndex(const std::vector<uint32_t>& keys, uint32_t keyCount, std::vec
 
 }  // namespace
 
-SortedGrid buildSortedGrid(std::span<const Photon> photons, const GridOptions& options, RenderStats* stats) {
+SortedGrid buildSortedGrid(std::vector<Photon> photons, const GridOptions& options, RenderStats* stats) {
   SortedGrid map;
+  map.photons = std::move(photons);
   Stopwatch keyClock;
-  map.grid = makeUniformGrid(photons, options, std::min<uint64_t>(options.maxCells, UINT32_MAX - 1));
-  map.photons.assign(photons.begin(), photons.end());
-  std::vector<uint32_t> keys(photons.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, photons.size(), kGrain), [&](const auto& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) keys[i] = map.grid.cellIndex(map.grid.cellOf(photons[i].position));
+  map.grid = makeUniformGrid(map.photons, options, std::min<uint64_t>(options.maxCells, UINT32_MAX - 1));
+  std::vector<uint32_t> keys(map.photons.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, keys.size(), kGrain), [&](const auto& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) keys[i] = map.grid.cellIndex(map.grid.cellOf(map.photons[i].position));
   });
   if (stats) stats->addStage("grid_keys", keyClock.seconds());
   sortAndIndex(keys, uint32_t(map.grid.cellCount()), map.photonList, map.firstPhoton, stats);
   return map;
 }
 
-HashedGrid buildHashedGrid(std::span<const Photon> photons, const GridOptions& options, RenderStats* stats) {
+HashedGrid buildHashedGrid(std::vector<Photon> photons, const GridOptions& options, RenderStats* stats) {
   HashedGrid map;
+  map.photons = std::move(photons);
+  const size_t n = map.photons.size();
   Stopwatch keyClock;
-  map.grid = makeUniformGrid(photons, options, 0);
-  map.photons.assign(photons.begin(), photons.end());
-  const double cellsFilled = std::max(1.0, double(photons.size()) / options.photonsPerCell);
+  map.grid = makeUniformGrid(map.photons, options, 0);
+  const double cellsFilled = std::max(1.0, double(n) / options.photonsPerCell);
   const uint64_t buckets = std::bit_ceil(uint64_t(
       options.hashBuckets > 0 ? options.hashBuckets : std::min(2 * cellsFilled, double(1u << 30))));
   map.bucketMask = uint32_t(buckets - 1);
-  std::vector<uint32_t> keys(photons.size());
-  std::vector<uint64_t> cellKeys(photons.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, photons.size(), kGrain), [&](const auto& r) {
+  std::vector<uint32_t> keys(n);
+  std::vector<uint64_t> cellKeys(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const auto& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
-      cellKeys[i] = UniformGrid::cellKey(map.grid.cellOf(photons[i].position));
+      cellKeys[i] = UniformGrid::cellKey(map.grid.cellOf(map.photons[i].position));
       keys[i] = map.bucketOf(cellKeys[i]);
     }
   });
   if (stats) stats->addStage("grid_keys", keyClock.seconds());
   sortAndIndex(keys, uint32_t(buckets), map.photonList, map.firstPhoton, stats);
-  map.cellKeys.resize(photons.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, photons.size(), kGrain), [&](const auto& r) {
+  map.cellKeys.resize(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const auto& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) map.cellKeys[i] = cellKeys[map.photonList[i]];
   });
   return map;

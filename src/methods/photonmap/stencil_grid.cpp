@@ -41,21 +41,21 @@ Rgb redistributionScale(const std::vector<Photon>& photons, const uint32_t* ids,
 
 }  // namespace
 
-StencilGrid buildStencilGrid(std::span<const Photon> photons, const GridOptions& options, RenderStats* stats) {
+StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& options, RenderStats* stats) {
   const size_t n = photons.size();
   if (n >= UINT32_MAX) throw std::length_error("photon maps hold fewer than 2^32 - 1 photons");
   StencilGrid map;
+  map.photons = std::move(photons);
   map.side = std::max(1u, options.stencilSide);
   const uint32_t capacity = map.capacity();
 
   Stopwatch keyClock;
   const uint64_t maxCells = std::max<uint64_t>(1, std::min<uint64_t>(options.maxCells, options.maxStencilSlots / capacity));
-  map.grid = makeUniformGrid(photons, options, std::min<uint64_t>(maxCells, UINT32_MAX - 1));
-  map.photons.assign(photons.begin(), photons.end());
+  map.grid = makeUniformGrid(map.photons, options, std::min<uint64_t>(maxCells, UINT32_MAX - 1));
   const uint32_t cells = uint32_t(map.grid.cellCount());
   std::vector<uint32_t> cellOfPhoton(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const auto& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) cellOfPhoton[i] = map.grid.cellIndex(map.grid.cellOf(photons[i].position));
+    for (size_t i = r.begin(); i != r.end(); ++i) cellOfPhoton[i] = map.grid.cellIndex(map.grid.cellOf(map.photons[i].position));
   });
   if (stats) stats->addStage("grid_keys", keyClock.seconds());
 

@@ -29,10 +29,10 @@ struct StencilGrid {
   }
 };
 
-// Stages, timed into `stats` when given: "grid_keys" (cell per photon), "stencil_count" (arrivals
+// Takes the photons by value (move them in: no copy). Stages, timed into `stats` when given: "grid_keys" (cell per photon), "stencil_count" (arrivals
 // per cell), "stencil_route" (photons to their cells' footprints in arrival order, power
 // redistribution). The grid has at most min(maxCells, maxStencilSlots / m^2) cells.
-StencilGrid buildStencilGrid(std::span<const Photon> photons, const GridOptions& options = {},
+StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& options = {},
                              RenderStats* stats = nullptr);
 
 }  // namespace lucent

@@ -33,7 +33,7 @@ struct GridOptions {
   // Stencil grid (section 2.2.2): m, the side of a cell's m x m footprint, and a bound on the
   // footprints' total slots (the paper's stencil buffer was 1024 x 1024).
   uint32_t stencilSide = 16;
-  uint64_t maxStencilSlots = uint64_t(1) << 24;
+  uint64_t maxStencilSlots = uint64_t(1) << 20;
   PowerRedistribution redistribution = PowerRedistribution::Count;
   // Hashed grid (section 4.4): buckets, rounded up to a power of two; 0: twice the cells that
   // photons / photonsPerCell would fill.
