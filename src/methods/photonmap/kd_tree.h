@@ -27,6 +27,7 @@ struct PhotonDistance {
   float d2;        // squared distance to the query
   uint32_t index;  // into PhotonKdTree::photons
 };
+static_assert(sizeof(PhotonDistance) == 8);
 
 struct KdTreeResult {
   uint32_t found = 0;   // photons in the heap, at most k

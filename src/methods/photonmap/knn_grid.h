@@ -20,6 +20,7 @@
 #pragma once
 #include <algorithm>
 #include <cstdint>
+#include <type_traits>
 
 #include "uniform_grid.h"
 
@@ -35,6 +36,8 @@ struct KnnGridSearch {
   bool done = false;        // no unexplored photon can be accepted
   uint32_t cellsVisited = 0, photonsExamined = 0, collisionsSkipped = 0;  // counters
 };
+// Per-query state that a GPU would keep per pixel between passes.
+static_assert(sizeof(KnnGridSearch) == 48 && std::is_trivially_copyable_v<KnnGridSearch>);
 
 inline KnnGridSearch beginKnnGrid(Vec3 position, uint32_t k, float maxRadius) {
   KnnGridSearch s;

@@ -77,8 +77,8 @@ HashedGrid buildHashedGrid(std::vector<Photon> photons, const GridOptions& optio
   Stopwatch keyClock;
   map.grid = makeUniformGrid(map.photons, options, 0);
   const double cellsFilled = std::max(1.0, double(n) / options.photonsPerCell);
-  const uint64_t buckets = std::bit_ceil(uint64_t(
-      options.hashBuckets > 0 ? options.hashBuckets : std::min(2 * cellsFilled, double(1u << 30))));
+  const uint64_t buckets = std::min<uint64_t>(
+      std::bit_ceil(uint64_t(options.hashBuckets > 0 ? double(options.hashBuckets) : 2 * cellsFilled)), 1u << 30);
   map.bucketMask = uint32_t(buckets - 1);
   std::vector<uint32_t> keys(n);
   std::vector<uint64_t> cellKeys(n);

@@ -43,6 +43,7 @@ struct GridOptions {
 struct CellCoord {
   int32_t x = 0, y = 0, z = 0;
 };
+static_assert(sizeof(CellCoord) == 12);
 
 struct UniformGrid {
   Vec3 lo;              // corner of cell (0, 0, 0)
