@@ -11,8 +11,23 @@ struct Photon {
   Vec3 position;
   Rgb power;           // flux carried, W
   uint32_t direction;  // octahedral unit vector towards where the photon came from, 2 x 16 bits
-  uint32_t flags;      // bounce count in the low byte
+  uint32_t flags;      // bounce count in the low byte; bits 8-9: kd-tree split axis (PhotonKdTree)
 };
 static_assert(sizeof(Photon) == 32, "Photon is a fixed-size 32-byte record");
+
+inline constexpr uint32_t kPhotonBounceMask = 0xffu;
+inline constexpr uint32_t kPhotonAxisShift = 8;
+inline constexpr uint32_t kPhotonAxisMask = 3u << kPhotonAxisShift;
+
+inline uint32_t photonBounce(const Photon& p) { return p.flags & kPhotonBounceMask; }
+inline int photonSplitAxis(const Photon& p) { return int((p.flags & kPhotonAxisMask) >> kPhotonAxisShift); }
+inline Vec3 photonIncoming(const Photon& p) { return decodeOctahedral(p.direction); }
+
+// Squared distance as every photon map computes it, so that maps and brute force agree to the bit
+// on which photons lie inside a radius.
+inline float distance2(Vec3 a, Vec3 b) {
+  const Vec3 d = a - b;
+  return dot(d, d);
+}
 
 }  // namespace lucent

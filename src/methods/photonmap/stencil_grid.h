@@ -1,0 +1,38 @@
+// The approximate grid photon map built by stencil routing (Purcell et al. 2003, section 2.2.2): a
+// fixed footprint of m x m photon slots per cell; the first m^2 photons that arrive at a cell are
+// stored, the rest only counted, and the stored photons' power is scaled so that the cell keeps the
+// power that arrived (power redistribution).
+#pragma once
+#include <span>
+#include <vector>
+
+#include "lucent/core/stats.h"
+#include "uniform_grid.h"
+
+namespace lucent {
+
+struct StencilGrid {
+  static constexpr uint32_t kEmptySlot = UINT32_MAX;
+
+  UniformGrid grid;
+  uint32_t side = 16;              // m
+  std::vector<Photon> photons;     // as given; stored photons' power redistributed
+  std::vector<uint32_t> slots;     // cell c's footprint: slots [c m^2, (c+1) m^2), photon indices in
+                                   // arrival (= index) order, kEmptySlot after the last stored one
+  std::vector<uint32_t> arrived;   // photons routed to each cell: the stencil buffer's final count
+
+  uint32_t capacity() const { return side * side; }
+  uint32_t stored(uint32_t cell) const { return std::min(arrived[cell], capacity()); }
+  CellPhotons cellPhotons(CellCoord c) const {
+    const uint32_t cell = grid.cellIndex(c);
+    return {slots.data() + size_t(cell) * capacity(), stored(cell)};
+  }
+};
+
+// Takes the photons by value (move them in: no copy). Stages, timed into `stats` when given: "grid_keys" (cell per photon), "stencil_count" (arrivals
+// per cell), "stencil_route" (photons to their cells' footprints in arrival order, power
+// redistribution). The grid has at most min(maxCells, maxStencilSlots / m^2) cells.
+StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& options = {},
+                             RenderStats* stats = nullptr);
+
+}  // namespace lucent

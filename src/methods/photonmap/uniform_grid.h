@@ -1,0 +1,104 @@
+// The uniform grid over the photons' bounds that Purcell et al. 2003 store photons in (section 2.2),
+// and the small interface through which the kNN-grid search (knn_grid.h) reads any grid photon map.
+#pragma once
+#include <array>
+#include <concepts>
+#include <cstdint>
+#include <span>
+
+#include "lucent/core/math.h"
+#include "photon.h"
+
+namespace lucent {
+
+// How the resolution is chosen, first match wins:
+//  - `resolution`: cells per axis as given (the paper's 250x1x250 and 25x25x50); cells may be boxes;
+//  - `cellSize` > 0: cubic cells of that side, e.g. the maximum search radius, so that a kNN-grid
+//    search ends within the first shell or two (Wald et al. 2002 use twice the fixed radius);
+//  - otherwise cubic cells sized so that the bounding box holds about photons / photonsPerCell
+//    cells; axes thinner than a cell (photons on a floor) get one cell and the cells are sized over
+//    the others.
+// Dense grids are coarsened until they have at most maxCells cells (their memory); the hashed grid
+// ignores maxCells, as memory does not grow with its resolution.
+enum class PowerRedistribution : uint8_t {
+  Count,  // the paper's: stored photons' power times arrived / stored (exact for equal-power photons)
+  Power,  // per RGB channel, times (power arrived) / (power stored): exact for any photon powers
+};
+
+struct GridOptions {
+  std::array<uint32_t, 3> resolution{0, 0, 0};
+  float cellSize = 0;
+  float photonsPerCell = 8;
+  uint64_t maxCells = uint64_t(1) << 24;
+  // Stencil grid (section 2.2.2): m, the side of a cell's m x m footprint, and a bound on the
+  // footprints' total slots (the paper's stencil buffer was 1024 x 1024).
+  uint32_t stencilSide = 16;
+  uint64_t maxStencilSlots = uint64_t(1) << 20;
+  PowerRedistribution redistribution = PowerRedistribution::Count;
+  // Hashed grid (section 4.4): buckets, rounded up to a power of two; 0: twice the cells that
+  // photons / photonsPerCell would fill.
+  uint32_t hashBuckets = 0;
+};
+
+struct CellCoord {
+  int32_t x = 0, y = 0, z = 0;
+};
+static_assert(sizeof(CellCoord) == 12);
+
+struct UniformGrid {
+  Vec3 lo;              // corner of cell (0, 0, 0)
+  Vec3 cellSize;        // per axis
+  Vec3 invCellSize;
+  std::array<int32_t, 3> res{1, 1, 1};
+  float slack = 0;      // distance by which float rounding may put a photon outside its cell's box
+
+  static constexpr int32_t kMaxResolution = 1 << 21;  // 21 bits per axis in packed cell keys
+
+  uint64_t cellCount() const { return uint64_t(res[0]) * uint64_t(res[1]) * uint64_t(res[2]); }
+  // The cell containing p; points outside the grid go to the nearest cell.
+  CellCoord cellOf(Vec3 p) const {
+    auto axis = [&](int a) {
+      const float f = std::floor((p[a] - lo[a]) * invCellSize[a]);
+      return f < 0 ? 0 : (f >= float(res[a]) ? res[a] - 1 : int32_t(f));
+    };
+    return {axis(0), axis(1), axis(2)};
+  }
+  uint32_t cellIndex(CellCoord c) const { return uint32_t(c.x + res[0] * (c.y + res[1] * c.z)); }
+  // Unique key for any resolution, for the hashed grid.
+  static uint64_t cellKey(CellCoord c) {
+    return uint64_t(c.x) | uint64_t(c.y) << 21 | uint64_t(c.z) << 42;
+  }
+  // Squared distance from p to the box of cell c, shrunk by `slack` (never more than the truth).
+  float cellDistance2(Vec3 p, CellCoord c) const {
+    float d2 = 0;
+    const int32_t ci[3] = {c.x, c.y, c.z};
+    for (int a = 0; a < 3; ++a) {
+      const float cellLo = lo[a] + float(ci[a]) * cellSize[a], cellHi = cellLo + cellSize[a];
+      const float gap = std::max({cellLo - p[a], p[a] - cellHi, 0.0f}) - slack;
+      if (gap > 0) d2 += gap * gap;
+    }
+    return d2;
+  }
+};
+
+// Bounds the photons (a parallel min/max reduction) and sizes the grid by `options`, with at most
+// maxCells cells (0: no bound but the 21 bits per axis of packed cell keys).
+UniformGrid makeUniformGrid(std::span<const Photon> photons, const GridOptions& options, uint64_t maxCells);
+
+// The photons of one cell, as a grid photon map hands them to the kNN-grid search.
+struct CellPhotons {
+  const uint32_t* ids = nullptr;       // indices into the map's photons
+  uint32_t count = 0;
+  const uint64_t* cellKeys = nullptr;  // hashed grid only: each entry's cell, as entries of other
+  uint64_t cellKey = 0;                // cells share the bucket and must be skipped (section 4.4)
+};
+
+// What the kNN-grid search needs of a map: its grid, its photons, and the photons of a cell.
+template <class Map>
+concept GridPhotonMap = requires(const Map& map, CellCoord c) {
+  { map.grid } -> std::convertible_to<UniformGrid>;
+  { map.photons.data() } -> std::convertible_to<const Photon*>;
+  { map.cellPhotons(c) } -> std::same_as<CellPhotons>;
+};
+
+}  // namespace lucent

@@ -1,0 +1,437 @@
+// Photon map data structures (Purcell et al. 2003, section 2.2-2.3 and 4.4; Jensen's kd-tree): the
+// bitonic sort against std::sort, every map's neighbour sets against brute force, stencil routing's
+// storage and power redistribution, the progressive kNN-grid search, and determinism.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <random>
+#include <vector>
+
+#include "lucent/core/parallel.h"
+#include "lucent/core/rng.h"
+#include "methods/photonmap/bitonic_sort.h"
+#include "methods/photonmap/kd_tree.h"
+#include "methods/photonmap/knn_grid.h"
+#include "methods/photonmap/sorted_grid.h"
+#include "methods/photonmap/stencil_grid.h"
+
+using namespace lucent;
+
+namespace {
+
+enum class Cloud { Uniform, Clustered, Flat };
+
+// Photons in [-1, 1]^3; clustered: dense Gaussian blobs, photons on the faces of a box and a
+// sprinkling of outliers (varying density, as in a scene); flat: all on the plane y = 0.25.
+std::vector<Photon> photonCloud(uint32_t n, Cloud cloud, uint64_t seed, bool equalPower = false) {
+  Rng rng(seed);
+  std::vector<Photon> photons(n);
+  Vec3 centres[4];
+  for (Vec3& c : centres) c = {rng.uniform() * 1.6f - 0.8f, rng.uniform() * 1.6f - 0.8f, rng.uniform() * 1.6f - 0.8f};
+  for (uint32_t i = 0; i < n; ++i) {
+    Vec3 p{rng.uniform() * 2 - 1, rng.uniform() * 2 - 1, rng.uniform() * 2 - 1};
+    if (cloud == Cloud::Flat) p.y = 0.25f;
+    if (cloud == Cloud::Clustered) {
+      const uint32_t kind = rng.below(10);
+      if (kind < 5) {  // a blob of width ~0.05
+        const Vec3 c = centres[rng.below(4)];
+        p = c + 0.05f * Vec3{rng.uniform() + rng.uniform() - 1, rng.uniform() + rng.uniform() - 1,
+                             rng.uniform() + rng.uniform() - 1};
+      } else if (kind < 9) {  // a face of the box
+        p[int(rng.below(3))] = rng.uniform() < 0.5f ? -1.0f : 1.0f;
+      }
+    }
+    const float power = equalPower ? 0.01f : 0.001f + 0.02f * rng.uniform();
+    photons[i] = {p, Rgb(power, 0.5f * power, 0.25f * power), encodeOctahedral(normalize(Vec3{0.3f, 1, 0.2f})), i % 5};
+  }
+  return photons;
+}
+
+// Queries inside the cloud, at photons, and outside its bounds.
+std::vector<Vec3> queryPoints(const std::vector<Photon>& photons, uint32_t count, uint64_t seed) {
+  Rng rng(seed);
+  std::vector<Vec3> q;
+  for (uint32_t i = 0; i < count; ++i) {
+    switch (i % 4) {
+      case 0: q.push_back({rng.uniform() * 2 - 1, rng.uniform() * 2 - 1, rng.uniform() * 2 - 1}); break;
+      case 1: q.push_back(photons[rng.below(uint32_t(photons.size()))].position); break;
+      case 2: q.push_back({rng.uniform() * 6 - 3, rng.uniform() * 6 - 3, rng.uniform() * 6 - 3}); break;
+      default: q.push_back(photons[rng.below(uint32_t(photons.size()))].position + Vec3(0.01f, -0.02f, 0.005f));
+    }
+  }
+  return q;
+}
+
+std::vector<uint32_t> bruteWithin(const std::vector<Photon>& photons, Vec3 p, float r2) {
+  std::vector<uint32_t> ids;
+  for (uint32_t i = 0; i < photons.size(); ++i)
+    if (distance2(photons[i].position, p) <= r2) ids.push_back(i);
+  return ids;
+}
+
+// (d2, index) of every photon, nearest first.
+std::vector<std::pair<float, uint32_t>> bruteSorted(const std::vector<Photon>& photons, Vec3 p) {
+  std::vector<std::pair<float, uint32_t>> all;
+  for (uint32_t i = 0; i < photons.size(); ++i) all.push_back({distance2(photons[i].position, p), i});
+  std::sort(all.begin(), all.end());
+  return all;
+}
+
+struct GridResult {
+  std::vector<uint32_t> ids;  // in visiting order
+  KnnGridSearch search;
+  std::vector<uint32_t> sorted() const {
+    std::vector<uint32_t> s = ids;
+    std::sort(s.begin(), s.end());
+    return s;
+  }
+};
+
+template <class Map>
+GridResult gridQuery(const Map& map, Vec3 p, uint32_t k, float maxRadius) {
+  GridResult r;
+  r.search = knnGrid(map, p, k, maxRadius, [&](uint32_t id, const Photon&, float) { r.ids.push_back(id); });
+  return r;
+}
+
+// The kNN-grid's contract against brute force: every photon within the final radius and only those;
+// at least k of them, over a radius at least the k-th nearest's; or, with fewer than k within the
+// maximum radius, all of those and the maximum radius.
+void checkAgainstBruteForce(const std::vector<Photon>& photons, const std::vector<std::pair<float, uint32_t>>& sorted,
+                            const GridResult& r, Vec3 p, uint32_t k, float maxRadius) {
+  const float maxR2 = maxRadius * maxRadius;
+  const size_t withinMax = std::count_if(sorted.begin(), sorted.end(), [&](auto& e) { return e.first <= maxR2; });
+  REQUIRE(r.search.done);
+  CHECK(r.sorted() == bruteWithin(photons, p, r.search.radius2));
+  CHECK(r.ids.size() == r.search.found);
+  if (withinMax >= k) {
+    CHECK(r.search.found >= k);
+    if (k > 0) CHECK(r.search.radius2 >= sorted[k - 1].first);
+    CHECK(r.search.radius2 <= maxR2);
+    CHECK(knnGridRadius2(r.search) == r.search.radius2);
+  } else {
+    CHECK(r.search.found == withinMax);
+    CHECK(knnGridRadius2(r.search) == maxR2);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Bitonic sort equals std::sort for any size", "[photonmap][bitonic]") {
+  std::mt19937_64 random(7);
+  for (size_t n : {0, 1, 2, 3, 5, 1000, 4097, 100000}) {
+    for (int distinct : {0, 3, 1000}) {  // 0: full 64-bit keys; else many equal keys
+      std::vector<uint64_t> keys(n);
+      for (uint64_t& key : keys) key = distinct ? random() % distinct : random();
+      if (n > 2 && !distinct) keys[1] = ~uint64_t(0);  // the padding value itself must sort too
+      std::vector<uint64_t> expected = keys;
+      std::sort(expected.begin(), expected.end());
+      for (uint32_t block : {2u, 64u, kBitonicLocalBlock}) {  // merged locally from distance 1, 32, 2048
+        std::vector<uint64_t> sorted = keys;
+        bitonicSort(sorted, block);
+        INFO("n = " << n << ", distinct = " << distinct << ", block = " << block);
+        CHECK(sorted == expected);
+      }
+    }
+  }
+}
+
+TEST_CASE("Bitonic sort of (cell, photon index) pairs orders photons by cell, then index", "[photonmap][bitonic]") {
+  std::mt19937 random(3);
+  std::vector<uint64_t> pairs;
+  for (uint32_t i = 0; i < 5001; ++i) pairs.push_back(packSortKey(random() % 17, i));
+  for (int threads : {1, 2}) {
+    ParallelScope scope(threads);
+    std::vector<uint64_t> sorted = pairs;
+    bitonicSort(sorted);
+    for (size_t i = 1; i < sorted.size(); ++i) {
+      const bool ordered = sortKeyOf(sorted[i - 1]) < sortKeyOf(sorted[i]) ||
+                           (sortKeyOf(sorted[i - 1]) == sortKeyOf(sorted[i]) &&
+                            sortIndexOf(sorted[i - 1]) < sortIndexOf(sorted[i]));
+      REQUIRE(ordered);
+    }
+  }
+}
+
+TEST_CASE("kd-tree returns exactly the k nearest photons within the maximum radius", "[photonmap][kdtree]") {
+  for (Cloud cloud : {Cloud::Uniform, Cloud::Clustered, Cloud::Flat}) {
+    const std::vector<Photon> photons = photonCloud(4000, cloud, 11 + int(cloud));
+    const PhotonKdTree tree = buildPhotonKdTree(photons);
+    REQUIRE(tree.photons.size() == photons.size());
+    std::vector<PhotonDistance> heap(500);
+    for (Vec3 p : queryPoints(photons, 40, 5)) {
+      const auto nearestFirst = bruteSorted(photons, p);
+      for (uint32_t k : {1u, 8u, 50u, 500u}) {
+        for (float maxRadius : {0.05f, 0.3f, 10.0f}) {
+          const KdTreeResult r = kdTreeNearest(tree, p, k, maxRadius, heap.data());
+          std::vector<uint32_t> got;
+          for (uint32_t i = 0; i < r.found; ++i) got.push_back(tree.sourceIndex[heap[i].index]);
+          std::sort(got.begin(), got.end());
+          std::vector<uint32_t> expected;
+          float kth2 = 0;
+          for (const auto& [d2, id] : nearestFirst)
+            if (expected.size() < k && d2 <= maxRadius * maxRadius) expected.push_back(id), kth2 = d2;
+          std::sort(expected.begin(), expected.end());
+          INFO("k = " << k << ", max radius = " << maxRadius);
+          CHECK(got == expected);
+          CHECK(r.radius2 == (r.found == k ? kth2 : maxRadius * maxRadius));
+          if (r.found == k) CHECK(heap[0].d2 == kth2);  // a max-heap
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("kd-tree is median-ordered and independent of the thread count", "[photonmap][kdtree][determinism]") {
+  const std::vector<Photon> photons = photonCloud(10000, Cloud::Clustered, 4);
+  PhotonKdTree trees[2];
+  for (int threads : {1, 2}) {
+    ParallelScope scope(threads);
+    trees[threads - 1] = buildPhotonKdTree(photons);
+  }
+  CHECK(trees[0].sourceIndex == trees[1].sourceIndex);
+  const PhotonKdTree& tree = trees[0];
+  // Every splitting photon has its left subtree below it and its right subtree above it.
+  auto check = [&](auto&& self, uint32_t lo, uint32_t hi) -> void {
+    if (hi - lo < 2) return;
+    const uint32_t mid = lo + (hi - lo) / 2;
+    const int a = photonSplitAxis(tree.photons[mid]);
+    for (uint32_t i = lo; i < hi; ++i) {
+      if (i < mid) REQUIRE(tree.photons[i].position[a] <= tree.photons[mid].position[a]);
+      if (i > mid) REQUIRE(tree.photons[i].position[a] >= tree.photons[mid].position[a]);
+    }
+    self(self, lo, mid);
+    self(self, mid + 1, hi);
+  };
+  check(check, 0, uint32_t(tree.photons.size()));
+  for (uint32_t i = 0; i < tree.photons.size(); ++i) {  // the record is the input's but for the axis
+    const Photon& in = photons[tree.sourceIndex[i]];
+    CHECK(tree.photons[i].position == in.position);
+    CHECK(photonBounce(tree.photons[i]) == photonBounce(in));
+  }
+}
+
+TEST_CASE("Sorted grid: first photon per cell by binary search (Fig. 4)", "[photonmap][grid]") {
+  const std::vector<Photon> photons = photonCloud(3000, Cloud::Clustered, 9);
+  const SortedGrid map = buildSortedGrid(photons);
+  const uint32_t cells = uint32_t(map.grid.cellCount());
+  REQUIRE(map.firstPhoton.size() == cells + 1);
+  CHECK(map.firstPhoton.back() == photons.size());
+  std::vector<uint32_t> seen;
+  for (uint32_t c = 0; c < cells; ++c) {
+    REQUIRE(map.firstPhoton[c] <= map.firstPhoton[c + 1]);
+    for (uint32_t i = map.firstPhoton[c]; i < map.firstPhoton[c + 1]; ++i) {
+      const uint32_t id = map.photonList[i];
+      REQUIRE(map.grid.cellIndex(map.grid.cellOf(photons[id].position)) == c);
+      if (i > map.firstPhoton[c]) REQUIRE(map.photonList[i - 1] < id);  // index order within a cell
+      seen.push_back(id);
+    }
+  }
+  std::sort(seen.begin(), seen.end());
+  for (uint32_t i = 0; i < seen.size(); ++i) REQUIRE(seen[i] == i);
+  CHECK(seen.size() == photons.size());
+}
+
+TEST_CASE("Grid resolution follows the options", "[photonmap][grid]") {
+  const std::vector<Photon> photons = photonCloud(8000, Cloud::Uniform, 2);
+  GridOptions options;
+  options.photonsPerCell = 8;
+  const UniformGrid automatic = buildSortedGrid(photons, options).grid;
+  CHECK(double(automatic.cellCount()) == Approx(1000).epsilon(0.35));  // 8000 / 8 cubic cells
+  CHECK(automatic.cellSize.x == automatic.cellSize.y);
+  // A flat cloud: one cell across, the cells sized over the plane.
+  const UniformGrid flat = buildSortedGrid(photonCloud(8000, Cloud::Flat, 2), options).grid;
+  CHECK(flat.res[1] == 1);
+  CHECK(double(flat.cellCount()) == Approx(1000).epsilon(0.35));
+  options.cellSize = 0.25f;
+  const UniformGrid bySize = buildSortedGrid(photons, options).grid;
+  CHECK(bySize.res[0] == 8);
+  CHECK(bySize.cellSize.z == 0.25f);
+  options.resolution = {25, 25, 50};  // the paper's Cornell box grid
+  const UniformGrid explicitRes = buildSortedGrid(photons, options).grid;
+  CHECK(explicitRes.res == std::array<int32_t, 3>{25, 25, 50});
+  options.maxCells = 1000;
+  CHECK(buildSortedGrid(photons, options).grid.cellCount() <= 1000);
+}
+
+TEST_CASE("kNN-grid on the sorted, hashed and stencil grids finds every photon within its radius",
+          "[photonmap][knn]") {
+  struct Setup {
+    Cloud cloud;
+    GridOptions options;
+  };
+  GridOptions coarse, fine, boxes, flat;
+  coarse.photonsPerCell = 40;
+  fine.cellSize = 0.08f;  // many shells per search
+  boxes.resolution = {7, 3, 13};
+  flat.photonsPerCell = 4;
+  for (const Setup& setup : {Setup{Cloud::Uniform, coarse}, Setup{Cloud::Clustered, GridOptions{}},
+                             Setup{Cloud::Clustered, fine}, Setup{Cloud::Clustered, boxes}, Setup{Cloud::Flat, flat}}) {
+    const std::vector<Photon> photons = photonCloud(3000, setup.cloud, 21 + int(setup.cloud));
+    GridOptions options = setup.options;
+    options.hashBuckets = 64;  // few buckets: many collisions to skip
+    const SortedGrid sorted = buildSortedGrid(photons, options);
+    // Room for every photon of a cell: stencil routing drops none.
+    uint32_t fullest = 0;
+    for (size_t c = 0; c + 1 < sorted.firstPhoton.size(); ++c)
+      fullest = std::max(fullest, sorted.firstPhoton[c + 1] - sorted.firstPhoton[c]);
+    options.stencilSide = uint32_t(std::ceil(std::sqrt(double(fullest))));
+    options.maxStencilSlots = sorted.grid.cellCount() * options.stencilSide * options.stencilSide;
+    const HashedGrid hashed = buildHashedGrid(photons, options);
+    const StencilGrid stencil = buildStencilGrid(photons, options);
+    REQUIRE(stencil.grid.res == sorted.grid.res);
+    REQUIRE(hashed.grid.res == sorted.grid.res);
+    for (uint32_t c = 0; c < stencil.arrived.size(); ++c) REQUIRE(stencil.arrived[c] <= stencil.capacity());
+    uint64_t collisions = 0;
+    for (Vec3 p : queryPoints(photons, 24, 8)) {
+      const auto nearestFirst = bruteSorted(photons, p);
+      for (uint32_t k : {1u, 16u, 64u}) {
+        for (float maxRadius : {0.08f, 0.4f, 4.0f}) {
+          INFO("cloud " << int(setup.cloud) << ", k = " << k << ", max radius = " << maxRadius << ", res "
+                        << sorted.grid.res[0] << "x" << sorted.grid.res[1] << "x" << sorted.grid.res[2]);
+          const GridResult a = gridQuery(sorted, p, k, maxRadius);
+          checkAgainstBruteForce(photons, nearestFirst, a, p, k, maxRadius);
+          // Same cells, same order within them: the same search, step by step.
+          const GridResult b = gridQuery(hashed, p, k, maxRadius);
+          const GridResult c = gridQuery(stencil, p, k, maxRadius);
+          CHECK(b.ids == a.ids);
+          CHECK(c.ids == a.ids);
+          CHECK(b.search.radius2 == a.search.radius2);
+          CHECK(c.search.radius2 == a.search.radius2);
+          collisions += b.search.collisionsSkipped;
+        }
+      }
+    }
+    CHECK(collisions > 0);
+  }
+}
+
+TEST_CASE("kNN-grid and kd-tree agree on a cloud with one photon and on an empty one", "[photonmap][knn]") {
+  for (uint32_t n : {0u, 1u}) {
+    const std::vector<Photon> photons = photonCloud(n, Cloud::Uniform, 1);
+    const SortedGrid sorted = buildSortedGrid(photons);
+    const HashedGrid hashed = buildHashedGrid(photons);
+    const StencilGrid stencil = buildStencilGrid(photons);
+    const PhotonKdTree tree = buildPhotonKdTree(photons);
+    PhotonDistance heap[4];
+    for (Vec3 p : {Vec3(0.0f), Vec3(5.0f)}) {
+      const KdTreeResult kd = kdTreeNearest(tree, p, 4, 100.0f, heap);
+      const GridResult a = gridQuery(sorted, p, 4, 100.0f), b = gridQuery(hashed, p, 4, 100.0f),
+                       c = gridQuery(stencil, p, 4, 100.0f);
+      CHECK(kd.found == n);
+      CHECK(a.ids.size() == n);
+      CHECK(b.ids == a.ids);
+      CHECK(c.ids == a.ids);
+      CHECK(knnGridRadius2(a.search) == kd.radius2);
+    }
+  }
+}
+
+TEST_CASE("Progressive kNN-grid: shell by shell to the full search", "[photonmap][knn]") {
+  const std::vector<Photon> photons = photonCloud(5000, Cloud::Clustered, 13);
+  GridOptions options;
+  options.cellSize = 0.05f;
+  const SortedGrid map = buildSortedGrid(photons, options);
+  uint32_t maxShells = 0;
+  for (Vec3 p : queryPoints(photons, 40, 2)) {
+    for (uint32_t k : {8u, 100u}) {
+      const GridResult full = gridQuery(map, p, k, 1.0f);
+      GridResult step;
+      step.search = beginKnnGrid(p, k, 1.0f);
+      auto visit = [&](uint32_t id, const Photon&, float) { step.ids.push_back(id); };
+      advanceKnnGrid(map, step.search, 0, visit);  // 0 shells: nothing explored
+      CHECK(step.ids.empty());
+      CHECK(step.search.found == 0);
+      CHECK(step.search.radius2 == 0);
+      CHECK_FALSE(step.search.done);
+      advanceKnnGrid(map, step.search, 1, visit);  // 1 shell: the query's cell only
+      const CellCoord cell = map.grid.cellOf(p);
+      for (uint32_t id : step.ids) {
+        const CellCoord c = map.grid.cellOf(photons[id].position);
+        CHECK((c.x == cell.x && c.y == cell.y && c.z == cell.z));
+      }
+      float lastRadius2 = step.search.radius2;
+      while (!step.search.done) {
+        advanceKnnGrid(map, step.search, 1, visit);
+        CHECK(step.search.radius2 >= lastRadius2);  // the running radius only grows
+        lastRadius2 = step.search.radius2;
+      }
+      CHECK(step.ids == full.ids);
+      CHECK(step.search.radius2 == full.search.radius2);
+      CHECK(step.search.shells == full.search.shells);
+      advanceKnnGrid(map, step.search, 5, visit);  // a finished search stays finished
+      CHECK(step.ids == full.ids);
+      maxShells = std::max(maxShells, full.search.shells);
+    }
+  }
+  CHECK(maxShells > 2);  // the test did explore several shells
+}
+
+TEST_CASE("Stencil routing stores the first m^2 arrivals and conserves every cell's power",
+          "[photonmap][stencil]") {
+  for (PowerRedistribution mode : {PowerRedistribution::Count, PowerRedistribution::Power}) {
+    // The paper's count ratio conserves power for photons of equal power, as it assumes.
+    const bool equalPower = mode == PowerRedistribution::Count;
+    const std::vector<Photon> photons = photonCloud(20000, Cloud::Clustered, 17, equalPower);
+    GridOptions options;
+    options.stencilSide = 4;  // 16 per cell: dense blobs overflow
+    options.photonsPerCell = 16;
+    options.redistribution = mode;
+    StencilGrid maps[2];
+    for (int threads : {1, 2}) {
+      ParallelScope scope(threads);
+      maps[threads - 1] = buildStencilGrid(photons, options);
+    }
+    const StencilGrid& map = maps[0];
+    CHECK(maps[1].slots == map.slots);
+    CHECK(std::memcmp(maps[1].photons.data(), map.photons.data(), photons.size() * sizeof(Photon)) == 0);
+
+    std::vector<std::vector<uint32_t>> arrivals(map.grid.cellCount());
+    for (uint32_t i = 0; i < photons.size(); ++i) arrivals[map.grid.cellIndex(map.grid.cellOf(photons[i].position))].push_back(i);
+    uint32_t overflowing = 0;
+    for (uint32_t c = 0; c < arrivals.size(); ++c) {
+      const std::vector<uint32_t>& in = arrivals[c];
+      REQUIRE(map.arrived[c] == in.size());
+      const uint32_t stored = std::min<uint32_t>(uint32_t(in.size()), map.capacity());
+      REQUIRE(map.stored(c) == stored);
+      const uint32_t* slots = map.slots.data() + size_t(c) * map.capacity();
+      double arrivedPower[3] = {0, 0, 0}, storedPower[3] = {0, 0, 0};
+      for (uint32_t i = 0; i < in.size(); ++i)
+        for (int ch = 0; ch < 3; ++ch) arrivedPower[ch] += photons[in[i]].power[ch];
+      for (uint32_t s = 0; s < map.capacity(); ++s) {
+        if (s < stored) {
+          REQUIRE(slots[s] == in[s]);  // the first arrivals, in arrival order
+          for (int ch = 0; ch < 3; ++ch) storedPower[ch] += map.photons[slots[s]].power[ch];
+        } else {
+          REQUIRE(slots[s] == StencilGrid::kEmptySlot);
+        }
+      }
+      for (int ch = 0; ch < 3; ++ch) REQUIRE(storedPower[ch] == Approx(arrivedPower[ch]).epsilon(1e-5));
+      overflowing += in.size() > stored;
+    }
+    CHECK(overflowing > 10);
+    // Photons that were dropped keep their power; they are in no footprint.
+    uint64_t storedTotal = 0;
+    for (uint32_t c = 0; c < arrivals.size(); ++c) storedTotal += map.stored(c);
+    CHECK(storedTotal < photons.size());
+  }
+}
+
+TEST_CASE("Grid maps do not depend on the thread count", "[photonmap][grid][determinism]") {
+  const std::vector<Photon> photons = photonCloud(30000, Cloud::Clustered, 5);
+  SortedGrid sorted[2];
+  HashedGrid hashed[2];
+  for (int threads : {1, 2}) {
+    ParallelScope scope(threads);
+    sorted[threads - 1] = buildSortedGrid(photons);
+    hashed[threads - 1] = buildHashedGrid(photons);
+  }
+  CHECK(sorted[0].photonList == sorted[1].photonList);
+  CHECK(sorted[0].firstPhoton == sorted[1].firstPhoton);
+  CHECK(hashed[0].photonList == hashed[1].photonList);
+  CHECK(hashed[0].firstPhoton == hashed[1].firstPhoton);
+  CHECK(hashed[0].cellKeys == hashed[1].cellKeys);
+}
