@@ -1,7 +1,12 @@
 // Reflectance texture lookups: sRGB decoding and bilinear filtering with wrap-around.
 #include <catch2/catch.hpp>
 
+#include <fstream>
+
+#include "lucent/image/image.h"
+#include "lucent/scene/loader.h"
 #include "lucent/scene/texture.h"
+#include "test_support.h"
 
 using namespace lucent;
 
@@ -37,4 +42,23 @@ TEST_CASE("Bilinear lookup interpolates in linear space and wraps around", "[tex
   REQUIRE(bilinear(t, texels.data(), {2.75f, 1.75f}).g == Approx(1.0f));
   // The centre of the texture: all four texels equally.
   REQUIRE(bilinear(t, texels.data(), {0.5f, 0.5f}).g == Approx(0.5f));
+}
+
+TEST_CASE("Textures: 8-bit files are decoded from sRGB, float files read as linear", "[texture]") {
+  const lucent::test::TempDir dir("texture");
+  Image linearHalf(1, 1, {"R", "G", "B"});
+  for (int c = 0; c < 3; ++c) linearHalf.at(0, 0, c) = 0.5f;
+  writePng(linearHalf, dir / "half.png");  // stored as sRGB code 188
+  writeExr(linearHalf, dir / "half.exr");  // stored as linear 0.5
+  for (const char* file : {"half.png", "half.exr"}) {
+    std::ofstream(dir / "quad.obj") << "mtllib quad.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    std::ofstream(dir / "quad.mtl") << "newmtl lamp\nKd 1 1 1\nKe 1 1 1\nmap_Kd " << file << "\n";
+    std::ofstream(dir / "scene.json")
+        << R"({"camera": {"eye": [0.5, 0.5, 2], "look_at": [0.5, 0.5, 0], "up": [0, 1, 0], "fov_y": 40,
+               "resolution": [4, 4]}, "meshes": [{"obj": "quad.obj"}]})";
+    const Scene scene = loadScene(dir / "scene.json", {true});
+    REQUIRE(scene.texels.size() == 1);
+    INFO(file);
+    REQUIRE(decodeTexel(scene.texels[0]).g == Approx(0.5f).epsilon(0.01));
+  }
 }

@@ -16,18 +16,26 @@ using detail::JsonFields;
 
 namespace {
 
-// 8-bit image formats hold sRGB-encoded values; float formats hold linear radiometry.
-bool isSrgbEncoded(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+std::string lowercase(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// Whether stored values are sRGB-encoded: the colour space OpenImageIO reports for the file (sRGB
+// for 8-bit JPEG, PNG, TIFF...; linear for EXR and HDR), or, where it reports none, the extension.
+bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata) {
+  for (const auto& [key, value] : metadata)
+    if (key == "oiio:ColorSpace") return lowercase(value).find("srgb") != std::string::npos;
+  const std::string ext = lowercase(fs::path(path).extension().string());
   return ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".bmp" || ext == ".tga";
 }
 
 // Reads an RGB (or grey) image into linear texels; row 0 is the top row.
 std::vector<Rgb> readTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h) {
   Image image;
+  ImageMetadata metadata;
   try {
-    image = readImage(path);
+    image = readImage(path, &metadata);
   } catch (const std::exception& e) {
     throw SceneError(context + ": " + e.what());  // the message names the image
   }
@@ -35,7 +43,7 @@ std::vector<Rgb> readTexels(const std::string& path, const std::string& context,
   h = static_cast<uint32_t>(image.height());
   const int nc = image.channelCount();
   if (nc < 1 || w == 0 || h == 0) throw SceneError(context + ": image '" + path + "' is empty");
-  const bool srgb = isSrgbEncoded(path);
+  const bool srgb = isSrgbEncoded(path, metadata);
   std::vector<Rgb> texels(size_t(w) * h);
   for (uint32_t y = 0; y < h; ++y)
     for (uint32_t x = 0; x < w; ++x) {
