@@ -188,6 +188,10 @@ Rgb directLight(const Scene& scene, const Visibility& vis, const ShadingPoint& p
 void estimateDirectLight(const Scene& scene, const Visibility& vis, std::span<const ShadingPoint> points,
                          int samples, uint64_t seed, std::span<Rgb> direct, uint64_t& rays) {
   const uint64_t stream = streamSeed(seed, RenderStream::Direct);
+  // A single point or directional light gives every sample the same shadow ray: one is enough
+  // (the paper's RING: "only shoots one shadow ray per pixel").
+  if (scene.lights.size() == 1 && (scene.lights[0].type == LightType::Point || scene.lights[0].type == LightType::Directional))
+    samples = std::min(samples, 1);
   const size_t blocks = (points.size() + 255) / 256;
   std::vector<uint64_t> blockRays(blocks, 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const tbb::blocked_range<size_t>& r) {
