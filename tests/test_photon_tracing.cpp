@@ -171,3 +171,27 @@ TEST_CASE("Photon maps are identical with 1 and 2 threads", "[photons][determini
     }
   }
 }
+
+TEST_CASE("Caustic-only tracing stores the caustic photons of full tracing, flagged", "[photons]") {
+  // Paths are keyed by (seed, photon index, bounce), so ending them at their first non-specular
+  // surface changes nothing before it: the caustic map is the same, at a fraction of the work.
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true});
+  const Visibility vis(scene);
+  PhotonTracingOptions opt;
+  opt.photons = 20000;
+  opt.seed = 8;
+  const PhotonMaps full = tracePhotons(scene, vis, opt);
+  opt.causticOnly = true;
+  const PhotonMaps only = tracePhotons(scene, vis, opt);
+  REQUIRE(only.global.empty());
+  REQUIRE(only.caustic.size() == full.caustic.size());
+  REQUIRE(std::memcmp(only.caustic.data(), full.caustic.data(), full.caustic.size() * sizeof(Photon)) == 0);
+  size_t flagged = 0;
+  for (const Photon& p : full.global) {
+    flagged += photonIsCaustic(p);
+    if (photonIsCaustic(p)) REQUIRE(photonBounce(p) >= 1);
+  }
+  REQUIRE(flagged == full.caustic.size());
+  for (const Photon& p : full.caustic) REQUIRE(photonIsCaustic(p));
+  REQUIRE(only.alivePerBounce.size() < full.alivePerBounce.size());
+}

@@ -96,3 +96,65 @@ TEST_CASE("render: a time budget stops early and records the samples taken", "[c
   for (const auto& [k, v] : meta) found |= (k == "lucent:spp" && v == std::to_string(spp));
   REQUIRE(found);
 }
+
+TEST_CASE("render --method purcell and pmfg: options, the paper's stages and metadata", "[cli][render][photonmap]") {
+  const test::TempDir dir("render-cli");
+  for (const std::string method : {"purcell", "pmfg"}) {
+    const std::string exr = dir / (method + ".exr");
+    const test::CliRun r =
+        runLucent("render " + kScene + " --method " + method + " --photons 5000 --caustic-photons 0 --k 20 --seed 5" +
+                  " --light-samples 2 --resolution 24x20 --threads 2 --layers --quiet -o " + exr +
+                  (method == "pmfg" ? " --gather-rays 8" : " --map stencil --shells 2"));
+    INFO(r.output);
+    REQUIRE(r.status == 0);
+    const auto summary = nlohmann::json::parse(r.output);
+    REQUIRE(summary["method"] == method);
+    REQUIRE(summary["spp"] == 1);
+    const auto& options = summary["options"];
+    REQUIRE(options["photons"] == 5000);
+    REQUIRE(options["caustic_photons"] == 0);
+    REQUIRE(options["k"] == 20);
+    REQUIRE(options["seed"] == 5);
+    REQUIRE(options["light_samples"] == 2);
+    REQUIRE(options["map"] == (method == "pmfg" ? "kdtree" : "stencil"));
+    REQUIRE(options["max_radius"].get<double>() > 0);  // derived from the scene, and written down
+    for (const char* key : {"caustic_k", "shells", "max_specular_depth", "photon_bounces", "grid_resolution",
+                            "cell_size", "photons_per_cell", "stencil_side", "spp", "layers"})
+      REQUIRE(options.contains(key));
+    REQUIRE(options.contains("gather_rays") == (method == "pmfg"));
+    for (const char* stage : {"trace_photons", "build_map", "trace_rays", "radiance_estimate"})
+      REQUIRE(summary["stages"].contains(stage));
+    REQUIRE(summary["counters"]["global_photons"].get<int>() > 5000);
+    REQUIRE(summary["counters"]["caustic_photons"] == 0);
+
+    ImageMetadata meta;
+    const Image image = readImage(exr, &meta);
+    REQUIRE(image.width() == 24);
+    for (const char* c : {"R", "albedo.R", "depth.Z", "direct.G", "indirect.B", "caustic.R"})
+      REQUIRE(image.channelIndex(c) >= 0);
+    std::string metaMethod, metaOptions;
+    for (const auto& [k, v] : meta) {
+      if (k == "lucent:method") metaMethod = v;
+      if (k == "lucent:options") metaOptions = v;
+    }
+    REQUIRE(metaMethod == method);
+    REQUIRE(nlohmann::json::parse(metaOptions) == options);
+  }
+}
+
+TEST_CASE("render: impossible photon-mapping options are rejected with a message and no output", "[cli][render][photonmap]") {
+  const test::TempDir dir("render-cli");
+  const std::string exr = dir / "out.exr";
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {"--method purcell --map kdtree --shells 3", "shells"},
+           {"--method purcell --gather-rays 16", "--gather-rays"},
+           {"--method pt --photons 1000", "--photons"},
+           {"--method pmfg --time-budget 2", "--time-budget"},
+           {"--method pmfg --grid-resolution 25x25", "--grid-resolution"}}) {
+    const test::CliRun r = runLucent("render " + kScene + " " + args + " --resolution 8x8 --quiet -o " + exr);
+    INFO(args << ": " << r.output);
+    REQUIRE(r.status == 1);
+    REQUIRE(r.output.find(message) != std::string::npos);
+    REQUIRE(dir.entries().empty());
+  }
+}

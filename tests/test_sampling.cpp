@@ -447,3 +447,31 @@ TEST_CASE("Frame is orthonormal and inverts itself", "[sampling][frame]") {
     CHECK(length(f.toLocal(f.n) - Vec3(0, 0, 1)) < 1e-5f);
   }
 }
+
+TEST_CASE("stratifiedSample2D puts one sample in each cell of its grid", "[sampling]") {
+  Rng rng(31);
+  for (uint32_t n : {1u, 2u, 4u, 7u, 16u, 30u, 4096u}) {
+    const auto nx = static_cast<uint32_t>(std::sqrt(double(n))), ny = n / nx;
+    std::set<std::pair<uint32_t, uint32_t>> cells;
+    for (uint32_t i = 0; i < n; ++i) {
+      const Vec2 u = rng.uniform2();
+      const Vec2 s = stratifiedSample2D(i, n, u);
+      INFO("n " << n << ", sample " << i);
+      REQUIRE((s.x >= 0 && s.x < 1 && s.y >= 0 && s.y < 1));
+      if (i < nx * ny) {
+        const auto cell = std::pair{uint32_t(s.x * nx), uint32_t(s.y * ny)};
+        REQUIRE(cell == std::pair{i % nx, i / nx});
+        cells.insert(cell);
+        // Uniform within the cell: the jitter is the offset in it.
+        REQUIRE(s.x * nx - float(i % nx) == Approx(u.x).margin(1e-5));
+        REQUIRE(s.y * ny - float(i / nx) == Approx(u.y).margin(1e-5));
+      } else {
+        REQUIRE((s.x == u.x && s.y == u.y));  // the remainder is uniform over the square
+      }
+    }
+    REQUIRE(cells.size() == size_t(nx) * ny);
+  }
+  // The last cell's upper edge stays below 1.
+  const Vec2 s = stratifiedSample2D(3, 4, {0x1.fffffep-1f, 0x1.fffffep-1f});
+  REQUIRE((s.x < 1 && s.y < 1));
+}

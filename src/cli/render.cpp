@@ -8,6 +8,7 @@
 #include "cli/progress.h"
 #include "lucent/core/parallel.h"
 #include "lucent/methods/pathtrace.h"
+#include "lucent/methods/photonmap.h"
 #include "lucent/scene/loader.h"
 
 namespace lucent::cli {
@@ -18,9 +19,63 @@ namespace {
 struct RenderArgs {
   std::string scene, method = "pt", output, png, resolution, strategy = "mis";
   int threads = 0;
-  bool quiet = false, robust = false;
+  int spp = 0;  // 0: the method's default
+  bool quiet = false, robust = false, layers = false;
+  uint64_t seed = 0;
   PathTraceOptions pt;
+  PhotonMapOptions pm;
+  std::string map, gridResolution;  // map: empty for the method's default
+  // Options that belong to one family of methods, to reject them with the other.
+  std::vector<CLI::Option*> ptOnly, pmOnly;
+  CLI::Option* pmGather = nullptr;
 };
+
+PhotonMapKind parseMapKind(const std::string& name) {
+  if (name == "sort") return PhotonMapKind::Sort;
+  if (name == "stencil") return PhotonMapKind::Stencil;
+  if (name == "hash") return PhotonMapKind::Hash;
+  return PhotonMapKind::KdTree;
+}
+
+std::array<uint32_t, 3> parseGridResolution(const std::string& text) {
+  std::array<uint32_t, 3> r{0, 0, 0};
+  if (text.empty()) return r;
+  long long v[3];
+  char x1 = 0, x2 = 0, rest = 0;
+  std::istringstream in(text);
+  if (!(in >> v[0] >> x1 >> v[1] >> x2 >> v[2]) || x1 != 'x' || x2 != 'x' || (in >> rest))
+    throw std::invalid_argument("--grid-resolution '" + text + "': expected XxYxZ, e.g. 25x25x50");
+  for (int a = 0; a < 3; ++a) {
+    if (v[a] < 1 || v[a] > (1 << 21))
+      throw std::invalid_argument("--grid-resolution '" + text + "': cell counts must be in [1, 2^21]");
+    r[a] = uint32_t(v[a]);
+  }
+  return r;
+}
+
+nlohmann::json photonMapOptionsJson(const RenderArgs& a, const Scene& scene) {
+  const PhotonMapOptions& o = a.pm;
+  nlohmann::json j = {{"spp", o.spp},
+                      {"seed", o.seed},
+                      {"photons", o.photons},
+                      {"caustic_photons", o.causticPhotons},
+                      {"k", o.k},
+                      {"caustic_k", o.causticK > 0 ? o.causticK : o.k},
+                      {"max_radius", o.maxRadius > 0 ? o.maxRadius : defaultMaxRadius(scene)},
+                      {"map", a.map},
+                      {"shells", o.shells},
+                      {"light_samples", o.lightSamples},
+                      {"max_specular_depth", o.maxSpecularDepth},
+                      {"photon_bounces", o.maxPhotonBounces},
+                      {"grid_resolution", a.gridResolution.empty() ? "auto" : a.gridResolution},
+                      {"cell_size", o.cellSize},
+                      {"photons_per_cell", o.photonsPerCell > 0 ? nlohmann::json(o.photonsPerCell) : nlohmann::json("auto")},
+                      {"stencil_side", o.stencilSide},
+                      {"layers", o.layers},
+                      {"robust", a.robust}};
+  if (a.method == "pmfg") j["gather_rays"] = o.gatherRays;
+  return j;
+}
 
 std::string hex(uint64_t v) {
   std::ostringstream s;
@@ -35,6 +90,21 @@ void checkOutputPath(const std::string& path, const std::string& extension, cons
 }
 
 int runRender(RenderArgs& a) {
+  const bool photonMapping = a.method == "purcell" || a.method == "pmfg";
+  if (a.method != "pt" && !photonMapping)
+    throw std::invalid_argument("--method '" + a.method + "': unknown method (available: pt, purcell, pmfg)");
+  for (CLI::Option* o : photonMapping ? a.ptOnly : a.pmOnly)
+    if (o->count() > 0) throw std::invalid_argument(o->get_name() + " does not apply to --method " + a.method);
+  if (photonMapping && a.method == "purcell" && a.pmGather->count() > 0)
+    throw std::invalid_argument("--gather-rays applies to --method pmfg only");
+  a.pt.spp = a.spp > 0 ? a.spp : a.pt.spp;
+  a.pt.seed = a.pm.seed = a.seed;
+  a.pt.layers = a.pm.layers = a.layers;
+  if (a.spp > 0) a.pm.spp = a.spp;
+  if (a.map.empty()) a.map = a.method == "pmfg" ? "kdtree" : "sort";
+  a.pm.map = parseMapKind(a.map);
+  a.pm.gridResolution = parseGridResolution(a.gridResolution);
+  if (photonMapping) validatePhotonMapOptions(a.pm);
   checkOutputPath(a.output, ".exr", "-o");
   if (!a.png.empty()) checkOutputPath(a.png, ".png", "--png");
 
@@ -75,8 +145,11 @@ int runRender(RenderArgs& a) {
                  {"seed", a.pt.seed},         {"time_budget", a.pt.timeBudget}, {"layers", a.pt.layers},
                  {"strategy", a.strategy},    {"robust", a.robust}};
       out = renderPathTraced(scene, visibility, a.pt, [&](double f) { bar.update(f); });
-    } else {
-      throw std::invalid_argument("--method '" + a.method + "': unknown method (available: pt)");
+    } else if (photonMapping) {
+      options = photonMapOptionsJson(a, scene);
+      const ProgressFn progress = [&](double f) { bar.update(f); };
+      out = a.method == "purcell" ? renderPurcell(scene, visibility, a.pm, progress)
+                                  : renderPhotonMapFinalGather(scene, visibility, a.pm, progress);
     }
   }
   for (const auto& s : out.stats.stageSeconds) stats.addStage(s.first, s.second);
@@ -86,7 +159,7 @@ int runRender(RenderArgs& a) {
   ImageMetadata meta = {{"lucent:method", a.method},
                         {"lucent:options", options.dump()},
                         {"lucent:spp", std::to_string(out.sppDone)},
-                        {"lucent:seed", std::to_string(a.pt.seed)},
+                        {"lucent:seed", std::to_string(a.seed)},
                         {"lucent:render_seconds", std::to_string(renderSeconds)},
                         {"lucent:version", LUCENT_VERSION},
                         {"lucent:embree_version", Visibility::embreeVersion()},
@@ -120,26 +193,72 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* cmd = app.add_subcommand("render", "Render a scene to an EXR (and optionally a PNG)");
   cmd->add_option("scene", args->scene, "Scene file (JSON)")->required();
-  cmd->add_option("--method", args->method, "Rendering method: pt")->capture_default_str();
+  cmd->add_option("--method", args->method, "Rendering method: pt, purcell, pmfg")->capture_default_str();
   cmd->add_option("-o,--output", args->output, "Output EXR file")->required();
   cmd->add_option("--png", args->png, "Also write an sRGB PNG");
-  cmd->add_option("--spp", args->pt.spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24))->capture_default_str();
-  cmd->add_option("--seed", args->pt.seed, "Random seed")->capture_default_str();
+  cmd->add_option("--spp", args->spp, "Samples per pixel (default: pt 64; purcell and pmfg 1, through the pixel centre)")
+      ->check(CLI::Range(1, 1 << 24));
+  cmd->add_option("--seed", args->seed, "Random seed")->capture_default_str();
   cmd->add_option("--threads", args->threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 4096));
   cmd->add_option("--resolution", args->resolution, "Override the camera resolution, WIDTHxHEIGHT");
-  cmd->add_option("--time-budget", args->pt.timeBudget, "Stop sampling within this many seconds (at least 1 spp)")
-      ->check(CLI::Range(0.0, 1e9));
-  cmd->add_option("--max-depth", args->pt.maxDepth, "Path length in bounces (1: direct light only)")
-      ->check(CLI::Range(0, 1 << 16))->capture_default_str();
-  cmd->add_option("--roulette-depth", args->pt.rouletteDepth, "Russian roulette from this bounce on")
-      ->check(CLI::Range(1, 1 << 16))->capture_default_str();
-  cmd->add_option("--tile-size", args->pt.tileSize, "Tile size in pixels (does not change the image)")
-      ->check(CLI::Range(1, 4096))->capture_default_str();
-  cmd->add_option("--strategy", args->strategy, "pt: mis (default), or light or bsdf sampling alone, for validation")
-      ->check(CLI::IsMember({"mis", "light", "bsdf"}));
-  cmd->add_flag("--layers", args->pt.layers, "Add albedo, normal, depth, direct and indirect layers to the EXR");
+  cmd->add_flag("--layers", args->layers,
+                "Add albedo, normal, depth, direct and indirect layers to the EXR (purcell, pmfg: and caustic)");
   cmd->add_flag("--robust", args->robust, "Embree robust traversal mode");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar or warnings");
+
+  // Path tracer (pt).
+  auto& pt = args->ptOnly;
+  pt.push_back(cmd->add_option("--time-budget", args->pt.timeBudget, "pt: stop sampling within this many seconds (at least 1 spp)")
+                   ->check(CLI::Range(0.0, 1e9)));
+  pt.push_back(cmd->add_option("--max-depth", args->pt.maxDepth, "pt: path length in bounces (1: direct light only)")
+                   ->check(CLI::Range(0, 1 << 16))->capture_default_str());
+  pt.push_back(cmd->add_option("--roulette-depth", args->pt.rouletteDepth, "pt: Russian roulette from this bounce on")
+                   ->check(CLI::Range(1, 1 << 16))->capture_default_str());
+  pt.push_back(cmd->add_option("--tile-size", args->pt.tileSize, "pt: tile size in pixels (does not change the image)")
+                   ->check(CLI::Range(1, 4096))->capture_default_str());
+  pt.push_back(cmd->add_option("--strategy", args->strategy, "pt: mis (default), or light or bsdf sampling alone, for validation")
+                   ->check(CLI::IsMember({"mis", "light", "bsdf"})));
+
+  // Photon mapping (purcell, pmfg).
+  PhotonMapOptions& o = args->pm;
+  auto& pm = args->pmOnly;
+  pm.push_back(cmd->add_option("--photons", o.photons, "purcell, pmfg: photon paths emitted for the global map")
+                   ->check(CLI::Range(0u, 1u << 28))->capture_default_str());
+  pm.push_back(cmd->add_option("--caustic-photons", o.causticPhotons,
+                               "purcell, pmfg: photon paths emitted for the caustic map (0: no caustic map)")
+                   ->check(CLI::Range(0u, 1u << 28))->capture_default_str());
+  pm.push_back(cmd->add_option("--k", o.k, "purcell, pmfg: photons sought per radiance estimate")
+                   ->check(CLI::Range(1u, 1u << 20))->capture_default_str());
+  pm.push_back(cmd->add_option("--caustic-k", o.causticK, "purcell, pmfg: photons sought in the caustic map (0: --k)")
+                   ->check(CLI::Range(0u, 1u << 20))->capture_default_str());
+  pm.push_back(cmd->add_option("--max-radius", o.maxRadius,
+                               "purcell, pmfg: maximum search radius (0: 0.1 x the scene's bounding-box diagonal)")
+                   ->check(CLI::Range(0.0f, 1e30f))->capture_default_str());
+  pm.push_back(cmd->add_option("--map", args->map,
+                               "purcell, pmfg: photon map: sort, stencil, hash, kdtree (default: purcell sort, pmfg kdtree)")
+                   ->check(CLI::IsMember({"sort", "stencil", "hash", "kdtree"})));
+  pm.push_back(cmd->add_option("--shells", o.shells,
+                               "purcell, pmfg: stop each kNN-grid search after N shells (progressive estimate; 0: to the end)")
+                   ->check(CLI::Range(0u, 1u << 20))->capture_default_str());
+  pm.push_back(cmd->add_option("--light-samples", o.lightSamples, "purcell, pmfg: shadow rays per shading point")
+                   ->check(CLI::Range(0, 1 << 16))->capture_default_str());
+  args->pmGather = cmd->add_option("--gather-rays", o.gatherRays, "pmfg: final-gather rays per shading point")
+                       ->check(CLI::Range(0, 1 << 20))->capture_default_str();
+  pm.push_back(args->pmGather);
+  pm.push_back(cmd->add_option("--max-specular-depth", o.maxSpecularDepth,
+                               "purcell, pmfg: mirror and glass bounces followed from the camera and by gather rays")
+                   ->check(CLI::Range(0, 64))->capture_default_str());
+  pm.push_back(cmd->add_option("--photon-bounces", o.maxPhotonBounces, "purcell, pmfg: interactions followed per photon path")
+                   ->check(CLI::Range(1u, 255u))->capture_default_str());
+  pm.push_back(cmd->add_option("--grid-resolution", args->gridResolution,
+                               "purcell, pmfg: grid cells per axis, XxYxZ (default: from the photons)"));
+  pm.push_back(cmd->add_option("--cell-size", o.cellSize, "purcell, pmfg: cubic grid cells of this side")
+                   ->check(CLI::Range(0.0f, 1e30f)));
+  pm.push_back(cmd->add_option("--photons-per-cell", o.photonsPerCell,
+                               "purcell, pmfg: otherwise, about this many photons per cell of the photons' bounds (0: max(1, k / 16))")
+                   ->check(CLI::Range(0.0f, 1e9f))->capture_default_str());
+  pm.push_back(cmd->add_option("--stencil-side", o.stencilSide, "purcell, pmfg: m, with m x m photons per stencil-routed cell")
+                   ->check(CLI::Range(1u, 1024u))->capture_default_str());
   cmd->callback([args, &exitCode] { exitCode = runRender(*args); });
 }
 

@@ -62,6 +62,20 @@ inline float phongLobePdf(float cosAlpha, float exponent) {
   return cosAlpha > 0 ? (exponent + 1.0f) * (0.5f * kInvPi) * std::pow(cosAlpha, exponent) : 0.0f;
 }
 
+// Sample i of n over the unit square, stratified: the first nx * ny samples (nx = floor(sqrt(n)),
+// ny = floor(n / nx)) take one cell each of an nx x ny grid, jittered by `u` within it; the rest, if
+// any, are `u` itself. Every sample's average over the n is unbiased: each stratified sample is
+// uniform in a cell of equal area and the remaining ones are uniform over the square.
+inline Vec2 stratifiedSample2D(uint32_t i, uint32_t n, Vec2 u) {
+  const auto nx = static_cast<uint32_t>(std::sqrt(double(n)));
+  if (nx == 0) return u;
+  const uint32_t ny = n / nx;
+  if (i >= nx * ny) return u;
+  // The product can round to 1 for the last cell; keep samples in [0, 1).
+  return {std::min((float(i % nx) + u.x) / float(nx), 0x1.fffffep-1f),
+          std::min((float(i / nx) + u.y) / float(ny), 0x1.fffffep-1f)};
+}
+
 // Multiple importance sampling weight, power heuristic with beta = 2 (Veach 1997).
 inline float powerHeuristic(float pdfA, float pdfB) {
   const float a = pdfA * pdfA, b = pdfB * pdfB;

@@ -2,10 +2,8 @@
 // sampling by multiple importance sampling, Russian roulette, box-filtered pixels.
 #pragma once
 #include <cstdint>
-#include <functional>
 
-#include "lucent/core/stats.h"
-#include "lucent/image/image.h"
+#include "lucent/methods/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
 
@@ -25,15 +23,6 @@ struct PathTraceOptions {
   int tileSize = 16;           // pixels; does not change the image
   bool layers = false;         // add albedo, normal, depth, direct and indirect layers
   PathStrategy strategy = PathStrategy::Mis;
-};
-
-// Called from worker threads with the fraction of work done; must be thread-safe.
-using ProgressFn = std::function<void(double)>;
-
-struct RenderOutput {
-  Image image;
-  RenderStats stats;
-  int sppDone = 0;
 };
 
 RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, const PathTraceOptions& options,

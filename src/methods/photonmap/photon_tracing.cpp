@@ -26,7 +26,8 @@ struct BounceResult {
   uint8_t stored = 0, caustic = 0, alive = 0;
 };
 
-BounceResult bounce(const Scene& scene, const Visibility& vis, const PhotonPath& path, uint32_t depth, uint64_t seed) {
+BounceResult bounce(const Scene& scene, const Visibility& vis, const PhotonPath& path, uint32_t depth, uint64_t seed,
+                    bool causticOnly) {
   BounceResult out;
   const Hit hit = vis.intersect(path.ray);
   if (!hit.found()) return out;
@@ -36,9 +37,11 @@ BounceResult bounce(const Scene& scene, const Visibility& vis, const PhotonPath&
   const bool frontFace = dot(wo, sp.geometricNormal) > 0;
 
   if (!bsdf.isDelta() && !(bsdf.kd + bsdf.ks).isBlack()) {
-    out.photon = {sp.position, path.power, encodeOctahedral(wo), depth};
-    out.stored = 1;
     out.caustic = path.specularOnly && depth > 0;
+    out.photon = {sp.position, path.power, encodeOctahedral(wo),
+                  std::min(depth, kPhotonBounceMask) | (out.caustic ? kPhotonCausticFlag : 0u)};
+    out.stored = !causticOnly || out.caustic;
+    if (causticOnly) return out;  // no caustic path continues from a non-specular surface
   }
 
   Rng rng(seed, path.index, depth + 1);
@@ -98,12 +101,12 @@ PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonT
     maps.alivePerBounce.push_back(static_cast<uint32_t>(paths.size()));
     results.resize(paths.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, paths.size(), 256), [&](const auto& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i) results[i] = bounce(scene, vis, paths[i], depth, options.seed);
+      for (size_t i = r.begin(); i != r.end(); ++i) results[i] = bounce(scene, vis, paths[i], depth, options.seed, options.causticOnly);
     });
     size_t next = 0;
     for (const BounceResult& b : results) {
       if (b.stored) {
-        maps.global.push_back(b.photon);
+        if (!options.causticOnly) maps.global.push_back(b.photon);
         if (b.caustic) maps.caustic.push_back(b.photon);
       }
       if (b.alive) paths[next++] = b.next;

@@ -15,11 +15,14 @@ struct PhotonTracingOptions {
   uint32_t photons = 65000;  // photon paths emitted
   uint32_t maxBounces = 64;  // interactions followed per path (Russian roulette ends most far earlier)
   uint64_t seed = 0;
+  // Trace for the caustic map alone: a path ends at its first non-specular surface (after storing
+  // there when it came through specular bounces), and `global` stays empty.
+  bool causticOnly = false;
 };
 
 // Photons stored at non-specular surfaces. The caustic map holds those that reached a diffuse or
 // glossy surface through specular bounces only (L S+ D); the global map holds every stored photon
-// (L {S|D}* D), direct ones included.
+// (L {S|D}* D), direct ones included. Caustic photons carry kPhotonCausticFlag in both maps.
 struct PhotonMaps {
   std::vector<Photon> global;
   std::vector<Photon> caustic;

@@ -1,0 +1,206 @@
+#include "eye_paths.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "lucent/core/parallel.h"
+#include "lucent/core/sampling.h"
+#include "lucent/scene/camera.h"
+#include "lucent/scene/light_sampling.h"
+#include "lucent/scene/surface.h"
+
+namespace lucent {
+namespace {
+
+struct Branch {
+  Ray ray;
+  Rgb weight;
+  int depth = 0;  // specular bounces so far
+};
+
+// Depth-first over a camera sample's branches: each pop pushes at most two, and the depth is
+// bounded by maxSpecularDepth (at most 64), so the stack never holds more than 66.
+constexpr int kMaxBranchStack = 80;
+
+struct SampleResult {
+  Rgb emitted;
+  bool valid = true;
+};
+
+// Follows one camera ray through specular bounces; appends the shading points it reaches.
+SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const EyePathSettings& settings, Ray ray,
+                               uint32_t pixel, uint32_t sample, Rng& rng, EyePixel* firstHit,
+                               std::vector<ShadingPoint>& points, uint64_t& rays) {
+  SampleResult out;
+  Branch stack[kMaxBranchStack];
+  int top = 0;
+  stack[top++] = {ray, Rgb(1.0f), 0};
+  uint32_t branch = 0;
+  while (top > 0) {
+    const Branch b = stack[--top];
+    if (!isFinite(b.ray.origin) || !isFinite(b.ray.direction) || !isFinite(b.weight)) {
+      out.valid = false;
+      return out;
+    }
+    ++rays;
+    const Hit hit = vis.intersect(b.ray);
+    if (!hit.found()) {
+      if (scene.environment.present) out.emitted += b.weight * environmentRadiance(scene.environment, b.ray.direction);
+      continue;
+    }
+    const SurfacePoint sp = surfaceAt(scene, hit.triangle, hit.b1, hit.b2);
+    const Material& material = scene.materials[sp.materialId];
+    const Vec3 wo = -b.ray.direction;
+    const bool frontFace = dot(wo, sp.geometricNormal) > 0;
+    if (!material.ke.isBlack() && frontFace) out.emitted += b.weight * material.ke;
+    const SurfaceBsdf bsdf = bsdfAt(scene, sp);
+    // As the path tracer: the geometric normal where the shading normal puts the viewer on the
+    // other side; glass keeps the winding orientation, other materials are two-sided.
+    Vec3 n = dot(wo, sp.shadingNormal) * dot(wo, sp.geometricNormal) > 0 ? sp.shadingNormal : sp.geometricNormal;
+    if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
+    if (firstHit) {
+      firstHit->albedo = bsdf.type == MaterialType::Diffuse || bsdf.type == MaterialType::Phong ? bsdf.kd + bsdf.ks
+                         : bsdf.type == MaterialType::Mirror                                   ? bsdf.ks
+                                                                                                : Rgb(1.0f);
+      firstHit->normal = sp.shadingNormal;
+      firstHit->depth = hit.t;
+      firstHit = nullptr;
+    }
+
+    if (!bsdf.isDelta()) {
+      if (!(bsdf.kd + bsdf.ks).isBlack())
+        points.push_back({sp.position, sp.geometricNormal, n, wo, b.weight, bsdf, pixel, sample, branch++});
+      continue;
+    }
+    if (b.depth >= settings.maxSpecularDepth) continue;
+    const Frame frame(n);
+    const Vec3 woLocal = frame.toLocal(wo);
+    // Pushes the continuation along s with weight w, unless it leaves on the wrong side of the
+    // real surface (shading-normal leaks), as the path tracer does.
+    auto push = [&](const BsdfSample& s, Rgb w) {
+      if (!s.valid) return;
+      const Vec3 wi = frame.toWorld(s.wi);
+      const bool transmits = s.wi.z * woLocal.z < 0;
+      if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) return;
+      const Rgb weight = b.weight * w;
+      if (weight.isBlack()) return;
+      stack[top++] = {{offsetOrigin(sp.position, sp.geometricNormal, wi), wi}, weight, b.depth + 1};
+    };
+    if (bsdf.type == MaterialType::Glass && b.weight.maxComponent() >= kSplitWeight) {
+      // Both lobes, each weighted by the probability with which sampleBsdf would pick it (F, 1 - F):
+      // u = 0 picks reflection unless F = 0, u just below 1 refraction unless F = 1 (total internal
+      // reflection).
+      const BsdfSample r = sampleBsdf(bsdf, woLocal, 0.0f, {});
+      const BsdfSample t = sampleBsdf(bsdf, woLocal, 0x1.fffffep-1f, {});
+      if (r.valid && r.wi.z * woLocal.z > 0) push(r, r.weight * r.pdf);
+      if (t.valid && t.wi.z * woLocal.z < 0) push(t, t.weight * t.pdf);
+    } else {
+      // One lobe, chosen with its probability (sampleBsdf's weight for delta lobes has it divided out).
+      const float uLobe = rng.uniform();
+      const BsdfSample s = sampleBsdf(bsdf, woLocal, uLobe, {});
+      push(s, s.weight);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathSettings& settings) {
+  const int width = scene.camera.width, height = scene.camera.height;
+  const int tile = settings.tileSize;
+  const int tilesX = (width + tile - 1) / tile, tilesY = (height + tile - 1) / tile;
+  const int tiles = tilesX * tilesY;
+  const PinholeCamera camera(scene.camera);
+  const uint64_t seed = streamSeed(settings.seed, RenderStream::Eye);
+
+  EyePaths out;
+  out.pixels.resize(size_t(width) * height);
+  std::vector<std::vector<ShadingPoint>> tilePoints(tiles);
+  std::vector<uint64_t> tileRays(tiles, 0), tileInvalid(tiles, 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
+    flushDenormals();
+    for (int t = r.begin(); t != r.end(); ++t) {
+      const int x0 = (t % tilesX) * tile, y0 = (t / tilesX) * tile;
+      const int x1 = std::min(width, x0 + tile), y1 = std::min(height, y0 + tile);
+      std::vector<ShadingPoint>& points = tilePoints[t];
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+          const uint32_t pixel = uint32_t(y) * uint32_t(width) + uint32_t(x);
+          EyePixel& px = out.pixels[pixel];
+          for (int s = 0; s < settings.spp; ++s) {
+            Rng rng(seed, pixel, uint64_t(s));
+            const Vec2 offset = settings.spp == 1 ? Vec2{0.5f, 0.5f}
+                                                  : stratifiedSample2D(uint32_t(s), uint32_t(settings.spp), rng.uniform2());
+            const size_t before = points.size();
+            EyePixel first;
+            const SampleResult res =
+                traceCameraSample(scene, vis, settings, camera.generate(float(x) + offset.x, float(y) + offset.y),
+                                  pixel, uint32_t(s), rng, settings.layers ? &first : nullptr, points, tileRays[t]);
+            if (!res.valid || !isFinite(res.emitted)) {
+              points.resize(before);
+              ++tileInvalid[t];
+              continue;
+            }
+            ++px.validSamples;
+            px.emitted += res.emitted;
+            px.albedo += first.albedo;
+            px.normal += first.normal;
+            px.depth += first.depth;
+          }
+        }
+    }
+  });
+  size_t total = 0;
+  for (const auto& p : tilePoints) total += p.size();
+  out.points.reserve(total);
+  for (int t = 0; t < tiles; ++t) {
+    out.points.insert(out.points.end(), tilePoints[t].begin(), tilePoints[t].end());
+    out.rays += tileRays[t];
+    out.invalid += tileInvalid[t];
+  }
+  return out;
+}
+
+Rgb directLight(const Scene& scene, const Visibility& vis, const ShadingPoint& point, int samples, uint64_t seed,
+                uint64_t& rays) {
+  Rng rng(seed, point.pixel, uint64_t(point.sample) << 32 | point.branch);
+  const Frame frame(point.normal);
+  const Vec3 woLocal = frame.toLocal(point.wo);
+  const float side = dot(point.normal, point.geometricNormal);
+  Rgb sum;
+  for (int i = 0; i < samples; ++i) {
+    const float uLight = rng.uniform();
+    const Vec2 u = stratifiedSample2D(uint32_t(i), uint32_t(samples), rng.uniform2());
+    const LightSample ls = sampleLight(scene, point.position, uLight, u);
+    if (!(ls.pdf > 0) || ls.radiance.isBlack()) continue;
+    const Vec3 wiLocal = frame.toLocal(ls.wi);
+    if (wiLocal.z <= 0 || dot(ls.wi, point.geometricNormal) * side <= 0) continue;
+    const Rgb f = evalBsdf(point.bsdf, woLocal, wiLocal);
+    if (f.isBlack()) continue;
+    ++rays;
+    if (vis.occluded(shadowRay(point.position, point.geometricNormal, ls))) continue;
+    sum += f * ls.radiance * (wiLocal.z / ls.pdf);
+  }
+  return sum * (1.0f / float(samples));
+}
+
+void estimateDirectLight(const Scene& scene, const Visibility& vis, std::span<const ShadingPoint> points,
+                         int samples, uint64_t seed, std::span<Rgb> direct, uint64_t& rays) {
+  const uint64_t stream = streamSeed(seed, RenderStream::Direct);
+  // A single point or directional light gives every sample the same shadow ray: one is enough
+  // (the paper's RING: "only shoots one shadow ray per pixel").
+  if (scene.lights.size() == 1 && (scene.lights[0].type == LightType::Point || scene.lights[0].type == LightType::Directional))
+    samples = std::min(samples, 1);
+  const size_t blocks = (points.size() + 255) / 256;
+  std::vector<uint64_t> blockRays(blocks, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const tbb::blocked_range<size_t>& r) {
+    flushDenormals();
+    for (size_t b = r.begin(); b != r.end(); ++b)
+      for (size_t i = b * 256; i < std::min(points.size(), (b + 1) * 256); ++i)
+        direct[i] = directLight(scene, vis, points[i], samples, stream, blockRays[b]);
+  });
+  for (uint64_t n : blockRays) rays += n;
+}
+
+}  // namespace lucent

@@ -1,0 +1,186 @@
+// --method pmfg: Jensen's RT/PM/FG (Jensen 1996; Jensen 2001, chapter 9), the ground truth that GPU
+// photon mappers and final gatherers are compared against. At the first diffuse or glossy surface
+// reached from the camera (through mirrors and glass):
+//   direct light       shadow rays to the lights (L D E);
+//   caustics           the caustic map's radiance estimate (L S+ D E);
+//   indirect light     final gathering: gatherRays rays distributed by the BSDF (cosine for
+//                      diffuse surfaces), stratified, followed through mirrors and glass; at the
+//                      diffuse or glossy surface each reaches, the global map's estimate with all
+//                      photons, direct ones included (L {S|D}* D S* D E).
+// Emission seen by gather rays (also through mirrors and glass) is not added: light reaching the
+// shading point straight from an emitter is counted by the shadow rays, and through specular
+// surfaces by the caustic map. So is the environment seen by gather rays.
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+
+#include "lucent/core/parallel.h"
+#include "lucent/core/sampling.h"
+#include "lucent/scene/surface.h"
+#include "photon_render.h"
+
+namespace lucent {
+namespace {
+
+// Where a gather ray ended: a diffuse or glossy point to estimate at, and the ray's weight
+// (BSDF * cos / pdf at the shading point, times the specular bounces' weights).
+struct GatherHit {
+  EstimatePoint point;
+  Rgb weight;
+};
+
+// Per-thread scratch and clocks of the gathering stage.
+struct GatherScratch {
+  std::vector<GatherHit> hits;
+  std::vector<PhotonDistance> heap;
+  double traceSeconds = 0, estimateSeconds = 0;
+  uint64_t rays = 0;
+  EstimateCounters counters;
+};
+
+// Traces the gather rays of one shading point; returns how many reached a diffuse or glossy surface.
+size_t traceGatherRays(const Scene& scene, const Visibility& vis, const ShadingPoint& point, int count,
+                       int maxSpecularDepth, uint64_t seed, GatherHit* hits, uint64_t& rays) {
+  Rng rng(seed, point.pixel, uint64_t(point.sample) << 32 | point.branch);
+  const Frame frame(point.normal);
+  const Vec3 woLocal = frame.toLocal(point.wo);
+  const float side = dot(point.wo, point.geometricNormal);
+  size_t found = 0;
+  for (int j = 0; j < count; ++j) {
+    const float uLobe = rng.uniform();
+    const Vec2 u = stratifiedSample2D(uint32_t(j), uint32_t(count), rng.uniform2());
+    const BsdfSample bs = sampleBsdf(point.bsdf, woLocal, uLobe, u);
+    if (!bs.valid) continue;
+    Vec3 wi = frame.toWorld(bs.wi);
+    if (dot(wi, point.geometricNormal) * side <= 0) continue;  // below the real surface
+    Rgb weight = bs.weight;
+    Ray ray{offsetOrigin(point.position, point.geometricNormal, wi), wi};
+    for (int depth = 0;; ++depth) {
+      ++rays;
+      const Hit hit = vis.intersect(ray);
+      if (!hit.found()) break;  // the environment is direct light
+      const SurfacePoint sp = surfaceAt(scene, hit.triangle, hit.b1, hit.b2);
+      const SurfaceBsdf bsdf = bsdfAt(scene, sp);
+      const Vec3 wo = -ray.direction;
+      const bool frontFace = dot(wo, sp.geometricNormal) > 0;
+      Vec3 n = dot(wo, sp.shadingNormal) * dot(wo, sp.geometricNormal) > 0 ? sp.shadingNormal : sp.geometricNormal;
+      if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
+      const Frame f(n);
+      if (!bsdf.isDelta()) {
+        if (!(bsdf.kd + bsdf.ks).isBlack()) hits[found++] = {{sp.position, f, f.toLocal(wo), bsdf}, weight};
+        break;
+      }
+      if (depth >= maxSpecularDepth) break;
+      // Through a mirror or glass: one lobe, chosen with its probability.
+      const Vec3 woL = f.toLocal(wo);
+      const float uL = rng.uniform();
+      const BsdfSample s = sampleBsdf(bsdf, woL, uL, {});
+      if (!s.valid) break;
+      wi = f.toWorld(s.wi);
+      const bool transmits = s.wi.z * woL.z < 0;
+      if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) break;
+      weight *= s.weight;
+      if (weight.isBlack() || !isFinite(weight)) break;
+      ray = {offsetOrigin(sp.position, sp.geometricNormal, wi), wi};
+    }
+  }
+  return found;
+}
+
+}  // namespace
+
+RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
+                                        const ProgressFn& progress) {
+  validatePhotonMapOptions(options);
+  RenderOutput out;
+  const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::All, out.stats);
+
+  Stopwatch rayClock;
+  const EyePaths eye = traceEyePaths(scene, vis, {options.spp, options.maxSpecularDepth, options.seed, options.layers});
+  const size_t n = eye.points.size();
+  PointRadiance radiance(n);
+  uint64_t shadowRays = 0;
+  if (options.lightSamples > 0)
+    estimateDirectLight(scene, vis, eye.points, options.lightSamples, options.seed, radiance.direct, shadowRays);
+  double traceSeconds = rayClock.seconds();
+
+  const uint32_t heapSize = std::max(maps.globalSettings.k, maps.causticSettings.k);
+  tbb::enumerable_thread_specific<GatherScratch> scratch([&] {
+    GatherScratch s;
+    s.hits.resize(size_t(options.gatherRays));
+    s.heap.resize(heapSize);
+    return s;
+  });
+  tbb::enumerable_thread_specific<EstimateCounters> causticCounters;
+  const uint64_t gatherSeed = streamSeed(options.seed, RenderStream::Gather);
+  double estimateSeconds = 0;
+  withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
+    // Caustics: the caustic map's estimate at every shading point.
+    Stopwatch causticClock;
+    if (caustic)
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+        flushDenormals();
+        PhotonDistance* heap = scratch.local().heap.data();
+        EstimateCounters& cc = causticCounters.local();
+        for (size_t i = r.begin(); i != r.end(); ++i)
+          radiance.caustic[i] = estimateRadiance(*caustic, estimatePoint(eye.points[i]), maps.causticSettings, heap, cc);
+      });
+    estimateSeconds += causticClock.seconds();
+
+    // Final gathering: per shading point, trace its gather rays, then estimate at their hits. The
+    // two parts are timed per thread and the stage's wall time is split between trace_rays and
+    // radiance_estimate in proportion.
+    if (!global || options.gatherRays == 0) return;
+    Stopwatch gatherClock;
+    std::atomic<size_t> done{0};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
+      flushDenormals();
+      GatherScratch& s = scratch.local();
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        const ShadingPoint& point = eye.points[i];
+        Stopwatch traceClock;
+        const size_t hits = traceGatherRays(scene, vis, point, options.gatherRays, options.maxSpecularDepth,
+                                            gatherSeed, s.hits.data(), s.rays);
+        s.traceSeconds += traceClock.seconds();
+        Stopwatch estimateClock;
+        double sum[3] = {0, 0, 0};
+        for (size_t h = 0; h < hits; ++h) {
+          const Rgb L = s.hits[h].weight * estimateRadiance(*global, s.hits[h].point, maps.globalSettings,
+                                                            s.heap.data(), s.counters);
+          for (int c = 0; c < 3; ++c) sum[c] += L[c];
+        }
+        const double inv = 1.0 / options.gatherRays;
+        radiance.indirect[i] = Rgb(float(sum[0] * inv), float(sum[1] * inv), float(sum[2] * inv));
+        s.estimateSeconds += estimateClock.seconds();
+      }
+      if (progress) progress(double(done += r.size()) / double(n));
+    });
+    const double wall = gatherClock.seconds();
+    double t = 0, e = 0;
+    for (const GatherScratch& s : scratch) t += s.traceSeconds, e += s.estimateSeconds;
+    const double share = t + e > 0 ? t / (t + e) : 0.5;
+    traceSeconds += wall * share;
+    estimateSeconds += wall * (1 - share);
+  });
+  out.stats.addStage("trace_rays", traceSeconds);
+  out.stats.addStage("radiance_estimate", estimateSeconds);
+
+  out.image = assembleImage(scene, eye, radiance, options.layers);
+  out.sppDone = options.spp;
+  EstimateCounters gc, cc;
+  uint64_t gatherRays = 0;
+  for (const GatherScratch& s : scratch) gc += s.counters, gatherRays += s.rays;
+  for (const auto& c : causticCounters) cc += c;
+  out.stats.addCounter("eye_rays", eye.rays);
+  out.stats.addCounter("shadow_rays", shadowRays);
+  out.stats.addCounter("gather_rays", gatherRays);
+  out.stats.addCounter("shading_points", n);
+  out.stats.addCounter("invalid_samples", eye.invalid);
+  addEstimateCounters(out.stats, "global", gc);
+  addEstimateCounters(out.stats, "caustic", cc);
+  return out;
+}
+
+}  // namespace lucent

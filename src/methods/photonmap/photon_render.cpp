@@ -1,0 +1,155 @@
+#include "photon_render.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "photon_tracing.h"
+
+namespace lucent {
+
+float defaultMaxRadius(const Scene& scene) { return 0.1f * length(scene.bounds.extent()); }
+
+void validatePhotonMapOptions(const PhotonMapOptions& o) {
+  auto fail = [](const std::string& message) { throw std::invalid_argument(message); };
+  if (o.k < 1) fail("k must be at least 1");
+  if (!(o.maxRadius >= 0) || !std::isfinite(o.maxRadius)) fail("max radius must be finite and not negative");
+  if (o.lightSamples < 0) fail("light samples must not be negative");
+  if (o.gatherRays < 0) fail("gather rays must not be negative");
+  if (o.spp < 1) fail("spp must be at least 1");
+  if (o.maxSpecularDepth < 0 || o.maxSpecularDepth > 64) fail("max specular depth must be in [0, 64]");
+  if (o.maxPhotonBounces < 1 || o.maxPhotonBounces > 255)
+    fail("max photon bounces must be in [1, 255] (a photon's bounce count is 8 bits)");
+  if (o.shells > 0 && o.map == PhotonMapKind::KdTree) fail("shells apply to the grid maps (sort, stencil, hash), not kdtree");
+  if (!(o.cellSize >= 0) || !std::isfinite(o.cellSize)) fail("cell size must be finite and not negative");
+  if (!(o.photonsPerCell >= 0) || !std::isfinite(o.photonsPerCell)) fail("photons per cell must not be negative");
+  if (o.stencilSide < 1 || o.stencilSide > 1024) fail("stencil side must be in [1, 1024]");
+  const auto& r = o.gridResolution;
+  const bool anyRes = r[0] > 0 || r[1] > 0 || r[2] > 0;
+  if (anyRes && !(r[0] > 0 && r[1] > 0 && r[2] > 0)) fail("grid resolution needs three positive cell counts");
+  for (uint32_t c : r)
+    if (c > uint32_t(UniformGrid::kMaxResolution)) fail("grid resolution exceeds 2^21 cells per axis");
+}
+
+namespace {
+
+BuiltPhotonMap buildMap(std::vector<Photon> photons, PhotonMapKind kind, const GridOptions& grid, RenderStats& sub) {
+  BuiltPhotonMap built;
+  built.photons = photons.size();
+  if (photons.empty()) return built;
+  switch (kind) {
+    case PhotonMapKind::Sort: built.map = buildSortedGrid(std::move(photons), grid, &sub); break;
+    case PhotonMapKind::Stencil: built.map = buildStencilGrid(std::move(photons), grid, &sub); break;
+    case PhotonMapKind::Hash: built.map = buildHashedGrid(std::move(photons), grid, &sub); break;
+    case PhotonMapKind::KdTree: built.map = buildPhotonKdTree(photons, &sub); break;
+  }
+  return built;
+}
+
+}  // namespace
+
+RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
+                                   GlobalPhotons which, RenderStats& stats) {
+  RenderPhotonMaps maps;
+  const float maxRadius = options.maxRadius > 0 ? options.maxRadius : defaultMaxRadius(scene);
+  maps.globalSettings = {options.k, maxRadius, options.shells};
+  maps.causticSettings = {options.causticK > 0 ? options.causticK : options.k, maxRadius, options.shells};
+
+  // Two passes: the global map's photons, and the caustic map's from paths that end at their
+  // first non-specular surface (so causticPhotons can be many at little cost).
+  Stopwatch traceClock;
+  PhotonTracingOptions tracing;
+  tracing.photons = options.photons;
+  tracing.maxBounces = options.maxPhotonBounces;
+  tracing.seed = options.seed;
+  PhotonMaps global;
+  if (options.photons > 0) global = tracePhotons(scene, vis, tracing);
+  PhotonMaps caustic;
+  if (options.causticPhotons > 0) {
+    tracing.photons = options.causticPhotons;
+    tracing.seed = streamSeed(options.seed, RenderStream::CausticPhotons);
+    tracing.causticOnly = true;
+    caustic = tracePhotons(scene, vis, tracing);
+  }
+  std::vector<Photon> globalPhotons = std::move(global.global);
+  if (which == GlobalPhotons::Indirect)
+    std::erase_if(globalPhotons, [](const Photon& p) { return photonBounce(p) == 0 || photonIsCaustic(p); });
+  stats.addStage("trace_photons", traceClock.seconds());
+
+  Stopwatch buildClock;
+  // Cells of a fraction of the search radius: the kNN-grid then reads few cells and accepts few
+  // photons beyond the k nearest (see the README's measurements).
+  auto gridFor = [&](uint32_t k) {
+    GridOptions grid;
+    grid.resolution = options.gridResolution;
+    grid.cellSize = options.cellSize;
+    grid.photonsPerCell = options.photonsPerCell > 0 ? options.photonsPerCell : std::max(1.0f, float(k) / 16.0f);
+    grid.stencilSide = options.stencilSide;
+    return grid;
+  };
+  RenderStats globalSub, causticSub;
+  maps.global = buildMap(std::move(globalPhotons), options.map, gridFor(maps.globalSettings.k), globalSub);
+  maps.caustic = buildMap(std::move(caustic.caustic), options.map, gridFor(maps.causticSettings.k), causticSub);
+  stats.addStage("build_map", buildClock.seconds());
+  for (const auto& [name, s] : globalSub.stageSeconds) stats.addStage("build_map.global." + name, s);
+  for (const auto& [name, s] : causticSub.stageSeconds) stats.addStage("build_map.caustic." + name, s);
+
+  stats.addCounter("photons_emitted", uint64_t(options.photons) + options.causticPhotons);
+  stats.addCounter("global_photons", maps.global.photons);
+  stats.addCounter("caustic_photons", maps.caustic.photons);
+  return maps;
+}
+
+Image assembleImage(const Scene& scene, const EyePaths& eye, const PointRadiance& radiance, bool layers) {
+  const int width = scene.camera.width, height = scene.camera.height;
+  std::vector<std::string> channels = {"R", "G", "B"};
+  if (layers)
+    for (const char* name : {"albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z", "depth.Z",
+                             "direct.R", "direct.G", "direct.B", "indirect.R", "indirect.G", "indirect.B",
+                             "caustic.R", "caustic.G", "caustic.B"})
+      channels.push_back(name);
+  const size_t nc = channels.size(), pixels = size_t(width) * height;
+  // Sums in double, the points in their (fixed) order.
+  std::vector<double> direct(pixels * 3, 0.0), indirect(pixels * 3, 0.0), caustic(pixels * 3, 0.0);
+  for (size_t p = 0; p < pixels; ++p)
+    for (int c = 0; c < 3; ++c) direct[p * 3 + c] = eye.pixels[p].emitted[c];
+  for (size_t i = 0; i < eye.points.size(); ++i) {
+    const ShadingPoint& sp = eye.points[i];
+    const size_t p = sp.pixel;
+    const Rgb d = sp.weight * radiance.direct[i], ind = sp.weight * radiance.indirect[i],
+              ca = sp.weight * radiance.caustic[i];
+    for (int c = 0; c < 3; ++c) {
+      direct[p * 3 + c] += d[c];
+      indirect[p * 3 + c] += ind[c];
+      caustic[p * 3 + c] += ca[c];
+    }
+  }
+  Image image(width, height, channels);
+  float* out = image.pixels().data();
+  for (size_t p = 0; p < pixels; ++p) {
+    const EyePixel& px = eye.pixels[p];
+    const double n = std::max<uint32_t>(1, px.validSamples);
+    float* o = out + p * nc;
+    for (int c = 0; c < 3; ++c)
+      o[c] = float((direct[p * 3 + c] + indirect[p * 3 + c] + caustic[p * 3 + c]) / n);
+    if (!layers) continue;
+    const float v[7] = {px.albedo.r, px.albedo.g, px.albedo.b, px.normal.x, px.normal.y, px.normal.z, px.depth};
+    for (int c = 0; c < 7; ++c) o[3 + c] = float(v[c] / n);
+    for (int c = 0; c < 3; ++c) {
+      o[10 + c] = float(direct[p * 3 + c] / n);
+      o[13 + c] = float(indirect[p * 3 + c] / n);
+      o[16 + c] = float(caustic[p * 3 + c] / n);
+    }
+  }
+  return image;
+}
+
+void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& c) {
+  stats.addCounter(prefix + "_estimates", c.queries);
+  stats.addCounter(prefix + "_photons_used", c.photonsUsed);
+  stats.addCounter(prefix + "_photons_examined", c.photonsExamined);
+  if (c.cellsVisited > 0) stats.addCounter(prefix + "_cells_visited", c.cellsVisited);
+  if (c.unfinished > 0) stats.addCounter(prefix + "_searches_unfinished", c.unfinished);
+}
+
+}  // namespace lucent

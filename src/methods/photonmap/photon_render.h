@@ -1,0 +1,77 @@
+// What the two photon-mapping renderers share: their photon maps (traced, selected and built into
+// the chosen structure), the dispatch to one instantiation per map type, and the image assembly.
+#pragma once
+#include <span>
+#include <variant>
+
+#include "eye_paths.h"
+#include "kd_tree.h"
+#include "lucent/methods/photonmap.h"
+#include "radiance_estimate.h"
+#include "sorted_grid.h"
+#include "stencil_grid.h"
+
+namespace lucent {
+
+// One photon map in the structure chosen; monostate when it holds no photons.
+struct BuiltPhotonMap {
+  std::variant<std::monostate, SortedGrid, StencilGrid, HashedGrid, PhotonKdTree> map;
+  size_t photons = 0;
+};
+
+// Which photons of the global map a renderer reads.
+enum class GlobalPhotons {
+  All,       // every stored photon, direct ones included (final gathering: pmfg)
+  Indirect,  // photons after at least one bounce that are not caustic photons (purcell: direct
+             // light comes from shadow rays and caustics from the caustic map)
+};
+
+struct RenderPhotonMaps {
+  BuiltPhotonMap global, caustic;
+  EstimateSettings globalSettings, causticSettings;
+};
+
+// Stages "trace_photons" (the global pass, and a caustic-only pass of causticPhotons paths) and
+// "build_map" (both maps), timed into `stats` with their sub-stages and counters.
+RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& visibility, const PhotonMapOptions& options,
+                                   GlobalPhotons which, RenderStats& stats);
+
+// Calls f(global, caustic) with typed pointers to the maps (nullptr for an empty one), so that the
+// stages that search them are compiled once per map type.
+template <class F>
+void withPhotonMaps(const RenderPhotonMaps& maps, PhotonMapKind kind, F&& f) {
+  auto call = [&](auto* type) {
+    using Map = std::remove_pointer_t<decltype(type)>;
+    f(std::get_if<Map>(&maps.global.map), std::get_if<Map>(&maps.caustic.map));
+  };
+  switch (kind) {
+    case PhotonMapKind::Sort: call(static_cast<SortedGrid*>(nullptr)); break;
+    case PhotonMapKind::Stencil: call(static_cast<StencilGrid*>(nullptr)); break;
+    case PhotonMapKind::Hash: call(static_cast<HashedGrid*>(nullptr)); break;
+    case PhotonMapKind::KdTree: call(static_cast<PhotonKdTree*>(nullptr)); break;
+  }
+}
+
+// The estimate of a map that may be absent.
+template <class Map>
+Rgb estimateIfPresent(const Map* map, const EstimatePoint& q, const EstimateSettings& settings, PhotonDistance* heap,
+                      EstimateCounters& counters) {
+  return map ? estimateRadiance(*map, q, settings, heap, counters) : Rgb();
+}
+
+// Per shading point, the radiance each part of the estimate sends towards the camera (before the
+// point's camera-path weight).
+struct PointRadiance {
+  std::vector<Rgb> direct, indirect, caustic;
+  explicit PointRadiance(size_t n) : direct(n), indirect(n), caustic(n) {}
+};
+
+// The image: per pixel, the emission its camera samples saw plus each shading point's radiance
+// times its weight, averaged over the pixel's samples (in a fixed order: the same image whatever
+// the thread count). Layers: albedo, normal, depth (first hit), direct (emission and shadow rays),
+// indirect (global map or final gathering), caustic (caustic map).
+Image assembleImage(const Scene& scene, const EyePaths& eye, const PointRadiance& radiance, bool layers);
+
+void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& counters);
+
+}  // namespace lucent

@@ -1,0 +1,69 @@
+// --method purcell: the renderer of Purcell et al. 2003, sections 2.4 and 3, as data-parallel stages
+// over the whole image (the paper's breadth-first passes): trace photons, build the maps, trace
+// eye rays through mirrors and glass, shadow rays for direct light, then the radiance estimates of
+// the global and caustic maps at every diffuse hit, visualized directly.
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+
+#include "lucent/core/parallel.h"
+#include "photon_render.h"
+
+namespace lucent {
+
+RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
+                           const ProgressFn& progress) {
+  validatePhotonMapOptions(options);
+  RenderOutput out;
+  // The global map without direct and caustic photons: direct light comes from shadow rays and
+  // caustics from the caustic map, so each light path is counted once.
+  const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::Indirect, out.stats);
+
+  Stopwatch rayClock;
+  const EyePaths eye = traceEyePaths(scene, vis, {options.spp, options.maxSpecularDepth, options.seed, options.layers});
+  const size_t n = eye.points.size();
+  PointRadiance radiance(n);
+  uint64_t shadowRays = 0;
+  if (options.lightSamples > 0)
+    estimateDirectLight(scene, vis, eye.points, options.lightSamples, options.seed, radiance.direct, shadowRays);
+  out.stats.addStage("trace_rays", rayClock.seconds());
+
+  // The radiance estimate: one work item per shading point, both maps.
+  Stopwatch estimateClock;
+  const uint32_t heapSize = std::max(maps.globalSettings.k, maps.causticSettings.k);
+  tbb::enumerable_thread_specific<std::vector<PhotonDistance>> heaps([&] { return std::vector<PhotonDistance>(heapSize); });
+  tbb::enumerable_thread_specific<EstimateCounters> globalCounters, causticCounters;
+  std::atomic<size_t> done{0};
+  withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+      flushDenormals();
+      PhotonDistance* heap = heaps.local().data();
+      EstimateCounters& gc = globalCounters.local();
+      EstimateCounters& cc = causticCounters.local();
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        const EstimatePoint q = estimatePoint(eye.points[i]);
+        radiance.indirect[i] = estimateIfPresent(global, q, maps.globalSettings, heap, gc);
+        radiance.caustic[i] = estimateIfPresent(caustic, q, maps.causticSettings, heap, cc);
+      }
+      if (progress) progress(double(done += r.size()) / double(n));
+    });
+  });
+  out.stats.addStage("radiance_estimate", estimateClock.seconds());
+
+  out.image = assembleImage(scene, eye, radiance, options.layers);
+  out.sppDone = options.spp;
+  EstimateCounters gc, cc;
+  for (const auto& c : globalCounters) gc += c;
+  for (const auto& c : causticCounters) cc += c;
+  out.stats.addCounter("eye_rays", eye.rays);
+  out.stats.addCounter("shadow_rays", shadowRays);
+  out.stats.addCounter("shading_points", n);
+  out.stats.addCounter("invalid_samples", eye.invalid);
+  addEstimateCounters(out.stats, "global", gc);
+  addEstimateCounters(out.stats, "caustic", cc);
+  return out;
+}
+
+}  // namespace lucent

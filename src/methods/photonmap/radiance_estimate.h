@@ -1,0 +1,115 @@
+// The photon map radiance estimate (Jensen 1996; Jensen 2001, eq. 7.6; Purcell et al. 2003, 2.3):
+// the radiance reflected towards wo at x is
+//
+//   L(x, wo) ~ sum over photons p near x of f(x, wo, wi_p) * Phi_p / (pi r^2),
+//
+// over the photons within radius r of x whose incoming direction wi_p lies on the viewer's side of
+// the surface (photons on the other side of a thin wall do not light this side). r is the radius of
+// the search: the kNN-grid's final radius on the grids (all photons within it are summed, at least
+// k of them, section 2.3), the k-th nearest photon's distance on the kd-tree; the maximum radius
+// when fewer than k photons lie within it.
+//
+// One template per map (no virtual calls in the loop over photons); the renderers instantiate
+// their stages once per map type.
+#pragma once
+#include <cstdint>
+
+#include "kd_tree.h"
+#include "knn_grid.h"
+#include "lucent/scene/bsdf.h"
+
+namespace lucent {
+
+// A diffuse or glossy surface point seen from direction wo.
+struct EstimatePoint {
+  Vec3 position;
+  Frame frame;       // shading frame whose normal is on the viewer's side
+  Vec3 woLocal;      // towards the viewer, in `frame`
+  SurfaceBsdf bsdf;  // Diffuse or Phong
+};
+
+struct EstimateSettings {
+  uint32_t k = 50;
+  float maxRadius = 1;
+  uint32_t shells = 0;  // kNN-grid: stop after this many shells (the running estimate); 0: to the end
+};
+
+// Per-thread counters of the estimate stage, summed at the end.
+struct EstimateCounters {
+  uint64_t queries = 0;
+  uint64_t photonsUsed = 0;      // photons within the radius on the viewer's side
+  uint64_t photonsExamined = 0;  // distances computed (grids) or nodes visited (kd-tree)
+  uint64_t cellsVisited = 0;     // grids only
+  uint64_t unfinished = 0;       // kNN-grid searches stopped by `shells` before their end
+  EstimateCounters& operator+=(const EstimateCounters& o) {
+    queries += o.queries, photonsUsed += o.photonsUsed, photonsExamined += o.photonsExamined;
+    cellsVisited += o.cellsVisited, unfinished += o.unfinished;
+    return *this;
+  }
+};
+
+namespace estimate_detail {
+
+// Sums f * Phi over the photons; a Lambertian f is constant and applied once at the end. Keeps
+// the farthest photon's share apart: when it defines the radius it is left out (see radiance()).
+struct Accumulator {
+  const EstimatePoint& q;
+  bool diffuse;
+  Rgb sum, farthest;
+  float farthestD2 = -1;
+  uint32_t used = 0;
+
+  explicit Accumulator(const EstimatePoint& point) : q(point), diffuse(point.bsdf.type == MaterialType::Diffuse) {}
+  void add(const Photon& p, float d2) {
+    const Vec3 wi = q.frame.toLocal(photonIncoming(p));
+    const Rgb share = wi.z <= 0 ? Rgb()  // arrived from the other side of the surface
+                      : diffuse ? p.power
+                                : evalBsdf(q.bsdf, q.woLocal, wi) * p.power;
+    used += wi.z > 0;
+    sum += share;
+    if (d2 > farthestD2) farthestD2 = d2, farthest = share;
+  }
+  // The photon on the sphere that fixed the radius is not counted: the density estimate of m
+  // photons over the disc through the m-th is biased by m / (m - 1) (Loftsgaarden and
+  // Quesenberry 1965), 2% at k = 50. With the maximum radius (fewer than k found) all count.
+  Rgb radiance(float radius2) const {
+    if (!(radius2 > 0)) return {};
+    const Rgb inside = farthestD2 == radius2 ? sum - farthest : sum;
+    const Rgb flux = diffuse ? inside * (q.bsdf.kd * kInvPi) : inside;
+    return flux * (1.0f / (kPi * radius2));
+  }
+};
+
+}  // namespace estimate_detail
+
+// On a grid map: the kNN-grid search (knn_grid.h), whole or stopped after `shells` shells, in
+// which case the running estimate over the radius reached so far is returned (section 3.4).
+template <GridPhotonMap Map>
+Rgb estimateRadiance(const Map& map, const EstimatePoint& q, const EstimateSettings& settings, PhotonDistance*,
+                     EstimateCounters& counters) {
+  estimate_detail::Accumulator acc(q);
+  KnnGridSearch s = beginKnnGrid(q.position, settings.k, settings.maxRadius);
+  advanceKnnGrid(map, s, settings.shells > 0 ? settings.shells : UINT32_MAX,
+                 [&](uint32_t, const Photon& p, float d2) { acc.add(p, d2); });
+  ++counters.queries;
+  counters.photonsUsed += acc.used;
+  counters.photonsExamined += s.photonsExamined;
+  counters.cellsVisited += s.cellsVisited;
+  counters.unfinished += !s.done;
+  return acc.radiance(knnGridRadius2(s));
+}
+
+// On the kd-tree: the k nearest photons within the maximum radius (Jensen's max-heap search);
+// `heap` holds at least k entries.
+inline Rgb estimateRadiance(const PhotonKdTree& tree, const EstimatePoint& q, const EstimateSettings& settings,
+                            PhotonDistance* heap, EstimateCounters& counters) {
+  estimate_detail::Accumulator acc(q);
+  const KdTreeResult r = kdTreeNearest(tree, q.position, settings.k, settings.maxRadius, heap);
+  for (uint32_t i = 0; i < r.found; ++i) acc.add(tree.photons[heap[i].index], heap[i].d2);
+  ++counters.queries;
+  counters.photonsUsed += acc.used;
+  counters.photonsExamined += r.nodesVisited;
+  return acc.radiance(r.radius2);
+}
+
+}  // namespace lucent

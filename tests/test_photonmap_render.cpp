@@ -1,0 +1,327 @@
+// The photon-mapping renderers (purcell, pmfg) against analytic answers (furnaces), against the
+// path tracer (Cornell box, glass-ball caustic), across map types, and for determinism.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+
+#include "lucent/core/parallel.h"
+#include "lucent/image/metrics.h"
+#include "lucent/methods/pathtrace.h"
+#include "lucent/methods/photonmap.h"
+#include "lucent/scene/loader.h"
+#include "test_scenes.h"
+#include "test_support.h"
+
+using namespace lucent;
+
+namespace {
+
+// The Cornell box at a few pixels, the camera tilted down so that the light is out of view: a light
+// seen directly covers a pixel or two at this size, and its coverage noise (the same for every
+// setting) would swamp the comparison.
+Scene smallCornellBox(int size) {
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
+  scene.camera.width = size;
+  scene.camera.height = size;
+  scene.camera.lookAt = {278, 160, 0};
+  return scene;
+}
+
+Image pathTraced(const Scene& scene, const Visibility& vis, int spp, uint64_t seed) {
+  PathTraceOptions pt;
+  pt.spp = spp;
+  pt.seed = seed;
+  return renderPathTraced(scene, vis, pt).image;
+}
+
+Scene furnace(Rgb rho, Rgb le, int size) {
+  Scene scene;
+  Material m;
+  m.kd = rho;
+  m.ke = le;
+  test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, test::addMaterial(scene, m, "walls"), true);
+  scene.camera = test::testCamera({0.1f, 0.2f, 0.3f}, {0.5f, 0.1f, -1}, size, size, 90);
+  finalizeScene(scene);
+  return scene;
+}
+
+// Relative standard deviation of the total power a furnace's photon paths store, per channel: a
+// path of survival probability p per bounce (Russian roulette by the largest albedo) stores
+// S = sum over b = 0..B of a^b times its emitted power, a = rho / p, P(B >= b) = p^b, so
+// E[S] = 1 / (1 - rho) and E[S^2] = sum over b, b' of a^(b + b') p^max(b, b').
+double photonPathSpread(float rho, float p) {
+  const double a = rho / p;
+  double s2 = 0, below = 0;  // below: sum of a^j over j < m
+  for (int m = 0; m < 4000; ++m) {  // the terms with max(b, b') = m
+    const double am = std::pow(a, m);
+    s2 += std::pow(p, m) * am * (am + 2 * below);
+    below += am;
+  }
+  const double s = 1 / (1 - rho);
+  return s2 / (s * s);  // E[S^2] / E[S]^2
+}
+
+}  // namespace
+
+TEST_CASE("Closed diffuse furnace: purcell and pmfg give Le / (1 - rho)", "[photonmap-render][furnace]") {
+  // Every wall emits Le and reflects rho: L = Le / (1 - rho) everywhere. Both renderers split it
+  // into emission plus shadow-ray direct light, Le (1 + rho), and the photon maps' part,
+  // rho^2 Le / (1 - rho), which must carry every bounce after the first exactly once.
+  //
+  // Tolerance. The direct part's noise is per pixel, and so is the pmfg gather noise; purcell's
+  // per-pixel estimates share no photons (the kernel, 2 r_max = 0.04 wide, is smaller than a pixel's
+  // footprint, about 0.06 here), so the image mean's standard error from the pixel spread, SE, holds
+  // for them. Photon noise shared by all pixels: the indirect mean is sum over paths of the
+  // path's stored powers weighted by W(photon position), W the (smooth) weight the pixels give a
+  // photon; Var <= (1 + cv^2) E[S^2] - E[S]^2 per path (Cauchy-Schwarz), relative
+  // sigma_ph = sqrt(((1 + cv^2) E[S^2] / E[S]^2 - 1) / N) with cv, the coefficient of variation of
+  // W over the walls, taken as 1 (gather rays spread W over the whole box; measured spreads over
+  // 10 seeds match cv = 0). Bias: the estimate is exact where density is uniform, except within r
+  // of an edge or corner, where the sphere also takes photons from the other wall (those arriving
+  // from the viewer's side: half of them) and loses the part beyond the edge; the ratio of the
+  // area it sees to pi r^2 lies in [0.75, 1.04] (corners [0.5, 1.1]), and bands of width r_max
+  // along the 12 edges cover 2 r_max of the walls (side 2): |bias| <= 0.5 r_max (1 + r_max) of the
+  // indirect part. Required: |mean - Le / (1 - rho)| <= 4.5 sqrt(SE^2 + (I sigma_ph)^2) + I bias,
+  // I = rho^2 Le / (1 - rho). Measured errors are 0.1-0.5% of L, tolerances 1-2.5%.
+  const Rgb rho(0.5f, 0.7f, 0.3f), le(1.0f, 2.0f, 0.5f);
+  const Scene scene = furnace(rho, le, 48);
+  const Visibility vis(scene);
+  PhotonMapOptions opt;
+  opt.photons = 200000;
+  opt.causticPhotons = 0;
+  opt.k = 30;
+  opt.maxRadius = 0.02f;
+  opt.gatherRays = 64;
+  opt.lightSamples = 64;
+  opt.layers = true;
+  opt.seed = 3;
+  const float p = rho.maxComponent();
+  const double bias = 0.5 * opt.maxRadius * (1 + opt.maxRadius);
+  for (const char* method : {"purcell", "pmfg"}) {
+    const RenderOutput out = std::string(method) == "purcell" ? renderPurcell(scene, vis, opt)
+                                                              : renderPhotonMapFinalGather(scene, vis, opt);
+    for (int c = 0; c < 3; ++c) {
+      const double expected = le[c] / (1 - rho[c]), indirect = rho[c] * rho[c] * le[c] / (1 - rho[c]);
+      const double sigmaPhoton = std::sqrt((2 * photonPathSpread(rho[c], p) - 1) / opt.photons);
+      const test::MeanAndError all = test::channelMean(out.image, c);
+      const test::MeanAndError direct = test::channelMean(out.image, out.image.channelIndex("direct.R") + c);
+      const test::MeanAndError ind = test::channelMean(out.image, out.image.channelIndex("indirect.R") + c);
+      const double tolerance = 4.5 * std::hypot(all.standardError, indirect * sigmaPhoton) + indirect * bias;
+      INFO(method << ", channel " << c << ": mean " << all.mean << " (direct " << direct.mean << ", indirect "
+                  << ind.mean << "), expected " << expected << " (" << le[c] * (1 + rho[c]) << ", " << indirect
+                  << ") +- " << tolerance);
+      REQUIRE(tolerance < 0.03 * expected);
+      CHECK(std::abs(all.mean - expected) <= tolerance);
+      CHECK(std::abs(direct.mean - le[c] * (1 + rho[c])) <= 4.5 * direct.standardError);
+      CHECK(std::abs(ind.mean - indirect) <=
+            4.5 * std::hypot(ind.standardError, indirect * sigmaPhoton) + indirect * bias);
+    }
+  }
+}
+
+
+TEST_CASE("pmfg converges to the path tracer on the Cornell box", "[photonmap-render]") {
+  // Three settings with more photons, gather rays and k each; 64 stratified camera samples per
+  // pixel in all, so that edges are resolved alike. relMSE must fall from each to the next by a
+  // margin larger than its spread over seeds (measured: 0.0053, 0.0016, 0.0007; the reference's own
+  // noise adds about 0.0002), and the image means agree within 2% at the last.
+  const Scene scene = smallCornellBox(16);
+  const Visibility vis(scene);
+  const Image reference = pathTraced(scene, vis, 4096, 1);
+  struct Setting {
+    uint32_t photons;
+    int gatherRays;
+    uint32_t k;
+  };
+  double previous = kInf;
+  for (const Setting s : {Setting{500, 1, 10}, Setting{4000, 4, 20}, Setting{32000, 16, 50}}) {
+    PhotonMapOptions opt;
+    opt.photons = s.photons;
+    opt.gatherRays = s.gatherRays;
+    opt.k = s.k;
+    opt.spp = 64;
+    opt.lightSamples = 4;
+    opt.map = PhotonMapKind::KdTree;
+    opt.seed = 9;
+    const Image image = renderPhotonMapFinalGather(scene, vis, opt).image;
+    const double relmse = compareImages(image, reference).overall.relmse;
+    INFO(s.photons << " photons, " << s.gatherRays << " gather rays, k " << s.k << ": relMSE " << relmse
+                   << " (previous " << previous << ")");
+    CHECK(relmse * 1.5 < previous);
+    previous = relmse;
+    if (s.photons == 32000) {
+      CHECK(relmse < 0.0012);
+      for (int c = 0; c < 3; ++c) {
+        const double mean = test::channelMean(image, c).mean, expected = test::channelMean(reference, c).mean;
+        INFO("channel " << c << ": mean " << mean << ", path tracer " << expected);
+        CHECK(std::abs(mean / expected - 1) < 0.02);
+      }
+    }
+  }
+}
+
+TEST_CASE("The glass ball's caustic: the caustic map matches the path tracer, and without it the caustic is gone",
+          "[photonmap-render][caustic]") {
+  // The camera zoomed on the floor under the ball, where the light focused by the ball is seen as
+  // a bright crescent below its silhouette. The region: pixels that an independent path-traced
+  // image (256 spp) shows brighter than 1.5 x the floor would be there without the ball (direct
+  // light from the 1 x 1 light of Le 40 five units above, by quadrature). Its mean green radiance in
+  // two more path-traced images (1024 spp each) and in two pmfg images (other seeds) is compared;
+  // each pair's per-pixel differences give the variance of its mean (pixels are independent: the
+  // caustic kernel, about 0.02 wide at k = 32, is narrower than a pixel's footprint on the floor).
+  // Required: |pmfg - pt| <= 4.5 sqrt(SE_pt^2 + SE_pmfg^2), 5-6% here. Measured over seeds at
+  // 4096 spp, the path tracer gives 2.094 +- 0.004 on this region (48 pixels, fov 8), pmfg 2.13
+  // (200,000 caustic photon paths), 2.11 (10^6). Without the caustic map the region keeps only the
+  // indirect light that gathering finds: below 20% of the caustic.
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/glass-ball.json", {true});
+  const int size = 32;
+  scene.camera.width = size;
+  scene.camera.height = size;
+  scene.camera.lookAt = {0, 0.15f, 0.6f};
+  scene.camera.fovY = 6;
+  const Visibility vis(scene);
+  double floorRadiance = 0;  // (Kd / pi) Le integral of cos cos / r^2 over the light, below its centre
+  for (int i = 0; i < 64; ++i)
+    for (int j = 0; j < 64; ++j) {
+      const float x = (i + 0.5f) / 64 - 0.5f, z = (j + 0.5f) / 64 - 0.5f, r2 = x * x + z * z + 25.0f;
+      floorRadiance += 0.7 * kInvPi * 40.0 * 25.0 / (r2 * r2) / (64 * 64);
+    }
+  const Image select = pathTraced(scene, vis, 256, 1);
+  const Image ptA = pathTraced(scene, vis, 1024, 2), ptB = pathTraced(scene, vis, 1024, 3);
+  std::vector<std::pair<int, int>> region;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x)
+      if (select.at(x, y, 1) > 1.5 * floorRadiance) region.push_back({x, y});
+  REQUIRE(region.size() >= 50);
+  // The mean of two independent images over the region, and its standard error.
+  auto regionMean = [&](const Image& a, const Image& b) {
+    double sum = 0, d2 = 0;
+    for (const auto& [x, y] : region) {
+      sum += 0.5 * (a.at(x, y, 1) + b.at(x, y, 1));
+      d2 += (a.at(x, y, 1) - b.at(x, y, 1)) * (a.at(x, y, 1) - b.at(x, y, 1));
+    }
+    return test::MeanAndError{sum / region.size(), std::sqrt(d2 / 4) / region.size()};
+  };
+  const test::MeanAndError pt = regionMean(ptA, ptB);
+
+  PhotonMapOptions opt;
+  opt.causticPhotons = 200000;
+  opt.k = 32;
+  opt.gatherRays = 16;
+  opt.spp = 4;
+  opt.map = PhotonMapKind::KdTree;
+  opt.seed = 1;
+  const Image pmA = renderPhotonMapFinalGather(scene, vis, opt).image;
+  opt.seed = 2;
+  const Image pmB = renderPhotonMapFinalGather(scene, vis, opt).image;
+  const test::MeanAndError pm = regionMean(pmA, pmB);
+  opt.causticPhotons = 0;
+  const Image none = renderPhotonMapFinalGather(scene, vis, opt).image;
+  const test::MeanAndError without = regionMean(none, none);
+  const double tolerance = 4.5 * std::hypot(pt.standardError, pm.standardError);
+  INFO(region.size() << " pixels above " << 1.5 * floorRadiance << ": path tracer " << pt.mean << " +- "
+                     << pt.standardError << ", pmfg " << pm.mean << " +- " << pm.standardError
+                     << ", without caustic map " << without.mean);
+  CHECK(std::abs(pm.mean - pt.mean) <= tolerance);
+  CHECK(tolerance < 0.08 * pt.mean);
+  CHECK(without.mean < 0.2 * pt.mean);
+}
+
+TEST_CASE("Every photon map renders the Cornell box alike with purcell", "[photonmap-render]") {
+  // The same photons in the four maps. The sorted and the hashed grid find the same photons (the
+  // kNN-grid on the same cells; only the order of the sums differs); stencil routing drops photons
+  // beyond m^2 per cell and redistributes their power; the kd-tree takes the k nearest where the
+  // kNN-grid takes at least k. Measured relMSE between maps: sort-hash 0, sort-stencil 0.0004,
+  // grids-kdtree 0.0016-0.0023, against 0.0085 between each and the path tracer.
+  const Scene scene = smallCornellBox(32);
+  const Visibility vis(scene);
+  const Image reference = pathTraced(scene, vis, 1024, 1);
+  std::vector<Image> images;
+  const PhotonMapKind kinds[] = {PhotonMapKind::Sort, PhotonMapKind::Stencil, PhotonMapKind::Hash, PhotonMapKind::KdTree};
+  for (PhotonMapKind kind : kinds) {
+    PhotonMapOptions opt;
+    opt.k = 50;
+    opt.spp = 4;
+    opt.map = kind;
+    images.push_back(renderPurcell(scene, vis, opt).image);
+  }
+  const double sortToPt = compareImages(images[0], reference).overall.relmse;
+  auto between = [&](int a, int b) { return compareImages(images[a], images[b]).overall.relmse; };
+  INFO("sort against the path tracer " << sortToPt << "; sort-stencil " << between(0, 1) << ", sort-hash "
+                                       << between(0, 2) << ", sort-kdtree " << between(0, 3) << ", stencil-kdtree "
+                                       << between(1, 3) << ", hash-kdtree " << between(2, 3));
+  CHECK(between(0, 2) < 1e-8);
+  CHECK(between(0, 1) < 0.1 * sortToPt);
+  for (int a : {0, 1, 2}) CHECK(between(a, 3) < 0.35 * sortToPt);
+  for (int a = 1; a < 4; ++a) CHECK(compareImages(images[a], reference).overall.relmse < 1.2 * sortToPt);
+}
+
+TEST_CASE("The kNN-grid's progressive estimate converges shell by shell to the complete one", "[photonmap-render]") {
+  // Section 3.4: the running estimate after s shells; the image approaches the complete search's
+  // as s grows and equals it once every search has ended.
+  const Scene scene = smallCornellBox(24);
+  const Visibility vis(scene);
+  PhotonMapOptions opt;
+  opt.k = 100;
+  opt.photonsPerCell = 2;
+  const RenderOutput complete = renderPurcell(scene, vis, opt);
+  double previous = kInf;
+  for (uint32_t shells : {1u, 2u, 3u, 1000u}) {
+    opt.shells = shells;
+    const RenderOutput out = renderPurcell(scene, vis, opt);
+    const double relmse = compareImages(out.image, complete.image).overall.relmse;
+    uint64_t unfinished = 0;
+    for (const auto& [name, value] : out.stats.counters)
+      if (name == "global_searches_unfinished") unfinished = value;
+    INFO(shells << " shells: relMSE " << relmse << " to the complete search, " << unfinished << " searches unfinished");
+    if (shells < 1000) {
+      CHECK(relmse < previous);
+      CHECK(unfinished > 0);
+    } else {
+      CHECK(unfinished == 0);
+      CHECK(out.image.pixels() == complete.image.pixels());
+    }
+    previous = relmse;
+  }
+}
+
+TEST_CASE("Photon-mapped renders are bit-identical with 1 and 2 threads", "[photonmap-render][determinism]") {
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true});
+  scene.camera.width = 24;
+  scene.camera.height = 20;
+  for (PhotonMapKind kind : {PhotonMapKind::Sort, PhotonMapKind::Stencil, PhotonMapKind::KdTree}) {
+    PhotonMapOptions opt;
+    opt.photons = 20000;
+    opt.causticPhotons = 20000;
+    opt.gatherRays = 16;
+    opt.lightSamples = 2;
+    opt.spp = 2;
+    opt.layers = true;
+    opt.map = kind;
+    opt.seed = 4;
+    for (bool gather : {false, true}) {
+      std::vector<float> reference;
+      for (int threads : {1, 2}) {
+        ParallelScope scope(threads);
+        const Visibility vis(scene);
+        const Image image = gather ? renderPhotonMapFinalGather(scene, vis, opt).image : renderPurcell(scene, vis, opt).image;
+        INFO((gather ? "pmfg" : "purcell") << ", map " << int(kind) << ", " << threads << " threads");
+        if (threads == 1) {
+          reference = image.pixels();
+          // The beauty image is the sum of the direct, indirect and caustic layers.
+          for (int y = 0; y < image.height(); ++y)
+            for (int x = 0; x < image.width(); ++x)
+              for (int c = 0; c < 3; ++c) {
+                const float sum = image.at(x, y, image.channelIndex("direct.R") + c) +
+                                  image.at(x, y, image.channelIndex("indirect.R") + c) +
+                                  image.at(x, y, image.channelIndex("caustic.R") + c);
+                REQUIRE(image.at(x, y, c) == Approx(sum).epsilon(1e-5).margin(1e-6));
+              }
+        } else {
+          REQUIRE(image.pixels() == reference);
+        }
+      }
+    }
+  }
+}
