@@ -286,7 +286,7 @@ TEST_CASE("The kNN-grid's progressive estimate converges shell by shell to the c
   }
 }
 
-TEST_CASE("Photon-mapped renders are bit-identical with 1 and 2 threads", "[photonmap-render][determinism]") {
+TEST_CASE("Photon-mapped renders are bit-identical with 1 and 2 threads and in bands", "[photonmap-render][determinism]") {
   Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true});
   scene.camera.width = 24;
   scene.camera.height = 20;
@@ -302,12 +302,16 @@ TEST_CASE("Photon-mapped renders are bit-identical with 1 and 2 threads", "[phot
     opt.seed = 4;
     for (bool gather : {false, true}) {
       std::vector<float> reference;
-      for (int threads : {1, 2}) {
+      // One band with 1 and 2 threads, then bands of 2 rows (100 samples of 48 per row).
+      for (const auto& [threads, band] : {std::pair{1, uint64_t(1) << 19}, std::pair{2, uint64_t(1) << 19},
+                                          std::pair{2, uint64_t(100)}}) {
         ParallelScope scope(threads);
         const Visibility vis(scene);
+        opt.bandSamples = band;
         const Image image = gather ? renderPhotonMapFinalGather(scene, vis, opt).image : renderPurcell(scene, vis, opt).image;
-        INFO((gather ? "pmfg" : "purcell") << ", map " << int(kind) << ", " << threads << " threads");
-        if (threads == 1) {
+        INFO((gather ? "pmfg" : "purcell") << ", map " << int(kind) << ", " << threads << " threads, bands of "
+                                           << band << " samples");
+        if (reference.empty()) {
           reference = image.pixels();
           // The beauty image is the sum of the direct, indirect and caustic layers.
           for (int y = 0; y < image.height(); ++y)
