@@ -107,27 +107,29 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
 }  // namespace
 
 EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathSettings& settings) {
-  const int width = scene.camera.width, height = scene.camera.height;
+  const int width = scene.camera.width;
+  const int rowBegin = settings.rowBegin, rowEnd = settings.rowEnd > 0 ? settings.rowEnd : scene.camera.height;
   const int tile = settings.tileSize;
-  const int tilesX = (width + tile - 1) / tile, tilesY = (height + tile - 1) / tile;
+  const int tilesX = (width + tile - 1) / tile, tilesY = (rowEnd - rowBegin + tile - 1) / tile;
   const int tiles = tilesX * tilesY;
   const PinholeCamera camera(scene.camera);
   const uint64_t seed = streamSeed(settings.seed, RenderStream::Eye);
 
   EyePaths out;
-  out.pixels.resize(size_t(width) * height);
+  out.firstPixel = uint32_t(rowBegin) * uint32_t(width);
+  out.pixels.resize(size_t(width) * size_t(rowEnd - rowBegin));
   std::vector<std::vector<ShadingPoint>> tilePoints(tiles);
   std::vector<uint64_t> tileRays(tiles, 0), tileInvalid(tiles, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
     flushDenormals();
     for (int t = r.begin(); t != r.end(); ++t) {
-      const int x0 = (t % tilesX) * tile, y0 = (t / tilesX) * tile;
-      const int x1 = std::min(width, x0 + tile), y1 = std::min(height, y0 + tile);
+      const int x0 = (t % tilesX) * tile, y0 = rowBegin + (t / tilesX) * tile;
+      const int x1 = std::min(width, x0 + tile), y1 = std::min(rowEnd, y0 + tile);
       std::vector<ShadingPoint>& points = tilePoints[t];
       for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
           const uint32_t pixel = uint32_t(y) * uint32_t(width) + uint32_t(x);
-          EyePixel& px = out.pixels[pixel];
+          EyePixel& px = out.pixels[pixel - out.firstPixel];
           for (int s = 0; s < settings.spp; ++s) {
             Rng rng(seed, pixel, uint64_t(s));
             const Vec2 offset = settings.spp == 1 ? Vec2{0.5f, 0.5f}

@@ -46,6 +46,7 @@ struct EyePathSettings {
   int maxSpecularDepth = 10;
   uint64_t seed = 0;
   bool layers = false;
+  int rowBegin = 0, rowEnd = 0;  // the band of image rows traced; rowEnd 0: to the last row
   int tileSize = 16;
 };
 
@@ -60,7 +61,8 @@ struct EyePixel {
 
 struct EyePaths {
   std::vector<ShadingPoint> points;  // by tile, then pixel, then sample, then branch
-  std::vector<EyePixel> pixels;
+  std::vector<EyePixel> pixels;      // the band's, from pixel firstPixel on (row rowBegin)
+  uint32_t firstPixel = 0;
   uint64_t rays = 0;
   uint64_t invalid = 0;  // camera paths dropped for non-finite values
 };

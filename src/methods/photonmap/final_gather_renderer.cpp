@@ -97,15 +97,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   RenderOutput out;
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::All, out.stats);
 
-  Stopwatch rayClock;
-  const EyePaths eye = traceEyePaths(scene, vis, {options.spp, options.maxSpecularDepth, options.seed, options.layers});
-  const size_t n = eye.points.size();
-  PointRadiance radiance(n);
-  uint64_t shadowRays = 0;
-  if (options.lightSamples > 0)
-    estimateDirectLight(scene, vis, eye.points, options.lightSamples, options.seed, radiance.direct, shadowRays);
-  double traceSeconds = rayClock.seconds();
-
+  ImageAccumulator image(scene, options.layers);
   const uint32_t heapSize = std::max(maps.globalSettings.k, maps.causticSettings.k);
   tbb::enumerable_thread_specific<GatherScratch> scratch([&] {
     GatherScratch s;
@@ -115,69 +107,88 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   });
   tbb::enumerable_thread_specific<EstimateCounters> causticCounters;
   const uint64_t gatherSeed = streamSeed(options.seed, RenderStream::Gather);
-  double estimateSeconds = 0;
-  withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
-    // Caustics: the caustic map's estimate at every shading point.
-    Stopwatch causticClock;
-    if (caustic)
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
-        flushDenormals();
-        PhotonDistance* heap = scratch.local().heap.data();
-        EstimateCounters& cc = causticCounters.local();
-        for (size_t i = r.begin(); i != r.end(); ++i)
-          radiance.caustic[i] = estimateRadiance(*caustic, estimatePoint(eye.points[i]), maps.causticSettings, heap, cc);
-      });
-    estimateSeconds += causticClock.seconds();
+  double traceSeconds = 0, estimateSeconds = 0;
+  uint64_t eyeRays = 0, shadowRays = 0, points = 0, invalid = 0;
+  const auto bands = imageBands(scene, options.spp, options.bandSamples);
+  for (size_t band = 0; band < bands.size(); ++band) {
+    // Eye rays and shadow rays.
+    Stopwatch rayClock;
+    EyePathSettings eyeSettings{options.spp, options.maxSpecularDepth, options.seed, options.layers};
+    eyeSettings.rowBegin = bands[band].first;
+    eyeSettings.rowEnd = bands[band].second;
+    const EyePaths eye = traceEyePaths(scene, vis, eyeSettings);
+    const size_t n = eye.points.size();
+    PointRadiance radiance(n);
+    if (options.lightSamples > 0)
+      estimateDirectLight(scene, vis, eye.points, options.lightSamples, options.seed, radiance.direct, shadowRays);
+    traceSeconds += rayClock.seconds();
 
-    // Final gathering: per shading point, trace its gather rays, then estimate at their hits. The
-    // two parts are timed per thread and the stage's wall time is split between trace_rays and
-    // radiance_estimate in proportion.
-    if (!global || options.gatherRays == 0) return;
-    Stopwatch gatherClock;
-    std::atomic<size_t> done{0};
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
-      flushDenormals();
-      GatherScratch& s = scratch.local();
-      for (size_t i = r.begin(); i != r.end(); ++i) {
-        const ShadingPoint& point = eye.points[i];
-        Stopwatch traceClock;
-        const size_t hits = traceGatherRays(scene, vis, point, options.gatherRays, options.maxSpecularDepth,
-                                            gatherSeed, s.hits.data(), s.rays);
-        s.traceSeconds += traceClock.seconds();
-        Stopwatch estimateClock;
-        double sum[3] = {0, 0, 0};
-        for (size_t h = 0; h < hits; ++h) {
-          const Rgb L = s.hits[h].weight * estimateRadiance(*global, s.hits[h].point, maps.globalSettings,
-                                                            s.heap.data(), s.counters);
-          for (int c = 0; c < 3; ++c) sum[c] += L[c];
+    withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
+      // Caustics: the caustic map's estimate at every shading point.
+      Stopwatch causticClock;
+      if (caustic)
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+          flushDenormals();
+          PhotonDistance* heap = scratch.local().heap.data();
+          EstimateCounters& cc = causticCounters.local();
+          for (size_t i = r.begin(); i != r.end(); ++i)
+            radiance.caustic[i] = estimateRadiance(*caustic, estimatePoint(eye.points[i]), maps.causticSettings, heap, cc);
+        });
+      estimateSeconds += causticClock.seconds();
+
+      // Final gathering: per shading point, trace its gather rays, then estimate at their hits. The
+      // two parts are timed per thread and the stage's wall time is split between trace_rays and
+      // radiance_estimate in proportion.
+      if (!global || options.gatherRays == 0) return;
+      Stopwatch gatherClock;
+      for (GatherScratch& s : scratch) s.traceSeconds = s.estimateSeconds = 0;
+      std::atomic<size_t> done{0};
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
+        flushDenormals();
+        GatherScratch& s = scratch.local();
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+          const ShadingPoint& point = eye.points[i];
+          Stopwatch traceClock;
+          const size_t hits = traceGatherRays(scene, vis, point, options.gatherRays, options.maxSpecularDepth,
+                                              gatherSeed, s.hits.data(), s.rays);
+          s.traceSeconds += traceClock.seconds();
+          Stopwatch estimateClock;
+          double sum[3] = {0, 0, 0};
+          for (size_t h = 0; h < hits; ++h) {
+            const Rgb L = s.hits[h].weight * estimateRadiance(*global, s.hits[h].point, maps.globalSettings,
+                                                              s.heap.data(), s.counters);
+            for (int c = 0; c < 3; ++c) sum[c] += L[c];
+          }
+          const double inv = 1.0 / options.gatherRays;
+          radiance.indirect[i] = Rgb(float(sum[0] * inv), float(sum[1] * inv), float(sum[2] * inv));
+          s.estimateSeconds += estimateClock.seconds();
         }
-        const double inv = 1.0 / options.gatherRays;
-        radiance.indirect[i] = Rgb(float(sum[0] * inv), float(sum[1] * inv), float(sum[2] * inv));
-        s.estimateSeconds += estimateClock.seconds();
-      }
-      if (progress) progress(double(done += r.size()) / double(n));
+        if (progress) progress((double(band) + double(done += r.size()) / double(n)) / double(bands.size()));
+      });
+      const double wall = gatherClock.seconds();
+      double t = 0, e = 0;
+      for (const GatherScratch& s : scratch) t += s.traceSeconds, e += s.estimateSeconds;
+      const double share = t + e > 0 ? t / (t + e) : 0.5;
+      traceSeconds += wall * share;
+      estimateSeconds += wall * (1 - share);
     });
-    const double wall = gatherClock.seconds();
-    double t = 0, e = 0;
-    for (const GatherScratch& s : scratch) t += s.traceSeconds, e += s.estimateSeconds;
-    const double share = t + e > 0 ? t / (t + e) : 0.5;
-    traceSeconds += wall * share;
-    estimateSeconds += wall * (1 - share);
-  });
+    image.add(eye, radiance);
+    eyeRays += eye.rays, points += n, invalid += eye.invalid;
+  }
   out.stats.addStage("trace_rays", traceSeconds);
   out.stats.addStage("radiance_estimate", estimateSeconds);
 
-  out.image = assembleImage(scene, eye, radiance, options.layers);
+  out.image = image.finish();
   out.sppDone = options.spp;
   EstimateCounters gc, cc;
   uint64_t gatherRays = 0;
   for (const GatherScratch& s : scratch) gc += s.counters, gatherRays += s.rays;
   for (const auto& c : causticCounters) cc += c;
-  out.stats.addCounter("eye_rays", eye.rays);
+  out.stats.addCounter("eye_rays", eyeRays);
   out.stats.addCounter("shadow_rays", shadowRays);
   out.stats.addCounter("gather_rays", gatherRays);
-  out.stats.addCounter("shading_points", n);
-  out.stats.addCounter("invalid_samples", eye.invalid);
+  out.stats.addCounter("shading_points", points);
+  out.stats.addCounter("invalid_samples", invalid);
   addEstimateCounters(out.stats, "global", gc);
   addEstimateCounters(out.stats, "caustic", cc);
   return out;

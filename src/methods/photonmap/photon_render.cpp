@@ -1,5 +1,6 @@
 #include "photon_render.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -17,6 +18,7 @@ void validatePhotonMapOptions(const PhotonMapOptions& o) {
   if (o.lightSamples < 0) fail("light samples must not be negative");
   if (o.gatherRays < 0) fail("gather rays must not be negative");
   if (o.spp < 1) fail("spp must be at least 1");
+  if (o.bandSamples < 1) fail("band samples must be at least 1");
   if (o.maxSpecularDepth < 0 || o.maxSpecularDepth > 64) fail("max specular depth must be in [0, 64]");
   if (o.maxPhotonBounces < 1 || o.maxPhotonBounces > 255)
     fail("max photon bounces must be in [1, 255] (a photon's bounce count is 8 bits)");
@@ -100,45 +102,65 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
   return maps;
 }
 
-Image assembleImage(const Scene& scene, const EyePaths& eye, const PointRadiance& radiance, bool layers) {
-  const int width = scene.camera.width, height = scene.camera.height;
-  std::vector<std::string> channels = {"R", "G", "B"};
-  if (layers)
-    for (const char* name : {"albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z", "depth.Z",
-                             "direct.R", "direct.G", "direct.B", "indirect.R", "indirect.G", "indirect.B",
-                             "caustic.R", "caustic.G", "caustic.B"})
-      channels.push_back(name);
-  const size_t nc = channels.size(), pixels = size_t(width) * height;
-  // Sums in double, the points in their (fixed) order.
-  std::vector<double> direct(pixels * 3, 0.0), indirect(pixels * 3, 0.0), caustic(pixels * 3, 0.0);
-  for (size_t p = 0; p < pixels; ++p)
-    for (int c = 0; c < 3; ++c) direct[p * 3 + c] = eye.pixels[p].emitted[c];
+std::vector<std::pair<int, int>> imageBands(const Scene& scene, int spp, uint64_t bandSamples) {
+  const uint64_t rowSamples = uint64_t(scene.camera.width) * uint64_t(std::max(1, spp));
+  const int rows = int(std::clamp<uint64_t>(bandSamples / rowSamples, 1, uint64_t(scene.camera.height)));
+  std::vector<std::pair<int, int>> bands;
+  for (int y = 0; y < scene.camera.height; y += rows) bands.push_back({y, std::min(scene.camera.height, y + rows)});
+  return bands;
+}
+
+ImageAccumulator::ImageAccumulator(const Scene& scene, bool layers)
+    : width_(scene.camera.width), height_(scene.camera.height), layers_(layers) {
+  const size_t pixels = size_t(width_) * height_;
+  direct_.assign(pixels * 3, 0.0);
+  indirect_.assign(pixels * 3, 0.0);
+  caustic_.assign(pixels * 3, 0.0);
+  pixels_.resize(pixels);
+}
+
+void ImageAccumulator::add(const EyePaths& eye, const PointRadiance& radiance) {
+  for (size_t i = 0; i < eye.pixels.size(); ++i) {
+    const size_t p = eye.firstPixel + i;
+    pixels_[p] = eye.pixels[i];
+    for (int c = 0; c < 3; ++c) direct_[p * 3 + c] += eye.pixels[i].emitted[c];
+  }
+  // The points in their (fixed) order.
   for (size_t i = 0; i < eye.points.size(); ++i) {
     const ShadingPoint& sp = eye.points[i];
     const size_t p = sp.pixel;
     const Rgb d = sp.weight * radiance.direct[i], ind = sp.weight * radiance.indirect[i],
               ca = sp.weight * radiance.caustic[i];
     for (int c = 0; c < 3; ++c) {
-      direct[p * 3 + c] += d[c];
-      indirect[p * 3 + c] += ind[c];
-      caustic[p * 3 + c] += ca[c];
+      direct_[p * 3 + c] += d[c];
+      indirect_[p * 3 + c] += ind[c];
+      caustic_[p * 3 + c] += ca[c];
     }
   }
-  Image image(width, height, channels);
+}
+
+Image ImageAccumulator::finish() const {
+  std::vector<std::string> channels = {"R", "G", "B"};
+  if (layers_)
+    for (const char* name : {"albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z", "depth.Z",
+                             "direct.R", "direct.G", "direct.B", "indirect.R", "indirect.G", "indirect.B",
+                             "caustic.R", "caustic.G", "caustic.B"})
+      channels.push_back(name);
+  const size_t nc = channels.size(), pixels = size_t(width_) * height_;
+  Image image(width_, height_, channels);
   float* out = image.pixels().data();
   for (size_t p = 0; p < pixels; ++p) {
-    const EyePixel& px = eye.pixels[p];
+    const EyePixel& px = pixels_[p];
     const double n = std::max<uint32_t>(1, px.validSamples);
     float* o = out + p * nc;
-    for (int c = 0; c < 3; ++c)
-      o[c] = float((direct[p * 3 + c] + indirect[p * 3 + c] + caustic[p * 3 + c]) / n);
-    if (!layers) continue;
+    for (int c = 0; c < 3; ++c) o[c] = float((direct_[p * 3 + c] + indirect_[p * 3 + c] + caustic_[p * 3 + c]) / n);
+    if (!layers_) continue;
     const float v[7] = {px.albedo.r, px.albedo.g, px.albedo.b, px.normal.x, px.normal.y, px.normal.z, px.depth};
     for (int c = 0; c < 7; ++c) o[3 + c] = float(v[c] / n);
     for (int c = 0; c < 3; ++c) {
-      o[10 + c] = float(direct[p * 3 + c] / n);
-      o[13 + c] = float(indirect[p * 3 + c] / n);
-      o[16 + c] = float(caustic[p * 3 + c] / n);
+      o[10 + c] = float(direct_[p * 3 + c] / n);
+      o[13 + c] = float(indirect_[p * 3 + c] / n);
+      o[16 + c] = float(caustic_[p * 3 + c] / n);
     }
   }
   return image;

@@ -66,11 +66,27 @@ struct PointRadiance {
   explicit PointRadiance(size_t n) : direct(n), indirect(n), caustic(n) {}
 };
 
+// The bands of rows, each of at most `bandSamples` camera samples (at least one row), so that the
+// shading points held at once stay bounded whatever the resolution and spp (512 x 512 at 1 spp is
+// one band by default: the paper's whole-screen passes).
+std::vector<std::pair<int, int>> imageBands(const Scene& scene, int spp, uint64_t bandSamples);
+
 // The image: per pixel, the emission its camera samples saw plus each shading point's radiance
 // times its weight, averaged over the pixel's samples (in a fixed order: the same image whatever
 // the thread count). Layers: albedo, normal, depth (first hit), direct (emission and shadow rays),
 // indirect (global map or final gathering), caustic (caustic map).
-Image assembleImage(const Scene& scene, const EyePaths& eye, const PointRadiance& radiance, bool layers);
+class ImageAccumulator {
+ public:
+  ImageAccumulator(const Scene& scene, bool layers);
+  void add(const EyePaths& band, const PointRadiance& radiance);
+  Image finish() const;
+
+ private:
+  int width_, height_;
+  bool layers_;
+  std::vector<double> direct_, indirect_, caustic_;  // 3 per pixel
+  std::vector<EyePixel> pixels_;
+};
 
 void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& counters);
 

@@ -21,46 +21,59 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
   // caustics from the caustic map, so each light path is counted once.
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::Indirect, out.stats);
 
-  Stopwatch rayClock;
-  const EyePaths eye = traceEyePaths(scene, vis, {options.spp, options.maxSpecularDepth, options.seed, options.layers});
-  const size_t n = eye.points.size();
-  PointRadiance radiance(n);
-  uint64_t shadowRays = 0;
-  if (options.lightSamples > 0)
-    estimateDirectLight(scene, vis, eye.points, options.lightSamples, options.seed, radiance.direct, shadowRays);
-  out.stats.addStage("trace_rays", rayClock.seconds());
-
-  // The radiance estimate: one work item per shading point, both maps.
-  Stopwatch estimateClock;
+  ImageAccumulator image(scene, options.layers);
   const uint32_t heapSize = std::max(maps.globalSettings.k, maps.causticSettings.k);
   tbb::enumerable_thread_specific<std::vector<PhotonDistance>> heaps([&] { return std::vector<PhotonDistance>(heapSize); });
   tbb::enumerable_thread_specific<EstimateCounters> globalCounters, causticCounters;
-  std::atomic<size_t> done{0};
-  withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
-      flushDenormals();
-      PhotonDistance* heap = heaps.local().data();
-      EstimateCounters& gc = globalCounters.local();
-      EstimateCounters& cc = causticCounters.local();
-      for (size_t i = r.begin(); i != r.end(); ++i) {
-        const EstimatePoint q = estimatePoint(eye.points[i]);
-        radiance.indirect[i] = estimateIfPresent(global, q, maps.globalSettings, heap, gc);
-        radiance.caustic[i] = estimateIfPresent(caustic, q, maps.causticSettings, heap, cc);
-      }
-      if (progress) progress(double(done += r.size()) / double(n));
-    });
-  });
-  out.stats.addStage("radiance_estimate", estimateClock.seconds());
+  double traceSeconds = 0, estimateSeconds = 0;
+  uint64_t eyeRays = 0, shadowRays = 0, points = 0, invalid = 0;
+  const auto bands = imageBands(scene, options.spp, options.bandSamples);
+  for (size_t band = 0; band < bands.size(); ++band) {
+    // Eye rays and shadow rays.
+    Stopwatch rayClock;
+    EyePathSettings eyeSettings{options.spp, options.maxSpecularDepth, options.seed, options.layers};
+    eyeSettings.rowBegin = bands[band].first;
+    eyeSettings.rowEnd = bands[band].second;
+    const EyePaths eye = traceEyePaths(scene, vis, eyeSettings);
+    const size_t n = eye.points.size();
+    PointRadiance radiance(n);
+    if (options.lightSamples > 0)
+      estimateDirectLight(scene, vis, eye.points, options.lightSamples, options.seed, radiance.direct, shadowRays);
+    traceSeconds += rayClock.seconds();
 
-  out.image = assembleImage(scene, eye, radiance, options.layers);
+    // The radiance estimate: one work item per shading point, both maps.
+    Stopwatch estimateClock;
+    std::atomic<size_t> done{0};
+    withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+        flushDenormals();
+        PhotonDistance* heap = heaps.local().data();
+        EstimateCounters& gc = globalCounters.local();
+        EstimateCounters& cc = causticCounters.local();
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+          const EstimatePoint q = estimatePoint(eye.points[i]);
+          radiance.indirect[i] = estimateIfPresent(global, q, maps.globalSettings, heap, gc);
+          radiance.caustic[i] = estimateIfPresent(caustic, q, maps.causticSettings, heap, cc);
+        }
+        if (progress) progress((double(band) + double(done += r.size()) / double(n)) / double(bands.size()));
+      });
+    });
+    estimateSeconds += estimateClock.seconds();
+    image.add(eye, radiance);
+    eyeRays += eye.rays, points += n, invalid += eye.invalid;
+  }
+  out.stats.addStage("trace_rays", traceSeconds);
+  out.stats.addStage("radiance_estimate", estimateSeconds);
+
+  out.image = image.finish();
   out.sppDone = options.spp;
   EstimateCounters gc, cc;
   for (const auto& c : globalCounters) gc += c;
   for (const auto& c : causticCounters) cc += c;
-  out.stats.addCounter("eye_rays", eye.rays);
+  out.stats.addCounter("eye_rays", eyeRays);
   out.stats.addCounter("shadow_rays", shadowRays);
-  out.stats.addCounter("shading_points", n);
-  out.stats.addCounter("invalid_samples", eye.invalid);
+  out.stats.addCounter("shading_points", points);
+  out.stats.addCounter("invalid_samples", invalid);
   addEstimateCounters(out.stats, "global", gc);
   addEstimateCounters(out.stats, "caustic", cc);
   return out;
