@@ -113,14 +113,8 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   for (size_t band = 0; band < bands.size(); ++band) {
     // Eye rays and shadow rays.
     Stopwatch rayClock;
-    EyePathSettings eyeSettings{options.spp, options.maxSpecularDepth, options.seed, options.layers};
-    eyeSettings.rowBegin = bands[band].first;
-    eyeSettings.rowEnd = bands[band].second;
-    const EyePaths eye = traceEyePaths(scene, vis, eyeSettings);
+    auto [eye, radiance] = traceBand(scene, vis, options, bands[band], shadowRays);
     const size_t n = eye.points.size();
-    PointRadiance radiance(n);
-    if (options.lightSamples > 0)
-      estimateDirectLight(scene, vis, eye.points, options.lightSamples, options.seed, radiance.direct, shadowRays);
     traceSeconds += rayClock.seconds();
 
     withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {

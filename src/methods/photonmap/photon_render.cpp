@@ -174,4 +174,16 @@ void addEstimateCounters(RenderStats& stats, const std::string& prefix, const Es
   if (c.unfinished > 0) stats.addCounter(prefix + "_searches_unfinished", c.unfinished);
 }
 
+BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
+                            std::pair<int, int> band, uint64_t& shadowRays) {
+  EyePathSettings eyeSettings{options.spp, options.maxSpecularDepth, options.seed, options.layers};
+  eyeSettings.rowBegin = band.first;
+  eyeSettings.rowEnd = band.second;
+  BandShadingPoints out{traceEyePaths(scene, vis, eyeSettings), PointRadiance(0)};
+  out.radiance = PointRadiance(out.eye.points.size());
+  if (options.lightSamples > 0)
+    estimateDirectLight(scene, vis, out.eye.points, options.lightSamples, options.seed, out.radiance.direct, shadowRays);
+  return out;
+}
+
 }  // namespace lucent

@@ -71,6 +71,15 @@ struct PointRadiance {
 // one band by default: the paper's whole-screen passes).
 std::vector<std::pair<int, int>> imageBands(const Scene& scene, int spp, uint64_t bandSamples);
 
+// The first stage of both renderers for one band of rows: eye rays through mirrors and glass to
+// their shading points, and the direct light at those points by shadow rays.
+struct BandShadingPoints {
+  EyePaths eye;
+  PointRadiance radiance;
+};
+BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
+                            std::pair<int, int> band, uint64_t& shadowRays);
+
 // The image: per pixel, the emission its camera samples saw plus each shading point's radiance
 // times its weight, averaged over the pixel's samples (in a fixed order: the same image whatever
 // the thread count). Layers: albedo, normal, depth (first hit), direct (emission and shadow rays),
