@@ -107,15 +107,14 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   });
   tbb::enumerable_thread_specific<EstimateCounters> causticCounters;
   const uint64_t gatherSeed = streamSeed(options.seed, RenderStream::Gather);
-  double traceSeconds = 0, estimateSeconds = 0;
-  uint64_t eyeRays = 0, shadowRays = 0, points = 0, invalid = 0;
+  RenderTotals totals;
   const auto bands = imageBands(scene, options.spp, options.bandSamples);
   for (size_t band = 0; band < bands.size(); ++band) {
     // Eye rays and shadow rays.
     Stopwatch rayClock;
-    auto [eye, radiance] = traceBand(scene, vis, options, bands[band], shadowRays);
+    auto [eye, radiance] = traceBand(scene, vis, options, bands[band], totals.shadowRays);
     const size_t n = eye.points.size();
-    traceSeconds += rayClock.seconds();
+    totals.traceSeconds += rayClock.seconds();
 
     withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
       // Caustics: the caustic map's estimate at every shading point.
@@ -128,7 +127,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
           for (size_t i = r.begin(); i != r.end(); ++i)
             radiance.caustic[i] = estimateRadiance(*caustic, estimatePoint(eye.points[i]), maps.causticSettings, heap, cc);
         });
-      estimateSeconds += causticClock.seconds();
+      totals.estimateSeconds += causticClock.seconds();
 
       // Final gathering: per shading point, trace its gather rays, then estimate at their hits. The
       // two parts are timed per thread and the stage's wall time is split between trace_rays and
@@ -163,14 +162,12 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
       double t = 0, e = 0;
       for (const GatherScratch& s : scratch) t += s.traceSeconds, e += s.estimateSeconds;
       const double share = t + e > 0 ? t / (t + e) : 0.5;
-      traceSeconds += wall * share;
-      estimateSeconds += wall * (1 - share);
+      totals.traceSeconds += wall * share;
+      totals.estimateSeconds += wall * (1 - share);
     });
     image.add(eye, radiance);
-    eyeRays += eye.rays, points += n, invalid += eye.invalid;
+    totals.addBand(eye);
   }
-  out.stats.addStage("trace_rays", traceSeconds);
-  out.stats.addStage("radiance_estimate", estimateSeconds);
 
   out.image = image.finish();
   out.sppDone = options.spp;
@@ -178,13 +175,8 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   uint64_t gatherRays = 0;
   for (const GatherScratch& s : scratch) gc += s.counters, gatherRays += s.rays;
   for (const auto& c : causticCounters) cc += c;
-  out.stats.addCounter("eye_rays", eyeRays);
-  out.stats.addCounter("shadow_rays", shadowRays);
+  totals.report(out.stats, gc, cc);
   out.stats.addCounter("gather_rays", gatherRays);
-  out.stats.addCounter("shading_points", points);
-  out.stats.addCounter("invalid_samples", invalid);
-  addEstimateCounters(out.stats, "global", gc);
-  addEstimateCounters(out.stats, "caustic", cc);
   return out;
 }
 

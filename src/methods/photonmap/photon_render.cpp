@@ -186,4 +186,15 @@ BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const Pho
   return out;
 }
 
+void RenderTotals::report(RenderStats& stats, const EstimateCounters& global, const EstimateCounters& caustic) const {
+  stats.addStage("trace_rays", traceSeconds);
+  stats.addStage("radiance_estimate", estimateSeconds);
+  stats.addCounter("eye_rays", eyeRays);
+  stats.addCounter("shadow_rays", shadowRays);
+  stats.addCounter("shading_points", points);
+  stats.addCounter("invalid_samples", invalid);
+  addEstimateCounters(stats, "global", global);
+  addEstimateCounters(stats, "caustic", caustic);
+}
+
 }  // namespace lucent

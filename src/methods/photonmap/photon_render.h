@@ -99,4 +99,17 @@ class ImageAccumulator {
 
 void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& counters);
 
+// What both renderers add up over the bands, and report the same way: the paper's Table 1 stages
+// trace_rays and radiance_estimate, and the ray, point and estimate counters.
+struct RenderTotals {
+  double traceSeconds = 0, estimateSeconds = 0;
+  uint64_t eyeRays = 0, shadowRays = 0, points = 0, invalid = 0;
+  void addBand(const EyePaths& eye) {
+    eyeRays += eye.rays;
+    points += eye.points.size();
+    invalid += eye.invalid;
+  }
+  void report(RenderStats& stats, const EstimateCounters& global, const EstimateCounters& caustic) const;
+};
+
 }  // namespace lucent

@@ -25,15 +25,14 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
   const uint32_t heapSize = std::max(maps.globalSettings.k, maps.causticSettings.k);
   tbb::enumerable_thread_specific<std::vector<PhotonDistance>> heaps([&] { return std::vector<PhotonDistance>(heapSize); });
   tbb::enumerable_thread_specific<EstimateCounters> globalCounters, causticCounters;
-  double traceSeconds = 0, estimateSeconds = 0;
-  uint64_t eyeRays = 0, shadowRays = 0, points = 0, invalid = 0;
+  RenderTotals totals;
   const auto bands = imageBands(scene, options.spp, options.bandSamples);
   for (size_t band = 0; band < bands.size(); ++band) {
     // Eye rays and shadow rays.
     Stopwatch rayClock;
-    auto [eye, radiance] = traceBand(scene, vis, options, bands[band], shadowRays);
+    auto [eye, radiance] = traceBand(scene, vis, options, bands[band], totals.shadowRays);
     const size_t n = eye.points.size();
-    traceSeconds += rayClock.seconds();
+    totals.traceSeconds += rayClock.seconds();
 
     // The radiance estimate: one work item per shading point, both maps.
     Stopwatch estimateClock;
@@ -52,24 +51,17 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
         if (progress) progress((double(band) + double(done += r.size()) / double(n)) / double(bands.size()));
       });
     });
-    estimateSeconds += estimateClock.seconds();
+    totals.estimateSeconds += estimateClock.seconds();
     image.add(eye, radiance);
-    eyeRays += eye.rays, points += n, invalid += eye.invalid;
+    totals.addBand(eye);
   }
-  out.stats.addStage("trace_rays", traceSeconds);
-  out.stats.addStage("radiance_estimate", estimateSeconds);
 
   out.image = image.finish();
   out.sppDone = options.spp;
   EstimateCounters gc, cc;
   for (const auto& c : globalCounters) gc += c;
   for (const auto& c : causticCounters) cc += c;
-  out.stats.addCounter("eye_rays", eyeRays);
-  out.stats.addCounter("shadow_rays", shadowRays);
-  out.stats.addCounter("shading_points", points);
-  out.stats.addCounter("invalid_samples", invalid);
-  addEstimateCounters(out.stats, "global", gc);
-  addEstimateCounters(out.stats, "caustic", cc);
+  totals.report(out.stats, gc, cc);
   return out;
 }
 
