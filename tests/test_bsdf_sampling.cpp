@@ -171,25 +171,21 @@ TEST_CASE("Phong pdf and value match the mixture formula", "[bsdf]") {
 TEST_CASE("Phong sampling: negative controls", "[bsdf][chi2]") {
   const Vec3 wo = directionAt(0.7, 0.4);
   WeightCheck ignored;
-  SECTION("lobe chosen with probability 0.75 instead of 0.8") {
-    const SurfaceBsdf right = phong(Rgb(0.2f), Rgb(0.8f), 100), wrong = phong(Rgb(0.25f), Rgb(0.75f), 100);
+  // The sampler of `wrong` claiming the pdf of `right`: only the histogram can tell them apart.
+  auto testWrongSampler = [&](const SurfaceBsdf& right, const SurfaceBsdf& wrong, uint64_t seed) {
     auto pdf = [&](Vec3 wi) { return bsdfPdf(right, wo, wi); };
     auto sampler = [&, s = bsdfSampler(wrong, wo, ignored)](Rng& rng) {
       DirectionSample d = s(rng);
       if (d.pdf > 0) d.pdf = pdf(d.direction);
       return d;
     };
-    CHECK_CHI2_REJECT(chi2::testSphere(sampler, pdf, lobeOptions(wo, 100, 101)));
+    return chi2::testSphere(sampler, pdf, lobeOptions(wo, 100, seed));
+  };
+  SECTION("lobe chosen with probability 0.75 instead of 0.8") {
+    CHECK_CHI2_REJECT(testWrongSampler(phong(Rgb(0.2f), Rgb(0.8f), 100), phong(Rgb(0.25f), Rgb(0.75f), 100), 101));
   }
   SECTION("exponent 110 checked as 100") {
-    const SurfaceBsdf right = phong(Rgb(0.2f), Rgb(0.8f), 100), wrong = phong(Rgb(0.2f), Rgb(0.8f), 110);
-    auto pdf = [&](Vec3 wi) { return bsdfPdf(right, wo, wi); };
-    auto sampler = [&, s = bsdfSampler(wrong, wo, ignored)](Rng& rng) {
-      DirectionSample d = s(rng);
-      if (d.pdf > 0) d.pdf = pdf(d.direction);
-      return d;
-    };
-    CHECK_CHI2_REJECT(chi2::testSphere(sampler, pdf, lobeOptions(wo, 100, 102)));
+    CHECK_CHI2_REJECT(testWrongSampler(phong(Rgb(0.2f), Rgb(0.8f), 100), phong(Rgb(0.2f), Rgb(0.8f), 110), 102));
   }
   SECTION("lobe sampled around the normal instead of the mirror direction") {
     const SurfaceBsdf b = phong(Rgb(0.5f), Rgb(0.5f), 10);
