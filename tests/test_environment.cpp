@@ -17,15 +17,11 @@ namespace {
 
 // A map with a smooth sky gradient and a small, very bright "sun" patch above the horizon.
 Image makeSkyMap(int w, int h) {
-  Image map(w, h, {"R", "G", "B"});
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const float v = (y + 0.5f) / h, u = (x + 0.5f) / w;
-      Rgb c(0.2f + 0.8f * (1 - v), 0.3f + 0.5f * u, 0.5f);
-      if (y == h / 4 && x == w / 3) c = Rgb(400.0f, 300.0f, 200.0f);
-      for (int k = 0; k < 3; ++k) map.at(x, y, k) = c[k];
-    }
-  return map;
+  return test::rgbImage(w, h, [&](int x, int y) {
+    const float v = (y + 0.5f) / h, u = (x + 0.5f) / w;
+    if (y == h / 4 && x == w / 3) return Rgb(400.0f, 300.0f, 200.0f);
+    return Rgb(0.2f + 0.8f * (1 - v), 0.3f + 0.5f * u, 0.5f);
+  });
 }
 
 // Irradiance on a surface facing +y: sum over texels of L * max(0, cos) * solid angle, each texel

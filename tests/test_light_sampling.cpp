@@ -265,18 +265,14 @@ namespace {
 // A strongly non-uniform lat-long map: a sky gradient varying with azimuth, a bright row at the +y pole
 // (where the density has its 1/sin(theta) pole), a black row (no directions there) and a two-texel sun.
 Image makeSkyMap(int w, int h) {
-  Image map(w, h, {"R", "G", "B"});
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const float v = (y + 0.5f) / h, u = (x + 0.5f) / w;
-      const float sky = (0.05f + 2 * std::pow(1 - v, 3.0f)) * (1 + 0.8f * std::sin(2 * kPi * u));
-      Rgb c(sky, 0.8f * sky, 0.6f * sky);
-      if (y == 0) c = Rgb(6, 3, 1);
-      if (y == 10) c = Rgb(0.0f);
-      if (y == 3 && (x == 20 || x == 21)) c = Rgb(500, 400, 300);
-      for (int k = 0; k < 3; ++k) map.at(x, y, k) = c[k];
-    }
-  return map;
+  return test::rgbImage(w, h, [&](int x, int y) {
+    const float v = (y + 0.5f) / h, u = (x + 0.5f) / w;
+    const float sky = (0.05f + 2 * std::pow(1 - v, 3.0f)) * (1 + 0.8f * std::sin(2 * kPi * u));
+    if (y == 0) return Rgb(6, 3, 1);
+    if (y == 10) return Rgb(0.0f);
+    if (y == 3 && (x == 20 || x == 21)) return Rgb(500, 400, 300);
+    return Rgb(sky, 0.8f * sky, 0.6f * sky);
+  });
 }
 
 // Writes the map and a scene with it as environment (scale 0.5), a point light and one diffuse

@@ -66,6 +66,18 @@ inline CliRun runLucent(const std::string& args) {
   return run;
 }
 
+// An R,G,B image whose pixel (x, y) is colourAt(x, y).
+template <class ColourAt>
+Image rgbImage(int width, int height, ColourAt colourAt) {
+  Image image(width, height, {"R", "G", "B"});
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const Rgb c = colourAt(x, y);
+      for (int k = 0; k < 3; ++k) image.at(x, y, k) = c[k];
+    }
+  return image;
+}
+
 struct MeanAndError {
   double mean = 0, standardError = 0;
 };
