@@ -13,13 +13,7 @@ using namespace lucent;
 
 TEST_CASE("Closed diffuse furnace: radiance converges to Le / (1 - rho)", "[pathtrace][furnace]") {
   const Rgb rho(0.5f, 0.7f, 0.3f), le(1.0f, 2.0f, 0.5f);
-  Scene scene;
-  Material m;
-  m.kd = rho;
-  m.ke = le;
-  test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, test::addMaterial(scene, m, "walls"), true);
-  scene.camera = test::testCamera({0.1f, 0.2f, 0.3f}, {0.5f, 0.1f, -1}, 32, 32, 90);
-  finalizeScene(scene);
+  const Scene scene = test::furnaceBox(rho, le, test::testCamera({0.1f, 0.2f, 0.3f}, {0.5f, 0.1f, -1}, 32, 32, 90));
   const Visibility vis(scene);
   PathTraceOptions opt;
   opt.spp = 64;
@@ -32,13 +26,7 @@ TEST_CASE("Closed diffuse furnace: radiance converges to Le / (1 - rho)", "[path
 TEST_CASE("Closed diffuse furnace with max depth: geometric series truncated", "[pathtrace][furnace]") {
   // With emission seen directly plus `d` bounces of lighting, L = Le (1 + rho + ... + rho^d).
   const float rho = 0.6f;
-  Scene scene;
-  Material m;
-  m.kd = Rgb(rho);
-  m.ke = Rgb(1.0f);
-  test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, test::addMaterial(scene, m, "walls"), true);
-  scene.camera = test::testCamera({0, 0, 0}, {0, 0, -1}, 32, 32, 90);
-  finalizeScene(scene);
+  const Scene scene = test::furnaceBox(Rgb(rho), Rgb(1.0f), test::testCamera({0, 0, 0}, {0, 0, -1}, 32, 32, 90));
   const Visibility vis(scene);
   for (int depth : {1, 2, 4}) {
     PathTraceOptions opt;

@@ -23,14 +23,7 @@ Rgb storedPower(const std::vector<Photon>& photons, int bounce = -1) {
 
 // A closed box (side 2) of grey albedo rho whose walls all emit Ke.
 Scene emissiveBox(float rho, Rgb ke) {
-  Scene scene;
-  Material m;
-  m.kd = Rgb(rho);
-  m.ke = ke;
-  test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, test::addMaterial(scene, m, "walls"), true);
-  scene.camera = test::testCamera({0, 0, 0}, {0, 0, -1}, 8, 8);
-  finalizeScene(scene);
-  return scene;
+  return test::furnaceBox(Rgb(rho), ke, test::testCamera({0, 0, 0}, {0, 0, -1}, 8, 8));
 }
 
 // A closed, non-emitting box of albedo rho, for lights placed in code.

@@ -36,14 +36,7 @@ Image pathTraced(const Scene& scene, const Visibility& vis, int spp, uint64_t se
 }
 
 Scene furnace(Rgb rho, Rgb le, int size) {
-  Scene scene;
-  Material m;
-  m.kd = rho;
-  m.ke = le;
-  test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, test::addMaterial(scene, m, "walls"), true);
-  scene.camera = test::testCamera({0.1f, 0.2f, 0.3f}, {0.5f, 0.1f, -1}, size, size, 90);
-  finalizeScene(scene);
-  return scene;
+  return test::furnaceBox(rho, le, test::testCamera({0.1f, 0.2f, 0.3f}, {0.5f, 0.1f, -1}, size, size, 90));
 }
 
 // Relative standard deviation of the total power a furnace's photon paths store, per channel: a

@@ -45,4 +45,17 @@ inline Camera testCamera(Vec3 eye, Vec3 lookAt, int width, int height, float fov
   return c;
 }
 
+// The closed furnace: a 2 x 2 x 2 box whose inward-facing walls have albedo rho and emit le, so that
+// the radiance everywhere inside is le / (1 - rho).
+inline Scene furnaceBox(Rgb rho, Rgb le, const Camera& camera) {
+  Scene scene;
+  Material m;
+  m.kd = rho;
+  m.ke = le;
+  addBox(scene, {-1, -1, -1}, {1, 1, 1}, addMaterial(scene, m, "walls"), true);
+  scene.camera = camera;
+  finalizeScene(scene);
+  return scene;
+}
+
 }  // namespace lucent::test
