@@ -435,3 +435,42 @@ TEST_CASE("Grid maps do not depend on the thread count", "[photonmap][grid][dete
   CHECK(hashed[0].firstPhoton == hashed[1].firstPhoton);
   CHECK(hashed[0].cellKeys == hashed[1].cellKeys);
 }
+
+TEST_CASE("Cell count table counts the photons of any box of cells", "[photonmap][grid]") {
+  GridOptions options;
+  options.resolution = {9, 4, 7};
+  const SortedGrid map = buildSortedGrid(photonCloud(2000, Cloud::Clustered, 5), options);
+  const auto& res = map.grid.res;
+  Rng rng(3);
+  for (int trial = 0; trial < 500; ++trial) {
+    int32_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      const auto u = int32_t(rng.next() % uint32_t(res[a])), v = int32_t(rng.next() % uint32_t(res[a]));
+      lo[a] = std::min(u, v), hi[a] = std::max(u, v);
+    }
+    uint32_t brute = 0;
+    for (int32_t z = lo[2]; z <= hi[2]; ++z)
+      for (int32_t y = lo[1]; y <= hi[1]; ++y)
+        for (int32_t x = lo[0]; x <= hi[0]; ++x) brute += map.cellPhotons({x, y, z}).count;
+    REQUIRE(map.cellCounts.count(lo, hi) == brute);
+  }
+  const int32_t all[3] = {res[0] - 1, res[1] - 1, res[2] - 1}, origin[3] = {0, 0, 0}, empty[3] = {1, 0, 0};
+  CHECK(map.cellCounts.count(origin, all) == 2000);
+  CHECK(map.cellCounts.count(empty, origin) == 0);
+}
+
+TEST_CASE("kNN-grid skips the empty cells of a sparse map", "[photonmap][knn]") {
+  // Two photons at opposite corners of a fine grid: a query at one corner finds its photon, and the
+  // search over the empty cells out to the maximum radius costs no cell visits.
+  std::vector<Photon> photons(2);
+  photons[0].position = {0, 0, 0};
+  photons[1].position = {1, 1, 1};
+  GridOptions options;
+  options.resolution = {200, 200, 200};
+  const SortedGrid map = buildSortedGrid(photons, options);
+  const KnnGridSearch s = knnGrid(map, {0.001f, 0.001f, 0.001f}, 4, 0.9f, [](uint32_t, const Photon&, float) {});
+  CHECK(s.found == 1);
+  CHECK(s.done);
+  CHECK(s.cellsVisited <= 1);
+  CHECK(knnGridRadius2(s) == Approx(0.81f));
+}

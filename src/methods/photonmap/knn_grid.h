@@ -78,13 +78,9 @@ inline void reachAlong(const UniformGrid& g, Vec3 p, float r2, int a, int32_t& l
   if (last < float(hi)) hi = last < float(lo) ? lo - 1 : int32_t(last);
 }
 
-template <GridPhotonMap Map, class Visit>
-void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit) {
-  const float limit2 = s.found < s.k ? s.maxRadius2 : s.radius2;
-  if (map.grid.cellDistance2(s.position, cell) > limit2) return;  // no photon in it can be accepted
-  ++s.cellsVisited;
-  const CellPhotons cp = map.cellPhotons(cell);
-  const Photon* photons = map.photons.data();
+// Offers photons to the running estimate in the order given.
+template <class Visit>
+void examinePhotons(const Photon* photons, const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
   for (uint32_t i = 0; i < cp.count; ++i) {
     if (cp.cellKeys && cp.cellKeys[i] != cp.cellKey) {  // another cell's photon in the bucket
       ++s.collisionsSkipped;
@@ -104,24 +100,151 @@ void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit)
   }
 }
 
+template <GridPhotonMap Map, class Visit>
+void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit) {
+  const float limit2 = s.found < s.k ? s.maxRadius2 : s.radius2;
+  if (map.grid.cellDistance2(s.position, cell) > limit2) return;  // no photon in it can be accepted
+  ++s.cellsVisited;
+  examinePhotons(map.photons.data(), map.cellPhotons(cell), s, visit);
+}
+
+// A row of cells (x0..x1, y, z). Where the map keeps a row's photons contiguous in cell order (the
+// sorted grid), they are read in one run: the same photons in the same order as cell by cell,
+// without touching the empty cells (a photon in a cell that the acceptance sphere cannot reach is
+// rejected by its own distance). The run counts as one cell visit.
+template <GridPhotonMap Map, class Visit>
+void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_t y, int32_t z, Visit& visit) {
+  if constexpr (requires { map.rowPhotons(x0, x1, y, z); }) {
+    ++s.cellsVisited;
+    examinePhotons(map.photons.data(), map.rowPhotons(x0, x1, y, z), s, visit);
+  } else {
+    for (int32_t x = x0; x <= x1; ++x) exploreCell(map, s, {x, y, z}, visit);
+  }
+}
+
+template <class Map>
+constexpr bool kHasCellCounts = requires(const Map& map) { map.cellCounts.count(nullptr, nullptr); };
+
+// Photons in the cells [lo, hi] if the map can count them; otherwise "maybe some" (1) for a box
+// that has cells.
+template <class Map>
+uint32_t photonsIn(const Map& map, const int32_t lo[3], const int32_t hi[3]) {
+  if constexpr (kHasCellCounts<Map>) return map.cellCounts.count(lo, hi);
+  else return lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2] ? 1 : 0;
+}
+
+// The box of cells within Chebyshev distance `shell` of c, clipped to the grid and to the cells
+// that the sphere of squared radius limit2 about the query can reach.
+inline void shellBox(const UniformGrid& g, Vec3 p, float limit2, CellCoord c, int32_t shell, int32_t lo[3],
+                     int32_t hi[3]) {
+  const int32_t ci[3] = {c.x, c.y, c.z};
+  for (int a = 0; a < 3; ++a) {
+    reachAlong(g, p, limit2, a, lo[a], hi[a]);
+    lo[a] = std::max(lo[a], ci[a] - shell), hi[a] = std::min(hi[a], ci[a] + shell);
+  }
+}
+
 // The cells at Chebyshev distance exactly s from c, clipped to the grid and to the cells that the
-// sphere of the current acceptance radius can reach.
+// sphere of the current acceptance radius can reach, in z, y, x order. The shell is two z faces and,
+// between them, slabs of two y rows and two x ends. Ranges of slabs, rows and ends that hold no
+// photon are skipped by bisection on the map's cell counts, which keeps the order of the cells that
+// hold some: a search through empty space costs a few lookups per shell, not one per cell.
+template <GridPhotonMap Map, class Visit>
+struct ShellExplorer {
+  const Map& map;
+  KnnGridSearch& s;
+  Visit& visit;
+  int32_t lo[3], hi[3];
+  bool yLo, yHi, xLo, xHi;  // the shell's y rows and x ends lie within lo..hi
+  int32_t yi0, yi1;         // y range of the x ends
+
+  uint32_t photons(int32_t x0, int32_t x1, int32_t y0, int32_t y1, int32_t z0, int32_t z1) const {
+    const int32_t boxLo[3] = {x0, y0, z0}, boxHi[3] = {x1, y1, z1};
+    return photonsIn(map, boxLo, boxHi);
+  }
+  // Rows y0..y1 of the full-width face at z.
+  void rows(int32_t y0, int32_t y1, int32_t z) {
+    if (photons(lo[0], hi[0], y0, y1, z, z) == 0) return;
+    if (y0 == y1) return exploreRow(map, s, lo[0], hi[0], y0, z, visit);
+    const int32_t mid = y0 + (y1 - y0) / 2;
+    rows(y0, mid, z), rows(mid + 1, y1, z);
+  }
+  uint32_t ends(int32_t y0, int32_t y1, int32_t z0, int32_t z1) const {
+    return (xLo ? photons(lo[0], lo[0], y0, y1, z0, z1) : 0) + (xHi ? photons(hi[0], hi[0], y0, y1, z0, z1) : 0);
+  }
+  // The x ends of rows y0..y1 at z.
+  void endCells(int32_t y0, int32_t y1, int32_t z) {
+    if (ends(y0, y1, z, z) == 0) return;
+    if (y0 == y1) {
+      if (xLo) exploreCell(map, s, {lo[0], y0, z}, visit);
+      if (xHi) exploreCell(map, s, {hi[0], y0, z}, visit);
+      return;
+    }
+    const int32_t mid = y0 + (y1 - y0) / 2;
+    endCells(y0, mid, z), endCells(mid + 1, y1, z);
+  }
+  // The slabs z0..z1 between the z faces.
+  void slabs(int32_t z0, int32_t z1) {
+    const uint32_t n = (yLo ? photons(lo[0], hi[0], lo[1], lo[1], z0, z1) : 0) +
+                       (yHi ? photons(lo[0], hi[0], hi[1], hi[1], z0, z1) : 0) + ends(yi0, yi1, z0, z1);
+    if (n == 0) return;
+    if (z0 == z1) {
+      if (yLo) rows(lo[1], lo[1], z0);
+      if (yi0 <= yi1) endCells(yi0, yi1, z0);
+      if (yHi) rows(hi[1], hi[1], z0);
+      return;
+    }
+    const int32_t mid = z0 + (z1 - z0) / 2;
+    slabs(z0, mid), slabs(mid + 1, z1);
+  }
+};
+
 template <GridPhotonMap Map, class Visit>
 void exploreShell(const Map& map, KnnGridSearch& s, CellCoord c, int32_t shell, Visit& visit) {
-  const UniformGrid& g = map.grid;
+  ShellExplorer<Map, Visit> e{map, s, visit, {}, {}, false, false, false, false, 0, 0};
   const float limit2 = s.found < s.k ? s.maxRadius2 : s.radius2;
-  int32_t lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) reachAlong(g, s.position, limit2, a, lo[a], hi[a]);
-  const int32_t x0 = std::max(c.x - shell, lo[0]), x1 = std::min(c.x + shell, hi[0]);
-  for (int32_t z = std::max(c.z - shell, lo[2]); z <= std::min(c.z + shell, hi[2]); ++z)
-    for (int32_t y = std::max(c.y - shell, lo[1]); y <= std::min(c.y + shell, hi[1]); ++y) {
-      if (std::abs(z - c.z) == shell || std::abs(y - c.y) == shell) {  // a face of the shell: whole row
-        for (int32_t x = x0; x <= x1; ++x) exploreCell(map, s, {x, y, z}, visit);
-      } else {  // inside the shell's box: only its two ends
-        if (c.x - shell >= lo[0]) exploreCell(map, s, {c.x - shell, y, z}, visit);
-        if (c.x + shell <= hi[0]) exploreCell(map, s, {c.x + shell, y, z}, visit);
-      }
+  shellBox(map.grid, s.position, limit2, c, shell, e.lo, e.hi);
+  const int32_t* lo = e.lo;
+  const int32_t* hi = e.hi;
+  const bool zLo = c.z - shell == lo[2], zHi = c.z + shell == hi[2] && shell > 0;
+  e.yLo = c.y - shell == lo[1], e.yHi = c.y + shell == hi[1] && shell > 0;
+  e.xLo = c.x - shell == lo[0], e.xHi = c.x + shell == hi[0] && shell > 0;
+  e.yi0 = lo[1] + e.yLo, e.yi1 = hi[1] - e.yHi;
+  if (zLo) e.rows(lo[1], hi[1], lo[2]);
+  if (lo[2] + zLo <= hi[2] - zHi) e.slabs(lo[2] + zLo, hi[2] - zHi);
+  if (zHi) e.rows(lo[1], hi[1], hi[2]);
+}
+
+// Shells from `shell` on that hold no photon the acceptance sphere can reach, found by bisection on
+// the map's cell counts (the acceptance radius does not change while nothing is accepted): 0 if
+// shell `shell` holds some, kAllEmpty if every unexplored cell within reach is empty.
+inline constexpr uint32_t kAllEmpty = UINT32_MAX;
+template <GridPhotonMap Map>
+uint32_t emptyShellsFrom(const Map& map, const KnnGridSearch& s, CellCoord c, int32_t shell) {
+  if constexpr (!kHasCellCounts<Map>) {
+    return 0;
+  } else {
+    const float limit2 = s.found < s.k ? s.maxRadius2 : s.radius2;
+    int32_t reachLo[3], reachHi[3], lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) reachAlong(map.grid, s.position, limit2, a, reachLo[a], reachHi[a]);
+    auto withinShells = [&](int32_t t) {  // photons within reach in shells 0..t
+      if (t < 0) return 0u;
+      shellBox(map.grid, s.position, limit2, c, t, lo, hi);
+      return map.cellCounts.count(lo, hi);
+    };
+    const uint32_t explored = withinShells(shell - 1), reachable = map.cellCounts.count(reachLo, reachHi);
+    if (reachable == explored) return kAllEmpty;
+    // The first shell whose cube covers the reach box holds the rest: bisect below it.
+    const int32_t ci[3] = {c.x, c.y, c.z};
+    int32_t last = 0;
+    for (int a = 0; a < 3; ++a) last = std::max({last, ci[a] - reachLo[a], reachHi[a] - ci[a]});
+    int32_t emptyUpTo = shell - 1, nonEmpty = last;  // invariant: shells shell..emptyUpTo empty
+    while (nonEmpty - emptyUpTo > 1) {
+      const int32_t mid = emptyUpTo + (nonEmpty - emptyUpTo) / 2;
+      (withinShells(mid) == explored ? emptyUpTo : nonEmpty) = mid;
     }
+    return uint32_t(emptyUpTo - shell + 1);
+  }
 }
 
 }  // namespace knn_grid_detail
@@ -133,10 +256,17 @@ void advanceKnnGrid(const Map& map, KnnGridSearch& s, uint32_t shells, Visit&& v
   using namespace knn_grid_detail;
   const UniformGrid& g = map.grid;
   const CellCoord c = g.cellOf(s.position);
-  for (uint32_t i = 0; i < shells && !s.done; ++i) {
-    exploreShell(map, s, c, int32_t(s.shells), visit);
-    const float beyond = distanceBeyondShell(g, s.position, c, int32_t(s.shells));
-    ++s.shells;
+  for (uint32_t i = 0; i < shells && !s.done;) {
+    // Empty shells are explored by skipping them; a non-empty one cell by cell.
+    const uint32_t empty = emptyShellsFrom(map, s, c, int32_t(s.shells));
+    if (empty == kAllEmpty) {
+      s.done = true;
+      break;
+    }
+    const uint32_t step = empty > 0 ? std::min(empty, shells - i) : 1;
+    if (empty == 0) exploreShell(map, s, c, int32_t(s.shells), visit);
+    s.shells += step, i += step;
+    const float beyond = distanceBeyondShell(g, s.position, c, int32_t(s.shells) - 1);
     const float beyond2 = beyond > 0 ? beyond * beyond : 0;
     s.done = beyond == kInf || beyond2 > s.maxRadius2 || (s.found >= s.k && beyond2 > s.radius2);
   }

@@ -67,6 +67,9 @@ SortedGrid buildSortedGrid(std::vector<Photon> photons, const GridOptions& optio
   });
   if (stats) stats->addStage("grid_keys", keyClock.seconds());
   sortAndIndex(keys, uint32_t(map.grid.cellCount()), map.photonList, map.firstPhoton, stats);
+  Stopwatch countClock;
+  map.cellCounts = buildCellCountTable(map.grid, [&](uint32_t c) { return map.firstPhoton[c + 1] - map.firstPhoton[c]; });
+  if (stats) stats->addStage("cell_counts", countClock.seconds());
   return map;
 }
 

@@ -18,6 +18,7 @@ struct SortedGrid {
   std::vector<uint32_t> firstPhoton;  // per cell, where its photons start in photonList (an empty
                                       // cell points at the next cell's first photon); one extra
                                       // entry holds the photon count (Fig. 4 "uniform grid")
+  CellCountTable cellCounts;          // photons per box of cells, to skip empty ones
 
   CellPhotons cellPhotons(CellCoord c) const {
     const uint32_t cell = grid.cellIndex(c);

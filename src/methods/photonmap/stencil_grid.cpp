@@ -91,6 +91,9 @@ StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& opt
     }
   });
   if (stats) stats->addStage("stencil_route", routeClock.seconds());
+  Stopwatch cellCountClock;
+  map.cellCounts = buildCellCountTable(map.grid, [&](uint32_t c) { return map.stored(c); });
+  if (stats) stats->addStage("cell_counts", cellCountClock.seconds());
   return map;
 }
 

@@ -20,6 +20,7 @@ struct StencilGrid {
   std::vector<uint32_t> slots;     // cell c's footprint: slots [c m^2, (c+1) m^2), photon indices in
                                    // arrival (= index) order, kEmptySlot after the last stored one
   std::vector<uint32_t> arrived;   // photons routed to each cell: the stencil buffer's final count
+  CellCountTable cellCounts;       // stored photons per box of cells, to skip empty ones
 
   uint32_t capacity() const { return side * side; }
   uint32_t stored(uint32_t cell) const { return std::min(arrived[cell], capacity()); }

@@ -1,6 +1,7 @@
 #include "uniform_grid.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <cmath>
@@ -89,6 +90,35 @@ UniformGrid makeUniformGrid(std::span<const Photon> photons, const GridOptions& 
                                     extent.x, extent.y, extent.z});
   grid.slack = 1e-5f * magnitude;
   return grid;
+}
+
+CellCountTable buildCellCountTable(const UniformGrid& grid, const std::function<uint32_t(uint32_t)>& cellCount) {
+  CellCountTable t;
+  t.res = grid.res;
+  const size_t nx = size_t(grid.res[0]) + 1, ny = size_t(grid.res[1]) + 1, nz = size_t(grid.res[2]) + 1;
+  t.prefix.assign(nx * ny * nz, 0);
+  uint32_t* p = t.prefix.data();
+  // Along x, one work item per row of cells; then y per (x, z) column; then z per (x, y) column.
+  tbb::parallel_for(tbb::blocked_range<size_t>(1, ny * nz, 64), [&](const auto& r) {
+    for (size_t row = r.begin(); row != r.end(); ++row) {
+      const size_t y = row % ny, z = row / ny;
+      if (y == 0 || z == 0) continue;
+      uint32_t* out = p + row * nx;
+      const uint32_t first = grid.cellIndex({0, int32_t(y - 1), int32_t(z - 1)});
+      for (size_t x = 1; x < nx; ++x) out[x] = out[x - 1] + cellCount(first + uint32_t(x - 1));
+    }
+  });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, nz, 1), [&](const auto& r) {
+    for (size_t z = r.begin(); z != r.end(); ++z)
+      for (size_t y = 1; y < ny; ++y)
+        for (size_t x = 0; x < nx; ++x) p[(z * ny + y) * nx + x] += p[(z * ny + y - 1) * nx + x];
+  });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, ny, 1), [&](const auto& r) {
+    for (size_t y = r.begin(); y != r.end(); ++y)
+      for (size_t z = 1; z < nz; ++z)
+        for (size_t x = 0; x < nx; ++x) p[(z * ny + y) * nx + x] += p[((z - 1) * ny + y) * nx + x];
+  });
+  return t;
 }
 
 }  // namespace lucent
