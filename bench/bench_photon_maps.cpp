@@ -10,8 +10,6 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
-#include <malloc.h>
-
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <iostream>
@@ -262,10 +260,7 @@ int main(int argc, char** argv) {
   app.add_option("--repeats", repeats, "Timed repetitions (the best is reported)")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
-  // Keep freed memory in the heap, so that repeated builds reuse it as a renderer rebuilding its
-  // maps would: first touches of fresh pages are slow on this machine and serialise threads.
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);
-  mallopt(M_TRIM_THRESHOLD, 1 << 30);
+  retainFreedMemory();  // repeated builds reuse memory, as a renderer rebuilding its maps would
   json out;
   out["machine_note"] = "shared machine: compare ratios within one run; warm heap (mallopt)";
   out["sort"] = benchSorts(maxLog2, repeats);

@@ -2,8 +2,10 @@
 #include <iostream>
 
 #include "cli/commands.h"
+#include "lucent/core/parallel.h"
 
 int main(int argc, char** argv) {
+  lucent::retainFreedMemory();
   CLI::App app{"Lucent: a CPU reference renderer for global illumination"};
   app.require_subcommand(1);
   int exitCode = 0;

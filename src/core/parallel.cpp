@@ -1,5 +1,6 @@
 #include "lucent/core/parallel.h"
 
+#include <malloc.h>
 #include <pmmintrin.h>
 #include <xmmintrin.h>
 
@@ -8,6 +9,13 @@
 #include <tbb/task_scheduler_observer.h>
 
 namespace lucent {
+
+void retainFreedMemory() {
+  // glibc serves blocks above the mmap threshold with fresh mappings and unmaps them when freed;
+  // 32 MiB is the largest threshold it accepts. Trimming the heap top would return pages too.
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
+}
 
 void flushDenormals() {
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);

@@ -4,6 +4,11 @@
 
 namespace lucent {
 
+// Keeps freed memory in the process's heap instead of returning it to the system, so that the
+// large per-stage arrays of a render reuse pages already touched: first touches of fresh pages
+// (page faults) are slow on virtual machines and serialise threads. Call once, at start-up.
+void retainFreedMemory();
+
 // Flushes denormals to zero on the calling thread (Embree is slow and warns otherwise).
 void flushDenormals();
 
