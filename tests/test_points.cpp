@@ -16,6 +16,7 @@
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
 #include "lucent/methods/points/point_hierarchy.h"
+#include "lucent/methods/points/point_radiance.h"
 #include "lucent/scene/loader.h"
 #include "lucent/scene/surface.h"
 #include "test_scenes.h"
@@ -597,3 +598,60 @@ TEST_CASE("Refit under a rigid translation moves every sphere and keeps radii", 
   CHECK(p.nodeAreas[kRootNode] == Approx(200));
 }
 
+
+TEST_CASE("Radiance pull: interior nodes hold their leaves' area-weighted average", "[points]") {
+  const Scene& scene = cornellBox();
+  const uint32_t n = 1u << 10;
+  PointHierarchy h = buildPointHierarchy(scene, hierarchyOptions(n));
+  // Deform so that leaf areas differ, then give leaves distinct radiance.
+  Scene moved = scene;
+  for (Vec3& v : moved.positions) v.y *= 1 + v.x * 0.002f;
+  refitPointHierarchy(h, moved);
+  std::vector<Rgb> radiance(h.nodeCount(), Rgb(-1.0f));
+  for (uint32_t j = 0; j < n; ++j) radiance[n + j] = Rgb(float(j % 7), float(j % 3), 1.0f);
+  pullRadiance(h, radiance);
+  for (uint32_t i : {kRootNode, 2u, 3u, 5u, 37u, n / 2 + 3}) {
+    double sum[3] = {0, 0, 0}, area = 0;
+    for (uint32_t j = firstLeafPoint(i, n); j < firstLeafPoint(i, n) + leavesBelow(i, n); ++j) {
+      area += h.nodeAreas[n + j];
+      for (int c = 0; c < 3; ++c) sum[c] += double(h.nodeAreas[n + j]) * radiance[n + j][c];
+    }
+    for (int c = 0; c < 3; ++c) CHECK(radiance[i][c] == Approx(sum[c] / area).epsilon(1e-5));
+  }
+  CHECK(radiance[kRootNode].b == Approx(1.0f));
+  // Half floats for the packed layout.
+  const std::vector<HalfRgb> half = packRadiance(radiance);
+  REQUIRE(half.size() == radiance.size());
+  CHECK(toFloat(half[kRootNode]).r == Approx(radiance[kRootNode].r).epsilon(1.0 / 2048));
+  CHECK_THROWS_AS(pullRadiance(h, std::span<Rgb>(radiance).first(n)), std::invalid_argument);
+}
+
+
+TEST_CASE("Half floats: exact round trip and round-to-nearest-even", "[points]") {
+  for (uint32_t h = 0; h < 65536; ++h) {
+    const bool nan = (h & 0x7c00u) == 0x7c00u && (h & 0x3ffu) != 0;
+    if (nan) {
+      REQUIRE(std::isnan(halfToFloat(uint16_t(h))));
+      continue;
+    }
+    REQUIRE(floatToHalf(halfToFloat(uint16_t(h))) == h);
+  }
+  CHECK(halfToFloat(floatToHalf(65504.0f)) == 65504.0f);
+  CHECK(std::isinf(halfToFloat(floatToHalf(65520.0f))));
+  CHECK(halfToFloat(floatToHalf(65519.0f)) == 65504.0f);
+  CHECK(halfToFloat(floatToHalf(1.0f + 0x1p-11f)) == 1.0f);             // tie to even (down)
+  CHECK(halfToFloat(floatToHalf(1.0f + 3 * 0x1p-11f)) == 1.0f + 0x1p-9f);  // tie to even (up)
+  CHECK(halfToFloat(floatToHalf(0x1p-24f)) == 0x1p-24f);                  // smallest subnormal
+  // Random values: the nearest half, checked against its neighbours.
+  Rng rng(3);
+  for (int i = 0; i < 100000; ++i) {
+    const float f = std::ldexp(rng.uniform() + 0.5f, int(rng.below(40)) - 26) * (rng.uniform() < 0.5f ? -1 : 1);
+    const uint16_t h = floatToHalf(f);
+    const double err = std::abs(double(halfToFloat(h)) - f);
+    for (int d : {-1, 1}) {
+      const uint16_t other = uint16_t(h + d);
+      if ((other & 0x7c00u) == 0x7c00u || ((other ^ h) & 0x8000u)) continue;
+      REQUIRE(err <= std::abs(double(halfToFloat(other)) - f));
+    }
+  }
+}
