@@ -191,7 +191,9 @@ int main(int argc, char** argv) {
     options.sampling.tileScale = tileScale;
     std::vector<PointSample> points;
     std::map<std::string, double> best;
+    json counters;
     auto keep = [&](const RenderStats& stats) {
+      for (const auto& [name, value] : stats.counters) counters[name] = value;
       for (const auto& [stage, seconds] : stats.stageSeconds) {
         auto [it, fresh] = best.emplace(stage, seconds);
         if (!fresh) it->second = std::min(it->second, seconds);
@@ -216,7 +218,7 @@ int main(int argc, char** argv) {
         if (!fresh) it->second = std::min(it->second, seconds);
       }
     });
-    json row = {{"points", n}, {"refit_ms", refit * 1e3}};
+    json row = {{"points", n}, {"refit_ms", refit * 1e3}, {"counters", counters}};
     for (const auto& [stage, seconds] : refitBest) row["refit_stage_ms"][stage] = seconds * 1e3;
     for (const auto& [stage, seconds] : best) row["ms"][stage] = seconds * 1e3;
     if (quality) {

@@ -43,7 +43,8 @@ struct PointSamplingOptions {
 // (Mitchell 1991): each point is, of its candidates, the one farthest from the points already placed.
 // Every triangle is eligible, emitters and specular surfaces included; the per-triangle counts are
 // area-proportional in expectation. Deterministic for a seed whatever the thread count. Stage
-// "point_sampling"; counters "points", "point_candidates". Throws std::invalid_argument for a count
+// "point_sampling"; counters "points", "point_candidates", "points_with_few_candidates" (fewer
+// than half of `candidates`: points on pieces of triangles too small for a full share). Throws std::invalid_argument for a count
 // of 0 or above 2^26, bad options, or a scene without area.
 std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const PointSamplingOptions& options = {},
                                       RenderStats* stats = nullptr);
