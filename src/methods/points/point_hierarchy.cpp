@@ -159,7 +159,14 @@ PointHierarchy buildPointHierarchy(const Scene& scene, std::vector<PointSample> 
   const std::vector<uint32_t> order = medianSplitOrder(positions);
   h.points.resize(points.size());
   points::parallelFor(0, h.leafCount, [&](uint32_t j) { h.points[j] = points[order[j]]; });
-  if (stats) stats->addStage("median_split", splitClock.seconds());
+  if (stats) {
+    stats->addStage("median_split", splitClock.seconds());
+    // Emitters keep their points (their emission is the lighting stages' business): say how many.
+    uint64_t onEmitters = 0;
+    if (scene.triangleLight.size() == scene.triangleCount())
+      for (const PointSample& s : h.points) onEmitters += scene.triangleLight[s.triangle] >= 0;
+    stats->addCounter("points_on_emitters", onEmitters);
+  }
 
   // The rest state: each point stands for an equal share of the area it was sampled from.
   h.restTriangleAreas.resize(scene.triangleCount());

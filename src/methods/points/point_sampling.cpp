@@ -32,6 +32,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <experimental/simd>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -44,6 +45,8 @@
 namespace lucent {
 
 namespace {
+
+namespace stdx = std::experimental;
 
 constexpr uint32_t kMaxPoints = 1u << 26;
 constexpr uint32_t kMaxCandidates = 64;
@@ -93,34 +96,43 @@ uint32_t tileColour(uint64_t key) {
   return (tileCoord(key, 0) & 1u) | (tileCoord(key, 1) & 1u) << 1 | (tileCoord(key, 2) & 1u) << 2;
 }
 
-// Open-addressing map from tile key to tile index; built once per level, read concurrently.
-class TileTable {
+// The tiles around tiles visited in increasing key order. Keys order tiles by z, y, x, so the up to
+// three neighbours in each of the 9 rows (dy, dz) are consecutive in the sorted tile array; a cursor
+// per row only moves forward as x grows, so the 27 neighbours cost O(1) amortized and are read in
+// memory order (a hash lookup per neighbour, a cache miss each, was the sampler's largest cost).
+class NeighbourRows {
  public:
-  explicit TileTable(const std::vector<Tile>& tiles) {
-    const size_t size = std::bit_ceil(std::max<size_t>(16, 2 * tiles.size()));
-    mask_ = size - 1;
-    keys_.assign(size, kEmpty);
-    values_.resize(size);
-    for (uint32_t t = 0; t < tiles.size(); ++t) {
-      size_t slot = mix64(tiles[t].key) & mask_;
-      while (keys_[slot] != kEmpty) slot = (slot + 1) & mask_;
-      keys_[slot] = tiles[t].key;
-      values_[slot] = t;
-    }
-  }
-  // The tile's index, or -1.
-  int64_t find(uint64_t key) const {
-    for (size_t slot = mix64(key) & mask_;; slot = (slot + 1) & mask_) {
-      if (keys_[slot] == key) return values_[slot];
-      if (keys_[slot] == kEmpty) return -1;
-    }
+  explicit NeighbourRows(const std::vector<Tile>& tiles) : tiles_(tiles) {}
+
+  // f(tile) for every tile within one tile of `key` (the tile itself included).
+  template <class F>
+  void forEach(uint64_t key, F&& f) {
+    const uint32_t x = tileCoord(key, 0), y = tileCoord(key, 1), z = tileCoord(key, 2);
+    const uint64_t xLo = x > 0 ? x - 1 : 0, xHi = std::min(x + 1, kMaxTileCoord);
+    int k = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy, ++k) {
+        const int64_t yy = int64_t(y) + dy, zz = int64_t(z) + dz;
+        if (yy < 0 || zz < 0 || yy > kMaxTileCoord || zz > kMaxTileCoord) continue;
+        const uint64_t row = uint64_t(yy) << kTileBits | uint64_t(zz) << (2 * kTileBits);
+        const uint64_t lo = row | xLo, hi = row | xHi;
+        size_t& pos = pos_[k];
+        if (row_[k] != row || lo < lo_[k]) {
+          pos = size_t(std::lower_bound(tiles_.begin(), tiles_.end(), lo,
+                                        [](const Tile& t, uint64_t v) { return t.key < v; }) - tiles_.begin());
+        } else {
+          while (pos < tiles_.size() && tiles_[pos].key < lo) ++pos;
+        }
+        row_[k] = row, lo_[k] = lo;
+        for (size_t p = pos; p < tiles_.size() && tiles_[p].key <= hi; ++p) f(tiles_[p]);
+      }
   }
 
  private:
-  static constexpr uint64_t kEmpty = ~uint64_t(0);  // not a valid key: coordinates use 63 bits
-  std::vector<uint64_t> keys_;
-  std::vector<uint32_t> values_;
-  size_t mask_ = 0;
+  const std::vector<Tile>& tiles_;
+  uint64_t row_[9] = {~0ull, ~0ull, ~0ull, ~0ull, ~0ull, ~0ull, ~0ull, ~0ull, ~0ull};
+  uint64_t lo_[9] = {};
+  size_t pos_[9] = {};
 };
 
 // Candidate `index` of `level`: a triangle by area, then a point uniform on it. Given the triangle
@@ -152,26 +164,25 @@ struct Neighbours {
   std::vector<float> x, y, z;
   void clear() { x.clear(), y.clear(), z.clear(); }
   void add(Vec3 p) { x.push_back(p.x), y.push_back(p.y), z.push_back(p.z); }
-  // Squared distance from p to the nearest neighbour, at most cap2. Eight independent lanes, so the
-  // loop vectorizes without reassociating a float reduction.
+  // Squared distance from p to the nearest neighbour, at most cap2, in SIMD lanes (the compiler does
+  // not vectorize the min reduction without reassociation, which -ffast-math would allow).
   float nearest2(Vec3 p, float cap2) const {
-    constexpr size_t kLanes = 8;
-    float lane[kLanes];
-    for (float& l : lane) l = cap2;
-    const size_t n = x.size(), whole = n - n % kLanes;
-    for (size_t i = 0; i < whole; i += kLanes) {
-      for (size_t j = 0; j < kLanes; ++j) {
-        const float dx = x[i + j] - p.x, dy = y[i + j] - p.y, dz = z[i + j] - p.z;
-        const float d2 = dx * dx + dy * dy + dz * dz;
-        lane[j] = d2 < lane[j] ? d2 : lane[j];
-      }
+    using V = stdx::native_simd<float>;
+    constexpr size_t kWidth = V::size();
+    const size_t n = x.size(), whole = n - n % kWidth;
+    const V px(p.x), py(p.y), pz(p.z);
+    V lanes(cap2);
+    for (size_t i = 0; i < whole; i += kWidth) {
+      const V dx = V(&x[i], stdx::element_aligned) - px;
+      const V dy = V(&y[i], stdx::element_aligned) - py;
+      const V dz = V(&z[i], stdx::element_aligned) - pz;
+      lanes = stdx::min(lanes, dx * dx + dy * dy + dz * dz);
     }
-    float best = cap2;
+    float best = stdx::hmin(lanes);
     for (size_t i = whole; i < n; ++i) {
       const float dx = x[i] - p.x, dy = y[i] - p.y, dz = z[i] - p.z;
       best = std::min(best, dx * dx + dy * dy + dz * dz);
     }
-    for (float l : lane) best = std::min(best, l);
     return best;
   }
 };
@@ -210,6 +221,7 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
   uint64_t candidatesTotal = 0;
   // Reused from level to level: fresh pages cost more than the sorts that fill them.
   std::vector<PointKey> placedKeys;
+  std::vector<Vec3> placedByTile;  // positions in placedKeys order: neighbour lists read them in runs
   std::vector<CandidateKey> cand;
   std::vector<Tile> tiles;
 
@@ -236,6 +248,10 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
       for (uint32_t i = r.begin(); i != r.end(); ++i) placedKeys[i] = {grid.keyOf(positions[i]), i};
     });
     tbb::parallel_sort(placedKeys.begin(), placedKeys.end());
+    placedByTile.resize(placed);
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, placed, kGrain), [&](const auto& r) {
+      for (uint32_t i = r.begin(); i != r.end(); ++i) placedByTile[i] = positions[placedKeys[i].point];
+    });
     cand.resize(candCount);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, candCount, kGrain), [&](const auto& r) {
       for (uint32_t i = r.begin(); i != r.end(); ++i) {
@@ -260,7 +276,6 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
       t.candEnd = j;
       tiles.push_back(t);
     }
-    const TileTable table(tiles);
     std::vector<uint32_t> byColour[8];
     for (uint32_t t = 0; t < tiles.size(); ++t)
       if (tiles[t].candEnd > tiles[t].candBegin) byColour[tileColour(tiles[t].key)].push_back(t);
@@ -270,25 +285,18 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
       tbb::parallel_for(tbb::blocked_range<size_t>(0, list.size(), 16), [&](const auto& r) {
         Neighbours& nb = scratch.local();
         uint64_t& few = fewCandidates.local();
+        NeighbourRows rows(tiles);
         for (size_t li = r.begin(); li != r.end(); ++li) {
           const Tile& tile = tiles[list[li]];
           // The neighbourhood: placed points of the 27 tiles, and the new points of neighbours
           // done in earlier phases.
           nb.clear();
-          for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-              for (int dx = -1; dx <= 1; ++dx) {
-                const int64_t x = int64_t(tileCoord(tile.key, 0)) + dx, y = int64_t(tileCoord(tile.key, 1)) + dy,
-                              z = int64_t(tileCoord(tile.key, 2)) + dz;
-                if (x < 0 || y < 0 || z < 0 || x > kMaxTileCoord || y > kMaxTileCoord || z > kMaxTileCoord) continue;
-                const int64_t t = table.find(uint64_t(x) | uint64_t(y) << kTileBits | uint64_t(z) << (2 * kTileBits));
-                if (t < 0) continue;
-                const Tile& n = tiles[size_t(t)];
-                for (uint32_t k = n.placedBegin; k < n.placedEnd; ++k) nb.add(positions[placedKeys[k].point]);
-                if (tileColour(n.key) < colour)
-                  for (uint32_t k = pointsBefore(n.candBegin, c); k < pointsBefore(n.candEnd, c); ++k)
-                    nb.add(positions[placed + k]);
-              }
+          rows.forEach(tile.key, [&](const Tile& n) {
+            for (uint32_t k = n.placedBegin; k < n.placedEnd; ++k) nb.add(placedByTile[k]);
+            if (tileColour(n.key) < colour)
+              for (uint32_t k = pointsBefore(n.candBegin, c); k < pointsBefore(n.candEnd, c); ++k)
+                nb.add(positions[placed + k]);
+          });
           // Pieces (one triangle's run of candidates) in order; each point takes its share.
           for (uint32_t a = tile.candBegin; a < tile.candEnd;) {
             uint32_t b = a + 1;

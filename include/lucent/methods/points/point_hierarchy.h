@@ -92,7 +92,8 @@ struct PointHierarchy {
 };
 
 // Samples options.pointCount points and builds the hierarchy over them. Stages: those of
-// samplePoints, then "median_split", then those of refitPointHierarchy.
+// samplePoints, then "median_split", then those of refitPointHierarchy; counter
+// "points_on_emitters".
 PointHierarchy buildPointHierarchy(const Scene& scene, const PointHierarchyOptions& options,
                                    RenderStats* stats = nullptr);
 // The same over given points (any order; a power-of-two count): the median split, the rest state
