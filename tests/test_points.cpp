@@ -292,9 +292,14 @@ TEST_CASE("Point sampling: valid triangles and barycentrics, emitters included, 
   CHECK_THROWS_AS(samplePoints(scene, 16, bad), std::invalid_argument);
   CHECK_THROWS_AS(samplePoints(Scene{}, 16), std::invalid_argument);
   CHECK_THROWS_AS(buildPointHierarchy(scene, hierarchyOptions(3000)), std::invalid_argument);
-  // Every count works, the smallest too.
+  // Every count works, the smallest too; one point is a tree whose root is its leaf.
   CHECK(samplePoints(scene, 1).size() == 1);
   CHECK(samplePoints(scene, 3).size() == 3);
+  const PointHierarchy one = buildPointHierarchy(scene, hierarchyOptions(1));
+  REQUIRE(one.nodeCount() == 2);
+  CHECK(isLeafNode(kRootNode, one.leafCount));
+  CHECK(sphereContains(decodeSphere(one.packedNodes[kRootNode], one.quantization), one.floatNodes[kRootNode].sphere));
+  CHECK(nextNodeDescending(kRootNode, one.leafCount) == kTraversalEnd);
 }
 
 

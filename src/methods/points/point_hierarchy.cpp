@@ -114,9 +114,25 @@ void computePacked(PointHierarchy& h) {
   h.quantization = quantizationFor(h);
   const NodeQuantization& q = h.quantization;
   h.packedNodes.resize(h.nodeCount());
-  points::parallelFor(n, 2 * n, [&](uint32_t i) {
-    const FloatNode& f = h.floatNodes[i];
-    h.packedNodes[i] = encodeNode(f.sphere, f.cone, f.albedo, q);
+  // Leaves of one triangle have the same cone, so the same normal and cone bits: neighbours in tree
+  // order mostly share a triangle and reuse them (identical input, identical bits).
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(n, 2 * n, points::kNodeGrain), [&](const auto& r) {
+    NormalCone lastCone{Vec3(kInf), kInf};
+    PackedNode lastBits;
+    for (uint32_t i = r.begin(); i != r.end(); ++i) {
+      const FloatNode& f = h.floatNodes[i];
+      PackedNode p;
+      encodeSphere(f.sphere, q, p);
+      if (f.cone.axis == lastCone.axis && f.cone.angle == lastCone.angle) {
+        p.normalAlbedo = lastBits.normalAlbedo & 0x7fffu;
+        p.coneFree = lastBits.coneFree;
+      } else {
+        encodeCone(f.cone, p);
+        lastCone = f.cone, lastBits = p;
+      }
+      encodeAlbedo(f.albedo, p);
+      h.packedNodes[i] = p;
+    }
   });
   points::forEachInteriorBottomUp(n, [&](uint32_t i) {
     const Sphere s = mergeSpheres(decodeSphere(h.packedNodes[firstChild(i)], q),

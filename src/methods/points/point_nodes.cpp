@@ -35,13 +35,14 @@ uint32_t encodeNormal(Vec3 n) {
   const float m = std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)});
   int best[3] = {0, 0, kNormalLattice};
   if (!(m > 0)) return uint32_t(kNormalLattice) | uint32_t(kNormalLattice) << 5 | uint32_t(2 * kNormalLattice) << 10;
-  float bestCos = -2;
+  // Compare squared cosines, dot^2 / |k|^2: the dot product is positive for every scale.
+  float bestCos2 = -1;
   for (int s = kNormalLattice / 2 + 1; s <= kNormalLattice; ++s) {
     int k[3];
     for (int a = 0; a < 3; ++a) k[a] = std::clamp(roundToInt(n[a] / m * float(s)), -kNormalLattice, kNormalLattice);
-    const Vec3 d{float(k[0]), float(k[1]), float(k[2])};
-    const float c = dot(d, n) / length(d);
-    if (c > bestCos) bestCos = c, best[0] = k[0], best[1] = k[1], best[2] = k[2];
+    const float d = float(k[0]) * n.x + float(k[1]) * n.y + float(k[2]) * n.z;
+    const float cos2 = d * d / float(k[0] * k[0] + k[1] * k[1] + k[2] * k[2]);
+    if (cos2 > bestCos2) bestCos2 = cos2, best[0] = k[0], best[1] = k[1], best[2] = k[2];
   }
   return uint32_t(best[0] + kNormalLattice) | uint32_t(best[1] + kNormalLattice) << 5 |
          uint32_t(best[2] + kNormalLattice) << 10;
@@ -128,8 +129,7 @@ FloatNode decodeNode(const PackedNode& node, const NodeQuantization& q) {
   return {decodeSphere(node, q), {decodeNormal(node), decodeConeAngle(node)}, decodeAlbedo(node)};
 }
 
-PackedNode encodeNode(const Sphere& sphere, const NormalCone& cone, Rgb albedo, const NodeQuantization& q) {
-  PackedNode node;
+void encodeSphere(const Sphere& sphere, const NodeQuantization& q, PackedNode& node) {
   for (int a = 0; a < 3; ++a) {
     const float u = (sphere.center[a] - q.origin[a]) / q.step[a];
     node.position[a] = uint16_t(std::clamp(u, 0.0f, 65535.0f) + 0.5f);
@@ -140,9 +140,10 @@ PackedNode encodeNode(const Sphere& sphere, const NormalCone& cone, Rgb albedo, 
   while (float(radius) * q.radiusStep < need) ++radius;
   if (radius > 65535u) throw std::logic_error("point hierarchy: a radius exceeds the packed node's range");
   node.radius = uint16_t(radius);
+}
 
-  node.normalAlbedo = encodeNormal(cone.axis) | encodeAlbedoChannel(albedo.r) << 15 |
-                      encodeAlbedoChannel(albedo.g) << 20 | encodeAlbedoChannel(albedo.b) << 25;
+void encodeCone(const NormalCone& cone, PackedNode& node) {
+  node.normalAlbedo = (node.normalAlbedo & ~0x7fffu) | encodeNormal(cone.axis);
   uint32_t angle = kConeLevels;
   if (cone.angle < kPi) {
     // An exactly representable axis needs no room for rounding (a leaf on an axis-aligned face
@@ -152,7 +153,19 @@ PackedNode encodeNode(const Sphere& sphere, const NormalCone& cone, Rgb albedo, 
     angle = uint32_t(std::min(std::ceil(needAngle / (kPi / kConeLevels)), kConeLevels));
     while (angle < 255u && float(angle) * (kPi / kConeLevels) < needAngle) ++angle;
   }
-  node.coneFree = angle;
+  node.coneFree = (node.coneFree & ~0xffu) | angle;
+}
+
+void encodeAlbedo(Rgb albedo, PackedNode& node) {
+  node.normalAlbedo = (node.normalAlbedo & ~(0x7fffu << 15)) | encodeAlbedoChannel(albedo.r) << 15 |
+                      encodeAlbedoChannel(albedo.g) << 20 | encodeAlbedoChannel(albedo.b) << 25;
+}
+
+PackedNode encodeNode(const Sphere& sphere, const NormalCone& cone, Rgb albedo, const NodeQuantization& q) {
+  PackedNode node;
+  encodeSphere(sphere, q, node);
+  encodeCone(cone, node);
+  encodeAlbedo(albedo, node);
   return node;
 }
 

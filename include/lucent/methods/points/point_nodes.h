@@ -83,6 +83,11 @@ FloatNode decodeNode(const PackedNode& node, const NodeQuantization& q);
 // enlarged by the axis's displacement and rounded up). Throws std::logic_error if the radius does not
 // fit the quantization (it is sized from the float tree, so it always should).
 PackedNode encodeNode(const Sphere& sphere, const NormalCone& cone, Rgb albedo, const NodeQuantization& q);
+// encodeNode's three parts, each setting only its own bits, for encoders that share a part between
+// nodes (the leaves of one triangle share their normal and cone bits).
+void encodeSphere(const Sphere& sphere, const NodeQuantization& q, PackedNode& node);
+void encodeCone(const NormalCone& cone, PackedNode& node);
+void encodeAlbedo(Rgb albedo, PackedNode& node);
 
 // Reads nodes of either encoding as FloatNode, for code templated on the encoding (traversals).
 struct FloatNodeReader {
