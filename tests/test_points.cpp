@@ -19,6 +19,7 @@
 #include "lucent/methods/points/point_radiance.h"
 #include "lucent/scene/loader.h"
 #include "lucent/scene/surface.h"
+#include "methods/points/radix_sort.h"
 #include "test_scenes.h"
 
 using namespace lucent;
@@ -265,6 +266,28 @@ TEST_CASE("Packed node encoding is conservative: decoded spheres and cones conta
   CHECK_THROWS_AS(encodeNode({{0, 0, 0}, 1e6f}, {}, {}, q), std::logic_error);
 }
 
+
+TEST_CASE("Radix sort: stable by key, as std::stable_sort", "[points]") {
+  for (uint32_t bits : {1u, 11u, 23u, 40u, 64u}) {
+    Rng rng(bits);
+    const size_t n = 200000;
+    std::vector<uint64_t> keys(n), keyScratch;
+    std::vector<uint32_t> values(n), valueScratch;
+    for (size_t i = 0; i < n; ++i) {
+      // Few distinct keys for the stability check, all bits set for the mask check.
+      const uint64_t k = (uint64_t(rng.next()) << 32 | rng.next()) % 5000;
+      keys[i] = bits == 64 ? k * 0x9e3779b97f4a7c15ull : k & ((uint64_t(1) << bits) - 1);
+      values[i] = uint32_t(i);
+    }
+    std::vector<std::pair<uint64_t, uint32_t>> expected(n);
+    for (size_t i = 0; i < n; ++i) expected[i] = {keys[i], values[i]};
+    std::stable_sort(expected.begin(), expected.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    points::radixSortByKey(keys, values, bits, keyScratch, valueScratch);
+    uint32_t wrong = 0;
+    for (size_t i = 0; i < n; ++i) wrong += keys[i] != expected[i].first || values[i] != expected[i].second;
+    CHECK(wrong == 0);
+  }
+}
 
 TEST_CASE("Point sampling: valid triangles and barycentrics, emitters included, bad input rejected", "[points]") {
   const Scene& scene = cornellBox();

@@ -6,13 +6,12 @@ namespace lucent::points {
 uint32_t placeTilePoints(const BestCandidateLevel& level, const Tile& tile, uint32_t colour, NeighbourRows& rows,
                          NeighbourList& nb) {
   const uint32_t c = level.candidates;
-  const std::span<const CandidateKey> cand = level.sortedCandidates;
   // The neighbourhood: placed points of the 27 tiles, and the new points of neighbours done in
   // earlier phases.
   nb.clear();
   rows.forEach(tile.key, [&](const Tile& n) {
     for (uint32_t k = n.placedBegin; k < n.placedEnd; ++k) nb.add(level.placedByTile[k]);
-    if (tileColour(n.key) < colour)
+    if (level.grid.colour(n.key) < colour)
       for (uint32_t k = pointsBefore(n.candBegin, c); k < pointsBefore(n.candEnd, c); ++k)
         nb.add(level.positions[level.placed + k]);
   });
@@ -20,7 +19,7 @@ uint32_t placeTilePoints(const BestCandidateLevel& level, const Tile& tile, uint
   // Pieces (one triangle's run of candidates) in order; each point takes its share.
   for (uint32_t a = tile.candBegin; a < tile.candEnd;) {
     uint32_t b = a + 1;
-    while (b < tile.candEnd && cand[b].triangle() == cand[a].triangle()) ++b;
+    while (b < tile.candEnd && level.candidateKeys[b] == level.candidateKeys[a]) ++b;
     const uint32_t first = pointsBefore(a, c), pieceCount = pointsBefore(b, c) - first;
     const uint32_t m = b - a;
     for (uint32_t j = 0; j < pieceCount; ++j) {
@@ -34,7 +33,7 @@ uint32_t placeTilePoints(const BestCandidateLevel& level, const Tile& tile, uint
         if (d2 > bestD2) bestD2 = d2, best = s, bestP = p;
       };
       for (uint32_t k = lo; k < hi; ++k) {
-        const PointSample s = candidateOn(cand[k].triangle(), level.seed, level.level, cand[k].index());
+        const PointSample s = candidateOn(level.triangleOf(k), level.seed, level.level, level.candidateIndices[k]);
         consider(s, pointPosition(*level.scene, s));
       }
       // A piece too small for its share of c (a small triangle, or a corner of one in the tile):
@@ -42,7 +41,7 @@ uint32_t placeTilePoints(const BestCandidateLevel& level, const Tile& tile, uint
       // 4c tries. Counts stay as dealt, so area-proportionality holds.
       uint32_t have = hi - lo;
       for (uint32_t t = 0; have < c && t < kTopUpTries * c; ++t) {
-        const PointSample s = topUpCandidate(cand[a].triangle(), level.seed, level.level, cand[lo].index(), t);
+        const PointSample s = topUpCandidate(level.triangleOf(a), level.seed, level.level, level.candidateIndices[lo], t);
         const Vec3 p = pointPosition(*level.scene, s);
         if (level.grid.keyOf(p) != tile.key) continue;
         consider(s, p);

@@ -7,7 +7,8 @@
 //  1. c candidates per new point, uniform by area over the whole scene, keyed by (seed, level, index).
 //  2. Space is cut into cubic tiles of about tileScale point spacings of the level, so that every
 //     point within a tile's edge T of a candidate lies in the candidate's tile or its 26 neighbours.
-//     Candidates are sorted by (tile, triangle, index); a run of one triangle in one tile is a piece.
+//     Candidates are sorted by (tile, triangle, index) (a stable radix sort by tile and triangle);
+//     a run of one triangle in one tile is a piece.
 //  3. The new points are dealt out in that order, one per c candidates: a piece gets as many points
 //     as multiples of c fall among its sorted ranks, and its points share its candidates evenly. A
 //     point's candidates are therefore all on its own triangle, so each triangle gets points in
@@ -27,15 +28,16 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <functional>
 #include <stdexcept>
 #include <string>
 
 #include "best_candidate_tiles.h"
+#include "radix_sort.h"
 
 namespace lucent {
 
@@ -67,7 +69,6 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
   Stopwatch clock;
   Bounds3 bounds;
   for (const Vec3& p : scene.positions) bounds.extend(p);
-  const float extent = std::max({bounds.extent().x, bounds.extent().y, bounds.extent().z});
 
   std::vector<PointSample> points(count);
   std::vector<Vec3> positions(count);
@@ -75,10 +76,11 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
   tbb::enumerable_thread_specific<uint64_t> fewCandidates(0);  // points with fewer than c/2
   uint64_t candidatesTotal = 0;
   // Reused from level to level: fresh pages cost more than the sorts that fill them.
-  std::vector<PointKey> placedKeys;
-  std::vector<Vec3> placedByTile;  // positions in placedKeys order: neighbour lists read them in runs
-  std::vector<CandidateKey> cand;
+  std::vector<uint64_t> placedKeys, candKeys, keyScratch;
+  std::vector<uint32_t> placedIndices, candIndices, indexScratch;
+  std::vector<Vec3> placedByTile;  // positions in sorted order: neighbour lists read them in runs
   std::vector<Tile> tiles;
+  const auto triangleBits = uint32_t(std::bit_width(scene.triangleCount() - 1));
 
   // Level 0 places the first point, level L >= 1 adds 2^(L-1) (the last level of a count that is not
   // a power of two fewer).
@@ -89,51 +91,55 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
     const uint32_t candCount = adding * c;
     candidatesTotal += candCount;
 
-    // Tile edge: tileScale mean spacings of the points after this level, sqrt(area / total),
-    // kept within 21-bit coordinates.
+    // Tile edge: tileScale mean spacings of the points after this level, sqrt(area / total);
+    // coarser where a (tile, triangle) key would not fit 64 bits.
     float tileSize = options.tileScale * float(std::sqrt(totalArea / total));
-    tileSize = std::max(tileSize, extent / float(kMaxTileCoord - 1));
     if (!(tileSize > 0)) tileSize = 1;
-    const TileGrid grid{bounds.lo, 1.0f / tileSize};
+    TileGrid grid(bounds, tileSize);
+    while (grid.keyBits() + triangleBits > 64) grid = TileGrid(bounds, tileSize *= 2);
     const float cap2 = tileSize * tileSize;
 
-    // Placed points and candidates, sorted by tile.
+    // Placed points and candidates, sorted by tile (and triangle) by a stable radix sort, so that
+    // equal keys stay in index order.
     placedKeys.resize(placed);
+    placedIndices.resize(placed);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, placed, kGrain), [&](const auto& r) {
-      for (uint32_t i = r.begin(); i != r.end(); ++i) placedKeys[i] = {grid.keyOf(positions[i]), i};
+      for (uint32_t i = r.begin(); i != r.end(); ++i) placedKeys[i] = grid.keyOf(positions[i]), placedIndices[i] = i;
     });
-    tbb::parallel_sort(placedKeys.begin(), placedKeys.end());
+    radixSortByKey(placedKeys, placedIndices, grid.keyBits(), keyScratch, indexScratch);
     placedByTile.resize(placed);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, placed, kGrain), [&](const auto& r) {
-      for (uint32_t i = r.begin(); i != r.end(); ++i) placedByTile[i] = positions[placedKeys[i].point];
+      for (uint32_t i = r.begin(); i != r.end(); ++i) placedByTile[i] = positions[placedIndices[i]];
     });
-    cand.resize(candCount);
+    candKeys.resize(candCount);
+    candIndices.resize(candCount);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, candCount, kGrain), [&](const auto& r) {
       for (uint32_t i = r.begin(); i != r.end(); ++i) {
         const PointSample s = candidateAt(areas, options.seed, level, i);
-        cand[i] = {grid.keyOf(pointPosition(scene, s)), uint64_t(s.triangle) << 32 | i};
+        candKeys[i] = grid.keyOf(pointPosition(scene, s)) << triangleBits | s.triangle;
+        candIndices[i] = i;
       }
     });
-    tbb::parallel_sort(cand.begin(), cand.end());
+    radixSortByKey(candKeys, candIndices, grid.keyBits() + triangleBits, keyScratch, indexScratch);
 
     // The tiles: every key of either list, merged.
     tiles.clear();
     for (uint32_t i = 0, j = 0; i < placed || j < candCount;) {
-      const uint64_t key = std::min(i < placed ? placedKeys[i].tile : ~uint64_t(0),
-                                    j < candCount ? cand[j].tile : ~uint64_t(0));
+      const uint64_t key = std::min(i < placed ? placedKeys[i] : ~uint64_t(0),
+                                    j < candCount ? candKeys[j] >> triangleBits : ~uint64_t(0));
       Tile t;
       t.key = key;
       t.placedBegin = i;
-      while (i < placed && placedKeys[i].tile == key) ++i;
+      while (i < placed && placedKeys[i] == key) ++i;
       t.placedEnd = i;
       t.candBegin = j;
-      while (j < candCount && cand[j].tile == key) ++j;
+      while (j < candCount && candKeys[j] >> triangleBits == key) ++j;
       t.candEnd = j;
       tiles.push_back(t);
     }
     std::vector<uint32_t> byColour[8];
     for (uint32_t t = 0; t < tiles.size(); ++t)
-      if (tiles[t].candEnd > tiles[t].candBegin) byColour[tileColour(tiles[t].key)].push_back(t);
+      if (tiles[t].candEnd > tiles[t].candBegin) byColour[grid.colour(tiles[t].key)].push_back(t);
 
     BestCandidateLevel view;
     view.scene = &scene;
@@ -142,7 +148,9 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
     view.candidates = c;
     view.grid = grid;
     view.cap2 = cap2;
-    view.sortedCandidates = cand;
+    view.candidateKeys = candKeys;
+    view.candidateIndices = candIndices;
+    view.triangleBits = triangleBits;
     view.placedByTile = placedByTile;
     view.placed = placed;
     view.points = points;
@@ -151,7 +159,7 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
       const std::vector<uint32_t>& list = byColour[colour];
       tbb::parallel_for(tbb::blocked_range<size_t>(0, list.size(), 16), [&](const auto& r) {
         NeighbourList& nb = scratch.local();
-        NeighbourRows rows(tiles);
+        NeighbourRows rows(tiles, view.grid);
         uint64_t few = 0;
         for (size_t li = r.begin(); li != r.end(); ++li) few += placeTilePoints(view, tiles[list[li]], colour, rows, nb);
         fewCandidates.local() += few;
