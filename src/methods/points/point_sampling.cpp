@@ -80,6 +80,12 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
   std::vector<uint32_t> placedIndices, candIndices, indexScratch;
   std::vector<Vec3> placedByTile;  // positions in sorted order: neighbour lists read them in runs
   std::vector<Tile> tiles;
+  // The last level is the largest: reserve for it once rather than growing (and faulting in fresh
+  // pages) level after level.
+  const size_t mostCandidates = size_t(c) * (count / 2 + 1), mostKeys = std::max<size_t>(mostCandidates, count);
+  placedKeys.reserve(count), placedIndices.reserve(count), placedByTile.reserve(count);
+  candKeys.reserve(mostCandidates), candIndices.reserve(mostCandidates);
+  keyScratch.reserve(mostKeys), indexScratch.reserve(mostKeys);
   const auto triangleBits = uint32_t(std::bit_width(scene.triangleCount() - 1));
 
   // Level 0 places the first point, level L >= 1 adds 2^(L-1) (the last level of a count that is not
