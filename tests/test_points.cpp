@@ -1,7 +1,7 @@
 // The point hierarchy (Ritschel et al. 2009, 2.1 and 3.1): heap numbering and stackless traversal,
 // best-candidate sampling (area-proportional, better spaced than uniform, deterministic), the median
 // split, bounding spheres and normal cones of float and packed nodes, the packed nodes' error, refit
-// against rebuild, the radiance pull and half floats.
+// against rebuild, the radiance pull, half floats and the sampler's radix sort.
 #include <catch2/catch.hpp>
 
 #include <algorithm>

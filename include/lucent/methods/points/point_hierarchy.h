@@ -42,10 +42,11 @@ struct PointSamplingOptions {
 // `count` points on the scene's triangles, uniform by area, spread by best-candidate sampling
 // (Mitchell 1991): each point is, of its candidates, the one farthest from the points already placed.
 // Every triangle is eligible, emitters and specular surfaces included; the per-triangle counts are
-// area-proportional in expectation. Deterministic for a seed whatever the thread count. Stage
-// "point_sampling"; counters "points", "point_candidates", "points_with_few_candidates" (fewer
-// than half of `candidates`: points on pieces of triangles too small for a full share). Throws std::invalid_argument for a count
-// of 0 or above 2^26, bad options, or a scene without area.
+// area-proportional in expectation. Any count works (a power of two for a hierarchy). Deterministic
+// for a seed whatever the thread count. Stage "point_sampling"; counters "points",
+// "point_candidates", "points_with_few_candidates" (fewer than half of `candidates`: points on
+// pieces of triangles too small for a full share). Throws std::invalid_argument for a count of 0 or
+// above 2^26, bad options, or a scene without area.
 std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const PointSamplingOptions& options = {},
                                       RenderStats* stats = nullptr);
 
