@@ -7,6 +7,8 @@
 #include "cli/commands.h"
 #include "cli/progress.h"
 #include "lucent/core/parallel.h"
+#include "lucent/methods/microrender.h"
+#include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/methods/pathtrace.h"
 #include "lucent/methods/photonmap.h"
 #include "lucent/scene/loader.h"
@@ -24,11 +26,16 @@ struct RenderArgs {
   uint64_t seed = 0;
   PathTraceOptions pt;
   PhotonMapOptions pm;
+  MicroRenderOptions micro;
   std::string map, gridResolution;  // map: empty for the method's default
-  // Options that belong to one family of methods, to reject them with the other.
-  std::vector<CLI::Option*> ptOnly, pmOnly;
-  CLI::Option* pmGather = nullptr;
+  std::string lighting = "direct", mapping = "warped", encoding = "packed";
+  bool noRayCasting = false;
+  CLI::Option* photons = nullptr;  // shared by purcell, pmfg and micro, with different defaults
+  // Options that belong to some methods only, with those methods, to reject them with the others.
+  std::vector<std::pair<CLI::Option*, std::vector<std::string>>> methodOptions;
 };
+
+const std::vector<std::string> kMethods = {"pt", "purcell", "pmfg", "micro"};
 
 PhotonMapKind parseMapKind(const std::string& name) {
   if (name == "sort") return PhotonMapKind::Sort;
@@ -89,22 +96,61 @@ void checkOutputPath(const std::string& path, const std::string& extension, cons
   if (!fs::is_directory(dir)) throw std::invalid_argument(flag + ": directory '" + dir.string() + "' does not exist");
 }
 
+nlohmann::json microOptionsJson(const RenderArgs& a, const Scene& scene) {
+  const MicroRenderOptions& o = a.micro;
+  nlohmann::json j = {{"spp", o.spp},
+                      {"seed", o.seed},
+                      {"lighting", a.lighting},
+                      {"points", o.points > 0 ? o.points : defaultPointCount(scene, o.pointSpacing)},
+                      {"point_spacing", o.pointSpacing},
+                      {"buffer_size", o.bufferSide},
+                      {"mapping", a.mapping},
+                      {"table_size", o.tableSize},
+                      {"ray_casting", o.rayCasting},
+                      {"upsampling", o.upsampling},
+                      {"encoding", a.encoding},
+                      {"light_samples", o.lightSamples},
+                      {"point_light_samples", o.pointLightSamples},
+                      {"max_specular_depth", o.maxSpecularDepth},
+                      {"layers", o.layers},
+                      {"robust", a.robust}};
+  if (o.lighting == PointLighting::Vpl) j["vpls"] = o.vpls;
+  if (o.lighting == PointLighting::Radiosity) j["radiosity_level"] = o.radiosityLevel, j["bounces"] = o.bounces;
+  if (o.lighting == PointLighting::Photons) j["photons"] = o.photons, j["k"] = o.k;
+  return j;
+}
+
 int runRender(RenderArgs& a) {
   const bool photonMapping = a.method == "purcell" || a.method == "pmfg";
-  if (a.method != "pt" && !photonMapping)
-    throw std::invalid_argument("--method '" + a.method + "': unknown method (available: pt, purcell, pmfg)");
-  for (CLI::Option* o : photonMapping ? a.ptOnly : a.pmOnly)
-    if (o->count() > 0) throw std::invalid_argument(o->get_name() + " does not apply to --method " + a.method);
-  if (photonMapping && a.method == "purcell" && a.pmGather->count() > 0)
-    throw std::invalid_argument("--gather-rays applies to --method pmfg only");
+  if (std::find(kMethods.begin(), kMethods.end(), a.method) == kMethods.end())
+    throw std::invalid_argument("--method '" + a.method + "': unknown method (available: pt, purcell, pmfg, micro)");
+  for (const auto& [option, methods] : a.methodOptions)
+    if (option->count() > 0 && std::find(methods.begin(), methods.end(), a.method) == methods.end())
+      throw std::invalid_argument(option->get_name() + " does not apply to --method " + a.method);
   a.pt.spp = a.spp > 0 ? a.spp : a.pt.spp;
-  a.pt.seed = a.pm.seed = a.seed;
-  a.pt.layers = a.pm.layers = a.layers;
-  if (a.spp > 0) a.pm.spp = a.spp;
+  a.pt.seed = a.pm.seed = a.micro.seed = a.seed;
+  a.pt.layers = a.pm.layers = a.micro.layers = a.layers;
+  if (a.spp > 0) a.pm.spp = a.micro.spp = a.spp;
   if (a.map.empty()) a.map = a.method == "pmfg" ? "kdtree" : "sort";
   a.pm.map = parseMapKind(a.map);
   a.pm.gridResolution = parseGridResolution(a.gridResolution);
   if (photonMapping) validatePhotonMapOptions(a.pm);
+  if (a.method == "micro") {
+    MicroRenderOptions& m = a.micro;
+    m.lighting = a.lighting == "vpl"         ? PointLighting::Vpl
+                 : a.lighting == "radiosity" ? PointLighting::Radiosity
+                 : a.lighting == "photons"   ? PointLighting::Photons
+                                             : PointLighting::Direct;
+    m.mapping = a.mapping == "nusselt" ? MappingKind::Nusselt : MappingKind::Warped;
+    m.encoding = a.encoding == "float" ? NodeEncoding::Float : NodeEncoding::Packed;
+    m.rayCasting = !a.noRayCasting;
+    // Shared option names: the photon-mapping values given on the command line.
+    m.lightSamples = a.pm.lightSamples;
+    m.maxSpecularDepth = a.pm.maxSpecularDepth;
+    if (a.photons->count() > 0) m.photons = a.pm.photons;
+    m.k = a.pm.k;
+    validateMicroRenderOptions(m);
+  }
   checkOutputPath(a.output, ".exr", "-o");
   if (!a.png.empty()) checkOutputPath(a.png, ".png", "--png");
 
@@ -150,6 +196,9 @@ int runRender(RenderArgs& a) {
       const ProgressFn progress = [&](double f) { bar.update(f); };
       out = a.method == "purcell" ? renderPurcell(scene, visibility, a.pm, progress)
                                   : renderPhotonMapFinalGather(scene, visibility, a.pm, progress);
+    } else {
+      options = microOptionsJson(a, scene);
+      out = renderMicro(scene, visibility, a.micro, [&](double f) { bar.update(f); });
     }
   }
   for (const auto& s : out.stats.stageSeconds) stats.addStage(s.first, s.second);
@@ -193,7 +242,7 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* cmd = app.add_subcommand("render", "Render a scene to an EXR (and optionally a PNG)");
   cmd->add_option("scene", args->scene, "Scene file (JSON)")->required();
-  cmd->add_option("--method", args->method, "Rendering method: pt, purcell, pmfg")->capture_default_str();
+  cmd->add_option("--method", args->method, "Rendering method: pt, purcell, pmfg, micro")->capture_default_str();
   cmd->add_option("-o,--output", args->output, "Output EXR file")->required();
   cmd->add_option("--png", args->png, "Also write an sRGB PNG");
   cmd->add_option("--spp", args->spp, "Samples per pixel (default: pt 64; purcell and pmfg 1, through the pixel centre)")
@@ -206,59 +255,94 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
   cmd->add_flag("--robust", args->robust, "Embree robust traversal mode");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar or warnings");
 
-  // Path tracer (pt).
-  auto& pt = args->ptOnly;
-  pt.push_back(cmd->add_option("--time-budget", args->pt.timeBudget, "pt: stop sampling within this many seconds (at least 1 spp)")
-                   ->check(CLI::Range(0.0, 1e9)));
-  pt.push_back(cmd->add_option("--max-depth", args->pt.maxDepth, "pt: path length in bounces (1: direct light only)")
-                   ->check(CLI::Range(0, 1 << 16))->capture_default_str());
-  pt.push_back(cmd->add_option("--roulette-depth", args->pt.rouletteDepth, "pt: Russian roulette from this bounce on")
-                   ->check(CLI::Range(1, 1 << 16))->capture_default_str());
-  pt.push_back(cmd->add_option("--tile-size", args->pt.tileSize, "pt: tile size in pixels (does not change the image)")
-                   ->check(CLI::Range(1, 4096))->capture_default_str());
-  pt.push_back(cmd->add_option("--strategy", args->strategy, "pt: mis (default), or light or bsdf sampling alone, for validation")
-                   ->check(CLI::IsMember({"mis", "light", "bsdf"})));
+  auto only = [&](CLI::Option* option, std::vector<std::string> methods) {
+    args->methodOptions.emplace_back(option, std::move(methods));
+  };
+  const std::vector<std::string> pt = {"pt"}, pm = {"purcell", "pmfg"}, micro = {"micro"};
 
-  // Photon mapping (purcell, pmfg).
+  // Path tracer (pt).
+  only(cmd->add_option("--time-budget", args->pt.timeBudget, "pt: stop sampling within this many seconds (at least 1 spp)")
+           ->check(CLI::Range(0.0, 1e9)), pt);
+  only(cmd->add_option("--max-depth", args->pt.maxDepth, "pt: path length in bounces (1: direct light only)")
+           ->check(CLI::Range(0, 1 << 16))->capture_default_str(), pt);
+  only(cmd->add_option("--roulette-depth", args->pt.rouletteDepth, "pt: Russian roulette from this bounce on")
+           ->check(CLI::Range(1, 1 << 16))->capture_default_str(), pt);
+  only(cmd->add_option("--tile-size", args->pt.tileSize, "pt: tile size in pixels (does not change the image)")
+           ->check(CLI::Range(1, 4096))->capture_default_str(), pt);
+  only(cmd->add_option("--strategy", args->strategy, "pt: mis (default), or light or bsdf sampling alone, for validation")
+           ->check(CLI::IsMember({"mis", "light", "bsdf"})), pt);
+
+  // Photon mapping (purcell, pmfg); some options are micro's too.
   PhotonMapOptions& o = args->pm;
-  auto& pm = args->pmOnly;
-  pm.push_back(cmd->add_option("--photons", o.photons, "purcell, pmfg: photon paths emitted for the global map")
-                   ->check(CLI::Range(0u, 1u << 28))->capture_default_str());
-  pm.push_back(cmd->add_option("--caustic-photons", o.causticPhotons,
-                               "purcell, pmfg: photon paths emitted for the caustic map (0: no caustic map)")
-                   ->check(CLI::Range(0u, 1u << 28))->capture_default_str());
-  pm.push_back(cmd->add_option("--k", o.k, "purcell, pmfg: photons sought per radiance estimate")
-                   ->check(CLI::Range(1u, 1u << 20))->capture_default_str());
-  pm.push_back(cmd->add_option("--caustic-k", o.causticK, "purcell, pmfg: photons sought in the caustic map (0: --k)")
-                   ->check(CLI::Range(0u, 1u << 20))->capture_default_str());
-  pm.push_back(cmd->add_option("--max-radius", o.maxRadius,
-                               "purcell, pmfg: maximum search radius (0: 0.1 x the scene's bounding-box diagonal)")
-                   ->check(CLI::Range(0.0f, 1e30f))->capture_default_str());
-  pm.push_back(cmd->add_option("--map", args->map,
-                               "purcell, pmfg: photon map: sort, stencil, hash, kdtree (default: purcell sort, pmfg kdtree)")
-                   ->check(CLI::IsMember({"sort", "stencil", "hash", "kdtree"})));
-  pm.push_back(cmd->add_option("--shells", o.shells,
-                               "purcell, pmfg: stop each kNN-grid search after N shells (progressive estimate; 0: to the end)")
-                   ->check(CLI::Range(0u, 1u << 20))->capture_default_str());
-  pm.push_back(cmd->add_option("--light-samples", o.lightSamples, "purcell, pmfg: shadow rays per shading point")
-                   ->check(CLI::Range(0, 1 << 16))->capture_default_str());
-  args->pmGather = cmd->add_option("--gather-rays", o.gatherRays, "pmfg: final-gather rays per shading point")
-                       ->check(CLI::Range(0, 1 << 20))->capture_default_str();
-  pm.push_back(args->pmGather);
-  pm.push_back(cmd->add_option("--max-specular-depth", o.maxSpecularDepth,
-                               "purcell, pmfg: mirror and glass bounces followed from the camera and by gather rays")
-                   ->check(CLI::Range(0, 64))->capture_default_str());
-  pm.push_back(cmd->add_option("--photon-bounces", o.maxPhotonBounces, "purcell, pmfg: interactions followed per photon path")
-                   ->check(CLI::Range(1u, 255u))->capture_default_str());
-  pm.push_back(cmd->add_option("--grid-resolution", args->gridResolution,
-                               "purcell, pmfg: grid cells per axis, XxYxZ (default: from the photons)"));
-  pm.push_back(cmd->add_option("--cell-size", o.cellSize, "purcell, pmfg: cubic grid cells of this side")
-                   ->check(CLI::Range(0.0f, 1e30f)));
-  pm.push_back(cmd->add_option("--photons-per-cell", o.photonsPerCell,
-                               "purcell, pmfg: otherwise, about this many photons per cell of the photons' bounds (0: max(1, k / 16))")
-                   ->check(CLI::Range(0.0f, 1e9f))->capture_default_str());
-  pm.push_back(cmd->add_option("--stencil-side", o.stencilSide, "purcell, pmfg: m, with m x m photons per stencil-routed cell")
-                   ->check(CLI::Range(1u, 1024u))->capture_default_str());
+  const std::vector<std::string> pmMicro = {"purcell", "pmfg", "micro"};
+  args->photons = cmd->add_option("--photons", o.photons,
+                                  "purcell, pmfg: photon paths emitted for the global map; micro: for --lighting photons (default 200000)")
+                      ->check(CLI::Range(0u, 1u << 28))->capture_default_str();
+  only(args->photons, pmMicro);
+  only(cmd->add_option("--caustic-photons", o.causticPhotons,
+                       "purcell, pmfg: photon paths emitted for the caustic map (0: no caustic map)")
+           ->check(CLI::Range(0u, 1u << 28))->capture_default_str(), pm);
+  only(cmd->add_option("--k", o.k, "purcell, pmfg, micro (--lighting photons): photons sought per radiance estimate")
+           ->check(CLI::Range(1u, 1u << 20))->capture_default_str(), pmMicro);
+  only(cmd->add_option("--caustic-k", o.causticK, "purcell, pmfg: photons sought in the caustic map (0: --k)")
+           ->check(CLI::Range(0u, 1u << 20))->capture_default_str(), pm);
+  only(cmd->add_option("--max-radius", o.maxRadius,
+                       "purcell, pmfg: maximum search radius (0: 0.1 x the scene's bounding-box diagonal)")
+           ->check(CLI::Range(0.0f, 1e30f))->capture_default_str(), pm);
+  only(cmd->add_option("--map", args->map,
+                       "purcell, pmfg: photon map: sort, stencil, hash, kdtree (default: purcell sort, pmfg kdtree)")
+           ->check(CLI::IsMember({"sort", "stencil", "hash", "kdtree"})), pm);
+  only(cmd->add_option("--shells", o.shells,
+                       "purcell, pmfg: stop each kNN-grid search after N shells (progressive estimate; 0: to the end)")
+           ->check(CLI::Range(0u, 1u << 20))->capture_default_str(), pm);
+  only(cmd->add_option("--light-samples", o.lightSamples, "purcell, pmfg, micro: shadow rays per shading point")
+           ->check(CLI::Range(0, 1 << 16))->capture_default_str(), pmMicro);
+  only(cmd->add_option("--gather-rays", o.gatherRays, "pmfg: final-gather rays per shading point")
+           ->check(CLI::Range(0, 1 << 20))->capture_default_str(), {"pmfg"});
+  only(cmd->add_option("--max-specular-depth", o.maxSpecularDepth,
+                       "purcell, pmfg, micro: mirror and glass bounces followed from the camera (pmfg: and by gather rays)")
+           ->check(CLI::Range(0, 64))->capture_default_str(), pmMicro);
+  only(cmd->add_option("--photon-bounces", o.maxPhotonBounces, "purcell, pmfg: interactions followed per photon path")
+           ->check(CLI::Range(1u, 255u))->capture_default_str(), pm);
+  only(cmd->add_option("--grid-resolution", args->gridResolution,
+                       "purcell, pmfg: grid cells per axis, XxYxZ (default: from the photons)"), pm);
+  only(cmd->add_option("--cell-size", o.cellSize, "purcell, pmfg: cubic grid cells of this side")
+           ->check(CLI::Range(0.0f, 1e30f)), pm);
+  only(cmd->add_option("--photons-per-cell", o.photonsPerCell,
+                       "purcell, pmfg: otherwise, about this many photons per cell of the photons' bounds (0: max(1, k / 16))")
+           ->check(CLI::Range(0.0f, 1e9f))->capture_default_str(), pm);
+  only(cmd->add_option("--stencil-side", o.stencilSide, "purcell, pmfg: m, with m x m photons per stencil-routed cell")
+           ->check(CLI::Range(1u, 1024u))->capture_default_str(), pm);
+
+  // Micro-rendering (micro).
+  MicroRenderOptions& m = args->micro;
+  only(cmd->add_option("--lighting", args->lighting,
+                       "micro: how the points are lit: direct (one bounce), vpl, radiosity, photons")
+           ->check(CLI::IsMember({"direct", "vpl", "radiosity", "photons"}))->capture_default_str(), micro);
+  only(cmd->add_option("--points", m.points, "micro: points in the hierarchy, a power of two (0: from the scene's area and the image footprint)")
+           ->check(CLI::Range(0u, 1u << 23))->capture_default_str(), micro);
+  only(cmd->add_option("--point-spacing", m.pointSpacing, "micro: for the default point count, the points' spacing in pixels")
+           ->check(CLI::Range(0.01f, 1e6f))->capture_default_str(), micro);
+  only(cmd->add_option("--buffer-size", m.bufferSide, "micro: micro-buffer side in pixels, 8 to 32")
+           ->check(CLI::Range(kMinMicroBufferSide, kMaxMicroBufferSide))->capture_default_str(), micro);
+  only(cmd->add_option("--mapping", args->mapping, "micro: warped (BRDF importance warping) or nusselt")
+           ->check(CLI::IsMember({"warped", "nusselt"}))->capture_default_str(), micro);
+  only(cmd->add_option("--table-size", m.tableSize, "micro: cells per side of the tabulated BRDF slice")
+           ->check(CLI::Range(4, 256))->capture_default_str(), micro);
+  only(cmd->add_flag("--no-raycast", args->noRayCasting, "micro: no post-traversal ray casting (holes, as the paper's Fig. 11)"),
+       micro);
+  only(cmd->add_option("--upsampling", m.upsampling, "micro: gather at 1/N of the pixels, N = 1, 4 or 16, with bilateral upsampling")
+           ->check(CLI::IsMember({1, 4, 16}))->capture_default_str(), micro);
+  only(cmd->add_option("--encoding", args->encoding, "micro: packed (the paper's 128-bit nodes, half-float radiance) or float")
+           ->check(CLI::IsMember({"packed", "float"}))->capture_default_str(), micro);
+  only(cmd->add_option("--point-light-samples", m.pointLightSamples, "micro: shadow rays per point of the hierarchy")
+           ->check(CLI::Range(0, 1 << 16))->capture_default_str(), micro);
+  only(cmd->add_option("--vpls", m.vpls, "micro: light paths for virtual point lights (--lighting vpl)")
+           ->check(CLI::Range(1u, 1u << 20))->capture_default_str(), micro);
+  only(cmd->add_option("--radiosity-level", m.radiosityLevel, "micro: tree level gathered at (--lighting radiosity)")
+           ->check(CLI::Range(1, 22))->capture_default_str(), micro);
+  only(cmd->add_option("--bounces", m.bounces, "micro: Jacobi iterations (--lighting radiosity)")
+           ->check(CLI::Range(0, 64))->capture_default_str(), micro);
   cmd->callback([args, &exitCode] { exitCode = runRender(*args); });
 }
 

@@ -14,7 +14,7 @@ constexpr float kSpherePad = 1.0f + 0x1p-20f;
 // Absolute cone padding in radians, for the rounding of atan2 and of the new axis.
 constexpr float kConePad = 2e-6f;
 
-constexpr int kNormalLattice = 15;   // normal codes k in -15..15
+constexpr int kNormalLattice = kPackedNormalLattice;
 
 // Round to nearest, halves away from zero, inline (std::lround is a library call).
 inline int roundToInt(float x) { return int(x + std::copysign(0.5f, x)); }
@@ -27,7 +27,7 @@ inline float angleUpperBound(Vec3 a, Vec3 b) {
   return chord <= 1.0f ? chord + chord * chord * chord * (1.0f / 12.0f) : angleBetween(a, b);
 }
 constexpr float kAlbedoLevels = 31;  // 5-bit albedo codes
-constexpr float kConeLevels = 255;   // 8-bit cone codes
+constexpr float kConeLevels = kPackedConeLevels;
 
 uint32_t encodeNormal(Vec3 n) {
   // The decoded normal is the lattice direction k/|k|: only the direction matters, so try every
@@ -101,21 +101,6 @@ NormalCone mergeCones(const NormalCone& a, const NormalCone& b) {
   const float need = std::max(angleBetween(axis, a.axis) + a.angle, angleBetween(axis, b.axis) + b.angle) + kConePad;
   return {axis, std::min(need, kPi)};
 }
-
-Vec3 decodeCenter(const PackedNode& node, const NodeQuantization& q) {
-  return {q.origin.x + float(node.position[0]) * q.step.x, q.origin.y + float(node.position[1]) * q.step.y,
-          q.origin.z + float(node.position[2]) * q.step.z};
-}
-
-float decodeRadius(const PackedNode& node, const NodeQuantization& q) { return float(node.radius) * q.radiusStep; }
-
-Vec3 decodeNormal(const PackedNode& node) {
-  const uint32_t e = node.normalAlbedo;
-  return normalize(Vec3{float(int(e & 31u) - kNormalLattice), float(int((e >> 5) & 31u) - kNormalLattice),
-                        float(int((e >> 10) & 31u) - kNormalLattice)});
-}
-
-float decodeConeAngle(const PackedNode& node) { return float(node.coneFree & 255u) * (kPi / kConeLevels); }
 
 Rgb decodeAlbedo(const PackedNode& node) {
   auto channel = [&](int shift) {

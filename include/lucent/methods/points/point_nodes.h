@@ -68,13 +68,25 @@ struct PackedNode {
 };
 static_assert(sizeof(PackedNode) == 16, "the paper's node is 128 bits");
 
-Vec3 decodeCenter(const PackedNode& node, const NodeQuantization& q);
-float decodeRadius(const PackedNode& node, const NodeQuantization& q);
+inline constexpr int kPackedNormalLattice = 15;   // normal codes k in -15..15
+inline constexpr float kPackedConeLevels = 255;  // 8-bit cone codes over [0, pi]
+
+// The decoders are inline: traversals call them for every node they visit.
+inline Vec3 decodeCenter(const PackedNode& node, const NodeQuantization& q) {
+  return {q.origin.x + float(node.position[0]) * q.step.x, q.origin.y + float(node.position[1]) * q.step.y,
+          q.origin.z + float(node.position[2]) * q.step.z};
+}
+inline float decodeRadius(const PackedNode& node, const NodeQuantization& q) { return float(node.radius) * q.radiusStep; }
 inline Sphere decodeSphere(const PackedNode& node, const NodeQuantization& q) {
   return {decodeCenter(node, q), decodeRadius(node, q)};
 }
-Vec3 decodeNormal(const PackedNode& node);
-float decodeConeAngle(const PackedNode& node);
+inline Vec3 decodeNormal(const PackedNode& node) {
+  const uint32_t e = node.normalAlbedo;
+  return normalize(Vec3{float(int(e & 31u) - kPackedNormalLattice), float(int((e >> 5) & 31u) - kPackedNormalLattice),
+                        float(int((e >> 10) & 31u) - kPackedNormalLattice)});
+}
+inline uint32_t coneCode(const PackedNode& node) { return node.coneFree & 255u; }
+inline float decodeConeAngle(const PackedNode& node) { return float(coneCode(node)) * (kPi / kPackedConeLevels); }
 Rgb decodeAlbedo(const PackedNode& node);
 FloatNode decodeNode(const PackedNode& node, const NodeQuantization& q);
 

@@ -1,0 +1,89 @@
+// The mappings Phi(x, y) = omega between micro-buffer pixels and gather directions (Ritschel et al.
+// 2009, 2.2 and 2.3), in the gather point's local frame (normal on +z):
+//
+//   Nusselt  the projected hemisphere: (x, y) over [-1, 1]^2 is the direction (x, y, sqrt(1 - x^2 - y^2));
+//            pixels outside the unit disc are unused. The convolution weighs each pixel by the BRDF,
+//            the cosine and its solid angle.
+//   Warped   BRDF importance warping: the slice f(wo, .) for the gather point's view direction,
+//            tabulated over the same projected disc (omega_x, omega_y), is a 2-D density whose
+//            inverse marginal and conditional CDFs map uniform pixels to directions distributed as
+//            f cos (the cosine comes with the parameterization). The convolution is then a plain sum.
+//
+// Both give every pixel a direction (at a sample point inside the pixel, jittered per gather point),
+// the solid angle it subtends (the traversal's refinement threshold) and the weight of its radiance
+// in the convolution. src/methods/microrender/README.md says where this departs from the paper.
+#pragma once
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "lucent/core/math.h"
+#include "lucent/scene/bsdf.h"
+
+namespace lucent {
+
+enum class MappingKind : uint32_t { Nusselt = 0, Warped = 1 };
+
+// A density over the projected disc, piecewise constant on T x T cells of [-1, 1]^2 in
+// (omega_x, omega_y), with its marginal CDF over columns (omega_x) and per column the conditional
+// CDF over rows (omega_y): M^-1 and C^-1 of 2.3.
+struct WarpTable {
+  int size = 0;                     // T
+  float total = 0;                  // sum of the cell weights
+  std::vector<float> cellWeight;    // T x T, column-major: cell (column j, row k) at j * T + k
+  std::vector<float> columnCdf;     // T + 1, from 0 to 1
+  std::vector<float> rowCdf;        // T x (T + 1): column j's conditional CDF at j * (T + 1)
+};
+
+// What does not change from one gather point to the next, computed once per render: the part of
+// every table cell inside the unit disc and where the BRDF is evaluated for it, the Lambertian table
+// (the same for every diffuse gather point), and the Nusselt pixels' solid angles.
+struct MappingTables {
+  int bufferSide = 0, tableSize = 0;
+  std::vector<float> cellInside;      // T x T: fraction of the cell's area inside the disc
+  std::vector<Vec2> cellCentroid;     // T x T: centroid of that part
+  WarpTable lambertian;
+  std::vector<float> nusseltSolidAngle;  // per pixel: the exact solid angle of the pixel's part of the disc
+};
+MappingTables makeMappingTables(int bufferSide, int tableSize);
+
+// Tabulates the slice f(wo, omega) (its RGB average) at the cells' centroids, times the cells' areas
+// inside the disc. A floor of 1% of the mean keeps the density positive wherever f is (the weights
+// divide by it), so no direction a BRDF reflects from is left out. Diffuse: the shared table.
+void tabulateBrdfSlice(const SurfaceBsdf& bsdf, Vec3 woLocal, const MappingTables& tables, WarpTable& table);
+
+// A micro-buffer's mapping for one gather point.
+struct HemisphereMapping {
+  MappingKind kind = MappingKind::Nusselt;
+  int width = 0, height = 0;
+  Vec2 jitter{0.5f, 0.5f};        // sample position inside every pixel
+  const WarpTable* table = nullptr;  // Warped only
+
+  // Per pixel, row-major (row y, column x), filled by evaluatePixels.
+  std::vector<Vec3> direction;    // local frame; (0, 0, 0) for unused pixels
+  std::vector<float> solidAngle;  // Omega(x, y); +inf for unused pixels, so that nodes mapping there stop
+  std::vector<Rgb> weight;        // radiance weight in the convolution; 0 for unused pixels
+  std::vector<uint16_t> used;     // the pixels with a direction, in order
+  uint32_t pixelCount() const { return uint32_t(width * height); }
+
+  // Continuous pixel coordinates (u, v) in [0, 1)^2 of a local direction with z > 0 (Phi^-1), and the
+  // direction of (u, v) (Phi); `inside` is false where (u, v) maps outside the disc.
+  Vec2 inverse(Vec3 local) const;
+  Vec3 forward(Vec2 uv, bool& inside) const;
+  int pixelOf(Vec3 local) const {
+    const Vec2 uv = inverse(local);
+    const int x = std::min(int(uv.x * float(width)), width - 1), y = std::min(int(uv.y * float(height)), height - 1);
+    return y * width + x;
+  }
+  // Density of the mapping's directions over solid angle (for uniform (u, v)).
+  float pdf(Vec3 local) const;
+};
+
+// Sets up the mapping (the table must outlive it) and evaluates every pixel: direction at the
+// jittered sample, solid angle, and weight f cos Omega (Nusselt) or f / (N p) (Warped, p the
+// table's density over the projected disc; with an exact table this is rho / N, the paper's sum
+// scaled by rho).
+void evaluatePixels(HemisphereMapping& mapping, MappingKind kind, int side, Vec2 jitter, const WarpTable* table,
+                    const SurfaceBsdf& bsdf, Vec3 woLocal, const MappingTables& tables);
+
+}  // namespace lucent

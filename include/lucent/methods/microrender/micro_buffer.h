@@ -1,0 +1,45 @@
+// The micro-buffer (Ritschel et al. 2009, 2.2 and 3.1): a tiny frame buffer per gather point whose
+// pixels each hold the nearest visible node of the point hierarchy, as the paper packs them: the
+// node's index in 24 bits and its depth in 8 bits of one 32-bit word.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace lucent {
+
+// Buffer sides the paper uses (8 x 8 to 24 x 24) and up to 32 x 32.
+inline constexpr int kMinMicroBufferSide = 8;
+inline constexpr int kMaxMicroBufferSide = 32;
+
+// 24 index bits hold heap numbers up to 2^24 - 1: at most 2^23 leaves (3.1).
+inline constexpr uint32_t kMicroIndexBits = 24;
+inline constexpr uint32_t kMicroIndexMask = (1u << kMicroIndexBits) - 1;
+inline constexpr uint32_t kMaxMicroRenderPoints = 1u << 23;
+inline constexpr uint32_t kEmptyMicroPixel = 0xffffffffu;
+inline constexpr uint32_t kMaxDepthCode = 254;  // 255 with index 2^24 - 1 is the empty pixel
+
+// Depth in 8 bits, logarithmic over 12 octaves below the scene's extent: about 21 codes per octave,
+// so depths 3.3% apart get different codes at any distance. Nearer than 2^-12 of the extent is
+// code 0. With the depth in the high byte, "nearer, then lower node index" is one unsigned
+// comparison of packed words (the order an atomicMin would keep on a GPU).
+struct DepthCoding {
+  float logNear = 0;   // log2 of the distance coded 0
+  float codesPerOctave = 254.0f / 12.0f;
+
+  static DepthCoding forExtent(float sceneExtent) {
+    DepthCoding c;
+    c.logNear = std::log2(std::max(sceneExtent, 1e-30f)) - 12.0f;
+    return c;
+  }
+  uint32_t code(float distance) const {
+    const float x = (std::log2(std::max(distance, 1e-30f)) - logNear) * codesPerOctave;
+    return x <= 0 ? 0u : uint32_t(std::min(x, float(kMaxDepthCode)));
+  }
+};
+
+constexpr uint32_t packMicroPixel(uint32_t depthCode, uint32_t node) { return depthCode << kMicroIndexBits | node; }
+constexpr uint32_t microPixelNode(uint32_t pixel) { return pixel & kMicroIndexMask; }
+constexpr uint32_t microPixelDepth(uint32_t pixel) { return pixel >> kMicroIndexBits; }
+
+}  // namespace lucent

@@ -1,0 +1,84 @@
+// Micro-rendering of one gather point (Ritschel et al. 2009, 2.2, 3.1, 3.2): the point hierarchy's
+// cut, found by a stackless depth-first traversal with the solid-angle criterion, rasterized into a
+// micro-buffer with a depth test; leaves larger than a pixel resolved by on-demand ray casting; the
+// buffer convolved with the BRDF through the mapping's pixel weights.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "lucent/core/math.h"
+#include "lucent/methods/microrender/hemisphere_mapping.h"
+#include "lucent/methods/microrender/micro_buffer.h"
+#include "lucent/methods/points/point_hierarchy.h"
+#include "lucent/methods/points/point_radiance.h"
+
+namespace lucent {
+
+// Where gathering happens: a surface point, its frame (shading normal on +z, jittered about it) and
+// the distance below which hits count as the point's own surface.
+struct GatherPoint {
+  Vec3 position;
+  Frame frame;
+  float selfDistance = 0;
+};
+
+// Per-thread scratch of one micro-rendering; buffers are reused from one gather point to the next.
+struct MicroBuffer {
+  int side = 0;
+  std::vector<uint32_t> pixels;         // side x side packed depth | node (micro_buffer.h)
+  std::vector<uint32_t> postTraversal;  // leaves to ray-cast, at most side x side (3.1)
+  uint32_t listed = 0;
+  // Ray-casting scratch, one entry per used pixel of the mapping.
+  std::vector<float> dirX, dirY, dirZ, nearestT;
+  std::vector<uint32_t> nearestNode;
+  void resize(int bufferSide);
+};
+
+struct MicroCounters {
+  uint64_t buffers = 0;
+  uint64_t buffersRayCast = 0;    // buffers whose post-traversal list was not empty
+  uint64_t nodesVisited = 0;
+  uint64_t nodesSplatted = 0;     // nodes rasterized into one pixel
+  uint64_t leavesListed = 0;      // leaves put on post-traversal lists
+  uint64_t listFlushes = 0;       // lists ray-cast early because they were full
+  uint64_t rayDiscTests = 0;
+  double rayCastSeconds = 0;      // time spent ray casting, within renderMicroBuffer
+  MicroCounters& operator+=(const MicroCounters& o);
+};
+
+struct MicroRenderSettings {
+  bool rayCasting = true;  // false: leaves larger than a pixel are splatted like the rest (Fig. 11's holes)
+  DepthCoding depth;
+};
+
+// Nodes as the traversal reads them: sphere, cone axis, and the sine and cosine of the cone angle.
+struct TraversalNode {
+  Vec3 center;
+  float radius = 0;
+  Vec3 axis;
+  float coneSin = 0, coneCos = 1;
+};
+static_assert(sizeof(TraversalNode) == 36, "TraversalNode is a fixed-size record");
+
+// The hierarchy as micro-rendering reads it: the packed nodes decoded on the fly (with the cone
+// codes' sines and cosines tabulated), or the float nodes with their cones' sines and cosines
+// computed once per frame (with the hierarchy update).
+struct MicroHierarchy {
+  const PointHierarchy* hierarchy = nullptr;
+  std::vector<TraversalNode> floatNodes;      // Float encoding
+  float coneSin[256] = {}, coneCos[256] = {};  // Packed encoding: per cone code
+};
+MicroHierarchy prepareMicroHierarchy(const PointHierarchy& hierarchy);
+
+// Traversal, rasterization and ray casting into `buffer` for one gather point, reading the
+// hierarchy's selected encoding. The buffer holds the nearest node per pixel afterwards.
+void renderMicroBuffer(const MicroHierarchy& hierarchy, const GatherPoint& gather, const HemisphereMapping& mapping,
+                       const MicroRenderSettings& settings, MicroBuffer& buffer, MicroCounters& counters);
+
+// The convolution: the sum over the buffer's pixels of the visible node's radiance times the pixel's
+// weight. One overload per radiance layout: float RGB, or the paper's half floats (3.1).
+Rgb convolveMicroBuffer(const MicroBuffer& buffer, const HemisphereMapping& mapping, std::span<const Rgb> radiance);
+Rgb convolveMicroBuffer(const MicroBuffer& buffer, const HemisphereMapping& mapping, std::span<const HalfRgb> radiance);
+
+}  // namespace lucent

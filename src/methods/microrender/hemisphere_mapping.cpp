@@ -1,0 +1,210 @@
+// Nusselt and BRDF importance-warped micro-buffer mappings (Ritschel et al. 2009, 2.2, 2.3).
+#include "lucent/methods/microrender/hemisphere_mapping.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace lucent {
+
+namespace {
+
+// Index of the CDF interval [cdf[i], cdf[i + 1]) holding u, skipping empty intervals.
+int findInterval(const float* cdf, int n, float u) {
+  const int i = int(std::upper_bound(cdf + 1, cdf + n, u) - cdf) - 1;
+  return std::clamp(i, 0, n - 1);
+}
+
+// Solid angle of {(x, y) in [x0, x1] x [y0, y1] : x^2 + y^2 < 1} on the projected hemisphere,
+// dOmega = dx dy / sqrt(1 - x^2 - y^2): in y the integral is asin(y / s), s = sqrt(1 - x^2), then
+// midpoint quadrature in x. The same x nodes for every cell of a column make a column's cells sum to
+// exactly pi times its width, so all pixels sum to 2 pi.
+float projectedCellSolidAngle(double x0, double x1, double y0, double y1) {
+  constexpr int kNodes = 256;
+  double sum = 0;
+  for (int i = 0; i < kNodes; ++i) {
+    const double x = x0 + (x1 - x0) * (i + 0.5) / kNodes;
+    const double s = std::sqrt(std::max(0.0, 1.0 - x * x));
+    if (!(s > 0)) continue;
+    sum += std::asin(std::clamp(y1 / s, -1.0, 1.0)) - std::asin(std::clamp(y0 / s, -1.0, 1.0));
+  }
+  return float(sum * (x1 - x0) / kNodes);
+}
+
+void buildCdfs(WarpTable& t) {
+  const int n = t.size;
+  t.columnCdf.assign(size_t(n) + 1, 0.0f);
+  t.rowCdf.assign(size_t(n) * (n + 1), 0.0f);
+  double total = 0;
+  std::vector<double> column(n, 0.0);
+  for (int j = 0; j < n; ++j) {
+    double c = 0;
+    float* cdf = &t.rowCdf[size_t(j) * (n + 1)];
+    for (int k = 0; k < n; ++k) {
+      c += t.cellWeight[size_t(j) * n + k];
+      cdf[k + 1] = float(c);
+    }
+    for (int k = 1; k <= n; ++k) cdf[k] = c > 0 ? float(cdf[k] / c) : float(k) / float(n);
+    cdf[n] = 1.0f;
+    column[j] = c;
+    total += c;
+  }
+  if (!(total > 0)) throw std::logic_error("warp table without mass");
+  double c = 0;
+  for (int j = 0; j < n; ++j) {
+    c += column[j];
+    t.columnCdf[j + 1] = float(c / total);
+  }
+  t.columnCdf[n] = 1.0f;
+  t.total = float(total);
+}
+
+// Table density at cell (j, k) over the projected disc (area of [-1, 1]^2 is 4).
+float cellDensity(const WarpTable& t, int j, int k) {
+  return t.cellWeight[size_t(j) * t.size + k] / t.total * float(t.size * t.size) * 0.25f;
+}
+
+}  // namespace
+
+MappingTables makeMappingTables(int bufferSide, int tableSize) {
+  if (bufferSide < 1 || tableSize < 1) throw std::invalid_argument("mapping sizes must be positive");
+  MappingTables m;
+  m.bufferSide = bufferSide;
+  m.tableSize = tableSize;
+  const int T = tableSize;
+  constexpr int kSub = 16;  // sub-samples per cell side for the part inside the disc
+  m.cellInside.resize(size_t(T) * T);
+  m.cellCentroid.resize(size_t(T) * T);
+  for (int j = 0; j < T; ++j)
+    for (int k = 0; k < T; ++k) {
+      int inside = 0;
+      double cx = 0, cy = 0;
+      for (int a = 0; a < kSub; ++a)
+        for (int b = 0; b < kSub; ++b) {
+          const double x = -1.0 + 2.0 * (j + (a + 0.5) / kSub) / T, y = -1.0 + 2.0 * (k + (b + 0.5) / kSub) / T;
+          if (x * x + y * y >= 1.0) continue;
+          ++inside;
+          cx += x;
+          cy += y;
+        }
+      const size_t c = size_t(j) * T + k;
+      m.cellInside[c] = float(inside) / float(kSub * kSub);
+      m.cellCentroid[c] = inside > 0 ? Vec2{float(cx / inside), float(cy / inside)} : Vec2{};
+    }
+  m.lambertian.size = T;
+  m.lambertian.cellWeight = m.cellInside;
+  buildCdfs(m.lambertian);
+
+  const int N = bufferSide;
+  m.nusseltSolidAngle.resize(size_t(N) * N);
+  for (int y = 0; y < N; ++y)
+    for (int x = 0; x < N; ++x)
+      m.nusseltSolidAngle[size_t(y) * N + x] =
+          projectedCellSolidAngle(-1.0 + 2.0 * x / N, -1.0 + 2.0 * (x + 1) / N, -1.0 + 2.0 * y / N, -1.0 + 2.0 * (y + 1) / N);
+  return m;
+}
+
+void tabulateBrdfSlice(const SurfaceBsdf& bsdf, Vec3 woLocal, const MappingTables& tables, WarpTable& table) {
+  const int T = tables.tableSize;
+  table.size = T;
+  table.cellWeight.resize(size_t(T) * T);
+  double sum = 0;
+  for (size_t c = 0; c < table.cellWeight.size(); ++c) {
+    float f = 0;
+    if (tables.cellInside[c] > 0) {
+      const Vec2 q = tables.cellCentroid[c];
+      const Vec3 w{q.x, q.y, std::sqrt(std::max(0.0f, 1.0f - q.x * q.x - q.y * q.y))};
+      f = evalBsdf(bsdf, woLocal, w).average();
+    }
+    table.cellWeight[c] = f;
+    sum += double(f) * tables.cellInside[c];
+  }
+  const float floor = float(0.01 * sum / std::max(1e-30, double(T) * T * 0.785398));
+  for (size_t c = 0; c < table.cellWeight.size(); ++c)
+    table.cellWeight[c] = (table.cellWeight[c] + floor) * tables.cellInside[c];
+  if (!(sum > 0))  // a black slice: any density will do, the weights are zero
+    table.cellWeight = tables.cellInside;
+  buildCdfs(table);
+}
+
+Vec2 HemisphereMapping::inverse(Vec3 local) const {
+  const float a = std::clamp((local.x + 1.0f) * 0.5f, 0.0f, 0x1.fffffep-1f);
+  const float b = std::clamp((local.y + 1.0f) * 0.5f, 0.0f, 0x1.fffffep-1f);
+  if (kind == MappingKind::Nusselt) return {a, b};
+  const WarpTable& t = *table;
+  const int n = t.size;
+  const int j = std::min(int(a * float(n)), n - 1), k = std::min(int(b * float(n)), n - 1);
+  const float* rows = &t.rowCdf[size_t(j) * (n + 1)];
+  const float u = t.columnCdf[j] + (a * float(n) - float(j)) * (t.columnCdf[j + 1] - t.columnCdf[j]);
+  const float v = rows[k] + (b * float(n) - float(k)) * (rows[k + 1] - rows[k]);
+  return {std::min(u, 0x1.fffffep-1f), std::min(v, 0x1.fffffep-1f)};
+}
+
+Vec3 HemisphereMapping::forward(Vec2 uv, bool& inside) const {
+  float a = uv.x, b = uv.y;
+  if (kind == MappingKind::Warped) {
+    const WarpTable& t = *table;
+    const int n = t.size;
+    const int j = findInterval(t.columnCdf.data(), n, uv.x);
+    const float du = t.columnCdf[j + 1] - t.columnCdf[j];
+    a = (float(j) + std::clamp(du > 0 ? (uv.x - t.columnCdf[j]) / du : 0.5f, 0.0f, 1.0f)) / float(n);
+    const float* rows = &t.rowCdf[size_t(j) * (n + 1)];
+    const int k = findInterval(rows, n, uv.y);
+    const float dv = rows[k + 1] - rows[k];
+    b = (float(k) + std::clamp(dv > 0 ? (uv.y - rows[k]) / dv : 0.5f, 0.0f, 1.0f)) / float(n);
+  }
+  const float x = 2.0f * a - 1.0f, y = 2.0f * b - 1.0f;
+  const float z2 = 1.0f - x * x - y * y;
+  inside = z2 > 0;
+  return inside ? Vec3{x, y, std::sqrt(z2)} : Vec3{};
+}
+
+float HemisphereMapping::pdf(Vec3 local) const {
+  if (!(local.z > 0)) return 0.0f;
+  float density = 0.25f;  // Nusselt: uniform over [-1, 1]^2
+  if (kind == MappingKind::Warped) {
+    const int n = table->size;
+    const float a = std::clamp((local.x + 1.0f) * 0.5f, 0.0f, 0x1.fffffep-1f);
+    const float b = std::clamp((local.y + 1.0f) * 0.5f, 0.0f, 0x1.fffffep-1f);
+    density = cellDensity(*table, std::min(int(a * float(n)), n - 1), std::min(int(b * float(n)), n - 1));
+  }
+  return density * local.z;  // dA_projected = cos dOmega
+}
+
+void evaluatePixels(HemisphereMapping& m, MappingKind kind, int side, Vec2 jitter, const WarpTable* table,
+                    const SurfaceBsdf& bsdf, Vec3 woLocal, const MappingTables& tables) {
+  m.kind = kind;
+  m.width = m.height = side;
+  m.jitter = jitter;
+  m.table = table;
+  const size_t n = size_t(side) * side;
+  m.direction.resize(n);
+  m.solidAngle.resize(n);
+  m.weight.resize(n);
+  m.used.clear();
+  const float invN = 1.0f / float(n);
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x) {
+      const size_t i = size_t(y) * side + x;
+      bool inside;
+      const Vec3 w = m.forward({(float(x) + jitter.x) / float(side), (float(y) + jitter.y) / float(side)}, inside);
+      const Rgb f = inside ? evalBsdf(bsdf, woLocal, w) : Rgb();
+      m.direction[i] = w;
+      if (!inside) {
+        m.solidAngle[i] = kInf;
+        m.weight[i] = Rgb();
+        continue;
+      }
+      m.used.push_back(uint16_t(i));
+      if (kind == MappingKind::Nusselt) {
+        m.solidAngle[i] = tables.nusseltSolidAngle[i];
+        m.weight[i] = f * (4.0f * invN);  // f cos dOmega = f dA_projected, the pixel's area 4 / N
+      } else {
+        const float p = m.pdf(w) / w.z;  // density over the projected disc
+        m.solidAngle[i] = invN / (p * w.z);
+        m.weight[i] = f * (invN / p);
+      }
+    }
+}
+
+}  // namespace lucent

@@ -1,0 +1,226 @@
+// --method micro: the renderer of Ritschel et al. 2009. Camera paths (through mirrors and glass) to
+// diffuse and glossy shading points; direct light there by shadow rays, at every pixel; indirect
+// light by micro-rendering final gathering at every pixel or at a lattice of 1/4 or 1/16 of them
+// with bilateral upsampling (2.4); gather points processed in 3-D Morton order (3.2).
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "../photonmap/eye_paths.h"
+#include "../photonmap/photon_render.h"
+#include "gathering.h"
+#include "lucent/core/parallel.h"
+#include "lucent/methods/microrender.h"
+#include "point_lighting.h"
+#include "upsampling.h"
+
+namespace lucent {
+
+namespace {
+
+enum class MicroStream : uint64_t { Points = 21, Gather = 22 };
+
+// 30-bit 3-D Morton code of a point in the scene's bounds (10 bits per axis).
+uint32_t mortonCode(Vec3 p, const Bounds3& bounds) {
+  auto spread = [](uint32_t v) {
+    v = (v | (v << 16)) & 0x030000ffu;
+    v = (v | (v << 8)) & 0x0300f00fu;
+    v = (v | (v << 4)) & 0x030c30c3u;
+    v = (v | (v << 2)) & 0x09249249u;
+    return v;
+  };
+  const Vec3 e = bounds.extent();
+  uint32_t code = 0;
+  for (int a = 0; a < 3; ++a) {
+    const float t = e[a] > 0 ? (p[a] - bounds.lo[a]) / e[a] : 0.0f;
+    code |= spread(uint32_t(std::clamp(t, 0.0f, 1.0f) * 1023.0f)) << a;
+  }
+  return code;
+}
+
+// The stage clocks and counters of every thread's gathering, summed.
+struct GatherTotals {
+  double build = 0, evaluate = 0, rasterize = 0, rayCast = 0, convolve = 0;
+  MicroCounters counters;
+  void add(const tbb::enumerable_thread_specific<GatherScratch>& scratch) {
+    for (const GatherScratch& s : scratch) {
+      build += s.buildSeconds, evaluate += s.evaluateSeconds, rasterize += s.rasterizeSeconds;
+      convolve += s.convolveSeconds;
+      counters += s.counters;
+    }
+    rayCast = counters.rayCastSeconds;
+  }
+};
+
+}  // namespace
+
+void validateMicroRenderOptions(const MicroRenderOptions& o) {
+  auto fail = [](const std::string& m) { throw std::invalid_argument(m); };
+  if (o.points != 0 && (!std::has_single_bit(o.points) || o.points < 2))
+    fail("points must be a power of two of at least 2 (the hierarchy is a complete binary tree)");
+  if (o.points > kMaxMicroRenderPoints)
+    fail("points: at most 2^23: micro-buffer pixels hold 24-bit node indices (2^24 nodes)");
+  if (!(o.pointSpacing > 0) || !std::isfinite(o.pointSpacing)) fail("point spacing must be positive");
+  if (o.bufferSide < kMinMicroBufferSide || o.bufferSide > kMaxMicroBufferSide)
+    fail("micro-buffer size must be in [8, 32]");
+  if (o.tableSize < 4 || o.tableSize > 256) fail("BRDF table size must be in [4, 256]");
+  if (o.upsampling != 1 && o.upsampling != 4 && o.upsampling != 16) fail("upsampling must be 1, 4 or 16");
+  if (o.spp < 1) fail("spp must be at least 1");
+  if (o.lightSamples < 0 || o.pointLightSamples < 0) fail("light samples must not be negative");
+  if (o.maxSpecularDepth < 0 || o.maxSpecularDepth > 64) fail("max specular depth must be in [0, 64]");
+  if (o.lighting == PointLighting::Vpl && o.vpls < 1) fail("vpls must be at least 1");
+  if (o.radiosityLevel < 1 || o.radiosityLevel > 22) fail("radiosity level must be in [1, 22]");
+  if (o.bounces < 0 || o.bounces > 64) fail("bounces must be in [0, 64]");
+  if (o.lighting == PointLighting::Photons && o.photons < 1) fail("photons must be at least 1");
+  if (o.k < 1) fail("k must be at least 1");
+}
+
+uint32_t defaultPointCount(const Scene& scene, float spacing) {
+  double area = 0;
+  for (float a : scene.faceAreas) area += a;
+  const Camera& c = scene.camera;
+  const double distance = std::max(1e-30, double(length(scene.boundingCenter() - c.eye)));
+  const double footprint = 2.0 * distance * std::tan(double(c.fovY) * kPi / 360.0) / double(c.height);
+  const double n = area / std::pow(spacing * footprint, 2.0);
+  const double log2n = std::clamp(std::round(std::log2(std::max(n, 1.0))), 12.0, 22.0);
+  return uint32_t(1) << int(log2n);
+}
+
+RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroRenderOptions& o,
+                         const ProgressFn& progress) {
+  validateMicroRenderOptions(o);
+  RenderOutput out;
+  RenderStats& stats = out.stats;
+
+  // The point hierarchy (2.1). Its node data is what a deforming scene would refit every frame:
+  // the paper's "hierarchy update".
+  PointHierarchyOptions ho;
+  ho.pointCount = o.points > 0 ? o.points : defaultPointCount(scene, o.pointSpacing);
+  ho.encoding = o.encoding;
+  ho.sampling.seed = hashKey(o.seed, uint64_t(MicroStream::Points));
+  RenderStats hierarchyStats;
+  Stopwatch hierarchyClock;
+  const PointHierarchy hierarchy = buildPointHierarchy(scene, ho, &hierarchyStats);
+  MicroHierarchy micro = prepareMicroHierarchy(hierarchy);
+  stats.addStage("hierarchy", hierarchyClock.seconds());
+  double update = 0;
+  for (const auto& [name, s] : hierarchyStats.stageSeconds) {
+    stats.addStage("hierarchy." + name, s);
+    if (name == "leaf_nodes" || name == "interior_nodes" || name == "packed_nodes") update += s;
+  }
+  stats.addStage("hierarchy_update", update);
+  stats.addCounter("points", hierarchy.leafCount);
+
+  MicroRenderSettings settings;
+  settings.rayCasting = o.rayCasting;
+  settings.depth = DepthCoding::forExtent(length(scene.bounds.extent()));
+  const MappingTables tables = makeMappingTables(o.bufferSide, o.tableSize);
+  const GatherContext ctx{&micro, &tables, o.mapping, settings};
+
+  // Section 4: the radiance of the points.
+  Stopwatch lightingClock;
+  const NodeRadiance radiance = lightPoints(scene, vis, hierarchy, ctx, o, stats);
+  stats.addStage("point_lighting", lightingClock.seconds());
+
+  // Camera paths and direct light, at every pixel.
+  Stopwatch eyeClock;
+  EyePathSettings eyeSettings{o.spp, o.maxSpecularDepth, o.seed, o.layers};
+  const EyePaths eye = traceEyePaths(scene, vis, eyeSettings);
+  const size_t n = eye.points.size();
+  PointRadiance shading(n);
+  uint64_t shadowRays = 0;
+  if (o.lightSamples > 0) estimateDirectLight(scene, vis, eye.points, o.lightSamples, o.seed, shading.direct, shadowRays);
+  stats.addStage("eye_rays_and_direct_light", eyeClock.seconds());
+
+  // Final gathering (2.2, 3.2) at the gather points, in Morton order of their positions so that
+  // neighbouring work items compute similar cuts.
+  const int step = o.upsampling == 16 ? 4 : o.upsampling == 4 ? 2 : 1;
+  const int width = scene.camera.width;
+  std::vector<uint32_t> gatherOrder;
+  for (uint32_t i = 0; i < n; ++i)
+    if (onGatherLattice(eye.points[i].pixel, width, step)) gatherOrder.push_back(i);
+  tbb::enumerable_thread_specific<GatherScratch> scratch;
+  const uint64_t gatherSeed = hashKey(o.seed, uint64_t(MicroStream::Gather));
+  std::atomic<size_t> done{0};
+  auto gather = [&](std::vector<uint32_t>& order, double progressShare, double progressBase) {
+    Stopwatch sortClock;
+    std::vector<uint64_t> keys(order.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4096), [&](const auto& r) {
+      for (size_t k = r.begin(); k != r.end(); ++k)
+        keys[k] = uint64_t(mortonCode(eye.points[order[k]].position, scene.bounds)) << 32 | order[k];
+    });
+    tbb::parallel_sort(keys.begin(), keys.end());
+    for (size_t k = 0; k < keys.size(); ++k) order[k] = uint32_t(keys[k]);
+    done = 0;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+      flushDenormals();
+      GatherScratch& s = scratch.local();
+      for (size_t k = r.begin(); k != r.end(); ++k) {
+        const uint32_t i = order[k];
+        const ShadingPoint& p = eye.points[i];
+        Rng rng(gatherSeed, p.pixel, uint64_t(p.sample) << 32 | p.branch);
+        shading.indirect[i] = gatherAt(ctx, p.position, p.normal, p.wo, p.bsdf, rng, radiance, s);
+      }
+      if (progress) progress(progressBase + progressShare * double(done += r.size()) / double(order.size()));
+    });
+    return sortClock.seconds();
+  };
+  const double gatherSeconds = gather(gatherOrder, step == 1 ? 1.0 : 0.9, 0.0);
+  uint64_t recomputed = 0;
+  double upsampleSeconds = 0;
+  if (step > 1) {
+    Stopwatch upClock;
+    UpsamplingSettings us;
+    us.width = width;
+    us.height = scene.camera.height;
+    us.step = step;
+    us.eye = scene.camera.eye;
+    us.pixelAngle = float(2.0 * std::tan(double(scene.camera.fovY) * kPi / 360.0) / scene.camera.height);
+    std::vector<uint32_t> left = upsampleIndirect(eye.points, us, shading.indirect);
+    upsampleSeconds = upClock.seconds();
+    recomputed = left.size();
+    gather(left, 0.1, 0.9);
+  }
+
+  GatherTotals totals;
+  totals.add(scratch);
+  stats.addStage("final_gathering", gatherSeconds);
+  stats.addStage("build_mappings", totals.build);
+  stats.addStage("evaluate_mappings", totals.evaluate);
+  stats.addStage("rasterize", totals.rasterize);
+  stats.addStage("ray_casting", totals.rayCast);
+  stats.addStage("convolution", totals.convolve);
+  stats.addStage("upsampling", upsampleSeconds);
+
+  Stopwatch imageClock;
+  ImageAccumulator image(scene, o.layers);
+  image.add(eye, shading);
+  out.image = image.finish();
+  out.sppDone = o.spp;
+  stats.addStage("image", imageClock.seconds());
+
+  const MicroCounters& c = totals.counters;
+  stats.addCounter("eye_rays", eye.rays);
+  stats.addCounter("shadow_rays", shadowRays);
+  stats.addCounter("shading_points", n);
+  stats.addCounter("invalid_samples", eye.invalid);
+  stats.addCounter("micro_buffers", c.buffers);
+  stats.addCounter("micro_buffers_ray_cast", c.buffersRayCast);
+  stats.addCounter("upsampling_recomputed", recomputed);
+  stats.addCounter("nodes_visited", c.nodesVisited);
+  stats.addCounter("nodes_splatted", c.nodesSplatted);
+  stats.addCounter("leaves_ray_cast", c.leavesListed);
+  stats.addCounter("post_traversal_flushes", c.listFlushes);
+  stats.addCounter("ray_disc_tests", c.rayDiscTests);
+  stats.addCounter("gather_samples", c.buffers * uint64_t(o.bufferSide) * uint64_t(o.bufferSide));
+  return out;
+}
+
+}  // namespace lucent

@@ -1,0 +1,265 @@
+// One gather point's micro-rendering (Ritschel et al. 2009, 2.2): the cut by depth-first traversal
+// with computed skip pointers (2.1, 3.1), rasterization with a depth test, on-demand ray casting of
+// the post-traversal list, and the convolution. One template per node encoding, no virtual calls.
+#include "lucent/methods/microrender/micro_rendering.h"
+
+#include <cmath>
+#include <limits>
+
+#include "lucent/core/stats.h"
+
+namespace lucent {
+
+namespace {
+
+// A node no wider than a pixel is splatted unless it is seen edge-on: when even the normal of its
+// cone that faces the gather point best is within 3 degrees of perpendicular to the direction, the
+// node covers under 5% of its disc, and claiming the whole pixel would occlude what lies behind
+// (a receiver's own plane, seen at the horizon, would hide everything near the horizon).
+constexpr float kEdgeOnCosine = 0.05f;
+
+struct FloatNodes {
+  const TraversalNode* nodes;
+  TraversalNode operator()(uint32_t i) const { return nodes[i]; }
+};
+
+struct PackedNodes {
+  const PackedNode* nodes;
+  NodeQuantization quantization;
+  const float* coneSin;
+  const float* coneCos;
+  TraversalNode operator()(uint32_t i) const {
+    const PackedNode& p = nodes[i];
+    const uint32_t code = coneCode(p);
+    return {decodeCenter(p, quantization), decodeRadius(p, quantization), decodeNormal(p), coneSin[code], coneCos[code]};
+  }
+};
+
+// Largest cosine between the direction w and a normal of the cone (axis, angle beta).
+inline float bestFacingCosine(const TraversalNode& node, float cosToAxis) {
+  if (cosToAxis >= node.coneCos) return 1.0f;
+  const float sinToAxis = std::sqrt(std::max(0.0f, 1.0f - cosToAxis * cosToAxis));
+  return cosToAxis * node.coneCos + sinToAxis * node.coneSin;  // cos(angle - beta)
+}
+
+template <class Nodes>
+class MicroRasterizer {
+ public:
+  MicroRasterizer(const Nodes& nodes, uint32_t leafCount, const GatherPoint& gather, const HemisphereMapping& mapping,
+                  const MicroRenderSettings& settings, MicroBuffer& buffer, MicroCounters& counters)
+      : nodes_(nodes), leafCount_(leafCount), g_(gather), m_(mapping), s_(settings), b_(buffer), c_(counters) {}
+
+  void run() {
+    b_.pixels.assign(size_t(m_.width) * m_.height, kEmptyMicroPixel);
+    b_.listed = 0;
+    raysReady_ = false;
+    ++c_.buffers;
+    traverse();
+    if (b_.listed > 0) castRays();
+    c_.buffersRayCast += listedAny_;
+  }
+
+ private:
+  // 2.2 "Point Hierarchy Cut": depth first from the root; a node goes to the buffer when it subtends
+  // no more than its pixel's solid angle, otherwise its children are visited; leaves larger than a
+  // pixel go to the post-traversal list. Skip pointers are computed (node_tree.h).
+  void traverse() {
+    const Vec3 p = g_.position, normal = g_.frame.n;
+    uint32_t i = kRootNode;
+    while (i != kTraversalEnd) {
+      ++c_.nodesVisited;
+      const TraversalNode node = nodes_(i);
+      const bool leaf = isLeafNode(i, leafCount_);
+      const Vec3 v = node.center - p;
+      // Below the tangent plane altogether.
+      if (dot(v, normal) <= -node.radius) {
+        i = nextNodeSkippingSubtree(i);
+        continue;
+      }
+      const float d2 = dot(v, v);
+      const float d = std::sqrt(d2);
+      const float cosToAxis = d > 0 ? -dot(node.axis, v) / d : 0.0f;  // axis against the direction to p
+      float solidAngle;
+      if (leaf) {
+        // A leaf is a disc in its triangle's plane: it faces p exactly when p lies in front of the
+        // plane. coneSin is the slack of a quantized normal (0 for float nodes).
+        const float facing = -dot(node.axis, v);
+        if (facing <= d * node.coneSin + g_.selfDistance) {
+          i = nextNodeSkippingSubtree(i);
+          continue;
+        }
+        solidAngle = kPi * node.radius * node.radius * facing / (d2 * d);  // projected disc
+      } else {
+        if (d <= node.radius) {
+          i = firstChild(i);
+          continue;
+        }
+        // Back-face culling with the normal cone: from points of the sphere, p is seen within
+        // alpha = asin(r / d) of the centre's direction; no normal of the cone can face it when the
+        // axis is more than 90 degrees + alpha + beta away from that direction.
+        const float sinA = node.radius / d, cosA = std::sqrt(std::max(0.0f, 1.0f - sinA * sinA));
+        if (cosA * node.coneCos - sinA * node.coneSin > 0 && cosToAxis < -(sinA * node.coneCos + cosA * node.coneSin)) {
+          i = nextNodeSkippingSubtree(i);
+          continue;
+        }
+        solidAngle = 2.0f * kPi * (1.0f - cosA);  // the sphere's cap
+      }
+      const Vec3 local = g_.frame.toLocal(v * (1.0f / d));
+      const int pixel = m_.pixelOf(local);
+      if (solidAngle > m_.solidAngle[size_t(pixel)]) {  // larger than its pixel: refine
+        if (!leaf) {
+          i = firstChild(i);
+        } else {
+          if (s_.rayCasting) listLeaf(i); else splat(pixel, d, i);
+          i = nextNodeSkippingSubtree(i);
+        }
+        continue;
+      }
+      // At most a pixel: rasterize, unless the centre is below the horizon (the part above is a
+      // sliver at the rim) or the node is seen edge-on.
+      if (local.z > 0 && bestFacingCosine(node, cosToAxis) > kEdgeOnCosine) splat(pixel, d, i);
+      i = nextNodeSkippingSubtree(i);
+    }
+  }
+
+  void splat(int pixel, float distance, uint32_t node) {
+    ++c_.nodesSplatted;
+    uint32_t& px = b_.pixels[size_t(pixel)];
+    px = std::min(px, packMicroPixel(s_.depth.code(distance), node));
+  }
+
+  void listLeaf(uint32_t node) {
+    if (b_.listed == b_.postTraversal.size()) {
+      ++c_.listFlushes;
+      castRays();
+    }
+    b_.postTraversal[b_.listed++] = node;
+    ++c_.leavesListed;
+    listedAny_ = true;
+  }
+
+  // 2.2 "On-demand Ray Casting": one ray per used pixel, in the pixel's direction, against every
+  // listed disc; the nearest hit enters the buffer through the same depth test as the splats. The
+  // loop over pixels is innermost so that it vectorizes (structure of arrays, selects, no branches).
+  void castRays() {
+    const Stopwatch clock;
+    const size_t used = m_.used.size();
+    if (!raysReady_) {
+      for (size_t k = 0; k < used; ++k) {
+        const Vec3 w = g_.frame.toWorld(m_.direction[m_.used[k]]);
+        b_.dirX[k] = w.x, b_.dirY[k] = w.y, b_.dirZ[k] = w.z;
+      }
+      raysReady_ = true;
+    }
+    float* nearestT = b_.nearestT.data();
+    uint32_t* nearestNode = b_.nearestNode.data();
+    const float* dx = b_.dirX.data();
+    const float* dy = b_.dirY.data();
+    const float* dz = b_.dirZ.data();
+    for (size_t k = 0; k < used; ++k) nearestT[k] = kInf, nearestNode[k] = 0;
+    const float tMin = g_.selfDistance;
+    for (uint32_t j = 0; j < b_.listed; ++j) {
+      const uint32_t index = b_.postTraversal[j];
+      const TraversalNode disc = nodes_(index);
+      const Vec3 pc = g_.position - disc.center;
+      const float ax = disc.axis.x, ay = disc.axis.y, az = disc.axis.z;
+      const float height = dot(pc, disc.axis);  // > 0: p in front of the disc
+      const float r2 = disc.radius * disc.radius;
+      for (size_t k = 0; k < used; ++k) {
+        const float cosine = dx[k] * ax + dy[k] * ay + dz[k] * az;  // < 0 towards the disc
+        const float t = height / -cosine;
+        const float qx = pc.x + t * dx[k], qy = pc.y + t * dy[k], qz = pc.z + t * dz[k];
+        const bool hit = (cosine < 0) & (t > tMin) & (t < nearestT[k]) & (qx * qx + qy * qy + qz * qz <= r2);
+        nearestT[k] = hit ? t : nearestT[k];
+        nearestNode[k] = hit ? index : nearestNode[k];
+      }
+    }
+    c_.rayDiscTests += uint64_t(used) * b_.listed;
+    for (size_t k = 0; k < used; ++k)
+      if (nearestT[k] < kInf) {
+        uint32_t& px = b_.pixels[m_.used[k]];
+        px = std::min(px, packMicroPixel(s_.depth.code(nearestT[k]), nearestNode[k]));
+      }
+    b_.listed = 0;
+    c_.rayCastSeconds += clock.seconds();
+  }
+
+  const Nodes& nodes_;
+  uint32_t leafCount_;
+  const GatherPoint& g_;
+  const HemisphereMapping& m_;
+  const MicroRenderSettings& s_;
+  MicroBuffer& b_;
+  MicroCounters& c_;
+  bool raysReady_ = false, listedAny_ = false;
+};
+
+template <class Radiance>
+Rgb convolve(const MicroBuffer& b, const HemisphereMapping& m, Radiance radiance) {
+  Rgb sum;
+  for (const uint16_t k : m.used) {
+    const uint32_t px = b.pixels[k];
+    if (px != kEmptyMicroPixel) sum += radiance(microPixelNode(px)) * m.weight[k];
+  }
+  return sum;
+}
+
+}  // namespace
+
+void MicroBuffer::resize(int bufferSide) {
+  side = bufferSide;
+  const size_t n = size_t(side) * side;
+  pixels.resize(n);
+  postTraversal.resize(n);
+  dirX.resize(n), dirY.resize(n), dirZ.resize(n), nearestT.resize(n), nearestNode.resize(n);
+}
+
+MicroCounters& MicroCounters::operator+=(const MicroCounters& o) {
+  buffers += o.buffers, buffersRayCast += o.buffersRayCast, nodesVisited += o.nodesVisited;
+  nodesSplatted += o.nodesSplatted, leavesListed += o.leavesListed, listFlushes += o.listFlushes;
+  rayDiscTests += o.rayDiscTests, rayCastSeconds += o.rayCastSeconds;
+  return *this;
+}
+
+MicroHierarchy prepareMicroHierarchy(const PointHierarchy& h) {
+  MicroHierarchy m;
+  m.hierarchy = &h;
+  for (int code = 0; code < 256; ++code) {
+    const float angle = float(code) * (kPi / kPackedConeLevels);
+    m.coneSin[code] = code == 255 ? 0.0f : std::sin(angle);
+    m.coneCos[code] = code == 255 ? -1.0f : std::cos(angle);
+  }
+  if (h.encoding == NodeEncoding::Float) {
+    m.floatNodes.resize(h.floatNodes.size());
+    for (size_t i = 1; i < h.floatNodes.size(); ++i) {
+      const FloatNode& f = h.floatNodes[i];
+      const bool all = f.cone.angle >= kPi;
+      m.floatNodes[i] = {f.sphere.center, f.sphere.radius, f.cone.axis, all ? 0.0f : std::sin(f.cone.angle),
+                         all ? -1.0f : std::cos(f.cone.angle)};
+    }
+  }
+  return m;
+}
+
+void renderMicroBuffer(const MicroHierarchy& mh, const GatherPoint& gather, const HemisphereMapping& mapping,
+                       const MicroRenderSettings& settings, MicroBuffer& buffer, MicroCounters& counters) {
+  const PointHierarchy& h = *mh.hierarchy;
+  if (buffer.side != mapping.width) buffer.resize(mapping.width);
+  if (h.encoding == NodeEncoding::Packed) {
+    const PackedNodes nodes{h.packedNodes.data(), h.quantization, mh.coneSin, mh.coneCos};
+    MicroRasterizer(nodes, h.leafCount, gather, mapping, settings, buffer, counters).run();
+  } else {
+    const FloatNodes nodes{mh.floatNodes.data()};
+    MicroRasterizer(nodes, h.leafCount, gather, mapping, settings, buffer, counters).run();
+  }
+}
+
+Rgb convolveMicroBuffer(const MicroBuffer& b, const HemisphereMapping& m, std::span<const Rgb> radiance) {
+  return convolve(b, m, [&](uint32_t node) { return radiance[node]; });
+}
+
+Rgb convolveMicroBuffer(const MicroBuffer& b, const HemisphereMapping& m, std::span<const HalfRgb> radiance) {
+  return convolve(b, m, [&](uint32_t node) { return toFloat(radiance[node]); });
+}
+
+}  // namespace lucent
