@@ -92,7 +92,8 @@ MappingTables makeMappingTables(int bufferSide, int tableSize) {
       m.cellCentroid[c] = inside > 0 ? Vec2{float(cx / inside), float(cy / inside)} : Vec2{};
     }
   m.lambertian.size = T;
-  m.lambertian.cellWeight = m.cellInside;
+  m.lambertian.cellWeight.resize(m.cellInside.size());
+  for (size_t c = 0; c < m.cellInside.size(); ++c) m.lambertian.cellWeight[c] = m.cellInside[c] > 0 ? 1.0f : 0.0f;
   buildCdfs(m.lambertian);
 
   const int N = bufferSide;
@@ -108,22 +109,40 @@ void tabulateBrdfSlice(const SurfaceBsdf& bsdf, Vec3 woLocal, const MappingTable
   const int T = tables.tableSize;
   table.size = T;
   table.cellWeight.resize(size_t(T) * T);
+  auto slice = [&](float x, float y) {
+    const float z2 = 1.0f - x * x - y * y;
+    return z2 > 0 ? evalBsdf(bsdf, woLocal, {x, y, std::sqrt(z2)}).average() : -1.0f;
+  };
+  // The slice at the cells' corners (T + 1 per side, shared by neighbouring cells).
+  std::vector<float>& corners = table.scratch;
+  corners.resize(size_t(T + 1) * (T + 1));
+  for (int j = 0; j <= T; ++j)
+    for (int k = 0; k <= T; ++k) corners[size_t(j) * (T + 1) + k] = slice(-1.0f + 2.0f * j / T, -1.0f + 2.0f * k / T);
+  // Each cell's value: the mean of the slice at the centroid of its part inside the disc and at its
+  // corners inside the disc. Where the slice is positive anywhere near a cell, so is the cell, and
+  // the table follows f at second order. Cells cut by the rim keep their full value (not scaled by
+  // the part inside): the density inside the disc is then f's, and samples falling outside are
+  // unused pixels.
   double sum = 0;
-  for (size_t c = 0; c < table.cellWeight.size(); ++c) {
-    float f = 0;
-    if (tables.cellInside[c] > 0) {
-      const Vec2 q = tables.cellCentroid[c];
-      const Vec3 w{q.x, q.y, std::sqrt(std::max(0.0f, 1.0f - q.x * q.x - q.y * q.y))};
-      f = evalBsdf(bsdf, woLocal, w).average();
+  for (int j = 0; j < T; ++j)
+    for (int k = 0; k < T; ++k) {
+      const size_t c = size_t(j) * T + k;
+      float w = 0;
+      if (tables.cellInside[c] > 0) {
+        const Vec2 q = tables.cellCentroid[c];
+        float total = std::max(0.0f, slice(q.x, q.y));
+        int count = 1;
+        for (int corner = 0; corner < 4; ++corner) {
+          const float v = corners[size_t(j + (corner & 1)) * (T + 1) + k + (corner >> 1)];
+          if (v >= 0) total += v, ++count;
+        }
+        w = total / float(count);
+      }
+      table.cellWeight[c] = w;
+      sum += w;
     }
-    table.cellWeight[c] = f;
-    sum += double(f) * tables.cellInside[c];
-  }
-  const float floor = float(0.01 * sum / std::max(1e-30, double(T) * T * 0.785398));
-  for (size_t c = 0; c < table.cellWeight.size(); ++c)
-    table.cellWeight[c] = (table.cellWeight[c] + floor) * tables.cellInside[c];
   if (!(sum > 0))  // a black slice: any density will do, the weights are zero
-    table.cellWeight = tables.cellInside;
+    for (size_t c = 0; c < table.cellWeight.size(); ++c) table.cellWeight[c] = tables.cellInside[c] > 0 ? 1.0f : 0.0f;
   buildCdfs(table);
 }
 
@@ -181,6 +200,7 @@ void evaluatePixels(HemisphereMapping& m, MappingKind kind, int side, Vec2 jitte
   m.direction.resize(n);
   m.solidAngle.resize(n);
   m.weight.resize(n);
+  m.spacing.resize(n);
   m.used.clear();
   const float invN = 1.0f / float(n);
   for (int y = 0; y < side; ++y)
@@ -205,6 +225,15 @@ void evaluatePixels(HemisphereMapping& m, MappingKind kind, int side, Vec2 jitte
         m.weight[i] = f * (invN / p);
       }
     }
+  for (const uint16_t i : m.used) {
+    const int x = i % side, y = i / side;
+    float maxCos = -1;
+    for (const int j : {i - 1, i + 1, i - side, i + side}) {
+      const bool neighbour = j >= 0 && j < int(n) && (j / side == y || j % side == x);
+      if (neighbour && m.direction[size_t(j)].z > 0) maxCos = std::max(maxCos, dot(m.direction[i], m.direction[size_t(j)]));
+    }
+    m.spacing[i] = maxCos > -1 ? std::sqrt(std::max(0.0f, 1.0f - maxCos * maxCos)) : 1.0f;
+  }
 }
 
 }  // namespace lucent

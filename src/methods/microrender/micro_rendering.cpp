@@ -12,12 +12,6 @@ namespace lucent {
 
 namespace {
 
-// A node no wider than a pixel is splatted unless it is seen edge-on: when even the normal of its
-// cone that faces the gather point best is within 3 degrees of perpendicular to the direction, the
-// node covers under 5% of its disc, and claiming the whole pixel would occlude what lies behind
-// (a receiver's own plane, seen at the horizon, would hide everything near the horizon).
-constexpr float kEdgeOnCosine = 0.05f;
-
 struct FloatNodes {
   const TraversalNode* nodes;
   TraversalNode operator()(uint32_t i) const { return nodes[i]; }
@@ -106,26 +100,42 @@ class MicroRasterizer {
       }
       const Vec3 local = g_.frame.toLocal(v * (1.0f / d));
       const int pixel = m_.pixelOf(local);
-      if (solidAngle > m_.solidAngle[size_t(pixel)]) {  // larger than its pixel: refine
+      // Larger than its pixel (the paper's solid-angle criterion), or wider than the pixel spacing
+      // (see HemisphereMapping::spacing): refine.
+      if (solidAngle > m_.solidAngle[size_t(pixel)] || node.radius > d * m_.spacing[size_t(pixel)]) {
         if (!leaf) {
           i = firstChild(i);
         } else {
-          if (s_.rayCasting) listLeaf(i); else splat(pixel, d, i);
+          if (s_.rayCasting) listLeaf(i); else splatFootprint(pixel, local, node.radius / d, d, i);
           i = nextNodeSkippingSubtree(i);
         }
         continue;
       }
-      // At most a pixel: rasterize, unless the centre is below the horizon (the part above is a
-      // sliver at the rim) or the node is seen edge-on.
-      if (local.z > 0 && bestFacingCosine(node, cosToAxis) > kEdgeOnCosine) splat(pixel, d, i);
+      // At most a pixel: rasterize, unless the centre lies in the tangent plane or below it (nodes of
+      // the receiver's own plane straddle it: no ray from the receiver meets them) or no normal of the
+      // cone faces the receiver.
+      if (local.z * d > g_.selfDistance && bestFacingCosine(node, cosToAxis) > 0)
+        splatFootprint(pixel, local, node.radius / d, d, i);
       i = nextNodeSkippingSubtree(i);
     }
   }
 
-  void splat(int pixel, float distance, uint32_t node) {
+  // A node of at most a pixel's solid angle goes to its centre's pixel, and to the neighbouring
+  // pixels whose sample direction its bounding sphere covers: nodes at the threshold are up to a
+  // pixel wide, and their centres alone would leave some pixels without any (holes that let the
+  // background through, about 2% of the pixels).
+  void splatFootprint(int pixel, Vec3 local, float sinRadius, float distance, uint32_t node) {
     ++c_.nodesSplatted;
-    uint32_t& px = b_.pixels[size_t(pixel)];
-    px = std::min(px, packMicroPixel(s_.depth.code(distance), node));
+    const uint32_t packed = packMicroPixel(s_.depth.code(distance), node);
+    const int w = m_.width, h = m_.height, x = pixel % w, y = pixel / w;
+    const float cosRadius = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
+    for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy)
+      for (int xx = std::max(0, x - 1); xx <= std::min(w - 1, x + 1); ++xx) {
+        const int p = yy * w + xx;
+        if (p != pixel && dot(m_.direction[size_t(p)], local) < cosRadius) continue;
+        uint32_t& px = b_.pixels[size_t(p)];
+        px = std::min(px, packed);
+      }
   }
 
   void listLeaf(uint32_t node) {

@@ -33,6 +33,7 @@ struct WarpTable {
   std::vector<float> cellWeight;    // T x T, column-major: cell (column j, row k) at j * T + k
   std::vector<float> columnCdf;     // T + 1, from 0 to 1
   std::vector<float> rowCdf;        // T x (T + 1): column j's conditional CDF at j * (T + 1)
+  std::vector<float> scratch;       // tabulation's working space, reused
 };
 
 // What does not change from one gather point to the next, computed once per render: the part of
@@ -47,9 +48,9 @@ struct MappingTables {
 };
 MappingTables makeMappingTables(int bufferSide, int tableSize);
 
-// Tabulates the slice f(wo, omega) (its RGB average) at the cells' centroids, times the cells' areas
-// inside the disc. A floor of 1% of the mean keeps the density positive wherever f is (the weights
-// divide by it), so no direction a BRDF reflects from is left out. Diffuse: the shared table.
+// Tabulates the slice f(wo, omega) (its RGB average) over the cells that reach into the disc, each
+// the mean of f at the centroid of its inside part and at its inside corners, so that a cell is
+// positive wherever f is (the weights divide by the density). Diffuse slices: the shared table.
 void tabulateBrdfSlice(const SurfaceBsdf& bsdf, Vec3 woLocal, const MappingTables& tables, WarpTable& table);
 
 // A micro-buffer's mapping for one gather point.
@@ -63,6 +64,11 @@ struct HemisphereMapping {
   std::vector<Vec3> direction;    // local frame; (0, 0, 0) for unused pixels
   std::vector<float> solidAngle;  // Omega(x, y); +inf for unused pixels, so that nodes mapping there stop
   std::vector<Rgb> weight;        // radiance weight in the convolution; 0 for unused pixels
+  // Sine of the smallest angle from the pixel's direction to a used neighbour's: nodes splat into a
+  // pixel and the neighbours their sphere covers, so a node no wider than this reaches no further.
+  // Where pixels are anisotropic (the Nusselt rim: radially stretched by 1 / cos) this, not the
+  // solid angle, limits the node size.
+  std::vector<float> spacing;
   std::vector<uint16_t> used;     // the pixels with a direction, in order
   uint32_t pixelCount() const { return uint32_t(width * height); }
 
