@@ -463,3 +463,58 @@ TEST_CASE("Cornell box: micro with direct-lit points agrees with the path tracer
     previous = e;
   }
 }
+
+TEST_CASE("Bilateral upsampling: 1/4 and 1/16 of the pixels gathered, close to gathering at every pixel", "[microrender]") {
+  // Indirect light interpolated from a lattice must stay close to the full gather (relMSE of the
+  // indirect layer below 0.01 at 1/4 and 0.02 at 1/16 on the Cornell box), gather at about 1/4 or
+  // 1/16 of the points, and gather again where the weights vanish (the blocks' silhouettes).
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
+  scene.camera.width = scene.camera.height = 64;
+  const Visibility vis(scene);
+  const ParallelScope threads(2);
+  MicroRenderOptions o;
+  o.points = 1u << 14;
+  o.layers = true;
+  const RenderOutput full = renderMicro(scene, vis, o);
+  auto counter = [](const RenderStats& s, const std::string& name) {
+    for (const auto& [n, v] : s.counters)
+      if (n == name) return v;
+    return uint64_t(0);
+  };
+  const uint64_t points = counter(full.stats, "shading_points");
+  REQUIRE(counter(full.stats, "micro_buffers") == points);
+  for (const int fraction : {4, 16}) {
+    o.upsampling = fraction;
+    const RenderOutput up = renderMicro(scene, vis, o);
+    const double e = relMse(up.image, full.image, "indirect.R");
+    const uint64_t buffers = counter(up.stats, "micro_buffers"), recomputed = counter(up.stats, "upsampling_recomputed");
+    INFO("1/" << fraction << ": indirect relMSE " << e << ", " << buffers << " buffers for " << points
+              << " points, recomputed " << recomputed);
+    REQUIRE(e < (fraction == 4 ? 0.01 : 0.02));
+    REQUIRE(recomputed > 0);
+    const uint64_t lattice = uint64_t(64 / (fraction == 4 ? 2 : 4)) * uint64_t(64 / (fraction == 4 ? 2 : 4));
+    REQUIRE(buffers - recomputed <= lattice);  // one camera sample per pixel: at most a point per pixel
+    REQUIRE(buffers - recomputed >= 0.85 * lattice);  // the light and the open front have no points
+  }
+}
+
+TEST_CASE("micro: the same image whatever the thread count", "[microrender]") {
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
+  scene.camera.width = scene.camera.height = 24;
+  const Visibility vis(scene);
+  for (const PointLighting lighting : {PointLighting::Direct, PointLighting::Radiosity, PointLighting::Vpl}) {
+    MicroRenderOptions o;
+    o.lighting = lighting;
+    o.points = 1u << 12;
+    o.upsampling = 4;
+    o.vpls = 64;
+    o.radiosityLevel = 8;
+    Image images[2];
+    for (const int t : {1, 2}) {
+      const ParallelScope threads(t);
+      images[t - 1] = renderMicro(scene, vis, o).image;
+    }
+    INFO("lighting " << int(lighting));
+    REQUIRE(images[0].pixels() == images[1].pixels());
+  }
+}

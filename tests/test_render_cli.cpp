@@ -158,3 +158,68 @@ TEST_CASE("render: impossible photon-mapping options are rejected with a message
     REQUIRE(dir.entries().empty());
   }
 }
+
+TEST_CASE("render --method micro: options, the paper's time breakdown and counters, metadata", "[cli][render][microrender]") {
+  const test::TempDir dir("render-cli");
+  for (const std::string lighting : {"direct", "vpl", "radiosity", "photons"}) {
+    const std::string exr = dir / (lighting + ".exr");
+    const test::CliRun r = runLucent("render " + kScene + " --method micro --lighting " + lighting +
+                                     " --points 4096 --buffer-size 16 --mapping nusselt --upsampling 4 --encoding float"
+                                     " --light-samples 4 --point-light-samples 2 --vpls 16 --radiosity-level 6 --bounces 1"
+                                     " --photons 2000 --k 10 --resolution 24x20 --seed 4 --threads 2 --layers --quiet -o " + exr);
+    INFO(r.output);
+    REQUIRE(r.status == 0);
+    const auto summary = nlohmann::json::parse(r.output);
+    REQUIRE(summary["method"] == "micro");
+    const auto& options = summary["options"];
+    REQUIRE(options["lighting"] == lighting);
+    REQUIRE(options["points"] == 4096);
+    REQUIRE(options["buffer_size"] == 16);
+    REQUIRE(options["mapping"] == "nusselt");
+    REQUIRE(options["upsampling"] == 4);
+    REQUIRE(options["encoding"] == "float");
+    REQUIRE(options["light_samples"] == 4);
+    REQUIRE(options["ray_casting"] == true);
+    REQUIRE(options.contains("vpls") == (lighting == "vpl"));
+    REQUIRE(options.contains("bounces") == (lighting == "radiosity"));
+    REQUIRE(options.contains("photons") == (lighting == "photons"));
+    for (const char* stage : {"hierarchy_update", "point_lighting", "build_mappings", "evaluate_mappings", "rasterize",
+                              "ray_casting", "upsampling", "eye_rays_and_direct_light"})
+      REQUIRE(summary["stages"].contains(stage));
+    for (const char* counter : {"micro_buffers", "micro_buffers_ray_cast", "nodes_visited", "gather_samples"})
+      REQUIRE(summary["counters"].contains(counter));
+    REQUIRE(summary["counters"]["micro_buffers"].get<int>() > 0);
+    std::string metaOptions;
+    ImageMetadata meta;
+    const Image image = readImage(exr, &meta);
+    for (const auto& [k, v] : meta)
+      if (k == "lucent:options") metaOptions = v;
+    REQUIRE(nlohmann::json::parse(metaOptions) == options);
+    REQUIRE(image.channelIndex("indirect.R") >= 0);
+  }
+  // Without a point count the scene's area and the image footprint decide, and it is written down.
+  const test::CliRun r = runLucent("render " + kScene + " --method micro --resolution 16x16 --quiet -o " + (dir / "d.exr"));
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  REQUIRE(nlohmann::json::parse(r.output)["options"]["points"].get<int>() >= 4096);
+}
+
+TEST_CASE("render: impossible micro options are rejected with a message and no output", "[cli][render][microrender]") {
+  const test::TempDir dir("render-cli");
+  const std::string exr = dir / "out.exr";
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {"--method micro --points 1000", "power of two"},
+           {"--method micro --points 16777216", "24-bit node indices"},
+           {"--method micro --buffer-size 40", "--buffer-size"},
+           {"--method micro --upsampling 3", "--upsampling"},
+           {"--method micro --lighting sunlight", "--lighting"},
+           {"--method micro --gather-rays 16", "--gather-rays"},
+           {"--method pmfg --no-raycast", "--no-raycast"},
+           {"--method pt --lighting vpl", "--lighting"}}) {
+    const test::CliRun r = runLucent("render " + kScene + " " + args + " --resolution 8x8 --quiet -o " + exr);
+    INFO(args << ": " << r.output);
+    REQUIRE(r.status != 0);
+    REQUIRE(r.output.find(message) != std::string::npos);
+    REQUIRE(dir.entries().empty());
+  }
+}

@@ -320,7 +320,7 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
                        "micro: how the points are lit: direct (one bounce), vpl, radiosity, photons")
            ->check(CLI::IsMember({"direct", "vpl", "radiosity", "photons"}))->capture_default_str(), micro);
   only(cmd->add_option("--points", m.points, "micro: points in the hierarchy, a power of two (0: from the scene's area and the image footprint)")
-           ->check(CLI::Range(0u, 1u << 23))->capture_default_str(), micro);
+           ->check(CLI::Range(0u, 1u << 31))->capture_default_str(), micro);
   only(cmd->add_option("--point-spacing", m.pointSpacing, "micro: for the default point count, the points' spacing in pixels")
            ->check(CLI::Range(0.01f, 1e6f))->capture_default_str(), micro);
   only(cmd->add_option("--buffer-size", m.bufferSide, "micro: micro-buffer side in pixels, 8 to 32")

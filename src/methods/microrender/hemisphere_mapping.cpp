@@ -213,6 +213,7 @@ void evaluatePixels(HemisphereMapping& m, MappingKind kind, int side, Vec2 jitte
       if (!inside) {
         m.solidAngle[i] = kInf;
         m.weight[i] = Rgb();
+        m.spacing[i] = 1.0f;
         continue;
       }
       m.used.push_back(uint16_t(i));
