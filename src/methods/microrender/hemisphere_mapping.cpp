@@ -159,7 +159,7 @@ Vec2 HemisphereMapping::inverse(Vec3 local) const {
   return {std::min(u, 0x1.fffffep-1f), std::min(v, 0x1.fffffep-1f)};
 }
 
-Vec3 HemisphereMapping::forward(Vec2 uv, bool& inside) const {
+Vec2 HemisphereMapping::forwardDisc(Vec2 uv) const {
   float a = uv.x, b = uv.y;
   if (kind == MappingKind::Warped) {
     const WarpTable& t = *table;
@@ -172,10 +172,14 @@ Vec3 HemisphereMapping::forward(Vec2 uv, bool& inside) const {
     const float dv = rows[k + 1] - rows[k];
     b = (float(k) + std::clamp(dv > 0 ? (uv.y - rows[k]) / dv : 0.5f, 0.0f, 1.0f)) / float(n);
   }
-  const float x = 2.0f * a - 1.0f, y = 2.0f * b - 1.0f;
-  const float z2 = 1.0f - x * x - y * y;
+  return {2.0f * a - 1.0f, 2.0f * b - 1.0f};
+}
+
+Vec3 HemisphereMapping::forward(Vec2 uv, bool& inside) const {
+  const Vec2 q = forwardDisc(uv);
+  const float z2 = 1.0f - q.x * q.x - q.y * q.y;
   inside = z2 > 0;
-  return inside ? Vec3{x, y, std::sqrt(z2)} : Vec3{};
+  return inside ? Vec3{q.x, q.y, std::sqrt(z2)} : Vec3{};
 }
 
 float HemisphereMapping::pdf(Vec3 local) const {
@@ -201,39 +205,41 @@ void evaluatePixels(HemisphereMapping& m, MappingKind kind, int side, Vec2 jitte
   m.solidAngle.resize(n);
   m.weight.resize(n);
   m.spacing.resize(n);
+  m.probe.resize(n);
   m.used.clear();
   const float invN = 1.0f / float(n);
   for (int y = 0; y < side; ++y)
     for (int x = 0; x < side; ++x) {
       const size_t i = size_t(y) * side + x;
-      bool inside;
-      const Vec3 w = m.forward({(float(x) + jitter.x) / float(side), (float(y) + jitter.y) / float(side)}, inside);
-      const Rgb f = inside ? evalBsdf(bsdf, woLocal, w) : Rgb();
-      m.direction[i] = w;
-      if (!inside) {
-        m.solidAngle[i] = kInf;
-        m.weight[i] = Rgb();
-        m.spacing[i] = 1.0f;
-        continue;
-      }
-      m.used.push_back(uint16_t(i));
+      const Vec2 q = m.forwardDisc({(float(x) + jitter.x) / float(side), (float(y) + jitter.y) / float(side)});
+      const float r2 = q.x * q.x + q.y * q.y;
+      const bool inside = r2 < 1.0f;
+      // Pixels whose sample falls outside the disc gather nothing, but nodes can still map to them
+      // (at the rim): they get the solid angle and spacing of the direction at the rim.
+      const float shrink = inside ? 1.0f : 0.9999f / std::sqrt(r2);
+      const Vec2 c{q.x * shrink, q.y * shrink};
+      const Vec3 w{c.x, c.y, std::sqrt(std::max(0.0f, 1.0f - c.x * c.x - c.y * c.y))};
+      m.probe[i] = w;
+      m.direction[i] = inside ? w : Vec3{};
+      m.weight[i] = Rgb();
       if (kind == MappingKind::Nusselt) {
         m.solidAngle[i] = tables.nusseltSolidAngle[i];
-        m.weight[i] = f * (4.0f * invN);  // f cos dOmega = f dA_projected, the pixel's area 4 / N
+        if (inside) m.weight[i] = evalBsdf(bsdf, woLocal, w) * (4.0f * invN);  // f cos dOmega = f dA, dA = 4 / N
       } else {
         const float p = m.pdf(w) / w.z;  // density over the projected disc
         m.solidAngle[i] = invN / (p * w.z);
-        m.weight[i] = f * (invN / p);
+        if (inside) m.weight[i] = evalBsdf(bsdf, woLocal, w) * (invN / p);
       }
+      if (inside) m.used.push_back(uint16_t(i));
     }
-  for (const uint16_t i : m.used) {
-    const int x = i % side, y = i / side;
+  for (size_t i = 0; i < n; ++i) {
+    const int x = int(i) % side, y = int(i) / side;
     float maxCos = -1;
-    for (const int j : {i - 1, i + 1, i - side, i + side}) {
-      const bool neighbour = j >= 0 && j < int(n) && (j / side == y || j % side == x);
-      if (neighbour && m.direction[size_t(j)].z > 0) maxCos = std::max(maxCos, dot(m.direction[i], m.direction[size_t(j)]));
-    }
-    m.spacing[i] = maxCos > -1 ? std::sqrt(std::max(0.0f, 1.0f - maxCos * maxCos)) : 1.0f;
+    if (x > 0) maxCos = std::max(maxCos, dot(m.probe[i], m.probe[i - 1]));
+    if (x + 1 < side) maxCos = std::max(maxCos, dot(m.probe[i], m.probe[i + 1]));
+    if (y > 0) maxCos = std::max(maxCos, dot(m.probe[i], m.probe[i - side]));
+    if (y + 1 < side) maxCos = std::max(maxCos, dot(m.probe[i], m.probe[i + side]));
+    m.spacing[i] = std::sqrt(std::max(0.0f, 1.0f - maxCos * maxCos));
   }
 }
 

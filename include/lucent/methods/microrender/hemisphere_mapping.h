@@ -62,13 +62,14 @@ struct HemisphereMapping {
 
   // Per pixel, row-major (row y, column x), filled by evaluatePixels.
   std::vector<Vec3> direction;    // local frame; (0, 0, 0) for unused pixels
-  std::vector<float> solidAngle;  // Omega(x, y); +inf for unused pixels, so that nodes mapping there stop
+  std::vector<float> solidAngle;  // Omega(x, y)
   std::vector<Rgb> weight;        // radiance weight in the convolution; 0 for unused pixels
   // Sine of the smallest angle from the pixel's direction to a used neighbour's: nodes splat into a
   // pixel and the neighbours their sphere covers, so a node no wider than this reaches no further.
   // Where pixels are anisotropic (the Nusselt rim: radially stretched by 1 / cos) this, not the
   // solid angle, limits the node size.
   std::vector<float> spacing;
+  std::vector<Vec3> probe;        // the direction, or for unused pixels the nearest one at the rim
   std::vector<uint16_t> used;     // the pixels with a direction, in order
   uint32_t pixelCount() const { return uint32_t(width * height); }
 
@@ -76,6 +77,7 @@ struct HemisphereMapping {
   // direction of (u, v) (Phi); `inside` is false where (u, v) maps outside the disc.
   Vec2 inverse(Vec3 local) const;
   Vec3 forward(Vec2 uv, bool& inside) const;
+  Vec2 forwardDisc(Vec2 uv) const;  // (omega_x, omega_y) of (u, v), possibly outside the disc
   int pixelOf(Vec3 local) const {
     const Vec2 uv = inverse(local);
     const int x = std::min(int(uv.x * float(width)), width - 1), y = std::min(int(uv.y * float(height)), height - 1);
