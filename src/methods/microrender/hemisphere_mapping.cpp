@@ -146,19 +146,6 @@ void tabulateBrdfSlice(const SurfaceBsdf& bsdf, Vec3 woLocal, const MappingTable
   buildCdfs(table);
 }
 
-Vec2 HemisphereMapping::inverse(Vec3 local) const {
-  const float a = std::clamp((local.x + 1.0f) * 0.5f, 0.0f, 0x1.fffffep-1f);
-  const float b = std::clamp((local.y + 1.0f) * 0.5f, 0.0f, 0x1.fffffep-1f);
-  if (kind == MappingKind::Nusselt) return {a, b};
-  const WarpTable& t = *table;
-  const int n = t.size;
-  const int j = std::min(int(a * float(n)), n - 1), k = std::min(int(b * float(n)), n - 1);
-  const float* rows = &t.rowCdf[size_t(j) * (n + 1)];
-  const float u = t.columnCdf[j] + (a * float(n) - float(j)) * (t.columnCdf[j + 1] - t.columnCdf[j]);
-  const float v = rows[k] + (b * float(n) - float(k)) * (rows[k + 1] - rows[k]);
-  return {std::min(u, 0x1.fffffep-1f), std::min(v, 0x1.fffffep-1f)};
-}
-
 Vec2 HemisphereMapping::forwardDisc(Vec2 uv) const {
   float a = uv.x, b = uv.y;
   if (kind == MappingKind::Warped) {

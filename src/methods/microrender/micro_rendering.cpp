@@ -12,6 +12,10 @@ namespace lucent {
 
 namespace {
 
+// Slope (rise over run) below which a node lying along the receiver's tangent plane is dropped:
+// 0.6 degrees.
+constexpr float kHorizonSlope = 0.01f;
+
 struct FloatNodes {
   const TraversalNode* nodes;
   TraversalNode operator()(uint32_t i) const { return nodes[i]; }
@@ -93,6 +97,19 @@ class MicroRasterizer {
         // axis is more than 90 degrees + alpha + beta away from that direction.
         const float sinA = node.radius / d, cosA = std::sqrt(std::max(0.0f, 1.0f - sinA * sinA));
         if (cosA * node.coneCos - sinA * node.coneSin > 0 && cosToAxis < -(sinA * node.coneCos + cosA * node.coneSin)) {
+          i = nextNodeSkippingSubtree(i);
+          continue;
+        }
+        // Coplanar culling: a flat node lying in the receiver's tangent plane (the receiver's own
+        // floor or wall) is seen, if at all, within kHorizonSlope of the horizon. Its leaves would be
+        // culled one by one (their planes pass through the receiver); this stops the descent early.
+        // The leaves' planes are tilted from the tangent plane by at most the cone's angle plus the
+        // axis's tilt; within the sphere they rise at most r sin(tilt) above the centre's height.
+        const float cosTilt = std::abs(dot(node.axis, normal));
+        const float sinTilt = std::sqrt(std::max(0.0f, 1.0f - cosTilt * cosTilt));
+        const float cosAll = cosTilt * node.coneCos - sinTilt * node.coneSin;  // cos(tilt + beta)
+        const float sinAll = cosAll > 0 ? node.coneSin * cosTilt + node.coneCos * sinTilt : 1.0f;
+        if (std::abs(dot(v, normal)) + node.radius * sinAll <= g_.selfDistance + kHorizonSlope * (d - node.radius)) {
           i = nextNodeSkippingSubtree(i);
           continue;
         }

@@ -75,7 +75,19 @@ struct HemisphereMapping {
 
   // Continuous pixel coordinates (u, v) in [0, 1)^2 of a local direction with z > 0 (Phi^-1), and the
   // direction of (u, v) (Phi); `inside` is false where (u, v) maps outside the disc.
-  Vec2 inverse(Vec3 local) const;
+  Vec2 inverse(Vec3 local) const {  // inline: the traversal maps every node it visits
+    const float a = std::clamp((local.x + 1.0f) * 0.5f, 0.0f, 0x1.fffffep-1f);
+    const float b = std::clamp((local.y + 1.0f) * 0.5f, 0.0f, 0x1.fffffep-1f);
+    if (kind == MappingKind::Nusselt) return {a, b};
+    const WarpTable& t = *table;
+    const int n = t.size;
+    const float an = a * float(n), bn = b * float(n);
+    const int j = std::min(int(an), n - 1), k = std::min(int(bn), n - 1);
+    const float* rows = &t.rowCdf[size_t(j) * (n + 1)];
+    const float u = t.columnCdf[j] + (an - float(j)) * (t.columnCdf[j + 1] - t.columnCdf[j]);
+    const float v = rows[k] + (bn - float(k)) * (rows[k + 1] - rows[k]);
+    return {std::min(u, 0x1.fffffep-1f), std::min(v, 0x1.fffffep-1f)};
+  }
   Vec3 forward(Vec2 uv, bool& inside) const;
   Vec2 forwardDisc(Vec2 uv) const;  // (omega_x, omega_y) of (u, v), possibly outside the disc
   int pixelOf(Vec3 local) const {
