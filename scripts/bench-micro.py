@@ -54,17 +54,11 @@ def relmse(image, ref):
 
 
 def shares(summary):
-    """The paper's breakdown: each stage's share of the render, gathering's parts scaled from thread time."""
+    """The paper's breakdown: each stage's share of the whole render."""
     st = summary["stages"]
-    gather = st.get("final_gathering", 0)
-    parts = {k: st.get(k, 0) for k in ("build_mappings", "evaluate_mappings", "rasterize", "ray_casting", "convolution")}
-    cpu = sum(parts.values()) or 1
-    wall = {k: gather * v / cpu for k, v in parts.items()}
-    wall["hierarchy_update"] = st.get("hierarchy_update", 0)
-    wall["upsampling"] = st.get("upsampling", 0)
     total = summary["seconds"]
-    rest = total - sum(wall[k] for k in SHARES)
-    return {k: wall[k] / total for k in SHARES} | {"rest (shading, direct light, lighting the points, I/O)": rest / total}
+    parts = {k: st.get(k, 0) / total for k in SHARES}
+    return parts | {"rest (shading, direct light, lighting the points, I/O)": 1 - sum(parts.values())}
 
 
 def main():

@@ -4,42 +4,18 @@
 
 #include "lucent/core/rng.h"
 #include "lucent/scene/bsdf.h"
+#include "test_bsdfs.h"
 
 using namespace lucent;
 
 namespace {
 
-Vec3 directionAt(float theta, float phi) {
-  return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
-}
+using test::directionAt;
 
-SurfaceBsdf phong(float kd, float ks, float ns) {
-  SurfaceBsdf b;
-  b.type = MaterialType::Phong;
-  b.kd = Rgb(kd);
-  b.ks = Rgb(ks);
-  b.ns = ns;
-  return b;
-}
+SurfaceBsdf phong(float kd, float ks, float ns) { return test::phongBsdf(Rgb(kd), Rgb(ks), ns); }
 
-// Directional albedo  a(wo) = integral of f(wo, wi) cos(theta_i) over the hemisphere, by the midpoint
-// rule in coordinates centred on the mirror direction (where the Phong lobe is narrow), fine enough
-// to resolve cos^1000.
-double albedo(const SurfaceBsdf& b, Vec3 wo) {
-  const Frame lobe(reflect(wo, {0, 0, 1}));
-  const int nAlpha = 6000, nPhi = 360;
-  double sum = 0;
-  for (int i = 0; i < nAlpha; ++i) {
-    const double alpha = (i + 0.5) * kPi / nAlpha;
-    double ring = 0;
-    for (int j = 0; j < nPhi; ++j) {
-      const Vec3 wi = lobe.toWorld(directionAt(float(alpha), float((j + 0.5) * 2 * kPi / nPhi)));
-      if (wi.z > 0) ring += evalBsdf(b, wo, wi).g * wi.z;
-    }
-    sum += ring * std::sin(alpha);
-  }
-  return sum * (kPi / nAlpha) * (2 * kPi / nPhi);
-}
+// Directional albedo (green channel; the tests' BSDFs are grey).
+double albedo(const SurfaceBsdf& b, Vec3 wo) { return test::directionalAlbedo(b, wo).g; }
 
 }  // namespace
 

@@ -10,6 +10,7 @@
 #include "chi2.h"
 #include "lucent/core/rng.h"
 #include "lucent/scene/bsdf.h"
+#include "test_bsdfs.h"
 
 using namespace lucent;
 using chi2::DirectionSample;
@@ -22,24 +23,9 @@ namespace {
 constexpr int kChi2Tests = 25;
 const double kAlpha = chi2::sidak(0.01, kChi2Tests);
 
-Vec3 directionAt(double theta, double phi) {
-  return {float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)), float(std::cos(theta))};
-}
-
-SurfaceBsdf diffuse(Rgb kd) {
-  SurfaceBsdf b;
-  b.type = MaterialType::Diffuse;
-  b.kd = kd;
-  return b;
-}
-SurfaceBsdf phong(Rgb kd, Rgb ks, float ns) {
-  SurfaceBsdf b;
-  b.type = MaterialType::Phong;
-  b.kd = kd;
-  b.ks = ks;
-  b.ns = ns;
-  return b;
-}
+using test::directionAt;
+const auto diffuse = &test::diffuseBsdf;
+const auto phong = &test::phongBsdf;
 SurfaceBsdf glass(float ni) {
   SurfaceBsdf b;
   b.type = MaterialType::Glass;

@@ -14,6 +14,7 @@
 #include "lucent/methods/pathtrace.h"
 #include "lucent/scene/loader.h"
 #include "methods/microrender/gathering.h"
+#include "test_bsdfs.h"
 #include "test_scenes.h"
 #include "test_support.h"
 
@@ -25,22 +26,9 @@ namespace {
 constexpr int kChi2Tests = 9;
 const double kAlpha = chi2::sidak(0.01, kChi2Tests);
 
-SurfaceBsdf diffuseBsdf(Rgb kd) {
-  SurfaceBsdf b;
-  b.kd = kd;
-  return b;
-}
-SurfaceBsdf phongBsdf(Rgb kd, Rgb ks, float ns) {
-  SurfaceBsdf b;
-  b.type = MaterialType::Phong;
-  b.kd = kd;
-  b.ks = ks;
-  b.ns = ns;
-  return b;
-}
-Vec3 directionAt(double theta, double phi) {
-  return {float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)), float(std::cos(theta))};
-}
+using test::diffuseBsdf;
+using test::directionAt;
+using test::phongBsdf;
 
 // A mapping evaluated for a BSDF and view direction, with its own table when it needs one.
 struct TestMapping {
@@ -62,18 +50,7 @@ struct TestMapping {
   }
 };
 
-// Directional albedo of a BSDF for wo, by midpoint quadrature over the hemisphere in (cos theta, phi).
-double directionalAlbedo(const SurfaceBsdf& b, Vec3 wo) {
-  constexpr int kCos = 1200, kPhi = 600;
-  double sum = 0;
-  for (int i = 0; i < kCos; ++i)
-    for (int j = 0; j < kPhi; ++j) {
-      const double z = (i + 0.5) / kCos, phi = 2 * kPi * (j + 0.5) / kPhi, r = std::sqrt(1 - z * z);
-      const Vec3 wi{float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)};
-      sum += evalBsdf(b, wo, wi).average() * z;
-    }
-  return sum * (2 * kPi) / (double(kCos) * kPhi);
-}
+double directionalAlbedo(const SurfaceBsdf& b, Vec3 wo) { return test::directionalAlbedo(b, wo).average(); }
 
 }  // namespace
 
@@ -217,7 +194,7 @@ struct GatherSetup {
   GatherContext ctx;
   GatherSetup(const Scene& scene, uint32_t points, NodeEncoding encoding, MappingKind mapping, bool rayCasting,
               Rgb (*leafRadiance)(Vec3 position), int side = 24)
-      : hierarchy(buildPointHierarchy(scene, {.pointCount = points, .encoding = encoding})),
+      : hierarchy(buildPointHierarchy(scene, {.pointCount = points, .sampling = {}, .discAreaScale = 3.0f, .encoding = encoding})),
         micro(prepareMicroHierarchy(hierarchy)),
         tables(makeMappingTables(side, 32)) {
     radiance.rgb.assign(hierarchy.nodeCount(), Rgb());

@@ -172,7 +172,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     });
     return sortClock.seconds();
   };
-  const double gatherSeconds = gather(gatherOrder, step == 1 ? 1.0 : 0.9, 0.0);
+  double gatherSeconds = gather(gatherOrder, step == 1 ? 1.0 : 0.9, 0.0);
   uint64_t recomputed = 0;
   double upsampleSeconds = 0;
   if (step > 1) {
@@ -186,17 +186,20 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     std::vector<uint32_t> left = upsampleIndirect(eye.points, us, shading.indirect);
     upsampleSeconds = upClock.seconds();
     recomputed = left.size();
-    gather(left, 0.1, 0.9);
+    gatherSeconds += gather(left, 0.1, 0.9);
   }
 
+  // Gathering's parts are timed per thread; the stage's wall time is split in proportion.
   GatherTotals totals;
   totals.add(scratch);
+  const double cpu = totals.build + totals.evaluate + totals.rasterize + totals.rayCast + totals.convolve;
+  const double scale = cpu > 0 ? gatherSeconds / cpu : 0.0;
   stats.addStage("final_gathering", gatherSeconds);
-  stats.addStage("build_mappings", totals.build);
-  stats.addStage("evaluate_mappings", totals.evaluate);
-  stats.addStage("rasterize", totals.rasterize);
-  stats.addStage("ray_casting", totals.rayCast);
-  stats.addStage("convolution", totals.convolve);
+  stats.addStage("build_mappings", totals.build * scale);
+  stats.addStage("evaluate_mappings", totals.evaluate * scale);
+  stats.addStage("rasterize", totals.rasterize * scale);
+  stats.addStage("ray_casting", totals.rayCast * scale);
+  stats.addStage("convolution", totals.convolve * scale);
   stats.addStage("upsampling", upsampleSeconds);
 
   Stopwatch imageClock;

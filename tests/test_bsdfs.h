@@ -1,0 +1,51 @@
+// BSDFs and directions that several test files build, and the directional albedo by quadrature.
+#pragma once
+#include <cmath>
+
+#include "lucent/scene/bsdf.h"
+
+namespace lucent::test {
+
+inline Vec3 directionAt(double theta, double phi) {
+  return {float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)), float(std::cos(theta))};
+}
+
+inline SurfaceBsdf diffuseBsdf(Rgb kd) {
+  SurfaceBsdf b;
+  b.type = MaterialType::Diffuse;
+  b.kd = kd;
+  return b;
+}
+
+inline SurfaceBsdf phongBsdf(Rgb kd, Rgb ks, float ns) {
+  SurfaceBsdf b;
+  b.type = MaterialType::Phong;
+  b.kd = kd;
+  b.ks = ks;
+  b.ns = ns;
+  return b;
+}
+
+// Directional albedo a(wo) = integral of f(wo, wi) cos(theta_i) over the hemisphere, per channel, by
+// the midpoint rule in coordinates centred on the mirror direction (where the Phong lobe is narrow),
+// fine enough to resolve cos^1000.
+inline Rgb directionalAlbedo(const SurfaceBsdf& b, Vec3 wo) {
+  const Frame lobe(reflect(wo, {0, 0, 1}));
+  const int nAlpha = 6000, nPhi = 360;
+  double sum[3] = {0, 0, 0};
+  for (int i = 0; i < nAlpha; ++i) {
+    const double alpha = (i + 0.5) * kPi / nAlpha;
+    double ring[3] = {0, 0, 0};
+    for (int j = 0; j < nPhi; ++j) {
+      const Vec3 wi = lobe.toWorld(directionAt(alpha, (j + 0.5) * 2 * kPi / nPhi));
+      if (wi.z <= 0) continue;
+      const Rgb f = evalBsdf(b, wo, wi);
+      for (int c = 0; c < 3; ++c) ring[c] += f[c] * wi.z;
+    }
+    for (int c = 0; c < 3; ++c) sum[c] += ring[c] * std::sin(alpha);
+  }
+  const double scale = (kPi / nAlpha) * (2 * kPi / nPhi);
+  return Rgb(float(sum[0] * scale), float(sum[1] * scale), float(sum[2] * scale));
+}
+
+}  // namespace lucent::test
