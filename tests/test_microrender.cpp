@@ -342,15 +342,15 @@ double relMse(const Image& a, const Image& b, const std::string& first = "R") {
   return sum / (3.0 * a.width() * a.height());
 }
 
-// Image mean of one channel over the three colour channels.
-double meanOf(const Image& image, const std::string& first = "R") {
-  const int c0 = image.channelIndex(first);
-  double sum = 0;
-  for (int y = 0; y < image.height(); ++y)
-    for (int x = 0; x < image.width(); ++x)
-      for (int c = 0; c < 3; ++c) sum += image.at(x, y, c0 + c);
-  return sum / (3.0 * image.width() * image.height());
+// The Cornell box at size x size pixels.
+Scene cornellBoxAt(int size) {
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
+  scene.camera.width = scene.camera.height = size;
+  return scene;
 }
+
+// Mean of the indirect layer's red channel, for messages.
+double indirectMean(const Image& image) { return test::channelMean(image, image.channelIndex("indirect.R")).mean; }
 
 }  // namespace
 
@@ -406,8 +406,7 @@ TEST_CASE("Cornell box: micro with direct-lit points agrees with the path tracer
   // both, so that edges are box-filtered alike. The full image within relMSE 0.02 at 24 x 24 and
   // the default point spacing; the indirect layer's error (the gathering's alone) falls as points
   // and buffer sides grow.
-  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
-  scene.camera.width = scene.camera.height = 48;
+  const Scene scene = cornellBoxAt(48);
   const Visibility vis(scene);
   const ParallelScope threads(2);
   PathTraceOptions pt;
@@ -424,10 +423,10 @@ TEST_CASE("Cornell box: micro with direct-lit points agrees with the path tracer
     o.layers = true;
     return renderMicro(scene, vis, o).image;
   };
-  const Image standard = micro(defaultPointCount(scene, 4.0f) , 24);
+  const Image standard = micro(defaultPointCount(scene, 4.0f), 24);
   const double full = relMse(standard, reference);
-  INFO("full image relMSE " << full << ", indirect means " << meanOf(standard, "indirect.R") << " / "
-                            << meanOf(reference, "indirect.R"));
+  INFO("full image relMSE " << full << ", indirect means " << indirectMean(standard) << " / "
+                            << indirectMean(reference));
   CHECK(full < 0.02);
   const std::vector<std::pair<uint32_t, int>> settings = {{1u << 10, 8}, {1u << 12, 16}, {1u << 15, 24}};
   double previous = 1e30;
@@ -435,7 +434,7 @@ TEST_CASE("Cornell box: micro with direct-lit points agrees with the path tracer
     const Image image = micro(points, side);
     const double e = relMse(image, reference, "indirect.R");
     INFO(points << " points, " << side << " x " << side << ": indirect relMSE " << e << ", mean "
-                << meanOf(image, "indirect.R") << " against " << meanOf(reference, "indirect.R"));
+                << indirectMean(image) << " against " << indirectMean(reference));
     CHECK(e < previous);
     previous = e;
   }
@@ -445,8 +444,7 @@ TEST_CASE("Bilateral upsampling: 1/4 and 1/16 of the pixels gathered, close to g
   // Indirect light interpolated from a lattice must stay close to the full gather (relMSE of the
   // indirect layer below 0.01 at 1/4 and 0.02 at 1/16 on the Cornell box), gather at about 1/4 or
   // 1/16 of the points, and gather again where the weights vanish (the blocks' silhouettes).
-  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
-  scene.camera.width = scene.camera.height = 64;
+  const Scene scene = cornellBoxAt(64);
   const Visibility vis(scene);
   const ParallelScope threads(2);
   MicroRenderOptions o;
@@ -476,8 +474,7 @@ TEST_CASE("Bilateral upsampling: 1/4 and 1/16 of the pixels gathered, close to g
 }
 
 TEST_CASE("micro: the same image whatever the thread count", "[microrender]") {
-  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
-  scene.camera.width = scene.camera.height = 24;
+  const Scene scene = cornellBoxAt(24);
   const Visibility vis(scene);
   for (const PointLighting lighting : {PointLighting::Direct, PointLighting::Radiosity, PointLighting::Vpl}) {
     MicroRenderOptions o;

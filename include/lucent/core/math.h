@@ -95,10 +95,15 @@ struct Frame {
   Vec3 toWorld(Vec3 v) const { return s * v.x + t * v.y + n * v.z; }
 };
 
-// Offsets a ray origin off the surface along the geometric normal, scaled to the coordinates'
-// magnitude so that it works for scenes in millimetres and in metres alike.
+// The distance below which a ray leaving p could meet p's own surface again through rounding: scaled
+// to the coordinates' magnitude so that it works for scenes in millimetres and in metres alike.
+inline float selfIntersectionScale(Vec3 p) {
+  return 1e-4f * std::max({1.0f, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+}
+
+// Offsets a ray origin off the surface along the geometric normal, by selfIntersectionScale.
 inline Vec3 offsetOrigin(Vec3 p, Vec3 ng, Vec3 w) {
-  const float scale = 1e-4f * std::max({1.0f, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  const float scale = selfIntersectionScale(p);
   return p + ng * (dot(w, ng) > 0 ? scale : -scale);
 }
 

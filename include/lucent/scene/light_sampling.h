@@ -86,8 +86,7 @@ inline Ray shadowRay(Vec3 p, Vec3 ng, const LightSample& ls) {
     const Vec3 to = ls.point - r.origin;
     const float d = length(to);
     r.direction = to / d;
-    const Vec3 q = ls.point;
-    r.tMax = d - 1e-4f * std::max({1.0f, std::abs(q.x), std::abs(q.y), std::abs(q.z)});
+    r.tMax = d - selfIntersectionScale(ls.point);
   }
   return r;
 }

@@ -54,7 +54,7 @@ inline GatherPoint jitteredGatherPoint(Vec3 position, Vec3 normal, Rng& rng, Vec
   g.frame = f;
   g.frame.s = f.s * c + f.t * s;
   g.frame.t = f.t * c - f.s * s;
-  g.selfDistance = 1e-4f * std::max({1.0f, std::abs(position.x), std::abs(position.y), std::abs(position.z)});
+  g.selfDistance = selfIntersectionScale(position);
   pixelJitter = rng.uniform2();
   return g;
 }

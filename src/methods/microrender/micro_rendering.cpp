@@ -4,7 +4,6 @@
 #include "lucent/methods/microrender/micro_rendering.h"
 
 #include <cmath>
-#include <limits>
 
 #include "lucent/core/stats.h"
 

@@ -189,7 +189,7 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
     const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, pm, GlobalPhotons::All, photonStats);
     for (const auto& [name, s] : photonStats.stageSeconds) stats.addStage("point_lighting." + name, s);
     for (const auto& [name, v] : photonStats.counters) stats.addCounter(name, v);
-    std::vector<Rgb> leaves(h.leafCount);
+    radiance.rgb.assign(h.nodeCount(), Rgb());
     withPhotonMaps(maps, PhotonMapKind::KdTree, [&](const auto* global, const auto*) {
       if (!global) return;
       tbb::enumerable_thread_specific<std::vector<PhotonDistance>> heaps(std::vector<PhotonDistance>(maps.globalSettings.k));
@@ -202,11 +202,10 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
         q.frame = Frame(leaf.normal);
         q.woLocal = {0, 0, 1};
         q.bsdf.kd = leaf.albedo;
-        leaves[j] = estimateRadiance(*global, q, maps.globalSettings, heaps.local().data(), counters.local());
+        radiance.rgb[h.leafCount + j] =
+            estimateRadiance(*global, q, maps.globalSettings, heaps.local().data(), counters.local());
       });
     });
-    radiance.rgb.assign(h.nodeCount(), Rgb());
-    for (uint32_t j = 0; j < h.leafCount; ++j) radiance.rgb[h.leafCount + j] = leaves[j];
     pullRadiance(h, radiance.rgb);
     radiance.finish(h.encoding);
     return radiance;
