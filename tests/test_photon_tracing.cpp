@@ -188,3 +188,68 @@ TEST_CASE("Caustic-only tracing stores the caustic photons of full tracing, flag
   for (const Photon& p : full.caustic) REQUIRE(photonIsCaustic(p));
   REQUIRE(only.alivePerBounce.size() < full.alivePerBounce.size());
 }
+
+TEST_CASE("Caustic emission aimed at the specular objects stores the same caustic power", "[photons][caustic]") {
+  // Aiming changes the density of the sampled paths, not their expectation: the caustic map's
+  // total power with and without aiming agrees within the two estimates' standard errors, for an
+  // area light, a point light, a directional light and an environment, while aiming stores many
+  // more photons per path.
+  auto caustic = [](const Scene& scene, uint32_t photons, bool aimed) {
+    const Visibility vis(scene);
+    PhotonTracingOptions opt;
+    opt.photons = photons;
+    opt.causticOnly = true;
+    opt.seed = aimed ? 3 : 4;
+    if (aimed) opt.target = specularTarget(scene);
+    REQUIRE(opt.target.has_value() == aimed);
+    const std::vector<Photon> stored = tracePhotons(scene, vis, opt).caustic;
+    // Each path stores at most one caustic photon: the total is a mean over paths.
+    double sum = 0, sum2 = 0;
+    for (const Photon& p : stored) {
+      const double v = double(p.power.r) + p.power.g + p.power.b;
+      sum += v, sum2 += v * v;
+    }
+    const double variance = std::max(0.0, sum2 - sum * sum / photons);
+    return std::tuple{sum, std::sqrt(variance), stored.size()};
+  };
+  auto mirrorOnPlane = [](bool environment) {
+    Scene scene;
+    Material grey, mirror;
+    grey.kd = Rgb(0.5f);
+    mirror.type = MaterialType::Mirror;
+    mirror.kd = Rgb(0.0f);
+    mirror.ks = Rgb(0.9f);
+    test::addBox(scene, {-2, -0.01f, -2}, {2, 0, 2}, test::addMaterial(scene, grey, "grey"), false);
+    test::addBox(scene, {-0.3f, 0.2f, -0.3f}, {0.3f, 0.5f, 0.3f}, test::addMaterial(scene, mirror, "mirror"), false);
+    if (environment) {
+      scene.environment.present = true;
+      scene.environment.radiance = Rgb(1.0f);
+    } else {
+      scene.lights.push_back({LightType::Directional, 0, normalize(Vec3{0.4f, -1.0f, 0.1f}), Rgb(2.0f)});
+    }
+    scene.camera = test::testCamera({0, 3, 3}, {0, 0, 0}, 8, 8);
+    finalizeScene(scene);
+    return scene;
+  };
+  struct Case {
+    const char* name;
+    Scene scene;
+    uint32_t photons;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"area light", loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true}), 100000});
+  cases.push_back({"point light", loadScene(LUCENT_SOURCE_DIR "/scenes/ring.json", {true}), 400000});
+  cases.push_back({"directional", mirrorOnPlane(false), 100000});
+  cases.push_back({"environment", mirrorOnPlane(true), 200000});
+  for (const Case& c : cases) {
+    const auto [plain, plainError, plainStored] = caustic(c.scene, c.photons, false);
+    const auto [aimed, aimedError, aimedStored] = caustic(c.scene, c.photons / 4, true);
+    INFO(c.name << ": caustic power " << aimed << " +- " << aimedError << " aimed (" << aimedStored << " photons), "
+                << plain << " +- " << plainError << " in every direction (" << plainStored << " photons)");
+    REQUIRE(plainStored > 100);
+    REQUIRE(std::abs(aimed - plain) <= 4 * std::hypot(aimedError, plainError));
+    // Per path (a quarter as many aimed): a smaller variance and more photons stored.
+    REQUIRE(aimedError * std::sqrt(c.photons / 4.0) < plainError * std::sqrt(double(c.photons)));
+    REQUIRE(aimedStored * 4.0 > 1.5 * plainStored);
+  }
+}

@@ -280,7 +280,7 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
                       ->check(CLI::Range(0u, 1u << 28))->capture_default_str();
   only(args->photons, pmMicro);
   only(cmd->add_option("--caustic-photons", o.causticPhotons,
-                       "purcell, pmfg: photon paths emitted for the caustic map (0: no caustic map)")
+                       "purcell, pmfg: photon paths emitted for the caustic map, towards the mirrors and glass (0: no caustic map)")
            ->check(CLI::Range(0u, 1u << 28))->capture_default_str(), pm);
   only(cmd->add_option("--k", o.k, "purcell, pmfg, micro (--lighting photons): photons sought per radiance estimate")
            ->check(CLI::Range(1u, 1u << 20))->capture_default_str(), pmMicro);

@@ -18,7 +18,8 @@ enum class PhotonMapKind { Sort, Stencil, Hash, KdTree };
 struct PhotonMapOptions {
   uint32_t photons = 65000;         // photon paths emitted for the global map (the paper counts the
                                     // photons stored: CORNELL BOX 65,000)
-  uint32_t causticPhotons = 65000;  // photon paths emitted for the caustic map; 0: no caustic map
+  uint32_t causticPhotons = 65000;  // photon paths emitted for the caustic map, aimed at the specular
+                                    // objects' bounding sphere; 0: no caustic map
   uint32_t k = 50;                  // photons sought per radiance estimate (paper: 32, 64, 500)
   uint32_t causticK = 0;            // for the caustic map; 0: k
   float maxRadius = 0;              // maximum search radius; 0: 0.1 x the scene's bounding-box diagonal

@@ -121,35 +121,83 @@ struct EmissionSample {
   bool valid = false;
 };
 
+// A sphere that emission can be aimed at: Jensen's projection maps reduced to one bounding sphere
+// of the specular objects. A caustic path's first hit is specular, so its direction from the light
+// lies in the cone the sphere subtends, and emitting only into that cone (with the cone's density)
+// samples every caustic path at a fraction of the cost.
+struct EmissionTarget {
+  Vec3 center;
+  float radius = 0;
+};
+
+// The cone of directions from x towards the target; false when x lies inside the sphere.
+struct TargetCone {
+  Frame frame;       // axis towards the centre
+  float cosMax = 1;  // cosine of the half-angle
+  float solidAngle = 0;
+};
+inline bool coneTowards(const EmissionTarget& target, Vec3 x, TargetCone& cone) {
+  const Vec3 d = target.center - x;
+  const float dist2 = dot(d, d), sin2 = target.radius * target.radius / dist2;
+  if (!(sin2 < 1)) return false;
+  cone.cosMax = std::sqrt(1 - sin2);
+  cone.solidAngle = 2 * kPi * sin2 / (1 + cone.cosMax);  // 2 pi (1 - cosMax), without cancellation
+  cone.frame = Frame(d / std::sqrt(dist2));
+  return true;
+}
+
 // Area lights emit cosine-distributed from a uniform point; point lights uniformly over the sphere;
 // directional and environment light enter through a disc of the scene's bounding radius R placed
 // upstream of the scene, perpendicular to the direction, so that it covers every surface.
-inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPosition, Vec2 uDirection) {
+// With a target, area and point lights emit uniformly into the target's cone (when the emitting
+// point lies outside the sphere) and directional and environment light enter through a disc of
+// the target's radius in front of it: only paths whose first hit lies in the sphere are sampled.
+inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPosition, Vec2 uDirection,
+                                     const EmissionTarget* target = nullptr) {
   EmissionSample s;
   if (scene.lights.empty()) return s;
   float pmf;
   const Light& light = scene.lights[scene.lightDistribution.sampleDiscrete(uLight, &pmf)];
   if (!(pmf > 0)) return s;
-  const Vec3 center = scene.boundingCenter();
-  const float radius = std::max(scene.boundingRadius(), 1e-6f);
-  // Origin on a disc of radius R, perpendicular to `travel`, a distance R upstream of the centre.
+  const Vec3 sceneCenter = scene.boundingCenter();
+  const float sceneRadius = std::max(scene.boundingRadius(), 1e-6f);
+  // The disc that directional and environment light enter through: the scene's, or the target's
+  // moved upstream until it lies outside the scene's bounding sphere.
+  const Vec3 discCenter = target ? target->center : sceneCenter;
+  const float discRadius = target ? target->radius : sceneRadius;
+  const float upstream = target ? length(target->center - sceneCenter) + sceneRadius : sceneRadius;
   auto discOrigin = [&](Vec3 travel) {
     const Vec2 d = sampleConcentricDisk(uPosition);
-    return center - travel * radius + Frame(travel).toWorld({d.x * radius, d.y * radius, 0});
+    return discCenter - travel * upstream + Frame(travel).toWorld({d.x * discRadius, d.y * discRadius, 0});
   };
-  const float discArea = kPi * radius * radius;
+  const float discArea = kPi * discRadius * discRadius;
+  TargetCone cone;
   switch (light.type) {
     case LightType::Triangle: {
       const uint32_t t = light.triangle;
       const Vec2 b = sampleUniformTriangle(uPosition);
       const Vec3 p = scene.vertex(t, 0) * (1 - b.x - b.y) + scene.vertex(t, 1) * b.x + scene.vertex(t, 2) * b.y;
       const Vec3 n = scene.geometricNormal(t);
+      const Rgb le = scene.materials[scene.materialIds[t]].ke;
+      if (target && coneTowards(*target, p, cone)) {
+        const Vec3 d = cone.frame.toWorld(sampleUniformCone(uDirection, cone.cosMax));
+        const float cosTheta = dot(d, n);
+        if (!(cosTheta > 0)) return s;  // behind the one-sided emitter
+        s.ray = {offsetOrigin(p, n, d), d};
+        s.power = le * (cosTheta * cone.solidAngle * scene.triangleArea(t) / pmf);
+        break;
+      }
       const Vec3 d = Frame(n).toWorld(sampleCosineHemisphere(uDirection));
       s.ray = {offsetOrigin(p, n, d), d};
-      s.power = scene.materials[scene.materialIds[t]].ke * (kPi * scene.triangleArea(t) / pmf);
+      s.power = le * (kPi * scene.triangleArea(t) / pmf);
       break;
     }
     case LightType::Point:
+      if (target && coneTowards(*target, light.vector, cone)) {
+        s.ray = {light.vector, cone.frame.toWorld(sampleUniformCone(uDirection, cone.cosMax))};
+        s.power = light.value * (cone.solidAngle / pmf);
+        break;
+      }
       s.ray = {light.vector, sampleUniformSphere(uDirection)};
       s.power = light.value * (4.0f * kPi / pmf);
       break;

@@ -66,8 +66,11 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
   tracing.seed = options.seed;
   PhotonMaps global;
   if (options.photons > 0) global = tracePhotons(scene, vis, tracing);
+  // Caustic paths start at a specular surface: they are emitted towards the specular objects'
+  // bounding sphere only, and not at all in a scene without mirrors and glass.
   PhotonMaps caustic;
-  if (options.causticPhotons > 0) {
+  tracing.target = specularTarget(scene);
+  if (options.causticPhotons > 0 && tracing.target) {
     tracing.photons = options.causticPhotons;
     tracing.seed = streamSeed(options.seed, RenderStream::CausticPhotons);
     tracing.causticOnly = true;
@@ -96,7 +99,7 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
   for (const auto& [name, s] : globalSub.stageSeconds) stats.addStage("build_map.global." + name, s);
   for (const auto& [name, s] : causticSub.stageSeconds) stats.addStage("build_map.caustic." + name, s);
 
-  stats.addCounter("photons_emitted", uint64_t(options.photons) + options.causticPhotons);
+  stats.addCounter("photons_emitted", uint64_t(global.emitted) + caustic.emitted);
   stats.addCounter("global_photons", maps.global.photons);
   stats.addCounter("caustic_photons", maps.caustic.photons);
   return maps;

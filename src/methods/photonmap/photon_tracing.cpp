@@ -68,11 +68,29 @@ BounceResult bounce(const Scene& scene, const Visibility& vis, const PhotonPath&
 
 }  // namespace
 
+std::optional<EmissionTarget> specularTarget(const Scene& scene) {
+  std::vector<Vec3> vertices;
+  for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
+    const MaterialType type = scene.materials[scene.materialIds[t]].type;
+    if (type == MaterialType::Mirror || type == MaterialType::Glass)
+      for (int v = 0; v < 3; ++v) vertices.push_back(scene.vertex(t, v));
+  }
+  if (vertices.empty()) return std::nullopt;
+  Bounds3 bounds;
+  for (const Vec3& v : vertices) bounds.extend(v);
+  EmissionTarget target{bounds.center(), 0};
+  for (const Vec3& v : vertices) target.radius = std::max(target.radius, length(v - target.center));
+  // Rounding must not put a vertex outside: a margin of the coordinates' scale.
+  target.radius += selfIntersectionScale(target.center);
+  return target;
+}
+
 PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonTracingOptions& options) {
   PhotonMaps maps;
   maps.emitted = options.photons;
   const float share = 1.0f / float(std::max<uint32_t>(1, options.photons));
 
+  const EmissionTarget* target = options.target ? &*options.target : nullptr;
   // Stage 0: emission, one work item per photon.
   Stopwatch emitClock;
   std::vector<PhotonPath> paths(options.photons);
@@ -82,7 +100,7 @@ PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonT
       Rng rng(options.seed, i, 0);
       const float uLight = rng.uniform();
       const Vec2 uPosition = rng.uniform2();
-      const EmissionSample e = sampleEmission(scene, uLight, uPosition, rng.uniform2());
+      const EmissionSample e = sampleEmission(scene, uLight, uPosition, rng.uniform2(), target);
       paths[i] = {e.ray, e.power * share, i, 1};
       emitted[i] = e.valid;
     }

@@ -2,9 +2,11 @@
 // stage, as a wavefront, so that every stage is one data-parallel pass over flat arrays.
 #pragma once
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "lucent/core/stats.h"
+#include "lucent/scene/light_sampling.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
 #include "photon.h"
@@ -18,7 +20,13 @@ struct PhotonTracingOptions {
   // Trace for the caustic map alone: a path ends at its first non-specular surface (after storing
   // there when it came through specular bounces), and `global` stays empty.
   bool causticOnly = false;
+  // Emit only towards this sphere (see EmissionTarget); with causticOnly, the specular objects'.
+  std::optional<EmissionTarget> target;
 };
+
+// The bounding sphere of the scene's mirror and glass triangles, where caustic paths must start;
+// none when the scene has no specular surface.
+std::optional<EmissionTarget> specularTarget(const Scene& scene);
 
 // Photons stored at non-specular surfaces. The caustic map holds those that reached a diffuse or
 // glossy surface through specular bounces only (L S+ D); the global map holds every stored photon
