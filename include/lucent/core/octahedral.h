@@ -20,7 +20,8 @@ inline uint32_t encodeOctahedral(Vec3 v) {
   return quantize(x) | quantize(y) << 16;
 }
 
-inline Vec3 decodeOctahedral(uint32_t e) {
+// The encoded direction, not normalized (its sign against any vector is the unit vector's).
+inline Vec3 octahedralDirection(uint32_t e) {
   const float x = (e & 0xffff) / 65535.0f * 2 - 1, y = (e >> 16) / 65535.0f * 2 - 1;
   Vec3 v{x, y, 1 - std::abs(x) - std::abs(y)};
   if (v.z < 0) {
@@ -29,7 +30,9 @@ inline Vec3 decodeOctahedral(uint32_t e) {
     v.x = ox;
     v.y = oy;
   }
-  return normalize(v);
+  return v;
 }
+
+inline Vec3 decodeOctahedral(uint32_t e) { return normalize(octahedralDirection(e)); }
 
 }  // namespace lucent

@@ -80,23 +80,35 @@ inline void reachAlong(const UniformGrid& g, Vec3 p, float r2, int a, int32_t& l
 
 // Offers photons to the running estimate in the order given.
 template <class Visit>
-void examinePhotons(const Photon* photons, const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
-  for (uint32_t i = 0; i < cp.count; ++i) {
-    if (cp.cellKeys && cp.cellKeys[i] != cp.cellKey) {  // another cell's photon in the bucket
-      ++s.collisionsSkipped;
-      continue;
-    }
-    const Photon& photon = photons[cp.ids[i]];
-    const float d2 = distance2(photon.position, s.position);
+void examinePhotons(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
+  auto otherCell = [&](uint32_t i) {  // another cell's photon in a hash bucket
+    const bool other = cp.cellKeys && cp.cellKeys[i] != cp.cellKey;
+    s.collisionsSkipped += other;
+    return other;
+  };
+  uint32_t i = 0;
+  // While fewer than k are accepted, any photon within the maximum radius is, and the radius grows
+  // to include it.
+  for (; i < cp.count && s.found < s.k; ++i) {
+    if (otherCell(i)) continue;
+    const float d2 = distance2(cp.photons[i].position, s.position);
     ++s.photonsExamined;
-    if (s.found < s.k) {
-      if (d2 > s.maxRadius2) continue;
-      s.radius2 = std::max(s.radius2, d2);  // expand the radius to include the photon
-    } else if (d2 > s.radius2) {
-      continue;
-    }
+    if (d2 > s.maxRadius2) continue;
+    s.radius2 = std::max(s.radius2, d2);
     ++s.found;
-    visit(cp.ids[i], photon, d2);
+    visit(cp.ids[i], cp.photons[i], d2);
+  }
+  // Then the radius stays, and photons within it are accepted.
+  const Vec3 q = s.position;
+  const float radius2 = s.radius2;
+  for (; i < cp.count; ++i) {
+    if (otherCell(i)) continue;
+    const float d2 = distance2(cp.photons[i].position, q);
+    ++s.photonsExamined;
+    if (d2 <= radius2) {
+      ++s.found;
+      visit(cp.ids[i], cp.photons[i], d2);
+    }
   }
 }
 
@@ -105,18 +117,18 @@ void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit)
   const float limit2 = s.found < s.k ? s.maxRadius2 : s.radius2;
   if (map.grid.cellDistance2(s.position, cell) > limit2) return;  // no photon in it can be accepted
   ++s.cellsVisited;
-  examinePhotons(map.photons.data(), map.cellPhotons(cell), s, visit);
+  examinePhotons(map.cellPhotons(cell), s, visit);
 }
 
 // A row of cells (x0..x1, y, z). Where the map keeps a row's photons contiguous in cell order (the
-// sorted grid), they are read in one run: the same photons in the same order as cell by cell,
+// sorted and stencil grids), they are read in one run: the same photons in the same order as cell by cell,
 // without touching the empty cells (a photon in a cell that the acceptance sphere cannot reach is
 // rejected by its own distance). The run counts as one cell visit.
 template <GridPhotonMap Map, class Visit>
 void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_t y, int32_t z, Visit& visit) {
   if constexpr (requires { map.rowPhotons(x0, x1, y, z); }) {
     ++s.cellsVisited;
-    examinePhotons(map.photons.data(), map.rowPhotons(x0, x1, y, z), s, visit);
+    examinePhotons(map.rowPhotons(x0, x1, y, z), s, visit);
   } else {
     for (int32_t x = x0; x <= x1; ++x) exploreCell(map, s, {x, y, z}, visit);
   }

@@ -61,11 +61,12 @@ struct Accumulator {
 
   explicit Accumulator(const EstimatePoint& point) : q(point), diffuse(point.bsdf.type == MaterialType::Diffuse) {}
   void add(const Photon& p, float d2) {
-    const Vec3 wi = q.frame.toLocal(photonIncoming(p));
-    const Rgb share = wi.z <= 0 ? Rgb()  // arrived from the other side of the surface
+    // Which side the photon came from needs no unit vector; the BRDF of a glossy surface does.
+    const bool front = dot(octahedralDirection(p.direction), q.frame.n) > 0;
+    const Rgb share = !front ? Rgb()  // arrived from the other side of the surface
                       : diffuse ? p.power
-                                : evalBsdf(q.bsdf, q.woLocal, wi) * p.power;
-    used += wi.z > 0;
+                                : evalBsdf(q.bsdf, q.woLocal, q.frame.toLocal(photonIncoming(p))) * p.power;
+    used += front;
     sum += share;
     if (d2 > farthestD2) farthestD2 = d2, farthest = share;
   }

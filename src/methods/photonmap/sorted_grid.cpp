@@ -70,6 +70,9 @@ SortedGrid buildSortedGrid(std::vector<Photon> photons, const GridOptions& optio
   Stopwatch countClock;
   map.cellCounts = buildCellCountTable(map.grid, [&](uint32_t c) { return map.firstPhoton[c + 1] - map.firstPhoton[c]; });
   if (stats) stats->addStage("cell_counts", countClock.seconds());
+  Stopwatch gatherClock;
+  map.listedPhotons = gatherPhotons(map.photons, map.photonList);
+  if (stats) stats->addStage("gather_photons", gatherClock.seconds());
   return map;
 }
 
@@ -97,6 +100,9 @@ HashedGrid buildHashedGrid(std::vector<Photon> photons, const GridOptions& optio
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const auto& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) map.cellKeys[i] = cellKeys[map.photonList[i]];
   });
+  Stopwatch gatherClock;
+  map.listedPhotons = gatherPhotons(map.photons, map.photonList);
+  if (stats) stats->addStage("gather_photons", gatherClock.seconds());
   return map;
 }
 

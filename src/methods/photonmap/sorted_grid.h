@@ -18,11 +18,15 @@ struct SortedGrid {
   std::vector<uint32_t> firstPhoton;  // per cell, where its photons start in photonList (an empty
                                       // cell points at the next cell's first photon); one extra
                                       // entry holds the photon count (Fig. 4 "uniform grid")
+  std::vector<Photon> listedPhotons;  // photons[photonList[i]]: the search reads a cell's photons in
+                                      // one run instead of gathering them from all over memory
   CellCountTable cellCounts;          // photons per box of cells, to skip empty ones
 
-  CellPhotons cellPhotons(CellCoord c) const {
-    const uint32_t cell = grid.cellIndex(c);
-    return {photonList.data() + firstPhoton[cell], firstPhoton[cell + 1] - firstPhoton[cell]};
+  CellPhotons cellPhotons(CellCoord c) const { return rowPhotons(c.x, c.x, c.y, c.z); }
+  // Cells x0..x1 of a row are consecutive keys, so their photons are one run of the list.
+  CellPhotons rowPhotons(int32_t x0, int32_t x1, int32_t y, int32_t z) const {
+    const uint32_t first = firstPhoton[grid.cellIndex({x0, y, z})], end = firstPhoton[grid.cellIndex({x1, y, z}) + 1];
+    return {listedPhotons.data() + first, photonList.data() + first, end - first};
   }
 };
 
@@ -38,6 +42,7 @@ struct HashedGrid {
   std::vector<uint32_t> photonList;   // photon indices sorted by bucket, then index
   std::vector<uint64_t> cellKeys;     // UniformGrid::cellKey of each photonList entry
   std::vector<uint32_t> firstPhoton;  // per bucket, as SortedGrid::firstPhoton per cell
+  std::vector<Photon> listedPhotons;  // photons[photonList[i]], as SortedGrid's
   uint32_t bucketMask = 0;            // buckets - 1
 
   uint32_t bucketOf(uint64_t cellKey) const { return uint32_t(mix64(cellKey)) & bucketMask; }
@@ -45,8 +50,8 @@ struct HashedGrid {
   CellPhotons cellPhotons(CellCoord c) const {
     const uint64_t key = UniformGrid::cellKey(c);
     const uint32_t b = bucketOf(key);
-    return {photonList.data() + firstPhoton[b], firstPhoton[b + 1] - firstPhoton[b],
-            cellKeys.data() + firstPhoton[b], key};
+    return {listedPhotons.data() + firstPhoton[b], photonList.data() + firstPhoton[b],
+            firstPhoton[b + 1] - firstPhoton[b], cellKeys.data() + firstPhoton[b], key};
   }
 };
 

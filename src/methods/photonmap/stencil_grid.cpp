@@ -94,6 +94,16 @@ StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& opt
   Stopwatch cellCountClock;
   map.cellCounts = buildCellCountTable(map.grid, [&](uint32_t c) { return map.stored(c); });
   if (stats) stats->addStage("cell_counts", cellCountClock.seconds());
+  Stopwatch gatherClock;
+  map.firstStored.assign(size_t(cells) + 1, 0);
+  for (uint32_t c = 0; c < cells; ++c) map.firstStored[c + 1] = map.firstStored[c] + map.stored(c);
+  map.storedList.resize(map.firstStored[cells]);
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, cells, 256), [&](const auto& r) {
+    for (uint32_t c = r.begin(); c != r.end(); ++c)
+      std::copy_n(map.slots.data() + size_t(c) * capacity, map.stored(c), map.storedList.data() + map.firstStored[c]);
+  });
+  map.listedPhotons = gatherPhotons(map.photons, map.storedList);
+  if (stats) stats->addStage("gather_photons", gatherClock.seconds());
   return map;
 }
 

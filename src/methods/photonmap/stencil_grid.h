@@ -21,18 +21,24 @@ struct StencilGrid {
                                    // arrival (= index) order, kEmptySlot after the last stored one
   std::vector<uint32_t> arrived;   // photons routed to each cell: the stencil buffer's final count
   CellCountTable cellCounts;       // stored photons per box of cells, to skip empty ones
+  // What the search reads: the footprints' stored photons compacted in cell order (storedList,
+  // photons[storedList[i]] in listedPhotons, cell c's from firstStored[c]), so that a row of cells
+  // is one run, as in the sorted grid.
+  std::vector<uint32_t> storedList, firstStored;
+  std::vector<Photon> listedPhotons;
 
   uint32_t capacity() const { return side * side; }
   uint32_t stored(uint32_t cell) const { return std::min(arrived[cell], capacity()); }
-  CellPhotons cellPhotons(CellCoord c) const {
-    const uint32_t cell = grid.cellIndex(c);
-    return {slots.data() + size_t(cell) * capacity(), stored(cell)};
+  CellPhotons cellPhotons(CellCoord c) const { return rowPhotons(c.x, c.x, c.y, c.z); }
+  CellPhotons rowPhotons(int32_t x0, int32_t x1, int32_t y, int32_t z) const {
+    const uint32_t first = firstStored[grid.cellIndex({x0, y, z})], end = firstStored[grid.cellIndex({x1, y, z}) + 1];
+    return {listedPhotons.data() + first, storedList.data() + first, end - first};
   }
 };
 
 // Takes the photons by value (move them in: no copy). Stages, timed into `stats` when given: "grid_keys" (cell per photon), "stencil_count" (arrivals
 // per cell), "stencil_route" (photons to their cells' footprints in arrival order, power
-// redistribution). The grid has at most min(maxCells, maxStencilSlots / m^2) cells.
+// redistribution), "gather_photons" (the compacted list). The grid has at most min(maxCells, maxStencilSlots / m^2) cells.
 StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& options = {},
                              RenderStats* stats = nullptr);
 

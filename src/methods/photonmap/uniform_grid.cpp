@@ -122,3 +122,15 @@ CellCountTable buildCellCountTable(const UniformGrid& grid, const std::function<
 }
 
 }  // namespace lucent
+
+namespace lucent {
+
+std::vector<Photon> gatherPhotons(const std::vector<Photon>& photons, const std::vector<uint32_t>& ids) {
+  std::vector<Photon> gathered(ids.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 4096), [&](const auto& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) gathered[i] = photons[ids[i]];
+  });
+  return gathered;
+}
+
+}  // namespace lucent

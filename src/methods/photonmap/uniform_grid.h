@@ -113,9 +113,14 @@ struct CellCountTable {
 // The table for `grid` from each cell's photon count, cellCount(cellIndex).
 CellCountTable buildCellCountTable(const UniformGrid& grid, const std::function<uint32_t(uint32_t)>& cellCount);
 
+// photons[ids[i]] for every i: a map's photons in the order the search reads them (one parallel
+// gather, as a GPU would copy them into list order).
+std::vector<Photon> gatherPhotons(const std::vector<Photon>& photons, const std::vector<uint32_t>& ids);
+
 // The photons of one cell, as a grid photon map hands them to the kNN-grid search.
 struct CellPhotons {
-  const uint32_t* ids = nullptr;       // indices into the map's photons
+  const Photon* photons = nullptr;     // the photons, contiguous: read without indirection
+  const uint32_t* ids = nullptr;       // their indices into the map's photons
   uint32_t count = 0;
   const uint64_t* cellKeys = nullptr;  // hashed grid only: each entry's cell, as entries of other
   uint64_t cellKey = 0;                // cells share the bucket and must be skipped (section 4.4)
