@@ -23,14 +23,10 @@ inline uint32_t encodeOctahedral(Vec3 v) {
 // The encoded direction, not normalized (its sign against any vector is the unit vector's).
 inline Vec3 octahedralDirection(uint32_t e) {
   const float x = (e & 0xffff) / 65535.0f * 2 - 1, y = (e >> 16) / 65535.0f * 2 - 1;
-  Vec3 v{x, y, 1 - std::abs(x) - std::abs(y)};
-  if (v.z < 0) {
-    const float ox = (1 - std::abs(y)) * std::copysign(1.0f, x);
-    const float oy = (1 - std::abs(x)) * std::copysign(1.0f, y);
-    v.x = ox;
-    v.y = oy;
-  }
-  return v;
+  // The lower hemisphere is folded over the diagonals: x -> sign(x) (1 - |y|), written without a
+  // branch (a photon map's search decodes photons arriving from either side, in random order).
+  const float z = 1 - std::abs(x) - std::abs(y), fold = std::max(-z, 0.0f);
+  return {x - std::copysign(fold, x), y - std::copysign(fold, y), z};
 }
 
 inline Vec3 decodeOctahedral(uint32_t e) { return normalize(octahedralDirection(e)); }

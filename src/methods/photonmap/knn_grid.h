@@ -19,6 +19,7 @@
 // virtual calls); the hashed grid's entries of other cells are skipped here.
 #pragma once
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <type_traits>
 
@@ -78,6 +79,21 @@ inline void reachAlong(const UniformGrid& g, Vec3 p, float r2, int a, int32_t& l
   if (last < float(hi)) hi = last < float(lo) ? lo - 1 : int32_t(last);
 }
 
+// The cells a sphere of squared radius limit2 about the query can reach. The acceptance radius
+// takes two values in a search (the maximum radius while fewer than k are accepted, then the final
+// one), so the box is computed when it changes, not for every shell.
+struct Reach {
+  float limit2 = -1;
+  int32_t lo[3], hi[3];
+  void update(const UniformGrid& g, Vec3 p, float newLimit2) {
+    if (newLimit2 == limit2) return;
+    limit2 = newLimit2;
+    for (int a = 0; a < 3; ++a) reachAlong(g, p, limit2, a, lo[a], hi[a]);
+  }
+};
+
+inline float acceptanceLimit2(const KnnGridSearch& s) { return s.found < s.k ? s.maxRadius2 : s.radius2; }
+
 // Offers photons to the running estimate in the order given.
 template <class Visit>
 void examinePhotons(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
@@ -98,24 +114,36 @@ void examinePhotons(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
     ++s.found;
     visit(cp.ids[i], cp.photons[i], d2);
   }
-  // Then the radius stays, and photons within it are accepted.
+  // Then the radius stays, and photons within it are accepted: distances by blocks, without a
+  // branch per photon, then the accepted ones of the block in order.
   const Vec3 q = s.position;
   const float radius2 = s.radius2;
-  for (; i < cp.count; ++i) {
-    if (otherCell(i)) continue;
-    const float d2 = distance2(cp.photons[i].position, q);
-    ++s.photonsExamined;
-    if (d2 <= radius2) {
-      ++s.found;
-      visit(cp.ids[i], cp.photons[i], d2);
+  constexpr uint32_t kBlock = 16;
+  float d2[kBlock];
+  while (i < cp.count) {
+    const uint32_t n = std::min(kBlock, cp.count - i);
+    uint32_t inside = 0;
+    for (uint32_t j = 0; j < n; ++j) {
+      d2[j] = distance2(cp.photons[i + j].position, q);
+      inside |= uint32_t(d2[j] <= radius2) << j;
     }
+    uint32_t others = 0;
+    if (cp.cellKeys)
+      for (uint32_t j = 0; j < n; ++j) others |= uint32_t(otherCell(i + j)) << j;
+    inside &= ~others;
+    s.photonsExamined += n - uint32_t(std::popcount(others));
+    for (; inside; inside &= inside - 1) {
+      const uint32_t j = uint32_t(std::countr_zero(inside));
+      ++s.found;
+      visit(cp.ids[i + j], cp.photons[i + j], d2[j]);
+    }
+    i += n;
   }
 }
 
 template <GridPhotonMap Map, class Visit>
 void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit) {
-  const float limit2 = s.found < s.k ? s.maxRadius2 : s.radius2;
-  if (map.grid.cellDistance2(s.position, cell) > limit2) return;  // no photon in it can be accepted
+  if (map.grid.cellDistance2(s.position, cell) > acceptanceLimit2(s)) return;  // no photon in it can be accepted
   ++s.cellsVisited;
   examinePhotons(map.cellPhotons(cell), s, visit);
 }
@@ -127,8 +155,10 @@ void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit)
 template <GridPhotonMap Map, class Visit>
 void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_t y, int32_t z, Visit& visit) {
   if constexpr (requires { map.rowPhotons(x0, x1, y, z); }) {
+    const CellPhotons run = map.rowPhotons(x0, x1, y, z);
+    if (run.count == 0) return;
     ++s.cellsVisited;
-    examinePhotons(map.rowPhotons(x0, x1, y, z), s, visit);
+    examinePhotons(run, s, visit);
   } else {
     for (int32_t x = x0; x <= x1; ++x) exploreCell(map, s, {x, y, z}, visit);
   }
@@ -145,16 +175,16 @@ uint32_t photonsIn(const Map& map, const int32_t lo[3], const int32_t hi[3]) {
   else return lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2] ? 1 : 0;
 }
 
-// The box of cells within Chebyshev distance `shell` of c, clipped to the grid and to the cells
-// that the sphere of squared radius limit2 about the query can reach.
-inline void shellBox(const UniformGrid& g, Vec3 p, float limit2, CellCoord c, int32_t shell, int32_t lo[3],
-                     int32_t hi[3]) {
+// The box of cells within Chebyshev distance `shell` of c, clipped to the reach box (and so to the
+// grid).
+inline void shellBox(const Reach& reach, CellCoord c, int32_t shell, int32_t lo[3], int32_t hi[3]) {
   const int32_t ci[3] = {c.x, c.y, c.z};
-  for (int a = 0; a < 3; ++a) {
-    reachAlong(g, p, limit2, a, lo[a], hi[a]);
-    lo[a] = std::max(lo[a], ci[a] - shell), hi[a] = std::min(hi[a], ci[a] + shell);
-  }
+  for (int a = 0; a < 3; ++a) lo[a] = std::max(reach.lo[a], ci[a] - shell), hi[a] = std::min(reach.hi[a], ci[a] + shell);
 }
+
+// Below this many rows, slabs or ends, a shell's parts are read directly (an empty row of a map
+// with row runs costs two loads) rather than bisected on the cell counts (eight loads a count).
+inline constexpr int32_t kBisectFrom = 4;
 
 // The cells at Chebyshev distance exactly s from c, clipped to the grid and to the cells that the
 // sphere of the current acceptance radius can reach, in z, y, x order. The shell is two z faces and,
@@ -176,6 +206,12 @@ struct ShellExplorer {
   }
   // Rows y0..y1 of the full-width face at z.
   void rows(int32_t y0, int32_t y1, int32_t z) {
+    if constexpr (requires { map.rowPhotons(0, 0, 0, 0); }) {
+      if (y1 - y0 < kBisectFrom) {
+        for (int32_t y = y0; y <= y1; ++y) exploreRow(map, s, lo[0], hi[0], y, z, visit);
+        return;
+      }
+    }
     if (photons(lo[0], hi[0], y0, y1, z, z) == 0) return;
     if (y0 == y1) return exploreRow(map, s, lo[0], hi[0], y0, z, visit);
     const int32_t mid = y0 + (y1 - y0) / 2;
@@ -212,10 +248,9 @@ struct ShellExplorer {
 };
 
 template <GridPhotonMap Map, class Visit>
-void exploreShell(const Map& map, KnnGridSearch& s, CellCoord c, int32_t shell, Visit& visit) {
+void exploreShell(const Map& map, KnnGridSearch& s, const Reach& reach, CellCoord c, int32_t shell, Visit& visit) {
   ShellExplorer<Map, Visit> e{map, s, visit, {}, {}, false, false, false, false, 0, 0};
-  const float limit2 = s.found < s.k ? s.maxRadius2 : s.radius2;
-  shellBox(map.grid, s.position, limit2, c, shell, e.lo, e.hi);
+  shellBox(reach, c, shell, e.lo, e.hi);
   const int32_t* lo = e.lo;
   const int32_t* hi = e.hi;
   const bool zLo = c.z - shell == lo[2], zHi = c.z + shell == hi[2] && shell > 0;
@@ -232,25 +267,24 @@ void exploreShell(const Map& map, KnnGridSearch& s, CellCoord c, int32_t shell, 
 // shell `shell` holds some, kAllEmpty if every unexplored cell within reach is empty.
 inline constexpr uint32_t kAllEmpty = UINT32_MAX;
 template <GridPhotonMap Map>
-uint32_t emptyShellsFrom(const Map& map, const KnnGridSearch& s, CellCoord c, int32_t shell) {
+uint32_t emptyShellsFrom(const Map& map, const Reach& reach, CellCoord c, int32_t shell) {
   if constexpr (!kHasCellCounts<Map>) {
     return 0;
   } else {
-    const float limit2 = s.found < s.k ? s.maxRadius2 : s.radius2;
-    int32_t reachLo[3], reachHi[3], lo[3], hi[3];
-    for (int a = 0; a < 3; ++a) reachAlong(map.grid, s.position, limit2, a, reachLo[a], reachHi[a]);
+    int32_t lo[3], hi[3];
     auto withinShells = [&](int32_t t) {  // photons within reach in shells 0..t
       if (t < 0) return 0u;
-      shellBox(map.grid, s.position, limit2, c, t, lo, hi);
+      shellBox(reach, c, t, lo, hi);
       return map.cellCounts.count(lo, hi);
     };
-    const uint32_t explored = withinShells(shell - 1), reachable = map.cellCounts.count(reachLo, reachHi);
-    if (reachable == explored) return kAllEmpty;
+    const uint32_t explored = withinShells(shell - 1);
+    if (withinShells(shell) != explored) return 0;  // the common case next to photons
+    if (map.cellCounts.count(reach.lo, reach.hi) == explored) return kAllEmpty;
     // The first shell whose cube covers the reach box holds the rest: bisect below it.
     const int32_t ci[3] = {c.x, c.y, c.z};
     int32_t last = 0;
-    for (int a = 0; a < 3; ++a) last = std::max({last, ci[a] - reachLo[a], reachHi[a] - ci[a]});
-    int32_t emptyUpTo = shell - 1, nonEmpty = last;  // invariant: shells shell..emptyUpTo empty
+    for (int a = 0; a < 3; ++a) last = std::max({last, ci[a] - reach.lo[a], reach.hi[a] - ci[a]});
+    int32_t emptyUpTo = shell, nonEmpty = last;  // invariant: shells shell..emptyUpTo empty
     while (nonEmpty - emptyUpTo > 1) {
       const int32_t mid = emptyUpTo + (nonEmpty - emptyUpTo) / 2;
       (withinShells(mid) == explored ? emptyUpTo : nonEmpty) = mid;
@@ -268,15 +302,17 @@ void advanceKnnGrid(const Map& map, KnnGridSearch& s, uint32_t shells, Visit&& v
   using namespace knn_grid_detail;
   const UniformGrid& g = map.grid;
   const CellCoord c = g.cellOf(s.position);
+  Reach reach;
   for (uint32_t i = 0; i < shells && !s.done;) {
+    reach.update(g, s.position, acceptanceLimit2(s));
     // Empty shells are explored by skipping them; a non-empty one cell by cell.
-    const uint32_t empty = emptyShellsFrom(map, s, c, int32_t(s.shells));
+    const uint32_t empty = emptyShellsFrom(map, reach, c, int32_t(s.shells));
     if (empty == kAllEmpty) {
       s.done = true;
       break;
     }
     const uint32_t step = empty > 0 ? std::min(empty, shells - i) : 1;
-    if (empty == 0) exploreShell(map, s, c, int32_t(s.shells), visit);
+    if (empty == 0) exploreShell(map, s, reach, c, int32_t(s.shells), visit);
     s.shells += step, i += step;
     const float beyond = distanceBeyondShell(g, s.position, c, int32_t(s.shells) - 1);
     const float beyond2 = beyond > 0 ? beyond * beyond : 0;

@@ -60,15 +60,17 @@ struct Accumulator {
   uint32_t used = 0;
 
   explicit Accumulator(const EstimatePoint& point) : q(point), diffuse(point.bsdf.type == MaterialType::Diffuse) {}
-  void add(const Photon& p, float d2) {
+  [[gnu::always_inline]] void add(const Photon& p, float d2) {
     // Which side the photon came from needs no unit vector; the BRDF of a glossy surface does.
+    // Photons from the other side of the surface are not counted.
     const bool front = dot(octahedralDirection(p.direction), q.frame.n) > 0;
-    const Rgb share = !front ? Rgb()  // arrived from the other side of the surface
-                      : diffuse ? p.power
-                                : evalBsdf(q.bsdf, q.woLocal, q.frame.toLocal(photonIncoming(p))) * p.power;
+    const Rgb share = diffuse ? p.power * float(front) : front ? glossyShare(p) : Rgb();
     used += front;
     sum += share;
     if (d2 > farthestD2) farthestD2 = d2, farthest = share;
+  }
+  [[gnu::noinline]] Rgb glossyShare(const Photon& p) const {
+    return evalBsdf(q.bsdf, q.woLocal, q.frame.toLocal(photonIncoming(p))) * p.power;
   }
   // The photon on the sphere that fixed the radius is not counted: the density estimate of m
   // photons over the disc through the m-th is biased by m / (m - 1) (Loftsgaarden and
