@@ -22,7 +22,8 @@ inline uint32_t encodeOctahedral(Vec3 v) {
 
 // The encoded direction, not normalized (its sign against any vector is the unit vector's).
 inline Vec3 octahedralDirection(uint32_t e) {
-  const float x = (e & 0xffff) / 65535.0f * 2 - 1, y = (e >> 16) / 65535.0f * 2 - 1;
+  constexpr float kScale = 2.0f / 65535.0f;
+  const float x = float(e & 0xffff) * kScale - 1, y = float(e >> 16) * kScale - 1;
   // The lower hemisphere is folded over the diagonals: x -> sign(x) (1 - |y|), written without a
   // branch (a photon map's search decodes photons arriving from either side, in random order).
   const float z = 1 - std::abs(x) - std::abs(y), fold = std::max(-z, 0.0f);

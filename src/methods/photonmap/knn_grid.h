@@ -152,8 +152,26 @@ void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit)
 // sorted and stencil grids), they are read in one run: the same photons in the same order as cell by cell,
 // without touching the empty cells (a photon in a cell that the acceptance sphere cannot reach is
 // rejected by its own distance). The run counts as one cell visit.
+// The cells of row (y, z) that the acceptance sphere can reach are trimmed to its chord first:
+// photons beyond it would be rejected by their own distance.
 template <GridPhotonMap Map, class Visit>
 void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_t y, int32_t z, Visit& visit) {
+  const UniformGrid& g = map.grid;
+  const float limit2 = acceptanceLimit2(s);
+  if (limit2 < kInf) {
+    auto gap = [&](int a, int32_t cell) {
+      const float cellLo = g.lo[a] + float(cell) * g.cellSize[a], cellHi = cellLo + g.cellSize[a];
+      return std::max(std::max(cellLo - s.position[a], s.position[a] - cellHi) - g.slack, 0.0f);
+    };
+    const float dy = gap(1, y), dz = gap(2, z), rest = limit2 - dy * dy - dz * dz;
+    if (rest < 0) return;
+    const float half = std::sqrt(rest) * 1.00001f + g.slack;  // a margin far above the rounding of d2
+    const float first = std::floor((s.position.x - half - g.lo[0]) * g.invCellSize[0]);
+    const float last = std::floor((s.position.x + half - g.lo[0]) * g.invCellSize[0]);
+    if (first > float(x0)) x0 = first > float(x1) ? x1 + 1 : int32_t(first);
+    if (last < float(x1)) x1 = last < float(x0) ? x0 - 1 : int32_t(last);
+    if (x0 > x1) return;
+  }
   if constexpr (requires { map.rowPhotons(x0, x1, y, z); }) {
     const CellPhotons run = map.rowPhotons(x0, x1, y, z);
     if (run.count == 0) return;
