@@ -170,7 +170,34 @@ Rgb directLight(const Scene& scene, const Visibility& vis, const ShadingPoint& p
   const Frame frame(point.normal);
   const Vec3 woLocal = frame.toLocal(point.wo);
   const float side = dot(point.normal, point.geometricNormal);
+  // A point's shadow rays share their origin and head for the same lights: they are traced as
+  // packets of up to 16 (a lone ray, a point light's, alone), and the unoccluded samples'
+  // contributions added in sample order.
+  constexpr int kPacket = 16;
+  Ray queuedRays[kPacket];
+  Rgb contribution[kPacket];
+  int queued = 0;
   Rgb sum;
+  auto flush = [&] {
+    bool occluded[kPacket];
+    if (queued == 1) {
+      occluded[0] = vis.occluded(queuedRays[0]);
+    } else {
+      RayPacket<kPacket> packet;
+      for (int j = 0; j < kPacket; ++j) {
+        const Ray& ray = queuedRays[std::min(j, queued - 1)];
+        packet.ox[j] = ray.origin.x, packet.oy[j] = ray.origin.y, packet.oz[j] = ray.origin.z;
+        packet.dx[j] = ray.direction.x, packet.dy[j] = ray.direction.y, packet.dz[j] = ray.direction.z;
+        packet.tMin[j] = ray.tMin, packet.tMax[j] = ray.tMax;
+        packet.valid[j] = j < queued ? -1 : 0;
+      }
+      vis.occluded(packet, occluded);
+    }
+    for (int j = 0; j < queued; ++j)
+      if (!occluded[j]) sum += contribution[j];
+    rays += uint64_t(queued);
+    queued = 0;
+  };
   for (int i = 0; i < samples; ++i) {
     const float uLight = rng.uniform();
     const Vec2 u = stratifiedSample2D(uint32_t(i), uint32_t(samples), rng.uniform2());
@@ -180,10 +207,11 @@ Rgb directLight(const Scene& scene, const Visibility& vis, const ShadingPoint& p
     if (wiLocal.z <= 0 || dot(ls.wi, point.geometricNormal) * side <= 0) continue;
     const Rgb f = evalBsdf(point.bsdf, woLocal, wiLocal);
     if (f.isBlack()) continue;
-    ++rays;
-    if (vis.occluded(shadowRay(point.position, point.geometricNormal, ls))) continue;
-    sum += f * ls.radiance * (wiLocal.z / ls.pdf);
+    queuedRays[queued] = shadowRay(point.position, point.geometricNormal, ls);
+    contribution[queued] = f * ls.radiance * (wiLocal.z / ls.pdf);
+    if (++queued == kPacket) flush();
   }
+  if (queued > 0) flush();
   return sum * (1.0f / float(samples));
 }
 
