@@ -240,6 +240,13 @@ struct ShellExplorer {
   }
   // The x ends of rows y0..y1 at z.
   void endCells(int32_t y0, int32_t y1, int32_t z) {
+    if (y1 - y0 < kBisectFrom && kHasCellCounts<Map>) {
+      for (int32_t y = y0; y <= y1; ++y) {
+        if (xLo) exploreEnd(lo[0], y, z);
+        if (xHi) exploreEnd(hi[0], y, z);
+      }
+      return;
+    }
     if (ends(y0, y1, z, z) == 0) return;
     if (y0 == y1) {
       if (xLo) exploreCell(map, s, {lo[0], y0, z}, visit);
@@ -249,8 +256,20 @@ struct ShellExplorer {
     const int32_t mid = y0 + (y1 - y0) / 2;
     endCells(y0, mid, z), endCells(mid + 1, y1, z);
   }
+  // One end cell read directly: an empty one is known from the map's list without a distance.
+  void exploreEnd(int32_t x, int32_t y, int32_t z) {
+    if (map.cellPhotons({x, y, z}).count > 0) exploreCell(map, s, {x, y, z}, visit);
+  }
   // The slabs z0..z1 between the z faces.
   void slabs(int32_t z0, int32_t z1) {
+    if (z1 - z0 < kBisectFrom && kHasCellCounts<Map>) {
+      for (int32_t z = z0; z <= z1; ++z) {
+        if (yLo) rows(lo[1], lo[1], z);
+        if (yi0 <= yi1) endCells(yi0, yi1, z);
+        if (yHi) rows(hi[1], hi[1], z);
+      }
+      return;
+    }
     const uint32_t n = (yLo ? photons(lo[0], hi[0], lo[1], lo[1], z0, z1) : 0) +
                        (yHi ? photons(lo[0], hi[0], hi[1], hi[1], z0, z1) : 0) + ends(yi0, yi1, z0, z1);
     if (n == 0) return;
