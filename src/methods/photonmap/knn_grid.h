@@ -148,12 +148,11 @@ void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit)
   examinePhotons(map.cellPhotons(cell), s, visit);
 }
 
-// A row of cells (x0..x1, y, z). Where the map keeps a row's photons contiguous in cell order (the
-// sorted and stencil grids), they are read in one run: the same photons in the same order as cell by cell,
+// A row of cells (x0..x1, y, z), first trimmed to the cells that the acceptance sphere's chord
+// through the row reaches. Where the map keeps a row's photons contiguous in cell order (the sorted
+// and stencil grids), they are read in one run: the same photons in the same order as cell by cell,
 // without touching the empty cells (a photon in a cell that the acceptance sphere cannot reach is
 // rejected by its own distance). The run counts as one cell visit.
-// The cells of row (y, z) that the acceptance sphere can reach are trimmed to its chord first:
-// photons beyond it would be rejected by their own distance.
 template <GridPhotonMap Map, class Visit>
 void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_t y, int32_t z, Visit& visit) {
   const UniformGrid& g = map.grid;
