@@ -42,6 +42,9 @@ inline float bestFacingCosine(const TraversalNode& node, float cosToAxis) {
 // One listed disc against every pixel's ray: the innermost loop of ray casting, over structure of
 // arrays with selects, so that it vectorizes; an AVX2 clone is picked at run time where the CPU has
 // it (the same IEEE operations, so the same results: no FMA contraction, -ffp-contract=off).
+// Rays are cast in tiles of kRayTile x kRayTile pixels, each bounded by a cone of directions.
+constexpr int kRayTile = 4;
+
 struct DiscForRays {
   float px, py, pz;  // gather point minus disc centre
   float ax, ay, az;  // disc normal
@@ -196,19 +199,47 @@ class MicroRasterizer {
     listedAny_ = true;
   }
 
+  // The rays of the used pixels, tile by tile, and each tile's bounding cone of directions.
+  void prepareRays() {
+    const int tilesX = (m_.width + kRayTile - 1) / kRayTile, tilesY = (m_.height + kRayTile - 1) / kRayTile;
+    uint32_t k = 0, tile = 0;
+    for (int ty = 0; ty < tilesY; ++ty)
+      for (int tx = 0; tx < tilesX; ++tx, ++tile) {
+        b_.tileBegin[tile] = k;
+        Vec3 sum;
+        for (int y = ty * kRayTile; y < std::min(m_.height, (ty + 1) * kRayTile); ++y)
+          for (int x = tx * kRayTile; x < std::min(m_.width, (tx + 1) * kRayTile); ++x) {
+            const int pixel = y * m_.width + x;
+            if (m_.direction[size_t(pixel)] == Vec3{}) continue;  // unused: no direction
+            const Vec3 w = g_.frame.toWorld(m_.direction[size_t(pixel)]);
+            b_.dirX[k] = w.x, b_.dirY[k] = w.y, b_.dirZ[k] = w.z;
+            b_.rayPixel[k++] = uint16_t(pixel);
+            sum += w;
+          }
+        const float len = length(sum);
+        const Vec3 axis = len > 0 ? sum / len : Vec3{0, 0, 1};
+        float cosCone = 1;
+        for (uint32_t r = b_.tileBegin[tile]; r < k; ++r)
+          cosCone = std::min(cosCone, axis.x * b_.dirX[r] + axis.y * b_.dirY[r] + axis.z * b_.dirZ[r]);
+        cosCone = std::max(-1.0f, cosCone - 1e-5f);  // rounding margin
+        b_.tileAxis[tile] = axis, b_.tileCos[tile] = cosCone;
+        b_.tileSin[tile] = std::sqrt(std::max(0.0f, 1.0f - cosCone * cosCone));
+      }
+    b_.tileBegin[tile] = k;
+    rayCount_ = k;
+    tileCount_ = tile;
+    raysReady_ = true;
+  }
+
   // 2.2 "On-demand Ray Casting": one ray per used pixel, in the pixel's direction, against every
   // listed disc; the nearest hit enters the buffer through the same depth test as the splats. The
   // loop over pixels is innermost so that it vectorizes (structure of arrays, selects, no branches).
+  // A disc is tested against the rays of the tiles whose cone of directions reaches the cone the
+  // disc subtends: the same hits as testing every ray (every listed disc meets a ray in list order).
   void castRays() {
     const Stopwatch clock;
-    const size_t used = m_.used.size();
-    if (!raysReady_) {
-      for (size_t k = 0; k < used; ++k) {
-        const Vec3 w = g_.frame.toWorld(m_.direction[m_.used[k]]);
-        b_.dirX[k] = w.x, b_.dirY[k] = w.y, b_.dirZ[k] = w.z;
-      }
-      raysReady_ = true;
-    }
+    if (!raysReady_) prepareRays();
+    const size_t used = rayCount_;
     float* nearestT = b_.nearestT.data();
     uint32_t* nearestNode = b_.nearestNode.data();
     const float* dx = b_.dirX.data();
@@ -223,12 +254,34 @@ class MicroRasterizer {
       const float ax = disc.axis.x, ay = disc.axis.y, az = disc.axis.z;
       const float height = dot(pc, disc.axis);  // > 0: p in front of the disc
       const float r2 = disc.radius * disc.radius;
-      intersectDisc({pc.x, pc.y, pc.z, ax, ay, az, height, r2, tMin}, index, dx, dy, dz, used, nearestT, nearestNode);
+      const DiscForRays rays{pc.x, pc.y, pc.z, ax, ay, az, height, r2, tMin};
+      // The disc lies within its bounding sphere, which subtends a cone of half-angle alpha about
+      // the direction to its centre; a tile whose cone (half-angle beta) is further than alpha + beta
+      // from it has no ray that can hit the disc.
+      const float d = length(pc);
+      const float sinA = disc.radius * 1.0001f / d;
+      if (!(sinA < 1)) {
+        intersectDisc(rays, index, dx, dy, dz, used, nearestT, nearestNode);
+        c_.rayDiscTests += used;
+        continue;
+      }
+      const float cosA = std::sqrt(1 - sinA * sinA);
+      const Vec3 toDisc = pc * (-1.0f / d);
+      for (uint32_t tile = 0; tile < tileCount_; ++tile) {
+        const float cosB = b_.tileCos[tile], sinB = b_.tileSin[tile];
+        // cos(alpha + beta), or -1 once alpha + beta reaches pi
+        const float cosAB = cosA * cosB - sinA * sinB;
+        const bool reachesPi = sinA * cosB + cosA * sinB < 0 && cosAB < 0;
+        if (!reachesPi && dot(b_.tileAxis[tile], toDisc) < cosAB - 1e-5f) continue;
+        const uint32_t begin = b_.tileBegin[tile], count = b_.tileBegin[tile + 1] - begin;
+        if (count == 0) continue;
+        intersectDisc(rays, index, dx + begin, dy + begin, dz + begin, count, nearestT + begin, nearestNode + begin);
+        c_.rayDiscTests += count;
+      }
     }
-    c_.rayDiscTests += uint64_t(used) * b_.listed;
     for (size_t k = 0; k < used; ++k)
       if (nearestT[k] < kInf) {
-        uint32_t& px = b_.pixels[m_.used[k]];
+        uint32_t& px = b_.pixels[b_.rayPixel[k]];
         px = std::min(px, packMicroPixel(s_.depth.code(nearestT[k]), nearestNode[k]));
       }
     b_.listed = 0;
@@ -244,6 +297,7 @@ class MicroRasterizer {
   MicroBuffer& b_;
   MicroCounters& c_;
   bool raysReady_ = false, listedAny_ = false;
+  uint32_t rayCount_ = 0, tileCount_ = 0;
 };
 
 template <class Radiance>
@@ -263,7 +317,9 @@ void MicroBuffer::resize(int bufferSide) {
   const size_t n = size_t(side) * side;
   pixels.resize(n);
   postTraversal.resize(n);
-  dirX.resize(n), dirY.resize(n), dirZ.resize(n), nearestT.resize(n), nearestNode.resize(n);
+  dirX.resize(n), dirY.resize(n), dirZ.resize(n), nearestT.resize(n), nearestNode.resize(n), rayPixel.resize(n);
+  const size_t tiles = size_t((side + kRayTile - 1) / kRayTile) * size_t((side + kRayTile - 1) / kRayTile);
+  tileBegin.resize(tiles + 1), tileAxis.resize(tiles), tileCos.resize(tiles), tileSin.resize(tiles);
 }
 
 MicroCounters& MicroCounters::operator+=(const MicroCounters& o) {

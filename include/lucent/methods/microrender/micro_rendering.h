@@ -29,9 +29,14 @@ struct MicroBuffer {
   std::vector<uint32_t> pixels;         // side x side packed depth | node (micro_buffer.h)
   std::vector<uint32_t> postTraversal;  // leaves to ray-cast, at most side x side (3.1)
   uint32_t listed = 0;
-  // Ray-casting scratch, one entry per used pixel of the mapping.
+  // Ray-casting scratch, one entry per used pixel of the mapping, in tiles of 4 x 4 pixels.
   std::vector<float> dirX, dirY, dirZ, nearestT;
   std::vector<uint32_t> nearestNode;
+  std::vector<uint16_t> rayPixel;  // the pixel of each ray
+  // Per tile: its rays [tileBegin[i], tileBegin[i + 1]) and the cone bounding their directions.
+  std::vector<uint32_t> tileBegin;
+  std::vector<Vec3> tileAxis;
+  std::vector<float> tileCos, tileSin;
   void resize(int bufferSide);
 };
 
