@@ -3,6 +3,7 @@
 // the post-traversal list, and the convolution. One template per node encoding, no virtual calls.
 #include "lucent/methods/microrender/micro_rendering.h"
 
+#include <bit>
 #include <cmath>
 
 #include "lucent/core/stats.h"
@@ -44,6 +45,8 @@ inline float bestFacingCosine(const TraversalNode& node, float cosToAxis) {
 // it (the same IEEE operations, so the same results: no FMA contraction, -ffp-contract=off).
 // Rays are cast in tiles of kRayTile x kRayTile pixels, each bounded by a cone of directions.
 constexpr int kRayTile = 4;
+constexpr int kMaxRayTiles = (kMaxMicroBufferSide + kRayTile - 1) / kRayTile * ((kMaxMicroBufferSide + kRayTile - 1) / kRayTile);
+static_assert(kMaxRayTiles <= 64, "reached tiles are a 64-bit mask");
 
 struct DiscForRays {
   float px, py, pz;  // gather point minus disc centre
@@ -222,13 +225,29 @@ class MicroRasterizer {
         for (uint32_t r = b_.tileBegin[tile]; r < k; ++r)
           cosCone = std::min(cosCone, axis.x * b_.dirX[r] + axis.y * b_.dirY[r] + axis.z * b_.dirZ[r]);
         cosCone = std::max(-1.0f, cosCone - 1e-5f);  // rounding margin
-        b_.tileAxis[tile] = axis, b_.tileCos[tile] = cosCone;
+        b_.tileAxisX[tile] = axis.x, b_.tileAxisY[tile] = axis.y, b_.tileAxisZ[tile] = axis.z;
+        b_.tileCos[tile] = cosCone;
         b_.tileSin[tile] = std::sqrt(std::max(0.0f, 1.0f - cosCone * cosCone));
       }
     b_.tileBegin[tile] = k;
     rayCount_ = k;
     tileCount_ = tile;
     raysReady_ = true;
+  }
+
+  // The tiles whose cone of directions (half-angle beta) reaches the cone of half-angle alpha about
+  // toDisc: those whose axis lies within alpha + beta of it (all when alpha + beta reaches pi).
+  uint64_t tilesReached(float sinA, Vec3 toDisc) const {
+    const float cosA = std::sqrt(1 - sinA * sinA);
+    uint64_t reached = 0;
+    for (uint32_t tile = 0; tile < tileCount_; ++tile) {
+      const float cosB = b_.tileCos[tile], sinB = b_.tileSin[tile];
+      const float cosAB = cosA * cosB - sinA * sinB;
+      const bool beyondPi = sinA * cosB + cosA * sinB < 0 && cosAB < 0;
+      const float axisDot = b_.tileAxisX[tile] * toDisc.x + b_.tileAxisY[tile] * toDisc.y + b_.tileAxisZ[tile] * toDisc.z;
+      reached |= uint64_t(beyondPi | (axisDot >= cosAB - 1e-5f)) << tile;
+    }
+    return reached;
   }
 
   // 2.2 "On-demand Ray Casting": one ray per used pixel, in the pixel's direction, against every
@@ -265,15 +284,13 @@ class MicroRasterizer {
         c_.rayDiscTests += used;
         continue;
       }
-      const float cosA = std::sqrt(1 - sinA * sinA);
-      const Vec3 toDisc = pc * (-1.0f / d);
-      for (uint32_t tile = 0; tile < tileCount_; ++tile) {
-        const float cosB = b_.tileCos[tile], sinB = b_.tileSin[tile];
-        // cos(alpha + beta), or -1 once alpha + beta reaches pi
-        const float cosAB = cosA * cosB - sinA * sinB;
-        const bool reachesPi = sinA * cosB + cosA * sinB < 0 && cosAB < 0;
-        if (!reachesPi && dot(b_.tileAxis[tile], toDisc) < cosAB - 1e-5f) continue;
-        const uint32_t begin = b_.tileBegin[tile], count = b_.tileBegin[tile + 1] - begin;
+      // Consecutive tiles hold consecutive rays: each run of reached tiles is one call.
+      uint64_t reached = tilesReached(sinA, pc * (-1.0f / d));
+      while (reached) {
+        const uint32_t first = uint32_t(std::countr_zero(reached));
+        const uint32_t end = first + uint32_t(std::countr_one(reached >> first));
+        reached = end < 64 ? reached & (~uint64_t(0) << end) : 0;
+        const uint32_t begin = b_.tileBegin[first], count = b_.tileBegin[end] - begin;
         if (count == 0) continue;
         intersectDisc(rays, index, dx + begin, dy + begin, dz + begin, count, nearestT + begin, nearestNode + begin);
         c_.rayDiscTests += count;
@@ -319,7 +336,8 @@ void MicroBuffer::resize(int bufferSide) {
   postTraversal.resize(n);
   dirX.resize(n), dirY.resize(n), dirZ.resize(n), nearestT.resize(n), nearestNode.resize(n), rayPixel.resize(n);
   const size_t tiles = size_t((side + kRayTile - 1) / kRayTile) * size_t((side + kRayTile - 1) / kRayTile);
-  tileBegin.resize(tiles + 1), tileAxis.resize(tiles), tileCos.resize(tiles), tileSin.resize(tiles);
+  tileBegin.resize(tiles + 1);
+  for (auto* v : {&tileAxisX, &tileAxisY, &tileAxisZ, &tileCos, &tileSin}) v->resize(tiles);
 }
 
 MicroCounters& MicroCounters::operator+=(const MicroCounters& o) {

@@ -35,8 +35,7 @@ struct MicroBuffer {
   std::vector<uint16_t> rayPixel;  // the pixel of each ray
   // Per tile: its rays [tileBegin[i], tileBegin[i + 1]) and the cone bounding their directions.
   std::vector<uint32_t> tileBegin;
-  std::vector<Vec3> tileAxis;
-  std::vector<float> tileCos, tileSin;
+  std::vector<float> tileAxisX, tileAxisY, tileAxisZ, tileCos, tileSin;
   void resize(int bufferSide);
 };
 
