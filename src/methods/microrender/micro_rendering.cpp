@@ -70,11 +70,11 @@ __attribute__((target_clones("avx2", "default"))) void intersectDisc(
 template <class Nodes>
 class MicroRasterizer {
  public:
-  MicroRasterizer(const Nodes& nodes, const float* areas, uint32_t leafCount, const GatherPoint& gather,
-                  const HemisphereMapping& mapping, const MicroRenderSettings& settings, MicroBuffer& buffer,
-                  MicroCounters& counters)
-      : nodes_(nodes), areas_(areas), leafCount_(leafCount), g_(gather), m_(mapping), s_(settings), b_(buffer),
-        c_(counters) {}
+  MicroRasterizer(const Nodes& nodes, const float* areas, const float* thickness, uint32_t leafCount,
+                  const GatherPoint& gather, const HemisphereMapping& mapping, const MicroRenderSettings& settings,
+                  MicroBuffer& buffer, MicroCounters& counters)
+      : nodes_(nodes), areas_(areas), thickness_(thickness), leafCount_(leafCount), g_(gather), m_(mapping),
+        s_(settings), b_(buffer), c_(counters) {}
 
   void run() {
     b_.pixels.assign(size_t(m_.width) * m_.height, kEmptyMicroPixel);
@@ -160,7 +160,7 @@ class MicroRasterizer {
         if (!leaf) {
           i = firstChild(i);
         } else {
-          if (s_.rayCasting) listLeaf(i); else splatFootprint(pixel, local, node.radius / d, d, i);
+          if (s_.rayCasting) listLeaf(i); else splat(pixel, node, v, d, i);
           i = nextNodeSkippingSubtree(i);
         }
         continue;
@@ -168,27 +168,53 @@ class MicroRasterizer {
       // At most a pixel: rasterize, unless the centre lies in the tangent plane or below it (nodes of
       // the receiver's own plane straddle it: no ray from the receiver meets them) or no normal of the
       // cone faces the receiver.
-      if (local.z * d > g_.selfDistance && bestFacingCosine(node, cosToAxis) > 0)
-        splatFootprint(pixel, local, node.radius / d, d, i);
+      if (local.z * d > g_.selfDistance && bestFacingCosine(node, cosToAxis) > 0) splat(pixel, node, v, d, i);
       i = nextNodeSkippingSubtree(i);
     }
   }
 
-  // A node of at most a pixel's solid angle goes to its centre's pixel, and to the neighbouring
-  // pixels whose sample direction its bounding sphere covers: nodes at the threshold are up to a
-  // pixel wide, and their centres alone would leave some pixels without any (holes that let the
-  // background through, about 2% of the pixels).
-  void splatFootprint(int pixel, Vec3 local, float sinRadius, float distance, uint32_t node) {
+  // A node of at most a pixel's solid angle goes to the pixels of its 3 x 3 neighbourhood whose
+  // sample ray meets it: a leaf's disc (one-sided), an interior node's sphere within its slab
+  // (MicroHierarchy::thickness). Nodes at the threshold are up to a pixel wide, so the centre's
+  // pixel alone would leave holes that let the background through (about 2% of the pixels); the
+  // bounding sphere alone would widen every silhouette by up to a pixel, showing near surfaces
+  // in front of far ones or of the open sky (on the Cornell box, 10% more indirect light).
+  void splat(int pixel, const TraversalNode& node, Vec3 toCentre, float distance, uint32_t index) {
     ++c_.nodesSplatted;
-    const uint32_t packed = packMicroPixel(s_.depth.code(distance), node);
+    const Vec3 pc = -toCentre;  // gather point minus node centre
+    const float height = dot(pc, node.axis), r2 = node.radius * node.radius;
+    const bool leaf = index >= leafCount_;
+    const float thickness = thickness_[index];
     const int w = m_.width, h = m_.height, x = pixel % w, y = pixel / w;
-    const float cosRadius = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
     for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy)
       for (int xx = std::max(0, x - 1); xx <= std::min(w - 1, x + 1); ++xx) {
         const int p = yy * w + xx;
-        if (p != pixel && dot(m_.direction[size_t(p)], local) < cosRadius) continue;
+        const Vec3 local = m_.direction[size_t(p)];
+        if (local == Vec3{}) continue;  // unused pixel
+        const Vec3 dir = g_.frame.toWorld(local);
+        const float cosine = dot(dir, node.axis);
+        float depth = distance;
+        if (leaf) {
+          const float t = height / -cosine;
+          const Vec3 q = pc + dir * t;
+          if (!(cosine < 0) || !(t > g_.selfDistance) || dot(q, q) > r2) continue;
+          depth = t;
+        } else {
+          const float b = dot(pc, dir), disc = b * b - (dot(pc, pc) - r2);
+          if (disc < 0) continue;
+          const float root = std::sqrt(disc);
+          float t0 = -b - root, t1 = -b + root;
+          if (std::abs(cosine) > 0) {
+            float u0 = (-thickness - height) / cosine, u1 = (thickness - height) / cosine;
+            if (u0 > u1) std::swap(u0, u1);
+            t0 = std::max(t0, u0), t1 = std::min(t1, u1);
+          } else if (std::abs(height) > thickness) {
+            continue;
+          }
+          if (t0 > t1 || !(t1 > g_.selfDistance)) continue;
+        }
         uint32_t& px = b_.pixels[size_t(p)];
-        px = std::min(px, packed);
+        px = std::min(px, packMicroPixel(s_.depth.code(depth), index));
       }
   }
 
@@ -306,7 +332,8 @@ class MicroRasterizer {
   }
 
   const Nodes& nodes_;
-  const float* areas_;  // surface area each node stands for
+  const float* areas_;      // surface area each node stands for
+  const float* thickness_;  // MicroHierarchy::thickness
   uint32_t leafCount_;
   const GatherPoint& g_;
   const HemisphereMapping& m_;
@@ -347,6 +374,30 @@ MicroCounters& MicroCounters::operator+=(const MicroCounters& o) {
   return *this;
 }
 
+namespace {
+
+// Bottom up over the decoded nodes: a point of child C (within its sphere and its slab of half-width
+// t_C about its plane) lies within |(c_C - c_P) . a_P| + r_C sin(theta) + t_C |cos(theta)| of the
+// parent's plane, theta the angle between their axes. Padded for float rounding.
+template <class Nodes>
+void computeThickness(const Nodes& nodes, uint32_t leafCount, std::vector<float>& thickness) {
+  thickness.assign(size_t(2) * leafCount, 0.0f);
+  for (uint32_t i = leafCount; i-- > kRootNode;) {
+    const TraversalNode parent = nodes(i);
+    float t = 0;
+    for (const uint32_t c : {firstChild(i), firstChild(i) + 1}) {
+      const TraversalNode child = nodes(c);
+      const float cosTheta = std::abs(dot(child.axis, parent.axis));
+      const float sinTheta = length(cross(child.axis, parent.axis));
+      t = std::max(t, std::abs(dot(child.center - parent.center, parent.axis)) + child.radius * sinTheta +
+                          thickness[c] * cosTheta);
+    }
+    thickness[i] = t * 1.0001f + 1e-6f * parent.radius;
+  }
+}
+
+}  // namespace
+
 MicroHierarchy prepareMicroHierarchy(const PointHierarchy& h) {
   MicroHierarchy m;
   m.hierarchy = &h;
@@ -363,6 +414,9 @@ MicroHierarchy prepareMicroHierarchy(const PointHierarchy& h) {
       m.floatNodes[i] = {f.sphere.center, f.sphere.radius, f.cone.axis, all ? 0.0f : std::sin(f.cone.angle),
                          all ? -1.0f : std::cos(f.cone.angle)};
     }
+    computeThickness(FloatNodes{m.floatNodes.data()}, h.leafCount, m.thickness);
+  } else {
+    computeThickness(PackedNodes{h.packedNodes.data(), h.quantization, m.coneSin, m.coneCos}, h.leafCount, m.thickness);
   }
   return m;
 }
@@ -373,10 +427,14 @@ void renderMicroBuffer(const MicroHierarchy& mh, const GatherPoint& gather, cons
   if (buffer.side != mapping.width) buffer.resize(mapping.width);
   if (h.encoding == NodeEncoding::Packed) {
     const PackedNodes nodes{h.packedNodes.data(), h.quantization, mh.coneSin, mh.coneCos};
-    MicroRasterizer(nodes, h.nodeAreas.data(), h.leafCount, gather, mapping, settings, buffer, counters).run();
+    MicroRasterizer(nodes, h.nodeAreas.data(), mh.thickness.data(), h.leafCount, gather, mapping, settings, buffer,
+                    counters)
+        .run();
   } else {
     const FloatNodes nodes{mh.floatNodes.data()};
-    MicroRasterizer(nodes, h.nodeAreas.data(), h.leafCount, gather, mapping, settings, buffer, counters).run();
+    MicroRasterizer(nodes, h.nodeAreas.data(), mh.thickness.data(), h.leafCount, gather, mapping, settings, buffer,
+                    counters)
+        .run();
   }
 }
 

@@ -72,6 +72,11 @@ struct MicroHierarchy {
   const PointHierarchy* hierarchy = nullptr;
   std::vector<TraversalNode> floatNodes;      // Float encoding
   float coneSin[256] = {}, coneCos[256] = {};  // Packed encoding: per cone code
+  // Per node, a bound on the distance of its leaf discs from the plane through its (decoded) centre
+  // normal to its axis: 0 for a leaf and for a flat node. A node's splat covers the directions that
+  // meet its sphere within that slab, not the whole sphere: seen edge-on, a flat node covers a
+  // sliver, and its sphere would widen the silhouette by up to a pixel.
+  std::vector<float> thickness;
 };
 MicroHierarchy prepareMicroHierarchy(const PointHierarchy& hierarchy);
 
