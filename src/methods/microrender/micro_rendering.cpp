@@ -78,6 +78,7 @@ class MicroRasterizer {
 
   void run() {
     b_.pixels.assign(size_t(m_.width) * m_.height, kEmptyMicroPixel);
+    for (size_t p = 0; p < m_.direction.size(); ++p) b_.worldDirection[p] = g_.frame.toWorld(m_.direction[p]);
     b_.listed = 0;
     raysReady_ = false;
     ++c_.buffers;
@@ -160,7 +161,7 @@ class MicroRasterizer {
         if (!leaf) {
           i = firstChild(i);
         } else {
-          if (s_.rayCasting) listLeaf(i); else splat(pixel, node, v, d, i);
+          if (s_.rayCasting) listLeaf(i); else splat(pixel, node, v, local, d, i);
           i = nextNodeSkippingSubtree(i);
         }
         continue;
@@ -168,7 +169,7 @@ class MicroRasterizer {
       // At most a pixel: rasterize, unless the centre lies in the tangent plane or below it (nodes of
       // the receiver's own plane straddle it: no ray from the receiver meets them) or no normal of the
       // cone faces the receiver.
-      if (local.z * d > g_.selfDistance && bestFacingCosine(node, cosToAxis) > 0) splat(pixel, node, v, d, i);
+      if (local.z * d > g_.selfDistance && bestFacingCosine(node, cosToAxis) > 0) splat(pixel, node, v, local, d, i);
       i = nextNodeSkippingSubtree(i);
     }
   }
@@ -179,42 +180,43 @@ class MicroRasterizer {
   // pixel alone would leave holes that let the background through (about 2% of the pixels); the
   // bounding sphere alone would widen every silhouette by up to a pixel, showing near surfaces
   // in front of far ones or of the open sky (on the Cornell box, 10% more indirect light).
-  void splat(int pixel, const TraversalNode& node, Vec3 toCentre, float distance, uint32_t index) {
+  void splat(int pixel, const TraversalNode& node, Vec3 toCentre, Vec3 local, float distance, uint32_t index) {
     ++c_.nodesSplatted;
+    // First the bounding sphere's cone, in the local frame (one dot product), then the exact test.
+    const float sinRadius = node.radius / distance;
+    const float cosRadius = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
+    const uint32_t packed = packMicroPixel(s_.depth.code(distance), index);
     const Vec3 pc = -toCentre;  // gather point minus node centre
-    const float height = dot(pc, node.axis), r2 = node.radius * node.radius;
+    const float height = dot(pc, node.axis), r2 = node.radius * node.radius, pc2 = dot(pc, pc);
     const bool leaf = index >= leafCount_;
     const float thickness = thickness_[index];
+    const bool flat = thickness < node.radius;  // else the slab cuts nothing off the sphere
     const int w = m_.width, h = m_.height, x = pixel % w, y = pixel / w;
+    // The tests are multiplied through by cosine^2 (no division per pixel).
     for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy)
       for (int xx = std::max(0, x - 1); xx <= std::min(w - 1, x + 1); ++xx) {
         const int p = yy * w + xx;
-        const Vec3 local = m_.direction[size_t(p)];
-        if (local == Vec3{}) continue;  // unused pixel
-        const Vec3 dir = g_.frame.toWorld(local);
-        const float cosine = dot(dir, node.axis);
-        float depth = distance;
+        if (dot(m_.direction[size_t(p)], local) < cosRadius) continue;  // also unused pixels: (0, 0, 0)
+        const Vec3 dir = b_.worldDirection[size_t(p)];
+        const float cosine = dot(dir, node.axis), b = dot(pc, dir), cos2 = cosine * cosine;
         if (leaf) {
-          const float t = height / -cosine;
-          const Vec3 q = pc + dir * t;
-          if (!(cosine < 0) || !(t > g_.selfDistance) || dot(q, q) > r2) continue;
-          depth = t;
+          // The ray meets the disc's plane at t = height / -cosine, beyond the receiver's own
+          // surface, within the radius: |pc cosine - dir height| <= r |cosine|.
+          if (!(cosine < 0) || !(height > -g_.selfDistance * cosine)) continue;
+          const Vec3 q = pc * cosine - dir * height;
+          if (dot(q, q) > r2 * cos2) continue;
         } else {
-          const float b = dot(pc, dir), disc = b * b - (dot(pc, pc) - r2);
-          if (disc < 0) continue;
-          const float root = std::sqrt(disc);
-          float t0 = -b - root, t1 = -b + root;
-          if (std::abs(cosine) > 0) {
-            float u0 = (-thickness - height) / cosine, u1 = (thickness - height) / cosine;
-            if (u0 > u1) std::swap(u0, u1);
-            t0 = std::max(t0, u0), t1 = std::min(t1, u1);
-          } else if (std::abs(height) > thickness) {
-            continue;
+          // |pc + t dir|^2 = pc2 + 2 b t + t^2 is least at t = -b (the ray meets the sphere: the
+          // cone test), and over the slab's stretch of the ray at t = -b if the slab holds that
+          // point, else at the slab's face nearer to it, where t cosine = e.
+          const float g = height - b * cosine;  // signed distance from the plane at t = -b
+          if (flat && std::abs(g) > thickness) {
+            const float e = std::copysign(thickness, g) - height;
+            if (cos2 * pc2 + 2 * b * cosine * e + e * e > r2 * cos2) continue;
           }
-          if (t0 > t1 || !(t1 > g_.selfDistance)) continue;
         }
         uint32_t& px = b_.pixels[size_t(p)];
-        px = std::min(px, packMicroPixel(s_.depth.code(depth), index));
+        px = std::min(px, packed);
       }
   }
 
@@ -240,7 +242,7 @@ class MicroRasterizer {
           for (int x = tx * kRayTile; x < std::min(m_.width, (tx + 1) * kRayTile); ++x) {
             const int pixel = y * m_.width + x;
             if (m_.direction[size_t(pixel)] == Vec3{}) continue;  // unused: no direction
-            const Vec3 w = g_.frame.toWorld(m_.direction[size_t(pixel)]);
+            const Vec3 w = b_.worldDirection[size_t(pixel)];
             b_.dirX[k] = w.x, b_.dirY[k] = w.y, b_.dirZ[k] = w.z;
             b_.rayPixel[k++] = uint16_t(pixel);
             sum += w;
@@ -265,14 +267,17 @@ class MicroRasterizer {
   // toDisc: those whose axis lies within alpha + beta of it (all when alpha + beta reaches pi).
   uint64_t tilesReached(float sinA, Vec3 toDisc) const {
     const float cosA = std::sqrt(1 - sinA * sinA);
-    uint64_t reached = 0;
+    // Two passes, the first without branches so that it vectorizes.
+    int32_t flags[kMaxRayTiles];
     for (uint32_t tile = 0; tile < tileCount_; ++tile) {
       const float cosB = b_.tileCos[tile], sinB = b_.tileSin[tile];
       const float cosAB = cosA * cosB - sinA * sinB;
-      const bool beyondPi = sinA * cosB + cosA * sinB < 0 && cosAB < 0;
+      const bool beyondPi = (sinA * cosB + cosA * sinB < 0) & (cosAB < 0);
       const float axisDot = b_.tileAxisX[tile] * toDisc.x + b_.tileAxisY[tile] * toDisc.y + b_.tileAxisZ[tile] * toDisc.z;
-      reached |= uint64_t(beyondPi | (axisDot >= cosAB - 1e-5f)) << tile;
+      flags[tile] = beyondPi | (axisDot >= cosAB - 1e-5f);
     }
+    uint64_t reached = 0;
+    for (uint32_t tile = 0; tile < tileCount_; ++tile) reached |= uint64_t(flags[tile]) << tile;
     return reached;
   }
 
@@ -362,6 +367,7 @@ void MicroBuffer::resize(int bufferSide) {
   pixels.resize(n);
   postTraversal.resize(n);
   dirX.resize(n), dirY.resize(n), dirZ.resize(n), nearestT.resize(n), nearestNode.resize(n), rayPixel.resize(n);
+  worldDirection.resize(n);
   const size_t tiles = size_t((side + kRayTile - 1) / kRayTile) * size_t((side + kRayTile - 1) / kRayTile);
   tileBegin.resize(tiles + 1);
   for (auto* v : {&tileAxisX, &tileAxisY, &tileAxisZ, &tileCos, &tileSin}) v->resize(tiles);

@@ -33,6 +33,7 @@ struct MicroBuffer {
   std::vector<float> dirX, dirY, dirZ, nearestT;
   std::vector<uint32_t> nearestNode;
   std::vector<uint16_t> rayPixel;  // the pixel of each ray
+  std::vector<Vec3> worldDirection;  // per pixel, its sample direction in world space (splats, rays)
   // Per tile: its rays [tileBegin[i], tileBegin[i + 1]) and the cone bounding their directions.
   std::vector<uint32_t> tileBegin;
   std::vector<float> tileAxisX, tileAxisY, tileAxisZ, tileCos, tileSin;
