@@ -265,6 +265,40 @@ TEST_CASE("A plane facing the gather point: covered with ray casting, with holes
     }
 }
 
+TEST_CASE("A plane seen edge-on covers no direction that passes below it", "[microrender]") {
+  // The gather point 0.1 below the plane y = 1, facing sideways: the plane fills the upper half of
+  // the hemisphere up to a horizon at grazing angles, where its nodes are far and seen edge-on.
+  // Rays that head below the horizontal never meet it, so no pixel looking more than a little
+  // downwards may show it. A node's bounding sphere reaches below the plane by its radius (up to a
+  // pixel's width at its distance); its disc (leaves) or slab (interior nodes) does not.
+  const Scene scene = ceilingPlane(50);
+  for (const NodeEncoding encoding : {NodeEncoding::Float, NodeEncoding::Packed}) {
+    const GatherSetup s(scene, 1u << 14, encoding, MappingKind::Nusselt, true, unitRadiance);
+    GatherScratch scratch;
+    Rng rng(9);
+    int below = 0, coveredBelow = 0, above = 0, coveredAbove = 0;
+    for (int g = 0; g < 16; ++g) {
+      Vec2 jitter;
+      const GatherPoint gp = jitteredGatherPoint({0, 0.9f, 0}, {1, 0, 0}, rng, jitter);
+      evaluatePixels(scratch.mapping, MappingKind::Nusselt, 24, jitter, nullptr, diffuseBsdf(Rgb(1.0f)), {0, 0, 1},
+                     s.tables);
+      renderMicroBuffer(s.micro, gp, scratch.mapping, s.ctx.settings, scratch.buffer, scratch.counters);
+      for (const uint16_t i : scratch.mapping.used) {
+        const Vec3 w = gp.frame.toWorld(scratch.mapping.direction[i]);
+        const bool covered = scratch.buffer.pixels[i] != kEmptyMicroPixel;
+        if (w.y < -0.01f) ++below, coveredBelow += covered;
+        // Well above the horizon and inside the square (hit within 40 of the gather point).
+        if (w.y > 0.1f / 40 && std::abs(w.z / w.y) < 0.1f * 400) ++above, coveredAbove += covered;
+      }
+    }
+    INFO("encoding " << int(encoding) << ": covered below " << coveredBelow << " of " << below << ", above "
+                     << coveredAbove << " of " << above);
+    REQUIRE(below > 1000);
+    REQUIRE(coveredBelow == 0);
+    REQUIRE(coveredAbove >= 0.99 * above);  // the horizon's neighbourhood stays covered
+  }
+}
+
 TEST_CASE("Packed and float nodes give nearly the same micro-buffers", "[microrender]") {
   // The Cornell box, gathered at points on its floor and walls: the packed nodes (16-bit positions,
   // 5-bit normals, 8-bit cones, half-float radiance) see the same node in most pixels, and the
