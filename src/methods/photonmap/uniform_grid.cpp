@@ -121,10 +121,6 @@ CellCountTable buildCellCountTable(const UniformGrid& grid, const std::function<
   return t;
 }
 
-}  // namespace lucent
-
-namespace lucent {
-
 std::vector<Photon> gatherPhotons(const std::vector<Photon>& photons, const std::vector<uint32_t>& ids) {
   std::vector<Photon> gathered(ids.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 4096), [&](const auto& r) {
