@@ -128,22 +128,22 @@ TEST_CASE("Warped mapping: its directions follow its density and the normalized 
     const double rho = directionalAlbedo(c.bsdf, wo);
     chi2::Options own{.samples = 200000, .seed = seed++, .zMin = 0};
     own.mass = std::nullopt;
+    // The mapping's directions, each tested against the density `pdf`.
+    auto sampledAgainst = [&](auto pdf) {
+      return [&sampler, pdf](Rng& rng) {
+        chi2::DirectionSample s = sampler(rng);
+        s.pdf = pdf(s.direction);
+        return s;
+      };
+    };
     // Own density: the claimed pdf divided by the inside mass.
     auto ownPdf = [&](Vec3 w) { return float(m.pdf(w) / insideMass); };
-    auto ownSampler = [&](Rng& rng) {
-      chi2::DirectionSample s = sampler(rng);
-      s.pdf = ownPdf(s.direction);
-      return s;
-    };
+    const auto ownSampler = sampledAgainst(ownPdf);
     INFO("theta_o " << c.theta << ", ns " << c.bsdf.ns << ", inside mass " << insideMass);
     CHECK_CHI2_PASS(chi2::testSphere(ownSampler, ownPdf, own));
     // The exact slice: f cos / rho.
     auto exactPdf = [&](Vec3 w) { return w.z > 0 ? float(evalBsdf(c.bsdf, wo, w).average() * w.z / rho) : 0.0f; };
-    auto exactSampler = [&](Rng& rng) {
-      chi2::DirectionSample s = sampler(rng);
-      s.pdf = exactPdf(s.direction);
-      return s;
-    };
+    const auto exactSampler = sampledAgainst(exactPdf);
     chi2::Options exact{.samples = 200000, .seed = seed++, .zMin = 0};
     CHECK_CHI2_PASS(chi2::testSphere(exactSampler, exactPdf, exact));
     // Negative control: the slice of a lobe twice as sharp (or, for the diffuse case, Phong 10) is
@@ -152,11 +152,7 @@ TEST_CASE("Warped mapping: its directions follow its density and the normalized 
                                                                     : phongBsdf(c.bsdf.kd, c.bsdf.ks, 2 * c.bsdf.ns);
     const double rhoWrong = directionalAlbedo(wrong, wo);
     auto wrongPdf = [&](Vec3 w) { return w.z > 0 ? float(evalBsdf(wrong, wo, w).average() * w.z / rhoWrong) : 0.0f; };
-    auto wrongSampler = [&](Rng& rng) {
-      chi2::DirectionSample s = sampler(rng);
-      s.pdf = wrongPdf(s.direction);
-      return s;
-    };
+    const auto wrongSampler = sampledAgainst(wrongPdf);
     chi2::Options control{.samples = 200000, .seed = seed++, .zMin = 0};
     CHECK_CHI2_REJECT(chi2::testSphere(wrongSampler, wrongPdf, control));
   }

@@ -143,9 +143,11 @@ void examinePhotons(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
 
 template <GridPhotonMap Map, class Visit>
 void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit) {
+  const CellPhotons photons = map.cellPhotons(cell);
+  if (photons.count == 0) return;
   if (map.grid.cellDistance2(s.position, cell) > acceptanceLimit2(s)) return;  // no photon in it can be accepted
   ++s.cellsVisited;
-  examinePhotons(map.cellPhotons(cell), s, visit);
+  examinePhotons(photons, s, visit);
 }
 
 // A row of cells (x0..x1, y, z), first trimmed to the cells that the acceptance sphere's chord
@@ -241,8 +243,8 @@ struct ShellExplorer {
   void endCells(int32_t y0, int32_t y1, int32_t z) {
     if (y1 - y0 < kBisectFrom && kHasCellCounts<Map>) {
       for (int32_t y = y0; y <= y1; ++y) {
-        if (xLo) exploreEnd(lo[0], y, z);
-        if (xHi) exploreEnd(hi[0], y, z);
+        if (xLo) exploreCell(map, s, {lo[0], y, z}, visit);
+        if (xHi) exploreCell(map, s, {hi[0], y, z}, visit);
       }
       return;
     }
@@ -254,10 +256,6 @@ struct ShellExplorer {
     }
     const int32_t mid = y0 + (y1 - y0) / 2;
     endCells(y0, mid, z), endCells(mid + 1, y1, z);
-  }
-  // One end cell read directly: an empty one is known from the map's list without a distance.
-  void exploreEnd(int32_t x, int32_t y, int32_t z) {
-    if (map.cellPhotons({x, y, z}).count > 0) exploreCell(map, s, {x, y, z}, visit);
   }
   // The slabs z0..z1 between the z faces.
   void slabs(int32_t z0, int32_t z1) {

@@ -69,8 +69,8 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
   // Caustic paths start at a specular surface: they are emitted towards the specular objects'
   // bounding sphere only, and not at all in a scene without mirrors and glass.
   PhotonMaps caustic;
-  tracing.target = specularTarget(scene);
-  if (options.causticPhotons > 0 && tracing.target) {
+  if (options.causticPhotons > 0) tracing.target = specularTarget(scene);
+  if (tracing.target) {
     tracing.photons = options.causticPhotons;
     tracing.seed = streamSeed(options.seed, RenderStream::CausticPhotons);
     tracing.causticOnly = true;
