@@ -84,7 +84,7 @@ inline void reachAlong(const UniformGrid& g, Vec3 p, float r2, int a, int32_t& l
 // one), so the box is computed when it changes, not for every shell.
 struct Reach {
   float limit2 = -1;
-  int32_t lo[3], hi[3];
+  int32_t lo[3] = {}, hi[3] = {};  // set by the first update (limit2 is never negative)
   void update(const UniformGrid& g, Vec3 p, float newLimit2) {
     if (newLimit2 == limit2) return;
     limit2 = newLimit2;
