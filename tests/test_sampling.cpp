@@ -85,6 +85,33 @@ TEST_CASE("chi2: samplers that fail where their pdf is zero", "[sampling][chi2]"
   CHECK_FALSE(chi2::testSphere(failingBelow(0), upperPdf).passed(0));
 }
 
+TEST_CASE("sinCosQuarterPi agrees with sin and cos in double to about an ulp", "[sampling]") {
+  double worstSin = 0, worstCos = 0;
+  for (int i = -100000; i <= 100000; ++i) {
+    const float x = float(kPi / 4 * i / 100000.0);
+    const Vec2 sc = sinCosQuarterPi(x);
+    worstSin = std::max(worstSin, std::abs(sc.x - std::sin(double(x))));
+    worstCos = std::max(worstCos, std::abs(sc.y - std::cos(double(x))));
+  }
+  // A float ulp below 1 is 6e-8; rounding in the nested products costs at most a few.
+  CHECK(worstSin < 1.5e-7);
+  CHECK(worstCos < 1.5e-7);
+}
+
+TEST_CASE("sampleConcentricDisk maps the square's border to the unit circle, sector by sector", "[sampling]") {
+  for (int i = 0; i <= 1000; ++i) {
+    const float t = i / 1000.0f;
+    for (const Vec2 u : {Vec2{t, 0}, Vec2{t, 1}, Vec2{0, t}, Vec2{1, t}}) {
+      const Vec2 d = sampleConcentricDisk(u);
+      CHECK(d.x * d.x + d.y * d.y == Approx(1.0f).margin(3e-7));
+      // Same quadrant as the square's point (the map preserves the sign of each coordinate).
+      CHECK(d.x * (2 * u.x - 1) >= 0);
+      CHECK(d.y * (2 * u.y - 1) >= 0);
+    }
+  }
+  CHECK(sampleConcentricDisk({0.5f, 0.5f}).x == 0.0f);
+}
+
 TEST_CASE("sampleCosineHemisphere", "[sampling]") {
   SECTION("around +z") {
     auto pdf = [](Vec3 d) { return cosineHemispherePdf(d.z); };

@@ -21,7 +21,7 @@ constexpr uint64_t hashKey(uint64_t a, uint64_t b = 0, uint64_t c = 0) {
 // PCG32 (O'Neill 2014, XSH-RR output) with the stream chosen by the key.
 class Rng {
  public:
-  Rng() : Rng(0) {}
+  Rng() = default;  // a placeholder until a keyed generator is assigned
   explicit Rng(uint64_t seed, uint64_t a = 0, uint64_t b = 0) {
     const uint64_t key = hashKey(seed, a, b);
     inc_ = (mix64(key ^ 0xda3e39cb94b95bdbull) << 1u) | 1u;
