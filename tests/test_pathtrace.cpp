@@ -65,6 +65,53 @@ TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "
   }
 }
 
+TEST_CASE("Lambertian hits shaded in lanes give the image of shading them one by one, bit for bit",
+          "[pathtrace][determinism]") {
+  // Every kind of light and material: the Cornell box with mirror and glass spheres, plus a point
+  // light, a directional light and a constant environment; walls with interpolated normals made
+  // up from their positions, a textured floor, and vertices with texture coordinates.
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true});
+  scene.camera.width = 40;
+  scene.camera.height = 32;
+  scene.lights.push_back({LightType::Point, 0, {0.3f, 1.2f, 0.5f}, Rgb(0.8f, 0.7f, 0.6f)});
+  scene.lights.push_back({LightType::Directional, 0, normalize(Vec3{0.3f, -1.0f, -0.4f}), Rgb(0.5f)});
+  scene.environment.present = true;
+  scene.environment.radiance = Rgb(0.1f, 0.15f, 0.2f);
+  for (size_t v = 0; v < scene.positions.size(); ++v) {
+    const Vec3 p = scene.positions[v];
+    scene.texcoords[v] = {p.x * 3.1f, p.z * 2.7f};
+    if (v % 3 == 0) scene.normals[v] = normalize(Vec3{0.2f * p.x, 1.0f, 0.3f * p.z});
+  }
+  scene.textures.push_back({0, 2, 2});
+  scene.texels = {0xff2040ffu, 0xff40ff20u, 0xffff4020u, 0xffc0c0c0u};
+  for (Material& m : scene.materials)
+    if (m.type == MaterialType::Diffuse && m.ke.isBlack()) m.kdTexture = 0;
+  finalizeScene(scene);
+  const Visibility vis(scene);
+  for (const int maxDepth : {1024, 2}) {
+    PathTraceOptions opt;
+    opt.spp = 6;
+    opt.layers = true;
+    opt.seed = 9;
+    opt.maxDepth = maxDepth;
+    const RenderOutput lanes = renderPathTraced(scene, vis, opt);
+    opt.laneShading = false;
+    const RenderOutput scalar = renderPathTraced(scene, vis, opt);
+    INFO("max depth " << maxDepth);
+    REQUIRE(lanes.image.pixels() == scalar.image.pixels());
+    // Not a vacuous comparison: light arrives, and most hits were shaded in lanes (and none when
+    // lane shading is off).
+    REQUIRE(test::channelMean(lanes.image, 0).mean > 0.01);
+    auto counter = [](const RenderOutput& out, const std::string& name) {
+      for (const auto& [key, value] : out.stats.counters)
+        if (key == name) return value;
+      return uint64_t(0);
+    };
+    CHECK(counter(lanes, "lane_shaded_hits") > counter(lanes, "rays") / 4);
+    CHECK(counter(scalar, "lane_shaded_hits") == 0);
+  }
+}
+
 namespace {
 
 // Sum of per-pixel differences over the square root of the sum of their squares: close to a

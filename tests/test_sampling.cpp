@@ -238,6 +238,31 @@ TEST_CASE("Distribution1D::sampleDiscrete", "[sampling][distribution]") {
   }
 }
 
+TEST_CASE("Distribution1D::pick is the first bin whose upper CDF value exceeds u", "[sampling][distribution]") {
+  // The reference: std::upper_bound over the normalized running sums, clamped to the last bin.
+  for (const uint32_t n : {1u, 2u, 3u, 5u, 8u, 13u, 37u}) {
+    auto w = randomWeights(n, 100 + n);
+    if (n > 3) w[1] = w[2] = 0;  // a run of zero-weight bins
+    const Distribution1D dist(w);
+    std::vector<double> cdf(n + 1, 0.0);
+    for (uint32_t i = 0; i < n; ++i) cdf[i + 1] = cdf[i] + w[i];
+    for (auto& c : cdf) c /= cdf[n];
+    cdf[n] = 1.0;
+    std::vector<float> us = {0.0f, 0x1.fffffep-1f};
+    for (uint32_t i = 0; i <= n; ++i)  // every boundary and its neighbours
+      for (float u = std::nextafter(float(cdf[i]), 0.0f), k = 0; k < 3; ++k, u = std::nextafter(u, 1.0f))
+        if (u >= 0 && u < 1) us.push_back(u);
+    Rng rng(n);
+    for (int k = 0; k < 1000; ++k) us.push_back(rng.uniform());
+    for (const float u : us) {
+      const auto it = std::upper_bound(cdf.begin() + 1, cdf.end(), double(u));
+      const auto expected = uint32_t(std::min<ptrdiff_t>(it - cdf.begin() - 1, n - 1));
+      REQUIRE(dist.pick(u) == expected);
+      if (dist.total() > 0) REQUIRE(dist.weight(dist.pick(u)) > 0);
+    }
+  }
+}
+
 TEST_CASE("Distribution1D::sampleContinuous", "[sampling][distribution]") {
   // 50 histogram cells over 37 bins: most bin edges fall inside cells.
   auto test = [](const std::vector<float>& w, const Distribution1D& dist, uint64_t seed) {

@@ -29,9 +29,7 @@ Distribution1D::Distribution1D(std::span<const float> weights) : func_(weights.b
 }
 
 uint32_t Distribution1D::sampleDiscrete(float u, float* pmfOut, float* remapped) const {
-  // First i with cdf_[i+1] > u, skipping zero-weight bins.
-  const auto it = std::upper_bound(cdf_.begin() + 1, cdf_.end(), double(u));
-  auto i = static_cast<uint32_t>(std::min<ptrdiff_t>(it - cdf_.begin() - 1, ptrdiff_t(size()) - 1));
+  const uint32_t i = pick(u);
   if (pmfOut) *pmfOut = pmf(i);
   if (remapped) {
     const double width = cdf_[i + 1] - cdf_[i];

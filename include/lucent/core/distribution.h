@@ -1,5 +1,6 @@
 // Piecewise-constant 1-D and 2-D distributions for discrete and continuous sampling.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -20,6 +21,20 @@ class Distribution1D {
 
   // Index with probability weight(i) / total(); `remapped` receives u rescaled to [0,1) within the bin.
   uint32_t sampleDiscrete(float u, float* pmf = nullptr, float* remapped = nullptr) const;
+  // The index alone: the first bin whose upper CDF value exceeds u (zero-weight bins are never
+  // picked), by a binary search without data-dependent branches (u is random: a branch per
+  // level would be mispredicted half the time).
+  uint32_t pick(float u) const {
+    const double* first = cdf_.data() + 1;
+    size_t count = func_.size();
+    while (count > 1) {
+      const size_t half = count / 2;
+      first = first[half] <= double(u) ? first + half : first;
+      count -= half;
+    }
+    const auto i = static_cast<uint32_t>(first - (cdf_.data() + 1)) + (first[0] <= double(u));
+    return std::min(i, size() - 1);
+  }
   float pmf(uint32_t i) const { return weightedTotal_ > 0 ? func_[i] / weightedTotal_ : 1.0f / size(); }
 
   // Continuous position in [0,1) with density func(x) / integral; returns the bin in `bin`.

@@ -98,7 +98,7 @@ struct Frame {
 // The distance below which a ray leaving p could meet p's own surface again through rounding: scaled
 // to the coordinates' magnitude so that it works for scenes in millimetres and in metres alike.
 inline float selfIntersectionScale(Vec3 p) {
-  return 1e-4f * std::max({1.0f, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  return 1e-4f * std::max(std::max(1.0f, std::abs(p.x)), std::max(std::abs(p.y), std::abs(p.z)));
 }
 
 // Offsets a ray origin off the surface along the geometric normal, by selfIntersectionScale.

@@ -19,8 +19,8 @@ struct LightSample {
 inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, Vec2 u) {
   LightSample s;
   if (scene.lights.empty()) return s;
-  float pmf;
-  const uint32_t li = scene.lightDistribution.sampleDiscrete(uLight, &pmf);
+  const uint32_t li = scene.lightDistribution.pick(uLight);
+  const float pmf = scene.lightDistribution.pmf(li);
   const Light& light = scene.lights[li];
   switch (light.type) {
     case LightType::Triangle: {

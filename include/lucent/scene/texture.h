@@ -23,21 +23,33 @@ inline Rgb decodeTexel(uint32_t texel) {
   return {kSrgb8ToLinear[texel & 0xff], kSrgb8ToLinear[(texel >> 8) & 0xff], kSrgb8ToLinear[(texel >> 16) & 0xff]};
 }
 
-// Bilinear lookup, in linear space, with wrap-around; uv (0,0) is the bottom-left corner, as in OBJ.
-inline Rgb bilinear(const Texture& t, const uint32_t* texels, Vec2 uv) {
+// The four texels a bilinear lookup reads (wrapping around) and the weights between them; uv (0,0)
+// is the bottom-left corner, as in OBJ.
+struct BilinearFootprint {
+  const uint32_t* row0;
+  const uint32_t* row1;
+  uint32_t x0, x1;
+  float tx, ty;
+};
+inline BilinearFootprint bilinearFootprint(const Texture& t, const uint32_t* texels, Vec2 uv) {
   const float x = (uv.x - std::floor(uv.x)) * t.width - 0.5f;
   const float y = (std::ceil(uv.y) - uv.y) * t.height - 0.5f;
   const float fx = std::floor(x), fy = std::floor(y);
-  const float tx = x - fx, ty = y - fy;
   // x lies in [-0.5, width - 0.5], so wrapping needs only the two edge cases.
   const uint32_t x0 = fx < 0 ? t.width - 1 : std::min(uint32_t(fx), t.width - 1);
   const uint32_t y0 = fy < 0 ? t.height - 1 : std::min(uint32_t(fy), t.height - 1);
   const uint32_t x1 = x0 + 1 == t.width ? 0 : x0 + 1, y1 = y0 + 1 == t.height ? 0 : y0 + 1;
-  const uint32_t* row0 = texels + t.offset + size_t(y0) * t.width;
-  const uint32_t* row1 = texels + t.offset + size_t(y1) * t.width;
-  const Rgb a = decodeTexel(row0[x0]) * (1 - tx) + decodeTexel(row0[x1]) * tx;
-  const Rgb b = decodeTexel(row1[x0]) * (1 - tx) + decodeTexel(row1[x1]) * tx;
-  return a * (1 - ty) + b * ty;
+  return {texels + t.offset + size_t(y0) * t.width, texels + t.offset + size_t(y1) * t.width, x0, x1, x - fx, y - fy};
+}
+
+// Bilinear lookup, in linear space, with wrap-around.
+inline Rgb bilinear(const BilinearFootprint& f) {
+  const Rgb a = decodeTexel(f.row0[f.x0]) * (1 - f.tx) + decodeTexel(f.row0[f.x1]) * f.tx;
+  const Rgb b = decodeTexel(f.row1[f.x0]) * (1 - f.tx) + decodeTexel(f.row1[f.x1]) * f.tx;
+  return a * (1 - f.ty) + b * f.ty;
+}
+inline Rgb bilinear(const Texture& t, const uint32_t* texels, Vec2 uv) {
+  return bilinear(bilinearFootprint(t, texels, uv));
 }
 
 inline Rgb diffuseAlbedo(const Scene& scene, const Material& m, Vec2 uv) {

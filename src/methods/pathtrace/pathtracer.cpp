@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <atomic>
+#include <memory>
 
 #include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
@@ -10,6 +11,7 @@
 #include "lucent/scene/camera.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"
+#include "methods/pathtrace/diffuse_lanes.h"
 
 namespace lucent {
 namespace {
@@ -28,6 +30,47 @@ struct PathResult {
 
 struct Counters {
   uint64_t rays = 0;
+  uint64_t laneShadedHits = 0;
+};
+
+// One camera path in flight. Paths advance together, one bounce per stage (a wavefront), so that
+// the closest-hit and shadow queries of many paths are issued back to back, and shading touches
+// one path's scene data while the others' loads are in flight.
+struct Path {
+  Ray ray;
+  Rng rng;
+  Rgb beta{1.0f};
+  bool lastDelta = true;  // the camera ray counts as specular: emission seen directly is not MIS'ed
+  float lastPdf = 0;
+  Vec3 lastPosition;
+  int gatheringVertices = 0;  // non-specular vertices the path has scattered from so far
+  int bounce = 0;
+  PathResult result;
+
+  // Light arriving at the vertex the path came from is direct if that vertex was the first
+  // non-specular one.
+  void gather(int verticesBefore, Rgb contribution) {
+    (verticesBefore <= 1 ? result.direct : result.indirect) += contribution;
+  }
+};
+
+// A light sample's shadow ray, and what it adds to its path if the light is visible.
+struct ShadowQuery {
+  Ray ray;
+  Rgb contribution;
+  uint32_t path = 0;
+  int verticesBefore = 0;
+};
+
+// Paths traced together: enough that the stages run long loops, few enough that the paths' state
+// stays in the first cache levels.
+constexpr int64_t kWaveSize = 128;
+
+// A lane whose albedo is textured: the texels to read, and the material's factor.
+struct TexturedLane {
+  uint32_t lane;
+  BilinearFootprint footprint;
+  Rgb kd;
 };
 
 class PathTracer {
@@ -35,89 +78,263 @@ class PathTracer {
   PathTracer(const Scene& scene, const Visibility& vis, const PathTraceOptions& opt)
       : scene_(scene), vis_(vis), opt_(opt) {}
 
-  PathResult trace(Ray ray, Rng& rng, Counters& counters) const {
-    PathResult out;
-    Rgb beta(1.0f);
-    bool lastDelta = true;  // the camera ray counts as specular: emission seen directly is not MIS'ed
-    float lastPdf = 0;
-    Vec3 lastPosition = ray.origin;
-    int gatheringVertices = 0;  // non-specular vertices the path has scattered from so far
-    // Light arriving at the vertex the path came from is direct if that vertex was the first
-    // non-specular one.
-    auto gather = [&](int verticesBefore, Rgb contribution) {
-      (verticesBefore <= 1 ? out.direct : out.indirect) += contribution;
-    };
-
-    for (int bounce = 0;; ++bounce) {
-      if (!isFinite(ray.origin) || !isFinite(ray.direction)) {
-        out.valid = false;
-        return out;
+  // One bounce of a path whose ray met `hit` (or nothing): emission found, the light sample (its
+  // shadow ray queued in `shadow`, `queued` set), and the next ray. False when the path ends.
+  bool shade(Path& path, const Hit& hit, ShadowQuery& shadow, bool& queued) const {
+    queued = false;
+    const Ray& ray = path.ray;
+    if (!hit.found()) {
+      if (scene_.environment.present) {
+        const Rgb le = environmentRadiance(scene_.environment, ray.direction);
+        path.gather(path.gatheringVertices,
+                    path.beta * le *
+                        emissionWeight(path.lastDelta, path.lastPdf, environmentLightPdf(scene_, ray.direction)));
       }
-      ++counters.rays;
-      const Hit hit = vis_.intersect(ray);
-      if (!hit.found()) {
-        if (scene_.environment.present) {
-          const Rgb le = environmentRadiance(scene_.environment, ray.direction);
-          gather(gatheringVertices, beta * le * emissionWeight(lastDelta, lastPdf, environmentLightPdf(scene_, ray.direction)));
-        }
-        break;
-      }
-      const SurfacePoint sp = surfaceAt(scene_, hit.triangle, hit.b1, hit.b2);
-      const Material& material = scene_.materials[sp.materialId];
-      const Vec3 wo = -ray.direction;
-      const bool frontFace = dot(wo, sp.geometricNormal) > 0;
-
-      if (!material.ke.isBlack() && frontFace) {
-        const float lightPdf =
-            lastDelta ? 0.0f : triangleLightPdf(scene_, hit.triangle, ray.direction, length(sp.position - lastPosition));
-        gather(gatheringVertices, beta * material.ke * emissionWeight(lastDelta, lastPdf, lightPdf));
-      }
-      const SurfaceBsdf bsdf = bsdfAt(scene_, sp);
-      if (bounce == 0) {
-        out.albedo = bsdf.type == MaterialType::Diffuse || bsdf.type == MaterialType::Phong ? bsdf.kd + bsdf.ks
-                     : bsdf.type == MaterialType::Mirror ? bsdf.ks : Rgb(1.0f);
-        out.normal = sp.shadingNormal;
-        out.depth = hit.t;
-      }
-      if (bounce + 1 > opt_.maxDepth) break;
-
-      // Glass keeps the winding orientation (inside/outside); other materials are two-sided. Where
-      // the shading normal puts the viewer on the other side than the geometric normal does (at
-      // silhouettes of smooth meshes), the geometric normal is used.
-      Vec3 n = dot(wo, sp.shadingNormal) * dot(wo, sp.geometricNormal) > 0 ? sp.shadingNormal : sp.geometricNormal;
-      if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
-      const Frame frame(n);
-      const Vec3 woLocal = frame.toLocal(wo);
-
-      if (!bsdf.isDelta()) {
-        gather(gatheringVertices + 1, beta * estimateDirect(sp, bsdf, frame, woLocal, rng, counters));
-        ++gatheringVertices;
-      }
-
-      const float uLobe = rng.uniform();
-      const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, rng.uniform2());
-      if (!bs.valid) break;
-      const Vec3 wi = frame.toWorld(bs.wi);
-      // Reject directions on the wrong side of the real surface (shading-normal light leaks).
-      const bool transmits = bs.wi.z * woLocal.z < 0;
-      if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) break;
-      beta *= bs.weight;
-      if (beta.isBlack()) break;
-      lastDelta = bs.delta;
-      lastPdf = bs.pdf;
-      lastPosition = sp.position;
-      ray = {offsetOrigin(sp.position, sp.geometricNormal, wi), wi};
-
-      if (bounce + 1 >= opt_.rouletteDepth) {
-        const float survive = std::min(1.0f, beta.maxComponent());
-        if (rng.uniform() >= survive) break;
-        beta *= 1.0f / survive;
-      }
+      return false;
     }
-    return out;
+    const SurfacePoint sp = surfaceAt(scene_, hit.triangle, hit.b1, hit.b2);
+    const Material& material = scene_.materials[sp.materialId];
+    const Vec3 wo = -ray.direction;
+    const bool frontFace = dot(wo, sp.geometricNormal) > 0;
+
+    if (frontFace) gatherEmission(path, hit.triangle, material, sp.position);
+    const SurfaceBsdf bsdf = bsdfAt(scene_, sp);
+    if (path.bounce == 0) {
+      PathResult& out = path.result;
+      out.albedo = bsdf.type == MaterialType::Diffuse || bsdf.type == MaterialType::Phong ? bsdf.kd + bsdf.ks
+                   : bsdf.type == MaterialType::Mirror                                  ? bsdf.ks
+                                                                                        : Rgb(1.0f);
+      out.normal = sp.shadingNormal;
+      out.depth = hit.t;
+    }
+    if (path.bounce + 1 > opt_.maxDepth) return false;
+
+    // Glass keeps the winding orientation (inside/outside); other materials are two-sided. Where
+    // the shading normal puts the viewer on the other side than the geometric normal does (at
+    // silhouettes of smooth meshes), the geometric normal is used.
+    Vec3 n = dot(wo, sp.shadingNormal) * dot(wo, sp.geometricNormal) > 0 ? sp.shadingNormal : sp.geometricNormal;
+    if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
+    const Frame frame(n);
+    const Vec3 woLocal = frame.toLocal(wo);
+
+    if (!bsdf.isDelta()) {
+      queued = sampleDirect(sp, bsdf, frame, woLocal, path.rng, shadow);
+      shadow.contribution *= path.beta;
+      shadow.verticesBefore = path.gatheringVertices + 1;
+      ++path.gatheringVertices;
+    }
+
+    const float uLobe = path.rng.uniform();
+    const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, path.rng.uniform2());
+    if (!bs.valid) return false;
+    const Vec3 wi = frame.toWorld(bs.wi);
+    // Reject directions on the wrong side of the real surface (shading-normal light leaks).
+    const bool transmits = bs.wi.z * woLocal.z < 0;
+    if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) return false;
+    path.beta *= bs.weight;
+    if (path.beta.isBlack()) return false;
+    path.lastDelta = bs.delta;
+    path.lastPdf = bs.pdf;
+    path.lastPosition = sp.position;
+    path.ray = {offsetOrigin(sp.position, sp.geometricNormal, wi), wi};
+    return survivesRoulette(path);
+  }
+
+  // The paths of one wave and the queries between its stages; one per thread, reused.
+  struct Wave {
+    std::vector<Path> paths;
+    std::vector<Hit> hits;
+    std::vector<uint32_t> active, next;
+    std::vector<ShadowQuery> shadows;
+    std::unique_ptr<DiffuseLanes> lanes = std::make_unique<DiffuseLanes>();  // zeroed
+    std::vector<TexturedLane> textured;
+  };
+
+  // Advances every path of the wave to its end: closest hits for all live paths, then shading,
+  // then the queued shadow rays, bounce after bounce. Each path sees the same random numbers and the
+  // same arithmetic as if traced alone.
+  void traceWave(Wave& w, Counters& counters) const {
+    w.hits.resize(w.paths.size());
+    w.active.resize(w.paths.size());
+    for (uint32_t i = 0; i < w.paths.size(); ++i) w.active[i] = i;
+    while (!w.active.empty()) {
+      size_t live = 0;
+      for (const uint32_t i : w.active) {
+        Path& path = w.paths[i];
+        if (!isFinite(path.ray.origin) || !isFinite(path.ray.direction)) {
+          path.result.valid = false;  // the sample is dropped and counted
+          continue;
+        }
+        w.hits[i] = vis_.intersect(path.ray);
+        w.active[live++] = i;
+      }
+      w.active.resize(live);
+      counters.rays += live;
+      w.next.clear();
+      w.shadows.clear();
+      DiffuseLanes& lanes = *w.lanes;
+      lanes.count = 0;
+      w.textured.clear();
+      for (const uint32_t i : w.active) {
+        if (inDiffuseLane(w.paths[i], w.hits[i])) {
+          fetchDiffuseLane(w.paths[i], w.hits[i], i, lanes, w.textured);
+          continue;
+        }
+        ShadowQuery shadow;
+        bool queued;
+        if (shade(w.paths[i], w.hits[i], shadow, queued)) w.next.push_back(i);
+        if (queued) {
+          shadow.path = i;
+          w.shadows.push_back(shadow);
+        }
+      }
+      counters.laneShadedHits += lanes.count;
+      if (lanes.count > 0) {
+        for (const TexturedLane& t : w.textured) {
+          const Rgb kd = t.kd * bilinear(t.footprint);
+          lanes.kdR[t.lane] = kd.r, lanes.kdG[t.lane] = kd.g, lanes.kdB[t.lane] = kd.b;
+        }
+        shadeDiffuseSurfaces(lanes);
+        fetchLightSamples(lanes);
+        shadeDiffuseScattering(lanes);
+        finishDiffuseLanes(lanes, w);
+      }
+      counters.rays += w.shadows.size();
+      for (const ShadowQuery& shadow : w.shadows)
+        if (!vis_.occluded(shadow.ray)) w.paths[shadow.path].gather(shadow.verticesBefore, shadow.contribution);
+      std::swap(w.active, w.next);
+    }
   }
 
  private:
+  // Hits that DiffuseLanes shades: Lambertian surfaces, below the depth limit, lights combined by MIS.
+  bool inDiffuseLane(const Path& path, const Hit& hit) const {
+    return opt_.laneShading && hit.found() && opt_.strategy == PathStrategy::Mis && path.bounce + 1 <= opt_.maxDepth &&
+           scene_.materials[scene_.materialIds[hit.triangle]].type == MaterialType::Diffuse;
+  }
+
+  // The lane's surface data and the random numbers shade would draw, in its order.
+  void fetchDiffuseLane(Path& path, const Hit& hit, uint32_t pathIndex, DiffuseLanes& l,
+                        std::vector<TexturedLane>& textured) const {
+    const uint32_t k = l.count++;
+    const Scene& s = scene_;
+    const uint32_t* v = &s.indices[3 * size_t(hit.triangle)];
+    const Vec3 p0 = s.positions[v[0]], p1 = s.positions[v[1]], p2 = s.positions[v[2]];
+    const Vec3 n0 = s.normals[v[0]], n1 = s.normals[v[1]], n2 = s.normals[v[2]];
+    const Vec3 ng = s.faceNormals[hit.triangle];
+    l.path[k] = pathIndex;
+    l.dirX[k] = path.ray.direction.x, l.dirY[k] = path.ray.direction.y, l.dirZ[k] = path.ray.direction.z;
+    l.b1[k] = hit.b1, l.b2[k] = hit.b2;
+    l.p0x[k] = p0.x, l.p0y[k] = p0.y, l.p0z[k] = p0.z, l.p1x[k] = p1.x, l.p1y[k] = p1.y, l.p1z[k] = p1.z;
+    l.p2x[k] = p2.x, l.p2y[k] = p2.y, l.p2z[k] = p2.z;
+    l.n0x[k] = n0.x, l.n0y[k] = n0.y, l.n0z[k] = n0.z, l.n1x[k] = n1.x, l.n1y[k] = n1.y, l.n1z[k] = n1.z;
+    l.n2x[k] = n2.x, l.n2y[k] = n2.y, l.n2z[k] = n2.z;
+    l.hasNormals[k] = !(n0 == Vec3{0, 0, 0});
+    l.ngx[k] = ng.x, l.ngy[k] = ng.y, l.ngz[k] = ng.z;
+    // bsdfAt's albedo; a texture's texels are requested now and read once every lane is fetched.
+    const Material& m = s.materials[s.materialIds[hit.triangle]];
+    if (m.kdTexture < 0) {
+      l.kdR[k] = m.kd.r, l.kdG[k] = m.kd.g, l.kdB[k] = m.kd.b;
+    } else {
+      SurfacePoint sp;
+      sp.triangle = hit.triangle, sp.b1 = hit.b1, sp.b2 = hit.b2;
+      const BilinearFootprint f = bilinearFootprint(s.textures[m.kdTexture], s.texels.data(), texcoordsAt(s, sp));
+      for (const uint32_t* texel : {f.row0 + f.x0, f.row0 + f.x1, f.row1 + f.x0, f.row1 + f.x1}) __builtin_prefetch(texel);
+      textured.push_back({k, f, m.kd});
+    }
+    l.uLight[k] = path.rng.uniform();
+    l.uLightX[k] = path.rng.uniform();
+    l.uLightY[k] = path.rng.uniform();
+    path.rng.uniform();  // shade's lobe choice, which a Lambertian surface does not use
+    l.uBsdfX[k] = path.rng.uniform();
+    l.uBsdfY[k] = path.rng.uniform();
+  }
+
+  // The light each lane samples: an emitting triangle's data for the lanes' own sampling, or any
+  // other light's sample whole.
+  void fetchLightSamples(DiffuseLanes& l) const {
+    const Scene& s = scene_;
+    for (uint32_t k = 0; k < l.count; ++k) {
+      const uint32_t li = s.lightDistribution.pick(l.uLight[k]);
+      const Light& light = s.lights[li];
+      l.lightIsTriangle[k] = light.type == LightType::Triangle;
+      if (light.type == LightType::Triangle) {
+        const uint32_t t = light.triangle;
+        const Vec3 q0 = s.vertex(t, 0), q1 = s.vertex(t, 1), q2 = s.vertex(t, 2), n = s.geometricNormal(t);
+        l.q0x[k] = q0.x, l.q0y[k] = q0.y, l.q0z[k] = q0.z, l.q1x[k] = q1.x, l.q1y[k] = q1.y, l.q1z[k] = q1.z;
+        l.q2x[k] = q2.x, l.q2y[k] = q2.y, l.q2z[k] = q2.z;
+        l.lightNx[k] = n.x, l.lightNy[k] = n.y, l.lightNz[k] = n.z;
+        l.lightArea[k] = s.triangleArea(t);
+        l.lightPmf[k] = s.lightDistribution.pmf(li);
+        const Rgb le = s.materials[s.materialIds[t]].ke;
+        l.leR[k] = le.r, l.leG[k] = le.g, l.leB[k] = le.b;
+        continue;
+      }
+      const LightSample ls = sampleLight(s, {l.posX[k], l.posY[k], l.posZ[k]}, l.uLight[k], {l.uLightX[k], l.uLightY[k]});
+      l.wiX[k] = ls.wi.x, l.wiY[k] = ls.wi.y, l.wiZ[k] = ls.wi.z, l.lightDistance[k] = ls.distance;
+      l.pointX[k] = ls.point.x, l.pointY[k] = ls.point.y, l.pointZ[k] = ls.point.z;
+      l.leR[k] = ls.radiance.r, l.leG[k] = ls.radiance.g, l.leB[k] = ls.radiance.b;
+      l.lightPdf[k] = ls.pdf;
+      l.lightDelta[k] = ls.delta;
+    }
+  }
+
+  // What shade does with the lanes' results: emission, first-hit layers, the shadow query, the
+  // next ray and Russian roulette.
+  void finishDiffuseLanes(const DiffuseLanes& l, Wave& w) const {
+    for (uint32_t k = 0; k < l.count; ++k) {
+      const uint32_t i = l.path[k];
+      Path& path = w.paths[i];
+      const Hit& hit = w.hits[i];
+      const Material& material = scene_.materials[scene_.materialIds[hit.triangle]];
+      const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
+      if (l.frontFace[k]) gatherEmission(path, hit.triangle, material, position);
+      if (path.bounce == 0) {
+        path.result.albedo = Rgb(l.kdR[k], l.kdG[k], l.kdB[k]) + material.ks;
+        path.result.normal = {l.snX[k], l.snY[k], l.snZ[k]};
+        path.result.depth = hit.t;
+      }
+      if (l.shadowQueued[k]) {
+        ShadowQuery& shadow = w.shadows.emplace_back();
+        shadow.ray = {{l.shadowOx[k], l.shadowOy[k], l.shadowOz[k]}, {l.shadowDx[k], l.shadowDy[k], l.shadowDz[k]}};
+        shadow.ray.tMax = l.shadowTMax[k];
+        shadow.contribution = Rgb(l.directR[k], l.directG[k], l.directB[k]) * path.beta;
+        shadow.verticesBefore = path.gatheringVertices + 1;
+        shadow.path = i;
+      }
+      ++path.gatheringVertices;
+      if (!l.scattered[k]) continue;
+      path.beta *= Rgb(l.weightR[k], l.weightG[k], l.weightB[k]);
+      if (path.beta.isBlack()) continue;
+      path.lastDelta = false;
+      path.lastPdf = l.scatterPdf[k];
+      path.lastPosition = position;
+      path.ray = {{l.nextOx[k], l.nextOy[k], l.nextOz[k]}, {l.nextDx[k], l.nextDy[k], l.nextDz[k]}};
+      if (survivesRoulette(path)) w.next.push_back(i);
+    }
+  }
+
+  // Emission of the front face the path has met, weighted against light sampling.
+  void gatherEmission(Path& path, uint32_t triangle, const Material& material, Vec3 position) const {
+    if (material.ke.isBlack()) return;
+    const float lightPdf = path.lastDelta ? 0.0f
+                                          : triangleLightPdf(scene_, triangle, path.ray.direction,
+                                                             length(position - path.lastPosition));
+    path.gather(path.gatheringVertices,
+                path.beta * material.ke * emissionWeight(path.lastDelta, path.lastPdf, lightPdf));
+  }
+
+  // Counts the bounce just taken; from the roulette depth on, ends the path with probability one
+  // minus its throughput's largest component, and scales the survivors up by as much.
+  bool survivesRoulette(Path& path) const {
+    ++path.bounce;
+    if (path.bounce < opt_.rouletteDepth) return true;
+    const float survive = std::min(1.0f, path.beta.maxComponent());
+    if (path.rng.uniform() >= survive) return false;
+    path.beta *= 1.0f / survive;
+    return true;
+  }
+
   // Weight of emission found by BSDF sampling, against light sampling of the same light.
   float emissionWeight(bool lastDelta, float bsdfPdf, float lightPdf) const {
     if (lastDelta) return 1.0f;
@@ -130,23 +347,24 @@ class PathTracer {
   }
 
   // One light sample, weighted against BSDF sampling (lights that BSDF sampling cannot hit, point
-  // and directional, always have weight 1).
-  Rgb estimateDirect(const SurfacePoint& sp, const SurfaceBsdf& bsdf, const Frame& frame, Vec3 woLocal, Rng& rng,
-                     Counters& counters) const {
+  // and directional, always have weight 1): its shadow ray and what it brings if unoccluded. False
+  // when the sample brings nothing whatever the shadow ray finds.
+  bool sampleDirect(const SurfacePoint& sp, const SurfaceBsdf& bsdf, const Frame& frame, Vec3 woLocal, Rng& rng,
+                    ShadowQuery& shadow) const {
     const float uLight = rng.uniform();
     const LightSample ls = sampleLight(scene_, sp.position, uLight, rng.uniform2());
-    if (!(ls.pdf > 0) || ls.radiance.isBlack()) return {};
-    if (opt_.strategy == PathStrategy::BsdfSampling && !ls.delta) return {};
+    if (!(ls.pdf > 0) || ls.radiance.isBlack()) return false;
+    if (opt_.strategy == PathStrategy::BsdfSampling && !ls.delta) return false;
     const Vec3 wiLocal = frame.toLocal(ls.wi);
-    if (wiLocal.z <= 0 || dot(ls.wi, sp.geometricNormal) * dot(frame.n, sp.geometricNormal) <= 0) return {};
+    if (wiLocal.z <= 0 || dot(ls.wi, sp.geometricNormal) * dot(frame.n, sp.geometricNormal) <= 0) return false;
     const Rgb f = evalBsdf(bsdf, woLocal, wiLocal);
-    if (f.isBlack()) return {};
-    ++counters.rays;
-    if (vis_.occluded(shadowRay(sp.position, sp.geometricNormal, ls))) return {};
+    if (f.isBlack()) return false;
     const float w = ls.delta || opt_.strategy == PathStrategy::LightSampling
                         ? 1.0f
                         : powerHeuristic(ls.pdf, bsdfPdf(bsdf, woLocal, wiLocal));
-    return f * ls.radiance * (wiLocal.z * w / ls.pdf);
+    shadow.ray = shadowRay(sp.position, sp.geometricNormal, ls);
+    shadow.contribution = f * ls.radiance * (wiLocal.z * w / ls.pdf);
+    return true;
   }
 
   const Scene& scene_;
@@ -183,6 +401,7 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
   const int tilesX = (width + options.tileSize - 1) / options.tileSize;
   const int tilesY = (height + options.tileSize - 1) / options.tileSize;
   tbb::enumerable_thread_specific<Counters> counters;
+  tbb::enumerable_thread_specific<PathTracer::Wave> waves;
   std::atomic<uint64_t> pixelSamplesDone{0};
   const double totalPixelSamples = double(width) * height * options.spp;
 
@@ -202,30 +421,46 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
     tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& r) {
       flushDenormals();  // every thread computes alike, whoever created it
       Counters& local = counters.local();
+      PathTracer::Wave& wave = waves.local();
       for (int tile = r.begin(); tile != r.end(); ++tile) {
         const int x0 = (tile % tilesX) * options.tileSize, y0 = (tile / tilesX) * options.tileSize;
         const int x1 = std::min(width, x0 + options.tileSize), y1 = std::min(height, y0 + options.tileSize);
-        for (int y = y0; y < y1; ++y)
-          for (int x = x0; x < x1; ++x) {
-            const uint64_t pixel = uint64_t(y) * width + x;
+        // The tile's (pixel, sample) pairs in pixel order, then sample order, in waves; results are
+        // added in that order, so every pixel sums its samples in sample order.
+        const int samples = passEnd - sppDone;
+        const int64_t items = int64_t(x1 - x0) * (y1 - y0) * samples;
+        for (int64_t first = 0; first < items; first += kWaveSize) {
+          const int64_t last = std::min(items, first + kWaveSize);
+          wave.paths.resize(size_t(last - first));
+          for (int64_t item = first; item < last; ++item) {
+            const int64_t pixelInTile = item / samples;
+            const int x = x0 + int(pixelInTile % (x1 - x0)), y = y0 + int(pixelInTile / (x1 - x0));
+            Path& path = wave.paths[size_t(item - first)];
+            path = Path{};
+            path.rng = Rng(options.seed, uint64_t(y) * width + x, uint64_t(sppDone + item % samples));
+            const Vec2 jitter = path.rng.uniform2();
+            path.ray = camera.generate(x + jitter.x, y + jitter.y);
+            path.lastPosition = path.ray.origin;
+          }
+          tracer.traceWave(wave, local);
+          for (int64_t item = first; item < last; ++item) {
+            const int64_t pixelInTile = item / samples;
+            const uint64_t pixel = uint64_t(y0 + pixelInTile / (x1 - x0)) * width + uint64_t(x0 + pixelInTile % (x1 - x0));
+            const PathResult& p = wave.paths[size_t(item - first)].result;
+            const Rgb L = p.direct + p.indirect;
+            if (!p.valid || !isFinite(L)) {
+              ++invalid[pixel];
+              continue;
+            }
             double* sum = &sums[pixel * nc];
-            for (int s = sppDone; s < passEnd; ++s) {
-              Rng rng(options.seed, pixel, uint64_t(s));
-              const Vec2 jitter = rng.uniform2();
-              const PathResult p = tracer.trace(camera.generate(x + jitter.x, y + jitter.y), rng, local);
-              const Rgb L = p.direct + p.indirect;
-              if (!p.valid || !isFinite(L)) {
-                ++invalid[pixel];
-                continue;
-              }
-              for (int c = 0; c < 3; ++c) sum[c] += L[c];
-              if (options.layers) {
-                const float v[13] = {p.albedo.r, p.albedo.g, p.albedo.b, p.normal.x, p.normal.y, p.normal.z, p.depth,
-                                     p.direct.r, p.direct.g, p.direct.b, p.indirect.r, p.indirect.g, p.indirect.b};
-                for (int c = 0; c < 13; ++c) sum[3 + c] += v[c];
-              }
+            for (int c = 0; c < 3; ++c) sum[c] += L[c];
+            if (options.layers) {
+              const float v[13] = {p.albedo.r, p.albedo.g, p.albedo.b, p.normal.x, p.normal.y, p.normal.z, p.depth,
+                                   p.direct.r, p.direct.g, p.direct.b, p.indirect.r, p.indirect.g, p.indirect.b};
+              for (int c = 0; c < 13; ++c) sum[3 + c] += v[c];
             }
           }
+        }
         const uint64_t done = pixelSamplesDone += uint64_t(x1 - x0) * (y1 - y0) * (passEnd - sppDone);
         if (progress) progress(std::min(1.0, done / totalPixelSamples));
       }
@@ -245,9 +480,11 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
   Counters total;
   for (const Counters& c : counters) {
     total.rays += c.rays;
+    total.laneShadedHits += c.laneShadedHits;
   }
   out.stats.addStage("trace_paths", clock.seconds());
   out.stats.addCounter("rays", total.rays);
+  out.stats.addCounter("lane_shaded_hits", total.laneShadedHits);
   out.stats.addCounter("samples", uint64_t(width) * height * sppDone);
   out.stats.addCounter("invalid_samples", invalidTotal);
   return out;

@@ -1,0 +1,119 @@
+#include "diffuse_lanes.h"
+
+#include "lucent/core/math.h"
+#include "lucent/core/sampling.h"
+
+namespace lucent {
+
+namespace {
+void store(Vec3 v, float* x, float* y, float* z, uint32_t k) { x[k] = v.x, y[k] = v.y, z[k] = v.z; }
+Vec3 select(bool c, Vec3 a, Vec3 b) { return {c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z}; }
+}  // namespace
+
+// surfaceAt, then the start of PathTracer::shade for a two-sided material.
+__attribute__((target_clones("avx2", "default"))) void shadeDiffuseSurfaces(DiffuseLanes& l) {
+  for (uint32_t k = 0; k < l.count; ++k) {
+    const float b1 = l.b1[k], b2 = l.b2[k], b0 = 1.0f - b1 - b2;
+    const Vec3 position = Vec3{l.p0x[k], l.p0y[k], l.p0z[k]} * b0 + Vec3{l.p1x[k], l.p1y[k], l.p1z[k]} * b1 +
+                          Vec3{l.p2x[k], l.p2y[k], l.p2z[k]} * b2;
+    const Vec3 ng = Vec3{l.ngx[k], l.ngy[k], l.ngz[k]};
+    const Vec3 interpolated = Vec3{l.n0x[k], l.n0y[k], l.n0z[k]} * b0 + Vec3{l.n1x[k], l.n1y[k], l.n1z[k]} * b1 +
+                              Vec3{l.n2x[k], l.n2y[k], l.n2z[k]} * b2;
+    const float len = length(interpolated);
+    Vec3 sn = select(len > 0, interpolated / len, ng);
+    sn = select(dot(sn, ng) < 0, -sn, sn);
+    sn = select(l.hasNormals[k] != 0, sn, ng);
+
+    const Vec3 wo = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
+    const bool frontFace = dot(wo, ng) > 0;
+    Vec3 n = select(dot(wo, sn) * dot(wo, ng) > 0, sn, ng);
+    n = select(frontFace, n, -n);
+    const Frame frame(n);
+    store(position, l.posX, l.posY, l.posZ, k);
+    store(sn, l.snX, l.snY, l.snZ, k);
+    store(frame.s, l.sX, l.sY, l.sZ, k);
+    store(frame.t, l.tX, l.tY, l.tZ, k);
+    store(frame.n, l.nX, l.nY, l.nZ, k);
+    store(frame.toLocal(wo), l.woX, l.woY, l.woZ, k);
+    l.frontFace[k] = frontFace;
+  }
+}
+
+// PathTracer::sampleDirect (the emitting triangle's sample as sampleLight takes it) and
+// sampleBsdf's Lambertian case, with shadowRay and offsetOrigin.
+__attribute__((target_clones("avx2", "default"))) void shadeDiffuseScattering(DiffuseLanes& l) {
+  for (uint32_t k = 0; k < l.count; ++k) {
+    const Vec3 position = Vec3{l.posX[k], l.posY[k], l.posZ[k]}, ng = Vec3{l.ngx[k], l.ngy[k], l.ngz[k]};
+    const Vec3 s = Vec3{l.sX[k], l.sY[k], l.sZ[k]}, t = Vec3{l.tX[k], l.tY[k], l.tZ[k]}, n = Vec3{l.nX[k], l.nY[k], l.nZ[k]};
+    const Vec3 wo = Vec3{l.woX[k], l.woY[k], l.woZ[k]};
+    const Rgb kd{l.kdR[k], l.kdG[k], l.kdB[k]};
+
+    // The light sample: a uniform point on the emitting triangle, or the one fetched.
+    const float su = std::sqrt(l.uLightX[k]);
+    const float bx = 1.0f - su, by = l.uLightY[k] * su;
+    const Vec3 q = Vec3{l.q0x[k], l.q0y[k], l.q0z[k]} * (1 - bx - by) + Vec3{l.q1x[k], l.q1y[k], l.q1z[k]} * bx +
+                   Vec3{l.q2x[k], l.q2y[k], l.q2z[k]} * by;
+    const Vec3 toLight = q - position;
+    const float dist2 = dot(toLight, toLight);
+    const float triangleDistance = std::sqrt(dist2);
+    const Vec3 triangleWi = toLight / triangleDistance;
+    const float cosLight = -dot(triangleWi, Vec3{l.lightNx[k], l.lightNy[k], l.lightNz[k]});
+    // sampleLight returns no sample (pdf 0) for the triangle's back or a zero distance.
+    const float trianglePdf =
+        cosLight <= 0 ? 0.0f : !(dist2 > 0) ? 0.0f : l.lightPmf[k] * dist2 / (cosLight * l.lightArea[k]);
+    const bool onTriangle = l.lightIsTriangle[k] != 0;
+    const Vec3 wi = select(onTriangle, triangleWi, Vec3{l.wiX[k], l.wiY[k], l.wiZ[k]});
+    const float fetchedDistance = l.lightDistance[k], fetchedPdf = l.lightPdf[k];
+    const float distance = onTriangle ? triangleDistance : fetchedDistance;
+    const Vec3 point = select(onTriangle, q, Vec3{l.pointX[k], l.pointY[k], l.pointZ[k]});
+    const float pdf = onTriangle ? trianglePdf : fetchedPdf;
+    const Rgb le{l.leR[k], l.leG[k], l.leB[k]};
+
+    // evalBsdf and bsdfPdf: zero unless both directions are above the surface. Conditions are
+    // chained selects, not boolean algebra, which the vectorizer does not take.
+    const Vec3 wiLocal{dot(wi, s), dot(wi, t), dot(wi, n)};  // Frame::toLocal
+    const float toF = wo.z <= 0 ? 0.0f : wiLocal.z <= 0 ? 0.0f : kInvPi;
+    const Rgb f{toF == 0 ? 0.0f : kd.r * kInvPi, toF == 0 ? 0.0f : kd.g * kInvPi, toF == 0 ? 0.0f : kd.b * kInvPi};
+    const float lambertPdf = toF == 0 ? 0.0f : cosineHemispherePdf(wiLocal.z);
+    const float mis = powerHeuristic(pdf, lambertPdf);
+    const float w = onTriangle ? mis : l.lightDelta[k] != 0 ? 1.0f : mis;  // delta lights: weight 1
+    const Rgb direct = f * le * (wiLocal.z * w / pdf);
+    // sampleDirect's tests, in its order. Radiance and albedo are never negative (the loader
+    // rejects negative values), so "not black" is "largest component above zero".
+    l.shadowQueued[k] = !(pdf > 0)                    ? 0
+                        : !(le.maxComponent() > 0)    ? 0
+                        : wiLocal.z <= 0              ? 0
+                        : dot(wi, ng) * dot(n, ng) <= 0 ? 0
+                        : f.maxComponent() > 0        ? 1
+                                                      : 0;
+    const Vec3 origin = offsetOrigin(position, ng, wi);
+    const Vec3 toPoint = point - origin;
+    const float pointDistance = length(toPoint);
+    const bool finite = distance < kInf;
+    store(origin, l.shadowOx, l.shadowOy, l.shadowOz, k);
+    store(select(finite, toPoint / pointDistance, wi), l.shadowDx, l.shadowDy, l.shadowDz, k);
+    l.shadowTMax[k] = finite ? pointDistance - selfIntersectionScale(point) : kInf;
+    l.directR[k] = direct.r, l.directG[k] = direct.g, l.directB[k] = direct.b;
+  }
+  // The next direction, cosine-distributed.
+  for (uint32_t k = 0; k < l.count; ++k) {
+    const Vec3 position = Vec3{l.posX[k], l.posY[k], l.posZ[k]}, ng = Vec3{l.ngx[k], l.ngy[k], l.ngz[k]};
+    const Vec3 s = Vec3{l.sX[k], l.sY[k], l.sZ[k]}, t = Vec3{l.tX[k], l.tY[k], l.tZ[k]}, n = Vec3{l.nX[k], l.nY[k], l.nZ[k]};
+    const Vec3 wo = Vec3{l.woX[k], l.woY[k], l.woZ[k]};
+    const Rgb kd{l.kdR[k], l.kdG[k], l.kdB[k]};
+    const Vec3 wiNext = sampleCosineHemisphere({l.uBsdfX[k], l.uBsdfY[k]});
+    // sampleBsdf: no sample unless both directions are above the surface and the pdf is positive.
+    const float scatterPdf = wo.z <= 0 ? 0.0f : wiNext.z <= 0 ? 0.0f : cosineHemispherePdf(wiNext.z);
+    const Rgb weight = kd * kInvPi * (wiNext.z / scatterPdf);
+    const Vec3 wiWorld = s * wiNext.x + t * wiNext.y + n * wiNext.z;  // Frame::toWorld
+    const Vec3 woWorld = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
+    // shade's test against leaks; with both local directions above the surface nothing transmits.
+    l.scattered[k] = scatterPdf > 0 ? (dot(wiWorld, ng) * dot(woWorld, ng) < 0 ? 0 : 1) : 0;
+    l.weightR[k] = weight.r, l.weightG[k] = weight.g, l.weightB[k] = weight.b;
+    l.scatterPdf[k] = scatterPdf;
+    store(offsetOrigin(position, ng, wiWorld), l.nextOx, l.nextOy, l.nextOz, k);
+    store(wiWorld, l.nextDx, l.nextDy, l.nextDz, k);
+  }
+}
+
+}  // namespace lucent
