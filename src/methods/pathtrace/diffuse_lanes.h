@@ -26,7 +26,7 @@ struct DiffuseLanes {
   alignas(64) float uLight[kMaxLanes], uLightX[kMaxLanes], uLightY[kMaxLanes], uBsdfX[kMaxLanes], uBsdfY[kMaxLanes];
   alignas(64) uint32_t path[kMaxLanes];  // the wave's path in this lane
 
-  // The light sample (PathTracer::fetchLightSamples, after the surface): for an emitting triangle
+  // The light sample (PathTracer::fetchDiffuseLane, sampleOtherLights): for an emitting triangle
   // its data, the sample itself taken per lane; for other lights the finished sample.
   alignas(64) int32_t lightIsTriangle[kMaxLanes];
   alignas(64) float q0x[kMaxLanes], q0y[kMaxLanes], q0z[kMaxLanes], q1x[kMaxLanes], q1y[kMaxLanes],

@@ -37,6 +37,7 @@ struct Counters {
 // the closest-hit and shadow queries of many paths are issued back to back, and shading touches
 // one path's scene data while the others' loads are in flight.
 struct Path {
+  uint64_t pixel = 0;
   Ray ray;
   Rng rng;
   Rgb beta{1.0f};
@@ -66,6 +67,14 @@ struct ShadowQuery {
 // stays in the first cache levels.
 constexpr int64_t kWaveSize = 128;
 
+// What a lane needs of an emitting triangle to sample it, gathered once per light.
+struct TriangleLightRecord {
+  Vec3 q0, q1, q2, normal;
+  float area = 0, pmf = 0;
+  Rgb le;
+  bool isTriangle = false;
+};
+
 // A lane whose albedo is textured: the texels to read, and the material's factor.
 struct TexturedLane {
   uint32_t lane;
@@ -76,7 +85,16 @@ struct TexturedLane {
 class PathTracer {
  public:
   PathTracer(const Scene& scene, const Visibility& vis, const PathTraceOptions& opt)
-      : scene_(scene), vis_(vis), opt_(opt) {}
+      : scene_(scene), vis_(vis), opt_(opt), lightRecords_(scene.lights.size()) {
+    for (uint32_t li = 0; li < scene.lights.size(); ++li) {
+      const Light& light = scene.lights[li];
+      if (light.type != LightType::Triangle) continue;
+      const uint32_t t = light.triangle;
+      lightRecords_[li] = {scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), scene.geometricNormal(t),
+                           scene.triangleArea(t), scene.lightDistribution.pmf(li),
+                           scene.materials[scene.materialIds[t]].ke, true};
+    }
+  }
 
   // One bounce of a path whose ray met `hit` (or nothing): emission found, the light sample (its
   // shadow ray queued in `shadow`, `queued` set), and the next ray. False when the path ends.
@@ -148,6 +166,7 @@ class PathTracer {
     std::vector<ShadowQuery> shadows;
     std::unique_ptr<DiffuseLanes> lanes = std::make_unique<DiffuseLanes>();  // zeroed
     std::vector<TexturedLane> textured;
+    std::vector<uint32_t> otherLights;  // lanes whose light is not a triangle
   };
 
   // Advances every path of the wave to its end: closest hits for all live paths, then shading,
@@ -175,9 +194,10 @@ class PathTracer {
       DiffuseLanes& lanes = *w.lanes;
       lanes.count = 0;
       w.textured.clear();
+      w.otherLights.clear();
       for (const uint32_t i : w.active) {
         if (inDiffuseLane(w.paths[i], w.hits[i])) {
-          fetchDiffuseLane(w.paths[i], w.hits[i], i, lanes, w.textured);
+          fetchDiffuseLane(w.paths[i], w.hits[i], i, lanes, w.textured, w.otherLights);
           continue;
         }
         ShadowQuery shadow;
@@ -195,7 +215,7 @@ class PathTracer {
           lanes.kdR[t.lane] = kd.r, lanes.kdG[t.lane] = kd.g, lanes.kdB[t.lane] = kd.b;
         }
         shadeDiffuseSurfaces(lanes);
-        fetchLightSamples(lanes);
+        sampleOtherLights(lanes, w.otherLights);
         shadeDiffuseScattering(lanes);
         finishDiffuseLanes(lanes, w);
       }
@@ -215,7 +235,7 @@ class PathTracer {
 
   // The lane's surface data and the random numbers shade would draw, in its order.
   void fetchDiffuseLane(Path& path, const Hit& hit, uint32_t pathIndex, DiffuseLanes& l,
-                        std::vector<TexturedLane>& textured) const {
+                        std::vector<TexturedLane>& textured, std::vector<uint32_t>& otherLights) const {
     const uint32_t k = l.count++;
     const Scene& s = scene_;
     const uint32_t* v = &s.indices[3 * size_t(hit.triangle)];
@@ -248,29 +268,28 @@ class PathTracer {
     path.rng.uniform();  // shade's lobe choice, which a Lambertian surface does not use
     l.uBsdfX[k] = path.rng.uniform();
     l.uBsdfY[k] = path.rng.uniform();
+
+    // The light: an emitting triangle's data for the lanes' own sampling; any other light is
+    // sampled whole once the lane's surface point is known (sampleOtherLights).
+    const TriangleLightRecord& light = lightRecords_[s.lightDistribution.pick(l.uLight[k])];
+    l.lightIsTriangle[k] = light.isTriangle;
+    if (!light.isTriangle) {
+      otherLights.push_back(k);
+      return;
+    }
+    l.q0x[k] = light.q0.x, l.q0y[k] = light.q0.y, l.q0z[k] = light.q0.z;
+    l.q1x[k] = light.q1.x, l.q1y[k] = light.q1.y, l.q1z[k] = light.q1.z;
+    l.q2x[k] = light.q2.x, l.q2y[k] = light.q2.y, l.q2z[k] = light.q2.z;
+    l.lightNx[k] = light.normal.x, l.lightNy[k] = light.normal.y, l.lightNz[k] = light.normal.z;
+    l.lightArea[k] = light.area;
+    l.lightPmf[k] = light.pmf;
+    l.leR[k] = light.le.r, l.leG[k] = light.le.g, l.leB[k] = light.le.b;
   }
 
-  // The light each lane samples: an emitting triangle's data for the lanes' own sampling, or any
-  // other light's sample whole.
-  void fetchLightSamples(DiffuseLanes& l) const {
-    const Scene& s = scene_;
-    for (uint32_t k = 0; k < l.count; ++k) {
-      const uint32_t li = s.lightDistribution.pick(l.uLight[k]);
-      const Light& light = s.lights[li];
-      l.lightIsTriangle[k] = light.type == LightType::Triangle;
-      if (light.type == LightType::Triangle) {
-        const uint32_t t = light.triangle;
-        const Vec3 q0 = s.vertex(t, 0), q1 = s.vertex(t, 1), q2 = s.vertex(t, 2), n = s.geometricNormal(t);
-        l.q0x[k] = q0.x, l.q0y[k] = q0.y, l.q0z[k] = q0.z, l.q1x[k] = q1.x, l.q1y[k] = q1.y, l.q1z[k] = q1.z;
-        l.q2x[k] = q2.x, l.q2y[k] = q2.y, l.q2z[k] = q2.z;
-        l.lightNx[k] = n.x, l.lightNy[k] = n.y, l.lightNz[k] = n.z;
-        l.lightArea[k] = s.triangleArea(t);
-        l.lightPmf[k] = s.lightDistribution.pmf(li);
-        const Rgb le = s.materials[s.materialIds[t]].ke;
-        l.leR[k] = le.r, l.leG[k] = le.g, l.leB[k] = le.b;
-        continue;
-      }
-      const LightSample ls = sampleLight(s, {l.posX[k], l.posY[k], l.posZ[k]}, l.uLight[k], {l.uLightX[k], l.uLightY[k]});
+  // Point, directional and environment lights, sampled by sampleLight at the lanes' surface points.
+  void sampleOtherLights(DiffuseLanes& l, const std::vector<uint32_t>& lanes) const {
+    for (const uint32_t k : lanes) {
+      const LightSample ls = sampleLight(scene_, {l.posX[k], l.posY[k], l.posZ[k]}, l.uLight[k], {l.uLightX[k], l.uLightY[k]});
       l.wiX[k] = ls.wi.x, l.wiY[k] = ls.wi.y, l.wiZ[k] = ls.wi.z, l.lightDistance[k] = ls.distance;
       l.pointX[k] = ls.point.x, l.pointY[k] = ls.point.y, l.pointZ[k] = ls.point.z;
       l.leR[k] = ls.radiance.r, l.leG[k] = ls.radiance.g, l.leB[k] = ls.radiance.b;
@@ -370,6 +389,7 @@ class PathTracer {
   const Scene& scene_;
   const Visibility& vis_;
   const PathTraceOptions& opt_;
+  std::vector<TriangleLightRecord> lightRecords_;  // by light index
 };
 
 std::vector<std::string> channelNames(bool layers) {
@@ -427,26 +447,27 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
         const int x1 = std::min(width, x0 + options.tileSize), y1 = std::min(height, y0 + options.tileSize);
         // The tile's (pixel, sample) pairs in pixel order, then sample order, in waves; results are
         // added in that order, so every pixel sums its samples in sample order.
-        const int samples = passEnd - sppDone;
-        const int64_t items = int64_t(x1 - x0) * (y1 - y0) * samples;
+        const int64_t items = int64_t(x1 - x0) * (y1 - y0) * (passEnd - sppDone);
+        int x = x0, y = y0, sample = sppDone;  // of the next item
         for (int64_t first = 0; first < items; first += kWaveSize) {
           const int64_t last = std::min(items, first + kWaveSize);
           wave.paths.resize(size_t(last - first));
-          for (int64_t item = first; item < last; ++item) {
-            const int64_t pixelInTile = item / samples;
-            const int x = x0 + int(pixelInTile % (x1 - x0)), y = y0 + int(pixelInTile / (x1 - x0));
-            Path& path = wave.paths[size_t(item - first)];
+          for (Path& path : wave.paths) {
             path = Path{};
-            path.rng = Rng(options.seed, uint64_t(y) * width + x, uint64_t(sppDone + item % samples));
+            path.pixel = uint64_t(y) * width + x;
+            path.rng = Rng(options.seed, path.pixel, uint64_t(sample));
             const Vec2 jitter = path.rng.uniform2();
             path.ray = camera.generate(x + jitter.x, y + jitter.y);
             path.lastPosition = path.ray.origin;
+            if (++sample == passEnd) {
+              sample = sppDone;
+              if (++x == x1) x = x0, ++y;
+            }
           }
           tracer.traceWave(wave, local);
-          for (int64_t item = first; item < last; ++item) {
-            const int64_t pixelInTile = item / samples;
-            const uint64_t pixel = uint64_t(y0 + pixelInTile / (x1 - x0)) * width + uint64_t(x0 + pixelInTile % (x1 - x0));
-            const PathResult& p = wave.paths[size_t(item - first)].result;
+          for (const Path& path : wave.paths) {
+            const uint64_t pixel = path.pixel;
+            const PathResult& p = path.result;
             const Rgb L = p.direct + p.indirect;
             if (!p.valid || !isFinite(L)) {
               ++invalid[pixel];
