@@ -64,8 +64,10 @@ inline Vec3 samplePhongLobe(Vec2 u, float exponent) {
   const float phi = 2.0f * kPi * u.y;
   return {sinA * std::cos(phi), sinA * std::sin(phi), cosA};
 }
+// The density of samplePhongLobe given cos^n of the angle, for callers that have the power already.
+inline float phongLobePdfOfPower(float power, float exponent) { return (exponent + 1.0f) * (0.5f * kInvPi) * power; }
 inline float phongLobePdf(float cosAlpha, float exponent) {
-  return cosAlpha > 0 ? (exponent + 1.0f) * (0.5f * kInvPi) * std::pow(cosAlpha, exponent) : 0.0f;
+  return cosAlpha > 0 ? phongLobePdfOfPower(std::pow(cosAlpha, exponent), exponent) : 0.0f;
 }
 
 // Sample i of n over the unit square, stratified: the first nx * ny samples (nx = floor(sqrt(n)),

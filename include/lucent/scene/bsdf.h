@@ -44,24 +44,26 @@ inline float fresnelDielectric(float cosI, float etaI, float etaT) {
   return 0.5f * (rs * rs + rp * rp);
 }
 
-// BSDF value for non-delta materials (zero for mirror and glass, whose lobes are Dirac deltas).
-inline Rgb evalBsdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
-  if (b.isDelta() || wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
-  Rgb f = b.kd * kInvPi;
+// BSDF value for non-delta materials (zero for mirror and glass, whose lobes are Dirac deltas), and
+// the density with which sampleBsdf picks wi, computed together (the Phong lobe's power once).
+struct BsdfValue {
+  Rgb f;
+  float pdf = 0;
+};
+inline BsdfValue evalBsdfAndPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
+  if (b.isDelta() || wo.z <= 0 || wi.z <= 0) return {Rgb(0.0f), 0.0f};
+  BsdfValue v{b.kd * kInvPi, cosineHemispherePdf(wi.z)};
   if (b.type == MaterialType::Phong) {
     const float cosAlpha = dot(reflect(wo, {0, 0, 1}), wi);
-    if (cosAlpha > 0) f += b.ks * ((b.ns + 2.0f) * 0.5f * kInvPi * std::pow(cosAlpha, b.ns));
+    const float power = cosAlpha > 0 ? std::pow(cosAlpha, b.ns) : 0.0f;
+    if (cosAlpha > 0) v.f += b.ks * ((b.ns + 2.0f) * 0.5f * kInvPi * power);
+    const float pd = b.diffuseChoice();
+    v.pdf = pd * v.pdf + (1.0f - pd) * (cosAlpha > 0 ? phongLobePdfOfPower(power, b.ns) : 0.0f);
   }
-  return f;
+  return v;
 }
-
-inline float bsdfPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
-  if (b.isDelta() || wo.z <= 0 || wi.z <= 0) return 0.0f;
-  if (b.type == MaterialType::Diffuse) return cosineHemispherePdf(wi.z);
-  const float pd = b.diffuseChoice();
-  return pd * cosineHemispherePdf(wi.z) +
-         (1.0f - pd) * phongLobePdf(dot(reflect(wo, {0, 0, 1}), wi), b.ns);
-}
+inline Rgb evalBsdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) { return evalBsdfAndPdf(b, wo, wi).f; }
+inline float bsdfPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) { return evalBsdfAndPdf(b, wo, wi).pdf; }
 
 // Samples wi given wo; `u` picks the lobe, `u2` the direction. For glass the outside (index 1) is
 // the +z side, so wo.z < 0 means the path is inside the dielectric.
@@ -107,9 +109,10 @@ inline BsdfSample sampleBsdf(const SurfaceBsdf& b, Vec3 wo, float u, Vec2 u2,
         s.wi = Frame(reflect(wo, {0, 0, 1})).toWorld(local);
       }
       if (s.wi.z <= 0) return s;
-      s.pdf = bsdfPdf(b, wo, s.wi);
+      const BsdfValue v = evalBsdfAndPdf(b, wo, s.wi);
+      s.pdf = v.pdf;
       if (!(s.pdf > 0)) return s;
-      s.weight = evalBsdf(b, wo, s.wi) * (s.wi.z / s.pdf);
+      s.weight = v.f * (s.wi.z / s.pdf);
       s.valid = true;
       return s;
     }

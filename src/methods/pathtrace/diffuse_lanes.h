@@ -23,6 +23,7 @@ struct DiffuseLanes {
   alignas(64) int32_t hasNormals[kMaxLanes];
   alignas(64) float ngx[kMaxLanes], ngy[kMaxLanes], ngz[kMaxLanes];  // its geometric normal
   alignas(64) float kdR[kMaxLanes], kdG[kMaxLanes], kdB[kMaxLanes];  // textured albedo
+  alignas(64) int32_t emits[kMaxLanes];                                // the material's Ke is not black
   alignas(64) float uLight[kMaxLanes], uLightX[kMaxLanes], uLightY[kMaxLanes], uBsdfX[kMaxLanes], uBsdfY[kMaxLanes];
   alignas(64) uint32_t path[kMaxLanes];  // the wave's path in this lane
 

@@ -252,7 +252,8 @@ class PathTracer {
     l.hasNormals[k] = !(n0 == Vec3{0, 0, 0});
     l.ngx[k] = ng.x, l.ngy[k] = ng.y, l.ngz[k] = ng.z;
     // bsdfAt's albedo; a texture's texels are requested now and read once every lane is fetched.
-    const Material& m = s.materials[s.materialIds[hit.triangle]];
+    const Material& m = material(hit.triangle);
+    l.emits[k] = !m.ke.isBlack();
     if (m.kdTexture < 0) {
       l.kdR[k] = m.kd.r, l.kdG[k] = m.kd.g, l.kdB[k] = m.kd.b;
     } else {
@@ -305,11 +306,10 @@ class PathTracer {
       const uint32_t i = l.path[k];
       Path& path = w.paths[i];
       const Hit& hit = w.hits[i];
-      const Material& material = scene_.materials[scene_.materialIds[hit.triangle]];
       const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
-      if (l.frontFace[k]) gatherEmission(path, hit.triangle, material, position);
+      if (l.emits[k] && l.frontFace[k]) gatherEmission(path, hit.triangle, material(hit.triangle), position);
       if (path.bounce == 0) {
-        path.result.albedo = Rgb(l.kdR[k], l.kdG[k], l.kdB[k]) + material.ks;
+        path.result.albedo = Rgb(l.kdR[k], l.kdG[k], l.kdB[k]) + material(hit.triangle).ks;
         path.result.normal = {l.snX[k], l.snY[k], l.snZ[k]};
         path.result.depth = hit.t;
       }
@@ -332,6 +332,8 @@ class PathTracer {
       if (survivesRoulette(path)) w.next.push_back(i);
     }
   }
+
+  const Material& material(uint32_t triangle) const { return scene_.materials[scene_.materialIds[triangle]]; }
 
   // Emission of the front face the path has met, weighted against light sampling.
   void gatherEmission(Path& path, uint32_t triangle, const Material& material, Vec3 position) const {
@@ -376,11 +378,11 @@ class PathTracer {
     if (opt_.strategy == PathStrategy::BsdfSampling && !ls.delta) return false;
     const Vec3 wiLocal = frame.toLocal(ls.wi);
     if (wiLocal.z <= 0 || dot(ls.wi, sp.geometricNormal) * dot(frame.n, sp.geometricNormal) <= 0) return false;
-    const Rgb f = evalBsdf(bsdf, woLocal, wiLocal);
+    const BsdfValue value = evalBsdfAndPdf(bsdf, woLocal, wiLocal);
+    const Rgb f = value.f;
     if (f.isBlack()) return false;
-    const float w = ls.delta || opt_.strategy == PathStrategy::LightSampling
-                        ? 1.0f
-                        : powerHeuristic(ls.pdf, bsdfPdf(bsdf, woLocal, wiLocal));
+    const float w =
+        ls.delta || opt_.strategy == PathStrategy::LightSampling ? 1.0f : powerHeuristic(ls.pdf, value.pdf);
     shadow.ray = shadowRay(sp.position, sp.geometricNormal, ls);
     shadow.contribution = f * ls.radiance * (wiLocal.z * w / ls.pdf);
     return true;
