@@ -10,15 +10,12 @@ void store(Vec3 v, float* x, float* y, float* z, uint32_t k) { x[k] = v.x, y[k] 
 Vec3 select(bool c, Vec3 a, Vec3 b) { return {c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z}; }
 }  // namespace
 
-// surfaceAt, then the start of PathTracer::shade for a two-sided material.
+// The rest of surfaceAt (the shading normal), then the start of PathTracer::shade for a two-sided
+// material.
 __attribute__((target_clones("avx2", "default"))) void shadeDiffuseSurfaces(DiffuseLanes& l) {
   for (uint32_t k = 0; k < l.count; ++k) {
-    const float b1 = l.b1[k], b2 = l.b2[k], b0 = 1.0f - b1 - b2;
-    const Vec3 position = Vec3{l.p0x[k], l.p0y[k], l.p0z[k]} * b0 + Vec3{l.p1x[k], l.p1y[k], l.p1z[k]} * b1 +
-                          Vec3{l.p2x[k], l.p2y[k], l.p2z[k]} * b2;
     const Vec3 ng = Vec3{l.ngx[k], l.ngy[k], l.ngz[k]};
-    const Vec3 interpolated = Vec3{l.n0x[k], l.n0y[k], l.n0z[k]} * b0 + Vec3{l.n1x[k], l.n1y[k], l.n1z[k]} * b1 +
-                              Vec3{l.n2x[k], l.n2y[k], l.n2z[k]} * b2;
+    const Vec3 interpolated{l.normalX[k], l.normalY[k], l.normalZ[k]};
     const float len = length(interpolated);
     Vec3 sn = select(len > 0, interpolated / len, ng);
     sn = select(dot(sn, ng) < 0, -sn, sn);
@@ -29,7 +26,6 @@ __attribute__((target_clones("avx2", "default"))) void shadeDiffuseSurfaces(Diff
     Vec3 n = select(dot(wo, sn) * dot(wo, ng) > 0, sn, ng);
     n = select(frontFace, n, -n);
     const Frame frame(n);
-    store(position, l.posX, l.posY, l.posZ, k);
     store(sn, l.snX, l.snY, l.snZ, k);
     store(frame.s, l.sX, l.sY, l.sZ, k);
     store(frame.t, l.tX, l.tY, l.tZ, k);

@@ -13,15 +13,12 @@ inline constexpr int kMaxLanes = 128;
 
 struct DiffuseLanes {
   uint32_t count = 0;
-  // Fetched per lane (PathTracer::fetchDiffuseLanes).
+  // Fetched per lane (PathTracer::fetchDiffuseLane).
   alignas(64) float dirX[kMaxLanes], dirY[kMaxLanes], dirZ[kMaxLanes];  // the incoming ray
-  alignas(64) float b1[kMaxLanes], b2[kMaxLanes];                       // barycentrics of the hit
-  alignas(64) float p0x[kMaxLanes], p0y[kMaxLanes], p0z[kMaxLanes], p1x[kMaxLanes], p1y[kMaxLanes],
-      p1z[kMaxLanes], p2x[kMaxLanes], p2y[kMaxLanes], p2z[kMaxLanes];  // the triangle's vertices
-  alignas(64) float n0x[kMaxLanes], n0y[kMaxLanes], n0z[kMaxLanes], n1x[kMaxLanes], n1y[kMaxLanes],
-      n1z[kMaxLanes], n2x[kMaxLanes], n2y[kMaxLanes], n2z[kMaxLanes];  // its vertex normals
+  alignas(64) float posX[kMaxLanes], posY[kMaxLanes], posZ[kMaxLanes];           // the hit point
+  alignas(64) float normalX[kMaxLanes], normalY[kMaxLanes], normalZ[kMaxLanes];  // vertex normals interpolated
   alignas(64) int32_t hasNormals[kMaxLanes];
-  alignas(64) float ngx[kMaxLanes], ngy[kMaxLanes], ngz[kMaxLanes];  // its geometric normal
+  alignas(64) float ngx[kMaxLanes], ngy[kMaxLanes], ngz[kMaxLanes];  // the triangle's geometric normal
   alignas(64) float kdR[kMaxLanes], kdG[kMaxLanes], kdB[kMaxLanes];  // textured albedo
   alignas(64) int32_t emits[kMaxLanes];                                // the material's Ke is not black
   alignas(64) float uLight[kMaxLanes], uLightX[kMaxLanes], uLightY[kMaxLanes], uBsdfX[kMaxLanes], uBsdfY[kMaxLanes];
@@ -39,8 +36,7 @@ struct DiffuseLanes {
   alignas(64) float leR[kMaxLanes], leG[kMaxLanes], leB[kMaxLanes], lightPdf[kMaxLanes];
   alignas(64) int32_t lightDelta[kMaxLanes];
 
-  // The surface point and shading frame (shadeDiffuseSurfaces).
-  alignas(64) float posX[kMaxLanes], posY[kMaxLanes], posZ[kMaxLanes];
+  // The shading frame (shadeDiffuseSurfaces).
   alignas(64) float snX[kMaxLanes], snY[kMaxLanes], snZ[kMaxLanes];  // shading normal
   alignas(64) float sX[kMaxLanes], sY[kMaxLanes], sZ[kMaxLanes], tX[kMaxLanes], tY[kMaxLanes], tZ[kMaxLanes],
       nX[kMaxLanes], nY[kMaxLanes], nZ[kMaxLanes];

@@ -244,11 +244,12 @@ class PathTracer {
     const Vec3 ng = s.faceNormals[hit.triangle];
     l.path[k] = pathIndex;
     l.dirX[k] = path.ray.direction.x, l.dirY[k] = path.ray.direction.y, l.dirZ[k] = path.ray.direction.z;
-    l.b1[k] = hit.b1, l.b2[k] = hit.b2;
-    l.p0x[k] = p0.x, l.p0y[k] = p0.y, l.p0z[k] = p0.z, l.p1x[k] = p1.x, l.p1y[k] = p1.y, l.p1z[k] = p1.z;
-    l.p2x[k] = p2.x, l.p2y[k] = p2.y, l.p2z[k] = p2.z;
-    l.n0x[k] = n0.x, l.n0y[k] = n0.y, l.n0z[k] = n0.z, l.n1x[k] = n1.x, l.n1y[k] = n1.y, l.n1z[k] = n1.z;
-    l.n2x[k] = n2.x, l.n2y[k] = n2.y, l.n2z[k] = n2.z;
+    // surfaceAt's arithmetic, up to the normalization of the interpolated normal.
+    const float b0 = 1.0f - hit.b1 - hit.b2;
+    const Vec3 position = p0 * b0 + p1 * hit.b1 + p2 * hit.b2;
+    const Vec3 normal = n0 * b0 + n1 * hit.b1 + n2 * hit.b2;
+    l.posX[k] = position.x, l.posY[k] = position.y, l.posZ[k] = position.z;
+    l.normalX[k] = normal.x, l.normalY[k] = normal.y, l.normalZ[k] = normal.z;
     l.hasNormals[k] = !(n0 == Vec3{0, 0, 0});
     l.ngx[k] = ng.x, l.ngy[k] = ng.y, l.ngz[k] = ng.z;
     // bsdfAt's albedo; a texture's texels are requested now and read once every lane is fetched.
