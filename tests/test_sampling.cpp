@@ -98,38 +98,6 @@ TEST_CASE("sinCosQuarterPi agrees with sin and cos in double to about an ulp", "
   CHECK(worstCos < 1.5e-7);
 }
 
-TEST_CASE("sinCos2Pi agrees with sin and cos in double over the whole turn", "[sampling]") {
-  double worst = 0;
-  for (int i = 0; i <= 400000; ++i) {
-    const float u = i / 400000.0f;
-    const Vec2 sc = sinCos2Pi(u);
-    const double angle = 2 * 3.14159265358979323846 * double(u);
-    worst = std::max({worst, std::abs(sc.x - std::sin(angle)), std::abs(sc.y - std::cos(angle))});
-  }
-  CHECK(worst < 4e-7);  // a few float ulps of 1; the float angle 2 pi u itself is rounded
-}
-
-TEST_CASE("powUnitInterval agrees with pow in double", "[sampling]") {
-  // Relative error within 4e-7 (1 + |y log2 x|): the rounding of y log2 x is amplified by the
-  // exponent, as in any float pow built on logarithms; Phong exponents reach the thousands.
-  double worst = 0;
-  Rng rng(3);
-  for (int i = 0; i < 200000; ++i) {
-    const float x = i % 4 == 0 ? 1.0f - rng.uniform() * 1e-3f : std::max(1e-7f, 1.0f - rng.uniform());
-    const float y = std::exp2(rng.uniform() * 26 - 12);  // 2^-12 .. 2^14
-    const double exact = std::pow(double(x), double(y));
-    if (exact < 1e-30) {
-      CHECK(powUnitInterval(x, y) < 1e-29f);
-      continue;
-    }
-    const double scale = 1 + std::abs(double(y) * std::log2(double(x)));
-    worst = std::max(worst, std::abs(powUnitInterval(x, y) / exact - 1) / scale);
-  }
-  CHECK(worst < 4e-7);
-  CHECK(powUnitInterval(1.0f, 100.0f) == 1.0f);
-  CHECK(powUnitInterval(0.5f, 3.0f) == Approx(0.125f).epsilon(1e-7));
-}
-
 TEST_CASE("sampleConcentricDisk maps the square's border to the unit circle, sector by sector", "[sampling]") {
   for (int i = 0; i <= 1000; ++i) {
     const float t = i / 1000.0f;

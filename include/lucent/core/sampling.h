@@ -1,9 +1,7 @@
 // Warping functions from the unit square. Directions are in a local frame with the normal on +z;
 // each sampler has a matching pdf (solid-angle measure unless said otherwise).
 #pragma once
-#include <bit>
 #include <cmath>
-#include <cstdint>
 
 #include "lucent/core/math.h"
 
@@ -16,36 +14,6 @@ inline Vec2 sinCosQuarterPi(float x) {
   const float s = x * (1 + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040 + x2 * (1.0f / 362880)))));
   const float c = 1 + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 * (1.0f / 40320 - x2 * (1.0f / 3628800)))));
   return {s, c};
-}
-
-// sin and cos of 2 pi u for u in [0, 1]: the nearest quarter turn taken out exactly, the rest within
-// pi/4 of 0 by sinCosQuarterPi.
-inline Vec2 sinCos2Pi(float u) {
-  const float quarter = std::floor(4.0f * u + 0.5f);
-  const Vec2 sc = sinCosQuarterPi((2.0f * kPi) * (u - 0.25f * quarter));
-  const int q = int(quarter) & 3;
-  return {q == 0 ? sc.x : q == 1 ? sc.y : q == 2 ? -sc.x : -sc.y, q == 0 ? sc.y : q == 1 ? -sc.x : q == 2 ? -sc.y : sc.x};
-}
-
-// x^y for x in (0, 1] (a little above 1 is fine) and y > 0, as 2^(y log2 x): log2 of the mantissa
-// scaled into [sqrt(1/2), sqrt(2)) by its atanh series, 2^f for the fraction by its Taylor series
-// (both truncated below 1e-8). Relative error about 1e-7 (1 + |y log2 x|); results below 2^-126
-// are 0. No library call and no branch, so that loops using it vectorize.
-inline float powUnitInterval(float x, float y) {
-  const auto bits = std::bit_cast<uint32_t>(x);
-  const float mantissa = std::bit_cast<float>((bits & 0x007fffffu) | 0x3f800000u);  // [1, 2)
-  const bool above = mantissa > 1.41421356f;
-  const float m = above ? 0.5f * mantissa : mantissa;
-  const float e = float(int32_t(bits >> 23) - (above ? 126 : 127));
-  const float t = (m - 1.0f) / (m + 1.0f), t2 = t * t;
-  const float log2m =
-      t * (2.88539008f + t2 * (0.961796694f + t2 * (0.577078016f + t2 * (0.412198583f + t2 * 0.320598898f))));
-  const float z = std::max(y * (e + log2m), -127.0f);
-  const auto whole = int32_t(z);  // towards zero: f in (-1, 1)
-  const float f = (z - float(whole)) * 0.693147181f;
-  const float twoToF =
-      1 + f * (1 + f * (1.0f / 2 + f * (1.0f / 6 + f * (1.0f / 24 + f * (1.0f / 120 + f * (1.0f / 720 + f * (1.0f / 5040 + f * (1.0f / 40320 + f * (1.0f / 362880)))))))));
-  return twoToF * std::bit_cast<float>(uint32_t(whole + 127) << 23);
 }
 
 // Shirley and Chiu's concentric map. Where |y| > |x| the angle is pi/2 - phi with phi within pi/4
@@ -91,15 +59,15 @@ inline Vec2 sampleUniformTriangle(Vec2 u) {
 
 // Directions distributed as cos^n of the angle to +z (the normalized Phong lobe's shape).
 inline Vec3 samplePhongLobe(Vec2 u, float exponent) {
-  const float cosA = powUnitInterval(1.0f - u.x, 1.0f / (exponent + 1.0f));
+  const float cosA = std::pow(1.0f - u.x, 1.0f / (exponent + 1.0f));
   const float sinA = std::sqrt(std::max(0.0f, 1.0f - cosA * cosA));
-  const Vec2 sc = sinCos2Pi(u.y);
-  return {sinA * sc.y, sinA * sc.x, cosA};
+  const float phi = 2.0f * kPi * u.y;
+  return {sinA * std::cos(phi), sinA * std::sin(phi), cosA};
 }
 // The density of samplePhongLobe given cos^n of the angle, for callers that have the power already.
 inline float phongLobePdfOfPower(float power, float exponent) { return (exponent + 1.0f) * (0.5f * kInvPi) * power; }
 inline float phongLobePdf(float cosAlpha, float exponent) {
-  return cosAlpha > 0 ? phongLobePdfOfPower(powUnitInterval(cosAlpha, exponent), exponent) : 0.0f;
+  return cosAlpha > 0 ? phongLobePdfOfPower(std::pow(cosAlpha, exponent), exponent) : 0.0f;
 }
 
 // Sample i of n over the unit square, stratified: the first nx * ny samples (nx = floor(sqrt(n)),

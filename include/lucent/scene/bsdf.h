@@ -55,7 +55,7 @@ inline BsdfValue evalBsdfAndPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
   BsdfValue v{b.kd * kInvPi, cosineHemispherePdf(wi.z)};
   if (b.type == MaterialType::Phong) {
     const float cosAlpha = dot(reflect(wo, {0, 0, 1}), wi);
-    const float power = cosAlpha > 0 ? powUnitInterval(cosAlpha, b.ns) : 0.0f;
+    const float power = cosAlpha > 0 ? std::pow(cosAlpha, b.ns) : 0.0f;
     if (cosAlpha > 0) v.f += b.ks * ((b.ns + 2.0f) * 0.5f * kInvPi * power);
     const float pd = b.diffuseChoice();
     v.pdf = pd * v.pdf + (1.0f - pd) * (cosAlpha > 0 ? phongLobePdfOfPower(power, b.ns) : 0.0f);
