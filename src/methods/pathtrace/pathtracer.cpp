@@ -34,8 +34,7 @@ struct Counters {
 };
 
 // One camera path in flight. Paths advance together, one bounce per stage (a wavefront), so that
-// the closest-hit and shadow queries of many paths are issued back to back, and shading touches
-// one path's scene data while the others' loads are in flight.
+// their hits can be shaded many at a time (DiffuseLanes).
 struct Path {
   uint64_t pixel = 0;
   Ray ray;
@@ -63,9 +62,10 @@ struct ShadowQuery {
   int verticesBefore = 0;
 };
 
-// Paths traced together: enough that the stages run long loops, few enough that the paths' state
-// stays in the first cache levels.
+// Paths traced together: enough for long vectorized loops, few enough that the lanes' arrays stay
+// near the first cache level (256 measured much slower, 64 no faster; README "Throughput").
 constexpr int64_t kWaveSize = 128;
+static_assert(kWaveSize <= kMaxLanes, "every path of a wave may need a lane");
 
 // What a lane needs of an emitting triangle to sample it, gathered once per light.
 struct TriangleLightRecord {
@@ -230,7 +230,7 @@ class PathTracer {
   // Hits that DiffuseLanes shades: Lambertian surfaces, below the depth limit, lights combined by MIS.
   bool inDiffuseLane(const Path& path, const Hit& hit) const {
     return opt_.laneShading && hit.found() && opt_.strategy == PathStrategy::Mis && path.bounce + 1 <= opt_.maxDepth &&
-           scene_.materials[scene_.materialIds[hit.triangle]].type == MaterialType::Diffuse;
+           material(hit.triangle).type == MaterialType::Diffuse;
   }
 
   // The lane's surface data and the random numbers shade would draw, in its order.
