@@ -112,6 +112,19 @@ TEST_CASE("Lambertian hits shaded in lanes give the image of shading them one by
   }
 }
 
+TEST_CASE("A scene without lights built in code renders black, in lanes and one by one", "[pathtrace]") {
+  const Scene scene = test::furnaceBox(Rgb(0.5f), Rgb(0.0f), test::testCamera({0, 0, 0}, {0, 0, -1}, 8, 8));
+  REQUIRE(scene.lights.empty());
+  const Visibility vis(scene);
+  for (const bool lanes : {true, false}) {
+    PathTraceOptions opt;
+    opt.spp = 2;
+    opt.laneShading = lanes;
+    const RenderOutput out = renderPathTraced(scene, vis, opt);
+    for (const float v : out.image.pixels()) REQUIRE(v == 0.0f);
+  }
+}
+
 namespace {
 
 // Sum of per-pixel differences over the square root of the sum of their squares: close to a

@@ -21,8 +21,9 @@ class Distribution1D {
 
   // Index with probability weight(i) / total(); `remapped` receives u rescaled to [0,1) within the bin.
   uint32_t sampleDiscrete(float u, float* pmf = nullptr, float* remapped = nullptr) const;
-  // The index alone: the first bin whose upper CDF value exceeds u (zero-weight bins are never
-  // picked), by a binary search without data-dependent branches (u is random: a branch per
+  // The index alone (of a constructed, so non-empty, distribution): the first bin whose upper CDF
+  // value exceeds u (zero-weight bins are never picked), by a binary search without data-dependent
+  // branches (u is random: a branch per
   // level would be mispredicted half the time).
   uint32_t pick(float u) const {
     const double* first = cdf_.data() + 1;

@@ -8,6 +8,9 @@ namespace lucent {
 namespace {
 void store(Vec3 v, float* x, float* y, float* z, uint32_t k) { x[k] = v.x, y[k] = v.y, z[k] = v.z; }
 Vec3 select(bool c, Vec3 a, Vec3 b) { return {c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z}; }
+// !Rgb::isBlack, NaN included, as a sum of one-comparison selects: the vectorizer takes neither
+// short-circuits nor a chain of selects on different comparisons here.
+bool notBlack(Rgb c) { return (c.r != 0 ? 1.0f : 0.0f) + (c.g != 0 ? 1.0f : 0.0f) + (c.b != 0 ? 1.0f : 0.0f) > 0; }
 }  // namespace
 
 // The rest of surfaceAt (the shading normal), then the start of PathTracer::shade for a two-sided
@@ -68,20 +71,20 @@ __attribute__((target_clones("avx2", "default"))) void shadeDiffuseScattering(Di
     // evalBsdf and bsdfPdf: zero unless both directions are above the surface. Conditions are
     // chained selects, not boolean algebra, which the vectorizer does not take.
     const Vec3 wiLocal{dot(wi, s), dot(wi, t), dot(wi, n)};  // Frame::toLocal
-    const float toF = wo.z <= 0 ? 0.0f : wiLocal.z <= 0 ? 0.0f : kInvPi;
-    const Rgb f{toF == 0 ? 0.0f : kd.r * kInvPi, toF == 0 ? 0.0f : kd.g * kInvPi, toF == 0 ? 0.0f : kd.b * kInvPi};
-    const float lambertPdf = toF == 0 ? 0.0f : cosineHemispherePdf(wiLocal.z);
+    const float bothAbove = wo.z <= 0 ? 0.0f : wiLocal.z <= 0 ? 0.0f : 1.0f;
+    const Rgb f{bothAbove == 0 ? 0.0f : kd.r * kInvPi, bothAbove == 0 ? 0.0f : kd.g * kInvPi,
+                bothAbove == 0 ? 0.0f : kd.b * kInvPi};
+    const float lambertPdf = bothAbove == 0 ? 0.0f : cosineHemispherePdf(wiLocal.z);
     const float mis = powerHeuristic(pdf, lambertPdf);
     const float w = onTriangle ? mis : l.lightDelta[k] != 0 ? 1.0f : mis;  // delta lights: weight 1
     const Rgb direct = f * le * (wiLocal.z * w / pdf);
-    // sampleDirect's tests, in its order. Radiance and albedo are never negative (the loader
-    // rejects negative values), so "not black" is "largest component above zero".
-    l.shadowQueued[k] = !(pdf > 0)                    ? 0
-                        : !(le.maxComponent() > 0)    ? 0
-                        : wiLocal.z <= 0              ? 0
+    // sampleDirect's tests, in its order.
+    l.shadowQueued[k] = !(pdf > 0)                      ? 0
+                        : !notBlack(le)                 ? 0
+                        : wiLocal.z <= 0                ? 0
                         : dot(wi, ng) * dot(n, ng) <= 0 ? 0
-                        : f.maxComponent() > 0        ? 1
-                                                      : 0;
+                        : notBlack(f)                   ? 1
+                                                        : 0;
     const Vec3 origin = offsetOrigin(position, ng, wi);
     const Vec3 toPoint = point - origin;
     const float pointDistance = length(toPoint);

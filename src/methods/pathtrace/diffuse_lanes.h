@@ -13,19 +13,21 @@ inline constexpr int kMaxLanes = 128;
 
 struct DiffuseLanes {
   uint32_t count = 0;
-  // Fetched per lane (PathTracer::fetchDiffuseLane).
+  // Fetched per lane (PathTracer::fetchDiffuseLane). Normals: ng* the triangle's geometric one,
+  // normal* the vertex normals interpolated (not yet normalized), sn* the shading normal, and
+  // n* the normal of the shading frame (s*, t*, n*), on the viewer's side.
   alignas(64) float dirX[kMaxLanes], dirY[kMaxLanes], dirZ[kMaxLanes];  // the incoming ray
   alignas(64) float posX[kMaxLanes], posY[kMaxLanes], posZ[kMaxLanes];           // the hit point
   alignas(64) float normalX[kMaxLanes], normalY[kMaxLanes], normalZ[kMaxLanes];  // vertex normals interpolated
   alignas(64) int32_t hasNormals[kMaxLanes];
   alignas(64) float ngx[kMaxLanes], ngy[kMaxLanes], ngz[kMaxLanes];  // the triangle's geometric normal
   alignas(64) float kdR[kMaxLanes], kdG[kMaxLanes], kdB[kMaxLanes];  // textured albedo
-  alignas(64) int32_t emits[kMaxLanes];                                // the material's Ke is not black
+  alignas(64) int32_t emits[kMaxLanes];  // Ke not black: only then is gatherEmission called
   alignas(64) float uLight[kMaxLanes], uLightX[kMaxLanes], uLightY[kMaxLanes], uBsdfX[kMaxLanes], uBsdfY[kMaxLanes];
   alignas(64) uint32_t path[kMaxLanes];  // the wave's path in this lane
 
-  // The light sample (PathTracer::fetchDiffuseLane, sampleOtherLights): for an emitting triangle
-  // its data, the sample itself taken per lane; for other lights the finished sample.
+  // The light sample. Triangle lights (fetchDiffuseLane): vertices q*, normal, area and pmf; the
+  // lanes sample the point. Other lights (sampleOtherLights): the finished sample, wi* to lightDelta.
   alignas(64) int32_t lightIsTriangle[kMaxLanes];
   alignas(64) float q0x[kMaxLanes], q0y[kMaxLanes], q0z[kMaxLanes], q1x[kMaxLanes], q1y[kMaxLanes],
       q1z[kMaxLanes], q2x[kMaxLanes], q2y[kMaxLanes], q2z[kMaxLanes];

@@ -227,9 +227,11 @@ class PathTracer {
   }
 
  private:
-  // Hits that DiffuseLanes shades: Lambertian surfaces, below the depth limit, lights combined by MIS.
+  // Hits that DiffuseLanes shades: Lambertian surfaces, below the depth limit, lights combined by MIS
+  // (and some light to sample: scenes built in code may have none).
   bool inDiffuseLane(const Path& path, const Hit& hit) const {
-    return opt_.laneShading && hit.found() && opt_.strategy == PathStrategy::Mis && path.bounce + 1 <= opt_.maxDepth &&
+    return opt_.laneShading && hit.found() && opt_.strategy == PathStrategy::Mis && !scene_.lights.empty() &&
+           path.bounce + 1 <= opt_.maxDepth &&
            material(hit.triangle).type == MaterialType::Diffuse;
   }
 
