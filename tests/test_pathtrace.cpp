@@ -65,7 +65,7 @@ TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "
   }
 }
 
-TEST_CASE("Lambertian hits shaded in lanes give the image of shading them one by one, bit for bit",
+TEST_CASE("Camera rays and Lambertian hits in lanes give the image of one path at a time, bit for bit",
           "[pathtrace][determinism]") {
   // Every kind of light and material: the Cornell box with mirror and glass spheres, plus a point
   // light, a directional light and a constant environment; walls with interpolated normals made

@@ -23,8 +23,9 @@ struct PathTraceOptions {
   int tileSize = 16;           // pixels; does not change the image
   bool layers = false;         // add albedo, normal, depth, direct and indirect layers
   PathStrategy strategy = PathStrategy::Mis;
-  // Lambertian hits are shaded many at a time in vectorized loops (DiffuseLanes), the others one by
-  // one. Both compute the same numbers; false shades every hit one by one, for tests of exactly that.
+  // Camera rays are started and Lambertian hits shaded many at a time in vectorized loops
+  // (CameraLanes, DiffuseLanes), other hits one by one. Both compute the same numbers; false does
+  // everything one path at a time, for tests of exactly that.
   bool laneShading = true;
 };
 

@@ -16,6 +16,7 @@ class PinholeCamera {
     up_ = up_ * tanHalf;
     right_ = right_ * (tanHalf * float(c.width) / float(c.height));
   }
+  Vec3 eye() const { return eye_; }
   // Ray through image position (px, py) in pixels, (0,0) the top-left corner of the image.
   Ray generate(float px, float py) const {
     const float sx = 2.0f * px / width_ - 1.0f, sy = 1.0f - 2.0f * py / height_;

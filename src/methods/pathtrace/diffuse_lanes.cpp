@@ -13,6 +13,17 @@ Vec3 select(bool c, Vec3 a, Vec3 b) { return {c ? a.x : b.x, c ? a.y : b.y, c ? 
 bool notBlack(Rgb c) { return (c.r != 0 ? 1.0f : 0.0f) + (c.g != 0 ? 1.0f : 0.0f) + (c.b != 0 ? 1.0f : 0.0f) > 0; }
 }  // namespace
 
+__attribute__((target_clones("avx2", "default"))) void startCameraPaths(CameraLanes& l, uint64_t seed,
+                                                                        const PinholeCamera& camera) {
+  for (uint32_t k = 0; k < l.count; ++k) {
+    Rng rng(seed, l.pixel[k], l.sample[k]);
+    const Vec2 jitter = rng.uniform2();
+    const Vec3 direction = camera.generate(l.x[k] + jitter.x, l.y[k] + jitter.y).direction;
+    l.rng[k] = rng;
+    l.dirX[k] = direction.x, l.dirY[k] = direction.y, l.dirZ[k] = direction.z;
+  }
+}
+
 // The rest of surfaceAt (the shading normal), then the start of PathTracer::shade for a two-sided
 // material.
 __attribute__((target_clones("avx2", "default"))) void shadeDiffuseSurfaces(DiffuseLanes& l) {

@@ -7,6 +7,9 @@
 #pragma once
 #include <cstdint>
 
+#include "lucent/core/rng.h"
+#include "lucent/scene/camera.h"
+
 namespace lucent {
 
 inline constexpr int kMaxLanes = 128;
@@ -55,6 +58,18 @@ struct DiffuseLanes {
   alignas(64) float nextOx[kMaxLanes], nextOy[kMaxLanes], nextOz[kMaxLanes], nextDx[kMaxLanes],
       nextDy[kMaxLanes], nextDz[kMaxLanes];
 };
+
+// The camera samples of a wave: pixel, sample index and pixel corner in; each path's seeded
+// generator (after the two jitter numbers) and camera ray direction out. The same numbers as
+// seeding an Rng and calling PinholeCamera::generate one sample at a time.
+struct CameraLanes {
+  uint32_t count = 0;
+  alignas(64) uint64_t pixel[kMaxLanes], sample[kMaxLanes];
+  alignas(64) float x[kMaxLanes], y[kMaxLanes];
+  alignas(64) Rng rng[kMaxLanes];
+  alignas(64) float dirX[kMaxLanes], dirY[kMaxLanes], dirZ[kMaxLanes];
+};
+void startCameraPaths(CameraLanes& lanes, uint64_t seed, const PinholeCamera& camera);
 
 // The surface point, shading normal, frame and local outgoing direction of every lane.
 void shadeDiffuseSurfaces(DiffuseLanes& lanes);

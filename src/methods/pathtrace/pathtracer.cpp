@@ -165,6 +165,7 @@ class PathTracer {
     std::vector<uint32_t> active, next;
     std::vector<ShadowQuery> shadows;
     std::unique_ptr<DiffuseLanes> lanes = std::make_unique<DiffuseLanes>();  // zeroed
+    std::unique_ptr<CameraLanes> camera = std::make_unique<CameraLanes>();
     std::vector<TexturedLane> textured;
     std::vector<uint32_t> otherLights;  // lanes whose light is not a triangle
   };
@@ -457,17 +458,30 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
         for (int64_t first = 0; first < items; first += kWaveSize) {
           const int64_t last = std::min(items, first + kWaveSize);
           wave.paths.resize(size_t(last - first));
-          for (Path& path : wave.paths) {
-            path = Path{};
-            path.pixel = uint64_t(y) * width + x;
-            path.rng = Rng(options.seed, path.pixel, uint64_t(sample));
-            const Vec2 jitter = path.rng.uniform2();
-            path.ray = camera.generate(x + jitter.x, y + jitter.y);
-            path.lastPosition = path.ray.origin;
+          CameraLanes& start = *wave.camera;
+          start.count = uint32_t(last - first);
+          for (uint32_t k = 0; k < start.count; ++k) {
+            start.pixel[k] = uint64_t(y) * width + x, start.sample[k] = uint64_t(sample);
+            start.x[k] = float(x), start.y[k] = float(y);
             if (++sample == passEnd) {
               sample = sppDone;
               if (++x == x1) x = x0, ++y;
             }
+          }
+          if (options.laneShading) startCameraPaths(start, options.seed, camera);
+          for (uint32_t k = 0; k < start.count; ++k) {
+            Path& path = wave.paths[k];
+            path = Path{};
+            path.pixel = start.pixel[k];
+            if (options.laneShading) {
+              path.rng = start.rng[k];
+              path.ray = {camera.eye(), {start.dirX[k], start.dirY[k], start.dirZ[k]}};
+            } else {  // what startCameraPaths computes, one path at a time
+              path.rng = Rng(options.seed, path.pixel, start.sample[k]);
+              const Vec2 jitter = path.rng.uniform2();
+              path.ray = camera.generate(start.x[k] + jitter.x, start.y[k] + jitter.y);
+            }
+            path.lastPosition = path.ray.origin;
           }
           tracer.traceWave(wave, local);
           for (const Path& path : wave.paths) {
