@@ -23,8 +23,7 @@ class Distribution1D {
   uint32_t sampleDiscrete(float u, float* pmf = nullptr, float* remapped = nullptr) const;
   // The index alone (of a constructed, so non-empty, distribution): the first bin whose upper CDF
   // value exceeds u (zero-weight bins are never picked), by a binary search without data-dependent
-  // branches (u is random: a branch per
-  // level would be mispredicted half the time).
+  // branches (u is random: a branch per level would be mispredicted half the time).
   uint32_t pick(float u) const {
     const double* first = cdf_.data() + 1;
     size_t count = func_.size();

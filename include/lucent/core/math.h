@@ -44,6 +44,12 @@ inline Vec3 normalize(Vec3 a) { return a / length(a); }
 inline Vec3 min(Vec3 a, Vec3 b) { return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)}; }
 inline Vec3 max(Vec3 a, Vec3 b) { return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)}; }
 inline bool isFinite(Vec3 a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }
+// The point with barycentric coordinates (1 - b1 - b2, b1, b2) in the triangle (v0, v1, v2): hit
+// points, interpolated normals, samples on lights. One formula, so that every caller gets the same
+// digits.
+constexpr Vec3 barycentric(Vec3 v0, Vec3 v1, Vec3 v2, float b1, float b2) {
+  return v0 * (1.0f - b1 - b2) + v1 * b1 + v2 * b2;
+}
 // Mirror reflection of w about n (both pointing away from the surface).
 constexpr Vec3 reflect(Vec3 w, Vec3 n) { return 2.0f * dot(w, n) * n - w; }
 

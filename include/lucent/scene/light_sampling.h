@@ -26,7 +26,7 @@ inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, 
     case LightType::Triangle: {
       const Vec2 b = sampleUniformTriangle(u);
       const uint32_t t = light.triangle;
-      const Vec3 q = scene.vertex(t, 0) * (1 - b.x - b.y) + scene.vertex(t, 1) * b.x + scene.vertex(t, 2) * b.y;
+      const Vec3 q = barycentric(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), b.x, b.y);
       const Vec3 d = q - receiver;
       const float dist2 = dot(d, d);
       s.point = q;
@@ -176,7 +176,7 @@ inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPos
     case LightType::Triangle: {
       const uint32_t t = light.triangle;
       const Vec2 b = sampleUniformTriangle(uPosition);
-      const Vec3 p = scene.vertex(t, 0) * (1 - b.x - b.y) + scene.vertex(t, 1) * b.x + scene.vertex(t, 2) * b.y;
+      const Vec3 p = barycentric(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), b.x, b.y);
       const Vec3 n = scene.geometricNormal(t);
       const Rgb le = scene.materials[scene.materialIds[t]].ke;
       if (target && coneTowards(*target, p, cone)) {

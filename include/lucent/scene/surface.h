@@ -22,13 +22,12 @@ inline SurfacePoint surfaceAt(const Scene& scene, uint32_t tri, float b1, float 
   sp.b1 = b1;
   sp.b2 = b2;
   const uint32_t* v = &scene.indices[3 * tri];
-  const float b0 = 1.0f - b1 - b2;
-  sp.position = scene.positions[v[0]] * b0 + scene.positions[v[1]] * b1 + scene.positions[v[2]] * b2;
+  sp.position = barycentric(scene.positions[v[0]], scene.positions[v[1]], scene.positions[v[2]], b1, b2);
   sp.geometricNormal = scene.geometricNormal(tri);
   sp.shadingNormal = sp.geometricNormal;
   // OBJ faces have normals at all their vertices or at none (then they are stored as zero).
   if (!(scene.normals[v[0]] == Vec3{0, 0, 0})) {
-    const Vec3 n = scene.normals[v[0]] * b0 + scene.normals[v[1]] * b1 + scene.normals[v[2]] * b2;
+    const Vec3 n = barycentric(scene.normals[v[0]], scene.normals[v[1]], scene.normals[v[2]], b1, b2);
     const float len = length(n);
     if (len > 0) sp.shadingNormal = n / len;
     if (dot(sp.shadingNormal, sp.geometricNormal) < 0) sp.shadingNormal = -sp.shadingNormal;

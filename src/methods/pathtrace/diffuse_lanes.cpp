@@ -59,10 +59,9 @@ __attribute__((target_clones("avx2", "default"))) void shadeDiffuseScattering(Di
     const Rgb kd{l.kdR[k], l.kdG[k], l.kdB[k]};
 
     // The light sample: a uniform point on the emitting triangle, or the one fetched.
-    const float su = std::sqrt(l.uLightX[k]);
-    const float bx = 1.0f - su, by = l.uLightY[k] * su;
-    const Vec3 q = Vec3{l.q0x[k], l.q0y[k], l.q0z[k]} * (1 - bx - by) + Vec3{l.q1x[k], l.q1y[k], l.q1z[k]} * bx +
-                   Vec3{l.q2x[k], l.q2y[k], l.q2z[k]} * by;
+    const Vec2 b = sampleUniformTriangle({l.uLightX[k], l.uLightY[k]});
+    const Vec3 q = barycentric(Vec3{l.q0x[k], l.q0y[k], l.q0z[k]}, Vec3{l.q1x[k], l.q1y[k], l.q1z[k]},
+                               Vec3{l.q2x[k], l.q2y[k], l.q2z[k]}, b.x, b.y);
     const Vec3 toLight = q - position;
     const float dist2 = dot(toLight, toLight);
     const float triangleDistance = std::sqrt(dist2);

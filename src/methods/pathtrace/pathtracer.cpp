@@ -52,6 +52,11 @@ struct Path {
   void gather(int verticesBefore, Rgb contribution) {
     (verticesBefore <= 1 ? result.direct : result.indirect) += contribution;
   }
+  // The auxiliary layers' features, at the first hit.
+  void recordFirstHit(Rgb albedo, Vec3 normal, float depth) {
+    if (bounce > 0) return;
+    result.albedo = albedo, result.normal = normal, result.depth = depth;
+  }
 };
 
 // A light sample's shadow ray, and what it adds to its path if the light is visible.
@@ -117,14 +122,10 @@ class PathTracer {
 
     if (frontFace) gatherEmission(path, hit.triangle, material, sp.position);
     const SurfaceBsdf bsdf = bsdfAt(scene_, sp);
-    if (path.bounce == 0) {
-      PathResult& out = path.result;
-      out.albedo = bsdf.type == MaterialType::Diffuse || bsdf.type == MaterialType::Phong ? bsdf.kd + bsdf.ks
-                   : bsdf.type == MaterialType::Mirror                                  ? bsdf.ks
-                                                                                        : Rgb(1.0f);
-      out.normal = sp.shadingNormal;
-      out.depth = hit.t;
-    }
+    path.recordFirstHit(bsdf.type == MaterialType::Diffuse || bsdf.type == MaterialType::Phong ? bsdf.kd + bsdf.ks
+                        : bsdf.type == MaterialType::Mirror                                  ? bsdf.ks
+                                                                                             : Rgb(1.0f),
+                        sp.shadingNormal, hit.t);
     if (path.bounce + 1 > opt_.maxDepth) return false;
 
     // Glass keeps the winding orientation (inside/outside); other materials are two-sided. Where
@@ -138,8 +139,7 @@ class PathTracer {
     if (!bsdf.isDelta()) {
       queued = sampleDirect(sp, bsdf, frame, woLocal, path.rng, shadow);
       shadow.contribution *= path.beta;
-      shadow.verticesBefore = path.gatheringVertices + 1;
-      ++path.gatheringVertices;
+      shadow.verticesBefore = ++path.gatheringVertices;
     }
 
     const float uLobe = path.rng.uniform();
@@ -149,13 +149,8 @@ class PathTracer {
     // Reject directions on the wrong side of the real surface (shading-normal light leaks).
     const bool transmits = bs.wi.z * woLocal.z < 0;
     if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) return false;
-    path.beta *= bs.weight;
-    if (path.beta.isBlack()) return false;
-    path.lastDelta = bs.delta;
-    path.lastPdf = bs.pdf;
-    path.lastPosition = sp.position;
-    path.ray = {offsetOrigin(sp.position, sp.geometricNormal, wi), wi};
-    return survivesRoulette(path);
+    return continuePath(path, bs.weight, bs.pdf, bs.delta, sp.position,
+                        {offsetOrigin(sp.position, sp.geometricNormal, wi), wi});
   }
 
   // The paths of one wave and the queries between its stages; one per thread, reused.
@@ -248,9 +243,8 @@ class PathTracer {
     l.path[k] = pathIndex;
     l.dirX[k] = path.ray.direction.x, l.dirY[k] = path.ray.direction.y, l.dirZ[k] = path.ray.direction.z;
     // surfaceAt's arithmetic, up to the normalization of the interpolated normal.
-    const float b0 = 1.0f - hit.b1 - hit.b2;
-    const Vec3 position = p0 * b0 + p1 * hit.b1 + p2 * hit.b2;
-    const Vec3 normal = n0 * b0 + n1 * hit.b1 + n2 * hit.b2;
+    const Vec3 position = barycentric(p0, p1, p2, hit.b1, hit.b2);
+    const Vec3 normal = barycentric(n0, n1, n2, hit.b1, hit.b2);
     l.posX[k] = position.x, l.posY[k] = position.y, l.posZ[k] = position.z;
     l.normalX[k] = normal.x, l.normalY[k] = normal.y, l.normalZ[k] = normal.z;
     l.hasNormals[k] = !(n0 == Vec3{0, 0, 0});
@@ -312,28 +306,22 @@ class PathTracer {
       const Hit& hit = w.hits[i];
       const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
       if (l.emits[k] && l.frontFace[k]) gatherEmission(path, hit.triangle, material(hit.triangle), position);
-      if (path.bounce == 0) {
-        path.result.albedo = Rgb(l.kdR[k], l.kdG[k], l.kdB[k]) + material(hit.triangle).ks;
-        path.result.normal = {l.snX[k], l.snY[k], l.snZ[k]};
-        path.result.depth = hit.t;
-      }
+      if (path.bounce == 0)
+        path.recordFirstHit(Rgb(l.kdR[k], l.kdG[k], l.kdB[k]) + material(hit.triangle).ks, {l.snX[k], l.snY[k], l.snZ[k]},
+                            hit.t);
+      const int verticesBefore = ++path.gatheringVertices;
       if (l.shadowQueued[k]) {
         ShadowQuery& shadow = w.shadows.emplace_back();
         shadow.ray = {{l.shadowOx[k], l.shadowOy[k], l.shadowOz[k]}, {l.shadowDx[k], l.shadowDy[k], l.shadowDz[k]}};
         shadow.ray.tMax = l.shadowTMax[k];
         shadow.contribution = Rgb(l.directR[k], l.directG[k], l.directB[k]) * path.beta;
-        shadow.verticesBefore = path.gatheringVertices + 1;
+        shadow.verticesBefore = verticesBefore;
         shadow.path = i;
       }
-      ++path.gatheringVertices;
-      if (!l.scattered[k]) continue;
-      path.beta *= Rgb(l.weightR[k], l.weightG[k], l.weightB[k]);
-      if (path.beta.isBlack()) continue;
-      path.lastDelta = false;
-      path.lastPdf = l.scatterPdf[k];
-      path.lastPosition = position;
-      path.ray = {{l.nextOx[k], l.nextOy[k], l.nextOz[k]}, {l.nextDx[k], l.nextDy[k], l.nextDz[k]}};
-      if (survivesRoulette(path)) w.next.push_back(i);
+      if (l.scattered[k] &&
+          continuePath(path, {l.weightR[k], l.weightG[k], l.weightB[k]}, l.scatterPdf[k], false, position,
+                       {{l.nextOx[k], l.nextOy[k], l.nextOz[k]}, {l.nextDx[k], l.nextDy[k], l.nextDz[k]}}))
+        w.next.push_back(i);
     }
   }
 
@@ -347,6 +335,18 @@ class PathTracer {
                                                              length(position - path.lastPosition));
     path.gather(path.gatheringVertices,
                 path.beta * material.ke * emissionWeight(path.lastDelta, path.lastPdf, lightPdf));
+  }
+
+  // The path goes on from `position` along `next`, its throughput scaled by the sample's weight:
+  // false when the throughput is black or Russian roulette ends the path.
+  bool continuePath(Path& path, Rgb weight, float pdf, bool delta, Vec3 position, const Ray& next) const {
+    path.beta *= weight;
+    if (path.beta.isBlack()) return false;
+    path.lastDelta = delta;
+    path.lastPdf = pdf;
+    path.lastPosition = position;
+    path.ray = next;
+    return survivesRoulette(path);
   }
 
   // Counts the bounce just taken; from the roulette depth on, ends the path with probability one

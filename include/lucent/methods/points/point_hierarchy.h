@@ -27,8 +27,7 @@ static_assert(sizeof(PointSample) == 12, "PointSample is a fixed-size record sha
 // The sample's position against the scene's current vertex positions (as surfaceAt computes it).
 inline Vec3 pointPosition(const Scene& scene, const PointSample& s) {
   const uint32_t* v = &scene.indices[3 * s.triangle];
-  const float b0 = 1.0f - s.b1 - s.b2;
-  return scene.positions[v[0]] * b0 + scene.positions[v[1]] * s.b1 + scene.positions[v[2]] * s.b2;
+  return barycentric(scene.positions[v[0]], scene.positions[v[1]], scene.positions[v[2]], s.b1, s.b2);
 }
 
 struct PointSamplingOptions {
