@@ -103,13 +103,8 @@ __attribute__((target_clones("avx2", "default"))) void shadeDiffuseScattering(Di
     store(select(finite, toPoint / pointDistance, wi), l.shadowDx, l.shadowDy, l.shadowDz, k);
     l.shadowTMax[k] = finite ? pointDistance - selfIntersectionScale(point) : kInf;
     l.directR[k] = direct.r, l.directG[k] = direct.g, l.directB[k] = direct.b;
-  }
-  // The next direction, cosine-distributed.
-  for (uint32_t k = 0; k < l.count; ++k) {
-    const Vec3 position = Vec3{l.posX[k], l.posY[k], l.posZ[k]}, ng = Vec3{l.ngx[k], l.ngy[k], l.ngz[k]};
-    const Vec3 s = Vec3{l.sX[k], l.sY[k], l.sZ[k]}, t = Vec3{l.tX[k], l.tY[k], l.tZ[k]}, n = Vec3{l.nX[k], l.nY[k], l.nZ[k]};
-    const Vec3 wo = Vec3{l.woX[k], l.woY[k], l.woZ[k]};
-    const Rgb kd{l.kdR[k], l.kdG[k], l.kdB[k]};
+
+    // The next direction, cosine-distributed.
     const Vec3 wiNext = sampleCosineHemisphere({l.uBsdfX[k], l.uBsdfY[k]});
     // sampleBsdf: no sample unless both directions are above the surface and the pdf is positive.
     const float scatterPdf = wo.z <= 0 ? 0.0f : wiNext.z <= 0 ? 0.0f : cosineHemispherePdf(wiNext.z);
