@@ -27,6 +27,18 @@ template <int N>
 struct alignas(64) RayPacket {
   float ox[N], oy[N], oz[N], dx[N], dy[N], dz[N], tMin[N], tMax[N];
   int32_t valid[N];  // -1 active, 0 inactive
+
+  // Lanes 0 .. count-1 (count >= 1) trace rayOf(lane); the rest are inactive copies of the last.
+  template <class RayOf>
+  void assign(int count, RayOf rayOf) {
+    for (int i = 0; i < N; ++i) {
+      const Ray& ray = rayOf(i < count ? i : count - 1);
+      ox[i] = ray.origin.x, oy[i] = ray.origin.y, oz[i] = ray.origin.z;
+      dx[i] = ray.direction.x, dy[i] = ray.direction.y, dz[i] = ray.direction.z;
+      tMin[i] = ray.tMin, tMax[i] = ray.tMax;
+      valid[i] = i < count ? -1 : 0;
+    }
+  }
 };
 template <int N>
 struct alignas(64) HitPacket {

@@ -216,13 +216,28 @@ class PathTracer {
         finishDiffuseLanes(lanes, w);
       }
       counters.rays += w.shadows.size();
-      for (const ShadowQuery& shadow : w.shadows)
-        if (!vis_.occluded(shadow.ray)) w.paths[shadow.path].gather(shadow.verticesBefore, shadow.contribution);
+      traceShadows(w);
       std::swap(w.active, w.next);
     }
   }
 
  private:
+  // The wave's shadow rays, in packets of 16 (9% faster than one by one on the Cornell box; README
+  // "Throughput"), and the light of those that reach it added to their paths in query order.
+  void traceShadows(Wave& w) const {
+    RayPacket<16> rays;
+    bool blocked[16];
+    for (size_t first = 0; first < w.shadows.size(); first += 16) {
+      const int n = int(std::min<size_t>(16, w.shadows.size() - first));
+      rays.assign(n, [&](int j) -> const Ray& { return w.shadows[first + j].ray; });
+      vis_.occluded(rays, blocked);
+      for (int j = 0; j < n; ++j) {
+        const ShadowQuery& shadow = w.shadows[first + j];
+        if (!blocked[j]) w.paths[shadow.path].gather(shadow.verticesBefore, shadow.contribution);
+      }
+    }
+  }
+
   // Hits that DiffuseLanes shades: Lambertian surfaces, below the depth limit, lights combined by MIS
   // (and some light to sample: scenes built in code may have none).
   bool inDiffuseLane(const Path& path, const Hit& hit) const {

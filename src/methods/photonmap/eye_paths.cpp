@@ -184,13 +184,7 @@ Rgb directLight(const Scene& scene, const Visibility& vis, const ShadingPoint& p
       occluded[0] = vis.occluded(queuedRays[0]);
     } else {
       RayPacket<kPacket> packet;
-      for (int j = 0; j < kPacket; ++j) {
-        const Ray& ray = queuedRays[std::min(j, queued - 1)];
-        packet.ox[j] = ray.origin.x, packet.oy[j] = ray.origin.y, packet.oz[j] = ray.origin.z;
-        packet.dx[j] = ray.direction.x, packet.dy[j] = ray.direction.y, packet.dz[j] = ray.direction.z;
-        packet.tMin[j] = ray.tMin, packet.tMax[j] = ray.tMax;
-        packet.valid[j] = j < queued ? -1 : 0;
-      }
+      packet.assign(queued, [&](int j) -> const Ray& { return queuedRays[j]; });
       vis.occluded(packet, occluded);
     }
     for (int j = 0; j < queued; ++j)
