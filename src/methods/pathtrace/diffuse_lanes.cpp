@@ -24,9 +24,10 @@ __attribute__((target_clones("avx2", "default"))) void startCameraPaths(CameraLa
   }
 }
 
-// The rest of surfaceAt (the shading normal), then the start of PathTracer::shade for a two-sided
-// material.
-__attribute__((target_clones("avx2", "default"))) void shadeDiffuseSurfaces(DiffuseLanes& l) {
+// The rest of surfaceAt (the shading normal), the start of PathTracer::shade for a two-sided
+// material, then PathTracer::sampleDirect (the emitting triangle's sample as sampleLight takes it)
+// and sampleBsdf's Lambertian case, with shadowRay and offsetOrigin.
+__attribute__((target_clones("avx2", "default"))) void shadeDiffuseLanes(DiffuseLanes& l) {
   for (uint32_t k = 0; k < l.count; ++k) {
     const Vec3 ng = Vec3{l.ngx[k], l.ngy[k], l.ngz[k]};
     const Vec3 interpolated{l.normalX[k], l.normalY[k], l.normalZ[k]};
@@ -35,27 +36,17 @@ __attribute__((target_clones("avx2", "default"))) void shadeDiffuseSurfaces(Diff
     sn = select(dot(sn, ng) < 0, -sn, sn);
     sn = select(l.hasNormals[k] != 0, sn, ng);
 
-    const Vec3 wo = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
-    const bool frontFace = dot(wo, ng) > 0;
-    Vec3 n = select(dot(wo, sn) * dot(wo, ng) > 0, sn, ng);
-    n = select(frontFace, n, -n);
-    const Frame frame(n);
+    const Vec3 woWorld = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
+    const bool frontFace = dot(woWorld, ng) > 0;
+    Vec3 shadingN = select(dot(woWorld, sn) * dot(woWorld, ng) > 0, sn, ng);
+    shadingN = select(frontFace, shadingN, -shadingN);
+    const Frame frame(shadingN);
     store(sn, l.snX, l.snY, l.snZ, k);
-    store(frame.s, l.sX, l.sY, l.sZ, k);
-    store(frame.t, l.tX, l.tY, l.tZ, k);
-    store(frame.n, l.nX, l.nY, l.nZ, k);
-    store(frame.toLocal(wo), l.woX, l.woY, l.woZ, k);
     l.frontFace[k] = frontFace;
-  }
-}
 
-// PathTracer::sampleDirect (the emitting triangle's sample as sampleLight takes it) and
-// sampleBsdf's Lambertian case, with shadowRay and offsetOrigin.
-__attribute__((target_clones("avx2", "default"))) void shadeDiffuseScattering(DiffuseLanes& l) {
-  for (uint32_t k = 0; k < l.count; ++k) {
-    const Vec3 position = Vec3{l.posX[k], l.posY[k], l.posZ[k]}, ng = Vec3{l.ngx[k], l.ngy[k], l.ngz[k]};
-    const Vec3 s = Vec3{l.sX[k], l.sY[k], l.sZ[k]}, t = Vec3{l.tX[k], l.tY[k], l.tZ[k]}, n = Vec3{l.nX[k], l.nY[k], l.nZ[k]};
-    const Vec3 wo = Vec3{l.woX[k], l.woY[k], l.woZ[k]};
+    const Vec3 position = Vec3{l.posX[k], l.posY[k], l.posZ[k]};
+    const Vec3 s = frame.s, t = frame.t, n = frame.n;
+    const Vec3 wo = frame.toLocal(woWorld);
     const Rgb kd{l.kdR[k], l.kdG[k], l.kdB[k]};
 
     // The light sample: a uniform point on the emitting triangle, or the one fetched.
@@ -110,7 +101,6 @@ __attribute__((target_clones("avx2", "default"))) void shadeDiffuseScattering(Di
     const float scatterPdf = wo.z <= 0 ? 0.0f : wiNext.z <= 0 ? 0.0f : cosineHemispherePdf(wiNext.z);
     const Rgb weight = kd * kInvPi * (wiNext.z / scatterPdf);
     const Vec3 wiWorld = s * wiNext.x + t * wiNext.y + n * wiNext.z;  // Frame::toWorld
-    const Vec3 woWorld = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
     // shade's test against leaks; with both local directions above the surface nothing transmits.
     l.scattered[k] = scatterPdf > 0 ? (dot(wiWorld, ng) * dot(woWorld, ng) < 0 ? 0 : 1) : 0;
     l.weightR[k] = weight.r, l.weightG[k] = weight.g, l.weightB[k] = weight.b;

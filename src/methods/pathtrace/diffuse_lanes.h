@@ -17,8 +17,7 @@ inline constexpr int kMaxLanes = 128;
 struct DiffuseLanes {
   uint32_t count = 0;
   // Fetched per lane (PathTracer::fetchDiffuseLane). Normals: ng* the triangle's geometric one,
-  // normal* the vertex normals interpolated (not yet normalized), sn* the shading normal, and
-  // n* the normal of the shading frame (s*, t*, n*), on the viewer's side.
+  // normal* the vertex normals interpolated (not yet normalized).
   alignas(64) float dirX[kMaxLanes], dirY[kMaxLanes], dirZ[kMaxLanes];  // the incoming ray
   alignas(64) float posX[kMaxLanes], posY[kMaxLanes], posZ[kMaxLanes];           // the hit point
   alignas(64) float normalX[kMaxLanes], normalY[kMaxLanes], normalZ[kMaxLanes];  // vertex normals interpolated
@@ -41,14 +40,10 @@ struct DiffuseLanes {
   alignas(64) float leR[kMaxLanes], leG[kMaxLanes], leB[kMaxLanes], lightPdf[kMaxLanes];
   alignas(64) int32_t lightDelta[kMaxLanes];
 
-  // The shading frame (shadeDiffuseSurfaces).
-  alignas(64) float snX[kMaxLanes], snY[kMaxLanes], snZ[kMaxLanes];  // shading normal
-  alignas(64) float sX[kMaxLanes], sY[kMaxLanes], sZ[kMaxLanes], tX[kMaxLanes], tY[kMaxLanes], tZ[kMaxLanes],
-      nX[kMaxLanes], nY[kMaxLanes], nZ[kMaxLanes];
-  alignas(64) float woX[kMaxLanes], woY[kMaxLanes], woZ[kMaxLanes];  // towards the viewer, local
+  // Computed (shadeDiffuseLanes): the shading normal and the side the viewer is on, for the
+  // first-hit layers and emission; next-event estimation and BSDF sampling.
+  alignas(64) float snX[kMaxLanes], snY[kMaxLanes], snZ[kMaxLanes];
   alignas(64) int32_t frontFace[kMaxLanes];
-
-  // Next-event estimation and BSDF sampling (shadeDiffuseScattering).
   alignas(64) int32_t shadowQueued[kMaxLanes];
   alignas(64) float shadowOx[kMaxLanes], shadowOy[kMaxLanes], shadowOz[kMaxLanes], shadowDx[kMaxLanes],
       shadowDy[kMaxLanes], shadowDz[kMaxLanes], shadowTMax[kMaxLanes];
@@ -71,9 +66,8 @@ struct CameraLanes {
 };
 void startCameraPaths(CameraLanes& lanes, uint64_t seed, const PinholeCamera& camera);
 
-// The surface point, shading normal, frame and local outgoing direction of every lane.
-void shadeDiffuseSurfaces(DiffuseLanes& lanes);
-// The light sample's shadow ray and what it brings, and the cosine-distributed next direction.
-void shadeDiffuseScattering(DiffuseLanes& lanes);
+// Every lane's shading normal and frame, its light sample's shadow ray and what it brings, and the
+// cosine-distributed next direction.
+void shadeDiffuseLanes(DiffuseLanes& lanes);
 
 }  // namespace lucent

@@ -210,9 +210,8 @@ class PathTracer {
           const Rgb kd = t.kd * bilinear(t.footprint);
           lanes.kdR[t.lane] = kd.r, lanes.kdG[t.lane] = kd.g, lanes.kdB[t.lane] = kd.b;
         }
-        shadeDiffuseSurfaces(lanes);
         sampleOtherLights(lanes, w.otherLights);
-        shadeDiffuseScattering(lanes);
+        shadeDiffuseLanes(lanes);
         finishDiffuseLanes(lanes, w);
       }
       counters.rays += w.shadows.size();
