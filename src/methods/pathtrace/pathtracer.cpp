@@ -237,11 +237,9 @@ class PathTracer {
     }
   }
 
-  // Hits that DiffuseLanes shades: Lambertian surfaces, below the depth limit, lights combined by MIS
-  // (and some light to sample: scenes built in code may have none).
+  // Hits that DiffuseLanes shades: Lambertian surfaces below the depth limit.
   bool inDiffuseLane(const Path& path, const Hit& hit) const {
-    return opt_.laneShading && hit.found() && opt_.strategy == PathStrategy::Mis && !scene_.lights.empty() &&
-           path.bounce + 1 <= opt_.maxDepth &&
+    return lanesEnabled_ && hit.found() && path.bounce < opt_.maxDepth &&
            material(hit.triangle).type == MaterialType::Diffuse;
   }
 
@@ -410,6 +408,9 @@ class PathTracer {
   const Visibility& vis_;
   const PathTraceOptions& opt_;
   std::vector<TriangleLightRecord> lightRecords_;  // by light index
+  // Lanes shade Lambertian hits when lights are combined by MIS and there is a light to sample
+  // (scenes built in code may have none).
+  const bool lanesEnabled_ = opt_.laneShading && opt_.strategy == PathStrategy::Mis && !scene_.lights.empty();
 };
 
 std::vector<std::string> channelNames(bool layers) {
