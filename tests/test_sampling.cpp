@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <vector>
 
@@ -473,6 +474,24 @@ TEST_CASE("Rng", "[sampling][rng]") {
     auto coarse = [](Rng& rng) { return IndexSample{((rng.next() >> 24) * n) >> 8, 1.0f / n}; };
     CHECK_CHI2_REJECT(chi2::testDiscrete(coarse, pmf, n));
   }
+}
+
+TEST_CASE("isFinite is false exactly when a component is infinite or NaN", "[math]") {
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  const float big = std::numeric_limits<float>::max(), tiny = std::numeric_limits<float>::denorm_min();
+  for (float ok : {0.0f, -0.0f, 1.0f, -big, big, tiny, -tiny})
+    for (int axis = 0; axis < 3; ++axis) {
+      Vec3 v{1, -2, 3};
+      v[axis] = ok;
+      CHECK(isFinite(v));
+      CHECK(isFinite(Rgb(v.x, v.y, v.z)));
+      for (float bad : {inf, -inf, nan}) {
+        Vec3 w = v;
+        w[(axis + 1) % 3] = bad;
+        CHECK_FALSE(isFinite(w));
+        CHECK_FALSE(isFinite(Rgb(w.x, w.y, w.z)));
+      }
+    }
 }
 
 TEST_CASE("Frame is orthonormal and inverts itself", "[sampling][frame]") {

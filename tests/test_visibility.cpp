@@ -96,6 +96,35 @@ void checkPackets(const Visibility& vis, const std::vector<Ray>& rays) {
   }
 }
 
+TEST_CASE("RayPacket::assign fills the first lanes and leaves the rest inactive", "[visibility]") {
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
+  const auto rays = randomRays(scene, 160, 5);
+  const Visibility vis(scene);
+  for (int count = 1; count <= 16; ++count) {
+    RayPacket<16> packet;
+    packet.assign(count, [&](int i) -> const Ray& { return rays[size_t(count + i)]; });
+    bool blocked[16];
+    HitPacket<16> hits;
+    vis.occluded(packet, blocked);
+    vis.intersect(packet, hits);
+    for (int i = 0; i < 16; ++i) {
+      INFO("count " << count << ", lane " << i);
+      const Ray& expected = rays[size_t(count + std::min(i, count - 1))];
+      CHECK(packet.valid[i] == (i < count ? -1 : 0));
+      CHECK(packet.ox[i] == expected.origin.x);
+      CHECK(packet.dz[i] == expected.direction.z);
+      CHECK(packet.tMax[i] == expected.tMax);
+      if (i >= count) {
+        CHECK_FALSE(blocked[i]);
+        CHECK(hits.triangle[i] == kNoHit);
+        continue;
+      }
+      CHECK(blocked[i] == vis.occluded(expected));
+      CHECK(hits.triangle[i] == vis.intersect(expected).triangle);
+    }
+  }
+}
+
 TEST_CASE("8- and 16-wide packets give the single-ray answers", "[visibility]") {
   const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
   const auto rays = randomRays(scene, 1600, 2);
