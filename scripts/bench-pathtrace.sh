@@ -9,4 +9,4 @@ scripts/build.sh > /dev/null
 sponza=scenes/sponza.json
 [ -f ../shared/scenes/sponza-dabrovic/sponza.obj ] || { echo "Sponza not found beside the repository; Cornell box only" >&2; sponza=; }
 build/lucent_bench_pathtrace scenes/cornell-box.json $sponza --resolution "${RESOLUTION:-256x256}" \
-  --spp "${SPP:-16}" --repeats "${REPEATS:-5}"
+  --spp "${SPP:-16}" --repeats "${REPEATS:-10}"
