@@ -247,7 +247,12 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("--png", args->png, "Also write an sRGB PNG");
   cmd->add_option("--spp", args->spp, "Samples per pixel (default: pt 64; purcell and pmfg 1, through the pixel centre)")
       ->check(CLI::Range(1, 1 << 24));
-  cmd->add_option("--seed", args->seed, "Random seed")->capture_default_str();
+  cmd->add_option("--seed", args->seed, "Random seed, a non-negative integer")
+      ->check(CLI::Validator(
+          // CLI11 wraps a negative number into an unsigned option instead of rejecting it.
+          [](std::string& value) { return value.find('-') == std::string::npos ? std::string() : "must not be negative"; },
+          "NONNEGATIVE"))
+      ->capture_default_str();
   cmd->add_option("--threads", args->threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 4096));
   cmd->add_option("--resolution", args->resolution, "Override the camera resolution, WIDTHxHEIGHT");
   cmd->add_flag("--layers", args->layers,
