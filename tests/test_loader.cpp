@@ -155,8 +155,9 @@ TEST_CASE("loader: lucent render rejects impossible options before writing anyth
     std::sort(names.begin(), names.end());
     CHECK(names == std::vector<std::string>{"out.exr", "out.png"});
   }
-  SECTION("impossible resolution, spp, method or seed") {
-    for (const std::string extra : {"--resolution 10x0", "--resolution 10", "--spp 0", "--method nonsense", "--seed -1"}) {
+  SECTION("impossible resolution, spp, method, seed or time budget") {
+    for (const std::string extra : {"--resolution 10x0", "--resolution 10", "--spp 0", "--method nonsense", "--seed -1",
+                                    "--time-budget nan"}) {
       CAPTURE(extra);
       TempDir out;
       const test::CliRun run = runLucent(renderArgs(scene, out, extra));

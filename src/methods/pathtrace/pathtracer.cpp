@@ -429,6 +429,8 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
   if (options.spp < 1) throw std::invalid_argument("spp must be at least 1");
   if (options.maxDepth < 0) throw std::invalid_argument("max depth must not be negative");
   if (options.tileSize < 1) throw std::invalid_argument("tile size must be at least 1");
+  if (!(options.timeBudget >= 0 && options.timeBudget < kInf))
+    throw std::invalid_argument("time budget must be finite and not negative (0: none)");
   const int width = scene.camera.width, height = scene.camera.height;
   const auto channels = channelNames(options.layers);
   const size_t nc = channels.size();
