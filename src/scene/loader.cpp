@@ -30,8 +30,10 @@ bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata) {
   return ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".bmp" || ext == ".tga";
 }
 
-// Reads an RGB (or grey) image into linear texels; row 0 is the top row.
-std::vector<Rgb> readTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h) {
+// Reads an RGB (or grey) image and calls texel(index, channel values as stored, sRGB-encoded or
+// not) for every texel; row 0 is the top row.
+template <class Texel>
+void readImageTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h, Texel texel) {
   Image image;
   ImageMetadata metadata;
   try {
@@ -44,18 +46,48 @@ std::vector<Rgb> readTexels(const std::string& path, const std::string& context,
   const int nc = image.channelCount();
   if (nc < 1 || w == 0 || h == 0) throw SceneError(context + ": image '" + path + "' is empty");
   const bool srgb = isSrgbEncoded(path, metadata);
-  std::vector<Rgb> texels(size_t(w) * h);
   for (uint32_t y = 0; y < h; ++y)
     for (uint32_t x = 0; x < w; ++x) {
-      Rgb c;
+      float stored[3];
       for (int k = 0; k < 3; ++k) {
-        float v = image.at(int(x), int(y), nc >= 3 ? k : 0);
-        if (srgb) v = srgbToLinear(v);
-        if (!std::isfinite(v) || v < 0) throw SceneError(context + ": image '" + path + "' has negative or non-finite texels");
-        c[k] = v;
+        const float v = stored[k] = image.at(int(x), int(y), nc >= 3 ? k : 0);
+        // The linear value must be finite and not negative; for sRGB values in [0, 1] it is.
+        const bool valid = std::isfinite(v) && v >= 0 && (!srgb || v <= 1 || std::isfinite(srgbToLinear(v)));
+        if (!valid) throw SceneError(context + ": image '" + path + "' has negative or non-finite texels");
       }
-      texels[size_t(y) * w + x] = c;
+      texel(size_t(y) * w + x, stored, srgb);
     }
+}
+
+// Linear texels (environment maps).
+std::vector<Rgb> readTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h) {
+  std::vector<Rgb> texels;
+  readImageTexels(path, context, w, h, [&](size_t i, const float* stored, bool srgb) {
+    if (texels.empty()) texels.resize(size_t(w) * h);
+    for (int k = 0; k < 3; ++k) texels[i][k] = srgb ? srgbToLinear(stored[k]) : stored[k];
+  });
+  return texels;
+}
+
+// 8-bit sRGB texels packed as R | G << 8 | B << 16 | 255 << 24 (diffuse albedo maps). An 8-bit
+// sRGB file's values are its codes over 255 and are kept as they are; other values are converted to
+// linear, clamped to [0, 1] (reflectance) and encoded.
+std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h) {
+  std::vector<uint32_t> texels;
+  readImageTexels(path, context, w, h, [&](size_t i, const float* stored, bool srgb) {
+    if (texels.empty()) texels.resize(size_t(w) * h);
+    uint32_t packed = 0xffu << 24;
+    for (int k = 0; k < 3; ++k) {
+      const float v = stored[k];
+      const long code = std::lround(255.0f * v);
+      const bool exact = srgb && code >= 0 && code <= 255 && float(code) / 255.0f == v;
+      const float linear = exact ? 0.0f : srgb ? srgbToLinear(v) : v;
+      const uint32_t byte = exact ? uint32_t(code)
+                                  : uint32_t(std::lround(255.0f * linearToSrgb(std::clamp(linear, 0.0f, 1.0f))));
+      packed |= byte << (8 * k);
+    }
+    texels[i] = packed;
+  });
   return texels;
 }
 
@@ -212,12 +244,8 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
     if (!spec.mapKd.empty()) {
       Texture tex;
       tex.offset = static_cast<uint32_t>(scene.texels.size());
-      const auto texels = readTexels(spec.mapKd, spec.origin + ": material '" + spec.name + "'", tex.width, tex.height);
-      // Back to 8-bit sRGB: exact for 8-bit files; float files are clamped to [0, 1] (reflectance).
-      const auto encode = [](float linear) {
-        return uint32_t(std::lround(255.0f * linearToSrgb(std::clamp(linear, 0.0f, 1.0f))));
-      };
-      for (const Rgb& c : texels) scene.texels.push_back(encode(c.r) | encode(c.g) << 8 | encode(c.b) << 16 | 0xffu << 24);
+      const auto texels = readSrgb8Texels(spec.mapKd, spec.origin + ": material '" + spec.name + "'", tex.width, tex.height);
+      scene.texels.insert(scene.texels.end(), texels.begin(), texels.end());
       m.kdTexture = static_cast<int32_t>(scene.textures.size());
       scene.textures.push_back(tex);
     }
