@@ -70,7 +70,8 @@ std::vector<Rgb> readTexels(const std::string& path, const std::string& context,
 }
 
 // 8-bit sRGB texels packed as R | G << 8 | B << 16 | 255 << 24 (diffuse albedo maps). An 8-bit
-// sRGB file's values are its codes over 255 and are kept as they are; other values are converted to
+// sRGB file's values are its codes over 255 (to a rounding of the reader's) and are kept as they
+// are, which decoding to linear and encoding back would give too; other values are converted to
 // linear, clamped to [0, 1] (reflectance) and encoded.
 std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h) {
   std::vector<uint32_t> texels;
@@ -80,7 +81,7 @@ std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string
     for (int k = 0; k < 3; ++k) {
       const float v = stored[k];
       const long code = std::lround(255.0f * v);
-      const bool exact = srgb && code >= 0 && code <= 255 && float(code) / 255.0f == v;
+      const bool exact = srgb && code >= 0 && code <= 255 && std::abs(255.0f * v - float(code)) < 1e-3f;
       const float linear = exact ? 0.0f : srgb ? srgbToLinear(v) : v;
       const uint32_t byte = exact ? uint32_t(code)
                                   : uint32_t(std::lround(255.0f * linearToSrgb(std::clamp(linear, 0.0f, 1.0f))));
