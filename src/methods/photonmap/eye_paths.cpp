@@ -21,6 +21,12 @@ struct Branch {
 // Depth-first over a camera sample's branches: each pop pushes at most two, and the depth is
 // bounded by maxSpecularDepth (at most 64), so the stack never holds more than 66.
 constexpr int kMaxBranchStack = 80;
+// A stack slot, left uninitialized: clearing 80 branches (3.8 KB) per camera sample took 10% of
+// RING's eye-ray stage (purcell, 512 x 384).
+union BranchSlot {
+  BranchSlot() {}
+  Branch branch;
+};
 
 struct SampleResult {
   Rgb emitted;
@@ -32,12 +38,12 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
                                uint32_t pixel, uint32_t sample, Rng& rng, EyePixel* firstHit,
                                std::vector<ShadingPoint>& points, uint64_t& rays) {
   SampleResult out;
-  Branch stack[kMaxBranchStack];
+  BranchSlot stack[kMaxBranchStack];
   int top = 0;
-  stack[top++] = {ray, Rgb(1.0f), 0};
+  stack[top++].branch = {ray, Rgb(1.0f), 0};
   uint32_t branch = 0;
   while (top > 0) {
-    const Branch b = stack[--top];
+    const Branch b = stack[--top].branch;
     if (!isFinite(b.ray.origin) || !isFinite(b.ray.direction) || !isFinite(b.weight)) {
       out.valid = false;
       return out;
@@ -84,7 +90,7 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
       if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) return;
       const Rgb weight = b.weight * w;
       if (weight.isBlack()) return;
-      stack[top++] = {{offsetOrigin(sp.position, sp.geometricNormal, wi), wi}, weight, b.depth + 1};
+      stack[top++].branch = {{offsetOrigin(sp.position, sp.geometricNormal, wi), wi}, weight, b.depth + 1};
     };
     if (bsdf.type == MaterialType::Glass && b.weight.maxComponent() >= kSplitWeight) {
       // Both lobes, each weighted by the probability with which sampleBsdf would pick it (F, 1 - F):
