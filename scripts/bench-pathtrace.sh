@@ -2,6 +2,8 @@
 # Path tracer throughput on the Cornell box and Sponza next to a raw Embree loop over the same rays
 # (bench/bench_pathtrace.cpp), with 1 and 2 threads. One JSON line per scene.
 # Targets (issue 2): path tracer rays/s >= 70% of the raw loop's with 2 threads; 2 threads >= 1.8x 1.
+# pt_over_raw is against single rays; pt_over_raw_shadow_packets against the raw loop with its
+# shadow rays in packets of 16, as the path tracer traces them (like with like).
 # Run it on an otherwise idle machine.
 set -euo pipefail
 cd "$(dirname "$0")/.."
