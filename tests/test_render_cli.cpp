@@ -164,7 +164,7 @@ TEST_CASE("render --method micro: options, the paper's time breakdown and counte
   for (const std::string lighting : {"direct", "vpl", "radiosity", "photons"}) {
     const std::string exr = dir / (lighting + ".exr");
     const test::CliRun r = runLucent("render " + kScene + " --method micro --lighting " + lighting +
-                                     " --points 4096 --buffer-size 16 --mapping nusselt --upsampling 4 --encoding float"
+                                     " --points 4096 --buffer-size 16 --mapping nusselt --upsampling 4 --encoding packed"
                                      " --light-samples 4 --point-light-samples 2 --vpls 16 --radiosity-level 6 --bounces 1"
                                      " --photons 2000 --k 10 --resolution 24x20 --seed 4 --threads 2 --layers --quiet -o " + exr);
     INFO(r.output);
@@ -177,7 +177,7 @@ TEST_CASE("render --method micro: options, the paper's time breakdown and counte
     REQUIRE(options["buffer_size"] == 16);
     REQUIRE(options["mapping"] == "nusselt");
     REQUIRE(options["upsampling"] == 4);
-    REQUIRE(options["encoding"] == "float");
+    REQUIRE(options["encoding"] == "packed");
     REQUIRE(options["light_samples"] == 4);
     REQUIRE(options["ray_casting"] == true);
     REQUIRE(options.contains("vpls") == (lighting == "vpl"));

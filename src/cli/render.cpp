@@ -28,7 +28,7 @@ struct RenderArgs {
   PhotonMapOptions pm;
   MicroRenderOptions micro;
   std::string map, gridResolution;  // map: empty for the method's default
-  std::string lighting = "direct", mapping = "warped", encoding = "packed";
+  std::string lighting = "direct", mapping = "warped", encoding = "float";
   bool noRayCasting = false;
   CLI::Option* photons = nullptr;  // shared by purcell, pmfg and micro, with different defaults
   // Options that belong to some methods only, with those methods, to reject them with the others.
@@ -338,7 +338,7 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
        micro);
   only(cmd->add_option("--upsampling", m.upsampling, "micro: gather at 1/N of the pixels, N = 1, 4 or 16, with bilateral upsampling")
            ->check(CLI::IsMember({1, 4, 16}))->capture_default_str(), micro);
-  only(cmd->add_option("--encoding", args->encoding, "micro: packed (the paper's 128-bit nodes, half-float radiance) or float")
+  only(cmd->add_option("--encoding", args->encoding, "micro: float nodes, or packed (the paper's 128-bit nodes, half-float radiance)")
            ->check(CLI::IsMember({"packed", "float"}))->capture_default_str(), micro);
   only(cmd->add_option("--point-light-samples", m.pointLightSamples, "micro: shadow rays per point of the hierarchy")
            ->check(CLI::Range(0, 1 << 16))->capture_default_str(), micro);

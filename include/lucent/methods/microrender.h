@@ -30,7 +30,10 @@ struct MicroRenderOptions {
   int tableSize = 32;              // cells per side of the tabulated BRDF slice (warped mapping)
   bool rayCasting = true;          // false: no post-traversal ray casting (the paper's Fig. 11)
   int upsampling = 1;              // gather at 1/upsampling of the pixels: 1, 4 or 16 (bilateral upsampling)
-  NodeEncoding encoding = NodeEncoding::Packed;  // the paper's 128-bit nodes and half-float radiance, or float
+  // Float nodes, or the paper's 128-bit nodes and half-float radiance. Float by default: on the CPU
+  // they gather 5-10% faster (decoding costs more than the memory saved) and no less accurately
+  // (README).
+  NodeEncoding encoding = NodeEncoding::Float;
   int spp = 1;                     // camera rays per pixel: 1 through the pixel centre, more stratified
   int lightSamples = 32;           // shadow rays per shading point (direct light, at every pixel)
   int pointLightSamples = 16;      // shadow rays per point of the hierarchy
