@@ -30,10 +30,10 @@ bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata) {
   return ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".bmp" || ext == ".tga";
 }
 
-// Reads an RGB (or grey) image and calls texel(index, channel values as stored, sRGB-encoded or
-// not) for every texel; row 0 is the top row.
-template <class Texel>
-void readImageTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h, Texel texel) {
+// Reads an RGB (or grey) image into texels, convert(channel values as stored, sRGB-encoded or not)
+// giving each; row 0 is the top row.
+template <class Convert>
+auto readImageTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h, Convert convert) {
   Image image;
   ImageMetadata metadata;
   try {
@@ -46,6 +46,7 @@ void readImageTexels(const std::string& path, const std::string& context, uint32
   const int nc = image.channelCount();
   if (nc < 1 || w == 0 || h == 0) throw SceneError(context + ": image '" + path + "' is empty");
   const bool srgb = isSrgbEncoded(path, metadata);
+  std::vector<decltype(convert(static_cast<const float*>(nullptr), srgb))> texels(size_t(w) * h);
   for (uint32_t y = 0; y < h; ++y)
     for (uint32_t x = 0; x < w; ++x) {
       float stored[3];
@@ -55,18 +56,18 @@ void readImageTexels(const std::string& path, const std::string& context, uint32
         const bool valid = std::isfinite(v) && v >= 0 && (!srgb || v <= 1 || std::isfinite(srgbToLinear(v)));
         if (!valid) throw SceneError(context + ": image '" + path + "' has negative or non-finite texels");
       }
-      texel(size_t(y) * w + x, stored, srgb);
+      texels[size_t(y) * w + x] = convert(stored, srgb);
     }
+  return texels;
 }
 
 // Linear texels (environment maps).
 std::vector<Rgb> readTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h) {
-  std::vector<Rgb> texels;
-  readImageTexels(path, context, w, h, [&](size_t i, const float* stored, bool srgb) {
-    if (texels.empty()) texels.resize(size_t(w) * h);
-    for (int k = 0; k < 3; ++k) texels[i][k] = srgb ? srgbToLinear(stored[k]) : stored[k];
+  return readImageTexels(path, context, w, h, [](const float* stored, bool srgb) {
+    Rgb c;
+    for (int k = 0; k < 3; ++k) c[k] = srgb ? srgbToLinear(stored[k]) : stored[k];
+    return c;
   });
-  return texels;
 }
 
 // 8-bit sRGB texels packed as R | G << 8 | B << 16 | 255 << 24 (diffuse albedo maps). An 8-bit
@@ -74,22 +75,22 @@ std::vector<Rgb> readTexels(const std::string& path, const std::string& context,
 // are, which decoding to linear and encoding back would give too; other values are converted to
 // linear, clamped to [0, 1] (reflectance) and encoded.
 std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h) {
-  std::vector<uint32_t> texels;
-  readImageTexels(path, context, w, h, [&](size_t i, const float* stored, bool srgb) {
-    if (texels.empty()) texels.resize(size_t(w) * h);
+  return readImageTexels(path, context, w, h, [](const float* stored, bool srgb) {
     uint32_t packed = 0xffu << 24;
     for (int k = 0; k < 3; ++k) {
       const float v = stored[k];
       const long code = std::lround(255.0f * v);
-      const bool exact = srgb && code >= 0 && code <= 255 && std::abs(255.0f * v - float(code)) < 1e-3f;
-      const float linear = exact ? 0.0f : srgb ? srgbToLinear(v) : v;
-      const uint32_t byte = exact ? uint32_t(code)
-                                  : uint32_t(std::lround(255.0f * linearToSrgb(std::clamp(linear, 0.0f, 1.0f))));
+      uint32_t byte;
+      if (srgb && code >= 0 && code <= 255 && std::abs(255.0f * v - float(code)) < 1e-3f) {
+        byte = uint32_t(code);
+      } else {
+        const float linear = srgb ? srgbToLinear(v) : v;
+        byte = uint32_t(std::lround(255.0f * linearToSrgb(std::clamp(linear, 0.0f, 1.0f))));
+      }
       packed |= byte << (8 * k);
     }
-    texels[i] = packed;
+    return packed;
   });
-  return texels;
 }
 
 std::string resolve(const fs::path& base, const std::string& relative) {
