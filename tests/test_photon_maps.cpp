@@ -12,9 +12,11 @@
 
 #include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
+#include "lucent/core/sampling.h"
 #include "methods/photonmap/bitonic_sort.h"
 #include "methods/photonmap/kd_tree.h"
 #include "methods/photonmap/knn_grid.h"
+#include "methods/photonmap/radiance_estimate.h"
 #include "methods/photonmap/sorted_grid.h"
 #include "methods/photonmap/stencil_grid.h"
 
@@ -307,6 +309,67 @@ TEST_CASE("kNN-grid on the sorted, hashed and stencil grids finds every photon w
     }
     CHECK(collisions > 0);
   }
+}
+
+TEST_CASE("The estimate's runs of photons summed eight at a time equal one photon at a time", "[photonmap][knn]") {
+  // photon_columns.h: the lanes must accept the photons examinePhotons accepts, grow the radius to
+  // the same bits and subtract the same farthest photon; only the order of the power sums differs.
+  // Photons come from random directions (so the front test matters), and a third of them repeat an
+  // earlier photon's position with another power and direction, so that the farthest distance is
+  // often shared and the tie goes to the first photon in search order.
+  Rng rng(77);
+  std::vector<Photon> photons = photonCloud(3000, Cloud::Clustered, 31);
+  for (uint32_t i = 0; i < photons.size(); ++i) {
+    photons[i].direction = encodeOctahedral(sampleUniformSphere(rng.uniform2()));
+    if (i > 0 && rng.below(3) == 0) photons[i].position = photons[rng.below(i)].position;
+  }
+  GridOptions fine, coarse;
+  fine.cellSize = 0.08f;
+  coarse.photonsPerCell = 40;
+  uint64_t ties = 0, runs = 0;
+  for (const GridOptions& options : {fine, coarse}) {
+    const SortedGrid sorted = buildSortedGrid(photons, options);
+    const StencilGrid stencil = buildStencilGrid(photons, options);
+    auto compare = [&](const auto& map, Vec3 p, Vec3 n, uint32_t k, float maxRadius, uint32_t shells) {
+      EstimatePoint q;
+      q.position = p;
+      q.frame = Frame(n);
+      q.bsdf.kd = Rgb(0.5f);
+      estimate_detail::Accumulator one(q), eight(q);
+      KnnGridSearch a = beginKnnGrid(p, k, maxRadius), b = a;
+      advanceKnnGrid(map, a, shells, [&](uint32_t, const Photon& photon, float d2) { one.add(photon, d2); });
+      estimate_detail::GridVisitor lanes{eight, {}};
+      advanceKnnGrid(map, b, shells, lanes);
+      lanes.finish();
+      INFO("k = " << k << ", max radius " << maxRadius << ", shells " << shells);
+      REQUIRE(b.found == a.found);
+      REQUIRE(b.radius2 == a.radius2);
+      CHECK(b.photonsExamined == a.photonsExamined);
+      CHECK(b.shells == a.shells);
+      CHECK(b.done == a.done);
+      CHECK(eight.used == one.used);
+      CHECK(eight.farthestD2 == one.farthestD2);
+      CHECK((eight.farthest == one.farthest));
+      // Positive terms summed in another order: each partial sum rounds by at most 2^-24 of itself.
+      const float tolerance = float(a.found) * 0x1p-24f;
+      for (int c = 0; c < 3; ++c) CHECK(std::abs(eight.sum[c] - one.sum[c]) <= tolerance * one.sum[c]);
+      ties += one.farthestD2 >= 0 && std::count_if(photons.begin(), photons.end(), [&](const Photon& ph) {
+                                       return distance2(ph.position, p) == one.farthestD2;
+                                     }) > 1;
+      runs += b.cellsVisited;
+    };
+    for (Vec3 p : queryPoints(photons, 40, 9)) {
+      const Vec3 n = sampleUniformSphere(rng.uniform2());
+      for (uint32_t k : {1u, 7u, 8u, 9u, 33u, 200u, 5000u})
+        for (float maxRadius : {0.08f, 0.4f, 4.0f})
+          for (uint32_t shells : {1u, 2u, UINT32_MAX}) {
+            compare(sorted, p, n, k, maxRadius, shells);
+            compare(stencil, p, n, k, maxRadius, shells);
+          }
+    }
+  }
+  CHECK(ties > 100);
+  CHECK(runs > 10000);
 }
 
 TEST_CASE("kNN-grid and kd-tree agree on a cloud with one photon and on an empty one", "[photonmap][knn]") {

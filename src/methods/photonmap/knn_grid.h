@@ -20,6 +20,7 @@
 #pragma once
 #include <algorithm>
 #include <bit>
+#include <concepts>
 #include <cstdint>
 #include <type_traits>
 
@@ -141,13 +142,23 @@ void examinePhotons(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
   }
 }
 
+// A visitor may take a run of photons whole (the radiance estimate of a Lambertian surface sums
+// them from the map's columns, eight at a time: photon_columns.h) and answer true, having updated
+// the search exactly as examinePhotons would; otherwise it sees them one by one.
+template <class Visit>
+void examineRun(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
+  if constexpr (requires { { visit.takeRun(cp, s) } -> std::same_as<bool>; })
+    if (visit.takeRun(cp, s)) return;
+  examinePhotons(cp, s, visit);
+}
+
 template <GridPhotonMap Map, class Visit>
 void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit) {
   const CellPhotons photons = map.cellPhotons(cell);
   if (photons.count == 0) return;
   if (map.grid.cellDistance2(s.position, cell) > acceptanceLimit2(s)) return;  // no photon in it can be accepted
   ++s.cellsVisited;
-  examinePhotons(photons, s, visit);
+  examineRun(photons, s, visit);
 }
 
 // A row of cells (x0..x1, y, z), first trimmed to the cells that the acceptance sphere's chord
@@ -177,7 +188,7 @@ void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_
     const CellPhotons run = map.rowPhotons(x0, x1, y, z);
     if (run.count == 0) return;
     ++s.cellsVisited;
-    examinePhotons(run, s, visit);
+    examineRun(run, s, visit);
   } else {
     for (int32_t x = x0; x <= x1; ++x) exploreCell(map, s, {x, y, z}, visit);
   }

@@ -16,6 +16,7 @@
 
 #include "kd_tree.h"
 #include "knn_grid.h"
+#include "photon_columns.h"
 #include "lucent/scene/bsdf.h"
 
 namespace lucent {
@@ -83,6 +84,27 @@ struct Accumulator {
   }
 };
 
+// The kNN-grid's visitor: a Lambertian surface's runs of photons summed from the map's columns
+// (photon_columns.h), other photons added one by one. Every run of a search goes the same way.
+struct GridVisitor {
+  Accumulator& acc;
+  PhotonLaneSums lanes;
+
+  void operator()(uint32_t, const Photon& p, float d2) { acc.add(p, d2); }
+  bool takeRun(const CellPhotons& run, KnnGridSearch& s) {
+    if (!acc.diffuse || !run.columns) return false;
+    sumPhotonRun(*run.columns, run.first, run.first + run.count, acc.q.frame.n, s, lanes);
+    return true;
+  }
+  // Adds the lanes' sums to the accumulator.
+  void finish() {
+    const PhotonRunTotals t = photonRunTotals(lanes);
+    acc.sum += t.sum;
+    acc.used += t.used;
+    if (t.farthestD2 > acc.farthestD2) acc.farthestD2 = t.farthestD2, acc.farthest = t.farthest;
+  }
+};
+
 }  // namespace estimate_detail
 
 // On a grid map: the kNN-grid search (knn_grid.h), whole or stopped after `shells` shells, in
@@ -91,9 +113,10 @@ template <GridPhotonMap Map>
 Rgb estimateRadiance(const Map& map, const EstimatePoint& q, const EstimateSettings& settings, PhotonDistance*,
                      EstimateCounters& counters) {
   estimate_detail::Accumulator acc(q);
+  estimate_detail::GridVisitor visit{acc, {}};
   KnnGridSearch s = beginKnnGrid(q.position, settings.k, settings.maxRadius);
-  advanceKnnGrid(map, s, settings.shells > 0 ? settings.shells : UINT32_MAX,
-                 [&](uint32_t, const Photon& p, float d2) { acc.add(p, d2); });
+  advanceKnnGrid(map, s, settings.shells > 0 ? settings.shells : UINT32_MAX, visit);
+  visit.finish();
   ++counters.queries;
   counters.photonsUsed += acc.used;
   counters.photonsExamined += s.photonsExamined;

@@ -72,6 +72,7 @@ SortedGrid buildSortedGrid(std::vector<Photon> photons, const GridOptions& optio
   if (stats) stats->addStage("cell_counts", countClock.seconds());
   Stopwatch gatherClock;
   map.listedPhotons = gatherPhotons(map.photons, map.photonList);
+  map.columns = photonColumns(map.listedPhotons);
   if (stats) stats->addStage("gather_photons", gatherClock.seconds());
   return map;
 }

@@ -7,6 +7,7 @@
 
 #include "lucent/core/rng.h"
 #include "lucent/core/stats.h"
+#include "photon_columns.h"
 #include "uniform_grid.h"
 
 namespace lucent {
@@ -20,13 +21,16 @@ struct SortedGrid {
                                       // entry holds the photon count (Fig. 4 "uniform grid")
   std::vector<Photon> listedPhotons;  // photons[photonList[i]]: the search reads a cell's photons in
                                       // one run instead of gathering them from all over memory
+  PhotonColumns columns;              // listedPhotons as columns, for the radiance estimate
   CellCountTable cellCounts;          // photons per box of cells, to skip empty ones
 
   CellPhotons cellPhotons(CellCoord c) const { return rowPhotons(c.x, c.x, c.y, c.z); }
   // Cells x0..x1 of a row are consecutive keys, so their photons are one run of the list.
   CellPhotons rowPhotons(int32_t x0, int32_t x1, int32_t y, int32_t z) const {
     const uint32_t first = firstPhoton[grid.cellIndex({x0, y, z})], end = firstPhoton[grid.cellIndex({x1, y, z}) + 1];
-    return {listedPhotons.data() + first, photonList.data() + first, end - first};
+    CellPhotons run{listedPhotons.data() + first, photonList.data() + first, end - first};
+    run.columns = &columns, run.first = first;
+    return run;
   }
 };
 

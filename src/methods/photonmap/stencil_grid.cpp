@@ -103,6 +103,7 @@ StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& opt
       std::copy_n(map.slots.data() + size_t(c) * capacity, map.stored(c), map.storedList.data() + map.firstStored[c]);
   });
   map.listedPhotons = gatherPhotons(map.photons, map.storedList);
+  map.columns = photonColumns(map.listedPhotons);
   if (stats) stats->addStage("gather_photons", gatherClock.seconds());
   return map;
 }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lucent/core/stats.h"
+#include "photon_columns.h"
 #include "uniform_grid.h"
 
 namespace lucent {
@@ -26,13 +27,16 @@ struct StencilGrid {
   // is one run, as in the sorted grid.
   std::vector<uint32_t> storedList, firstStored;
   std::vector<Photon> listedPhotons;
+  PhotonColumns columns;  // listedPhotons as columns, for the radiance estimate
 
   uint32_t capacity() const { return side * side; }
   uint32_t stored(uint32_t cell) const { return std::min(arrived[cell], capacity()); }
   CellPhotons cellPhotons(CellCoord c) const { return rowPhotons(c.x, c.x, c.y, c.z); }
   CellPhotons rowPhotons(int32_t x0, int32_t x1, int32_t y, int32_t z) const {
     const uint32_t first = firstStored[grid.cellIndex({x0, y, z})], end = firstStored[grid.cellIndex({x1, y, z}) + 1];
-    return {listedPhotons.data() + first, storedList.data() + first, end - first};
+    CellPhotons run{listedPhotons.data() + first, storedList.data() + first, end - first};
+    run.columns = &columns, run.first = first;
+    return run;
   }
 };
 

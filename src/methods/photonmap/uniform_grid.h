@@ -118,12 +118,15 @@ CellCountTable buildCellCountTable(const UniformGrid& grid, const std::function<
 std::vector<Photon> gatherPhotons(const std::vector<Photon>& photons, const std::vector<uint32_t>& ids);
 
 // The photons of one cell, as a grid photon map hands them to the kNN-grid search.
+struct PhotonColumns;
 struct CellPhotons {
   const Photon* photons = nullptr;     // the photons, contiguous: read without indirection
   const uint32_t* ids = nullptr;       // their indices into the map's photons
   uint32_t count = 0;
   const uint64_t* cellKeys = nullptr;  // hashed grid only: each entry's cell, as entries of other
   uint64_t cellKey = 0;                // cells share the bucket and must be skipped (section 4.4)
+  const PhotonColumns* columns = nullptr;  // sorted and stencil grids: the same photons as columns,
+  uint32_t first = 0;                      // from entry `first` on (photon_columns.h)
 };
 
 // What the kNN-grid search needs of a map: its grid, its photons, and the photons of a cell; a map

@@ -1,0 +1,184 @@
+#include "photon_columns.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cstring>
+
+#include "knn_grid.h"
+#include "lucent/core/octahedral.h"
+
+namespace lucent {
+
+PhotonColumns photonColumns(std::span<const Photon> listed) {
+  PhotonColumns c;
+  const size_t n = listed.size() + PhotonColumns::kPad;
+  for (std::vector<float>* column : {&c.x, &c.y, &c.z, &c.incomingX, &c.incomingY, &c.incomingZ, &c.r, &c.g, &c.b})
+    column->assign(n, 0.0f);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, listed.size(), 4096), [&](const auto& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      const Photon& p = listed[i];
+      const Vec3 incoming = octahedralDirection(p.direction);
+      c.x[i] = p.position.x, c.y[i] = p.position.y, c.z[i] = p.position.z;
+      c.incomingX[i] = incoming.x, c.incomingY[i] = incoming.y, c.incomingZ[i] = incoming.z;
+      c.r[i] = p.power.r, c.g[i] = p.power.g, c.b[i] = p.power.b;
+    }
+  });
+  return c;
+}
+
+namespace {
+
+// The helpers below pass eight-lane vectors by value; they are inlined within this file, so GCC's
+// note that the default clone passes them differently from the AVX2 one concerns no interface.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+// Eight lanes as GCC vector types: one AVX register in the AVX2 clone, two SSE registers otherwise.
+typedef float Floats __attribute__((vector_size(32)));
+typedef int32_t Ints __attribute__((vector_size(32)));
+
+Floats load(const float* p) {
+  Floats v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+Ints load(const int32_t* p) {
+  Ints v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+void store(float* p, Floats v) { std::memcpy(p, &v, sizeof v); }
+void store(int32_t* p, Ints v) { std::memcpy(p, &v, sizeof v); }
+Floats broadcast(float f) { return Floats{} + f; }
+Ints broadcast(int32_t i) { return Ints{} + i; }
+// The lanes of v where mask is set (all ones), zero elsewhere.
+Floats masked(Floats v, Ints mask) { return Floats(Ints(v) & mask); }
+int32_t sum(Ints v) {
+  int32_t n = 0;
+  for (int j = 0; j < kPhotonLanes; ++j) n += v[j];
+  return n;
+}
+// Lanes set in a mask.
+int32_t count(Ints mask) { return -sum(mask); }
+
+constexpr Ints kLane = {0, 1, 2, 3, 4, 5, 6, 7};
+
+// Eight photons from `first` on: squared distance (as distance2) and the cosine sign's operand (as
+// the estimate's front test), lanes past `end` invalid.
+struct Block {
+  Floats d2, cosine;
+  Ints valid;
+};
+
+struct Query {
+  Floats x, y, z, nx, ny, nz;
+};
+
+Block block(const PhotonColumns& c, uint32_t first, uint32_t end, const Query& q) {
+  const Floats dx = load(&c.x[first]) - q.x, dy = load(&c.y[first]) - q.y, dz = load(&c.z[first]) - q.z;
+  Block b;
+  b.d2 = dx * dx + dy * dy + dz * dz;
+  b.cosine = load(&c.incomingX[first]) * q.nx + load(&c.incomingY[first]) * q.ny + load(&c.incomingZ[first]) * q.nz;
+  b.valid = kLane < broadcast(int32_t(end - first));
+  return b;
+}
+
+}  // namespace
+
+__attribute__((target_clones("avx2", "default"))) void sumPhotonRun(const PhotonColumns& c, uint32_t begin,
+                                                                    uint32_t end, Vec3 n, KnnGridSearch& s,
+                                                                    PhotonLaneSums& sums) {
+  const Query q{broadcast(s.position.x), broadcast(s.position.y), broadcast(s.position.z),
+                broadcast(n.x),          broadcast(n.y),          broadcast(n.z)};
+  const uint32_t examinedBefore = s.photonsExamined;
+  uint32_t i = begin;
+
+  // While fewer than k are accepted: whole blocks as long as the k-th photon is not among them.
+  if (s.found < s.k) {
+    const Floats maxRadius2 = broadcast(s.maxRadius2);
+    Floats r = load(sums.r), g = load(sums.g), b = load(sums.b);
+    Ints used = load(sums.used);
+    Floats farD2 = load(sums.farthestD2), farR = load(sums.farthestR), farG = load(sums.farthestG),
+           farB = load(sums.farthestB);
+    Ints farOrder = load(reinterpret_cast<const int32_t*>(sums.farthestOrder));
+    Floats radius2 = broadcast(s.radius2);
+    for (; i < end && s.found < s.k; i += kPhotonLanes) {
+      const Block blk = block(c, i, end, q);
+      const Ints accepted = (blk.d2 <= maxRadius2) & blk.valid;
+      const int32_t accepting = count(accepted);
+      if (s.found + uint32_t(accepting) > s.k) break;  // the k-th photon is in this block
+      s.found += uint32_t(accepting);
+      const Ints lit = accepted & (blk.cosine > 0);
+      const Floats pr = masked(load(&c.r[i]), lit), pg = masked(load(&c.g[i]), lit), pb = masked(load(&c.b[i]), lit);
+      r += pr, g += pg, b += pb, used -= lit;
+      radius2 = accepted ? (blk.d2 > radius2 ? blk.d2 : radius2) : radius2;
+      const Ints farther = accepted & (blk.d2 > farD2);
+      farD2 = farther ? blk.d2 : farD2;
+      farR = farther ? pr : farR, farG = farther ? pg : farG, farB = farther ? pb : farB;
+      farOrder = farther ? broadcast(int32_t(examinedBefore + (i - begin))) + kLane : farOrder;
+    }
+    store(sums.r, r), store(sums.g, g), store(sums.b, b), store(sums.used, used);
+    store(sums.farthestD2, farD2), store(sums.farthestR, farR), store(sums.farthestG, farG), store(sums.farthestB, farB);
+    store(reinterpret_cast<int32_t*>(sums.farthestOrder), farOrder);
+    for (int j = 0; j < kPhotonLanes; ++j) s.radius2 = std::max(s.radius2, radius2[j]);
+
+    // The block holding the k-th photon, one photon at a time.
+    if (i < end && s.found < s.k) {
+      const Block blk = block(c, i, end, q);
+      const uint32_t blockEnd = std::min(end, i + kPhotonLanes);
+      for (int j = 0; i < blockEnd; ++i, ++j) {
+        const float d2 = blk.d2[j];
+        const bool growing = s.found < s.k;
+        if (!(d2 <= (growing ? s.maxRadius2 : s.radius2))) continue;
+        ++s.found;
+        const bool lit = blk.cosine[j] > 0;
+        const float pr = lit ? c.r[i] : 0.0f, pg = lit ? c.g[i] : 0.0f, pb = lit ? c.b[i] : 0.0f;
+        sums.r[j] += pr, sums.g[j] += pg, sums.b[j] += pb, sums.used[j] += lit;
+        if (!growing) continue;
+        s.radius2 = std::max(s.radius2, d2);
+        if (d2 > sums.farthestD2[j]) {
+          sums.farthestD2[j] = d2;
+          sums.farthestR[j] = pr, sums.farthestG[j] = pg, sums.farthestB[j] = pb;
+          sums.farthestOrder[j] = examinedBefore + (i - begin);
+        }
+      }
+    }
+  }
+
+  // Then the radius stays: every photon within it.
+  if (i < end) {
+    const Floats radius2 = broadcast(s.radius2);
+    Floats r = load(sums.r), g = load(sums.g), b = load(sums.b);
+    Ints used = load(sums.used), found = {};
+    for (; i < end; i += kPhotonLanes) {
+      const Block blk = block(c, i, end, q);
+      const Ints accepted = (blk.d2 <= radius2) & blk.valid;
+      const Ints lit = accepted & (blk.cosine > 0);
+      r += masked(load(&c.r[i]), lit), g += masked(load(&c.g[i]), lit), b += masked(load(&c.b[i]), lit);
+      used -= lit, found -= accepted;
+    }
+    store(sums.r, r), store(sums.g, g), store(sums.b, b), store(sums.used, used);
+    s.found += uint32_t(sum(found));
+  }
+  s.photonsExamined += end - begin;
+}
+
+PhotonRunTotals photonRunTotals(const PhotonLaneSums& sums) {
+  PhotonRunTotals t;
+  int far = -1;
+  for (int j = 0; j < kPhotonLanes; ++j) {
+    t.sum += Rgb(sums.r[j], sums.g[j], sums.b[j]);
+    t.used += uint32_t(sums.used[j]);
+    if (sums.farthestD2[j] < 0) continue;
+    if (far < 0 || sums.farthestD2[j] > sums.farthestD2[far] ||
+        (sums.farthestD2[j] == sums.farthestD2[far] && sums.farthestOrder[j] < sums.farthestOrder[far]))
+      far = j;
+  }
+  if (far >= 0) {
+    t.farthestD2 = sums.farthestD2[far];
+    t.farthest = Rgb(sums.farthestR[far], sums.farthestG[far], sums.farthestB[far]);
+  }
+  return t;
+}
+
+}  // namespace lucent

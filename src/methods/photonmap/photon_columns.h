@@ -1,0 +1,58 @@
+// The radiance estimate of a Lambertian surface on the sorted and stencil grids, eight photons at a
+// time. The kNN-grid reads a map's photons in runs (a row of cells whose photons are consecutive in
+// the photon list); a run's photons are taken from the map's columns (a structure of arrays in list
+// order) and accepted by the rule of examinePhotons (knn_grid.h): while fewer than k are accepted,
+// any photon within the maximum radius, the radius growing to include it; afterwards those within
+// the radius. The accepted photons' power is summed over those arriving from the viewer's side, in
+// eight lanes (lane j takes the run's photons j, j + 8, ...). Which photons are accepted, the radius
+// and the counts are exactly examinePhotons'; only the order of the power sums differs.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "photon.h"
+
+namespace lucent {
+
+struct KnnGridSearch;
+
+// A map's listed photons as columns, padded with kPad zero entries so that eight photons can be
+// loaded from any position of the list.
+struct PhotonColumns {
+  static constexpr uint32_t kPad = 8;
+  std::vector<float> x, y, z;                          // position
+  std::vector<float> incomingX, incomingY, incomingZ;  // octahedralDirection: the side it came from
+  std::vector<float> r, g, b;                          // power
+};
+
+PhotonColumns photonColumns(std::span<const Photon> listed);
+
+inline constexpr int kPhotonLanes = 8;
+
+// One estimate's running sums, per lane.
+struct alignas(32) PhotonLaneSums {
+  float r[kPhotonLanes] = {}, g[kPhotonLanes] = {}, b[kPhotonLanes] = {};
+  int32_t used[kPhotonLanes] = {};  // accepted and from the viewer's side
+  // The lane's farthest photon accepted while the radius grew: the first in search order at the
+  // largest distance, its share of the sum, and its place in the search (to break ties between lanes).
+  float farthestD2[kPhotonLanes] = {-1, -1, -1, -1, -1, -1, -1, -1};
+  float farthestR[kPhotonLanes] = {}, farthestG[kPhotonLanes] = {}, farthestB[kPhotonLanes] = {};
+  uint32_t farthestOrder[kPhotonLanes] = {};
+};
+
+// Photons begin..end of the list offered to the search s, whose normal on the viewer's side is n:
+// s.found, s.radius2 and s.photonsExamined are updated as examinePhotons updates them.
+void sumPhotonRun(const PhotonColumns& columns, uint32_t begin, uint32_t end, Vec3 n, KnnGridSearch& s,
+                  PhotonLaneSums& sums);
+
+// The lanes' totals: the power sum, the photons in it, and the farthest photon (the first met at
+// the largest distance; d2 -1 when none was accepted) with its share.
+struct PhotonRunTotals {
+  Rgb sum, farthest;
+  float farthestD2 = -1;
+  uint32_t used = 0;
+};
+PhotonRunTotals photonRunTotals(const PhotonLaneSums& sums);
+
+}  // namespace lucent
