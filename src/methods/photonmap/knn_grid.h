@@ -168,6 +168,10 @@ void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit)
 // rejected by its own distance). The run counts as one cell visit.
 template <GridPhotonMap Map, class Visit>
 void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_t y, int32_t z, Visit& visit) {
+  constexpr bool kRuns = requires { map.rowPhotons(x0, x1, y, z); };
+  if constexpr (kRuns) {
+    if (map.rowPhotons(x0, x1, y, z).count == 0) return;  // an empty row costs two loads, not a chord
+  }
   const UniformGrid& g = map.grid;
   const float limit2 = acceptanceLimit2(s);
   if (limit2 < kInf) {
@@ -184,7 +188,7 @@ void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_
     if (last < float(x1)) x1 = last < float(x0) ? x0 - 1 : int32_t(last);
     if (x0 > x1) return;
   }
-  if constexpr (requires { map.rowPhotons(x0, x1, y, z); }) {
+  if constexpr (kRuns) {
     const CellPhotons run = map.rowPhotons(x0, x1, y, z);
     if (run.count == 0) return;
     ++s.cellsVisited;
