@@ -342,6 +342,65 @@ uint32_t emptyShellsFrom(const Map& map, const Reach& reach, CellCoord c, int32_
   }
 }
 
+template <class Map>
+constexpr bool kReadsRows = requires(const Map& map) { map.rowPhotons(0, 0, 0, 0); };
+
+// The box of shells 0..t about c, clipped to the grid.
+inline void cubeBox(const UniformGrid& g, CellCoord c, int32_t t, int32_t lo[3], int32_t hi[3]) {
+  const int32_t ci[3] = {c.x, c.y, c.z};
+  for (int a = 0; a < 3; ++a) lo[a] = std::max(0, ci[a] - t), hi[a] = std::min(g.res[a] - 1, ci[a] + t);
+}
+
+// The shells that can be taken together as one box, row by row, because the order of their
+// photons cannot matter: they hold fewer photons than the k - found still sought, and all lie
+// within the maximum radius (the box's farthest corner does, the box cut to the photons' bounds),
+// so every one of them is accepted under the growing radius whatever the order, and the radius
+// after them is their farthest photon's. The search after them is that of shell by shell. It
+// saves the piecewise walk through the dozen sparse shells that a fine grid (the paper's
+// 250 x 1 x 250) needs before k photons are met. Returns the last such shell t (at most `most`),
+// or -1 where shell 0 alone does not qualify.
+template <GridPhotonMap Map>
+int32_t acceptedCube(const Map& map, const KnnGridSearch& s, CellCoord c, int32_t most) {
+  const UniformGrid& g = map.grid;
+  auto qualifies = [&](int32_t t) {
+    int32_t lo[3], hi[3];
+    cubeBox(g, c, t, lo, hi);
+    float far2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      const float boxLo = g.lo[a] + float(lo[a]) * g.cellSize[a] - g.slack;
+      const float boxHi = std::min(g.lo[a] + float(hi[a] + 1) * g.cellSize[a], g.hi[a]) + g.slack;
+      const float far = std::max(s.position[a] - boxLo, boxHi - s.position[a]);
+      far2 += far * far;
+    }
+    // The margin covers the rounding of far2 and of each photon's distance2.
+    return far2 * 1.0001f <= s.maxRadius2 && map.cellCounts.count(lo, hi) < s.k - s.found;
+  };
+  if (most < 0 || !qualifies(0)) return -1;
+  const int32_t ci[3] = {c.x, c.y, c.z};
+  int32_t covering = 0;  // shells 0..covering cover the grid
+  for (int a = 0; a < 3; ++a) covering = std::max({covering, ci[a], g.res[a] - 1 - ci[a]});
+  int32_t yes = 0, no = std::min(most, covering) + 1;
+  while (no - yes > 1) {
+    const int32_t mid = yes + (no - yes) / 2;
+    (qualifies(mid) ? yes : no) = mid;
+  }
+  return yes;
+}
+
+// Every row of the box of shells 0..t, each one run.
+template <GridPhotonMap Map, class Visit>
+void exploreCube(const Map& map, KnnGridSearch& s, CellCoord c, int32_t t, Visit& visit) {
+  int32_t lo[3], hi[3];
+  cubeBox(map.grid, c, t, lo, hi);
+  for (int32_t z = lo[2]; z <= hi[2]; ++z)
+    for (int32_t y = lo[1]; y <= hi[1]; ++y) {
+      const CellPhotons run = map.rowPhotons(lo[0], hi[0], y, z);
+      if (run.count == 0) continue;
+      ++s.cellsVisited;
+      examineRun(run, s, visit);
+    }
+}
+
 }  // namespace knn_grid_detail
 
 // Explores up to `shells` more shells, calling visit(photonIndex, photon, d2) for every photon
@@ -353,15 +412,24 @@ void advanceKnnGrid(const Map& map, KnnGridSearch& s, uint32_t shells, Visit&& v
   const CellCoord c = g.cellOf(s.position);
   Reach reach;
   for (uint32_t i = 0; i < shells && !s.done;) {
-    reach.update(g, s.position, acceptanceLimit2(s));
-    // Empty shells are explored by skipping them; a non-empty one cell by cell.
-    const uint32_t empty = emptyShellsFrom(map, reach, c, int32_t(s.shells));
-    if (empty == kAllEmpty) {
-      s.done = true;
-      break;
+    uint32_t step = 0;
+    if constexpr (kReadsRows<Map> && kHasCellCounts<Map>) {
+      if (s.shells == 0) {
+        const int32_t cube = acceptedCube(map, s, c, int32_t(std::min<uint32_t>(shells, INT32_MAX) - 1));
+        if (cube >= 0) exploreCube(map, s, c, cube, visit), step = uint32_t(cube) + 1;
+      }
     }
-    const uint32_t step = empty > 0 ? std::min(empty, shells - i) : 1;
-    if (empty == 0) exploreShell(map, s, reach, c, int32_t(s.shells), visit);
+    if (step == 0) {
+      reach.update(g, s.position, acceptanceLimit2(s));
+      // Empty shells are explored by skipping them; a non-empty one cell by cell.
+      const uint32_t empty = emptyShellsFrom(map, reach, c, int32_t(s.shells));
+      if (empty == kAllEmpty) {
+        s.done = true;
+        break;
+      }
+      step = empty > 0 ? std::min(empty, shells - i) : 1;
+      if (empty == 0) exploreShell(map, s, reach, c, int32_t(s.shells), visit);
+    }
     s.shells += step, i += step;
     const float beyond = distanceBeyondShell(g, s.position, c, int32_t(s.shells) - 1);
     const float beyond2 = beyond > 0 ? beyond * beyond : 0;

@@ -49,6 +49,7 @@ UniformGrid makeUniformGrid(std::span<const Photon> photons, const GridOptions& 
   const Bounds3 bounds = photons.empty() ? Bounds3{Vec3(0.0f), Vec3(0.0f)} : photonBounds(photons);
   const Vec3 extent = bounds.extent();
   grid.lo = bounds.lo;
+  grid.hi = bounds.hi;
 
   // Cells per axis and their sides.
   const auto& res = options.resolution;
