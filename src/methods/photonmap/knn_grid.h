@@ -34,7 +34,9 @@ struct KnnGridSearch {
   float maxRadius2 = 0;     // squared maximum search radius
   float radius2 = 0;        // squared search radius so far (see knnGridRadius2 for the estimate's)
   uint32_t found = 0;       // photons accepted into the running estimate
-  uint32_t shells = 0;      // shells explored: 0 before the first call, 1 after the query's cell
+  uint32_t shells = 0;      // shells explored: 0 before the first call, 1 after the query's cell;
+                            // a search that reads its last shells as rows counts each one the rows
+                            // touch (exploreBeyondCube)
   bool done = false;        // no unexplored photon can be accepted
   uint32_t cellsVisited = 0, photonsExamined = 0, collisionsSkipped = 0;  // counters
 };
@@ -401,6 +403,34 @@ void exploreCube(const Map& map, KnnGridSearch& s, CellCoord c, int32_t t, Visit
     }
 }
 
+// Once k photons are accepted the radius stays, and the photons within it are accepted in any
+// order. The shells beyond the explored ones (0..t), out to the last that the sphere reaches, are
+// then read as the rows of the reach box outside the cube of shells 0..t: one run per row, or two
+// where the row passes through the cube. The same photons as shell by shell, in fewer and longer
+// runs.
+template <GridPhotonMap Map, class Visit>
+void exploreBeyondCube(const Map& map, KnnGridSearch& s, const Reach& reach, CellCoord c, int32_t t, Visit& visit) {
+  int32_t lo[3], hi[3];
+  cubeBox(map.grid, c, t, lo, hi);
+  for (int32_t z = reach.lo[2]; z <= reach.hi[2]; ++z)
+    for (int32_t y = reach.lo[1]; y <= reach.hi[1]; ++y) {
+      if (y < lo[1] || y > hi[1] || z < lo[2] || z > hi[2]) {
+        exploreRow(map, s, reach.lo[0], reach.hi[0], y, z, visit);
+        continue;
+      }
+      if (reach.lo[0] < lo[0]) exploreRow(map, s, reach.lo[0], lo[0] - 1, y, z, visit);
+      if (hi[0] < reach.hi[0]) exploreRow(map, s, hi[0] + 1, reach.hi[0], y, z, visit);
+    }
+}
+
+// The last shell about c that the reach box touches.
+inline int32_t lastShellOf(const Reach& reach, CellCoord c) {
+  const int32_t ci[3] = {c.x, c.y, c.z};
+  int32_t last = 0;
+  for (int a = 0; a < 3; ++a) last = std::max({last, ci[a] - reach.lo[a], reach.hi[a] - ci[a]});
+  return last;
+}
+
 }  // namespace knn_grid_detail
 
 // Explores up to `shells` more shells, calling visit(photonIndex, photon, d2) for every photon
@@ -434,6 +464,18 @@ void advanceKnnGrid(const Map& map, KnnGridSearch& s, uint32_t shells, Visit&& v
     const float beyond = distanceBeyondShell(g, s.position, c, int32_t(s.shells) - 1);
     const float beyond2 = beyond > 0 ? beyond * beyond : 0;
     s.done = beyond == kInf || beyond2 > s.maxRadius2 || (s.found >= s.k && beyond2 > s.radius2);
+    if constexpr (kReadsRows<Map>) {
+      if (!s.done && s.found >= s.k) {
+        reach.update(g, s.position, s.radius2);
+        const int32_t last = lastShellOf(reach, c);
+        if (uint32_t(last + 1) - s.shells <= shells - i) {  // the search's end within this call's shells
+          exploreBeyondCube(map, s, reach, c, int32_t(s.shells) - 1, visit);
+          i += uint32_t(last + 1) - s.shells;
+          s.shells = uint32_t(last + 1);
+          s.done = true;
+        }
+      }
+    }
   }
 }
 
