@@ -345,7 +345,36 @@ uint32_t emptyShellsFrom(const Map& map, const Reach& reach, CellCoord c, int32_
 }
 
 template <class Map>
-constexpr bool kReadsRows = requires(const Map& map) { map.rowPhotons(0, 0, 0, 0); };
+constexpr bool kReadsRows = requires(const Map& map) {
+  map.rowPhotons(0, 0, 0, 0);
+  map.cellRangePhotons(0u, 0u);
+};
+
+// The longest run of photons read at once to settle a search that cannot reach k.
+inline constexpr uint32_t kShortSearchRun = 256;
+
+// A search that cannot reach k photons (the reach box of the maximum radius holds fewer than the
+// k - found still sought) accepts every photon within the maximum radius, in any order. Where the
+// photon list from the reach box's first cell to its last is short, it is read as one run: the
+// photons between them that lie in cells outside the box are beyond the maximum radius and
+// rejected by their distance. This spares the shells to the maximum radius in dark regions (RING's
+// global map holds 12 photons; each of its queries used to walk some 40 shells' counts). Returns
+// whether the search is settled.
+template <GridPhotonMap Map, class Visit>
+bool exploreShortSearch(const Map& map, KnnGridSearch& s, const Reach& reach, Visit& visit) {
+  if (map.cellCounts.count(reach.lo, reach.hi) >= s.k - s.found) return false;
+  for (int a = 0; a < 3; ++a)
+    if (reach.lo[a] > reach.hi[a]) return true;  // no cell within reach
+  const UniformGrid& g = map.grid;
+  const CellPhotons run = map.cellRangePhotons(g.cellIndex({reach.lo[0], reach.lo[1], reach.lo[2]}),
+                                               g.cellIndex({reach.hi[0], reach.hi[1], reach.hi[2]}));
+  if (run.count > kShortSearchRun) return false;
+  if (run.count > 0) {
+    ++s.cellsVisited;
+    examineRun(run, s, visit);
+  }
+  return true;
+}
 
 // The box of shells 0..t about c, clipped to the grid.
 inline void cubeBox(const UniformGrid& g, CellCoord c, int32_t t, int32_t lo[3], int32_t hi[3]) {
@@ -445,6 +474,13 @@ void advanceKnnGrid(const Map& map, KnnGridSearch& s, uint32_t shells, Visit&& v
     uint32_t step = 0;
     if constexpr (kReadsRows<Map> && kHasCellCounts<Map>) {
       if (s.shells == 0) {
+        reach.update(g, s.position, acceptanceLimit2(s));
+        const uint32_t lastShell = uint32_t(lastShellOf(reach, c));
+        if (lastShell < shells && exploreShortSearch(map, s, reach, visit)) {
+          s.shells = lastShell + 1;
+          s.done = true;
+          break;
+        }
         const int32_t cube = acceptedCube(map, s, c, int32_t(std::min<uint32_t>(shells, INT32_MAX) - 1));
         if (cube >= 0) exploreCube(map, s, c, cube, visit), step = uint32_t(cube) + 1;
       }

@@ -27,7 +27,11 @@ struct SortedGrid {
   CellPhotons cellPhotons(CellCoord c) const { return rowPhotons(c.x, c.x, c.y, c.z); }
   // Cells x0..x1 of a row are consecutive keys, so their photons are one run of the list.
   CellPhotons rowPhotons(int32_t x0, int32_t x1, int32_t y, int32_t z) const {
-    const uint32_t first = firstPhoton[grid.cellIndex({x0, y, z})], end = firstPhoton[grid.cellIndex({x1, y, z}) + 1];
+    return cellRangePhotons(grid.cellIndex({x0, y, z}), grid.cellIndex({x1, y, z}));
+  }
+  // The photons of cells firstCell..lastCell in index order, one run of the list.
+  CellPhotons cellRangePhotons(uint32_t firstCell, uint32_t lastCell) const {
+    const uint32_t first = firstPhoton[firstCell], end = firstPhoton[lastCell + 1];
     CellPhotons run{listedPhotons.data() + first, photonList.data() + first, end - first};
     run.columns = &columns, run.first = first;
     return run;

@@ -33,7 +33,11 @@ struct StencilGrid {
   uint32_t stored(uint32_t cell) const { return std::min(arrived[cell], capacity()); }
   CellPhotons cellPhotons(CellCoord c) const { return rowPhotons(c.x, c.x, c.y, c.z); }
   CellPhotons rowPhotons(int32_t x0, int32_t x1, int32_t y, int32_t z) const {
-    const uint32_t first = firstStored[grid.cellIndex({x0, y, z})], end = firstStored[grid.cellIndex({x1, y, z}) + 1];
+    return cellRangePhotons(grid.cellIndex({x0, y, z}), grid.cellIndex({x1, y, z}));
+  }
+  // The photons of cells firstCell..lastCell in index order, one run of the list.
+  CellPhotons cellRangePhotons(uint32_t firstCell, uint32_t lastCell) const {
+    const uint32_t first = firstStored[firstCell], end = firstStored[lastCell + 1];
     CellPhotons run{listedPhotons.data() + first, storedList.data() + first, end - first};
     run.columns = &columns, run.first = first;
     return run;
