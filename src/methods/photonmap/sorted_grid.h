@@ -31,10 +31,7 @@ struct SortedGrid {
   }
   // The photons of cells firstCell..lastCell in index order, one run of the list.
   CellPhotons cellRangePhotons(uint32_t firstCell, uint32_t lastCell) const {
-    const uint32_t first = firstPhoton[firstCell], end = firstPhoton[lastCell + 1];
-    CellPhotons run{listedPhotons.data() + first, photonList.data() + first, end - first};
-    run.columns = &columns, run.first = first;
-    return run;
+    return listRun(listedPhotons, photonList, columns, firstPhoton[firstCell], firstPhoton[lastCell + 1]);
   }
 };
 

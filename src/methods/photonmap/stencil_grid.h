@@ -37,10 +37,7 @@ struct StencilGrid {
   }
   // The photons of cells firstCell..lastCell in index order, one run of the list.
   CellPhotons cellRangePhotons(uint32_t firstCell, uint32_t lastCell) const {
-    const uint32_t first = firstStored[firstCell], end = firstStored[lastCell + 1];
-    CellPhotons run{listedPhotons.data() + first, storedList.data() + first, end - first};
-    run.columns = &columns, run.first = first;
-    return run;
+    return listRun(listedPhotons, storedList, columns, firstStored[firstCell], firstStored[lastCell + 1]);
   }
 };
 

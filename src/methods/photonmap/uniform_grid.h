@@ -131,6 +131,14 @@ struct CellPhotons {
   uint32_t first = 0;                      // from entry `first` on (photon_columns.h)
 };
 
+// List entries [first, end) of a map that keeps its photons in search order (listed) and as columns.
+inline CellPhotons listRun(const std::vector<Photon>& listed, const std::vector<uint32_t>& ids,
+                           const PhotonColumns& columns, uint32_t first, uint32_t end) {
+  CellPhotons run{listed.data() + first, ids.data() + first, end - first};
+  run.columns = &columns, run.first = first;
+  return run;
+}
+
 // What the kNN-grid search needs of a map: its grid, its photons, and the photons of a cell; a map
 // with a dense grid also has the CellCountTable `cellCounts` (the hashed grid has none).
 template <class Map>
