@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "lucent/core/srgb.h"
+
 namespace lucent {
 
 namespace fs = std::filesystem;
@@ -70,11 +72,6 @@ void checkPixelCount(const Image& image, const std::string& path) {
     throw std::runtime_error("cannot write image '" + path + "': it has no channels");
 }
 
-// IEC 61966-2-1 sRGB encoding of a linear value in [0,1].
-float srgbEncode(float v) {
-  return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
-}
-
 }  // namespace
 
 void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata) {
@@ -98,7 +95,7 @@ void writePng(const Image& image, const std::string& path) {
       for (int c : rgb) {
         float v = image.at(x, y, c);
         v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-        bytes[i++] = static_cast<unsigned char>(std::lround(srgbEncode(v) * 255.0f));
+        bytes[i++] = static_cast<unsigned char>(std::lround(linearToSrgb(v) * 255.0f));
       }
   OIIO::ImageSpec spec(image.width(), image.height(), 3, OIIO::TypeDesc::UINT8);
   spec.attribute("oiio:ColorSpace", "sRGB");

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "lucent/core/srgb.h"
+
 namespace lucent {
 
 namespace {
@@ -61,10 +63,6 @@ constexpr std::array<std::array<float, 3>, 9> kViridis = {{{0.267f, 0.005f, 0.32
                                                            {0.678f, 0.864f, 0.190f},
                                                            {0.993f, 0.906f, 0.144f}}};
 
-float srgbDecode(float v) {
-  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
-
 // Linear RGB, so that writePng's sRGB encoding reproduces the colour map.
 std::array<float, 3> viridis(double t) {
   const double s = std::clamp(t, 0.0, 1.0) * (kViridis.size() - 1);
@@ -72,7 +70,7 @@ std::array<float, 3> viridis(double t) {
   const float f = float(s - double(i));
   std::array<float, 3> rgb;
   for (int c = 0; c < 3; ++c)
-    rgb[c] = srgbDecode((1 - f) * kViridis[i][c] + f * kViridis[i + 1][c]);
+    rgb[c] = srgbToLinear((1 - f) * kViridis[i][c] + f * kViridis[i + 1][c]);
   return rgb;
 }
 

@@ -4,13 +4,10 @@
 #include <cmath>
 
 #include "lucent/core/sampling.h"
+#include "lucent/core/srgb.h"
 #include "lucent/scene/scene.h"
 
 namespace lucent {
-
-// sRGB transfer function (IEC 61966-2-1).
-inline float srgbToLinear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
-inline float linearToSrgb(float v) { return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f; }
 
 // Linear value of every 8-bit sRGB code.
 inline const std::array<float, 256> kSrgb8ToLinear = [] {
