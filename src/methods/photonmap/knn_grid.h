@@ -15,8 +15,14 @@
 //
 // The search is resumable: advanceKnnGrid explores a given number of shells and returns, leaving the
 // state of the running estimate, so that the progressive result the paper displays can be written
-// out after every shell. One code path serves every grid map through GridPhotonMap (a template, no
-// virtual calls); the hashed grid's entries of other cells are skipped here.
+// out after every shell. Every grid map goes through GridPhotonMap (a template, no virtual calls);
+// the hashed grid's entries of other cells are skipped here. Where the order of photons cannot
+// change which are accepted, the maps that keep rows of cells as runs of their photon list (the
+// sorted and stencil grids) read whole boxes and rows instead of shells: a search short of k
+// (exploreShortSearch), the first shells while all their photons must be accepted (acceptedCube)
+// and the shells after the k-th photon (exploreBeyondCube). They accept the same photons with the
+// same radius as shell by shell; only where two accepted photons lie at exactly the farthest
+// distance can the one met first, whose share the estimate leaves out, be another.
 #pragma once
 #include <algorithm>
 #include <bit>
@@ -35,8 +41,8 @@ struct KnnGridSearch {
   float radius2 = 0;        // squared search radius so far (see knnGridRadius2 for the estimate's)
   uint32_t found = 0;       // photons accepted into the running estimate
   uint32_t shells = 0;      // shells explored: 0 before the first call, 1 after the query's cell;
-                            // a search that reads its last shells as rows counts each one the rows
-                            // touch (exploreBeyondCube)
+                            // a search that ends by reading its reach box (exploreShortSearch,
+                            // exploreBeyondCube) counts every shell the box touches
   bool done = false;        // no unexplored photon can be accepted
   uint32_t cellsVisited = 0, photonsExamined = 0, collisionsSkipped = 0;  // counters
 };
@@ -97,7 +103,8 @@ struct Reach {
 
 inline float acceptanceLimit2(const KnnGridSearch& s) { return s.found < s.k ? s.maxRadius2 : s.radius2; }
 
-// Offers photons to the running estimate in the order given.
+// Offers photons to the running estimate in the order given. sumPhotonRuns (photon_columns.cpp)
+// applies the same rule eight photons at a time: keep the two in step.
 template <class Visit>
 void examinePhotons(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
   auto otherCell = [&](uint32_t i) {  // another cell's photon in a hash bucket
@@ -112,7 +119,7 @@ void examinePhotons(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
     if (otherCell(i)) continue;
     const float d2 = distance2(cp.photons[i].position, s.position);
     ++s.photonsExamined;
-    if (d2 > s.maxRadius2) continue;
+    if (!(d2 <= s.maxRadius2)) continue;
     s.radius2 = std::max(s.radius2, d2);
     ++s.found;
     visit(cp.ids[i], cp.photons[i], d2);
@@ -313,6 +320,14 @@ void exploreShell(const Map& map, KnnGridSearch& s, const Reach& reach, CellCoor
   if (zHi) e.rows(lo[1], hi[1], hi[2]);
 }
 
+// The last shell about c that the reach box touches.
+inline int32_t lastShellOf(const Reach& reach, CellCoord c) {
+  const int32_t ci[3] = {c.x, c.y, c.z};
+  int32_t last = 0;
+  for (int a = 0; a < 3; ++a) last = std::max({last, ci[a] - reach.lo[a], reach.hi[a] - ci[a]});
+  return last;
+}
+
 // Shells from `shell` on that hold no photon the acceptance sphere can reach, found by bisection on
 // the map's cell counts (the acceptance radius does not change while nothing is accepted): 0 if
 // shell `shell` holds some, kAllEmpty if every unexplored cell within reach is empty.
@@ -332,10 +347,7 @@ uint32_t emptyShellsFrom(const Map& map, const Reach& reach, CellCoord c, int32_
     if (withinShells(shell) != explored) return 0;  // the common case next to photons
     if (map.cellCounts.count(reach.lo, reach.hi) == explored) return kAllEmpty;
     // The first shell whose cube covers the reach box holds the rest: bisect below it.
-    const int32_t ci[3] = {c.x, c.y, c.z};
-    int32_t last = 0;
-    for (int a = 0; a < 3; ++a) last = std::max({last, ci[a] - reach.lo[a], reach.hi[a] - ci[a]});
-    int32_t emptyUpTo = shell, nonEmpty = last;  // invariant: shells shell..emptyUpTo empty
+    int32_t emptyUpTo = shell, nonEmpty = lastShellOf(reach, c);  // invariant: shells shell..emptyUpTo empty
     while (nonEmpty - emptyUpTo > 1) {
       const int32_t mid = emptyUpTo + (nonEmpty - emptyUpTo) / 2;
       (withinShells(mid) == explored ? emptyUpTo : nonEmpty) = mid;
@@ -345,7 +357,7 @@ uint32_t emptyShellsFrom(const Map& map, const Reach& reach, CellCoord c, int32_
 }
 
 template <class Map>
-constexpr bool kReadsRows = requires(const Map& map) {
+constexpr bool kReadsRuns = requires(const Map& map) {
   map.rowPhotons(0, 0, 0, 0);
   map.cellRangePhotons(0u, 0u);
 };
@@ -452,13 +464,6 @@ void exploreBeyondCube(const Map& map, KnnGridSearch& s, const Reach& reach, Cel
     }
 }
 
-// The last shell about c that the reach box touches.
-inline int32_t lastShellOf(const Reach& reach, CellCoord c) {
-  const int32_t ci[3] = {c.x, c.y, c.z};
-  int32_t last = 0;
-  for (int a = 0; a < 3; ++a) last = std::max({last, ci[a] - reach.lo[a], reach.hi[a] - ci[a]});
-  return last;
-}
 
 }  // namespace knn_grid_detail
 
@@ -472,7 +477,7 @@ void advanceKnnGrid(const Map& map, KnnGridSearch& s, uint32_t shells, Visit&& v
   Reach reach;
   for (uint32_t i = 0; i < shells && !s.done;) {
     uint32_t step = 0;
-    if constexpr (kReadsRows<Map> && kHasCellCounts<Map>) {
+    if constexpr (kReadsRuns<Map> && kHasCellCounts<Map>) {
       if (s.shells == 0) {
         reach.update(g, s.position, acceptanceLimit2(s));
         const uint32_t lastShell = uint32_t(lastShellOf(reach, c));
@@ -500,7 +505,7 @@ void advanceKnnGrid(const Map& map, KnnGridSearch& s, uint32_t shells, Visit&& v
     const float beyond = distanceBeyondShell(g, s.position, c, int32_t(s.shells) - 1);
     const float beyond2 = beyond > 0 ? beyond * beyond : 0;
     s.done = beyond == kInf || beyond2 > s.maxRadius2 || (s.found >= s.k && beyond2 > s.radius2);
-    if constexpr (kReadsRows<Map>) {
+    if constexpr (kReadsRuns<Map>) {
       if (!s.done && s.found >= s.k) {
         reach.update(g, s.position, s.radius2);
         const int32_t last = lastShellOf(reach, c);

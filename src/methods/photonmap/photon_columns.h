@@ -41,8 +41,9 @@ struct alignas(32) PhotonLaneSums {
   uint32_t farthestOrder[kPhotonLanes] = {};
 };
 
-// Photons begin..end of the list offered to the search s, whose normal on the viewer's side is n:
-// s.found, s.radius2 and s.photonsExamined are updated as examinePhotons updates them.
+// Entries [begin, end) of the list offered to the search s, whose normal on the viewer's side is n:
+// s.found, s.radius2 and s.photonsExamined are updated as examinePhotons (knn_grid.h) updates them;
+// keep the two rules in step.
 void sumPhotonRun(const PhotonColumns& columns, uint32_t begin, uint32_t end, Vec3 n, KnnGridSearch& s,
                   PhotonLaneSums& sums);
 

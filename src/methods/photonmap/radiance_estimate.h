@@ -96,12 +96,13 @@ struct GridVisitor {
     sumPhotonRun(*run.columns, run.first, run.first + run.count, acc.q.frame.n, s, lanes);
     return true;
   }
-  // Adds the lanes' sums to the accumulator.
+  // Moves the lanes' sums into the accumulator (the lanes start again from zero).
   void finish() {
     const PhotonRunTotals t = photonRunTotals(lanes);
     acc.sum += t.sum;
     acc.used += t.used;
     if (t.farthestD2 > acc.farthestD2) acc.farthestD2 = t.farthestD2, acc.farthest = t.farthest;
+    lanes = {};
   }
 };
 

@@ -50,7 +50,8 @@ static_assert(sizeof(CellCoord) == 12);
 struct UniformGrid {
   Vec3 lo;              // corner of cell (0, 0, 0): the photons' lower bound
   Vec3 hi;              // the photons' upper bound (the last cell reaches beyond it on an axis
-                        // that the photons do not span, such as the y of a floor's 250 x 1 x 250)
+                        // that the photons do not span, such as the y of a floor's 250 x 1 x 250);
+                        // the search relies on it (acceptedCube): grids come from makeUniformGrid
   Vec3 cellSize;        // per axis
   Vec3 invCellSize;
   std::array<int32_t, 3> res{1, 1, 1};
