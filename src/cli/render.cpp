@@ -318,6 +318,10 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
            ->check(CLI::Range(0.0f, 1e9f))->capture_default_str(), pm);
   only(cmd->add_option("--stencil-side", o.stencilSide, "purcell, pmfg: m, with m x m photons per stencil-routed cell")
            ->check(CLI::Range(1u, 1024u))->capture_default_str(), pm);
+  only(cmd->add_option("--dump", o.dumpDirectory,
+                       "purcell, pmfg: write every stage's arrays (photons, maps, shading points, estimates) into this "
+                       "existing directory, for checking another backend stage by stage (docs/dump-format.md)"),
+       pm);
 
   // Micro-rendering (micro).
   MicroRenderOptions& m = args->micro;

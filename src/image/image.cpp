@@ -1,14 +1,12 @@
 #include "lucent/image/image.h"
 
-#include <unistd.h>
-
 #include <OpenImageIO/imageio.h>
 
-#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <stdexcept>
 
+#include "lucent/core/files.h"
 #include "lucent/core/srgb.h"
 
 namespace lucent {
@@ -28,16 +26,6 @@ int Image::channelIndex(const std::string& name) const {
 }
 
 namespace {
-
-// Same directory (so rename is atomic), hidden, unique per process and call, and keeping the
-// extension because OIIO picks the file format from it.
-fs::path temporaryPathFor(const fs::path& path) {
-  static std::atomic<unsigned> counter{0};
-  std::string name = ".";
-  name += path.stem().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
-          std::to_string(counter++) + path.extension().string();
-  return path.parent_path() / name;
-}
 
 // Writes `data` (interleaved, `format`) with `spec` to `path` via a temporary file and a rename.
 void writeAtomically(const std::string& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc format,

@@ -4,6 +4,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <string>
 
 #include "lucent/methods/render_output.h"
 #include "lucent/scene/scene.h"
@@ -43,6 +44,9 @@ struct PhotonMapOptions {
   float photonsPerCell = 0;                          // otherwise: about this many photons per cell of the
                                                      // bounds; 0: max(1, k / 16) (measured on the Cornell box)
   uint32_t stencilSide = 16;                         // m: m x m photons per stencil-routed cell
+  // Where each stage's arrays are dumped for checking another backend stage by stage
+  // (docs/dump-format.md); empty: none.
+  std::string dumpDirectory;
 };
 
 // The maximum search radius that `options.maxRadius` = 0 stands for.

@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include "lucent/core/rng.h"
@@ -31,6 +32,7 @@ struct ShadingPoint {
   uint32_t sample = 0;   // the camera sample
   uint32_t branch = 0;   // index of this point among its camera sample's (specular splitting)
 };
+static_assert(sizeof(ShadingPoint) == 108 && std::is_trivially_copyable_v<ShadingPoint>, "dumped as records");
 
 inline EstimatePoint estimatePoint(const ShadingPoint& sp) {
   EstimatePoint q;

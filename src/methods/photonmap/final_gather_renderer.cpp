@@ -165,6 +165,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
       totals.traceSeconds += wall * share;
       totals.estimateSeconds += wall * (1 - share);
     });
+    dumpBand(options, band, eye, radiance);
     image.add(eye, radiance);
     totals.addBand(eye);
   }

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
+#include "lucent/core/dump.h"
 #include "photon_tracing.h"
 
 namespace lucent {
@@ -31,6 +33,8 @@ void validatePhotonMapOptions(const PhotonMapOptions& o) {
   if (anyRes && !(r[0] > 0 && r[1] > 0 && r[2] > 0)) fail("grid resolution needs three positive cell counts");
   for (uint32_t c : r)
     if (c > uint32_t(UniformGrid::kMaxResolution)) fail("grid resolution exceeds 2^21 cells per axis");
+  if (!o.dumpDirectory.empty() && !std::filesystem::is_directory(o.dumpDirectory))
+    fail("dump directory '" + o.dumpDirectory + "' is not an existing directory");
 }
 
 namespace {
@@ -99,6 +103,8 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
   for (const auto& [name, s] : globalSub.stageSeconds) stats.addStage("build_map.global." + name, s);
   for (const auto& [name, s] : causticSub.stageSeconds) stats.addStage("build_map.caustic." + name, s);
 
+  dumpPhotonMap(options, "global", maps.global);
+  dumpPhotonMap(options, "caustic", maps.caustic);
   stats.addCounter("photons_emitted", uint64_t(global.emitted) + caustic.emitted);
   stats.addCounter("global_photons", maps.global.photons);
   stats.addCounter("caustic_photons", maps.caustic.photons);
@@ -167,6 +173,48 @@ Image ImageAccumulator::finish() const {
     }
   }
   return image;
+}
+
+void dumpPhotonMap(const PhotonMapOptions& options, const std::string& prefix, const BuiltPhotonMap& built) {
+  const std::string& dir = options.dumpDirectory;
+  if (dir.empty()) return;
+  auto dump = [&](const char* array, const char* type, const auto& records) {
+    writeDump(dir, prefix + "." + array, type, std::span(records));
+  };
+  auto grid = [&](const UniformGrid& g, const CellCountTable& counts) {
+    dump("grid", "UniformGrid", std::vector<UniformGrid>{g});
+    dump("cell_counts", "uint32", counts.prefix);
+  };
+  if (const auto* m = std::get_if<SortedGrid>(&built.map)) {
+    grid(m->grid, m->cellCounts);
+    dump("photons", "Photon", m->photons);
+    dump("photon_list", "uint32", m->photonList);
+    dump("first_photon", "uint32", m->firstPhoton);
+  } else if (const auto* m = std::get_if<StencilGrid>(&built.map)) {
+    grid(m->grid, m->cellCounts);
+    dump("photons", "Photon", m->photons);
+    dump("slots", "uint32", m->slots);
+    dump("arrived", "uint32", m->arrived);
+  } else if (const auto* m = std::get_if<HashedGrid>(&built.map)) {
+    dump("grid", "UniformGrid", std::vector<UniformGrid>{m->grid});
+    dump("photons", "Photon", m->photons);
+    dump("photon_list", "uint32", m->photonList);
+    dump("cell_keys", "uint64", m->cellKeys);
+    dump("first_photon", "uint32", m->firstPhoton);
+  } else if (const auto* m = std::get_if<PhotonKdTree>(&built.map)) {
+    dump("photons", "Photon", m->photons);
+    dump("source_index", "uint32", m->sourceIndex);
+  }
+}
+
+void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance) {
+  const std::string& dir = options.dumpDirectory;
+  if (dir.empty()) return;
+  const std::string prefix = "band" + std::to_string(band) + ".";
+  writeDump(dir, prefix + "shading_points", "ShadingPoint", std::span(eye.points));
+  writeDump(dir, prefix + "direct", "Rgb", std::span(radiance.direct));
+  writeDump(dir, prefix + "indirect", "Rgb", std::span(radiance.indirect));
+  writeDump(dir, prefix + "caustic", "Rgb", std::span(radiance.caustic));
 }
 
 void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& c) {

@@ -99,6 +99,12 @@ class ImageAccumulator {
 
 void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& counters);
 
+// Dumps (docs/dump-format.md) into options.dumpDirectory, when it is set: a map's arrays as
+// "<prefix>.<array>" (prefix "global" or "caustic"), and a band's shading points and the radiance
+// each part of the estimate gives them as "band<N>.<array>".
+void dumpPhotonMap(const PhotonMapOptions& options, const std::string& prefix, const BuiltPhotonMap& map);
+void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance);
+
 // What both renderers add up over the bands, and report the same way: the paper's Table 1 stages
 // trace_rays and radiance_estimate, and the ray, point and estimate counters.
 struct RenderTotals {

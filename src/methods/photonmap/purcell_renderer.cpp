@@ -52,6 +52,7 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
       });
     });
     totals.estimateSeconds += estimateClock.seconds();
+    dumpBand(options, band, eye, radiance);
     image.add(eye, radiance);
     totals.addBand(eye);
   }

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include "lucent/core/math.h"
@@ -85,6 +86,7 @@ struct UniformGrid {
     return d2;
   }
 };
+static_assert(sizeof(UniformGrid) == 64 && std::is_trivially_copyable_v<UniformGrid>, "dumped as one record");
 
 // Bounds the photons (a parallel min/max reduction) and sizes the grid by `options`, with at most
 // maxCells cells (0: no bound but the 21 bits per axis of packed cell keys).

@@ -1,0 +1,51 @@
+// Binary dumps of a stage's flat arrays, so that another backend (a GPU port of a method) can be
+// checked against Lucent stage by stage: one file per array, a 64-byte header and then the records
+// exactly as they lie in memory (little-endian). docs/dump-format.md gives the header and the
+// fields of every record type.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace lucent {
+
+struct DumpHeader {
+  char magic[8];          // "LCNTDUMP"
+  uint32_t version;       // kDumpVersion
+  uint32_t recordBytes;   // size of one record
+  uint64_t count;         // records that follow the header
+  char type[40];          // the record type's name, NUL-padded ASCII ("Photon", "uint32", ...)
+};
+static_assert(sizeof(DumpHeader) == 64 && std::is_trivially_copyable_v<DumpHeader>);
+
+inline constexpr uint32_t kDumpVersion = 1;
+
+// Writes <directory>/<name>.bin whole or not at all (a temporary file, then a rename); throws
+// std::runtime_error naming the file when it cannot.
+void writeDump(const std::string& directory, const std::string& name, const std::string& type,
+               const void* records, uint32_t recordBytes, uint64_t count);
+
+template <class T>
+void writeDump(const std::string& directory, const std::string& name, const std::string& type,
+               std::span<const T> records) {
+  static_assert(std::is_trivially_copyable_v<T>, "dumps hold plain records");
+  writeDump(directory, name, type, records.data(), uint32_t(sizeof(T)), records.size());
+}
+
+// The header of a dump file; throws std::runtime_error naming the file if it is not one.
+DumpHeader readDumpHeader(const std::string& path);
+
+// The records of a dump file, checked against the expected type name and record size.
+void readDumpRecords(const std::string& path, const std::string& type, uint32_t recordBytes, void* records,
+                     uint64_t count);
+template <class T>
+std::vector<T> readDump(const std::string& path, const std::string& type) {
+  static_assert(std::is_trivially_copyable_v<T>, "dumps hold plain records");
+  std::vector<T> records(readDumpHeader(path).count);
+  readDumpRecords(path, type, uint32_t(sizeof(T)), records.data(), records.size());
+  return records;
+}
+
+}  // namespace lucent

@@ -1,0 +1,70 @@
+#!/usr/bin/env python3
+"""Reads a Lucent dump file (docs/dump-format.md) as a NumPy structured array.
+
+  scripts/read-dump.py FILE.bin [--head N]   prints the header and the first N records
+
+As a module: `records, header = read_dump(path)`. Needs NumPy (Debian: python3-numpy; run with
+/usr/bin/python3 where `python3` is another interpreter).
+"""
+import argparse
+import struct
+import sys
+
+import numpy as np
+
+HEADER = struct.Struct("<8sIIQ40s")  # magic, version, record_bytes, count, type
+assert HEADER.size == 64
+
+F3 = ("<f4", (3,))
+DTYPES = {
+    "uint32": np.dtype("<u4"),
+    "uint64": np.dtype("<u8"),
+    "Rgb": np.dtype([("rgb",) + F3]),
+    "Photon": np.dtype([("position",) + F3, ("power",) + F3, ("direction", "<u4"), ("flags", "<u4")]),
+    "UniformGrid": np.dtype([("lo",) + F3, ("hi",) + F3, ("cell_size",) + F3, ("inv_cell_size",) + F3,
+                             ("res", "<i4", (3,)), ("slack", "<f4")]),
+    "ShadingPoint": np.dtype([("position",) + F3, ("geometric_normal",) + F3, ("normal",) + F3, ("wo",) + F3,
+                              ("weight",) + F3, ("material", "<u4"), ("kd",) + F3, ("ks",) + F3, ("ns", "<f4"),
+                              ("ni", "<f4"), ("pixel", "<u4"), ("sample", "<u4"), ("branch", "<u4")]),
+}
+
+
+def read_dump(path):
+    with open(path, "rb") as f:
+        raw = f.read(HEADER.size)
+        if len(raw) < HEADER.size:
+            raise ValueError(f"{path}: not a Lucent dump (shorter than its header)")
+        magic, version, record_bytes, count, type_name = HEADER.unpack(raw)
+        if magic != b"LCNTDUMP":
+            raise ValueError(f"{path}: not a Lucent dump")
+        type_name = type_name.rstrip(b"\0").decode("ascii")
+        header = {"version": version, "record_bytes": record_bytes, "count": count, "type": type_name}
+        dtype = DTYPES.get(type_name)
+        if dtype is None:
+            raise ValueError(f"{path}: unknown record type '{type_name}'")
+        if dtype.itemsize != record_bytes:
+            raise ValueError(f"{path}: {type_name} records of {record_bytes} bytes, expected {dtype.itemsize}")
+        records = np.fromfile(f, dtype=dtype, count=count)
+        if len(records) != count:
+            raise ValueError(f"{path}: truncated ({len(records)} of {count} records)")
+        return records, header
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("file")
+    parser.add_argument("--head", type=int, default=5, help="records to print")
+    args = parser.parse_args()
+    try:
+        records, header = read_dump(args.file)
+    except (OSError, ValueError) as e:
+        print(f"read-dump: {e}", file=sys.stderr)
+        return 1
+    print(header)
+    for r in records[: args.head]:
+        print(r)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,69 @@
+#include "lucent/core/dump.h"
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "lucent/core/files.h"
+
+namespace lucent {
+
+namespace {
+constexpr char kMagic[8] = {'L', 'C', 'N', 'T', 'D', 'U', 'M', 'P'};
+}
+
+void writeDump(const std::string& directory, const std::string& name, const std::string& type,
+               const void* records, uint32_t recordBytes, uint64_t count) {
+  const std::filesystem::path path = std::filesystem::path(directory) / (name + ".bin");
+  if (type.size() >= sizeof(DumpHeader::type)) throw std::logic_error("dump type name too long: " + type);
+  DumpHeader header{};
+  std::memcpy(header.magic, kMagic, sizeof kMagic);
+  header.version = kDumpVersion;
+  header.recordBytes = recordBytes;
+  header.count = count;
+  std::memcpy(header.type, type.data(), type.size());
+  const std::filesystem::path tmp = temporaryPathFor(path);
+  auto fail = [&](const std::string& why) {
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
+    throw std::runtime_error("cannot write dump '" + path.string() + "': " + why);
+  };
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) fail("cannot create it (is '" + directory + "' a writable directory?)");
+    out.write(reinterpret_cast<const char*>(&header), sizeof header);
+    out.write(static_cast<const char*>(records), std::streamsize(uint64_t(recordBytes) * count));
+    out.close();
+    if (!out) fail("write failed");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) fail(ec.message());
+}
+
+DumpHeader readDumpHeader(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read dump '" + path + "'");
+  DumpHeader header{};
+  in.read(reinterpret_cast<char*>(&header), sizeof header);
+  if (!in || std::memcmp(header.magic, kMagic, sizeof kMagic) != 0)
+    throw std::runtime_error("'" + path + "' is not a Lucent dump");
+  return header;
+}
+
+void readDumpRecords(const std::string& path, const std::string& type, uint32_t recordBytes, void* records,
+                     uint64_t count) {
+  const DumpHeader header = readDumpHeader(path);
+  const std::string stored(header.type, strnlen(header.type, sizeof header.type));
+  if (stored != type || header.recordBytes != recordBytes || header.count != count)
+    throw std::runtime_error("dump '" + path + "' holds " + std::to_string(header.count) + " " + stored + " records of " +
+                             std::to_string(header.recordBytes) + " bytes, not " + std::to_string(count) + " " + type +
+                             " of " + std::to_string(recordBytes));
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(sizeof(DumpHeader));
+  in.read(static_cast<char*>(records), std::streamsize(uint64_t(recordBytes) * count));
+  if (!in) throw std::runtime_error("dump '" + path + "' is truncated");
+}
+
+}  // namespace lucent

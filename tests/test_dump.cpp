@@ -1,0 +1,121 @@
+// Binary dumps (docs/dump-format.md): the file format itself, and that a photon-mapping render's dump
+// holds enough to recompute a stage from the stages before it, as a GPU backend would be checked.
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <fstream>
+
+#include "lucent/core/dump.h"
+#include "lucent/methods/photonmap.h"
+#include "lucent/scene/loader.h"
+#include "methods/photonmap/eye_paths.h"
+#include "methods/photonmap/radiance_estimate.h"
+#include "methods/photonmap/sorted_grid.h"
+#include "test_support.h"
+
+using namespace lucent;
+using lucent::test::TempDir;
+
+TEST_CASE("Dumps hold their records behind a header that names them", "[dump]") {
+  TempDir dir("dump");
+  const std::vector<uint32_t> values = {7, 0, 0xffffffffu, 42};
+  writeDump(dir.path.string(), "values", "uint32", std::span(values));
+  const std::string path = dir / "values.bin";
+  REQUIRE(std::filesystem::file_size(path) == sizeof(DumpHeader) + values.size() * 4);
+  const DumpHeader header = readDumpHeader(path);
+  CHECK(std::memcmp(header.magic, "LCNTDUMP", 8) == 0);
+  CHECK(header.version == kDumpVersion);
+  CHECK(header.recordBytes == 4);
+  CHECK(header.count == values.size());
+  CHECK(std::string(header.type) == "uint32");
+  CHECK(readDump<uint32_t>(path, "uint32") == values);
+  CHECK(dir.entries().size() == 1);  // no temporary file left behind
+
+  // The wrong type, a file that is not a dump, a truncated one, and a directory that is not there.
+  CHECK_THROWS_WITH(readDump<float>(path, "float"), Catch::Contains("values.bin") && Catch::Contains("uint32"));
+  {
+    std::ofstream(dir / "not-a-dump.bin") << "hello, this is text and not a dump file at all, sixty-four bytes";
+  }
+  CHECK_THROWS_WITH(readDumpHeader(dir / "not-a-dump.bin"), Catch::Contains("not a Lucent dump"));
+  std::filesystem::resize_file(path, sizeof(DumpHeader) + 6);
+  CHECK_THROWS_WITH(readDump<uint32_t>(path, "uint32"), Catch::Contains("truncated"));
+  CHECK_THROWS_WITH(writeDump((dir.path / "missing").string(), "values", "uint32", std::span(values)),
+                    Catch::Contains("missing/values.bin"));
+}
+
+TEST_CASE("A purcell dump recomputes its maps and its caustic estimates", "[dump][photonmap-render]") {
+  // What a GPU port would do stage by stage: take the photons Lucent traced, build the sorted grid
+  // from them, and estimate at Lucent's shading points; each stage must match Lucent's dump exactly.
+  TempDir dir("purcell-dump");
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/glass-ball.json", {true});
+  scene.camera.width = 48, scene.camera.height = 36;
+  const Visibility vis(scene);
+  PhotonMapOptions opt;
+  opt.photons = 2000;
+  opt.causticPhotons = 4000;
+  opt.k = 16;
+  opt.lightSamples = 2;
+  opt.map = PhotonMapKind::Sort;
+  opt.photonsPerCell = 2;
+  opt.dumpDirectory = dir.path.string();
+  const RenderOutput out = renderPurcell(scene, vis, opt);
+
+  const auto photons = readDump<Photon>(dir / "caustic.photons.bin", "Photon");
+  const auto grid = readDump<UniformGrid>(dir / "caustic.grid.bin", "UniformGrid");
+  const auto points = readDump<ShadingPoint>(dir / "band0.shading_points.bin", "ShadingPoint");
+  const auto caustic = readDump<Rgb>(dir / "band0.caustic.bin", "Rgb");
+  REQUIRE(grid.size() == 1);
+  REQUIRE(photons.size() > 1000);
+  REQUIRE(points.size() > 500);
+  REQUIRE(caustic.size() == points.size());
+  CHECK(readDump<Rgb>(dir / "band0.direct.bin", "Rgb").size() == points.size());
+  for (const char* name : {"global.photons.bin", "global.photon_list.bin", "global.first_photon.bin",
+                           "global.cell_counts.bin", "caustic.cell_counts.bin"})
+    CHECK(std::filesystem::exists(dir / name));
+
+  // The map, from the dumped photons with the render's grid options.
+  GridOptions gridOptions;
+  gridOptions.photonsPerCell = opt.photonsPerCell;
+  const SortedGrid map = buildSortedGrid(photons, gridOptions);
+  CHECK(std::memcmp(&map.grid, &grid[0], sizeof(UniformGrid)) == 0);
+  CHECK(map.photonList == readDump<uint32_t>(dir / "caustic.photon_list.bin", "uint32"));
+  CHECK(map.firstPhoton == readDump<uint32_t>(dir / "caustic.first_photon.bin", "uint32"));
+  CHECK(map.cellCounts.prefix == readDump<uint32_t>(dir / "caustic.cell_counts.bin", "uint32"));
+
+  // The estimates, at the dumped shading points.
+  const EstimateSettings settings{opt.k, defaultMaxRadius(scene), 0};
+  EstimateCounters counters;
+  size_t lit = 0, equal = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Rgb e = estimateRadiance(map, estimatePoint(points[i]), settings, nullptr, counters);
+    equal += e == caustic[i];
+    lit += e.maxComponent() > 0;
+  }
+  CHECK(equal == points.size());
+  CHECK(lit > 50);  // the caustic under the ball is in view
+  CHECK(out.stats.stageSeconds.size() > 0);
+}
+
+TEST_CASE("--dump writes into an existing directory only, for purcell and pmfg", "[dump][cli]") {
+  TempDir dir("cli-dump");
+  const std::string scene = lucent::test::quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json");
+  const std::string common = " --resolution 16x16 --photons 500 --caustic-photons 0 --quiet -o " +
+                             lucent::test::quoted(dir / "out.exr");
+  const auto run = lucent::test::runLucent("render " + scene + " --method pmfg --gather-rays 4 --dump " +
+                                           lucent::test::quoted(dir.path.string()) + common);
+  INFO(run.output);
+  REQUIRE(run.status == 0);
+  CHECK(std::filesystem::exists(dir / "global.photons.bin"));
+  CHECK(std::filesystem::exists(dir / "global.source_index.bin"));  // pmfg's kd-tree
+  CHECK(std::filesystem::exists(dir / "band0.indirect.bin"));
+
+  const auto missing = lucent::test::runLucent("render " + scene + " --method purcell --dump " +
+                                               lucent::test::quoted(dir / "nowhere") + common);
+  CHECK(missing.status != 0);
+  CHECK_THAT(missing.output, Catch::Contains("nowhere") && Catch::Contains("not an existing directory"));
+  const auto pt = lucent::test::runLucent("render " + scene + " --method pt --dump " +
+                                          lucent::test::quoted(dir.path.string()) + " --resolution 16x16 --quiet -o " +
+                                          lucent::test::quoted(dir / "pt.exr"));
+  CHECK(pt.status != 0);
+  CHECK_FALSE(std::filesystem::exists(dir / "pt.exr"));
+}
