@@ -96,7 +96,7 @@ TEST_CASE("A purcell dump recomputes its maps and its caustic estimates", "[dump
   CHECK(out.stats.stageSeconds.size() > 0);
 }
 
-TEST_CASE("--dump writes into an existing directory only, for purcell and pmfg", "[dump][cli]") {
+TEST_CASE("The CLI dumps into an existing directory only, for purcell and pmfg", "[dump][cli]") {
   TempDir dir("cli-dump");
   const std::string scene = lucent::test::quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json");
   const std::string common = " --resolution 16x16 --photons 500 --caustic-photons 0 --quiet -o " +
