@@ -6,7 +6,9 @@
 #include <fstream>
 
 #include "lucent/core/dump.h"
+#include "lucent/methods/microrender.h"
 #include "lucent/methods/photonmap.h"
+#include "lucent/methods/points/point_radiance.h"
 #include "lucent/scene/loader.h"
 #include "methods/photonmap/eye_paths.h"
 #include "methods/photonmap/radiance_estimate.h"
@@ -96,7 +98,50 @@ TEST_CASE("A purcell dump recomputes its maps and its caustic estimates", "[dump
   CHECK(out.stats.stageSeconds.size() > 0);
 }
 
-TEST_CASE("The CLI dumps into an existing directory only, for purcell and pmfg", "[dump][cli]") {
+TEST_CASE("A micro dump's interior radiance pulls up from its leaves", "[dump][micro]") {
+  // Section 4's pull, recomputed from the dumped leaves' radiance and the nodes' areas, must give
+  // the dumped interior radiance; the paper's half floats must be those values rounded.
+  TempDir dir("micro-dump");
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
+  scene.camera.width = scene.camera.height = 16;
+  const Visibility vis(scene);
+  MicroRenderOptions opt;
+  opt.points = 1024;
+  opt.encoding = NodeEncoding::Packed;
+  opt.dumpDirectory = dir.path.string();
+  renderMicro(scene, vis, opt);
+
+  PointHierarchy h;
+  h.leafCount = 1024;
+  h.nodeAreas = readDump<float>(dir / "hierarchy.node_areas.bin", "float");
+  const auto radiance = readDump<Rgb>(dir / "point_radiance.bin", "Rgb");
+  REQUIRE(h.nodeAreas.size() == 2048);
+  REQUIRE(radiance.size() == 2048);
+  CHECK(readDump<PointSample>(dir / "hierarchy.points.bin", "PointSample").size() == 1024);
+  CHECK(readDump<FloatNode>(dir / "hierarchy.float_nodes.bin", "FloatNode").size() == 2048);
+  CHECK(readDump<PackedNode>(dir / "hierarchy.packed_nodes.bin", "PackedNode").size() == 2048);
+  CHECK(readDump<NodeQuantization>(dir / "hierarchy.quantization.bin", "NodeQuantization").size() == 1);
+  std::vector<Rgb> pulled(radiance.begin(), radiance.end());
+  for (uint32_t i = 1; i < h.leafCount; ++i) pulled[i] = Rgb(-1.0f);  // interior nodes recomputed
+  pullRadiance(h, pulled);
+  size_t equal = 0, lit = 0;
+  for (uint32_t i = 1; i < 2048; ++i) equal += pulled[i] == radiance[i], lit += radiance[i].maxComponent() > 0;
+  CHECK(equal == 2047);
+  CHECK(lit > 500);
+  const auto half = readDump<HalfRgb>(dir / "point_radiance_half.bin", "HalfRgb");
+  REQUIRE(half.size() == 2048);
+  size_t rounded = 0;
+  for (uint32_t i = 1; i < 2048; ++i) {
+    const HalfRgb expected = toHalf(radiance[i]);
+    rounded += half[i].r == expected.r && half[i].g == expected.g && half[i].b == expected.b;
+  }
+  CHECK(rounded == 2047);
+  const auto points = readDump<ShadingPoint>(dir / "shading_points.bin", "ShadingPoint");
+  CHECK(points.size() > 100);
+  CHECK(readDump<Rgb>(dir / "indirect.bin", "Rgb").size() == points.size());
+}
+
+TEST_CASE("The CLI dumps into an existing directory only, for purcell, pmfg and micro", "[dump][cli]") {
   TempDir dir("cli-dump");
   const std::string scene = lucent::test::quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json");
   const std::string common = " --resolution 16x16 --photons 500 --caustic-photons 0 --quiet -o " +

@@ -28,6 +28,7 @@ struct RenderArgs {
   PhotonMapOptions pm;
   MicroRenderOptions micro;
   std::string map, gridResolution;  // map: empty for the method's default
+  std::string dump;                 // purcell, pmfg, micro: the dump directory
   std::string lighting = "direct", mapping = "warped", encoding = "float";
   bool noRayCasting = false;
   CLI::Option* photons = nullptr;  // shared by purcell, pmfg and micro, with different defaults
@@ -130,6 +131,7 @@ int runRender(RenderArgs& a) {
   a.pt.spp = a.spp > 0 ? a.spp : a.pt.spp;
   a.pt.seed = a.pm.seed = a.micro.seed = a.seed;
   a.pt.layers = a.pm.layers = a.micro.layers = a.layers;
+  a.pm.dumpDirectory = a.micro.dumpDirectory = a.dump;
   if (a.spp > 0) a.pm.spp = a.micro.spp = a.spp;
   if (a.map.empty()) a.map = a.method == "pmfg" ? "kdtree" : "sort";
   a.pm.map = parseMapKind(a.map);
@@ -284,6 +286,11 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
                                   "purcell, pmfg: photon paths emitted for the global map; micro: for --lighting photons (default 200000)")
                       ->check(CLI::Range(0u, 1u << 28))->capture_default_str();
   only(args->photons, pmMicro);
+  only(cmd->add_option("--dump", args->dump,
+                       "purcell, pmfg, micro: write every stage's arrays (photons and maps, or the point hierarchy "
+                       "and its radiance; shading points, direct and indirect light) into this existing directory, "
+                       "for checking another backend stage by stage (docs/dump-format.md)"),
+       pmMicro);
   only(cmd->add_option("--caustic-photons", o.causticPhotons,
                        "purcell, pmfg: photon paths emitted for the caustic map, towards the mirrors and glass (0: no caustic map)")
            ->check(CLI::Range(0u, 1u << 28))->capture_default_str(), pm);
@@ -318,10 +325,6 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
            ->check(CLI::Range(0.0f, 1e9f))->capture_default_str(), pm);
   only(cmd->add_option("--stencil-side", o.stencilSide, "purcell, pmfg: m, with m x m photons per stencil-routed cell")
            ->check(CLI::Range(1u, 1024u))->capture_default_str(), pm);
-  only(cmd->add_option("--dump", o.dumpDirectory,
-                       "purcell, pmfg: write every stage's arrays (photons, maps, shading points, estimates) into this "
-                       "existing directory, for checking another backend stage by stage (docs/dump-format.md)"),
-       pm);
 
   // Micro-rendering (micro).
   MicroRenderOptions& m = args->micro;

@@ -3,6 +3,7 @@
 // exactly as they lie in memory (little-endian). docs/dump-format.md gives the header and the
 // fields of every record type.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -27,9 +28,9 @@ inline constexpr uint32_t kDumpVersion = 1;
 void writeDump(const std::string& directory, const std::string& name, const std::string& type,
                const void* records, uint32_t recordBytes, uint64_t count);
 
-template <class T>
+template <class T, size_t Extent>
 void writeDump(const std::string& directory, const std::string& name, const std::string& type,
-               std::span<const T> records) {
+               std::span<T, Extent> records) {
   static_assert(std::is_trivially_copyable_v<T>, "dumps hold plain records");
   writeDump(directory, name, type, records.data(), uint32_t(sizeof(T)), records.size());
 }

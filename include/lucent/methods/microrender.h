@@ -4,6 +4,7 @@
 // maps the paper to the code and lists the departures.
 #pragma once
 #include <cstdint>
+#include <string>
 
 #include "lucent/methods/microrender/hemisphere_mapping.h"
 #include "lucent/methods/points/point_hierarchy.h"
@@ -45,6 +46,9 @@ struct MicroRenderOptions {
   uint32_t k = 50;                 // Photons: photons per radiance estimate
   uint64_t seed = 0;
   bool layers = false;             // albedo, normal, depth, direct and indirect layers
+  // Where each stage's arrays are dumped for checking another backend stage by stage
+  // (docs/dump-format.md); empty: none.
+  std::string dumpDirectory;
 };
 
 // Throws std::invalid_argument for impossible options (naming the option).

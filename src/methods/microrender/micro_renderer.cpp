@@ -10,12 +10,14 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
 #include "../photonmap/eye_paths.h"
 #include "../photonmap/photon_render.h"
 #include "gathering.h"
+#include "lucent/core/dump.h"
 #include "lucent/core/parallel.h"
 #include "lucent/methods/microrender.h"
 #include "point_lighting.h"
@@ -80,7 +82,29 @@ void validateMicroRenderOptions(const MicroRenderOptions& o) {
   if (o.bounces < 0 || o.bounces > 64) fail("bounces must be in [0, 64]");
   if (o.lighting == PointLighting::Photons && o.photons < 1) fail("photons must be at least 1");
   if (o.k < 1) fail("k must be at least 1");
+  if (!o.dumpDirectory.empty() && !std::filesystem::is_directory(o.dumpDirectory))
+    fail("dump directory '" + o.dumpDirectory + "' is not an existing directory");
 }
+
+namespace {
+
+// Dumps (docs/dump-format.md): the hierarchy, the points' radiance, and the shading points with the
+// light each part of the image gives them.
+void dumpHierarchy(const std::string& dir, const PointHierarchy& h) {
+  writeDump(dir, "hierarchy.points", "PointSample", std::span(h.points));
+  writeDump(dir, "hierarchy.float_nodes", "FloatNode", std::span(h.floatNodes));
+  writeDump(dir, "hierarchy.node_areas", "float", std::span(h.nodeAreas));
+  if (h.encoding != NodeEncoding::Packed) return;
+  writeDump(dir, "hierarchy.packed_nodes", "PackedNode", std::span(h.packedNodes));
+  writeDump(dir, "hierarchy.quantization", "NodeQuantization", std::span(&h.quantization, 1));
+}
+
+void dumpPointRadiance(const std::string& dir, const NodeRadiance& radiance) {
+  writeDump(dir, "point_radiance", "Rgb", std::span(radiance.rgb));
+  if (!radiance.half.empty()) writeDump(dir, "point_radiance_half", "HalfRgb", std::span(radiance.half));
+}
+
+}  // namespace
 
 uint32_t defaultPointCount(const Scene& scene, float spacing) {
   double area = 0;
@@ -117,6 +141,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   }
   stats.addStage("hierarchy_update", update);
   stats.addCounter("points", hierarchy.leafCount);
+  if (!o.dumpDirectory.empty()) dumpHierarchy(o.dumpDirectory, hierarchy);
 
   MicroRenderSettings settings;
   settings.rayCasting = o.rayCasting;
@@ -128,6 +153,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   Stopwatch lightingClock;
   const NodeRadiance radiance = lightPoints(scene, vis, hierarchy, ctx, o, stats);
   stats.addStage("point_lighting", lightingClock.seconds());
+  if (!o.dumpDirectory.empty()) dumpPointRadiance(o.dumpDirectory, radiance);
 
   // Camera paths and direct light, at every pixel.
   Stopwatch eyeClock;
@@ -201,6 +227,12 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   stats.addStage("ray_casting", totals.rayCast * scale);
   stats.addStage("convolution", totals.convolve * scale);
   stats.addStage("upsampling", upsampleSeconds);
+
+  if (!o.dumpDirectory.empty()) {
+    writeDump(o.dumpDirectory, "shading_points", "ShadingPoint", std::span(eye.points));
+    writeDump(o.dumpDirectory, "direct", "Rgb", std::span(shading.direct));
+    writeDump(o.dumpDirectory, "indirect", "Rgb", std::span(shading.indirect));
+  }
 
   Stopwatch imageClock;
   ImageAccumulator image(scene, o.layers);

@@ -49,6 +49,7 @@ struct NodeQuantization {
   Vec3 step{1, 1, 1};
   float radiusStep = 1;
 };
+static_assert(sizeof(NodeQuantization) == 28, "NodeQuantization is a fixed-size record shared with GPU backends");
 
 // The paper's 128-bit node (3.1): position and radius in 4 x 16 bits, normal and albedo in 3 x 5 bits
 // each packed into 32 bits, cone angle in 8 bits, 24 bits (and 2 in normalAlbedo) free. Every
