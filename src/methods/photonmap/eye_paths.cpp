@@ -144,8 +144,9 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
       const int x1 = std::min(width, x0 + tile), y1 = std::min(rowEnd, y0 + tile);
       std::vector<ShadingPoint>& points = tilePoints[t];
       // The tile's camera samples in order (row, pixel, sample), their rays traced sixteen at a
-      // time as a packet (coherent rays: several times Embree's single-ray speed). The packets
-      // depend only on the fixed tiling, never on the threads.
+      // time as a packet (coherent rays: several times Embree's single-ray speed). A packet never
+      // spans two rows, so its rays depend only on the row and the fixed 16-pixel tile columns:
+      // neither the threads nor the bands of rows change them.
       CameraSample batch[kCameraPacket];
       int queued = 0;
       auto traceBatch = [&] {
@@ -188,8 +189,8 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
             cs.pixel = pixel, cs.sample = uint32_t(s);
             if (++queued == kCameraPacket) traceBatch();
           }
+          if (x + 1 == x1 && queued > 0) traceBatch();
         }
-      if (queued > 0) traceBatch();
     }
   });
   size_t total = 0;
