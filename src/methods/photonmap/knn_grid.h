@@ -103,7 +103,7 @@ struct Reach {
 
 inline float acceptanceLimit2(const KnnGridSearch& s) { return s.found < s.k ? s.maxRadius2 : s.radius2; }
 
-// Offers photons to the running estimate in the order given. sumPhotonRuns (photon_columns.cpp)
+// Offers photons to the running estimate in the order given. sumPhotonRun (photon_columns.cpp)
 // applies the same rule eight photons at a time: keep the two in step.
 template <class Visit>
 void examinePhotons(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
@@ -151,6 +151,14 @@ void examinePhotons(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
   }
 }
 
+// Maps that keep a row of cells (and any range of cell indices) as one run of their photon list:
+// the sorted and stencil grids, not the hashed grid.
+template <class Map>
+constexpr bool kReadsRuns = requires(const Map& map) {
+  map.rowPhotons(0, 0, 0, 0);
+  map.cellRangePhotons(0u, 0u);
+};
+
 // A visitor may take a run of photons whole (the radiance estimate of a Lambertian surface sums
 // them from the map's columns, eight at a time: photon_columns.h) and answer true, having updated
 // the search exactly as examinePhotons would; otherwise it sees them one by one.
@@ -177,8 +185,7 @@ void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit)
 // rejected by its own distance). The run counts as one cell visit.
 template <GridPhotonMap Map, class Visit>
 void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_t y, int32_t z, Visit& visit) {
-  constexpr bool kRuns = requires { map.rowPhotons(x0, x1, y, z); };
-  if constexpr (kRuns) {
+  if constexpr (kReadsRuns<Map>) {
     if (map.rowPhotons(x0, x1, y, z).count == 0) return;  // an empty row costs two loads, not a chord
   }
   const UniformGrid& g = map.grid;
@@ -197,7 +204,7 @@ void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_
     if (last < float(x1)) x1 = last < float(x0) ? x0 - 1 : int32_t(last);
     if (x0 > x1) return;
   }
-  if constexpr (kRuns) {
+  if constexpr (kReadsRuns<Map>) {
     const CellPhotons run = map.rowPhotons(x0, x1, y, z);
     if (run.count == 0) return;
     ++s.cellsVisited;
@@ -249,7 +256,7 @@ struct ShellExplorer {
   }
   // Rows y0..y1 of the full-width face at z.
   void rows(int32_t y0, int32_t y1, int32_t z) {
-    if constexpr (requires { map.rowPhotons(0, 0, 0, 0); }) {
+    if constexpr (kReadsRuns<Map>) {
       if (y1 - y0 < kBisectFrom) {
         for (int32_t y = y0; y <= y1; ++y) exploreRow(map, s, lo[0], hi[0], y, z, visit);
         return;
@@ -355,12 +362,6 @@ uint32_t emptyShellsFrom(const Map& map, const Reach& reach, CellCoord c, int32_
     return uint32_t(emptyUpTo - shell + 1);
   }
 }
-
-template <class Map>
-constexpr bool kReadsRuns = requires(const Map& map) {
-  map.rowPhotons(0, 0, 0, 0);
-  map.cellRangePhotons(0u, 0u);
-};
 
 // The longest run of photons read at once to settle a search that cannot reach k.
 inline constexpr uint32_t kShortSearchRun = 256;
