@@ -3,6 +3,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <memory>
+
 #include "lucent/core/parallel.h"
 #include "lucent/core/sampling.h"
 #include "lucent/scene/camera.h"
@@ -134,7 +136,7 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
 
   EyePaths out;
   out.firstPixel = uint32_t(rowBegin) * uint32_t(width);
-  out.pixels.resize(size_t(width) * size_t(rowEnd - rowBegin));
+  out.pixels.resize(size_t(width) * size_t(rowEnd - rowBegin));  // constructed by the tiles
   std::vector<std::vector<ShadingPoint>> tilePoints(tiles);
   std::vector<uint64_t> tileRays(tiles, 0), tileInvalid(tiles, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
@@ -142,7 +144,10 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
     for (int t = r.begin(); t != r.end(); ++t) {
       const int x0 = (t % tilesX) * tile, y0 = rowBegin + (t / tilesX) * tile;
       const int x1 = std::min(width, x0 + tile), y1 = std::min(rowEnd, y0 + tile);
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) ::new (&out.pixels[size_t(y - rowBegin) * width + x]) EyePixel{};
       std::vector<ShadingPoint>& points = tilePoints[t];
+      points.reserve(size_t(x1 - x0) * size_t(y1 - y0) * size_t(settings.spp));  // most samples end in one point
       // The tile's camera samples in order (row, pixel, sample), their rays traced sixteen at a
       // time as a packet (coherent rays: several times Embree's single-ray speed). A packet never
       // spans two rows, so its rays depend only on the row and the fixed 16-pixel tile columns:
@@ -193,14 +198,20 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
         }
     }
   });
-  size_t total = 0;
-  for (const auto& p : tilePoints) total += p.size();
-  out.points.reserve(total);
+  // The tiles' points joined in tile order, copied in parallel.
+  std::vector<size_t> first(tiles + 1, 0);
   for (int t = 0; t < tiles; ++t) {
-    out.points.insert(out.points.end(), tilePoints[t].begin(), tilePoints[t].end());
+    first[t + 1] = first[t] + tilePoints[t].size();
     out.rays += tileRays[t];
     out.invalid += tileInvalid[t];
   }
+  out.points.resize(first[tiles]);
+  tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
+    for (int t = r.begin(); t != r.end(); ++t) {
+      std::uninitialized_copy(tilePoints[t].begin(), tilePoints[t].end(), out.points.begin() + ptrdiff_t(first[t]));
+      std::vector<ShadingPoint>().swap(tilePoints[t]);
+    }
+  });
   return out;
 }
 

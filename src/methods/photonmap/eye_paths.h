@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lucent/core/rng.h"
+#include "lucent/core/uninitialized.h"
 #include "lucent/scene/bsdf.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
@@ -61,9 +62,10 @@ struct EyePixel {
   uint32_t validSamples = 0;  // camera samples kept (those with non-finite values are dropped)
 };
 
+// The arrays are written by the tiles in parallel (UninitializedVector).
 struct EyePaths {
-  std::vector<ShadingPoint> points;  // by tile, then pixel, then sample, then branch
-  std::vector<EyePixel> pixels;      // the band's, from pixel firstPixel on (row rowBegin)
+  UninitializedVector<ShadingPoint> points;  // by tile, then pixel, then sample, then branch
+  UninitializedVector<EyePixel> pixels;      // the band's, from pixel firstPixel on (row rowBegin)
   uint32_t firstPixel = 0;
   uint64_t rays = 0;
   uint64_t invalid = 0;  // camera paths dropped for non-finite values
