@@ -1,8 +1,10 @@
 // Path tracer throughput against a raw Embree loop over the same scene and the same kinds of rays.
 //
 // The raw loop first walks paths the way the path tracer does (camera ray, then at each hit one
-// shadow ray to a sampled light and one cosine-distributed continuation, Russian roulette by
-// albedo) and records every ray; only tracing the recorded rays is timed. The path tracer's rays
+// shadow ray to a sampled light and one cosine-distributed continuation, the path tracer's Russian
+// roulette by throughput) and records every ray; only tracing the recorded rays is timed. Its paths
+// are then as long as the path tracer's: pt_rays and raw_rays agree within a few per cent (a loop
+// with longer paths traces more of the slow, scattered rays and flatters the path tracer). The path tracer's rays
 // per second over the same scene, resolution and samples are then a fraction of that loop's: the
 // cost of shading, sampling and bookkeeping.
 //
@@ -43,7 +45,8 @@ RecordedRays recordRays(const Scene& scene, const Visibility& vis, int spp, uint
       for (int s = 0; s < spp; ++s) {
         Rng rng(seed, uint64_t(y) * w + x, s);
         Ray ray = camera.generate(x + rng.uniform(), y + rng.uniform());
-        for (int depth = 0; depth < 64; ++depth) {
+        Rgb beta(1.0f);  // the path's throughput, for the path tracer's roulette
+        for (int depth = 0; depth < 1024; ++depth) {
           out.closest.push_back(ray);
           const Hit hit = vis.intersect(ray);
           if (!hit.found()) break;
@@ -54,8 +57,16 @@ RecordedRays recordRays(const Scene& scene, const Visibility& vis, int spp, uint
           if (ls.pdf > 0 && dot(ls.wi, n) > 0) out.shadow.push_back(shadowRay(sp.position, n, ls));
           const Vec3 wi = Frame(n).toWorld(sampleCosineHemisphere(rng.uniform2()));
           ray = {offsetOrigin(sp.position, n, wi), wi};
-          const float albedo = bsdfAt(scene, sp).kd.maxComponent();
-          if (depth >= 2 && rng.uniform() >= albedo) break;
+          // The path tracer's continuation: the cosine-sampled weight is the albedo, a black
+          // throughput ends the path, and from the third bounce on it survives with probability
+          // min(1, max(beta)), scaled up by as much.
+          beta *= bsdfAt(scene, sp).kd;
+          if (beta.isBlack()) break;
+          if (depth + 1 >= PathTraceOptions{}.rouletteDepth) {
+            const float survive = std::min(1.0f, beta.maxComponent());
+            if (rng.uniform() >= survive) break;
+            beta *= 1.0f / survive;
+          }
         }
       }
   });
