@@ -70,4 +70,17 @@ class Visibility {
   std::unique_ptr<Impl> impl_;
 };
 
+// The closest hits of rays rayOf(0) .. rayOf(count - 1), 1 <= count <= N, traced as one packet. A
+// ray with a non-finite origin or direction is not traced and misses.
+template <int N, class RayOf>
+void intersectPacket(const Visibility& vis, int count, RayOf rayOf, Hit hits[]) {
+  RayPacket<N> packet;
+  packet.assign(count, rayOf);
+  for (int j = 0; j < count; ++j)
+    if (!isFinite(rayOf(j).origin) || !isFinite(rayOf(j).direction)) packet.valid[j] = 0;
+  HitPacket<N> h;
+  vis.intersect(packet, h);
+  for (int j = 0; j < count; ++j) hits[j] = packet.valid[j] ? Hit{h.t[j], h.triangle[j], h.b1[j], h.b2[j]} : Hit{};
+}
+
 }  // namespace lucent

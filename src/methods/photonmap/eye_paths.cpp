@@ -155,15 +155,11 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
       CameraSample batch[kCameraPacket];
       int queued = 0;
       auto traceBatch = [&] {
-        RayPacket<kCameraPacket> packet;
-        packet.assign(queued, [&](int j) -> const Ray& { return batch[j].ray; });
-        for (int j = 0; j < queued; ++j)
-          if (!isFinite(batch[j].ray.origin) || !isFinite(batch[j].ray.direction)) packet.valid[j] = 0;
-        HitPacket<kCameraPacket> hits;
-        vis.intersect(packet, hits);
+        Hit hits[kCameraPacket];
+        intersectPacket<kCameraPacket>(vis, queued, [&](int j) -> const Ray& { return batch[j].ray; }, hits);
         for (int j = 0; j < queued; ++j) {
           CameraSample& cs = batch[j];
-          const Hit hit{hits.t[j], hits.triangle[j], hits.b1[j], hits.b2[j]};
+          const Hit& hit = hits[j];
           EyePixel& px = out.pixels[cs.pixel - out.firstPixel];
           const size_t before = points.size();
           EyePixel first;

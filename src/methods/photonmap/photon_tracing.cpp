@@ -38,13 +38,7 @@ void closestHits(const Visibility& vis, const std::vector<PhotonPath>& paths, st
     for (size_t p = r.begin(); p != r.end(); ++p) {
       const size_t first = p * kPhotonPacket;
       const int n = int(std::min(kPhotonPacket, paths.size() - first));
-      RayPacket<kPhotonPacket> packet;
-      packet.assign(n, [&](int j) -> const Ray& { return paths[first + j].ray; });
-      for (int j = 0; j < n; ++j)
-        if (!isFinite(paths[first + j].ray.origin) || !isFinite(paths[first + j].ray.direction)) packet.valid[j] = 0;
-      HitPacket<kPhotonPacket> h;
-      vis.intersect(packet, h);
-      for (int j = 0; j < n; ++j) hits[first + j] = packet.valid[j] ? Hit{h.t[j], h.triangle[j], h.b1[j], h.b2[j]} : Hit{};
+      intersectPacket<kPhotonPacket>(vis, n, [&](int j) -> const Ray& { return paths[first + j].ray; }, &hits[first]);
     }
   });
 }
