@@ -239,14 +239,14 @@ TEST_CASE("A plane facing the gather point: covered with ray casting, with holes
         for (int g = 0; g < 16; ++g) {
           Vec2 jitter;
           const GatherPoint gp = jitteredGatherPoint({0, 0, 0}, {0, 1, 0}, rng, jitter);
-          evaluatePixels(scratch.mapping, kind, 24, jitter, kind == MappingKind::Warped ? &s.tables.lambertian : nullptr,
+          evaluatePixels(scratch.lanes[0].mapping, kind, 24, jitter, kind == MappingKind::Warped ? &s.tables.lambertian : nullptr,
                          diffuseBsdf(Rgb(1.0f)), {0, 0, 1}, s.tables);
-          renderMicroBuffer(s.micro, gp, scratch.mapping, s.ctx.settings, scratch.buffer, scratch.counters);
-          for (const uint16_t i : scratch.mapping.used) {
-            const Vec3 w = gp.frame.toWorld(scratch.mapping.direction[i]);
+          renderMicroBuffer(s.micro, gp, scratch.lanes[0].mapping, s.ctx.settings, scratch.lanes[0].buffer, scratch.counters);
+          for (const uint16_t i : scratch.lanes[0].mapping.used) {
+            const Vec3 w = gp.frame.toWorld(scratch.lanes[0].mapping.direction[i]);
             if (std::abs(w.x / w.y) > 45 || std::abs(w.z / w.y) > 45) continue;
             ++inside;
-            covered += scratch.buffer.pixels[i] != kEmptyMicroPixel;
+            covered += scratch.lanes[0].buffer.pixels[i] != kEmptyMicroPixel;
           }
         }
         coveredFraction[rayCasting] = double(covered) / inside;
@@ -276,12 +276,12 @@ TEST_CASE("A plane seen edge-on covers no direction that passes below it", "[mic
     for (int g = 0; g < 16; ++g) {
       Vec2 jitter;
       const GatherPoint gp = jitteredGatherPoint({0, 0.9f, 0}, {1, 0, 0}, rng, jitter);
-      evaluatePixels(scratch.mapping, MappingKind::Nusselt, 24, jitter, nullptr, diffuseBsdf(Rgb(1.0f)), {0, 0, 1},
+      evaluatePixels(scratch.lanes[0].mapping, MappingKind::Nusselt, 24, jitter, nullptr, diffuseBsdf(Rgb(1.0f)), {0, 0, 1},
                      s.tables);
-      renderMicroBuffer(s.micro, gp, scratch.mapping, s.ctx.settings, scratch.buffer, scratch.counters);
-      for (const uint16_t i : scratch.mapping.used) {
-        const Vec3 w = gp.frame.toWorld(scratch.mapping.direction[i]);
-        const bool covered = scratch.buffer.pixels[i] != kEmptyMicroPixel;
+      renderMicroBuffer(s.micro, gp, scratch.lanes[0].mapping, s.ctx.settings, scratch.lanes[0].buffer, scratch.counters);
+      for (const uint16_t i : scratch.lanes[0].mapping.used) {
+        const Vec3 w = gp.frame.toWorld(scratch.lanes[0].mapping.direction[i]);
+        const bool covered = scratch.lanes[0].buffer.pixels[i] != kEmptyMicroPixel;
         if (w.y < -0.01f) ++below, coveredBelow += covered;
         // Well above the horizon and inside the square (hit within 40 of the gather point).
         if (w.y > 0.1f / 40 && std::abs(w.z / w.y) < 0.1f * 400) ++above, coveredAbove += covered;
@@ -313,10 +313,10 @@ TEST_CASE("Packed and float nodes give nearly the same micro-buffers", "[microre
     Rng ra(9), rb(9);
     const Rgb la = gatherAt(packed.ctx, p.position, p.normal, p.normal, diffuseBsdf(Rgb(1.0f)), ra, packed.radiance, a);
     const Rgb lb = gatherAt(floats.ctx, p.position, p.normal, p.normal, diffuseBsdf(Rgb(1.0f)), rb, floats.radiance, b);
-    for (const uint16_t i : a.mapping.used) {
+    for (const uint16_t i : a.lanes[0].mapping.used) {
       ++pixels;
-      same += a.buffer.pixels[i] == b.buffer.pixels[i] ||
-              microPixelNode(a.buffer.pixels[i]) == microPixelNode(b.buffer.pixels[i]);
+      same += a.lanes[0].buffer.pixels[i] == b.lanes[0].buffer.pixels[i] ||
+              microPixelNode(a.lanes[0].buffer.pixels[i]) == microPixelNode(b.lanes[0].buffer.pixels[i]);
     }
     INFO("at " << p.position.x << " " << p.position.y << " " << p.position.z << ": " << la.r << " " << la.g << " "
                << la.b << " against " << lb.r << " " << lb.g << " " << lb.b);
@@ -324,6 +324,60 @@ TEST_CASE("Packed and float nodes give nearly the same micro-buffers", "[microre
   }
   INFO(same << " of " << pixels << " pixels see the same node");
   REQUIRE(same > 0.9 * pixels);
+}
+
+TEST_CASE("A packet of gather points gives every lane the buffer it gets alone", "[microrender]") {
+  // Packets walk the union of their lanes' cuts; each lane must meet exactly its own nodes in its own
+  // order, so its pixels (nearest node and depth), post-traversal list flushes and counters are
+  // those of the gather point rendered alone. Points on the Cornell box's walls and blocks, facing
+  // different ways, diffuse and glossy receivers mixed (lanes with different tables), with both
+  // mappings, both encodings, ray casting on and off, and 8 x 8 buffers over 2^9 large leaves whose
+  // short post-traversal lists fill up and are flushed mid-traversal.
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
+  const struct {
+    Vec3 position, normal;
+  } sites[] = {{{278, 0, 278}, {0, 1, 0}},    {{100, 0, 450}, {0, 1, 0}},       {{278, 300, 559.2f}, {0, 0, -1}},
+               {{1, 200, 300}, {1, 0, 0}},    {{200, 165, 170}, {0, 1, 0}},     {{555, 100, 100}, {-1, 0, 0}},
+               {{300, 548.7f, 300}, {0, -1, 0}}, {{420, 330, 380}, {0, 1, 0}}, {{278, 1, 279}, {0, 1, 0}}};
+  const SurfaceBsdf bsdfs[] = {diffuseBsdf(Rgb(0.7f)), phongBsdf(Rgb(0.2f), Rgb(0.6f), 30)};
+  for (const NodeEncoding encoding : {NodeEncoding::Float, NodeEncoding::Packed})
+    for (const MappingKind kind : {MappingKind::Nusselt, MappingKind::Warped})
+      for (const bool rayCasting : {true, false})
+        for (const int side : {8, 24}) {
+          const GatherSetup s(scene, side == 8 ? 1u << 9 : 1u << 13, encoding, kind, rayCasting, unitRadiance, side);
+          for (const size_t count : {size_t(8), size_t(5)}) {
+            GatherScratch packet, alone;
+            GatherRequest requests[kGatherPacket];
+            Rng packetRngs[kGatherPacket], aloneRngs[kGatherPacket];
+            for (size_t l = 0; l < count; ++l) {
+              const auto& site = sites[(l * 5 + count) % std::size(sites)];
+              const Vec3 wo = normalize(site.normal + Vec3{0.3f, 0.2f, -0.4f});
+              packetRngs[l] = aloneRngs[l] = Rng(31, l, count);
+              requests[l] = {site.position, site.normal, wo, &bsdfs[l % 2 == 0 ? 0 : 1], &packetRngs[l]};
+            }
+            Rgb packetResults[kGatherPacket];
+            gatherPacket(s.ctx, std::span(requests, count), s.radiance, packet, packetResults);
+            for (size_t l = 0; l < count; ++l) {
+              const GatherRequest& q = requests[l];
+              const Rgb result = gatherAt(s.ctx, q.position, q.normal, q.wo, *q.bsdf, aloneRngs[l], s.radiance, alone);
+              INFO("encoding " << int(encoding) << ", mapping " << int(kind) << ", ray casting " << rayCasting
+                               << ", side " << side << ", lane " << l << " of " << count);
+              REQUIRE(alone.lanes[0].buffer.pixels == packet.lanes[l].buffer.pixels);
+              REQUIRE(result.r == packetResults[l].r);
+              REQUIRE(result.g == packetResults[l].g);
+              REQUIRE(result.b == packetResults[l].b);
+            }
+            const MicroCounters& a = alone.counters;
+            const MicroCounters& p = packet.counters;
+            REQUIRE(a.buffers == p.buffers);
+            REQUIRE(a.nodesVisited == p.nodesVisited);
+            REQUIRE(a.nodesSplatted == p.nodesSplatted);
+            REQUIRE(a.leavesListed == p.leavesListed);
+            REQUIRE(a.listFlushes == p.listFlushes);
+            REQUIRE(a.buffersRayCast == p.buffersRayCast);
+            if (rayCasting && side == 8) REQUIRE(p.listFlushes > 0);
+          }
+        }
 }
 
 TEST_CASE("Gathering a uniform radiance field gives the receiver's directional albedo", "[microrender]") {

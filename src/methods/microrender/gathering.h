@@ -3,6 +3,7 @@
 // the hierarchy's nodes. Used for the camera's shading points and, with the radiosity lighting, for
 // the points of the hierarchy themselves.
 #pragma once
+#include <array>
 #include <span>
 #include <vector>
 
@@ -30,11 +31,18 @@ struct GatherContext {
   MicroRenderSettings settings;
 };
 
-// Per-thread scratch and the stage clocks of the paper's breakdown.
-struct GatherScratch {
+// One lane of a packet: its gather point, table, mapping and micro-buffer, reused from one packet
+// to the next.
+struct GatherLane {
+  GatherPoint point;
   HemisphereMapping mapping;
   WarpTable table;
   MicroBuffer buffer;
+};
+
+// Per-thread scratch and the stage clocks of the paper's breakdown.
+struct GatherScratch {
+  std::array<GatherLane, kGatherPacket> lanes;
   MicroCounters counters;
   double buildSeconds = 0;      // tabulating BRDF slices and their inverse CDFs
   double evaluateSeconds = 0;   // the pixels' directions, solid angles and weights
@@ -59,37 +67,61 @@ inline GatherPoint jitteredGatherPoint(Vec3 position, Vec3 normal, Rng& rng, Vec
   return g;
 }
 
-// Radiance reflected towards wo (world) by a surface point with the given BSDF, gathered from the
-// nodes' radiance.
+// A surface point to gather at: reflected radiance towards wo (world), for the given BSDF; the
+// frame's and pixels' jitter drawn from rng.
+struct GatherRequest {
+  Vec3 position, normal, wo;
+  const SurfaceBsdf* bsdf = nullptr;
+  Rng* rng = nullptr;
+};
+
+// Gathers at up to kGatherPacket points with one traversal of the hierarchy (renderMicroBuffers):
+// each result is what the point would gather alone.
+inline void gatherPacket(const GatherContext& ctx, std::span<const GatherRequest> requests,
+                         const NodeRadiance& radiance, GatherScratch& s, Rgb* results) {
+  const int side = ctx.tables->bufferSide;
+  MicroLane lanes[kGatherPacket];
+  for (size_t l = 0; l < requests.size(); ++l) {
+    const GatherRequest& q = requests[l];
+    GatherLane& lane = s.lanes[l];
+    Vec2 jitter;
+    lane.point = jitteredGatherPoint(q.position, q.normal, *q.rng, jitter);
+    const Vec3 woLocal = lane.point.frame.toLocal(q.wo);
+    const Stopwatch buildClock;
+    const WarpTable* table = nullptr;
+    if (ctx.mapping == MappingKind::Warped) {
+      if (q.bsdf->type == MaterialType::Diffuse) {
+        table = &ctx.tables->lambertian;
+      } else {
+        tabulateBrdfSlice(*q.bsdf, woLocal, *ctx.tables, lane.table);
+        table = &lane.table;
+      }
+    }
+    const double built = buildClock.seconds();
+    evaluatePixels(lane.mapping, ctx.mapping, side, jitter, table, *q.bsdf, woLocal, *ctx.tables);
+    s.buildSeconds += built;
+    s.evaluateSeconds += buildClock.seconds() - built;
+    lanes[l] = {&lane.point, &lane.mapping, &lane.buffer};
+  }
+  const Stopwatch renderClock;
+  const double rayCastBefore = s.counters.rayCastSeconds;
+  renderMicroBuffers(*ctx.hierarchy, std::span(lanes, requests.size()), ctx.settings, s.counters);
+  s.rasterizeSeconds += renderClock.seconds() - (s.counters.rayCastSeconds - rayCastBefore);
+  const Stopwatch convolveClock;
+  for (size_t l = 0; l < requests.size(); ++l) {
+    const GatherLane& lane = s.lanes[l];
+    results[l] = radiance.half.empty() ? convolveMicroBuffer(lane.buffer, lane.mapping, radiance.rgb)
+                                       : convolveMicroBuffer(lane.buffer, lane.mapping, radiance.half);
+  }
+  s.convolveSeconds += convolveClock.seconds();
+}
+
+// One point: a packet of one.
 inline Rgb gatherAt(const GatherContext& ctx, Vec3 position, Vec3 normal, Vec3 wo, const SurfaceBsdf& bsdf, Rng& rng,
                     const NodeRadiance& radiance, GatherScratch& s) {
-  Vec2 jitter;
-  const GatherPoint g = jitteredGatherPoint(position, normal, rng, jitter);
-  const Vec3 woLocal = g.frame.toLocal(wo);
-  const int side = ctx.tables->bufferSide;
-  const Stopwatch buildClock;
-  const WarpTable* table = nullptr;
-  if (ctx.mapping == MappingKind::Warped) {
-    if (bsdf.type == MaterialType::Diffuse) {
-      table = &ctx.tables->lambertian;
-    } else {
-      tabulateBrdfSlice(bsdf, woLocal, *ctx.tables, s.table);
-      table = &s.table;
-    }
-  }
-  const double built = buildClock.seconds();
-  evaluatePixels(s.mapping, ctx.mapping, side, jitter, table, bsdf, woLocal, *ctx.tables);
-  const double evaluated = buildClock.seconds();
-  const double rayCastBefore = s.counters.rayCastSeconds;
-  renderMicroBuffer(*ctx.hierarchy, g, s.mapping, ctx.settings, s.buffer, s.counters);
-  const double rendered = buildClock.seconds();
-  const Rgb result = radiance.half.empty() ? convolveMicroBuffer(s.buffer, s.mapping, radiance.rgb)
-                                           : convolveMicroBuffer(s.buffer, s.mapping, radiance.half);
-  const double done = buildClock.seconds();
-  s.buildSeconds += built;
-  s.evaluateSeconds += evaluated - built;
-  s.rasterizeSeconds += (rendered - evaluated) - (s.counters.rayCastSeconds - rayCastBefore);
-  s.convolveSeconds += done - rendered;
+  const GatherRequest request{position, normal, wo, &bsdf, &rng};
+  Rgb result;
+  gatherPacket(ctx, std::span(&request, 1), radiance, s, &result);
   return result;
 }
 

@@ -184,17 +184,29 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     });
     tbb::parallel_sort(keys.begin(), keys.end());
     for (size_t k = 0; k < keys.size(); ++k) order[k] = uint32_t(keys[k]);
+    // Packets of kGatherPacket consecutive gather points (one SIMD lane each, as the threads of a
+    // warp in the paper); a point's result does not depend on its packet.
     done = 0;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    const size_t packets = (order.size() + kGatherPacket - 1) / kGatherPacket;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, packets, 2), [&](const tbb::blocked_range<size_t>& r) {
       flushDenormals();
       GatherScratch& s = scratch.local();
-      for (size_t k = r.begin(); k != r.end(); ++k) {
-        const uint32_t i = order[k];
-        const ShadingPoint& p = eye.points[i];
-        Rng rng(gatherSeed, p.pixel, uint64_t(p.sample) << 32 | p.branch);
-        shading.indirect[i] = gatherAt(ctx, p.position, p.normal, p.wo, p.bsdf, rng, radiance, s);
+      size_t gathered = 0;
+      for (size_t packet = r.begin(); packet != r.end(); ++packet) {
+        const size_t begin = packet * kGatherPacket, end = std::min(order.size(), begin + kGatherPacket);
+        Rng rngs[kGatherPacket];
+        GatherRequest requests[kGatherPacket];
+        for (size_t k = begin; k < end; ++k) {
+          const ShadingPoint& p = eye.points[order[k]];
+          rngs[k - begin] = Rng(gatherSeed, p.pixel, uint64_t(p.sample) << 32 | p.branch);
+          requests[k - begin] = {p.position, p.normal, p.wo, &p.bsdf, &rngs[k - begin]};
+        }
+        Rgb results[kGatherPacket];
+        gatherPacket(ctx, std::span(requests, end - begin), radiance, s, results);
+        for (size_t k = begin; k < end; ++k) shading.indirect[order[k]] = results[k - begin];
+        gathered += end - begin;
       }
-      if (progress) progress(progressBase + progressShare * double(done += r.size()) / double(order.size()));
+      if (progress) progress(progressBase + progressShare * double(done += gathered) / double(order.size()));
     });
     return sortClock.seconds();
   };

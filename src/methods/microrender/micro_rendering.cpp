@@ -3,8 +3,10 @@
 // the post-traversal list, and the convolution. One template per node encoding, no virtual calls.
 #include "lucent/methods/microrender/micro_rendering.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
+#include <stdexcept>
 
 #include "lucent/core/stats.h"
 
@@ -33,13 +35,6 @@ struct PackedNodes {
   }
 };
 
-// Largest cosine between the direction w and a normal of the cone (axis, angle beta).
-inline float bestFacingCosine(const TraversalNode& node, float cosToAxis) {
-  if (cosToAxis >= node.coneCos) return 1.0f;
-  const float sinToAxis = std::sqrt(std::max(0.0f, 1.0f - cosToAxis * cosToAxis));
-  return cosToAxis * node.coneCos + sinToAxis * node.coneSin;  // cos(angle - beta)
-}
-
 // One listed disc against every pixel's ray: the innermost loop of ray casting, over structure of
 // arrays with selects, so that it vectorizes; an AVX2 clone is picked at run time where the CPU has
 // it (the same IEEE operations, so the same results: no FMA contraction, -ffp-contract=off).
@@ -67,111 +62,191 @@ __attribute__((target_clones("avx2", "default"))) void intersectDisc(
   }
 }
 
-template <class Nodes>
-class MicroRasterizer {
- public:
-  MicroRasterizer(const Nodes& nodes, const float* areas, const float* thickness, uint32_t leafCount,
-                  const GatherPoint& gather, const HemisphereMapping& mapping, const MicroRenderSettings& settings,
-                  MicroBuffer& buffer, MicroCounters& counters)
-      : nodes_(nodes), areas_(areas), thickness_(thickness), leafCount_(leafCount), g_(gather), m_(mapping),
-        s_(settings), b_(buffer), c_(counters) {}
+// The packet's gather points as SIMD lanes (structure of arrays), and what the traversal's tests
+// read of their mappings: every lane's inverse CDFs (M^-1 and C^-1 of 2.3; an identity table of one
+// cell for the Nusselt mapping, whose inverse is the identity) and every lane's pixels' solid angles
+// and spacings, in arrays of their own so that one index reaches any lane's entry.
+struct PacketLanes {
+  alignas(32) float px[kGatherPacket], py[kGatherPacket], pz[kGatherPacket];
+  alignas(32) float sx[kGatherPacket], sy[kGatherPacket], sz[kGatherPacket];
+  alignas(32) float tx[kGatherPacket], ty[kGatherPacket], tz[kGatherPacket];
+  alignas(32) float nx[kGatherPacket], ny[kGatherPacket], nz[kGatherPacket];
+  alignas(32) float selfDistance[kGatherPacket];
+  alignas(32) int32_t columnBase[kGatherPacket], rowBase[kGatherPacket], pixelBase[kGatherPacket];
+  const float* cdfs = nullptr;
+  const float* solidAngle = nullptr;
+  const float* spacing = nullptr;
+  int32_t side = 0, tableSize = 0;
+};
 
-  void run() {
-    b_.pixels.assign(size_t(m_.width) * m_.height, kEmptyMicroPixel);
-    for (size_t p = 0; p < m_.direction.size(); ++p) b_.worldDirection[p] = g_.frame.toWorld(m_.direction[p]);
-    b_.listed = 0;
-    raysReady_ = false;
-    ++c_.buffers;
-    traverse();
-    if (b_.listed > 0) castRays();
-    c_.buffersRayCast += listedAny_;
+// A node as every lane tests it.
+struct LaneNode {
+  float cx, cy, cz, radius, ax, ay, az, coneSin, coneCos, area;
+};
+
+enum LaneOutcome : int32_t { kSkipSubtree = 0, kDescend = 1, kSplat = 2, kListLeaf = 3 };
+
+// Per lane: what to do with the node, and for splats and leaves the node's pixel, the vector to its
+// centre, its direction in the lane's local frame and its distance.
+struct LaneResults {
+  alignas(32) int32_t outcome[kGatherPacket], pixel[kGatherPacket];
+  alignas(32) float vx[kGatherPacket], vy[kGatherPacket], vz[kGatherPacket];
+  alignas(32) float lx[kGatherPacket], ly[kGatherPacket], lz[kGatherPacket], d[kGatherPacket];
+};
+
+// What both kinds of node compute per lane: HemisphereMapping::pixelOf, written out over the lanes'
+// tables (the same operations, so the same pixel).
+inline int32_t lanePixel(const PacketLanes& L, const float* __restrict cdfs, int l, float lx, float ly) {
+  constexpr float kBelowOne = 0x1.fffffep-1f;
+  const int32_t n = L.tableSize;
+  const float a0 = (lx + 1.0f) * 0.5f, b0 = (ly + 1.0f) * 0.5f;  // std::clamp to [0, kBelowOne]
+  const float a = a0 < 0.0f ? 0.0f : kBelowOne < a0 ? kBelowOne : a0;
+  const float b = b0 < 0.0f ? 0.0f : kBelowOne < b0 ? kBelowOne : b0;
+  const float an = a * float(n), bn = b * float(n);
+  const int32_t j0 = int32_t(an), k0 = int32_t(bn);
+  const int32_t j = n - 1 < j0 ? n - 1 : j0, k = n - 1 < k0 ? n - 1 : k0;
+  const int32_t column = L.columnBase[l] + j, row = L.rowBase[l] + j * (n + 1) + k;
+  const float u = cdfs[column] + (an - float(j)) * (cdfs[column + 1] - cdfs[column]);
+  const float v = cdfs[row] + (bn - float(k)) * (cdfs[row + 1] - cdfs[row]);
+  const float uc = kBelowOne < u ? kBelowOne : u, vc = kBelowOne < v ? kBelowOne : v;
+  const int32_t x0 = int32_t(uc * float(L.side)), y0 = int32_t(vc * float(L.side));
+  const int32_t x = L.side - 1 < x0 ? L.side - 1 : x0, y = L.side - 1 < y0 ? L.side - 1 : y0;
+  return y * L.side + x;
+}
+
+// Largest cosine between a direction at cosToAxis from the cone's axis and a normal of the cone
+// (half-angle beta): 1 inside the cone, else cos(angle - beta).
+inline float laneBestFacing(float cosToAxis, float coneSin, float coneCos) {
+  const float sinToAxis = std::sqrt(std::max(0.0f, 1.0f - cosToAxis * cosToAxis));
+  const float facing = cosToAxis * coneCos + sinToAxis * coneSin;
+  return cosToAxis >= coneCos ? 1.0f : facing;
+}
+
+// 2.2 "Point Hierarchy Cut", one node against every lane, as loops over the lanes that GCC
+// vectorizes (selects, no branches; an AVX2 clone where the CPU has it). The tests are those of the
+// one-gather-point traversal, in the same order of precedence, with the same IEEE operations:
+//  - below the tangent plane altogether: skip;
+//  - a leaf is a disc in its triangle's plane: it faces p exactly when p lies in front of the plane
+//    (coneSin is the slack of a quantized normal, 0 for float nodes); its solid angle is the projected
+//    disc's;
+//  - an interior node: descend when p is inside its sphere; skip when back-facing by its normal cone
+//    (from points of the sphere, p is seen within alpha = asin(r / d) of the centre's direction; no
+//    normal of the cone faces it when the axis is more than 90 degrees + alpha + beta away) or when it
+//    is a flat node lying in the receiver's tangent plane (the receiver's own floor or wall, seen if at
+//    all within kHorizonSlope of the horizon: its leaves' planes are tilted from the tangent plane by at
+//    most the cone's angle plus the axis's tilt, and within the sphere rise at most r sin(tilt) above
+//    the centre's height); its solid angle is its area seen at the best cosine its cone allows, at
+//    most the sphere's cap (the cap alone, QSplat's measure, is 1.5 to 3 times that for flat nodes and
+//    made the cut's nodes a third of a pixel; the spacing bound keeps the sphere within a pixel's reach);
+//  - larger than its pixel (the paper's criterion) or wider than the pixel spacing (see
+//    HemisphereMapping::spacing): descend (a leaf: to the post-traversal list);
+//  - at most a pixel: splat, unless the centre lies in the tangent plane or below it (nodes of the
+//    receiver's own plane straddle it: no ray from the receiver meets them) or no normal of the cone
+//    faces the receiver.
+// The lanes' results go to a local LaneResults first: its stores cannot alias the gathered loads,
+// so the loops vectorize. The tests' precedence is applied last first, one comparison per select
+// (GCC vectorizes chained selects, not selects on combined conditions).
+__attribute__((target_clones("avx2", "default"))) void classifyLeaf(const PacketLanes& __restrict L,
+                                                                     const LaneNode& __restrict n, LaneResults& out) {
+  LaneResults r;
+  const float discArea = kPi * n.radius * n.radius;
+  const float* __restrict cdfs = L.cdfs;
+  const float* __restrict pixelSolidAngle = L.solidAngle;
+  const float* __restrict pixelSpacing = L.spacing;
+  for (int l = 0; l < kGatherPacket; ++l) {
+    const float vx = n.cx - L.px[l], vy = n.cy - L.py[l], vz = n.cz - L.pz[l];
+    const float height = vx * L.nx[l] + vy * L.ny[l] + vz * L.nz[l];
+    const float d2 = vx * vx + vy * vy + vz * vz;
+    const float d = std::sqrt(d2);
+    const float invD = d > 0 ? 1.0f / d : 0.0f;
+    const float facing = -(n.ax * vx + n.ay * vy + n.az * vz);
+    const float cosToAxis = facing * invD;
+    const float solidAngle = discArea * facing / (d2 * d);
+    const float wx = vx * invD, wy = vy * invD, wz = vz * invD;
+    const float lx = wx * L.sx[l] + wy * L.sy[l] + wz * L.sz[l];
+    const float ly = wx * L.tx[l] + wy * L.ty[l] + wz * L.tz[l];
+    const float lz = wx * L.nx[l] + wy * L.ny[l] + wz * L.nz[l];
+    const int32_t pixel = lanePixel(L, cdfs, l, lx, ly);
+    const int32_t at = L.pixelBase[l] + pixel;
+    int32_t outcome = lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
+    outcome = laneBestFacing(cosToAxis, n.coneSin, n.coneCos) > 0 ? outcome : kSkipSubtree;
+    outcome = solidAngle > pixelSolidAngle[at] ? kListLeaf : outcome;
+    outcome = n.radius > d * pixelSpacing[at] ? kListLeaf : outcome;
+    outcome = facing <= d * n.coneSin + L.selfDistance[l] ? kSkipSubtree : outcome;
+    r.outcome[l] = height <= -n.radius ? kSkipSubtree : outcome;
+    r.pixel[l] = pixel;
+    r.vx[l] = vx, r.vy[l] = vy, r.vz[l] = vz;
+    r.lx[l] = lx, r.ly[l] = ly, r.lz[l] = lz, r.d[l] = d;
+  }
+  out = r;
+}
+
+__attribute__((target_clones("avx2", "default"))) void classifyInterior(const PacketLanes& __restrict L,
+                                                                         const LaneNode& __restrict n,
+                                                                         LaneResults& out) {
+  LaneResults r;
+  const float twoPi = 2.0f * kPi;
+  const float* __restrict cdfs = L.cdfs;
+  const float* __restrict pixelSolidAngle = L.solidAngle;
+  const float* __restrict pixelSpacing = L.spacing;
+  for (int l = 0; l < kGatherPacket; ++l) {
+    const float vx = n.cx - L.px[l], vy = n.cy - L.py[l], vz = n.cz - L.pz[l];
+    const float height = vx * L.nx[l] + vy * L.ny[l] + vz * L.nz[l];
+    const float d2 = vx * vx + vy * vy + vz * vz;
+    const float d = std::sqrt(d2);
+    const float invD = d > 0 ? 1.0f / d : 0.0f;
+    const float cosToAxis = -(n.ax * vx + n.ay * vy + n.az * vz) * invD;
+    const float sinA = n.radius * invD, cosA = std::sqrt(std::max(0.0f, 1.0f - sinA * sinA));
+    const float horizon = L.selfDistance[l] + kHorizonSlope * (d - n.radius);
+    const float cosTilt = std::abs(n.ax * L.nx[l] + n.ay * L.ny[l] + n.az * L.nz[l]);
+    const float sinTilt = std::sqrt(std::max(0.0f, 1.0f - cosTilt * cosTilt));
+    const float cosAll = cosTilt * n.coneCos - sinTilt * n.coneSin;  // cos(tilt + beta)
+    const float sinAll = cosAll > 0 ? n.coneSin * cosTilt + n.coneCos * sinTilt : 1.0f;
+    const float bestFacing = laneBestFacing(cosToAxis, n.coneSin, n.coneCos);
+    const float solidAngle = std::min(twoPi * (1.0f - cosA), n.area * bestFacing * invD * invD);
+    const float wx = vx * invD, wy = vy * invD, wz = vz * invD;
+    const float lx = wx * L.sx[l] + wy * L.sy[l] + wz * L.sz[l];
+    const float ly = wx * L.tx[l] + wy * L.ty[l] + wz * L.tz[l];
+    const float lz = wx * L.nx[l] + wy * L.ny[l] + wz * L.nz[l];
+    const int32_t pixel = lanePixel(L, cdfs, l, lx, ly);
+    const int32_t at = L.pixelBase[l] + pixel;
+    int32_t outcome = lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
+    outcome = bestFacing > 0 ? outcome : kSkipSubtree;
+    outcome = solidAngle > pixelSolidAngle[at] ? kDescend : outcome;
+    outcome = n.radius > d * pixelSpacing[at] ? kDescend : outcome;
+    const int32_t coplanar = std::abs(height) + n.radius * sinAll <= horizon ? kSkipSubtree : outcome;
+    outcome = std::abs(height) <= horizon ? coplanar : outcome;
+    const int32_t backFacing = cosToAxis < -(sinA * n.coneCos + cosA * n.coneSin) ? kSkipSubtree : outcome;
+    outcome = cosA * n.coneCos - sinA * n.coneSin > 0 ? backFacing : outcome;
+    outcome = d <= n.radius ? kDescend : outcome;
+    r.outcome[l] = height <= -n.radius ? kSkipSubtree : outcome;
+    r.pixel[l] = pixel;
+    r.vx[l] = vx, r.vy[l] = vy, r.vz[l] = vz;
+    r.lx[l] = lx, r.ly[l] = ly, r.lz[l] = lz, r.d[l] = d;
+  }
+  out = r;
+}
+
+// One lane's micro-buffer: splats, the post-traversal list and its ray casting.
+template <class Nodes>
+class LaneRasterizer {
+ public:
+  LaneRasterizer(const Nodes& nodes, const float* thickness, uint32_t leafCount, const GatherPoint& gather,
+                 const HemisphereMapping& mapping, const MicroRenderSettings& settings, MicroBuffer& buffer,
+                 MicroCounters& counters)
+      : nodes_(nodes), thickness_(thickness), leafCount_(leafCount), g_(&gather), m_(&mapping), s_(&settings),
+        b_(&buffer), c_(&counters) {}
+
+  void start() {
+    b_->pixels.assign(size_t(m_->width) * m_->height, kEmptyMicroPixel);
+    for (size_t p = 0; p < m_->direction.size(); ++p) b_->worldDirection[p] = g_->frame.toWorld(m_->direction[p]);
+    b_->listed = 0;
+    ++c_->buffers;
   }
 
- private:
-  // 2.2 "Point Hierarchy Cut": depth first from the root; a node goes to the buffer when it subtends
-  // no more than its pixel's solid angle, otherwise its children are visited; leaves larger than a
-  // pixel go to the post-traversal list. Skip pointers are computed (node_tree.h).
-  void traverse() {
-    const Vec3 p = g_.position, normal = g_.frame.n;
-    uint32_t i = kRootNode;
-    while (i != kTraversalEnd) {
-      ++c_.nodesVisited;
-      const TraversalNode node = nodes_(i);
-      const bool leaf = isLeafNode(i, leafCount_);
-      const Vec3 v = node.center - p;
-      const float height = dot(v, normal);
-      // Below the tangent plane altogether.
-      if (height <= -node.radius) {
-        i = nextNodeSkippingSubtree(i);
-        continue;
-      }
-      const float d2 = dot(v, v);
-      const float d = std::sqrt(d2);
-      const float invD = d > 0 ? 1.0f / d : 0.0f;
-      const float cosToAxis = -dot(node.axis, v) * invD;  // axis against the direction to p
-      float solidAngle;
-      if (leaf) {
-        // A leaf is a disc in its triangle's plane: it faces p exactly when p lies in front of the
-        // plane. coneSin is the slack of a quantized normal (0 for float nodes).
-        const float facing = -dot(node.axis, v);
-        if (facing <= d * node.coneSin + g_.selfDistance) {
-          i = nextNodeSkippingSubtree(i);
-          continue;
-        }
-        solidAngle = kPi * node.radius * node.radius * facing / (d2 * d);  // projected disc
-      } else {
-        if (d <= node.radius) {
-          i = firstChild(i);
-          continue;
-        }
-        // Back-face culling with the normal cone: from points of the sphere, p is seen within
-        // alpha = asin(r / d) of the centre's direction; no normal of the cone can face it when the
-        // axis is more than 90 degrees + alpha + beta away from that direction.
-        const float sinA = node.radius * invD, cosA = std::sqrt(std::max(0.0f, 1.0f - sinA * sinA));
-        if (cosA * node.coneCos - sinA * node.coneSin > 0 && cosToAxis < -(sinA * node.coneCos + cosA * node.coneSin)) {
-          i = nextNodeSkippingSubtree(i);
-          continue;
-        }
-        // Coplanar culling: a flat node lying in the receiver's tangent plane (the receiver's own
-        // floor or wall) is seen, if at all, within kHorizonSlope of the horizon. Its leaves would be
-        // culled one by one (their planes pass through the receiver); this stops the descent early.
-        // The leaves' planes are tilted from the tangent plane by at most the cone's angle plus the
-        // axis's tilt; within the sphere they rise at most r sin(tilt) above the centre's height.
-        const float horizon = g_.selfDistance + kHorizonSlope * (d - node.radius);
-        if (std::abs(height) <= horizon) {
-          const float cosTilt = std::abs(dot(node.axis, normal));
-          const float sinTilt = std::sqrt(std::max(0.0f, 1.0f - cosTilt * cosTilt));
-          const float cosAll = cosTilt * node.coneCos - sinTilt * node.coneSin;  // cos(tilt + beta)
-          const float sinAll = cosAll > 0 ? node.coneSin * cosTilt + node.coneCos * sinTilt : 1.0f;
-          if (std::abs(height) + node.radius * sinAll <= horizon) {
-            i = nextNodeSkippingSubtree(i);
-            continue;
-          }
-        }
-        // What the node's surface subtends: its area seen at the best cosine its cone allows. The
-        // sphere's cap (QSplat's measure) is 1.5 to 3 times that for flat nodes and made the cut's
-        // nodes a third of a pixel; the spacing bound below keeps the sphere within a pixel's reach.
-        solidAngle = std::min(2.0f * kPi * (1.0f - cosA), areas_[i] * bestFacingCosine(node, cosToAxis) * invD * invD);
-      }
-      const Vec3 local = g_.frame.toLocal(v * invD);
-      const int pixel = m_.pixelOf(local);
-      // Larger than its pixel (the paper's solid-angle criterion), or wider than the pixel spacing
-      // (see HemisphereMapping::spacing): refine.
-      if (solidAngle > m_.solidAngle[size_t(pixel)] || node.radius > d * m_.spacing[size_t(pixel)]) {
-        if (!leaf) {
-          i = firstChild(i);
-        } else {
-          if (s_.rayCasting) listLeaf(i); else splat(pixel, node, v, local, d, i);
-          i = nextNodeSkippingSubtree(i);
-        }
-        continue;
-      }
-      // At most a pixel: rasterize, unless the centre lies in the tangent plane or below it (nodes of
-      // the receiver's own plane straddle it: no ray from the receiver meets them) or no normal of the
-      // cone faces the receiver.
-      if (local.z * d > g_.selfDistance && bestFacingCosine(node, cosToAxis) > 0) splat(pixel, node, v, local, d, i);
-      i = nextNodeSkippingSubtree(i);
-    }
+  void finish() {
+    if (b_->listed > 0) castRays();
+    c_->buffersRayCast += listedAny_;
   }
 
   // A node of at most a pixel's solid angle goes to the pixels of its 3 x 3 neighbourhood whose
@@ -181,28 +256,28 @@ class MicroRasterizer {
   // bounding sphere alone would widen every silhouette by up to a pixel, showing near surfaces
   // in front of far ones or of the open sky (on the Cornell box, 10% more indirect light).
   void splat(int pixel, const TraversalNode& node, Vec3 toCentre, Vec3 local, float distance, uint32_t index) {
-    ++c_.nodesSplatted;
+    ++c_->nodesSplatted;
     // First the bounding sphere's cone, in the local frame (one dot product), then the exact test.
     const float sinRadius = node.radius / distance;
     const float cosRadius = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
-    const uint32_t packed = packMicroPixel(s_.depth.code(distance), index);
+    const uint32_t packed = packMicroPixel(s_->depth.code(distance), index);
     const Vec3 pc = -toCentre;  // gather point minus node centre
     const float height = dot(pc, node.axis), r2 = node.radius * node.radius, pc2 = dot(pc, pc);
     const bool leaf = index >= leafCount_;
     const float thickness = thickness_[index];
     const bool flat = thickness < node.radius;  // else the slab cuts nothing off the sphere
-    const int w = m_.width, h = m_.height, x = pixel % w, y = pixel / w;
+    const int w = m_->width, h = m_->height, x = pixel % w, y = pixel / w;
     // The tests are multiplied through by cosine^2 (no division per pixel).
     for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy)
       for (int xx = std::max(0, x - 1); xx <= std::min(w - 1, x + 1); ++xx) {
         const int p = yy * w + xx;
-        if (dot(m_.direction[size_t(p)], local) < cosRadius) continue;  // also unused pixels: (0, 0, 0)
-        const Vec3 dir = b_.worldDirection[size_t(p)];
+        if (dot(m_->direction[size_t(p)], local) < cosRadius) continue;  // also unused pixels: (0, 0, 0)
+        const Vec3 dir = b_->worldDirection[size_t(p)];
         const float cosine = dot(dir, node.axis), b = dot(pc, dir), cos2 = cosine * cosine;
         if (leaf) {
           // The ray meets the disc's plane at t = height / -cosine, beyond the receiver's own
           // surface, within the radius: |pc cosine - dir height| <= r |cosine|.
-          if (!(cosine < 0) || !(height > -g_.selfDistance * cosine)) continue;
+          if (!(cosine < 0) || !(height > -g_->selfDistance * cosine)) continue;
           const Vec3 q = pc * cosine - dir * height;
           if (dot(q, q) > r2 * cos2) continue;
         } else {
@@ -215,49 +290,50 @@ class MicroRasterizer {
             if (cos2 * pc2 + 2 * b * cosine * e + e * e > r2 * cos2) continue;
           }
         }
-        uint32_t& px = b_.pixels[size_t(p)];
+        uint32_t& px = b_->pixels[size_t(p)];
         px = std::min(px, packed);
       }
   }
 
   void listLeaf(uint32_t node) {
-    if (b_.listed == b_.postTraversal.size()) {
-      ++c_.listFlushes;
+    if (b_->listed == b_->postTraversal.size()) {
+      ++c_->listFlushes;
       castRays();
     }
-    b_.postTraversal[b_.listed++] = node;
-    ++c_.leavesListed;
+    b_->postTraversal[b_->listed++] = node;
+    ++c_->leavesListed;
     listedAny_ = true;
   }
 
+ private:
   // The rays of the used pixels, tile by tile, and each tile's bounding cone of directions.
   void prepareRays() {
-    const int tilesX = (m_.width + kRayTile - 1) / kRayTile, tilesY = (m_.height + kRayTile - 1) / kRayTile;
+    const int tilesX = (m_->width + kRayTile - 1) / kRayTile, tilesY = (m_->height + kRayTile - 1) / kRayTile;
     uint32_t k = 0, tile = 0;
     for (int ty = 0; ty < tilesY; ++ty)
       for (int tx = 0; tx < tilesX; ++tx, ++tile) {
-        b_.tileBegin[tile] = k;
+        b_->tileBegin[tile] = k;
         Vec3 sum;
-        for (int y = ty * kRayTile; y < std::min(m_.height, (ty + 1) * kRayTile); ++y)
-          for (int x = tx * kRayTile; x < std::min(m_.width, (tx + 1) * kRayTile); ++x) {
-            const int pixel = y * m_.width + x;
-            if (m_.direction[size_t(pixel)] == Vec3{}) continue;  // unused: no direction
-            const Vec3 w = b_.worldDirection[size_t(pixel)];
-            b_.dirX[k] = w.x, b_.dirY[k] = w.y, b_.dirZ[k] = w.z;
-            b_.rayPixel[k++] = uint16_t(pixel);
+        for (int y = ty * kRayTile; y < std::min(m_->height, (ty + 1) * kRayTile); ++y)
+          for (int x = tx * kRayTile; x < std::min(m_->width, (tx + 1) * kRayTile); ++x) {
+            const int pixel = y * m_->width + x;
+            if (m_->direction[size_t(pixel)] == Vec3{}) continue;  // unused: no direction
+            const Vec3 w = b_->worldDirection[size_t(pixel)];
+            b_->dirX[k] = w.x, b_->dirY[k] = w.y, b_->dirZ[k] = w.z;
+            b_->rayPixel[k++] = uint16_t(pixel);
             sum += w;
           }
         const float len = length(sum);
         const Vec3 axis = len > 0 ? sum / len : Vec3{0, 0, 1};
         float cosCone = 1;
-        for (uint32_t r = b_.tileBegin[tile]; r < k; ++r)
-          cosCone = std::min(cosCone, axis.x * b_.dirX[r] + axis.y * b_.dirY[r] + axis.z * b_.dirZ[r]);
+        for (uint32_t r = b_->tileBegin[tile]; r < k; ++r)
+          cosCone = std::min(cosCone, axis.x * b_->dirX[r] + axis.y * b_->dirY[r] + axis.z * b_->dirZ[r]);
         cosCone = std::max(-1.0f, cosCone - 1e-5f);  // rounding margin
-        b_.tileAxisX[tile] = axis.x, b_.tileAxisY[tile] = axis.y, b_.tileAxisZ[tile] = axis.z;
-        b_.tileCos[tile] = cosCone;
-        b_.tileSin[tile] = std::sqrt(std::max(0.0f, 1.0f - cosCone * cosCone));
+        b_->tileAxisX[tile] = axis.x, b_->tileAxisY[tile] = axis.y, b_->tileAxisZ[tile] = axis.z;
+        b_->tileCos[tile] = cosCone;
+        b_->tileSin[tile] = std::sqrt(std::max(0.0f, 1.0f - cosCone * cosCone));
       }
-    b_.tileBegin[tile] = k;
+    b_->tileBegin[tile] = k;
     rayCount_ = k;
     tileCount_ = tile;
     raysReady_ = true;
@@ -270,10 +346,10 @@ class MicroRasterizer {
     // Two passes, the first without branches so that it vectorizes.
     int32_t flags[kMaxRayTiles];
     for (uint32_t tile = 0; tile < tileCount_; ++tile) {
-      const float cosB = b_.tileCos[tile], sinB = b_.tileSin[tile];
+      const float cosB = b_->tileCos[tile], sinB = b_->tileSin[tile];
       const float cosAB = cosA * cosB - sinA * sinB;
       const bool beyondPi = (sinA * cosB + cosA * sinB < 0) & (cosAB < 0);
-      const float axisDot = b_.tileAxisX[tile] * toDisc.x + b_.tileAxisY[tile] * toDisc.y + b_.tileAxisZ[tile] * toDisc.z;
+      const float axisDot = b_->tileAxisX[tile] * toDisc.x + b_->tileAxisY[tile] * toDisc.y + b_->tileAxisZ[tile] * toDisc.z;
       flags[tile] = beyondPi | (axisDot >= cosAB - 1e-5f);
     }
     uint64_t reached = 0;
@@ -290,17 +366,17 @@ class MicroRasterizer {
     const Stopwatch clock;
     if (!raysReady_) prepareRays();
     const size_t used = rayCount_;
-    float* nearestT = b_.nearestT.data();
-    uint32_t* nearestNode = b_.nearestNode.data();
-    const float* dx = b_.dirX.data();
-    const float* dy = b_.dirY.data();
-    const float* dz = b_.dirZ.data();
+    float* nearestT = b_->nearestT.data();
+    uint32_t* nearestNode = b_->nearestNode.data();
+    const float* dx = b_->dirX.data();
+    const float* dy = b_->dirY.data();
+    const float* dz = b_->dirZ.data();
     for (size_t k = 0; k < used; ++k) nearestT[k] = kInf, nearestNode[k] = 0;
-    const float tMin = g_.selfDistance;
-    for (uint32_t j = 0; j < b_.listed; ++j) {
-      const uint32_t index = b_.postTraversal[j];
+    const float tMin = g_->selfDistance;
+    for (uint32_t j = 0; j < b_->listed; ++j) {
+      const uint32_t index = b_->postTraversal[j];
       const TraversalNode disc = nodes_(index);
-      const Vec3 pc = g_.position - disc.center;
+      const Vec3 pc = g_->position - disc.center;
       const float ax = disc.axis.x, ay = disc.axis.y, az = disc.axis.z;
       const float height = dot(pc, disc.axis);  // > 0: p in front of the disc
       const float r2 = disc.radius * disc.radius;
@@ -312,7 +388,7 @@ class MicroRasterizer {
       const float sinA = disc.radius * 1.0001f / d;
       if (!(sinA < 1)) {
         intersectDisc(rays, index, dx, dy, dz, used, nearestT, nearestNode);
-        c_.rayDiscTests += used;
+        c_->rayDiscTests += used;
         continue;
       }
       // Consecutive tiles hold consecutive rays: each run of reached tiles is one call.
@@ -321,30 +397,29 @@ class MicroRasterizer {
         const uint32_t first = uint32_t(std::countr_zero(reached));
         const uint32_t end = first + uint32_t(std::countr_one(reached >> first));
         reached = end < 64 ? reached & (~uint64_t(0) << end) : 0;
-        const uint32_t begin = b_.tileBegin[first], count = b_.tileBegin[end] - begin;
+        const uint32_t begin = b_->tileBegin[first], count = b_->tileBegin[end] - begin;
         if (count == 0) continue;
         intersectDisc(rays, index, dx + begin, dy + begin, dz + begin, count, nearestT + begin, nearestNode + begin);
-        c_.rayDiscTests += count;
+        c_->rayDiscTests += count;
       }
     }
     for (size_t k = 0; k < used; ++k)
       if (nearestT[k] < kInf) {
-        uint32_t& px = b_.pixels[b_.rayPixel[k]];
-        px = std::min(px, packMicroPixel(s_.depth.code(nearestT[k]), nearestNode[k]));
+        uint32_t& px = b_->pixels[b_->rayPixel[k]];
+        px = std::min(px, packMicroPixel(s_->depth.code(nearestT[k]), nearestNode[k]));
       }
-    b_.listed = 0;
-    c_.rayCastSeconds += clock.seconds();
+    b_->listed = 0;
+    c_->rayCastSeconds += clock.seconds();
   }
 
   const Nodes& nodes_;
-  const float* areas_;      // surface area each node stands for
   const float* thickness_;  // MicroHierarchy::thickness
   uint32_t leafCount_;
-  const GatherPoint& g_;
-  const HemisphereMapping& m_;
-  const MicroRenderSettings& s_;
-  MicroBuffer& b_;
-  MicroCounters& c_;
+  const GatherPoint* g_;
+  const HemisphereMapping* m_;
+  const MicroRenderSettings* s_;
+  MicroBuffer* b_;
+  MicroCounters* c_;
   bool raysReady_ = false, listedAny_ = false;
   uint32_t rayCount_ = 0, tileCount_ = 0;
 };
@@ -427,21 +502,145 @@ MicroHierarchy prepareMicroHierarchy(const PointHierarchy& h) {
   return m;
 }
 
+namespace {
+
+// Depth first from the root with computed skip pointers (2.1, 3.1), the packet's lanes at once. A
+// lane takes part in a node when every ancestor sent it down; the lanes sent into each level are
+// kept per level (a tree's depth of masks instead of a stack): the second child of a node is
+// reached by skipping the first child's subtree, and reads the mask its parent left at its level.
+template <class Nodes>
+void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, const PacketLanes& lanes,
+                    uint32_t laneMask, std::span<LaneRasterizer<Nodes>> rasterizers, bool rayCasting,
+                    MicroCounters& counters) {
+  uint32_t lanesAtLevel[33];
+  lanesAtLevel[nodeLevel(kRootNode)] = laneMask;
+  LaneResults r;
+  uint64_t visited = 0;
+  uint32_t i = kRootNode;
+  while (i != kTraversalEnd) {
+    const uint32_t level = nodeLevel(i);
+    const uint32_t active = lanesAtLevel[level];
+    visited += uint32_t(std::popcount(active));
+    const TraversalNode node = nodes(i);
+    const LaneNode lane{node.center.x, node.center.y, node.center.z, node.radius, node.axis.x,
+                        node.axis.y,   node.axis.z,   node.coneSin,  node.coneCos, areas[i]};
+    if (isLeafNode(i, leafCount)) classifyLeaf(lanes, lane, r); else classifyInterior(lanes, lane, r);
+    uint32_t descend = 0;
+    for (uint32_t m = active; m != 0; m &= m - 1) {
+      const int l = std::countr_zero(m);
+      const int32_t outcome = r.outcome[l];
+      if (outcome == kSkipSubtree) continue;
+      if (outcome == kDescend) {
+        descend |= 1u << l;
+      } else if (outcome == kListLeaf && rayCasting) {
+        rasterizers[size_t(l)].listLeaf(i);
+      } else {  // splat, or without ray casting a leaf larger than its pixel (Fig. 11's holes)
+        rasterizers[size_t(l)].splat(r.pixel[l], node, {r.vx[l], r.vy[l], r.vz[l]}, {r.lx[l], r.ly[l], r.lz[l]},
+                                     r.d[l], i);
+      }
+    }
+    if (descend != 0) {
+      lanesAtLevel[level + 1] = descend;
+      i = firstChild(i);
+    } else {
+      i = nextNodeSkippingSubtree(i);
+    }
+  }
+  counters.nodesVisited += visited;
+}
+
+// The lanes' gather points, tables, solid angles and spacings in PacketLanes' arrays. Lanes past the
+// packet's size repeat its first lane (their results are never read).
+struct PacketArrays {
+  std::vector<float> cdfs, solidAngle, spacing;
+};
+
+void preparePacketLanes(std::span<const MicroLane> lanes, PacketLanes& L, PacketArrays& a) {
+  const HemisphereMapping& first = *lanes[0].mapping;
+  const int32_t side = first.width, pixels = side * side;
+  const WarpTable* firstTable = first.kind == MappingKind::Warped ? first.table : nullptr;
+  L.side = side;
+  L.tableSize = firstTable ? firstTable->size : 1;
+  a.solidAngle.resize(size_t(pixels) * kGatherPacket);
+  a.spacing.resize(size_t(pixels) * kGatherPacket);
+  a.cdfs.clear();
+  const WarpTable* tables[kGatherPacket] = {};
+  for (int l = 0; l < kGatherPacket; ++l) {
+    const MicroLane& lane = lanes[size_t(l) < lanes.size() ? size_t(l) : 0];
+    const HemisphereMapping& m = *lane.mapping;
+    const WarpTable* table = m.kind == MappingKind::Warped ? m.table : nullptr;
+    if (m.kind != first.kind || m.width != side || m.height != side || (table ? table->size : 1) != L.tableSize)
+      throw std::logic_error("the lanes of a micro-rendering packet need one mapping kind, side and table size");
+    const GatherPoint& g = *lane.gather;
+    L.px[l] = g.position.x, L.py[l] = g.position.y, L.pz[l] = g.position.z;
+    L.sx[l] = g.frame.s.x, L.sy[l] = g.frame.s.y, L.sz[l] = g.frame.s.z;
+    L.tx[l] = g.frame.t.x, L.ty[l] = g.frame.t.y, L.tz[l] = g.frame.t.z;
+    L.nx[l] = g.frame.n.x, L.ny[l] = g.frame.n.y, L.nz[l] = g.frame.n.z;
+    L.selfDistance[l] = g.selfDistance;
+    // Lanes with the same table (every diffuse receiver: the Lambertian one) share its copy.
+    int shared = -1;
+    for (int k = 0; k < l; ++k)
+      if (tables[k] == table) shared = k;
+    tables[l] = table;
+    if (shared >= 0) {
+      L.columnBase[l] = L.columnBase[shared], L.rowBase[l] = L.rowBase[shared];
+    } else if (table) {
+      L.columnBase[l] = int32_t(a.cdfs.size());
+      a.cdfs.insert(a.cdfs.end(), table->columnCdf.begin(), table->columnCdf.end());
+      L.rowBase[l] = int32_t(a.cdfs.size());
+      a.cdfs.insert(a.cdfs.end(), table->rowCdf.begin(), table->rowCdf.end());
+    } else {  // Nusselt: the identity, u = a (0 + a * (1 - 0) is a exactly)
+      L.columnBase[l] = int32_t(a.cdfs.size());
+      L.rowBase[l] = L.columnBase[l];
+      a.cdfs.insert(a.cdfs.end(), {0.0f, 1.0f});
+    }
+    L.pixelBase[l] = l * pixels;
+    std::copy(m.solidAngle.begin(), m.solidAngle.end(), a.solidAngle.begin() + l * pixels);
+    std::copy(m.spacing.begin(), m.spacing.end(), a.spacing.begin() + l * pixels);
+  }
+  L.cdfs = a.cdfs.data();
+  L.solidAngle = a.solidAngle.data();
+  L.spacing = a.spacing.data();
+}
+
+template <class Nodes>
+void renderPacket(const Nodes& nodes, const MicroHierarchy& mh, std::span<const MicroLane> lanes,
+                  const MicroRenderSettings& settings, MicroCounters& counters) {
+  const PointHierarchy& h = *mh.hierarchy;
+  PacketLanes packet;
+  PacketArrays arrays;
+  preparePacketLanes(lanes, packet, arrays);
+  std::vector<LaneRasterizer<Nodes>> rasterizers;
+  rasterizers.reserve(lanes.size());
+  for (const MicroLane& lane : lanes) {
+    if (lane.buffer->side != lane.mapping->width) lane.buffer->resize(lane.mapping->width);
+    rasterizers.emplace_back(nodes, mh.thickness.data(), h.leafCount, *lane.gather, *lane.mapping, settings,
+                             *lane.buffer, counters);
+    rasterizers.back().start();
+  }
+  traversePacket(nodes, h.nodeAreas.data(), h.leafCount, packet, (1u << lanes.size()) - 1, std::span(rasterizers),
+                 settings.rayCasting, counters);
+  for (LaneRasterizer<Nodes>& r : rasterizers) r.finish();
+}
+
+}  // namespace
+
+void renderMicroBuffers(const MicroHierarchy& mh, std::span<const MicroLane> lanes, const MicroRenderSettings& settings,
+                        MicroCounters& counters) {
+  if (lanes.empty()) return;
+  if (lanes.size() > size_t(kGatherPacket)) throw std::logic_error("a micro-rendering packet has at most 8 lanes");
+  const PointHierarchy& h = *mh.hierarchy;
+  if (h.encoding == NodeEncoding::Packed)
+    renderPacket(PackedNodes{h.packedNodes.data(), h.quantization, mh.coneSin, mh.coneCos}, mh, lanes, settings,
+                 counters);
+  else
+    renderPacket(FloatNodes{mh.floatNodes.data()}, mh, lanes, settings, counters);
+}
+
 void renderMicroBuffer(const MicroHierarchy& mh, const GatherPoint& gather, const HemisphereMapping& mapping,
                        const MicroRenderSettings& settings, MicroBuffer& buffer, MicroCounters& counters) {
-  const PointHierarchy& h = *mh.hierarchy;
-  if (buffer.side != mapping.width) buffer.resize(mapping.width);
-  if (h.encoding == NodeEncoding::Packed) {
-    const PackedNodes nodes{h.packedNodes.data(), h.quantization, mh.coneSin, mh.coneCos};
-    MicroRasterizer(nodes, h.nodeAreas.data(), mh.thickness.data(), h.leafCount, gather, mapping, settings, buffer,
-                    counters)
-        .run();
-  } else {
-    const FloatNodes nodes{mh.floatNodes.data()};
-    MicroRasterizer(nodes, h.nodeAreas.data(), mh.thickness.data(), h.leafCount, gather, mapping, settings, buffer,
-                    counters)
-        .run();
-  }
+  const MicroLane lane{&gather, &mapping, &buffer};
+  renderMicroBuffers(mh, std::span(&lane, 1), settings, counters);
 }
 
 Rgb convolveMicroBuffer(const MicroBuffer& b, const HemisphereMapping& m, std::span<const Rgb> radiance) {

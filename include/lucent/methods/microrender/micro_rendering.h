@@ -81,8 +81,24 @@ struct MicroHierarchy {
 };
 MicroHierarchy prepareMicroHierarchy(const PointHierarchy& hierarchy);
 
-// Traversal, rasterization and ray casting into `buffer` for one gather point, reading the
-// hierarchy's selected encoding. The buffer holds the nearest node per pixel afterwards.
+// Gather points micro-rendered together, one SIMD lane each: the CPU's counterpart of the CUDA
+// threads of a warp, which the paper (3.2) keeps coherent by handing neighbouring gather points (3-D
+// Morton order) to neighbouring threads. The packet walks the union of its lanes' cuts once; each lane
+// meets exactly the nodes of its own cut, in the same order, so its buffer is the one it would get
+// alone.
+inline constexpr int kGatherPacket = 8;
+
+struct MicroLane {
+  const GatherPoint* gather = nullptr;
+  const HemisphereMapping* mapping = nullptr;  // all lanes of a packet: the same kind, side and table size
+  MicroBuffer* buffer = nullptr;
+};
+
+// Traversal, rasterization and ray casting into each lane's buffer (at most kGatherPacket lanes),
+// reading the hierarchy's selected encoding. The buffers hold the nearest node per pixel afterwards.
+void renderMicroBuffers(const MicroHierarchy& hierarchy, std::span<const MicroLane> lanes,
+                        const MicroRenderSettings& settings, MicroCounters& counters);
+// One gather point: a packet of one lane.
 void renderMicroBuffer(const MicroHierarchy& hierarchy, const GatherPoint& gather, const HemisphereMapping& mapping,
                        const MicroRenderSettings& settings, MicroBuffer& buffer, MicroCounters& counters);
 
