@@ -143,11 +143,11 @@ inline float laneBestFacing(float cosToAxis, float coneSin, float coneCos) {
 //  - at most a pixel: splat, unless the centre lies in the tangent plane or below it (nodes of the
 //    receiver's own plane straddle it: no ray from the receiver meets them) or no normal of the cone
 //    faces the receiver.
-// The lanes' results go to a local LaneResults first: its stores cannot alias the gathered loads,
-// so the loops vectorize. The tests' precedence is applied last first, one comparison per select
+// The lanes' results are returned by value: stores to the return slot cannot alias the gathered
+// loads, so the loops vectorize. The tests' precedence is applied last first, one comparison per select
 // (GCC vectorizes chained selects, not selects on combined conditions).
-__attribute__((target_clones("avx2", "default"))) void classifyLeaf(const PacketLanes& __restrict L,
-                                                                     const LaneNode& __restrict n, LaneResults& out) {
+__attribute__((target_clones("avx2", "default"))) LaneResults classifyLeaf(const PacketLanes& __restrict L,
+                                                                     const LaneNode& __restrict n) {
   LaneResults r;
   const float discArea = kPi * n.radius * n.radius;
   const float* __restrict cdfs = L.cdfs;
@@ -178,12 +178,11 @@ __attribute__((target_clones("avx2", "default"))) void classifyLeaf(const Packet
     r.vx[l] = vx, r.vy[l] = vy, r.vz[l] = vz;
     r.lx[l] = lx, r.ly[l] = ly, r.lz[l] = lz, r.d[l] = d;
   }
-  out = r;
+  return r;
 }
 
-__attribute__((target_clones("avx2", "default"))) void classifyInterior(const PacketLanes& __restrict L,
-                                                                         const LaneNode& __restrict n,
-                                                                         LaneResults& out) {
+__attribute__((target_clones("avx2", "default"))) LaneResults classifyInterior(const PacketLanes& __restrict L,
+                                                                         const LaneNode& __restrict n) {
   LaneResults r;
   const float twoPi = 2.0f * kPi;
   const float* __restrict cdfs = L.cdfs;
@@ -224,7 +223,7 @@ __attribute__((target_clones("avx2", "default"))) void classifyInterior(const Pa
     r.vx[l] = vx, r.vy[l] = vy, r.vz[l] = vz;
     r.lx[l] = lx, r.ly[l] = ly, r.lz[l] = lz, r.d[l] = d;
   }
-  out = r;
+  return r;
 }
 
 // One lane's micro-buffer: splats, the post-traversal list and its ray casting.
@@ -514,20 +513,19 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
                     MicroCounters& counters) {
   uint32_t lanesAtLevel[33];
   lanesAtLevel[nodeLevel(kRootNode)] = laneMask;
-  LaneResults r;
   uint64_t visited = 0;
   uint32_t i = kRootNode;
   while (i != kTraversalEnd) {
     const uint32_t level = nodeLevel(i);
     const uint32_t active = lanesAtLevel[level];
-    visited += uint32_t(std::popcount(active));
     const TraversalNode node = nodes(i);
     const LaneNode lane{node.center.x, node.center.y, node.center.z, node.radius, node.axis.x,
                         node.axis.y,   node.axis.z,   node.coneSin,  node.coneCos, areas[i]};
-    if (isLeafNode(i, leafCount)) classifyLeaf(lanes, lane, r); else classifyInterior(lanes, lane, r);
+    const LaneResults r = isLeafNode(i, leafCount) ? classifyLeaf(lanes, lane) : classifyInterior(lanes, lane);
     uint32_t descend = 0;
     for (uint32_t m = active; m != 0; m &= m - 1) {
       const int l = std::countr_zero(m);
+      ++visited;
       const int32_t outcome = r.outcome[l];
       if (outcome == kSkipSubtree) continue;
       if (outcome == kDescend) {
