@@ -86,17 +86,21 @@ struct LaneNode {
 
 enum LaneOutcome : int32_t { kSkipSubtree = 0, kDescend = 1, kSplat = 2, kListLeaf = 3 };
 
-// Per lane: what to do with the node, and for splats and leaves the node's pixel, the vector to its
-// centre, its direction in the lane's local frame and its distance.
+// Per lane: what to do with the node, and for splats the node's pixel, the vector to its centre, its
+// direction in the lane's local frame, its distance and its sphere's cone.
 struct LaneResults {
-  alignas(32) int32_t outcome[kGatherPacket], pixel[kGatherPacket];
+  alignas(32) int32_t outcome[kGatherPacket], column[kGatherPacket], row[kGatherPacket];
   alignas(32) float vx[kGatherPacket], vy[kGatherPacket], vz[kGatherPacket];
   alignas(32) float lx[kGatherPacket], ly[kGatherPacket], lz[kGatherPacket], d[kGatherPacket];
+  alignas(32) float cosRadius[kGatherPacket];  // of the cone the node's sphere subtends
 };
 
 // What both kinds of node compute per lane: HemisphereMapping::pixelOf, written out over the lanes'
 // tables (the same operations, so the same pixel).
-inline int32_t lanePixel(const PacketLanes& L, const float* __restrict cdfs, int l, float lx, float ly) {
+struct LanePixel {
+  int32_t column, row;
+};
+inline LanePixel lanePixel(const PacketLanes& L, const float* __restrict cdfs, int l, float lx, float ly) {
   constexpr float kBelowOne = 0x1.fffffep-1f;
   const int32_t n = L.tableSize;
   const float a0 = (lx + 1.0f) * 0.5f, b0 = (ly + 1.0f) * 0.5f;  // std::clamp to [0, kBelowOne]
@@ -111,7 +115,7 @@ inline int32_t lanePixel(const PacketLanes& L, const float* __restrict cdfs, int
   const float uc = kBelowOne < u ? kBelowOne : u, vc = kBelowOne < v ? kBelowOne : v;
   const int32_t x0 = int32_t(uc * float(L.side)), y0 = int32_t(vc * float(L.side));
   const int32_t x = L.side - 1 < x0 ? L.side - 1 : x0, y = L.side - 1 < y0 ? L.side - 1 : y0;
-  return y * L.side + x;
+  return {x, y};
 }
 
 // Largest cosine between a direction at cosToAxis from the cone's axis and a normal of the cone
@@ -166,15 +170,17 @@ __attribute__((target_clones("avx2", "default"))) LaneResults classifyLeaf(const
     const float lx = wx * L.sx[l] + wy * L.sy[l] + wz * L.sz[l];
     const float ly = wx * L.tx[l] + wy * L.ty[l] + wz * L.tz[l];
     const float lz = wx * L.nx[l] + wy * L.ny[l] + wz * L.nz[l];
-    const int32_t pixel = lanePixel(L, cdfs, l, lx, ly);
-    const int32_t at = L.pixelBase[l] + pixel;
+    const LanePixel pixel = lanePixel(L, cdfs, l, lx, ly);
+    const int32_t at = L.pixelBase[l] + pixel.row * L.side + pixel.column;
+    const float sinRadius = n.radius / d;
     int32_t outcome = lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
     outcome = laneBestFacing(cosToAxis, n.coneSin, n.coneCos) > 0 ? outcome : kSkipSubtree;
     outcome = solidAngle > pixelSolidAngle[at] ? kListLeaf : outcome;
     outcome = n.radius > d * pixelSpacing[at] ? kListLeaf : outcome;
     outcome = facing <= d * n.coneSin + L.selfDistance[l] ? kSkipSubtree : outcome;
     r.outcome[l] = height <= -n.radius ? kSkipSubtree : outcome;
-    r.pixel[l] = pixel;
+    r.column[l] = pixel.column, r.row[l] = pixel.row;
+    r.cosRadius[l] = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
     r.vx[l] = vx, r.vy[l] = vy, r.vz[l] = vz;
     r.lx[l] = lx, r.ly[l] = ly, r.lz[l] = lz, r.d[l] = d;
   }
@@ -207,8 +213,9 @@ __attribute__((target_clones("avx2", "default"))) LaneResults classifyInterior(c
     const float lx = wx * L.sx[l] + wy * L.sy[l] + wz * L.sz[l];
     const float ly = wx * L.tx[l] + wy * L.ty[l] + wz * L.tz[l];
     const float lz = wx * L.nx[l] + wy * L.ny[l] + wz * L.nz[l];
-    const int32_t pixel = lanePixel(L, cdfs, l, lx, ly);
-    const int32_t at = L.pixelBase[l] + pixel;
+    const LanePixel pixel = lanePixel(L, cdfs, l, lx, ly);
+    const int32_t at = L.pixelBase[l] + pixel.row * L.side + pixel.column;
+    const float sinRadius = n.radius / d;
     int32_t outcome = lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
     outcome = bestFacing > 0 ? outcome : kSkipSubtree;
     outcome = solidAngle > pixelSolidAngle[at] ? kDescend : outcome;
@@ -219,7 +226,8 @@ __attribute__((target_clones("avx2", "default"))) LaneResults classifyInterior(c
     outcome = cosA * n.coneCos - sinA * n.coneSin > 0 ? backFacing : outcome;
     outcome = d <= n.radius ? kDescend : outcome;
     r.outcome[l] = height <= -n.radius ? kSkipSubtree : outcome;
-    r.pixel[l] = pixel;
+    r.column[l] = pixel.column, r.row[l] = pixel.row;
+    r.cosRadius[l] = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
     r.vx[l] = vx, r.vy[l] = vy, r.vz[l] = vz;
     r.lx[l] = lx, r.ly[l] = ly, r.lz[l] = lz, r.d[l] = d;
   }
@@ -254,18 +262,18 @@ class LaneRasterizer {
   // pixel alone would leave holes that let the background through (about 2% of the pixels); the
   // bounding sphere alone would widen every silhouette by up to a pixel, showing near surfaces
   // in front of far ones or of the open sky (on the Cornell box, 10% more indirect light).
-  void splat(int pixel, const TraversalNode& node, Vec3 toCentre, Vec3 local, float distance, uint32_t index) {
+  // (x, y) is the node's pixel, cosRadius the cosine of the half-angle its sphere subtends.
+  void splat(int x, int y, float cosRadius, const TraversalNode& node, Vec3 toCentre, Vec3 local, float distance,
+             uint32_t index) {
     ++c_->nodesSplatted;
     // First the bounding sphere's cone, in the local frame (one dot product), then the exact test.
-    const float sinRadius = node.radius / distance;
-    const float cosRadius = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
     const uint32_t packed = packMicroPixel(s_->depth.code(distance), index);
     const Vec3 pc = -toCentre;  // gather point minus node centre
     const float height = dot(pc, node.axis), r2 = node.radius * node.radius, pc2 = dot(pc, pc);
     const bool leaf = index >= leafCount_;
     const float thickness = thickness_[index];
     const bool flat = thickness < node.radius;  // else the slab cuts nothing off the sphere
-    const int w = m_->width, h = m_->height, x = pixel % w, y = pixel / w;
+    const int w = m_->width, h = m_->height;
     // The tests are multiplied through by cosine^2 (no division per pixel).
     for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy)
       for (int xx = std::max(0, x - 1); xx <= std::min(w - 1, x + 1); ++xx) {
@@ -533,7 +541,7 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
       } else if (outcome == kListLeaf && rayCasting) {
         rasterizers[size_t(l)].listLeaf(i);
       } else {  // splat, or without ray casting a leaf larger than its pixel (Fig. 11's holes)
-        rasterizers[size_t(l)].splat(r.pixel[l], node, {r.vx[l], r.vy[l], r.vz[l]}, {r.lx[l], r.ly[l], r.lz[l]},
+        rasterizers[size_t(l)].splat(r.column[l], r.row[l], r.cosRadius[l], node, {r.vx[l], r.vy[l], r.vz[l]}, {r.lx[l], r.ly[l], r.lz[l]},
                                      r.d[l], i);
       }
     }
