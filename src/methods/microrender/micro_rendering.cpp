@@ -126,6 +126,33 @@ inline float laneBestFacing(float cosToAxis, float coneSin, float coneCos) {
   return cosToAxis >= coneCos ? 1.0f : facing;
 }
 
+// What both node tests compute per lane: the vector to the node's centre, its height above the
+// tangent plane, its distance, its direction in the lane's local frame and the pixel there (stored in
+// r with the sphere's cone), and where that pixel's solid angle and spacing are.
+struct LaneGeometry {
+  float vx, vy, vz, height, d2, d, invD, lz;
+  int32_t at;
+};
+inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict cdfs, const LaneNode& n, int l,
+                                 LaneResults& r) {
+  const float vx = n.cx - L.px[l], vy = n.cy - L.py[l], vz = n.cz - L.pz[l];
+  const float height = vx * L.nx[l] + vy * L.ny[l] + vz * L.nz[l];
+  const float d2 = vx * vx + vy * vy + vz * vz;
+  const float d = std::sqrt(d2);
+  const float invD = d > 0 ? 1.0f / d : 0.0f;
+  const float wx = vx * invD, wy = vy * invD, wz = vz * invD;
+  const float lx = wx * L.sx[l] + wy * L.sy[l] + wz * L.sz[l];
+  const float ly = wx * L.tx[l] + wy * L.ty[l] + wz * L.tz[l];
+  const float lz = wx * L.nx[l] + wy * L.ny[l] + wz * L.nz[l];
+  const LanePixel pixel = lanePixel(L, cdfs, l, lx, ly);
+  const float sinRadius = n.radius / d;
+  r.column[l] = pixel.column, r.row[l] = pixel.row;
+  r.cosRadius[l] = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
+  r.vx[l] = vx, r.vy[l] = vy, r.vz[l] = vz;
+  r.lx[l] = lx, r.ly[l] = ly, r.lz[l] = lz, r.d[l] = d;
+  return {vx, vy, vz, height, d2, d, invD, lz, L.pixelBase[l] + pixel.row * L.side + pixel.column};
+}
+
 // 2.2 "Point Hierarchy Cut", one node against every lane, as loops over the lanes that GCC
 // vectorizes (selects, no branches; an AVX2 clone where the CPU has it). The tests are those of the
 // one-gather-point traversal, in the same order of precedence, with the same IEEE operations:
@@ -158,31 +185,18 @@ __attribute__((target_clones("avx2", "default"))) LaneResults classifyLeaf(const
   const float* __restrict pixelSolidAngle = L.solidAngle;
   const float* __restrict pixelSpacing = L.spacing;
   for (int l = 0; l < kGatherPacket; ++l) {
-    const float vx = n.cx - L.px[l], vy = n.cy - L.py[l], vz = n.cz - L.pz[l];
-    const float height = vx * L.nx[l] + vy * L.ny[l] + vz * L.nz[l];
-    const float d2 = vx * vx + vy * vy + vz * vz;
-    const float d = std::sqrt(d2);
-    const float invD = d > 0 ? 1.0f / d : 0.0f;
-    const float facing = -(n.ax * vx + n.ay * vy + n.az * vz);
-    const float cosToAxis = facing * invD;
-    const float solidAngle = discArea * facing / (d2 * d);
-    const float wx = vx * invD, wy = vy * invD, wz = vz * invD;
-    const float lx = wx * L.sx[l] + wy * L.sy[l] + wz * L.sz[l];
-    const float ly = wx * L.tx[l] + wy * L.ty[l] + wz * L.tz[l];
-    const float lz = wx * L.nx[l] + wy * L.ny[l] + wz * L.nz[l];
-    const LanePixel pixel = lanePixel(L, cdfs, l, lx, ly);
-    const int32_t at = L.pixelBase[l] + pixel.row * L.side + pixel.column;
-    const float sinRadius = n.radius / d;
-    int32_t outcome = lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
+    const LaneGeometry g = laneGeometry(L, cdfs, n, l, r);
+    const float d = g.d;
+    const int32_t at = g.at;
+    const float facing = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz);
+    const float cosToAxis = facing * g.invD;
+    const float solidAngle = discArea * facing / (g.d2 * d);
+    int32_t outcome = g.lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
     outcome = laneBestFacing(cosToAxis, n.coneSin, n.coneCos) > 0 ? outcome : kSkipSubtree;
     outcome = solidAngle > pixelSolidAngle[at] ? kListLeaf : outcome;
     outcome = n.radius > d * pixelSpacing[at] ? kListLeaf : outcome;
     outcome = facing <= d * n.coneSin + L.selfDistance[l] ? kSkipSubtree : outcome;
-    r.outcome[l] = height <= -n.radius ? kSkipSubtree : outcome;
-    r.column[l] = pixel.column, r.row[l] = pixel.row;
-    r.cosRadius[l] = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
-    r.vx[l] = vx, r.vy[l] = vy, r.vz[l] = vz;
-    r.lx[l] = lx, r.ly[l] = ly, r.lz[l] = lz, r.d[l] = d;
+    r.outcome[l] = g.height <= -n.radius ? kSkipSubtree : outcome;
   }
   return r;
 }
@@ -195,12 +209,10 @@ __attribute__((target_clones("avx2", "default"))) LaneResults classifyInterior(c
   const float* __restrict pixelSolidAngle = L.solidAngle;
   const float* __restrict pixelSpacing = L.spacing;
   for (int l = 0; l < kGatherPacket; ++l) {
-    const float vx = n.cx - L.px[l], vy = n.cy - L.py[l], vz = n.cz - L.pz[l];
-    const float height = vx * L.nx[l] + vy * L.ny[l] + vz * L.nz[l];
-    const float d2 = vx * vx + vy * vy + vz * vz;
-    const float d = std::sqrt(d2);
-    const float invD = d > 0 ? 1.0f / d : 0.0f;
-    const float cosToAxis = -(n.ax * vx + n.ay * vy + n.az * vz) * invD;
+    const LaneGeometry g = laneGeometry(L, cdfs, n, l, r);
+    const float d = g.d, invD = g.invD, height = g.height;
+    const int32_t at = g.at;
+    const float cosToAxis = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz) * invD;
     const float sinA = n.radius * invD, cosA = std::sqrt(std::max(0.0f, 1.0f - sinA * sinA));
     const float horizon = L.selfDistance[l] + kHorizonSlope * (d - n.radius);
     const float cosTilt = std::abs(n.ax * L.nx[l] + n.ay * L.ny[l] + n.az * L.nz[l]);
@@ -209,14 +221,7 @@ __attribute__((target_clones("avx2", "default"))) LaneResults classifyInterior(c
     const float sinAll = cosAll > 0 ? n.coneSin * cosTilt + n.coneCos * sinTilt : 1.0f;
     const float bestFacing = laneBestFacing(cosToAxis, n.coneSin, n.coneCos);
     const float solidAngle = std::min(twoPi * (1.0f - cosA), n.area * bestFacing * invD * invD);
-    const float wx = vx * invD, wy = vy * invD, wz = vz * invD;
-    const float lx = wx * L.sx[l] + wy * L.sy[l] + wz * L.sz[l];
-    const float ly = wx * L.tx[l] + wy * L.ty[l] + wz * L.tz[l];
-    const float lz = wx * L.nx[l] + wy * L.ny[l] + wz * L.nz[l];
-    const LanePixel pixel = lanePixel(L, cdfs, l, lx, ly);
-    const int32_t at = L.pixelBase[l] + pixel.row * L.side + pixel.column;
-    const float sinRadius = n.radius / d;
-    int32_t outcome = lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
+    int32_t outcome = g.lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
     outcome = bestFacing > 0 ? outcome : kSkipSubtree;
     outcome = solidAngle > pixelSolidAngle[at] ? kDescend : outcome;
     outcome = n.radius > d * pixelSpacing[at] ? kDescend : outcome;
@@ -226,10 +231,6 @@ __attribute__((target_clones("avx2", "default"))) LaneResults classifyInterior(c
     outcome = cosA * n.coneCos - sinA * n.coneSin > 0 ? backFacing : outcome;
     outcome = d <= n.radius ? kDescend : outcome;
     r.outcome[l] = height <= -n.radius ? kSkipSubtree : outcome;
-    r.column[l] = pixel.column, r.row[l] = pixel.row;
-    r.cosRadius[l] = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
-    r.vx[l] = vx, r.vy[l] = vy, r.vz[l] = vz;
-    r.lx[l] = lx, r.ly[l] = ly, r.lz[l] = lz, r.d[l] = d;
   }
   return r;
 }
