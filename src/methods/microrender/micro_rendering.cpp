@@ -95,8 +95,8 @@ struct LaneResults {
   alignas(32) float cosRadius[kGatherPacket];  // of the cone the node's sphere subtends
 };
 
-// What both kinds of node compute per lane: HemisphereMapping::pixelOf, written out over the lanes'
-// tables (the same operations, so the same pixel).
+// A direction's pixel in lane l's mapping: HemisphereMapping::pixelOf written out over the lanes'
+// tables, with selects instead of std::clamp and std::min (the same operations, so the same pixel).
 struct LanePixel {
   int32_t column, row;
 };
