@@ -146,20 +146,26 @@ void tabulateBrdfSlice(const SurfaceBsdf& bsdf, Vec3 woLocal, const MappingTable
   buildCdfs(table);
 }
 
-Vec2 HemisphereMapping::forwardDisc(Vec2 uv) const {
-  float a = uv.x, b = uv.y;
+HemisphereMapping::Column HemisphereMapping::column(float u) const {
+  if (kind != MappingKind::Warped) return {0, u};
+  const WarpTable& t = *table;
+  const int n = t.size;
+  const int j = findInterval(t.columnCdf.data(), n, u);
+  const float du = t.columnCdf[j + 1] - t.columnCdf[j];
+  return {j, (float(j) + std::clamp(du > 0 ? (u - t.columnCdf[j]) / du : 0.5f, 0.0f, 1.0f)) / float(n)};
+}
+
+Vec2 HemisphereMapping::forwardDisc(Column c, float v) const {
+  float b = v;
   if (kind == MappingKind::Warped) {
     const WarpTable& t = *table;
     const int n = t.size;
-    const int j = findInterval(t.columnCdf.data(), n, uv.x);
-    const float du = t.columnCdf[j + 1] - t.columnCdf[j];
-    a = (float(j) + std::clamp(du > 0 ? (uv.x - t.columnCdf[j]) / du : 0.5f, 0.0f, 1.0f)) / float(n);
-    const float* rows = &t.rowCdf[size_t(j) * (n + 1)];
-    const int k = findInterval(rows, n, uv.y);
+    const float* rows = &t.rowCdf[size_t(c.index) * (n + 1)];
+    const int k = findInterval(rows, n, v);
     const float dv = rows[k + 1] - rows[k];
-    b = (float(k) + std::clamp(dv > 0 ? (uv.y - rows[k]) / dv : 0.5f, 0.0f, 1.0f)) / float(n);
+    b = (float(k) + std::clamp(dv > 0 ? (v - rows[k]) / dv : 0.5f, 0.0f, 1.0f)) / float(n);
   }
-  return {2.0f * a - 1.0f, 2.0f * b - 1.0f};
+  return {2.0f * c.a - 1.0f, 2.0f * b - 1.0f};
 }
 
 Vec3 HemisphereMapping::forward(Vec2 uv, bool& inside) const {
@@ -195,10 +201,13 @@ void evaluatePixels(HemisphereMapping& m, MappingKind kind, int side, Vec2 jitte
   m.probe.resize(n);
   m.used.clear();
   const float invN = 1.0f / float(n);
+  // M^-1 once per column of pixels, C^-1 per pixel.
+  HemisphereMapping::Column columns[kMaxMicroBufferSide];
+  for (int x = 0; x < side; ++x) columns[x] = m.column((float(x) + jitter.x) / float(side));
   for (int y = 0; y < side; ++y)
     for (int x = 0; x < side; ++x) {
       const size_t i = size_t(y) * side + x;
-      const Vec2 q = m.forwardDisc({(float(x) + jitter.x) / float(side), (float(y) + jitter.y) / float(side)});
+      const Vec2 q = m.forwardDisc(columns[x], (float(y) + jitter.y) / float(side));
       const float r2 = q.x * q.x + q.y * q.y;
       const bool inside = r2 < 1.0f;
       // Pixels whose sample falls outside the disc gather nothing, but nodes can still map to them

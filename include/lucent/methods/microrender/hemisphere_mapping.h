@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "lucent/core/math.h"
+#include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/scene/bsdf.h"
 
 namespace lucent {
@@ -89,7 +90,15 @@ struct HemisphereMapping {
     return {std::min(u, 0x1.fffffep-1f), std::min(v, 0x1.fffffep-1f)};
   }
   Vec3 forward(Vec2 uv, bool& inside) const;
-  Vec2 forwardDisc(Vec2 uv) const;  // (omega_x, omega_y) of (u, v), possibly outside the disc
+  // (omega_x, omega_y) of (u, v), possibly outside the disc: M^-1(u) (`column`: the table column and
+  // a = (omega_x + 1) / 2), then C^-1(v | column).
+  struct Column {
+    int index;
+    float a;
+  };
+  Column column(float u) const;
+  Vec2 forwardDisc(Column c, float v) const;
+  Vec2 forwardDisc(Vec2 uv) const { return forwardDisc(column(uv.x), uv.y); }
   int pixelOf(Vec3 local) const {
     const Vec2 uv = inverse(local);
     const int x = std::min(int(uv.x * float(width)), width - 1), y = std::min(int(uv.y * float(height)), height - 1);
