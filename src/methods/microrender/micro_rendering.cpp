@@ -568,12 +568,13 @@ void preparePacketLanes(std::span<const MicroLane> lanes, PacketLanes& L, Packet
   const WarpTable* firstTable = first.kind == MappingKind::Warped ? first.table : nullptr;
   L.side = side;
   L.tableSize = firstTable ? firstTable->size : 1;
-  a.solidAngle.resize(size_t(pixels) * kGatherPacket);
-  a.spacing.resize(size_t(pixels) * kGatherPacket);
+  a.solidAngle.resize(size_t(pixels) * lanes.size());
+  a.spacing.resize(size_t(pixels) * lanes.size());
   a.cdfs.clear();
   const WarpTable* tables[kGatherPacket] = {};
   for (int l = 0; l < kGatherPacket; ++l) {
-    const MicroLane& lane = lanes[size_t(l) < lanes.size() ? size_t(l) : 0];
+    const bool inPacket = size_t(l) < lanes.size();
+    const MicroLane& lane = lanes[inPacket ? size_t(l) : 0];
     const HemisphereMapping& m = *lane.mapping;
     const WarpTable* table = m.kind == MappingKind::Warped ? m.table : nullptr;
     if (m.kind != first.kind || m.width != side || m.height != side || (table ? table->size : 1) != L.tableSize)
@@ -601,7 +602,8 @@ void preparePacketLanes(std::span<const MicroLane> lanes, PacketLanes& L, Packet
       L.rowBase[l] = L.columnBase[l];
       a.cdfs.insert(a.cdfs.end(), {0.0f, 1.0f});
     }
-    L.pixelBase[l] = l * pixels;
+    L.pixelBase[l] = inPacket ? l * pixels : 0;  // lanes past the packet read the first lane's pixels
+    if (!inPacket) continue;
     std::copy(m.solidAngle.begin(), m.solidAngle.end(), a.solidAngle.begin() + l * pixels);
     std::copy(m.spacing.begin(), m.spacing.end(), a.spacing.begin() + l * pixels);
   }
