@@ -1,6 +1,7 @@
-// One gather point's micro-rendering (Ritschel et al. 2009, 2.2): the cut by depth-first traversal
-// with computed skip pointers (2.1, 3.1), rasterization with a depth test, on-demand ray casting of
-// the post-traversal list, and the convolution. One template per node encoding, no virtual calls.
+// Micro-rendering of a packet of gather points (Ritschel et al. 2009, 2.2, 3.2): the cut by
+// depth-first traversal with computed skip pointers (2.1, 3.1), the packet's lanes tested together,
+// rasterization with a depth test, on-demand ray casting of the post-traversal list, and the
+// convolution. One template per node encoding, no virtual calls.
 #include "lucent/methods/microrender/micro_rendering.h"
 
 #include <algorithm>
@@ -520,7 +521,7 @@ template <class Nodes>
 void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, const PacketLanes& lanes,
                     uint32_t laneMask, std::span<LaneRasterizer<Nodes>> rasterizers, bool rayCasting,
                     MicroCounters& counters) {
-  uint32_t lanesAtLevel[33];
+  uint32_t lanesAtLevel[32];  // levels 0 to 31: node indices are 32-bit
   lanesAtLevel[nodeLevel(kRootNode)] = laneMask;
   uint64_t visited = 0;
   uint32_t i = kRootNode;
