@@ -35,18 +35,20 @@ struct RecordedRays {
   std::vector<Ray> shadow;
 };
 
-RecordedRays recordRays(const Scene& scene, const Visibility& vis, int spp, uint64_t seed) {
+// The raw loop's paths: the path tracer's (opt's) length, throughput and roulette, so that both trace
+// as many rays.
+RecordedRays recordRays(const Scene& scene, const Visibility& vis, const PathTraceOptions& opt, uint64_t seed) {
   const PinholeCamera camera(scene.camera);
   const int w = scene.camera.width, h = scene.camera.height;
   std::vector<RecordedRays> perRow(h);
   tbb::parallel_for(0, h, [&](int y) {
     RecordedRays& out = perRow[y];
     for (int x = 0; x < w; ++x)
-      for (int s = 0; s < spp; ++s) {
+      for (int s = 0; s < opt.spp; ++s) {
         Rng rng(seed, uint64_t(y) * w + x, s);
         Ray ray = camera.generate(x + rng.uniform(), y + rng.uniform());
         Rgb beta(1.0f);  // the path's throughput, for the path tracer's roulette
-        for (int depth = 0; depth < 1024; ++depth) {
+        for (int depth = 0; depth < opt.maxDepth; ++depth) {
           out.closest.push_back(ray);
           const Hit hit = vis.intersect(ray);
           if (!hit.found()) break;
@@ -58,15 +60,10 @@ RecordedRays recordRays(const Scene& scene, const Visibility& vis, int spp, uint
           const Vec3 wi = Frame(n).toWorld(sampleCosineHemisphere(rng.uniform2()));
           ray = {offsetOrigin(sp.position, n, wi), wi};
           // The path tracer's continuation: the cosine-sampled weight is the albedo, a black
-          // throughput ends the path, and from the third bounce on it survives with probability
-          // min(1, max(beta)), scaled up by as much.
+          // throughput ends the path, and from the roulette depth on Russian roulette.
           beta *= bsdfAt(scene, sp).kd;
           if (beta.isBlack()) break;
-          if (depth + 1 >= PathTraceOptions{}.rouletteDepth) {
-            const float survive = std::min(1.0f, beta.maxComponent());
-            if (rng.uniform() >= survive) break;
-            beta *= 1.0f / survive;
-          }
+          if (depth + 1 >= opt.rouletteDepth && !survivesRussianRoulette(beta, rng.uniform())) break;
         }
       }
   });
@@ -92,12 +89,11 @@ double traceRecorded(const Visibility& vis, const RecordedRays& rays, bool shado
     uint64_t blocked = 0;
     if (!shadowPackets)
       for (size_t i = r.begin(); i != r.end(); ++i) blocked += vis.occluded(rays.shadow[i]);
-    RayPacket<16> packet;
     bool occluded[16];
     for (size_t first = r.begin(); shadowPackets && first < r.end(); first += 16) {
-      packet.assign(int(std::min<size_t>(16, r.end() - first)), [&](int j) -> const Ray& { return rays.shadow[first + j]; });
-      vis.occluded(packet, occluded);
-      for (size_t j = 0; j < 16; ++j) blocked += occluded[j];
+      const int n = int(std::min<size_t>(16, r.end() - first));
+      occludedPacket<16>(vis, n, [&](int j) -> const Ray& { return rays.shadow[first + j]; }, occluded);
+      for (int j = 0; j < n; ++j) blocked += occluded[j];
     }
     sink += blocked;
   });
@@ -134,10 +130,10 @@ int main(int argc, char** argv) {
     // the raw loop with shadow packets with 1 thread and with 2, in turns, so that a change in the
     // machine's speed between phases does not show up as a speed-up.
     const Visibility vis(scene);
-    const RecordedRays rays = recordRays(scene, vis, spp, 1);
-    const uint64_t rawRays = rays.closest.size() + rays.shadow.size();
     PathTraceOptions opt;
     opt.spp = spp;
+    const RecordedRays rays = recordRays(scene, vis, opt, 1);
+    const uint64_t rawRays = rays.closest.size() + rays.shadow.size();
     uint64_t ptRays = 0;
     double bestPt[3] = {1e30, 1e30, 1e30}, bestRaw[3] = {1e30, 1e30, 1e30}, bestPackets[3] = {1e30, 1e30, 1e30};
     for (int r = 0; r < repeats; ++r)

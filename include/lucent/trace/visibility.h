@@ -83,4 +83,18 @@ void intersectPacket(const Visibility& vis, int count, RayOf rayOf, Hit hits[]) 
   for (int j = 0; j < count; ++j) hits[j] = packet.valid[j] ? Hit{h.t[j], h.triangle[j], h.b1[j], h.b2[j]} : Hit{};
 }
 
+// Whether rays rayOf(0) .. rayOf(count - 1), 1 <= count <= N, are blocked, traced as one packet (a
+// lone ray as a single ray). An occlusion query's answer does not depend on the order of traversal,
+// so it does not depend on the packet's other rays.
+template <int N, class RayOf>
+void occludedPacket(const Visibility& vis, int count, RayOf rayOf, bool occluded[]) {
+  if (count == 1) {
+    occluded[0] = vis.occluded(rayOf(0));
+    return;
+  }
+  RayPacket<N> packet;
+  packet.assign(count, rayOf);
+  vis.occluded(packet, occluded);
+}
+
 }  // namespace lucent

@@ -252,13 +252,7 @@ struct ShadowPackets {
   }
   void flush() {
     bool occluded[kPacket];
-    if (queued == 1) {
-      occluded[0] = vis.occluded(queuedRays[0]);
-    } else if (queued > 1) {
-      RayPacket<kPacket> packet;
-      packet.assign(queued, [&](int j) -> const Ray& { return queuedRays[j]; });
-      vis.occluded(packet, occluded);
-    }
+    if (queued > 0) occludedPacket<kPacket>(vis, queued, [&](int j) -> const Ray& { return queuedRays[j]; }, occluded);
     for (int j = 0; j < queued; ++j)
       if (!occluded[j]) *sumOf[j] += contribution[j];
     rays += uint64_t(queued);
