@@ -23,23 +23,19 @@ void writeDump(const std::string& directory, const std::string& name, const std:
   header.recordBytes = recordBytes;
   header.count = count;
   std::memcpy(header.type, type.data(), type.size());
-  const std::filesystem::path tmp = temporaryPathFor(path);
-  auto fail = [&](const std::string& why) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    throw std::runtime_error("cannot write dump '" + path.string() + "': " + why);
-  };
-  {
+  writeFileAtomically(path, "dump", [&](const std::filesystem::path& tmp) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) fail("cannot create it (is '" + directory + "' a writable directory?)");
+    if (!out) throw WriteFailure("cannot create it (is '" + directory + "' a writable directory?)");
     out.write(reinterpret_cast<const char*>(&header), sizeof header);
     out.write(static_cast<const char*>(records), std::streamsize(uint64_t(recordBytes) * count));
     out.close();
-    if (!out) fail("write failed");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) fail(ec.message());
+    if (!out) throw WriteFailure("write failed");
+  });
+}
+
+std::string dumpDirectoryProblem(const std::string& directory) {
+  if (directory.empty() || std::filesystem::is_directory(directory)) return "";
+  return "dump directory '" + directory + "' is not an existing directory";
 }
 
 DumpHeader readDumpHeader(const std::string& path) {

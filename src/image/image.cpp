@@ -27,28 +27,20 @@ int Image::channelIndex(const std::string& name) const {
 
 namespace {
 
-// Writes `data` (interleaved, `format`) with `spec` to `path` via a temporary file and a rename.
+// Writes `data` (interleaved, `format`) with `spec` to `path`, whole or not at all.
 void writeAtomically(const std::string& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc format,
                      const void* data) {
-  const fs::path tmp = temporaryPathFor(path);
-  auto fail = [&](const std::string& why) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw std::runtime_error("cannot write image '" + path + "': " + why);
-  };
-  auto out = OIIO::ImageOutput::create(tmp.string());
-  if (!out) fail(OIIO::geterror());
-  if (!out->open(tmp.string(), spec)) fail(out->geterror());
-  if (!out->write_image(format, data)) {
-    std::string why = out->geterror();
-    out->close();
-    fail(why);
-  }
-  if (!out->close()) fail(out->geterror());
-  out.reset();
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) fail(ec.message());
+  writeFileAtomically(path, "image", [&](const fs::path& tmp) {
+    auto out = OIIO::ImageOutput::create(tmp.string());
+    if (!out) throw WriteFailure(OIIO::geterror());
+    if (!out->open(tmp.string(), spec)) throw WriteFailure(out->geterror());
+    if (!out->write_image(format, data)) {
+      std::string why = out->geterror();
+      out->close();
+      throw WriteFailure(why);
+    }
+    if (!out->close()) throw WriteFailure(out->geterror());
+  });
 }
 
 void checkPixelCount(const Image& image, const std::string& path) {

@@ -35,6 +35,9 @@ void writeDump(const std::string& directory, const std::string& name, const std:
   writeDump(directory, name, type, records.data(), uint32_t(sizeof(T)), records.size());
 }
 
+// Why `directory` cannot take dumps, or "" if it can (or is "": no dumps): it must exist.
+std::string dumpDirectoryProblem(const std::string& directory);
+
 // The header of a dump file; throws std::runtime_error naming the file if it is not one.
 DumpHeader readDumpHeader(const std::string& path);
 

@@ -10,7 +10,6 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
-#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -82,8 +81,7 @@ void validateMicroRenderOptions(const MicroRenderOptions& o) {
   if (o.bounces < 0 || o.bounces > 64) fail("bounces must be in [0, 64]");
   if (o.lighting == PointLighting::Photons && o.photons < 1) fail("photons must be at least 1");
   if (o.k < 1) fail("k must be at least 1");
-  if (!o.dumpDirectory.empty() && !std::filesystem::is_directory(o.dumpDirectory))
-    fail("dump directory '" + o.dumpDirectory + "' is not an existing directory");
+  if (const std::string why = dumpDirectoryProblem(o.dumpDirectory); !why.empty()) fail(why);
 }
 
 namespace {

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -33,8 +32,7 @@ void validatePhotonMapOptions(const PhotonMapOptions& o) {
   if (anyRes && !(r[0] > 0 && r[1] > 0 && r[2] > 0)) fail("grid resolution needs three positive cell counts");
   for (uint32_t c : r)
     if (c > uint32_t(UniformGrid::kMaxResolution)) fail("grid resolution exceeds 2^21 cells per axis");
-  if (!o.dumpDirectory.empty() && !std::filesystem::is_directory(o.dumpDirectory))
-    fail("dump directory '" + o.dumpDirectory + "' is not an existing directory");
+  if (const std::string why = dumpDirectoryProblem(o.dumpDirectory); !why.empty()) fail(why);
 }
 
 namespace {
