@@ -141,7 +141,7 @@ TEST_CASE("A micro dump's interior radiance pulls up from its leaves", "[dump][m
   CHECK(readDump<Rgb>(dir / "indirect.bin", "Rgb").size() == points.size());
 }
 
-TEST_CASE("The CLI dumps into an existing directory only, for purcell, pmfg and micro", "[dump][cli]") {
+TEST_CASE("The CLI dumps pmfg's stages into an existing directory only, and refuses --dump for pt", "[dump][cli]") {
   TempDir dir("cli-dump");
   const std::string scene = lucent::test::quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json");
   const std::string common = " --resolution 16x16 --photons 500 --caustic-photons 0 --quiet -o " +

@@ -87,7 +87,8 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& visibility, const E
 void estimateDirectLight(const Scene& scene, const Visibility& visibility, std::span<const ShadingPoint> points,
                          int samples, uint64_t seed, std::span<Rgb> direct, uint64_t& rays);
 
-// One point's direct light (the work item of estimateDirectLight).
+// One point's direct light, its shadow rays in packets of its own samples (estimateDirectLight
+// packs rays across points instead).
 Rgb directLight(const Scene& scene, const Visibility& visibility, const ShadingPoint& point, int samples,
                 uint64_t seed, uint64_t& rays);
 

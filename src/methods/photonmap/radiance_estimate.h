@@ -96,13 +96,12 @@ struct GridVisitor {
     sumPhotonRun(*run.columns, run.first, run.first + run.count, acc.q.frame.n, s, lanes);
     return true;
   }
-  // Moves the lanes' sums into the accumulator (the lanes start again from zero).
+  // Moves the lanes' sums into the accumulator, once, at the end of the search.
   void finish() {
     const PhotonRunTotals t = photonRunTotals(lanes);
     acc.sum += t.sum;
     acc.used += t.used;
     if (t.farthestD2 > acc.farthestD2) acc.farthestD2 = t.farthestD2, acc.farthest = t.farthest;
-    lanes = {};
   }
 };
 
