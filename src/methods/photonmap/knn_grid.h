@@ -169,13 +169,20 @@ void examineRun(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
   examinePhotons(cp, s, visit);
 }
 
+// A cell's photons, or a run of cells', examined as one cell visit; an empty run is no visit.
+template <class Visit>
+void visitRun(const CellPhotons& run, KnnGridSearch& s, Visit& visit) {
+  if (run.count == 0) return;
+  ++s.cellsVisited;
+  examineRun(run, s, visit);
+}
+
 template <GridPhotonMap Map, class Visit>
 void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit) {
   const CellPhotons photons = map.cellPhotons(cell);
   if (photons.count == 0) return;
   if (map.grid.cellDistance2(s.position, cell) > acceptanceLimit2(s)) return;  // no photon in it can be accepted
-  ++s.cellsVisited;
-  examineRun(photons, s, visit);
+  visitRun(photons, s, visit);
 }
 
 // A row of cells (x0..x1, y, z), first trimmed to the cells that the acceptance sphere's chord
@@ -205,10 +212,7 @@ void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_
     if (x0 > x1) return;
   }
   if constexpr (kReadsRuns<Map>) {
-    const CellPhotons run = map.rowPhotons(x0, x1, y, z);
-    if (run.count == 0) return;
-    ++s.cellsVisited;
-    examineRun(run, s, visit);
+    visitRun(map.rowPhotons(x0, x1, y, z), s, visit);
   } else {
     for (int32_t x = x0; x <= x1; ++x) exploreCell(map, s, {x, y, z}, visit);
   }
@@ -382,10 +386,7 @@ bool exploreShortSearch(const Map& map, KnnGridSearch& s, const Reach& reach, Vi
   const CellPhotons run = map.cellRangePhotons(g.cellIndex({reach.lo[0], reach.lo[1], reach.lo[2]}),
                                                g.cellIndex({reach.hi[0], reach.hi[1], reach.hi[2]}));
   if (run.count > kShortSearchRun) return false;
-  if (run.count > 0) {
-    ++s.cellsVisited;
-    examineRun(run, s, visit);
-  }
+  visitRun(run, s, visit);
   return true;
 }
 
@@ -437,12 +438,7 @@ void exploreCube(const Map& map, KnnGridSearch& s, CellCoord c, int32_t t, Visit
   int32_t lo[3], hi[3];
   cubeBox(map.grid, c, t, lo, hi);
   for (int32_t z = lo[2]; z <= hi[2]; ++z)
-    for (int32_t y = lo[1]; y <= hi[1]; ++y) {
-      const CellPhotons run = map.rowPhotons(lo[0], hi[0], y, z);
-      if (run.count == 0) continue;
-      ++s.cellsVisited;
-      examineRun(run, s, visit);
-    }
+    for (int32_t y = lo[1]; y <= hi[1]; ++y) visitRun(map.rowPhotons(lo[0], hi[0], y, z), s, visit);
 }
 
 // Once k photons are accepted the radius stays, and the photons within it are accepted in any
