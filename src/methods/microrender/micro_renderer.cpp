@@ -238,11 +238,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   stats.addStage("convolution", totals.convolve * scale);
   stats.addStage("upsampling", upsampleSeconds);
 
-  if (!o.dumpDirectory.empty()) {
-    writeDump(o.dumpDirectory, "shading_points", "ShadingPoint", std::span(eye.points));
-    writeDump(o.dumpDirectory, "direct", "Rgb", std::span(shading.direct));
-    writeDump(o.dumpDirectory, "indirect", "Rgb", std::span(shading.indirect));
-  }
+  if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
 
   Stopwatch imageClock;
   ImageAccumulator image(scene, o.layers);

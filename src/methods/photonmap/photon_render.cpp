@@ -205,14 +205,17 @@ void dumpPhotonMap(const PhotonMapOptions& options, const std::string& prefix, c
   }
 }
 
-void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance) {
-  const std::string& dir = options.dumpDirectory;
-  if (dir.empty()) return;
-  const std::string prefix = "band" + std::to_string(band) + ".";
+void dumpShadingPoints(const std::string& dir, const std::string& prefix, const EyePaths& eye,
+                       const PointRadiance& radiance, bool caustic) {
   writeDump(dir, prefix + "shading_points", "ShadingPoint", std::span(eye.points));
   writeDump(dir, prefix + "direct", "Rgb", std::span(radiance.direct));
   writeDump(dir, prefix + "indirect", "Rgb", std::span(radiance.indirect));
-  writeDump(dir, prefix + "caustic", "Rgb", std::span(radiance.caustic));
+  if (caustic) writeDump(dir, prefix + "caustic", "Rgb", std::span(radiance.caustic));
+}
+
+void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance) {
+  if (options.dumpDirectory.empty()) return;
+  dumpShadingPoints(options.dumpDirectory, "band" + std::to_string(band) + ".", eye, radiance, true);
 }
 
 void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& c) {

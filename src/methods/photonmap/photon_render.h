@@ -104,6 +104,10 @@ void addEstimateCounters(RenderStats& stats, const std::string& prefix, const Es
 // each part of the estimate gives them as "band<N>.<array>".
 void dumpPhotonMap(const PhotonMapOptions& options, const std::string& prefix, const BuiltPhotonMap& map);
 void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance);
+// The shading points and the light each part of the image gives them, as <prefix>shading_points,
+// direct, indirect and (where the renderer has a caustic part) caustic.
+void dumpShadingPoints(const std::string& dir, const std::string& prefix, const EyePaths& eye,
+                       const PointRadiance& radiance, bool caustic);
 
 // What both renderers add up over the bands, and report the same way: the paper's Table 1 stages
 // trace_rays and radiance_estimate, and the ray, point and estimate counters.
