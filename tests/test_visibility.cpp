@@ -1,6 +1,8 @@
 // Embree visibility against brute-force ray-triangle intersection, and packets against single rays.
 #include <catch2/catch.hpp>
 
+#include <limits>
+
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
 #include "lucent/scene/loader.h"
@@ -134,4 +136,58 @@ TEST_CASE("8- and 16-wide packets give the single-ray answers", "[visibility]") 
     checkPackets<16>(vis, rays);
   }
   REQUIRE(Visibility::embreeVersion().rfind("3.", 0) == 0);
+}
+
+TEST_CASE("Packets of 1 to N rays, some of them untraceable, give the single-ray answers", "[visibility]") {
+  // intersectPacket and occludedPacket trace partial packets (the last of a wave or a tile); rays
+  // with a NaN or infinite origin or direction, or a NaN interval, miss and are not occluded, alone
+  // or in a packet, and do not disturb the packet's other rays.
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
+  std::vector<Ray> rays = randomRays(scene, 400, 9);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (size_t i = 0; i < rays.size(); i += 7) {
+    switch (i % 4) {
+      case 0: rays[i].origin.y = nan; break;
+      case 1: rays[i].direction.x = kInf; break;
+      case 2: rays[i].tMax = nan; break;
+      default: rays[i].direction.z = -kInf; break;
+    }
+  }
+  const Visibility vis(scene);
+  int hitsFound = 0, blockedFound = 0, untraceable = 0;
+  for (int count = 1; count <= 16; ++count) {
+    for (size_t first = 0; first + size_t(count) <= rays.size(); first += 23) {
+      auto rayOf = [&](int j) -> const Ray& { return rays[first + size_t(j)]; };
+      Hit hits8[8], hits16[16];
+      bool blocked8[8], blocked16[16];
+      if (count <= 8) {
+        intersectPacket<8>(vis, count, rayOf, hits8);
+        occludedPacket<8>(vis, count, rayOf, blocked8);
+      }
+      intersectPacket<16>(vis, count, rayOf, hits16);
+      occludedPacket<16>(vis, count, rayOf, blocked16);
+      for (int j = 0; j < count; ++j) {
+        INFO("count " << count << ", first " << first << ", lane " << j);
+        const Ray& ray = rayOf(j);
+        const Hit single = vis.intersect(ray);
+        const bool blocked = vis.occluded(ray);
+        if (!traceable(ray)) {
+          ++untraceable;
+          CHECK_FALSE(single.found());
+          CHECK_FALSE(blocked);
+        }
+        hitsFound += single.found(), blockedFound += blocked;
+        CHECK(hits16[j].triangle == single.triangle);
+        CHECK(hits16[j].t == single.t);
+        CHECK(blocked16[j] == blocked);
+        if (count <= 8) {
+          CHECK(hits8[j].triangle == single.triangle);
+          CHECK(blocked8[j] == blocked);
+        }
+      }
+    }
+  }
+  CHECK(untraceable > 100);
+  CHECK(hitsFound > 1000);
+  CHECK(blockedFound > 1000);
 }

@@ -36,8 +36,11 @@ void recordError(void* user, RTCError code, const char* message) {
 }
 
 template <class RayHitN, int N>
-void toEmbree(const RayPacket<N>& rays, RayHitN& rh) {
+// Also the lanes to trace: the packet's active lanes whose rays are traceable.
+void toEmbree(const RayPacket<N>& rays, RayHitN& rh, int32_t valid[N]) {
   for (int i = 0; i < N; ++i) {
+    const Ray ray{{rays.ox[i], rays.oy[i], rays.oz[i]}, {rays.dx[i], rays.dy[i], rays.dz[i]}, rays.tMin[i], rays.tMax[i]};
+    valid[i] = traceable(ray) ? rays.valid[i] : 0;
     rh.ray.org_x[i] = rays.ox[i];
     rh.ray.org_y[i] = rays.oy[i];
     rh.ray.org_z[i] = rays.oz[i];
@@ -82,6 +85,7 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
 Visibility::~Visibility() = default;
 
 Hit Visibility::intersect(const Ray& ray) const {
+  if (!traceable(ray)) return Hit{};
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit rh;
@@ -110,6 +114,7 @@ Hit Visibility::intersect(const Ray& ray) const {
 }
 
 bool Visibility::occluded(const Ray& ray) const {
+  if (!traceable(ray)) return false;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay r;
@@ -134,11 +139,12 @@ bool Visibility::occluded(const Ray& ray) const {
     RTCIntersectContext context;                                                                   \
     rtcInitIntersectContext(&context);                                                             \
     RTCRayHit##N rh;                                                                               \
-    toEmbree(rays, rh);                                                                            \
+    int32_t valid[N];                                                                              \
+    toEmbree(rays, rh, valid);                                                                     \
     for (int i = 0; i < N; ++i) rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;                        \
-    rtcIntersect##N(rays.valid, impl_->scene, &context, &rh);                                      \
+    rtcIntersect##N(valid, impl_->scene, &context, &rh);                                           \
     for (int i = 0; i < N; ++i) {                                                                  \
-      const bool found = rays.valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;             \
+      const bool found = valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;                  \
       hits.t[i] = found ? rh.ray.tfar[i] : kInf;                                                   \
       hits.triangle[i] = found ? rh.hit.primID[i] : kNoHit;                                        \
       hits.b1[i] = rh.hit.u[i];                                                                    \
@@ -149,9 +155,10 @@ bool Visibility::occluded(const Ray& ray) const {
     RTCIntersectContext context;                                                                   \
     rtcInitIntersectContext(&context);                                                             \
     RTCRayHit##N rh;                                                                               \
-    toEmbree(rays, rh);                                                                            \
-    rtcOccluded##N(rays.valid, impl_->scene, &context, &rh.ray);                                   \
-    for (int i = 0; i < N; ++i) occluded[i] = rays.valid[i] && rh.ray.tfar[i] < 0;                 \
+    int32_t valid[N];                                                                              \
+    toEmbree(rays, rh, valid);                                                                     \
+    rtcOccluded##N(valid, impl_->scene, &context, &rh.ray);                                        \
+    for (int i = 0; i < N; ++i) occluded[i] = valid[i] && rh.ray.tfar[i] < 0;                      \
   }
 LUCENT_PACKET_QUERIES(8)
 LUCENT_PACKET_QUERIES(16)

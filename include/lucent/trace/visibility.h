@@ -18,6 +18,13 @@ struct Hit {
   bool found() const { return triangle != kNoHit; }
 };
 
+// Every query traces only rays with a finite origin and direction and an interval tMin <= tMax
+// (false for NaN): any other ray misses and is not occluded, alone or in a packet. Callers that
+// must tell such a ray from a miss (to drop the sample) test it themselves.
+inline bool traceable(const Ray& ray) {
+  return isFinite(ray.origin) && isFinite(ray.direction) && ray.tMin <= ray.tMax;
+}
+
 struct VisibilityOptions {
   bool robust = false;  // Embree's robust traversal (watertight at edges), slower
 };
@@ -70,17 +77,14 @@ class Visibility {
   std::unique_ptr<Impl> impl_;
 };
 
-// The closest hits of rays rayOf(0) .. rayOf(count - 1), 1 <= count <= N, traced as one packet. A
-// ray with a non-finite origin or direction is not traced and misses.
+// The closest hits of rays rayOf(0) .. rayOf(count - 1), 1 <= count <= N, traced as one packet.
 template <int N, class RayOf>
 void intersectPacket(const Visibility& vis, int count, RayOf rayOf, Hit hits[]) {
   RayPacket<N> packet;
   packet.assign(count, rayOf);
-  for (int j = 0; j < count; ++j)
-    if (!isFinite(rayOf(j).origin) || !isFinite(rayOf(j).direction)) packet.valid[j] = 0;
   HitPacket<N> h;
   vis.intersect(packet, h);
-  for (int j = 0; j < count; ++j) hits[j] = packet.valid[j] ? Hit{h.t[j], h.triangle[j], h.b1[j], h.b2[j]} : Hit{};
+  for (int j = 0; j < count; ++j) hits[j] = h.triangle[j] != kNoHit ? Hit{h.t[j], h.triangle[j], h.b1[j], h.b2[j]} : Hit{};
 }
 
 // Whether rays rayOf(0) .. rayOf(count - 1), 1 <= count <= N, are blocked, traced as one packet (a
