@@ -270,6 +270,7 @@ TEST_CASE("kNN-grid on the sorted, hashed and stencil grids finds every photon w
   fine.cellSize = 0.08f;  // many shells per search
   boxes.resolution = {7, 3, 13};
   flat.photonsPerCell = 4;
+  uint8_t boxesRead = 0;
   for (const Setup& setup : {Setup{Cloud::Uniform, coarse}, Setup{Cloud::Clustered, GridOptions{}},
                              Setup{Cloud::Clustered, fine}, Setup{Cloud::Clustered, boxes}, Setup{Cloud::Flat, flat}}) {
     const std::vector<Photon> photons = photonCloud(3000, setup.cloud, 21 + int(setup.cloud));
@@ -307,11 +308,15 @@ TEST_CASE("kNN-grid on the sorted, hashed and stencil grids finds every photon w
           CHECK(b.search.radius2 == a.search.radius2);
           CHECK(c.search.radius2 == a.search.radius2);
           collisions += b.search.collisionsSkipped;
+          CHECK(b.search.boxesRead == 0);
+          boxesRead |= a.search.boxesRead | c.search.boxesRead;
         }
       }
     }
     CHECK(collisions > 0);
   }
+  // Each way of reading boxes of rows was compared with shell by shell.
+  CHECK(boxesRead == (kReadShortSearch | kReadAcceptedCube | kReadBeyondCube));
 }
 
 TEST_CASE("kNN-grid's boxes and rows stop where shell by shell stops, at any number of shells",
@@ -327,6 +332,7 @@ TEST_CASE("kNN-grid's boxes and rows stop where shell by shell stops, at any num
   const SortedGrid sorted = buildSortedGrid(photons, fine);
   const HashedGrid hashed = buildHashedGrid(photons, fine);
   uint64_t compared = 0, unfinished = 0;
+  uint8_t boxesRead = 0;
   for (Vec3 p : queryPoints(photons, 32, 17))
     for (uint32_t k : {1u, 20u, 200u, 4000u})
       for (float maxRadius : {0.0f, 0.1f, 0.5f, 1e30f})
@@ -349,9 +355,11 @@ TEST_CASE("kNN-grid's boxes and rows stop where shell by shell stops, at any num
           CHECK(knnGridRadius2(a.search) == knnGridRadius2(b.search));
           unfinished += !a.search.done;
           ++compared;
+          boxesRead |= a.search.boxesRead;
         }
   CHECK(compared == 32 * 4 * 4 * 6);
   CHECK(unfinished > 100);  // limited budgets did stop searches midway
+  CHECK(boxesRead == (kReadShortSearch | kReadAcceptedCube | kReadBeyondCube));
 }
 
 TEST_CASE("The estimate's runs of photons summed eight at a time equal one photon at a time", "[photonmap][knn]") {
@@ -370,6 +378,7 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
   fine.cellSize = 0.08f;
   coarse.photonsPerCell = 40;
   uint64_t ties = 0, runs = 0;
+  uint8_t boxesRead = 0;
   for (const GridOptions& options : {fine, coarse}) {
     const SortedGrid sorted = buildSortedGrid(photons, options);
     const StencilGrid stencil = buildStencilGrid(photons, options);
@@ -383,6 +392,7 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
       advanceKnnGrid(map, a, shells, [&](uint32_t, const Photon& photon, float d2) { one.add(photon, d2); });
       estimate_detail::GridVisitor lanes{eight, {}};
       advanceKnnGrid(map, b, shells, lanes);
+      CHECK(eight.used == 0);  // every run went through the lanes, none photon by photon
       lanes.finish();
       INFO("k = " << k << ", max radius " << maxRadius << ", shells " << shells);
       REQUIRE(b.found == a.found);
@@ -400,6 +410,7 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
                                        return distance2(ph.position, p) == one.farthestD2;
                                      }) > 1;
       runs += b.cellsVisited;
+      boxesRead |= b.boxesRead;
     };
     for (Vec3 p : queryPoints(photons, 40, 9)) {
       const Vec3 n = sampleUniformSphere(rng.uniform2());
@@ -413,6 +424,7 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
   }
   CHECK(ties > 100);
   CHECK(runs > 10000);
+  CHECK(boxesRead == (kReadShortSearch | kReadAcceptedCube | kReadBeyondCube));
 }
 
 TEST_CASE("kNN-grid and kd-tree agree on a cloud with one photon and on an empty one", "[photonmap][knn]") {

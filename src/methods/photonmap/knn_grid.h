@@ -44,8 +44,12 @@ struct KnnGridSearch {
                             // a search that ends by reading its reach box (exploreShortSearch,
                             // exploreBeyondCube) counts every shell the box touches
   bool done = false;        // no unexplored photon can be accepted
+  uint8_t boxesRead = 0;    // the parts of the search read as boxes of rows (KnnBoxRead bits)
   uint32_t cellsVisited = 0, photonsExamined = 0, collisionsSkipped = 0;  // counters
 };
+// Where the order cannot matter, the sorted and stencil grids read boxes of rows instead of shells
+// (see above); a search records which of them it took, so that tests can see each one compared.
+enum KnnBoxRead : uint8_t { kReadShortSearch = 1, kReadAcceptedCube = 2, kReadBeyondCube = 4 };
 // Per-query state that a GPU would keep per pixel between passes.
 static_assert(sizeof(KnnGridSearch) == 48 && std::is_trivially_copyable_v<KnnGridSearch>);
 
@@ -481,10 +485,15 @@ void advanceKnnGrid(const Map& map, KnnGridSearch& s, uint32_t shells, Visit&& v
         if (lastShell < shells && exploreShortSearch(map, s, reach, visit)) {
           s.shells = lastShell + 1;
           s.done = true;
+          s.boxesRead |= kReadShortSearch;
           break;
         }
         const int32_t cube = acceptedCube(map, s, c, int32_t(std::min<uint32_t>(shells, INT32_MAX) - 1));
-        if (cube >= 0) exploreCube(map, s, c, cube, visit), step = uint32_t(cube) + 1;
+        if (cube >= 0) {
+          exploreCube(map, s, c, cube, visit);
+          step = uint32_t(cube) + 1;
+          s.boxesRead |= kReadAcceptedCube;
+        }
       }
     }
     if (step == 0) {
@@ -511,6 +520,7 @@ void advanceKnnGrid(const Map& map, KnnGridSearch& s, uint32_t shells, Visit&& v
           i += uint32_t(last + 1) - s.shells;
           s.shells = uint32_t(last + 1);
           s.done = true;
+          s.boxesRead |= kReadBeyondCube;
         }
       }
     }
