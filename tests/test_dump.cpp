@@ -13,6 +13,7 @@
 #include "methods/photonmap/eye_paths.h"
 #include "methods/photonmap/radiance_estimate.h"
 #include "methods/photonmap/sorted_grid.h"
+#include "methods/photonmap/stencil_grid.h"
 #include "test_support.h"
 
 using namespace lucent;
@@ -96,6 +97,65 @@ TEST_CASE("A purcell dump recomputes its maps and its caustic estimates", "[dump
   CHECK(equal == points.size());
   CHECK(lit > 50);  // the caustic under the ball is in view
   CHECK(out.stats.stageSeconds.size() > 0);
+}
+
+TEST_CASE("Stencil and hashed grid dumps hold the routing and the buckets their photons give", "[dump][photonmap-render]") {
+  // The stencil grid's dump: each cell's slots hold the first m^2 photons, in index order, of
+  // those whose positions fall in it, `arrived` counts them all, and the cell counts are of the
+  // stored ones. The hashed grid's dump: a rebuild from its photons (as traced) with the render's
+  // options gives the same list, keys and buckets.
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true});
+  scene.camera.width = 24, scene.camera.height = 18;
+  const Visibility vis(scene);
+  PhotonMapOptions opt;
+  opt.photons = 3000;
+  opt.causticPhotons = 6000;
+  opt.k = 16;
+  opt.lightSamples = 1;
+  opt.photonsPerCell = 2;
+  opt.stencilSide = 3;  // few slots: crowded cells overflow
+  for (PhotonMapKind kind : {PhotonMapKind::Stencil, PhotonMapKind::Hash}) {
+    TempDir dir("grid-dump");
+    opt.map = kind;
+    opt.dumpDirectory = dir.path.string();
+    renderPurcell(scene, vis, opt);
+    for (const std::string map : {"global", "caustic"}) {
+      INFO(map << (kind == PhotonMapKind::Stencil ? " stencil" : " hash"));
+      const auto photons = readDump<Photon>(dir / (map + ".photons.bin"), "Photon");
+      const auto grids = readDump<UniformGrid>(dir / (map + ".grid.bin"), "UniformGrid");
+      REQUIRE(grids.size() == 1);
+      REQUIRE(photons.size() > 500);
+      const UniformGrid& grid = grids[0];
+      if (kind == PhotonMapKind::Stencil) {
+        const auto slots = readDump<uint32_t>(dir / (map + ".slots.bin"), "uint32");
+        const auto arrived = readDump<uint32_t>(dir / (map + ".arrived.bin"), "uint32");
+        const uint32_t m2 = opt.stencilSide * opt.stencilSide;
+        REQUIRE(arrived.size() == grid.cellCount());
+        REQUIRE(slots.size() == arrived.size() * m2);
+        std::vector<uint32_t> expectedSlots(slots.size(), StencilGrid::kEmptySlot), expectedArrived(arrived.size(), 0),
+            stored(arrived.size(), 0);
+        for (uint32_t i = 0; i < photons.size(); ++i) {
+          const uint32_t c = grid.cellIndex(grid.cellOf(photons[i].position));
+          if (expectedArrived[c]++ < m2) expectedSlots[size_t(c) * m2 + stored[c]++] = i;
+        }
+        CHECK(arrived == expectedArrived);
+        CHECK(slots == expectedSlots);
+        CHECK(readDump<uint32_t>(dir / (map + ".cell_counts.bin"), "uint32") ==
+              buildCellCountTable(grid, [&](uint32_t c) { return stored[c]; }).prefix);
+        size_t overflowing = 0;
+        for (uint32_t n : arrived) overflowing += n > m2;
+        CHECK(overflowing > 0);
+      } else {
+        GridOptions gridOptions;
+        gridOptions.photonsPerCell = opt.photonsPerCell;
+        const HashedGrid map2 = buildHashedGrid(photons, gridOptions);
+        CHECK(std::memcmp(&map2.grid, &grid, sizeof(UniformGrid)) == 0);
+        CHECK(map2.photonList == readDump<uint32_t>(dir / (map + ".photon_list.bin"), "uint32"));
+        CHECK(map2.cellKeys == readDump<uint64_t>(dir / (map + ".cell_keys.bin"), "uint64"));
+        CHECK(map2.firstPhoton == readDump<uint32_t>(dir / (map + ".first_photon.bin"), "uint32"));
+      }
+    }
+  }
 }
 
 TEST_CASE("A micro dump's interior radiance pulls up from its leaves", "[dump][micro]") {
