@@ -201,7 +201,8 @@ TEST_CASE("A micro dump's interior radiance pulls up from its leaves", "[dump][m
   CHECK(readDump<Rgb>(dir / "indirect.bin", "Rgb").size() == points.size());
 }
 
-TEST_CASE("The CLI dumps pmfg's stages into an existing directory only, and refuses --dump for pt", "[dump][cli]") {
+TEST_CASE("The CLI dumps pmfg's and micro's stages into an existing directory only, and refuses --dump for pt",
+          "[dump][cli]") {
   TempDir dir("cli-dump");
   const std::string scene = lucent::test::quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json");
   const std::string common = " --resolution 16x16 --photons 500 --caustic-photons 0 --quiet -o " +
@@ -218,6 +219,22 @@ TEST_CASE("The CLI dumps pmfg's stages into an existing directory only, and refu
                                                lucent::test::quoted(dir / "nowhere") + common);
   CHECK(missing.status != 0);
   CHECK_THAT(missing.output, Catch::Contains("nowhere") && Catch::Contains("not an existing directory"));
+  // micro: the hierarchy, the points' radiance, the shading points and, lit by photons, the map.
+  TempDir microDir("cli-micro-dump");
+  const auto micro = lucent::test::runLucent(
+      "render " + scene + " --method micro --lighting photons --photons 2000 --points 1024 --dump " +
+      lucent::test::quoted(microDir.path.string()) + " --resolution 16x16 --quiet -o " +
+      lucent::test::quoted(microDir / "micro.exr"));
+  INFO(micro.output);
+  REQUIRE(micro.status == 0);
+  CHECK(readDump<PointSample>(microDir / "hierarchy.points.bin", "PointSample").size() == 1024);
+  CHECK(readDump<Rgb>(microDir / "point_radiance.bin", "Rgb").size() == 2048);
+  const auto microPoints = readDump<ShadingPoint>(microDir / "shading_points.bin", "ShadingPoint");
+  CHECK(readDump<Rgb>(microDir / "indirect.bin", "Rgb").size() == microPoints.size());
+  const auto photons = readDump<Photon>(microDir / "global.photons.bin", "Photon");
+  CHECK(photons.size() > 1000);
+  CHECK(readDump<uint32_t>(microDir / "global.source_index.bin", "uint32").size() == photons.size());
+
   const auto pt = lucent::test::runLucent("render " + scene + " --method pt --dump " +
                                           lucent::test::quoted(dir.path.string()) + " --resolution 16x16 --quiet -o " +
                                           lucent::test::quoted(dir / "pt.exr"));

@@ -193,6 +193,7 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
     pm.k = o.k;
     pm.map = PhotonMapKind::KdTree;
     pm.seed = lightingSeed(o.seed, LightingStream::Photons);
+    pm.dumpDirectory = o.dumpDirectory;  // the map the leaves' estimates read
     RenderStats photonStats;
     const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, pm, GlobalPhotons::All, photonStats);
     for (const auto& [name, s] : photonStats.stageSeconds) stats.addStage("point_lighting." + name, s);
