@@ -62,3 +62,42 @@ TEST_CASE("Textures: 8-bit files are decoded from sRGB, float files read as line
     REQUIRE(decodeTexel(scene.texels[0]).g == Approx(0.5f).epsilon(0.01));
   }
 }
+
+TEST_CASE("An 8-bit sRGB texture keeps every code; a float texture is clamped and encoded", "[texture]") {
+  // The loader keeps an 8-bit file's codes as they are (what decoding to linear and encoding back
+  // would give), and encodes a linear file's values, clamped to reflectance [0, 1], to the nearest
+  // code (negative texels are an error). All 256 codes in each channel, in different orders.
+  const lucent::test::TempDir dir("texture-codes");
+  auto code = [](int x, int c) { return c == 0 ? x : c == 1 ? 255 - x : (37 * x + 11) % 256; };
+  Image codes(256, 1, {"R", "G", "B"}), linear(256, 1, {"R", "G", "B"});
+  for (int x = 0; x < 256; ++x)
+    for (int c = 0; c < 3; ++c) {
+      codes.at(x, 0, c) = kSrgb8ToLinear[code(x, c)];  // written back as code(x, c)
+      linear.at(x, 0, c) = 1.2f * float(code(x, c)) / 255.0f;  // some above 1
+    }
+  writePng(codes, dir / "codes.png");
+  writeExr(linear, dir / "linear.exr");
+  for (const char* file : {"codes.png", "linear.exr"}) {
+    std::ofstream(dir / "quad.obj") << "mtllib quad.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    std::ofstream(dir / "quad.mtl") << "newmtl lamp\nKd 1 1 1\nKe 1 1 1\nmap_Kd " << file << "\n";
+    std::ofstream(dir / "scene.json")
+        << R"({"camera": {"eye": [0.5, 0.5, 2], "look_at": [0.5, 0.5, 0], "up": [0, 1, 0], "fov_y": 40,
+               "resolution": [4, 4]}, "meshes": [{"obj": "quad.obj"}]})";
+    const Scene scene = loadScene(dir / "scene.json", {true});
+    REQUIRE(scene.texels.size() == 256);
+    for (int x = 0; x < 256; ++x) {
+      INFO(file << ", texel " << x);
+      const uint32_t texel = scene.texels[size_t(x)];
+      CHECK(texel >> 24 == 255);
+      for (int c = 0; c < 3; ++c) {
+        const uint32_t byte = (texel >> (8 * c)) & 0xff;
+        if (file[0] == 'c') {
+          CHECK(byte == uint32_t(code(x, c)));
+        } else {
+          const float v = std::clamp(linear.at(x, 0, c), 0.0f, 1.0f);
+          CHECK(byte == uint32_t(std::lround(255.0f * linearToSrgb(v))));
+        }
+      }
+    }
+  }
+}
