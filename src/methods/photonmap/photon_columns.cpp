@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include "knn_grid.h"
@@ -12,9 +13,12 @@ namespace lucent {
 
 PhotonColumns photonColumns(std::span<const Photon> listed) {
   PhotonColumns c;
+  // Every entry is written once: the photons by the parallel fill, the padding here.
   const size_t n = listed.size() + PhotonColumns::kPad;
-  for (std::vector<float>* column : {&c.x, &c.y, &c.z, &c.incomingX, &c.incomingY, &c.incomingZ, &c.r, &c.g, &c.b})
-    column->assign(n, 0.0f);
+  for (UninitializedVector<float>* column : {&c.x, &c.y, &c.z, &c.incomingX, &c.incomingY, &c.incomingZ, &c.r, &c.g, &c.b}) {
+    column->resize(n);
+    std::fill(column->begin() + ptrdiff_t(listed.size()), column->end(), 0.0f);
+  }
   tbb::parallel_for(tbb::blocked_range<size_t>(0, listed.size(), 4096), [&](const auto& range) {
     for (size_t i = range.begin(); i != range.end(); ++i) {
       const Photon& p = listed[i];

@@ -11,6 +11,7 @@
 #include <span>
 #include <vector>
 
+#include "lucent/core/uninitialized.h"
 #include "photon.h"
 
 namespace lucent {
@@ -21,9 +22,9 @@ struct KnnGridSearch;
 // loaded from any position of the list.
 struct PhotonColumns {
   static constexpr uint32_t kPad = 8;
-  std::vector<float> x, y, z;                          // position
-  std::vector<float> incomingX, incomingY, incomingZ;  // octahedralDirection: the side it came from
-  std::vector<float> r, g, b;                          // power
+  UninitializedVector<float> x, y, z;                          // position
+  UninitializedVector<float> incomingX, incomingY, incomingZ;  // octahedralDirection: the side it came from
+  UninitializedVector<float> r, g, b;                          // power
 };
 
 PhotonColumns photonColumns(std::span<const Photon> listed);
