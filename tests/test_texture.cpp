@@ -12,6 +12,16 @@ using namespace lucent;
 
 namespace {
 uint32_t grey(uint8_t v) { return v | v << 8 | v << 16 | 0xffu << 24; }
+
+// A scene of one quad whose material's map_Kd is `file` in `dir`.
+Scene texturedQuad(const lucent::test::TempDir& dir, const std::string& file) {
+  std::ofstream(dir / "quad.obj") << "mtllib quad.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+  std::ofstream(dir / "quad.mtl") << "newmtl lamp\nKd 1 1 1\nKe 1 1 1\nmap_Kd " << file << "\n";
+  std::ofstream(dir / "scene.json")
+      << R"({"camera": {"eye": [0.5, 0.5, 2], "look_at": [0.5, 0.5, 0], "up": [0, 1, 0], "fov_y": 40,
+             "resolution": [4, 4]}, "meshes": [{"obj": "quad.obj"}]})";
+  return loadScene(dir / "scene.json", {true});
+}
 }  // namespace
 
 TEST_CASE("sRGB decoding table matches the transfer function and round-trips", "[texture]") {
@@ -51,12 +61,7 @@ TEST_CASE("Textures: 8-bit files are decoded from sRGB, float files read as line
   writePng(linearHalf, dir / "half.png");  // stored as sRGB code 188
   writeExr(linearHalf, dir / "half.exr");  // stored as linear 0.5
   for (const char* file : {"half.png", "half.exr"}) {
-    std::ofstream(dir / "quad.obj") << "mtllib quad.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
-    std::ofstream(dir / "quad.mtl") << "newmtl lamp\nKd 1 1 1\nKe 1 1 1\nmap_Kd " << file << "\n";
-    std::ofstream(dir / "scene.json")
-        << R"({"camera": {"eye": [0.5, 0.5, 2], "look_at": [0.5, 0.5, 0], "up": [0, 1, 0], "fov_y": 40,
-               "resolution": [4, 4]}, "meshes": [{"obj": "quad.obj"}]})";
-    const Scene scene = loadScene(dir / "scene.json", {true});
+    const Scene scene = texturedQuad(dir, file);
     REQUIRE(scene.texels.size() == 1);
     INFO(file);
     REQUIRE(decodeTexel(scene.texels[0]).g == Approx(0.5f).epsilon(0.01));
@@ -78,12 +83,7 @@ TEST_CASE("An 8-bit sRGB texture keeps every code; a float texture is clamped an
   writePng(codes, dir / "codes.png");
   writeExr(linear, dir / "linear.exr");
   for (const char* file : {"codes.png", "linear.exr"}) {
-    std::ofstream(dir / "quad.obj") << "mtllib quad.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
-    std::ofstream(dir / "quad.mtl") << "newmtl lamp\nKd 1 1 1\nKe 1 1 1\nmap_Kd " << file << "\n";
-    std::ofstream(dir / "scene.json")
-        << R"({"camera": {"eye": [0.5, 0.5, 2], "look_at": [0.5, 0.5, 0], "up": [0, 1, 0], "fov_y": 40,
-               "resolution": [4, 4]}, "meshes": [{"obj": "quad.obj"}]})";
-    const Scene scene = loadScene(dir / "scene.json", {true});
+    const Scene scene = texturedQuad(dir, file);
     REQUIRE(scene.texels.size() == 256);
     for (int x = 0; x < 256; ++x) {
       INFO(file << ", texel " << x);
