@@ -35,8 +35,8 @@ void recordError(void* user, RTCError code, const char* message) {
     error->message = "Embree error " + std::to_string(int(code)) + ": " + (message ? message : "");
 }
 
+// The packet in Embree's layout, and the lanes to trace: its active lanes whose rays are traceable.
 template <class RayHitN, int N>
-// Also the lanes to trace: the packet's active lanes whose rays are traceable.
 void toEmbree(const RayPacket<N>& rays, RayHitN& rh, int32_t valid[N]) {
   for (int i = 0; i < N; ++i) {
     const Ray ray{{rays.ox[i], rays.oy[i], rays.oz[i]}, {rays.dx[i], rays.dy[i], rays.dz[i]}, rays.tMin[i], rays.tMax[i]};
@@ -147,8 +147,8 @@ bool Visibility::occluded(const Ray& ray) const {
       const bool found = valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;                  \
       hits.t[i] = found ? rh.ray.tfar[i] : kInf;                                                   \
       hits.triangle[i] = found ? rh.hit.primID[i] : kNoHit;                                        \
-      hits.b1[i] = rh.hit.u[i];                                                                    \
-      hits.b2[i] = rh.hit.v[i];                                                                    \
+      hits.b1[i] = found ? rh.hit.u[i] : 0.0f;                                                     \
+      hits.b2[i] = found ? rh.hit.v[i] : 0.0f;                                                     \
     }                                                                                              \
   }                                                                                                \
   void Visibility::occluded(const RayPacket<N>& rays, bool occluded[N]) const {                    \

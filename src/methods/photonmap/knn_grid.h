@@ -47,11 +47,12 @@ struct KnnGridSearch {
   uint8_t boxesRead = 0;    // the parts of the search read as boxes of rows (KnnBoxRead bits)
   uint32_t cellsVisited = 0, photonsExamined = 0, collisionsSkipped = 0;  // counters
 };
+// Per-query state that a GPU would keep per pixel between passes.
+static_assert(sizeof(KnnGridSearch) == 48 && std::is_trivially_copyable_v<KnnGridSearch>);
+
 // Where the order cannot matter, the sorted and stencil grids read boxes of rows instead of shells
 // (see above); a search records which of them it took, so that tests can see each one compared.
 enum KnnBoxRead : uint8_t { kReadShortSearch = 1, kReadAcceptedCube = 2, kReadBeyondCube = 4 };
-// Per-query state that a GPU would keep per pixel between passes.
-static_assert(sizeof(KnnGridSearch) == 48 && std::is_trivially_copyable_v<KnnGridSearch>);
 
 inline KnnGridSearch beginKnnGrid(Vec3 position, uint32_t k, float maxRadius) {
   KnnGridSearch s;
