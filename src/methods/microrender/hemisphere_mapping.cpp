@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "lucent/methods/microrender/micro_buffer.h"
+
 namespace lucent {
 
 namespace {
@@ -201,7 +203,7 @@ void evaluatePixels(HemisphereMapping& m, MappingKind kind, int side, Vec2 jitte
   m.probe.resize(n);
   m.used.clear();
   const float invN = 1.0f / float(n);
-  // M^-1 once per column of pixels, C^-1 per pixel.
+  // M^-1 once per column of pixels, C^-1 per pixel. (validateMicroRenderOptions bounds the side.)
   HemisphereMapping::Column columns[kMaxMicroBufferSide];
   for (int x = 0; x < side; ++x) columns[x] = m.column((float(x) + jitter.x) / float(side));
   for (int y = 0; y < side; ++y)

@@ -96,27 +96,9 @@ struct LaneResults {
   alignas(32) float cosRadius[kGatherPacket];  // of the cone the node's sphere subtends
 };
 
-// A direction's pixel in lane l's mapping: HemisphereMapping::pixelOf written out over the lanes'
-// tables, with selects instead of std::clamp and std::min (the same operations, so the same pixel).
-struct LanePixel {
-  int32_t column, row;
-};
-inline LanePixel lanePixel(const PacketLanes& L, const float* __restrict cdfs, int l, float lx, float ly) {
-  constexpr float kBelowOne = 0x1.fffffep-1f;
-  const int32_t n = L.tableSize;
-  const float a0 = (lx + 1.0f) * 0.5f, b0 = (ly + 1.0f) * 0.5f;  // std::clamp to [0, kBelowOne]
-  const float a = a0 < 0.0f ? 0.0f : kBelowOne < a0 ? kBelowOne : a0;
-  const float b = b0 < 0.0f ? 0.0f : kBelowOne < b0 ? kBelowOne : b0;
-  const float an = a * float(n), bn = b * float(n);
-  const int32_t j0 = int32_t(an), k0 = int32_t(bn);
-  const int32_t j = n - 1 < j0 ? n - 1 : j0, k = n - 1 < k0 ? n - 1 : k0;
-  const int32_t column = L.columnBase[l] + j, row = L.rowBase[l] + j * (n + 1) + k;
-  const float u = cdfs[column] + (an - float(j)) * (cdfs[column + 1] - cdfs[column]);
-  const float v = cdfs[row] + (bn - float(k)) * (cdfs[row + 1] - cdfs[row]);
-  const float uc = kBelowOne < u ? kBelowOne : u, vc = kBelowOne < v ? kBelowOne : v;
-  const int32_t x0 = int32_t(uc * float(L.side)), y0 = int32_t(vc * float(L.side));
-  const int32_t x = L.side - 1 < x0 ? L.side - 1 : x0, y = L.side - 1 < y0 ? L.side - 1 : y0;
-  return {x, y};
+// A direction's pixel in lane l's mapping: HemisphereMapping::pixelOf over the lanes' tables.
+inline PixelCoord lanePixel(const PacketLanes& L, const float* __restrict cdfs, int l, float lx, float ly) {
+  return pixelAt(inverseCdfs(cdfs, L.columnBase[l], cdfs, L.rowBase[l], L.tableSize, lx, ly), L.side, L.side);
 }
 
 // Largest cosine between a direction at cosToAxis from the cone's axis and a normal of the cone
@@ -145,7 +127,7 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
   const float lx = wx * L.sx[l] + wy * L.sy[l] + wz * L.sz[l];
   const float ly = wx * L.tx[l] + wy * L.ty[l] + wz * L.tz[l];
   const float lz = wx * L.nx[l] + wy * L.ny[l] + wz * L.nz[l];
-  const LanePixel pixel = lanePixel(L, cdfs, l, lx, ly);
+  const PixelCoord pixel = lanePixel(L, cdfs, l, lx, ly);
   const float sinRadius = n.radius / d;
   r.column[l] = pixel.column, r.row[l] = pixel.row;
   r.cosRadius[l] = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
@@ -155,8 +137,9 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
 }
 
 // 2.2 "Point Hierarchy Cut", one node against every lane, as loops over the lanes that GCC
-// vectorizes (selects, no branches; an AVX2 clone where the CPU has it). The tests are those of the
-// one-gather-point traversal, in the same order of precedence, with the same IEEE operations:
+// vectorizes (selects, no branches; an AVX2 clone where the CPU has it). The tests are those the
+// traversal made one gather point at a time before packets, in the same order of precedence, with
+// the same IEEE operations:
 //  - below the tangent plane altogether: skip;
 //  - a leaf is a disc in its triangle's plane: it faces p exactly when p lies in front of the plane
 //    (coneSin is the slack of a quantized normal, 0 for float nodes); its solid angle is the projected
@@ -598,10 +581,10 @@ void preparePacketLanes(std::span<const MicroLane> lanes, PacketLanes& L, Packet
       a.cdfs.insert(a.cdfs.end(), table->columnCdf.begin(), table->columnCdf.end());
       L.rowBase[l] = int32_t(a.cdfs.size());
       a.cdfs.insert(a.cdfs.end(), table->rowCdf.begin(), table->rowCdf.end());
-    } else {  // Nusselt: the identity, u = a (0 + a * (1 - 0) is a exactly)
+    } else {  // Nusselt: the identity table (inverseCdfs)
       L.columnBase[l] = int32_t(a.cdfs.size());
       L.rowBase[l] = L.columnBase[l];
-      a.cdfs.insert(a.cdfs.end(), {0.0f, 1.0f});
+      a.cdfs.insert(a.cdfs.end(), std::begin(kIdentityCdf), std::end(kIdentityCdf));
     }
     L.pixelBase[l] = inPacket ? l * pixels : 0;  // lanes past the packet read the first lane's pixels
     if (!inPacket) continue;

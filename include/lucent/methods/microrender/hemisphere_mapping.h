@@ -18,7 +18,6 @@
 #include <vector>
 
 #include "lucent/core/math.h"
-#include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/scene/bsdf.h"
 
 namespace lucent {
@@ -36,6 +35,38 @@ struct WarpTable {
   std::vector<float> rowCdf;        // T x (T + 1): column j's conditional CDF at j * (T + 1)
   std::vector<float> scratch;       // tabulation's working space, reused
 };
+
+// Phi^-1 of 2.3 over inverse CDFs of n x n cells: the continuous pixel coordinates (u, v) in [0, 1)^2
+// of a local direction's (omega_x, omega_y), M^-1 then C^-1. The n + 1 values of M^-1 start at
+// columns[columnBase], column j's n + 1 values of C^-1 at rows[rowBase + j (n + 1)]. The Nusselt
+// mapping is the table of one cell {0, 1}, whose inverse is the identity (0 + a (1 - 0) is a
+// exactly). The traversal calls this in loops over a packet's lanes, with one array and each lane's
+// bases: selects rather than std::clamp and std::min, and 32-bit indices from the same arrays, let
+// GCC vectorize them (a pointer per lane does not: it measured 1.5x slower).
+inline Vec2 inverseCdfs(const float* columns, int32_t columnBase, const float* rows, int32_t rowBase, int32_t n,
+                        float lx, float ly) {
+  constexpr float kBelowOne = 0x1.fffffep-1f;
+  const float a0 = (lx + 1.0f) * 0.5f, b0 = (ly + 1.0f) * 0.5f;  // clamped to [0, kBelowOne]
+  const float a = a0 < 0.0f ? 0.0f : kBelowOne < a0 ? kBelowOne : a0;
+  const float b = b0 < 0.0f ? 0.0f : kBelowOne < b0 ? kBelowOne : b0;
+  const float an = a * float(n), bn = b * float(n);
+  const int32_t j0 = int32_t(an), k0 = int32_t(bn);
+  const int32_t j = n - 1 < j0 ? n - 1 : j0, k = n - 1 < k0 ? n - 1 : k0;
+  const int32_t column = columnBase + j, row = rowBase + j * (n + 1) + k;
+  const float u = columns[column] + (an - float(j)) * (columns[column + 1] - columns[column]);
+  const float v = rows[row] + (bn - float(k)) * (rows[row + 1] - rows[row]);
+  return {kBelowOne < u ? kBelowOne : u, kBelowOne < v ? kBelowOne : v};
+}
+inline constexpr float kIdentityCdf[2] = {0.0f, 1.0f};
+
+// The pixel of continuous coordinates (u, v) in [0, 1)^2, in a width x height buffer.
+struct PixelCoord {
+  int32_t column, row;
+};
+inline PixelCoord pixelAt(Vec2 uv, int32_t width, int32_t height) {
+  const int32_t x = int32_t(uv.x * float(width)), y = int32_t(uv.y * float(height));
+  return {width - 1 < x ? width - 1 : x, height - 1 < y ? height - 1 : y};
+}
 
 // What does not change from one gather point to the next, computed once per render: the part of
 // every table cell inside the unit disc and where the BRDF is evaluated for it, the Lambertian table
@@ -76,18 +107,9 @@ struct HemisphereMapping {
 
   // Continuous pixel coordinates (u, v) in [0, 1)^2 of a local direction with z > 0 (Phi^-1), and the
   // direction of (u, v) (Phi); `inside` is false where (u, v) maps outside the disc.
-  Vec2 inverse(Vec3 local) const {  // inline: the traversal maps every node it visits
-    const float a = std::clamp((local.x + 1.0f) * 0.5f, 0.0f, 0x1.fffffep-1f);
-    const float b = std::clamp((local.y + 1.0f) * 0.5f, 0.0f, 0x1.fffffep-1f);
-    if (kind == MappingKind::Nusselt) return {a, b};
-    const WarpTable& t = *table;
-    const int n = t.size;
-    const float an = a * float(n), bn = b * float(n);
-    const int j = std::min(int(an), n - 1), k = std::min(int(bn), n - 1);
-    const float* rows = &t.rowCdf[size_t(j) * (n + 1)];
-    const float u = t.columnCdf[j] + (an - float(j)) * (t.columnCdf[j + 1] - t.columnCdf[j]);
-    const float v = rows[k] + (bn - float(k)) * (rows[k + 1] - rows[k]);
-    return {std::min(u, 0x1.fffffep-1f), std::min(v, 0x1.fffffep-1f)};
+  Vec2 inverse(Vec3 local) const {
+    if (kind == MappingKind::Nusselt) return inverseCdfs(kIdentityCdf, 0, kIdentityCdf, 0, 1, local.x, local.y);
+    return inverseCdfs(table->columnCdf.data(), 0, table->rowCdf.data(), 0, table->size, local.x, local.y);
   }
   Vec3 forward(Vec2 uv, bool& inside) const;
   // (omega_x, omega_y) of (u, v), possibly outside the disc: M^-1(u) (`column`: the table column and
@@ -100,9 +122,8 @@ struct HemisphereMapping {
   Vec2 forwardDisc(Column c, float v) const;
   Vec2 forwardDisc(Vec2 uv) const { return forwardDisc(column(uv.x), uv.y); }
   int pixelOf(Vec3 local) const {
-    const Vec2 uv = inverse(local);
-    const int x = std::min(int(uv.x * float(width)), width - 1), y = std::min(int(uv.y * float(height)), height - 1);
-    return y * width + x;
+    const PixelCoord p = pixelAt(inverse(local), width, height);
+    return p.row * width + p.column;
   }
   // Density of the mapping's directions over solid angle (for uniform (u, v)).
   float pdf(Vec3 local) const;

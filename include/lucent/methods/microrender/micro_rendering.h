@@ -1,4 +1,4 @@
-// Micro-rendering of one gather point (Ritschel et al. 2009, 2.2, 3.1, 3.2): the point hierarchy's
+// Micro-rendering of gather points, a packet of them at once (Ritschel et al. 2009, 2.2, 3.1, 3.2): the point hierarchy's
 // cut, found by a stackless depth-first traversal with the solid-angle criterion, rasterized into a
 // micro-buffer with a depth test; leaves larger than a pixel resolved by on-demand ray casting; the
 // buffer convolved with the BRDF through the mapping's pixel weights.
@@ -23,7 +23,7 @@ struct GatherPoint {
   float selfDistance = 0;
 };
 
-// Per-thread scratch of one micro-rendering; buffers are reused from one gather point to the next.
+// One lane's micro-buffer, reused from one gather point to the next.
 struct MicroBuffer {
   int side = 0;
   std::vector<uint32_t> pixels;         // side x side packed depth | node (micro_buffer.h)
@@ -48,7 +48,7 @@ struct MicroCounters {
   uint64_t leavesListed = 0;      // leaves put on post-traversal lists
   uint64_t listFlushes = 0;       // lists ray-cast early because they were full
   uint64_t rayDiscTests = 0;
-  double rayCastSeconds = 0;      // time spent ray casting, within renderMicroBuffer
+  double rayCastSeconds = 0;      // time spent ray casting, within renderMicroBuffers
   MicroCounters& operator+=(const MicroCounters& o);
 };
 
