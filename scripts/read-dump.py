@@ -28,7 +28,7 @@ DTYPES = {
     "PointSample": np.dtype([("triangle", "<u4"), ("b1", "<f4"), ("b2", "<f4")]),
     "FloatNode": np.dtype([("center",) + F3, ("radius", "<f4"), ("cone_axis",) + F3, ("cone_angle", "<f4"),
                            ("albedo",) + F3]),
-    "PackedNode": np.dtype([("position", "<u2", (3,)), ("radius", "<u2"), ("normal_albedo", "<u4"), ("cone", "<u4")]),
+    "PackedNode": np.dtype([("position", "<u2", (3,)), ("radius", "<u2"), ("normal_albedo", "<u4"), ("cone_free", "<u4")]),
     "NodeQuantization": np.dtype([("origin",) + F3, ("step",) + F3, ("radius_step", "<f4")]),
     "ShadingPoint": np.dtype([("position",) + F3, ("geometric_normal",) + F3, ("normal",) + F3, ("wo",) + F3,
                               ("weight",) + F3, ("material", "<u4"), ("kd",) + F3, ("ks",) + F3, ("ns", "<f4"),

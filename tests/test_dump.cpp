@@ -11,6 +11,7 @@
 #include "lucent/methods/points/point_radiance.h"
 #include "lucent/scene/loader.h"
 #include "methods/photonmap/eye_paths.h"
+#include "methods/photonmap/photon_render.h"
 #include "methods/photonmap/radiance_estimate.h"
 #include "methods/photonmap/sorted_grid.h"
 #include "methods/photonmap/stencil_grid.h"
@@ -77,9 +78,7 @@ TEST_CASE("A purcell dump recomputes its maps and its caustic estimates", "[dump
     CHECK(std::filesystem::exists(dir / name));
 
   // The map, from the dumped photons with the render's grid options.
-  GridOptions gridOptions;
-  gridOptions.photonsPerCell = opt.photonsPerCell;
-  const SortedGrid map = buildSortedGrid(photons, gridOptions);
+  const SortedGrid map = buildSortedGrid(photons, gridOptionsFor(opt, opt.k));
   CHECK(std::memcmp(&map.grid, &grid[0], sizeof(UniformGrid)) == 0);
   CHECK(map.photonList == readDump<uint32_t>(dir / "caustic.photon_list.bin", "uint32"));
   CHECK(map.firstPhoton == readDump<uint32_t>(dir / "caustic.first_photon.bin", "uint32"));
@@ -146,9 +145,7 @@ TEST_CASE("Stencil and hashed grid dumps hold the routing and the buckets their 
         for (uint32_t n : arrived) overflowing += n > m2;
         CHECK(overflowing > 0);
       } else {
-        GridOptions gridOptions;
-        gridOptions.photonsPerCell = opt.photonsPerCell;
-        const HashedGrid map2 = buildHashedGrid(photons, gridOptions);
+        const HashedGrid map2 = buildHashedGrid(photons, gridOptionsFor(opt, opt.k));
         CHECK(std::memcmp(&map2.grid, &grid, sizeof(UniformGrid)) == 0);
         CHECK(map2.photonList == readDump<uint32_t>(dir / (map + ".photon_list.bin"), "uint32"));
         CHECK(map2.cellKeys == readDump<uint64_t>(dir / (map + ".cell_keys.bin"), "uint64"));

@@ -377,7 +377,7 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
   GridOptions fine, coarse;
   fine.cellSize = 0.08f;
   coarse.photonsPerCell = 40;
-  uint64_t ties = 0, runs = 0;
+  uint64_t ties = 0, runs = 0, glossyRuns = 0;
   uint8_t boxesRead = 0;
   for (const GridOptions& options : {fine, coarse}) {
     const SortedGrid sorted = buildSortedGrid(photons, options);
@@ -411,6 +411,22 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
                                      }) > 1;
       runs += b.cellsVisited;
       boxesRead |= b.boxesRead;
+      if (shells != UINT32_MAX) return;
+      // A glossy surface's photons need the BRDF each: the visitor declines the runs, and the
+      // estimate is that of one photon at a time, to the bit.
+      EstimatePoint glossy = q;
+      glossy.bsdf.type = MaterialType::Phong;
+      glossy.bsdf.kd = Rgb(0.2f), glossy.bsdf.ks = Rgb(0.5f), glossy.bsdf.ns = 30;
+      glossy.woLocal = normalize(Vec3{0.3f, -0.2f, 1.0f});
+      estimate_detail::Accumulator glossyOne(glossy), glossyVisited(glossy);
+      KnnGridSearch c = beginKnnGrid(p, k, maxRadius), d = c;
+      advanceKnnGrid(map, c, shells, [&](uint32_t, const Photon& photon, float d2) { glossyOne.add(photon, d2); });
+      estimate_detail::GridVisitor glossyLanes{glossyVisited, {}};
+      advanceKnnGrid(map, d, shells, glossyLanes);
+      glossyLanes.finish();
+      CHECK((glossyVisited.sum == glossyOne.sum));
+      CHECK(glossyVisited.used == glossyOne.used);
+      glossyRuns += glossyOne.used > 0;
     };
     for (Vec3 p : queryPoints(photons, 40, 9)) {
       const Vec3 n = sampleUniformSphere(rng.uniform2());
@@ -424,6 +440,7 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
   }
   CHECK(ties > 100);
   CHECK(runs > 10000);
+  CHECK(glossyRuns > 100);
   CHECK(boxesRead == (kReadShortSearch | kReadAcceptedCube | kReadBeyondCube));
 }
 

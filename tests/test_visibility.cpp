@@ -119,6 +119,9 @@ TEST_CASE("RayPacket::assign fills the first lanes and leaves the rest inactive"
       if (i >= count) {
         CHECK_FALSE(blocked[i]);
         CHECK(hits.triangle[i] == kNoHit);
+        CHECK(hits.t[i] == kInf);
+        CHECK(hits.b1[i] == 0.0f);
+        CHECK(hits.b2[i] == 0.0f);
         continue;
       }
       CHECK(blocked[i] == vis.occluded(expected));
@@ -179,6 +182,8 @@ TEST_CASE("Packets of 1 to N rays, some of them untraceable, give the single-ray
         hitsFound += single.found(), blockedFound += blocked;
         CHECK(hits16[j].triangle == single.triangle);
         CHECK(hits16[j].t == single.t);
+        CHECK(hits16[j].b1 == single.b1);  // a miss's barycentrics are 0, as Hit{}'s
+        CHECK(hits16[j].b2 == single.b2);
         CHECK(blocked16[j] == blocked);
         if (count <= 8) {
           CHECK(hits8[j].triangle == single.triangle);

@@ -1,5 +1,6 @@
 #include "lucent/core/dump.h"
 
+#include <bit>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -8,6 +9,9 @@
 #include "lucent/core/files.h"
 
 namespace lucent {
+
+// Records are written as they lie in memory, and the format is little-endian.
+static_assert(std::endian::native == std::endian::little);
 
 namespace {
 constexpr char kMagic[8] = {'L', 'C', 'N', 'T', 'D', 'U', 'M', 'P'};

@@ -75,7 +75,7 @@ void writePng(const Image& image, const std::string& path) {
       for (int c : rgb) {
         float v = image.at(x, y, c);
         v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-        bytes[i++] = static_cast<unsigned char>(std::lround(linearToSrgb(v) * 255.0f));
+        bytes[i++] = linearToSrgb8(v);
       }
   OIIO::ImageSpec spec(image.width(), image.height(), 3, OIIO::TypeDesc::UINT8);
   spec.attribute("oiio:ColorSpace", "sRGB");

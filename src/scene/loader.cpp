@@ -85,7 +85,7 @@ std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string
         byte = uint32_t(code);
       } else {
         const float linear = srgb ? srgbToLinear(v) : v;
-        byte = uint32_t(std::lround(255.0f * linearToSrgb(std::clamp(linear, 0.0f, 1.0f))));
+        byte = linearToSrgb8(std::clamp(linear, 0.0f, 1.0f));
       }
       packed |= byte << (8 * k);
     }

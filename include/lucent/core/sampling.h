@@ -85,7 +85,6 @@ inline Vec2 stratifiedSample2D(uint32_t i, uint32_t n, Vec2 u) {
           std::min((float(i / nx) + u.y) / float(ny), 0x1.fffffep-1f)};
 }
 
-// Multiple importance sampling weight, power heuristic with beta = 2 (Veach 1997).
 // Russian roulette on a path's throughput: the path survives with probability min(1, the
 // throughput's largest component), u uniform in [0, 1), and the survivor is scaled up by as much.
 inline bool survivesRussianRoulette(Rgb& beta, float u) {
@@ -95,6 +94,7 @@ inline bool survivesRussianRoulette(Rgb& beta, float u) {
   return true;
 }
 
+// Multiple importance sampling weight, power heuristic with beta = 2 (Veach 1997).
 inline float powerHeuristic(float pdfA, float pdfB) {
   const float a = pdfA * pdfA, b = pdfB * pdfB;
   return a + b > 0 ? a / (a + b) : 0.0f;

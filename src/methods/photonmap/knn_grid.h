@@ -76,8 +76,8 @@ inline float distanceBeyondShell(const UniformGrid& g, Vec3 p, CellCoord c, int3
   float d = kInf;
   const int32_t ci[3] = {c.x, c.y, c.z};
   for (int a = 0; a < 3; ++a) {
-    if (ci[a] - s > 0) d = std::min(d, p[a] - (g.lo[a] + float(ci[a] - s) * g.cellSize[a]));
-    if (ci[a] + s + 1 < g.res[a]) d = std::min(d, g.lo[a] + float(ci[a] + s + 1) * g.cellSize[a] - p[a]);
+    if (ci[a] - s > 0) d = std::min(d, p[a] - g.cellLo(a, ci[a] - s));
+    if (ci[a] + s + 1 < g.res[a]) d = std::min(d, g.cellLo(a, ci[a] + s + 1) - p[a]);
   }
   return d - g.slack;
 }
@@ -103,6 +103,13 @@ struct Reach {
     if (newLimit2 == limit2) return;
     limit2 = newLimit2;
     for (int a = 0; a < 3; ++a) reachAlong(g, p, limit2, a, lo[a], hi[a]);
+  }
+  // Every cell of the grid (the reach of an infinite radius).
+  static Reach whole(const UniformGrid& g) {
+    Reach r;
+    r.limit2 = kInf;
+    for (int a = 0; a < 3; ++a) r.lo[a] = 0, r.hi[a] = g.res[a] - 1;
+    return r;
   }
 };
 
@@ -204,7 +211,7 @@ void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_
   const float limit2 = acceptanceLimit2(s);
   if (limit2 < kInf) {
     auto gap = [&](int a, int32_t cell) {
-      const float cellLo = g.lo[a] + float(cell) * g.cellSize[a], cellHi = cellLo + g.cellSize[a];
+      const float cellLo = g.cellLo(a, cell), cellHi = cellLo + g.cellSize[a];
       return std::max(std::max(cellLo - s.position[a], s.position[a] - cellHi) - g.slack, 0.0f);
     };
     const float dy = gap(1, y), dz = gap(2, z), rest = limit2 - dy * dy - dz * dz;
@@ -234,8 +241,8 @@ uint32_t photonsIn(const Map& map, const int32_t lo[3], const int32_t hi[3]) {
   else return lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2] ? 1 : 0;
 }
 
-// The box of cells within Chebyshev distance `shell` of c, clipped to the reach box (and so to the
-// grid).
+// The box of cells within Chebyshev distance `shell` of c (shells 0..shell), clipped to the reach
+// box (Reach::whole: to the grid).
 inline void shellBox(const Reach& reach, CellCoord c, int32_t shell, int32_t lo[3], int32_t hi[3]) {
   const int32_t ci[3] = {c.x, c.y, c.z};
   for (int a = 0; a < 3; ++a) lo[a] = std::max(reach.lo[a], ci[a] - shell), hi[a] = std::min(reach.hi[a], ci[a] + shell);
@@ -395,12 +402,6 @@ bool exploreShortSearch(const Map& map, KnnGridSearch& s, const Reach& reach, Vi
   return true;
 }
 
-// The box of shells 0..t about c, clipped to the grid.
-inline void cubeBox(const UniformGrid& g, CellCoord c, int32_t t, int32_t lo[3], int32_t hi[3]) {
-  const int32_t ci[3] = {c.x, c.y, c.z};
-  for (int a = 0; a < 3; ++a) lo[a] = std::max(0, ci[a] - t), hi[a] = std::min(g.res[a] - 1, ci[a] + t);
-}
-
 // The shells that can be taken together as one box, row by row, because the order of their
 // photons cannot matter: they hold fewer photons than the k - found still sought, and all lie
 // within the maximum radius (the box's farthest corner does, the box cut to the photons' bounds),
@@ -412,13 +413,14 @@ inline void cubeBox(const UniformGrid& g, CellCoord c, int32_t t, int32_t lo[3],
 template <GridPhotonMap Map>
 int32_t acceptedCube(const Map& map, const KnnGridSearch& s, CellCoord c, int32_t most) {
   const UniformGrid& g = map.grid;
-  auto qualifies = [&](int32_t t) {
+  const Reach grid = Reach::whole(g);
+  auto qualifies = [&](int32_t t) {  // the box of shells 0..t
     int32_t lo[3], hi[3];
-    cubeBox(g, c, t, lo, hi);
+    shellBox(grid, c, t, lo, hi);
     float far2 = 0;
     for (int a = 0; a < 3; ++a) {
-      const float boxLo = g.lo[a] + float(lo[a]) * g.cellSize[a] - g.slack;
-      const float boxHi = std::min(g.lo[a] + float(hi[a] + 1) * g.cellSize[a], g.hi[a]) + g.slack;
+      const float boxLo = g.cellLo(a, lo[a]) - g.slack;
+      const float boxHi = std::min(g.cellLo(a, hi[a] + 1), g.hi[a]) + g.slack;
       const float far = std::max(s.position[a] - boxLo, boxHi - s.position[a]);
       far2 += far * far;
     }
@@ -426,10 +428,7 @@ int32_t acceptedCube(const Map& map, const KnnGridSearch& s, CellCoord c, int32_
     return far2 * 1.0001f <= s.maxRadius2 && map.cellCounts.count(lo, hi) < s.k - s.found;
   };
   if (most < 0 || !qualifies(0)) return -1;
-  const int32_t ci[3] = {c.x, c.y, c.z};
-  int32_t covering = 0;  // shells 0..covering cover the grid
-  for (int a = 0; a < 3; ++a) covering = std::max({covering, ci[a], g.res[a] - 1 - ci[a]});
-  int32_t yes = 0, no = std::min(most, covering) + 1;
+  int32_t yes = 0, no = std::min(most, lastShellOf(grid, c)) + 1;  // shells 0..lastShellOf cover the grid
   while (no - yes > 1) {
     const int32_t mid = yes + (no - yes) / 2;
     (qualifies(mid) ? yes : no) = mid;
@@ -441,7 +440,7 @@ int32_t acceptedCube(const Map& map, const KnnGridSearch& s, CellCoord c, int32_
 template <GridPhotonMap Map, class Visit>
 void exploreCube(const Map& map, KnnGridSearch& s, CellCoord c, int32_t t, Visit& visit) {
   int32_t lo[3], hi[3];
-  cubeBox(map.grid, c, t, lo, hi);
+  shellBox(Reach::whole(map.grid), c, t, lo, hi);  // the box of shells 0..t
   for (int32_t z = lo[2]; z <= hi[2]; ++z)
     for (int32_t y = lo[1]; y <= hi[1]; ++y) visitRun(map.rowPhotons(lo[0], hi[0], y, z), s, visit);
 }
@@ -454,7 +453,7 @@ void exploreCube(const Map& map, KnnGridSearch& s, CellCoord c, int32_t t, Visit
 template <GridPhotonMap Map, class Visit>
 void exploreBeyondCube(const Map& map, KnnGridSearch& s, const Reach& reach, CellCoord c, int32_t t, Visit& visit) {
   int32_t lo[3], hi[3];
-  cubeBox(map.grid, c, t, lo, hi);
+  shellBox(Reach::whole(map.grid), c, t, lo, hi);  // the cube of shells 0..t
   for (int32_t z = reach.lo[2]; z <= reach.hi[2]; ++z)
     for (int32_t y = reach.lo[1]; y <= reach.hi[1]; ++y) {
       if (y < lo[1] || y > hi[1] || z < lo[2] || z > hi[2]) {
@@ -470,7 +469,9 @@ void exploreBeyondCube(const Map& map, KnnGridSearch& s, const Reach& reach, Cel
 }  // namespace knn_grid_detail
 
 // Explores up to `shells` more shells, calling visit(photonIndex, photon, d2) for every photon
-// accepted (photonIndex into map.photons, in the order of the input photons).
+// accepted (photonIndex into map.photons, in the order of the input photons), unless the visitor
+// takes a run whole (examineRun). Where boxes of rows are read, photons come in another order than
+// shell by shell (see the top of this file).
 template <GridPhotonMap Map, class Visit>
 void advanceKnnGrid(const Map& map, KnnGridSearch& s, uint32_t shells, Visit&& visit) {
   using namespace knn_grid_detail;

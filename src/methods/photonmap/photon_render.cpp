@@ -35,6 +35,17 @@ void validatePhotonMapOptions(const PhotonMapOptions& o) {
   if (const std::string why = dumpDirectoryProblem(o.dumpDirectory); !why.empty()) fail(why);
 }
 
+GridOptions gridOptionsFor(const PhotonMapOptions& options, uint32_t k) {
+  GridOptions grid;
+  grid.resolution = options.gridResolution;
+  grid.cellSize = options.cellSize;
+  // Cells of a fraction of the search radius: the kNN-grid then reads few cells and accepts few
+  // photons beyond the k nearest (see the README's measurements).
+  grid.photonsPerCell = options.photonsPerCell > 0 ? options.photonsPerCell : std::max(1.0f, float(k) / 16.0f);
+  grid.stencilSide = options.stencilSide;
+  return grid;
+}
+
 namespace {
 
 BuiltPhotonMap buildMap(std::vector<Photon> photons, PhotonMapKind kind, const GridOptions& grid, RenderStats& sub) {
@@ -84,19 +95,9 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
   stats.addStage("trace_photons", traceClock.seconds());
 
   Stopwatch buildClock;
-  // Cells of a fraction of the search radius: the kNN-grid then reads few cells and accepts few
-  // photons beyond the k nearest (see the README's measurements).
-  auto gridFor = [&](uint32_t k) {
-    GridOptions grid;
-    grid.resolution = options.gridResolution;
-    grid.cellSize = options.cellSize;
-    grid.photonsPerCell = options.photonsPerCell > 0 ? options.photonsPerCell : std::max(1.0f, float(k) / 16.0f);
-    grid.stencilSide = options.stencilSide;
-    return grid;
-  };
   RenderStats globalSub, causticSub;
-  maps.global = buildMap(std::move(globalPhotons), options.map, gridFor(maps.globalSettings.k), globalSub);
-  maps.caustic = buildMap(std::move(caustic.caustic), options.map, gridFor(maps.causticSettings.k), causticSub);
+  maps.global = buildMap(std::move(globalPhotons), options.map, gridOptionsFor(options, maps.globalSettings.k), globalSub);
+  maps.caustic = buildMap(std::move(caustic.caustic), options.map, gridOptionsFor(options, maps.causticSettings.k), causticSub);
   stats.addStage("build_map", buildClock.seconds());
   for (const auto& [name, s] : globalSub.stageSeconds) stats.addStage("build_map.global." + name, s);
   for (const auto& [name, s] : causticSub.stageSeconds) stats.addStage("build_map.caustic." + name, s);
@@ -180,7 +181,7 @@ void dumpPhotonMap(const PhotonMapOptions& options, const std::string& prefix, c
     writeDump(dir, prefix + "." + array, type, std::span(records));
   };
   auto grid = [&](const UniformGrid& g, const CellCountTable& counts) {
-    dump("grid", "UniformGrid", std::vector<UniformGrid>{g});
+    dump("grid", "UniformGrid", std::span(&g, 1));
     dump("cell_counts", "uint32", counts.prefix);
   };
   if (const auto* m = std::get_if<SortedGrid>(&built.map)) {
@@ -194,7 +195,7 @@ void dumpPhotonMap(const PhotonMapOptions& options, const std::string& prefix, c
     dump("slots", "uint32", m->slots);
     dump("arrived", "uint32", m->arrived);
   } else if (const auto* m = std::get_if<HashedGrid>(&built.map)) {
-    dump("grid", "UniformGrid", std::vector<UniformGrid>{m->grid});
+    dump("grid", "UniformGrid", std::span(&m->grid, 1));
     dump("photons", "Photon", m->photons);
     dump("photon_list", "uint32", m->photonList);
     dump("cell_keys", "uint64", m->cellKeys);

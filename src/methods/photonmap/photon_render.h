@@ -31,6 +31,9 @@ struct RenderPhotonMaps {
   EstimateSettings globalSettings, causticSettings;
 };
 
+// The grid of a map searched for k photons, as the render options ask for it.
+GridOptions gridOptionsFor(const PhotonMapOptions& options, uint32_t k);
+
 // Stages "trace_photons" (the global pass, and a caustic-only pass of causticPhotons paths) and
 // "build_map" (both maps), timed into `stats` with their sub-stages and counters.
 RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& visibility, const PhotonMapOptions& options,

@@ -74,12 +74,14 @@ struct UniformGrid {
   static uint64_t cellKey(CellCoord c) {
     return uint64_t(c.x) | uint64_t(c.y) << 21 | uint64_t(c.z) << 42;
   }
+  // Where cell i begins along axis a (i may be past the last cell: where the grid's cells end).
+  float cellLo(int a, int32_t i) const { return lo[a] + float(i) * cellSize[a]; }
   // Squared distance from p to the box of cell c, shrunk by `slack` (never more than the truth).
   float cellDistance2(Vec3 p, CellCoord c) const {
     float d2 = 0;
     const int32_t ci[3] = {c.x, c.y, c.z};
     for (int a = 0; a < 3; ++a) {
-      const float cellLo = lo[a] + float(ci[a]) * cellSize[a], cellHi = cellLo + cellSize[a];
+      const float cellLo = this->cellLo(a, ci[a]), cellHi = cellLo + cellSize[a];
       const float gap = std::max({cellLo - p[a], p[a] - cellHi, 0.0f}) - slack;
       if (gap > 0) d2 += gap * gap;
     }
@@ -122,8 +124,10 @@ CellCountTable buildCellCountTable(const UniformGrid& grid, const std::function<
 // gather, as a GPU would copy them into list order).
 std::vector<Photon> gatherPhotons(const std::vector<Photon>& photons, const std::vector<uint32_t>& ids);
 
-// The photons of one cell, as a grid photon map hands them to the kNN-grid search.
 struct PhotonColumns;
+
+// The photons of one cell, or of a run of cells that the map keeps contiguous (a row, a range of
+// cell indices), as a grid photon map hands them to the kNN-grid search.
 struct CellPhotons {
   const Photon* photons = nullptr;     // the photons, contiguous: read without indirection
   const uint32_t* ids = nullptr;       // their indices into the map's photons
