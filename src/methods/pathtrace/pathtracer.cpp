@@ -67,9 +67,10 @@ struct ShadowQuery {
   int verticesBefore = 0;
 };
 
-// Paths traced together: enough for long vectorized loops, few enough that the lanes' arrays stay
-// near the first cache level (256 measured much slower, 64 no faster; README "Throughput").
-constexpr int64_t kWaveSize = 128;
+// Paths traced together: enough for long vectorized loops and full shadow packets, and to spread
+// the cost of switching between Embree's kernels and the shading loops over many paths (128 1-2% slower,
+// 512 no faster; README "Throughput").
+constexpr int64_t kWaveSize = 256;
 static_assert(kWaveSize <= kMaxLanes, "every path of a wave may need a lane");
 
 // What a lane needs of an emitting triangle to sample it, gathered once per light.
