@@ -37,7 +37,7 @@ struct PackedNodes {
 };
 
 // One listed disc against every pixel's ray: the innermost loop of ray casting, over structure of
-// arrays with selects, so that it vectorizes; an AVX2 clone is picked at run time where the CPU has
+// arrays with selects, so that it vectorizes; an AVX-512 or AVX2 clone is picked at run time where the CPU has
 // it (the same IEEE operations, so the same results: no FMA contraction, -ffp-contract=off).
 // Rays are cast in tiles of kRayTile x kRayTile pixels, each bounded by a cone of directions.
 constexpr int kRayTile = 4;
@@ -50,7 +50,7 @@ struct DiscForRays {
   float height;      // of the gather point above the disc's plane
   float radius2, tMin;
 };
-__attribute__((target_clones("avx2", "default"))) void intersectDisc(
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void intersectDisc(
     const DiscForRays disc, uint32_t index, const float* dx, const float* dy, const float* dz, size_t count,
     float* nearestT, uint32_t* nearestNode) {
   for (size_t k = 0; k < count; ++k) {
@@ -137,7 +137,7 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
 }
 
 // 2.2 "Point Hierarchy Cut", one node against every lane, as loops over the lanes that GCC
-// vectorizes (selects, no branches; an AVX2 clone where the CPU has it). The tests are those the
+// vectorizes (selects, no branches; AVX-512 and AVX2 clones where the CPU has them). The tests are those the
 // traversal made one gather point at a time before packets, in the same order of precedence, with
 // the same IEEE operations:
 //  - below the tangent plane altogether: skip;
@@ -161,7 +161,7 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
 // The lanes' results are returned by value: stores to the return slot cannot alias the gathered
 // loads, so the loops vectorize. The tests' precedence is applied last first, one comparison per select
 // (GCC vectorizes chained selects, not selects on combined conditions).
-__attribute__((target_clones("avx2", "default"))) LaneResults classifyLeaf(const PacketLanes& __restrict L,
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) LaneResults classifyLeaf(const PacketLanes& __restrict L,
                                                                      const LaneNode& __restrict n) {
   LaneResults r;
   const float discArea = kPi * n.radius * n.radius;
@@ -185,7 +185,7 @@ __attribute__((target_clones("avx2", "default"))) LaneResults classifyLeaf(const
   return r;
 }
 
-__attribute__((target_clones("avx2", "default"))) LaneResults classifyInterior(const PacketLanes& __restrict L,
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) LaneResults classifyInterior(const PacketLanes& __restrict L,
                                                                          const LaneNode& __restrict n) {
   LaneResults r;
   const float twoPi = 2.0f * kPi;

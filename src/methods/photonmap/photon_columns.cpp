@@ -34,10 +34,11 @@ PhotonColumns photonColumns(std::span<const Photon> listed) {
 namespace {
 
 // The helpers below pass eight-lane vectors by value; they are inlined within this file, so GCC's
-// note that the default clone passes them differently from the AVX2 one concerns no interface.
+// note that the default clone passes them differently from the AVX2 and AVX-512 ones concerns no interface.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
-// Eight lanes as GCC vector types: one AVX register in the AVX2 clone, two SSE registers otherwise.
+// Eight lanes as GCC vector types: one AVX register in the AVX2 and AVX-512 clones (the latter with
+// mask registers for the comparisons), two SSE registers otherwise.
 typedef float Floats __attribute__((vector_size(32)));
 typedef int32_t Ints __attribute__((vector_size(32)));
 
@@ -100,7 +101,7 @@ Block block(const PhotonColumns& c, uint32_t first, Ints valid, const Query& q) 
 
 }  // namespace
 
-__attribute__((target_clones("avx2", "default"))) void sumPhotonRun(const PhotonColumns& c, uint32_t begin,
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void sumPhotonRun(const PhotonColumns& c, uint32_t begin,
                                                                     uint32_t end, Vec3 n, KnnGridSearch& s,
                                                                     PhotonLaneSums& sums) {
   const Query q{broadcast(s.position.x), broadcast(s.position.y), broadcast(s.position.z),
