@@ -380,6 +380,31 @@ TEST_CASE("A packet of gather points gives every lane the buffer it gets alone",
         }
 }
 
+TEST_CASE("A packet refuses more than eight lanes and lanes whose mappings differ", "[microrender]") {
+  // The lanes of a packet share one traversal and one pixel grid: a ninth lane or a lane with
+  // another mapping kind, side or table size is a programming error, reported rather than rendered.
+  const GatherSetup s(ceilingPlane(50), 1u << 10, NodeEncoding::Float, MappingKind::Warped, true, unitRadiance);
+  const GatherPoint gp{{0, 0, 0}, Frame({0, 1, 0}), 0};
+  const SurfaceBsdf diffuse = diffuseBsdf(Rgb(0.5f));
+  const TestMapping warped24(MappingKind::Warped, 24, diffuse, {0, 0, 1});
+  const TestMapping nusselt24(MappingKind::Nusselt, 24, diffuse, {0, 0, 1});
+  const TestMapping warped16(MappingKind::Warped, 16, diffuse, {0, 0, 1});
+  const TestMapping warpedTable16(MappingKind::Warped, 24, diffuse, {0, 0, 1}, {0.5f, 0.5f}, 16);
+  MicroBuffer buffers[kGatherPacket + 1];
+  MicroCounters counters;
+  auto packet = [&](std::initializer_list<const HemisphereMapping*> mappings) {
+    std::vector<MicroLane> lanes;
+    for (const HemisphereMapping* m : mappings) lanes.push_back({&gp, m, &buffers[lanes.size()]});
+    renderMicroBuffers(s.micro, lanes, s.ctx.settings, counters);
+  };
+  const HemisphereMapping* w = &warped24.mapping;
+  REQUIRE_NOTHROW(packet({w, w, w, w, w, w, w, w}));
+  REQUIRE_THROWS_AS(packet({w, w, w, w, w, w, w, w, w}), std::logic_error);
+  REQUIRE_THROWS_AS(packet({w, &nusselt24.mapping}), std::logic_error);
+  REQUIRE_THROWS_AS(packet({w, &warped16.mapping}), std::logic_error);
+  REQUIRE_THROWS_AS(packet({w, &warpedTable16.mapping}), std::logic_error);
+}
+
 TEST_CASE("Gathering a uniform radiance field gives the receiver's directional albedo", "[microrender]") {
   // Inside a closed box whose every point sends radiance 1, the gathered radiance at a wall is the
   // receiver's directional albedo for wo, for diffuse and glossy receivers with either mapping: any
