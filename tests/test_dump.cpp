@@ -43,6 +43,13 @@ TEST_CASE("Dumps hold their records behind a header that names them", "[dump]") 
   CHECK_THROWS_WITH(readDumpHeader(dir / "not-a-dump.bin"), Catch::Contains("not a Lucent dump"));
   std::filesystem::resize_file(path, sizeof(DumpHeader) + 6);
   CHECK_THROWS_WITH(readDump<uint32_t>(path, "uint32"), Catch::Contains("truncated"));
+  {  // a damaged count is refused against the file's length, before anything is allocated
+    DumpHeader damaged = header;
+    damaged.count = uint64_t(1) << 60;
+    std::fstream file(path, std::ios::binary | std::ios::in | std::ios::out);
+    file.write(reinterpret_cast<const char*>(&damaged), sizeof damaged);
+  }
+  CHECK_THROWS_WITH(readDump<uint32_t>(path, "uint32"), Catch::Contains("truncated"));
   CHECK_THROWS_WITH(writeDump((dir.path / "missing").string(), "values", "uint32", std::span(values)),
                     Catch::Contains("missing/values.bin"));
 }

@@ -42,8 +42,8 @@ std::string dumpDirectoryProblem(const std::string& directory) {
   return "dump directory '" + directory + "' is not an existing directory";
 }
 
-DumpHeader readDumpHeader(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
+namespace {
+DumpHeader readHeader(std::ifstream& in, const std::string& path) {
   if (!in) throw std::runtime_error("cannot read dump '" + path + "'");
   DumpHeader header{};
   in.read(reinterpret_cast<char*>(&header), sizeof header);
@@ -51,19 +51,33 @@ DumpHeader readDumpHeader(const std::string& path) {
     throw std::runtime_error("'" + path + "' is not a Lucent dump");
   return header;
 }
+}  // namespace
 
-void readDumpRecords(const std::string& path, const std::string& type, uint32_t recordBytes, void* records,
-                     uint64_t count) {
-  const DumpHeader header = readDumpHeader(path);
-  const std::string stored(header.type, strnlen(header.type, sizeof header.type));
-  if (stored != type || header.recordBytes != recordBytes || header.count != count)
-    throw std::runtime_error("dump '" + path + "' holds " + std::to_string(header.count) + " " + stored + " records of " +
-                             std::to_string(header.recordBytes) + " bytes, not " + std::to_string(count) + " " + type +
-                             " of " + std::to_string(recordBytes));
+DumpHeader readDumpHeader(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
+  return readHeader(in, path);
+}
+
+void readDumpRecords(const std::string& path, const std::string& type, uint32_t recordBytes,
+                     const std::function<void*(uint64_t count)>& storage) {
+  std::ifstream in(path, std::ios::binary);
+  const DumpHeader header = readHeader(in, path);
+  const std::string stored(header.type, strnlen(header.type, sizeof header.type));
+  if (stored != type || header.recordBytes != recordBytes)
+    throw std::runtime_error("dump '" + path + "' holds " + stored + " records of " +
+                             std::to_string(header.recordBytes) + " bytes, not " + type + " of " +
+                             std::to_string(recordBytes));
+  // The length is checked before anything is allocated: a damaged count must not ask for terabytes.
+  in.seekg(0, std::ios::end);
+  const uint64_t payload = uint64_t(in.tellg()) - sizeof(DumpHeader);
+  if (!in || header.count > payload / recordBytes)
+    throw std::runtime_error("dump '" + path + "' is truncated: " + std::to_string(header.count) + " records of " +
+                             std::to_string(recordBytes) + " bytes announced, " + std::to_string(payload) +
+                             " bytes present");
+  void* records = storage(header.count);
   in.seekg(sizeof(DumpHeader));
-  in.read(static_cast<char*>(records), std::streamsize(uint64_t(recordBytes) * count));
-  if (!in) throw std::runtime_error("dump '" + path + "' is truncated");
+  in.read(static_cast<char*>(records), std::streamsize(uint64_t(recordBytes) * header.count));
+  if (!in) throw std::runtime_error("dump '" + path + "' could not be read");
 }
 
 }  // namespace lucent

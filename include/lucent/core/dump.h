@@ -5,6 +5,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 #include <type_traits>
@@ -41,14 +42,19 @@ std::string dumpDirectoryProblem(const std::string& directory);
 // The header of a dump file; throws std::runtime_error naming the file if it is not one.
 DumpHeader readDumpHeader(const std::string& path);
 
-// The records of a dump file, checked against the expected type name and record size.
-void readDumpRecords(const std::string& path, const std::string& type, uint32_t recordBytes, void* records,
-                     uint64_t count);
+// The records of a dump file, checked against the expected type name and record size, and the
+// header's count against the file's length, then read into storage(count); throws
+// std::runtime_error naming the file otherwise. The file is opened once.
+void readDumpRecords(const std::string& path, const std::string& type, uint32_t recordBytes,
+                     const std::function<void*(uint64_t count)>& storage);
 template <class T>
 std::vector<T> readDump(const std::string& path, const std::string& type) {
   static_assert(std::is_trivially_copyable_v<T>, "dumps hold plain records");
-  std::vector<T> records(readDumpHeader(path).count);
-  readDumpRecords(path, type, uint32_t(sizeof(T)), records.data(), records.size());
+  std::vector<T> records;
+  readDumpRecords(path, type, uint32_t(sizeof(T)), [&](uint64_t count) {
+    records.resize(count);
+    return static_cast<void*>(records.data());
+  });
   return records;
 }
 
