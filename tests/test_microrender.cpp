@@ -345,7 +345,7 @@ TEST_CASE("A packet of gather points gives every lane the buffer it gets alone",
       for (const bool rayCasting : {true, false})
         for (const int side : {8, 24}) {
           const GatherSetup s(scene, side == 8 ? 1u << 9 : 1u << 13, encoding, kind, rayCasting, unitRadiance, side);
-          for (const size_t count : {size_t(8), size_t(5)}) {
+          for (const size_t count : {size_t(kGatherPacket), size_t(5)}) {
             GatherScratch packet, alone;
             GatherRequest requests[kGatherPacket];
             Rng packetRngs[kGatherPacket], aloneRngs[kGatherPacket];
@@ -380,8 +380,8 @@ TEST_CASE("A packet of gather points gives every lane the buffer it gets alone",
         }
 }
 
-TEST_CASE("A packet refuses more than eight lanes and lanes whose mappings differ", "[microrender]") {
-  // The lanes of a packet share one traversal and one pixel grid: a ninth lane or a lane with
+TEST_CASE("A packet refuses lanes beyond kGatherPacket and lanes whose mappings differ", "[microrender]") {
+  // The lanes of a packet share one traversal and one pixel grid: a lane too many or a lane with
   // another mapping kind, side or table size is a programming error, reported rather than rendered.
   const GatherSetup s(ceilingPlane(50), 1u << 10, NodeEncoding::Float, MappingKind::Warped, true, unitRadiance);
   const GatherPoint gp{{0, 0, 0}, Frame({0, 1, 0}), 0};
@@ -392,14 +392,14 @@ TEST_CASE("A packet refuses more than eight lanes and lanes whose mappings diffe
   const TestMapping warpedTable16(MappingKind::Warped, 24, diffuse, {0, 0, 1}, {0.5f, 0.5f}, 16);
   MicroBuffer buffers[kGatherPacket + 1];
   MicroCounters counters;
-  auto packet = [&](std::initializer_list<const HemisphereMapping*> mappings) {
+  auto packet = [&](const std::vector<const HemisphereMapping*>& mappings) {
     std::vector<MicroLane> lanes;
     for (const HemisphereMapping* m : mappings) lanes.push_back({&gp, m, &buffers[lanes.size()]});
     renderMicroBuffers(s.micro, lanes, s.ctx.settings, counters);
   };
   const HemisphereMapping* w = &warped24.mapping;
-  REQUIRE_NOTHROW(packet({w, w, w, w, w, w, w, w}));
-  REQUIRE_THROWS_AS(packet({w, w, w, w, w, w, w, w, w}), std::logic_error);
+  REQUIRE_NOTHROW(packet(std::vector(kGatherPacket, w)));
+  REQUIRE_THROWS_AS(packet(std::vector(kGatherPacket + 1, w)), std::logic_error);
   REQUIRE_THROWS_AS(packet({w, &nusselt24.mapping}), std::logic_error);
   REQUIRE_THROWS_AS(packet({w, &warped16.mapping}), std::logic_error);
   REQUIRE_THROWS_AS(packet({w, &warpedTable16.mapping}), std::logic_error);

@@ -8,6 +8,7 @@
 #include <bit>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "lucent/core/stats.h"
 
@@ -68,12 +69,12 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void interse
 // cell for the Nusselt mapping, whose inverse is the identity) and every lane's pixels' solid angles
 // and spacings, in arrays of their own so that one index reaches any lane's entry.
 struct PacketLanes {
-  alignas(32) float px[kGatherPacket], py[kGatherPacket], pz[kGatherPacket];
-  alignas(32) float sx[kGatherPacket], sy[kGatherPacket], sz[kGatherPacket];
-  alignas(32) float tx[kGatherPacket], ty[kGatherPacket], tz[kGatherPacket];
-  alignas(32) float nx[kGatherPacket], ny[kGatherPacket], nz[kGatherPacket];
-  alignas(32) float selfDistance[kGatherPacket];
-  alignas(32) int32_t columnBase[kGatherPacket], rowBase[kGatherPacket], pixelBase[kGatherPacket];
+  alignas(64) float px[kGatherPacket], py[kGatherPacket], pz[kGatherPacket];
+  alignas(64) float sx[kGatherPacket], sy[kGatherPacket], sz[kGatherPacket];
+  alignas(64) float tx[kGatherPacket], ty[kGatherPacket], tz[kGatherPacket];
+  alignas(64) float nx[kGatherPacket], ny[kGatherPacket], nz[kGatherPacket];
+  alignas(64) float selfDistance[kGatherPacket];
+  alignas(64) int32_t columnBase[kGatherPacket], rowBase[kGatherPacket], pixelBase[kGatherPacket];
   const float* cdfs = nullptr;
   const float* solidAngle = nullptr;
   const float* spacing = nullptr;
@@ -90,10 +91,10 @@ enum LaneOutcome : int32_t { kSkipSubtree = 0, kDescend = 1, kSplat = 2, kListLe
 // Per lane: what to do with the node, and for splats the node's pixel, the vector to its centre, its
 // direction in the lane's local frame, its distance and its sphere's cone.
 struct LaneResults {
-  alignas(32) int32_t outcome[kGatherPacket], column[kGatherPacket], row[kGatherPacket];
-  alignas(32) float vx[kGatherPacket], vy[kGatherPacket], vz[kGatherPacket];
-  alignas(32) float lx[kGatherPacket], ly[kGatherPacket], lz[kGatherPacket], d[kGatherPacket];
-  alignas(32) float cosRadius[kGatherPacket];  // of the cone the node's sphere subtends
+  alignas(64) int32_t outcome[kGatherPacket], column[kGatherPacket], row[kGatherPacket];
+  alignas(64) float vx[kGatherPacket], vy[kGatherPacket], vz[kGatherPacket];
+  alignas(64) float lx[kGatherPacket], ly[kGatherPacket], lz[kGatherPacket], d[kGatherPacket];
+  alignas(64) float cosRadius[kGatherPacket];  // of the cone the node's sphere subtends
 };
 
 // A direction's pixel in lane l's mapping: HemisphereMapping::pixelOf over the lanes' tables.
@@ -621,7 +622,7 @@ void renderPacket(const Nodes& nodes, const MicroHierarchy& mh, std::span<const 
 void renderMicroBuffers(const MicroHierarchy& mh, std::span<const MicroLane> lanes, const MicroRenderSettings& settings,
                         MicroCounters& counters) {
   if (lanes.empty()) return;
-  if (lanes.size() > size_t(kGatherPacket)) throw std::logic_error("a micro-rendering packet has at most 8 lanes");
+  if (lanes.size() > size_t(kGatherPacket)) throw std::logic_error("a micro-rendering packet has at most " + std::to_string(kGatherPacket) + " lanes");
   const PointHierarchy& h = *mh.hierarchy;
   if (h.encoding == NodeEncoding::Packed)
     renderPacket(PackedNodes{h.packedNodes.data(), h.quantization, mh.coneSin, mh.coneCos}, mh, lanes, settings,

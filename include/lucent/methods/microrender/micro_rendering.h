@@ -86,7 +86,7 @@ MicroHierarchy prepareMicroHierarchy(const PointHierarchy& hierarchy);
 // Morton order) to neighbouring threads. The packet walks the union of its lanes' cuts once; each lane
 // meets exactly the nodes of its own cut, in the same order, so its buffer is the one it would get
 // alone.
-inline constexpr int kGatherPacket = 8;
+inline constexpr int kGatherPacket = 16;
 
 struct MicroLane {
   const GatherPoint* gather = nullptr;
