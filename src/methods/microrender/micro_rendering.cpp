@@ -38,8 +38,9 @@ struct PackedNodes {
 };
 
 // One listed disc against every pixel's ray: the innermost loop of ray casting, over structure of
-// arrays with selects, so that it vectorizes; an AVX-512 or AVX2 clone is picked at run time where the CPU has
-// it (the same IEEE operations, so the same results: no FMA contraction, -ffp-contract=off).
+// arrays with selects, so that it vectorizes; an AVX-512 or AVX2 clone is picked at run time where
+// the CPU has it (the same IEEE operations, so the same results: no FMA contraction,
+// -ffp-contract=off).
 // Rays are cast in tiles of kRayTile x kRayTile pixels, each bounded by a cone of directions.
 constexpr int kRayTile = 4;
 constexpr int kMaxRayTiles = (kMaxMicroBufferSide + kRayTile - 1) / kRayTile * ((kMaxMicroBufferSide + kRayTile - 1) / kRayTile);

@@ -1,9 +1,9 @@
 // The wavefront path tracer's shading of Lambertian hits, many paths at a time: the scene data and
 // random numbers of each hit are fetched into a structure of arrays (one slot per path, a "lane"),
 // then every step that is the same arithmetic for all lanes runs as one loop over the lanes, which
-// the compiler vectorizes (eight lanes per instruction with AVX2, sixteen with AVX-512, chosen at run time). Each lane
-// computes exactly what PathTracer::shade computes for its path, in the same order, so images are
-// bit-identical whichever code shades a hit.
+// the compiler vectorizes (eight lanes per instruction with AVX2, sixteen with AVX-512, chosen at
+// run time). Each lane computes exactly what PathTracer::shade computes for its path, in the same
+// order, so images are bit-identical whichever code shades a hit.
 #pragma once
 #include <cstdint>
 

@@ -68,8 +68,8 @@ struct ShadowQuery {
 };
 
 // Paths traced together: enough for long vectorized loops and full shadow packets, and to spread
-// the cost of switching between Embree's kernels and the shading loops over many paths (128 1-2% slower,
-// 512 no faster; README "Throughput").
+// the cost of switching between Embree's kernels and the shading loops over many paths (waves of
+// 128 measured 1-2% slower, 512 no faster; README "Throughput").
 constexpr int64_t kWaveSize = 256;
 static_assert(kWaveSize <= kMaxLanes, "every path of a wave may need a lane");
 
@@ -439,7 +439,7 @@ class PathTracer {
   const bool lanesEnabled_ = opt_.laneShading && opt_.strategy == PathStrategy::Mis && !scene_.lights.empty();
   // A hit's triangle and vertex records are prefetched when the scene's arrays outgrow a core's
   // second-level cache (1 MiB here): Sponza's shading reads then wait on memory (its fetch stage
-  // 1.5x slower without), while the Cornell box's stay cached and the prefetches only cost (1%).
+  // is 1.5x slower without), while the Cornell box's stay cached and prefetching costs it 1%.
   const bool prefetchSceneData_ = sceneArrayBytes(scene_) > (size_t(1) << 20);
 };
 
