@@ -89,10 +89,10 @@ double traceRecorded(const Visibility& vis, const RecordedRays& rays, bool shado
     uint64_t blocked = 0;
     if (!shadowPackets)
       for (size_t i = r.begin(); i != r.end(); ++i) blocked += vis.occluded(rays.shadow[i]);
-    bool occluded[16];
-    for (size_t first = r.begin(); shadowPackets && first < r.end(); first += 16) {
-      const int n = int(std::min<size_t>(16, r.end() - first));
-      occludedPacket<16>(vis, n, [&](int j) -> const Ray& { return rays.shadow[first + j]; }, occluded);
+    bool occluded[kWidestPacket];
+    for (size_t first = r.begin(); shadowPackets && first < r.end(); first += kWidestPacket) {
+      const int n = int(std::min<size_t>(kWidestPacket, r.end() - first));
+      occludedPacket<kWidestPacket>(vis, n, [&](int j) -> const Ray& { return rays.shadow[first + j]; }, occluded);
       for (int j = 0; j < n; ++j) blocked += occluded[j];
     }
     sink += blocked;

@@ -32,6 +32,9 @@ struct VisibilityOptions {
   bool robust = false;  // Embree's robust traversal (watertight at edges), slower
 };
 
+// Embree's widest packet (native with AVX-512): what camera, photon and shadow rays are traced in.
+inline constexpr int kWidestPacket = 16;
+
 // Rays in structure-of-arrays form for the packet queries; N is 8 or 16.
 template <int N>
 struct alignas(64) RayPacket {

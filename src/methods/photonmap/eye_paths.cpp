@@ -121,7 +121,6 @@ struct CameraSample {
   Rng rng;
   uint32_t pixel, sample;
 };
-constexpr int kCameraPacket = 16;
 
 }  // namespace
 
@@ -152,11 +151,11 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
       // time as a packet (coherent rays: several times Embree's single-ray speed). A packet never
       // spans two rows, so its rays depend only on the row and the fixed 16-pixel tile columns:
       // neither the threads nor the bands of rows change them.
-      CameraSample batch[kCameraPacket];
+      CameraSample batch[kWidestPacket];
       int queued = 0;
       auto traceBatch = [&] {
-        Hit hits[kCameraPacket];
-        intersectPacket<kCameraPacket>(vis, queued, [&](int j) -> const Ray& { return batch[j].ray; }, hits);
+        Hit hits[kWidestPacket];
+        intersectPacket<kWidestPacket>(vis, queued, [&](int j) -> const Ray& { return batch[j].ray; }, hits);
         for (int j = 0; j < queued; ++j) {
           CameraSample& cs = batch[j];
           const Hit& hit = hits[j];
@@ -188,7 +187,7 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
                                                   : stratifiedSample2D(uint32_t(s), uint32_t(settings.spp), cs.rng.uniform2());
             cs.ray = camera.generate(float(x) + offset.x, float(y) + offset.y);
             cs.pixel = pixel, cs.sample = uint32_t(s);
-            if (++queued == kCameraPacket) traceBatch();
+            if (++queued == kWidestPacket) traceBatch();
           }
           if (x + 1 == x1 && queued > 0) traceBatch();
         }

@@ -32,7 +32,7 @@ struct BounceResult {
 // A packet's rays depend only on the paths' order, never on the threads, so neither do the hits.
 // Photons from one light leave in similar directions: packets made photon tracing 1.22x faster on
 // RING (caustic photons from a point light towards the ring), 1.07x on the Cornell box.
-constexpr size_t kPhotonPacket = 16;
+constexpr size_t kPhotonPacket = kWidestPacket;
 void closestHits(const Visibility& vis, const std::vector<PhotonPath>& paths, UninitializedVector<Hit>& hits) {
   hits.resize(paths.size());
   const size_t packets = (paths.size() + kPhotonPacket - 1) / kPhotonPacket;
