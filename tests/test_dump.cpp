@@ -85,14 +85,14 @@ TEST_CASE("A purcell dump recomputes its maps and its caustic estimates", "[dump
     CHECK(std::filesystem::exists(dir / name));
 
   // The map, from the dumped photons with the render's grid options.
-  const SortedGrid map = buildSortedGrid(photons, gridOptionsFor(opt, opt.k));
+  const EstimateSettings settings = estimateSettingsFor(scene, opt).caustic;
+  const SortedGrid map = buildSortedGrid(photons, gridOptionsFor(opt, settings.k));
   CHECK(std::memcmp(&map.grid, &grid[0], sizeof(UniformGrid)) == 0);
   CHECK(map.photonList == readDump<uint32_t>(dir / "caustic.photon_list.bin", "uint32"));
   CHECK(map.firstPhoton == readDump<uint32_t>(dir / "caustic.first_photon.bin", "uint32"));
   CHECK(map.cellCounts.prefix == readDump<uint32_t>(dir / "caustic.cell_counts.bin", "uint32"));
 
   // The estimates, at the dumped shading points.
-  const EstimateSettings settings{opt.k, defaultMaxRadius(scene), 0};
   EstimateCounters counters;
   size_t lit = 0, equal = 0;
   for (size_t i = 0; i < points.size(); ++i) {
@@ -152,7 +152,9 @@ TEST_CASE("Stencil and hashed grid dumps hold the routing and the buckets their 
         for (uint32_t n : arrived) overflowing += n > m2;
         CHECK(overflowing > 0);
       } else {
-        const HashedGrid map2 = buildHashedGrid(photons, gridOptionsFor(opt, opt.k));
+        const MapEstimateSettings settings = estimateSettingsFor(scene, opt);
+        const uint32_t k = map == "global" ? settings.global.k : settings.caustic.k;
+        const HashedGrid map2 = buildHashedGrid(photons, gridOptionsFor(opt, k));
         CHECK(std::memcmp(&map2.grid, &grid, sizeof(UniformGrid)) == 0);
         CHECK(map2.photonList == readDump<uint32_t>(dir / (map + ".photon_list.bin"), "uint32"));
         CHECK(map2.cellKeys == readDump<uint64_t>(dir / (map + ".cell_keys.bin"), "uint64"));

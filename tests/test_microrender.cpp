@@ -1,7 +1,9 @@
 // Micro-rendering (Ritschel et al. 2009): the mappings (forward and inverse, solid angles, the warped
 // directions' distribution), coverage of micro-buffers with and without ray casting, packed against
-// float nodes, gathering against analytic answers (a uniform radiance field, closed furnaces), and
-// the renderer against the path tracer limited to one indirect bounce.
+// float nodes, packets of gather points against each point alone (a packet of one: the node tests
+// themselves are checked against physics by the furnaces and the path tracer, not against a scalar
+// copy), gathering against analytic answers (a uniform radiance field, closed furnaces), and the
+// renderer against the path tracer limited to one indirect bounce.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -81,6 +83,16 @@ TEST_CASE("Mappings: the inverse of a pixel's direction is that pixel, and forwa
         // the table cells that the rim cuts (6% at 32 x 32 cells).
         REQUIRE(inside > (kind == MappingKind::Nusselt ? 1500 : 1850));
       }
+}
+
+TEST_CASE("A mapping wider than the largest micro-buffer is refused", "[microrender]") {
+  const MappingTables tables = makeMappingTables(kMaxMicroBufferSide + 1, 8);
+  HemisphereMapping m;
+  REQUIRE_THROWS_AS(evaluatePixels(m, MappingKind::Nusselt, kMaxMicroBufferSide + 1, {0.5f, 0.5f}, nullptr,
+                                   test::diffuseBsdf(Rgb(0.5f)), {0, 0, 1}, tables),
+                    std::invalid_argument);
+  REQUIRE_NOTHROW(evaluatePixels(m, MappingKind::Nusselt, kMaxMicroBufferSide, {0.5f, 0.5f}, nullptr,
+                                 test::diffuseBsdf(Rgb(0.5f)), {0, 0, 1}, tables));
 }
 
 TEST_CASE("Nusselt mapping: the pixels' solid angles sum to 2 pi", "[microrender]") {

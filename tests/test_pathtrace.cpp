@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 
 #include "lucent/core/parallel.h"
 #include "lucent/methods/pathtrace.h"
@@ -121,6 +122,28 @@ TEST_CASE("A scene without lights built in code renders black, in lanes and one 
     opt.spp = 2;
     opt.laneShading = lanes;
     const RenderOutput out = renderPathTraced(scene, vis, opt);
+    for (const float v : out.image.pixels()) REQUIRE(v == 0.0f);
+  }
+}
+
+TEST_CASE("Samples whose ray is not finite are dropped and counted, in lanes and one by one", "[pathtrace]") {
+  // The loader refuses such cameras; one built in code with a NaN eye makes every camera ray
+  // untraceable. Embree is not asked (Visibility answers a miss), and the path tracer must not take
+  // that miss for an escaped path: the samples are counted invalid and the pixels stay 0, although
+  // the furnace's walls emit.
+  Camera camera = test::testCamera({0, 0, 0}, {0, 0, -1}, 4, 3);
+  camera.eye.x = std::numeric_limits<float>::quiet_NaN();
+  const Scene scene = test::furnaceBox(Rgb(0.5f), Rgb(1.0f), camera);
+  const Visibility vis(scene);
+  for (const bool lanes : {true, false}) {
+    PathTraceOptions opt;
+    opt.spp = 2;
+    opt.laneShading = lanes;
+    const RenderOutput out = renderPathTraced(scene, vis, opt);
+    uint64_t invalid = 0;
+    for (const auto& [name, value] : out.stats.counters)
+      if (name == "invalid_samples") invalid = value;
+    CHECK(invalid == 4 * 3 * 2);
     for (const float v : out.image.pixels()) REQUIRE(v == 0.0f);
   }
 }

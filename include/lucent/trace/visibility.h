@@ -22,9 +22,10 @@ struct Hit {
 // (false for NaN): any other ray misses and is not occluded, alone or in a packet. Callers that
 // must tell such a ray from a miss (to drop the sample) test it themselves.
 inline bool traceable(const Ray& ray) {
-  // Embree's answer for other rays is not defined (it differed from a miss in the test). The
-  // check costs single rays about 3% of their throughput (Cornell box, 1 thread); & rather than &&
-  // keeps it one branch.
+  // Embree's answer for other rays is not defined (without this check on single rays, the test of
+  // packets with untraceable rays fails: Embree's single-ray answer differs from a miss). The check
+  // costs single rays about 3% of their throughput (bench_pathtrace's raw loop, Cornell box, 1
+  // thread); & rather than && keeps it one branch.
   return isFinite(ray.origin) & isFinite(ray.direction) & (ray.tMin <= ray.tMax);
 }
 
@@ -71,7 +72,7 @@ class Visibility {
   bool occluded(const Ray& ray) const;
   void intersect(const RayPacket<8>& rays, HitPacket<8>& hits) const;
   void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const;
-  // occluded[i] is true for active rays that hit something.
+  // occluded[i] is true for active, traceable rays that hit something.
   void occluded(const RayPacket<8>& rays, bool occluded[8]) const;
   void occluded(const RayPacket<16>& rays, bool occluded[16]) const;
 
@@ -95,8 +96,10 @@ void intersectPacket(const Visibility& vis, int count, RayOf rayOf, Hit hits[]) 
 }
 
 // Whether rays rayOf(0) .. rayOf(count - 1), 1 <= count <= N, are blocked, traced as one packet (a
-// lone ray as a single ray). An occlusion query's answer does not depend on the order of traversal,
-// so it does not depend on the packet's other rays.
+// lone ray as a single ray: a packet of one would cost a whole packet traversal). An occlusion
+// query's answer does not depend on the order of traversal, so it does not depend on the packet's
+// other rays. (A closest hit can, where two triangles meet at equal distance, so intersectPacket
+// is only used where a packet's rays are fixed by the data, not by threads or tiles.)
 template <int N, class RayOf>
 void occludedPacket(const Visibility& vis, int count, RayOf rayOf, bool occluded[]) {
   if (count == 1) {

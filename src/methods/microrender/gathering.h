@@ -1,12 +1,18 @@
-// Final gathering at one surface point by micro-rendering: the jittered local frame, the mapping for
-// the point's BRDF and view direction, the micro-buffer, and its convolution with the radiance of
-// the hierarchy's nodes. Used for the camera's shading points and, with the radiosity lighting, for
-// the points of the hierarchy themselves.
+// Final gathering at surface points by micro-rendering, a packet of them at a time: the jittered
+// local frame, the mapping for each point's BRDF and view direction, the micro-buffer, and its
+// convolution with the radiance of the hierarchy's nodes. Used for the camera's shading points and,
+// with the radiosity lighting, for the points of the hierarchy themselves.
 #pragma once
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <array>
 #include <span>
 #include <vector>
 
+#include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/stats.h"
 #include "lucent/methods/microrender/hemisphere_mapping.h"
@@ -114,6 +120,35 @@ inline void gatherPacket(const GatherContext& ctx, std::span<const GatherRequest
                                        : convolveMicroBuffer(lane.buffer, lane.mapping, radiance.half);
   }
   s.convolveSeconds += convolveClock.seconds();
+}
+
+// Gathers at points 0 .. count - 1 in packets of kGatherPacket consecutive points (the paper's warp
+// of neighbouring gather points, 3.2), in parallel, two packets per task: a packet is a whole
+// traversal, and a coarser grain would leave the few packets of a radiosity level to one thread.
+// request(k, rng) seeds rng and returns point k's request (which points to rng); deliver(k, result)
+// takes its result; finished(points) follows each task with the number of points it gathered. A
+// point's result does not depend on its packet, its task or its thread.
+template <class Request, class Deliver, class Finished>
+void gatherInPackets(const GatherContext& ctx, size_t count, const NodeRadiance& radiance,
+                     tbb::enumerable_thread_specific<GatherScratch>& scratch, Request&& request, Deliver&& deliver,
+                     Finished&& finished) {
+  const size_t packets = (count + kGatherPacket - 1) / kGatherPacket;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, packets, 2), [&](const tbb::blocked_range<size_t>& r) {
+    flushDenormals();  // every thread computes alike, whoever created it
+    GatherScratch& s = scratch.local();
+    size_t gathered = 0;
+    for (size_t packet = r.begin(); packet != r.end(); ++packet) {
+      const size_t begin = packet * kGatherPacket, end = std::min(count, begin + kGatherPacket);
+      Rng rngs[kGatherPacket];
+      GatherRequest requests[kGatherPacket];
+      for (size_t k = begin; k < end; ++k) requests[k - begin] = request(k, rngs[k - begin]);
+      Rgb results[kGatherPacket];
+      gatherPacket(ctx, std::span(requests, end - begin), radiance, s, results);
+      for (size_t k = begin; k < end; ++k) deliver(k, results[k - begin]);
+      gathered += end - begin;
+    }
+    finished(gathered);
+  });
 }
 
 // One point: a packet of one.

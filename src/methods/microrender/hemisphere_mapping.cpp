@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "lucent/methods/microrender/micro_buffer.h"
 
@@ -191,6 +192,9 @@ float HemisphereMapping::pdf(Vec3 local) const {
 
 void evaluatePixels(HemisphereMapping& m, MappingKind kind, int side, Vec2 jitter, const WarpTable* table,
                     const SurfaceBsdf& bsdf, Vec3 woLocal, const MappingTables& tables) {
+  if (side < 1 || side > kMaxMicroBufferSide)
+    throw std::invalid_argument("micro-buffer side " + std::to_string(side) + " outside 1 to " +
+                                std::to_string(kMaxMicroBufferSide));
   m.kind = kind;
   m.width = m.height = side;
   m.jitter = jitter;
@@ -203,7 +207,7 @@ void evaluatePixels(HemisphereMapping& m, MappingKind kind, int side, Vec2 jitte
   m.probe.resize(n);
   m.used.clear();
   const float invN = 1.0f / float(n);
-  // M^-1 once per column of pixels, C^-1 per pixel. (validateMicroRenderOptions bounds the side.)
+  // M^-1 once per column of pixels, C^-1 per pixel.
   HemisphereMapping::Column columns[kMaxMicroBufferSide];
   for (int x = 0; x < side; ++x) columns[x] = m.column((float(x) + jitter.x) / float(side));
   for (int y = 0; y < side; ++y)

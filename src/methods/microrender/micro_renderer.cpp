@@ -182,30 +182,20 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     });
     tbb::parallel_sort(keys.begin(), keys.end());
     for (size_t k = 0; k < keys.size(); ++k) order[k] = uint32_t(keys[k]);
-    // Packets of kGatherPacket consecutive gather points (one SIMD lane each, as the threads of a
-    // warp in the paper); a point's result does not depend on its packet.
+    // Packets of consecutive gather points in Morton order (one SIMD lane each, as the threads of
+    // a warp in the paper).
     done = 0;
-    const size_t packets = (order.size() + kGatherPacket - 1) / kGatherPacket;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, packets, 2), [&](const tbb::blocked_range<size_t>& r) {
-      flushDenormals();
-      GatherScratch& s = scratch.local();
-      size_t gathered = 0;
-      for (size_t packet = r.begin(); packet != r.end(); ++packet) {
-        const size_t begin = packet * kGatherPacket, end = std::min(order.size(), begin + kGatherPacket);
-        Rng rngs[kGatherPacket];
-        GatherRequest requests[kGatherPacket];
-        for (size_t k = begin; k < end; ++k) {
+    gatherInPackets(
+        ctx, order.size(), radiance, scratch,
+        [&](size_t k, Rng& rng) {
           const ShadingPoint& p = eye.points[order[k]];
-          rngs[k - begin] = Rng(gatherSeed, p.pixel, uint64_t(p.sample) << 32 | p.branch);
-          requests[k - begin] = {p.position, p.normal, p.wo, &p.bsdf, &rngs[k - begin]};
-        }
-        Rgb results[kGatherPacket];
-        gatherPacket(ctx, std::span(requests, end - begin), radiance, s, results);
-        for (size_t k = begin; k < end; ++k) shading.indirect[order[k]] = results[k - begin];
-        gathered += end - begin;
-      }
-      if (progress) progress(progressBase + progressShare * double(done += gathered) / double(order.size()));
-    });
+          rng = Rng(gatherSeed, p.pixel, uint64_t(p.sample) << 32 | p.branch);
+          return GatherRequest{p.position, p.normal, p.wo, &p.bsdf, &rng};
+        },
+        [&](size_t k, Rgb result) { shading.indirect[order[k]] = result; },
+        [&](size_t gathered) {
+          if (progress) progress(progressBase + progressShare * double(done += gathered) / double(order.size()));
+        });
     return sortClock.seconds();
   };
   double gatherSeconds = gather(gatherOrder, step == 1 ? 1.0 : 0.9, 0.0);

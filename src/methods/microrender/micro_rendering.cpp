@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "lucent/core/lane_clones.h"
 #include "lucent/core/stats.h"
 
 namespace lucent {
@@ -38,9 +39,7 @@ struct PackedNodes {
 };
 
 // One listed disc against every pixel's ray: the innermost loop of ray casting, over structure of
-// arrays with selects, so that it vectorizes; an AVX-512 or AVX2 clone is picked at run time where
-// the CPU has it (the same IEEE operations, so the same results: no FMA contraction,
-// -ffp-contract=off).
+// arrays with selects, so that it vectorizes (LUCENT_LANE_CLONES).
 // Rays are cast in tiles of kRayTile x kRayTile pixels, each bounded by a cone of directions.
 constexpr int kRayTile = 4;
 constexpr int kMaxRayTiles = (kMaxMicroBufferSide + kRayTile - 1) / kRayTile * ((kMaxMicroBufferSide + kRayTile - 1) / kRayTile);
@@ -52,7 +51,7 @@ struct DiscForRays {
   float height;      // of the gather point above the disc's plane
   float radius2, tMin;
 };
-__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void intersectDisc(
+LUCENT_LANE_CLONES void intersectDisc(
     const DiscForRays disc, uint32_t index, const float* dx, const float* dy, const float* dz, size_t count,
     float* nearestT, uint32_t* nearestNode) {
   for (size_t k = 0; k < count; ++k) {
@@ -139,9 +138,7 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
 }
 
 // 2.2 "Point Hierarchy Cut", one node against every lane, as loops over the lanes that GCC
-// vectorizes (selects, no branches; AVX-512 and AVX2 clones where the CPU has them). The tests are those the
-// traversal made one gather point at a time before packets, in the same order of precedence, with
-// the same IEEE operations:
+// vectorizes (selects, no branches; LUCENT_LANE_CLONES). The tests, in their order of precedence:
 //  - below the tangent plane altogether: skip;
 //  - a leaf is a disc in its triangle's plane: it faces p exactly when p lies in front of the plane
 //    (coneSin is the slack of a quantized normal, 0 for float nodes); its solid angle is the projected
@@ -163,8 +160,7 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
 // The lanes' results are returned by value: stores to the return slot cannot alias the gathered
 // loads, so the loops vectorize. The tests' precedence is applied last first, one comparison per select
 // (GCC vectorizes chained selects, not selects on combined conditions).
-__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) LaneResults classifyLeaf(const PacketLanes& __restrict L,
-                                                                     const LaneNode& __restrict n) {
+LUCENT_LANE_CLONES LaneResults classifyLeaf(const PacketLanes& __restrict L, const LaneNode& __restrict n) {
   LaneResults r;
   const float discArea = kPi * n.radius * n.radius;
   const float* __restrict cdfs = L.cdfs;
@@ -187,8 +183,7 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) LaneResults 
   return r;
 }
 
-__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) LaneResults classifyInterior(const PacketLanes& __restrict L,
-                                                                         const LaneNode& __restrict n) {
+LUCENT_LANE_CLONES LaneResults classifyInterior(const PacketLanes& __restrict L, const LaneNode& __restrict n) {
   LaneResults r;
   const float twoPi = 2.0f * kPi;
   const float* __restrict cdfs = L.cdfs;

@@ -157,20 +157,16 @@ void radiosityBounces(const Scene& scene, const PointHierarchy& h, const GatherC
   SurfaceBsdf white;
   white.kd = Rgb(1.0f);
   for (int b = 0; b < bounces; ++b) {
-    // Packets of kGatherPacket consecutive nodes (neighbours in space, as the point order is the
-    // tree's), gathered with one traversal each.
-    points::parallelFor(0, (count + kGatherPacket - 1) / kGatherPacket, [&](uint32_t packet) {
-      const uint32_t begin = packet * kGatherPacket, end = std::min(count, begin + kGatherPacket);
-      Rng rngs[kGatherPacket];
-      GatherRequest requests[kGatherPacket];
-      for (uint32_t k = begin; k < end; ++k) {
-        const uint32_t node = first + k;
-        const LeafSurface rep = leafSurface(scene, h, firstLeafPoint(node, h.leafCount) + leavesPerNode / 2);
-        rngs[k - begin] = Rng(stream, node, uint64_t(b));
-        requests[k - begin] = {rep.position, rep.normal, rep.normal, &white, &rngs[k - begin]};
-      }
-      gatherPacket(ctx, std::span(requests, end - begin), radiance, scratch.local(), &gathered[begin]);
-    });
+    // Packets of consecutive nodes (neighbours in space, as the point order is the tree's).
+    gatherInPackets(
+        ctx, count, radiance, scratch,
+        [&](size_t k, Rng& rng) {
+          const uint32_t node = first + uint32_t(k);
+          const LeafSurface rep = leafSurface(scene, h, firstLeafPoint(node, h.leafCount) + leavesPerNode / 2);
+          rng = Rng(stream, node, uint64_t(b));
+          return GatherRequest{rep.position, rep.normal, rep.normal, &white, &rng};
+        },
+        [&](size_t k, Rgb result) { gathered[k] = result; }, [](size_t) {});
     points::parallelFor(0, h.leafCount, [&](uint32_t j) { irradiance[j] = directOverPi[j] + gathered[j / leavesPerNode]; });
     setLeavesAndPull(h, irradiance, radiance.rgb);
     radiance.finish(h.encoding);

@@ -1,6 +1,7 @@
 #include "diffuse_lanes.h"
 
 #include "lucent/core/math.h"
+#include "lucent/core/lane_clones.h"
 #include "lucent/core/sampling.h"
 
 namespace lucent {
@@ -13,8 +14,7 @@ Vec3 select(bool c, Vec3 a, Vec3 b) { return {c ? a.x : b.x, c ? a.y : b.y, c ? 
 bool notBlack(Rgb c) { return (c.r != 0 ? 1.0f : 0.0f) + (c.g != 0 ? 1.0f : 0.0f) + (c.b != 0 ? 1.0f : 0.0f) > 0; }
 }  // namespace
 
-__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void startCameraPaths(CameraLanes& l, uint64_t seed,
-                                                                        const PinholeCamera& camera) {
+LUCENT_LANE_CLONES void startCameraPaths(CameraLanes& l, uint64_t seed, const PinholeCamera& camera) {
   for (uint32_t k = 0; k < l.count; ++k) {
     Rng rng(seed, l.pixel[k], l.sample[k]);
     const Vec2 jitter = rng.uniform2();
@@ -27,7 +27,7 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void startCa
 // The rest of surfaceAt (the shading normal), the start of PathTracer::shade for a two-sided
 // material, then PathTracer::sampleDirect (the emitting triangle's sample as sampleLight takes it)
 // and sampleBsdf's Lambertian case, with shadowRay and offsetOrigin.
-__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void shadeDiffuseLanes(DiffuseLanes& l) {
+LUCENT_LANE_CLONES void shadeDiffuseLanes(DiffuseLanes& l) {
   for (uint32_t k = 0; k < l.count; ++k) {
     const Vec3 ng = Vec3{l.ngx[k], l.ngy[k], l.ngz[k]};
     const Vec3 interpolated{l.normalX[k], l.normalY[k], l.normalZ[k]};

@@ -67,11 +67,8 @@ struct ShadowQuery {
   int verticesBefore = 0;
 };
 
-// Paths traced together: enough for long vectorized loops and full shadow packets, and to spread
-// the cost of switching between Embree's kernels and the shading loops over many paths (waves of
-// 128 measured 1-2% slower, 512 no faster; README "Throughput").
-constexpr int64_t kWaveSize = 256;
-static_assert(kWaveSize <= kMaxLanes, "every path of a wave may need a lane");
+// Paths traced together, one lane each when shaded (kMaxLanes: waves of 256, see there).
+constexpr int64_t kWaveSize = kMaxLanes;
 
 // What a lane needs of an emitting triangle to sample it, gathered once per light.
 struct TriangleLightRecord {
@@ -182,10 +179,11 @@ class PathTracer {
     for (uint32_t i = 0; i < w.paths.size(); ++i) w.active[i] = i;
     while (!w.active.empty()) {
       size_t live = 0;
+      Hit previous;  // a miss before the first
       for (const uint32_t i : w.active) {
         Path& path = w.paths[i];
         const Hit hit = vis_.intersect(path.ray);
-        // An untraceable ray misses; only then is the ray tested.
+        // An untraceable ray misses (Visibility does not trace it), so hits need no test of their own.
         if (!hit.found() && !traceable(path.ray)) {
           path.result.valid = false;  // the sample is dropped and counted
           continue;
@@ -195,7 +193,8 @@ class PathTracer {
           // The triangle's records now, the vertices of the hit before (its indices have
           // arrived): both are in cache when fetchDiffuseLane reads them, one Embree query later.
           prefetchTriangle(hit);
-          if (live > 0) prefetchVertices(w.hits[w.active[live - 1]]);
+          prefetchVertices(previous);
+          previous = hit;
         }
         w.active[live++] = i;
       }
@@ -259,11 +258,11 @@ class PathTracer {
   }
   void prefetchVertices(const Hit& hit) const {
     if (!hit.found()) return;
-    for (const uint32_t v : {scene_.indices[3 * size_t(hit.triangle)], scene_.indices[3 * size_t(hit.triangle) + 1],
-                             scene_.indices[3 * size_t(hit.triangle) + 2]}) {
-      __builtin_prefetch(&scene_.positions[v]);
-      __builtin_prefetch(&scene_.normals[v]);
-      if (!scene_.texcoords.empty()) __builtin_prefetch(&scene_.texcoords[v]);
+    const uint32_t* v = &scene_.indices[3 * size_t(hit.triangle)];
+    for (int k = 0; k < 3; ++k) {
+      __builtin_prefetch(&scene_.positions[v[k]]);
+      __builtin_prefetch(&scene_.normals[v[k]]);
+      if (!scene_.texcoords.empty()) __builtin_prefetch(&scene_.texcoords[v[k]]);  // built in code: maybe none
     }
   }
 

@@ -233,10 +233,10 @@ void shadowSamples(const Scene& scene, const ShadingPoint& point, int samples, u
   }
 }
 
-// Shadow rays queued and traced as packets of up to 16 (a lone ray alone); each unoccluded ray's
-// contribution is added to its point's sum, in queue order.
+// Shadow rays queued and traced as packets of up to kWidestPacket (a lone ray alone); each
+// unoccluded ray's contribution is added to its point's sum, in queue order.
 struct ShadowPackets {
-  static constexpr int kPacket = 16;
+  static constexpr int kPacket = kWidestPacket;
   ShadowPackets(const Visibility& visibility, uint64_t& rayCount) : vis(visibility), rays(rayCount) {}
   const Visibility& vis;
   uint64_t& rays;

@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "knn_grid.h"
+#include "lucent/core/lane_clones.h"
 #include "lucent/core/octahedral.h"
 
 namespace lucent {
@@ -101,9 +102,8 @@ Block block(const PhotonColumns& c, uint32_t first, Ints valid, const Query& q) 
 
 }  // namespace
 
-__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void sumPhotonRun(const PhotonColumns& c, uint32_t begin,
-                                                                    uint32_t end, Vec3 n, KnnGridSearch& s,
-                                                                    PhotonLaneSums& sums) {
+LUCENT_LANE_CLONES void sumPhotonRun(const PhotonColumns& c, uint32_t begin, uint32_t end, Vec3 n, KnnGridSearch& s,
+                                     PhotonLaneSums& sums) {
   const Query q{broadcast(s.position.x), broadcast(s.position.y), broadcast(s.position.z),
                 broadcast(n.x),          broadcast(n.y),          broadcast(n.z)};
   const uint32_t examinedBefore = s.photonsExamined;

@@ -63,12 +63,18 @@ BuiltPhotonMap buildMap(std::vector<Photon> photons, PhotonMapKind kind, const G
 
 }  // namespace
 
+MapEstimateSettings estimateSettingsFor(const Scene& scene, const PhotonMapOptions& options) {
+  const float maxRadius = options.maxRadius > 0 ? options.maxRadius : defaultMaxRadius(scene);
+  return {{options.k, maxRadius, options.shells},
+          {options.causticK > 0 ? options.causticK : options.k, maxRadius, options.shells}};
+}
+
 RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                                    GlobalPhotons which, RenderStats& stats) {
   RenderPhotonMaps maps;
-  const float maxRadius = options.maxRadius > 0 ? options.maxRadius : defaultMaxRadius(scene);
-  maps.globalSettings = {options.k, maxRadius, options.shells};
-  maps.causticSettings = {options.causticK > 0 ? options.causticK : options.k, maxRadius, options.shells};
+  const MapEstimateSettings settings = estimateSettingsFor(scene, options);
+  maps.globalSettings = settings.global;
+  maps.causticSettings = settings.caustic;
 
   // Two passes: the global map's photons, and the caustic map's from paths that end at their
   // first non-specular surface (so causticPhotons can be many at little cost).

@@ -34,6 +34,13 @@ struct RenderPhotonMaps {
 // The grid of a map searched for k photons, as the render options ask for it.
 GridOptions gridOptionsFor(const PhotonMapOptions& options, uint32_t k);
 
+// The global and caustic maps' estimate settings, as the render options ask for them (the caustic
+// k defaults to k; the maximum radius to defaultMaxRadius).
+struct MapEstimateSettings {
+  EstimateSettings global, caustic;
+};
+MapEstimateSettings estimateSettingsFor(const Scene& scene, const PhotonMapOptions& options);
+
 // Stages "trace_photons" (the global pass, and a caustic-only pass of causticPhotons paths) and
 // "build_map" (both maps), timed into `stats` with their sub-stages and counters.
 RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& visibility, const PhotonMapOptions& options,

@@ -96,7 +96,8 @@ struct GridVisitor {
     sumPhotonRun(*run.columns, run.first, run.first + run.count, acc.q.frame.n, s, lanes);
     return true;
   }
-  // Moves the lanes' sums into the accumulator, once, at the end of the search.
+  // Adds the lanes' sums to the accumulator at the end of the search; call it exactly once (the
+  // lanes are not cleared).
   void finish() {
     const PhotonRunTotals t = photonRunTotals(lanes);
     acc.sum += t.sum;

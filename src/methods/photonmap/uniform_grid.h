@@ -76,16 +76,16 @@ struct UniformGrid {
   }
   // Where cell i begins along axis a (i may be past the last cell: where the grid's cells end).
   float cellLo(int a, int32_t i) const { return lo[a] + float(i) * cellSize[a]; }
+  // Distance along axis a from coordinate x to cell i's slab, less `slack` (never more than the
+  // truth), 0 inside.
+  float axisGap(int a, int32_t i, float x) const {
+    const float cellLo = this->cellLo(a, i), cellHi = cellLo + cellSize[a];
+    return std::max(std::max(cellLo - x, x - cellHi) - slack, 0.0f);
+  }
   // Squared distance from p to the box of cell c, shrunk by `slack` (never more than the truth).
   float cellDistance2(Vec3 p, CellCoord c) const {
-    float d2 = 0;
-    const int32_t ci[3] = {c.x, c.y, c.z};
-    for (int a = 0; a < 3; ++a) {
-      const float cellLo = this->cellLo(a, ci[a]), cellHi = cellLo + cellSize[a];
-      const float gap = std::max({cellLo - p[a], p[a] - cellHi, 0.0f}) - slack;
-      if (gap > 0) d2 += gap * gap;
-    }
-    return d2;
+    const float gx = axisGap(0, c.x, p.x), gy = axisGap(1, c.y, p.y), gz = axisGap(2, c.z, p.z);
+    return gx * gx + gy * gy + gz * gz;
   }
 };
 static_assert(sizeof(UniformGrid) == 64 && std::is_trivially_copyable_v<UniformGrid>, "dumped as one record");

@@ -87,6 +87,7 @@ MicroHierarchy prepareMicroHierarchy(const PointHierarchy& hierarchy);
 // meets exactly the nodes of its own cut, in the same order, so its buffer is the one it would get
 // alone.
 inline constexpr int kGatherPacket = 16;
+static_assert(kGatherPacket < 32, "a packet's lanes are the bits of a 32-bit mask, all set as (1 << lanes) - 1");
 
 struct MicroLane {
   const GatherPoint* gather = nullptr;
