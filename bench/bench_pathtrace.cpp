@@ -141,8 +141,7 @@ int main(int argc, char** argv) {
         ParallelScope scope(threads);
         const RenderOutput out = renderPathTraced(scene, vis, opt);
         bestPt[threads] = std::min(bestPt[threads], out.stats.stageSeconds.front().second);
-        for (const auto& [name, value] : out.stats.counters)
-          if (name == "rays") ptRays = value;
+        ptRays = out.stats.counter("rays");
         bestRaw[threads] = std::min(bestRaw[threads], traceRecorded(vis, rays, false));
         bestPackets[threads] = std::min(bestPackets[threads], traceRecorded(vis, rays, true));
       }

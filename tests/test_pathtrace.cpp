@@ -103,27 +103,35 @@ TEST_CASE("Camera rays and Lambertian hits in lanes give the image of one path a
     // Not a vacuous comparison: light arrives, and most hits were shaded in lanes (and none when
     // lane shading is off).
     REQUIRE(test::channelMean(lanes.image, 0).mean > 0.01);
-    auto counter = [](const RenderOutput& out, const std::string& name) {
-      for (const auto& [key, value] : out.stats.counters)
-        if (key == name) return value;
-      return uint64_t(0);
-    };
-    CHECK(counter(lanes, "lane_shaded_hits") > counter(lanes, "rays") / 4);
-    CHECK(counter(scalar, "lane_shaded_hits") == 0);
+    CHECK(lanes.stats.counter("lane_shaded_hits") > lanes.stats.counter("rays") / 4);
+    CHECK(scalar.stats.counter("lane_shaded_hits") == 0);
   }
 }
 
-TEST_CASE("A scene without lights built in code renders black, in lanes and one by one", "[pathtrace]") {
-  const Scene scene = test::furnaceBox(Rgb(0.5f), Rgb(0.0f), test::testCamera({0, 0, 0}, {0, 0, -1}, 8, 8));
-  REQUIRE(scene.lights.empty());
+namespace {
+
+// Renders a scene built in code at 2 spp with Lambertian hits shaded in lanes, then one by one,
+// and hands each output to check.
+template <class Check>
+void renderInLanesAndOneByOne(const Scene& scene, Check&& check) {
   const Visibility vis(scene);
   for (const bool lanes : {true, false}) {
     PathTraceOptions opt;
     opt.spp = 2;
     opt.laneShading = lanes;
-    const RenderOutput out = renderPathTraced(scene, vis, opt);
-    for (const float v : out.image.pixels()) REQUIRE(v == 0.0f);
+    INFO("lanes " << lanes);
+    check(renderPathTraced(scene, vis, opt));
   }
+}
+
+}  // namespace
+
+TEST_CASE("A scene without lights built in code renders black, in lanes and one by one", "[pathtrace]") {
+  const Scene scene = test::furnaceBox(Rgb(0.5f), Rgb(0.0f), test::testCamera({0, 0, 0}, {0, 0, -1}, 8, 8));
+  REQUIRE(scene.lights.empty());
+  renderInLanesAndOneByOne(scene, [](const RenderOutput& out) {
+    for (const float v : out.image.pixels()) REQUIRE(v == 0.0f);
+  });
 }
 
 TEST_CASE("Samples whose ray is not finite are dropped and counted, in lanes and one by one", "[pathtrace]") {
@@ -134,18 +142,10 @@ TEST_CASE("Samples whose ray is not finite are dropped and counted, in lanes and
   Camera camera = test::testCamera({0, 0, 0}, {0, 0, -1}, 4, 3);
   camera.eye.x = std::numeric_limits<float>::quiet_NaN();
   const Scene scene = test::furnaceBox(Rgb(0.5f), Rgb(1.0f), camera);
-  const Visibility vis(scene);
-  for (const bool lanes : {true, false}) {
-    PathTraceOptions opt;
-    opt.spp = 2;
-    opt.laneShading = lanes;
-    const RenderOutput out = renderPathTraced(scene, vis, opt);
-    uint64_t invalid = 0;
-    for (const auto& [name, value] : out.stats.counters)
-      if (name == "invalid_samples") invalid = value;
-    CHECK(invalid == 4 * 3 * 2);
+  renderInLanesAndOneByOne(scene, [](const RenderOutput& out) {
+    CHECK(out.stats.counter("invalid_samples") == 4 * 3 * 2);
     for (const float v : out.image.pixels()) REQUIRE(v == 0.0f);
-  }
+  });
 }
 
 namespace {

@@ -295,9 +295,7 @@ TEST_CASE("The kNN-grid's progressive estimate converges shell by shell to the c
     opt.shells = shells;
     const RenderOutput out = renderPurcell(scene, vis, opt);
     const double relmse = compareImages(out.image, complete.image).overall.relmse;
-    uint64_t unfinished = 0;
-    for (const auto& [name, value] : out.stats.counters)
-      if (name == "global_searches_unfinished") unfinished = value;
+    const uint64_t unfinished = out.stats.counter("global_searches_unfinished");
     INFO(shells << " shells: relMSE " << relmse << " to the complete search, " << unfinished << " searches unfinished");
     if (shells < 1000) {
       CHECK(relmse < previous);

@@ -13,6 +13,12 @@ struct RenderStats {
   std::vector<std::pair<std::string, uint64_t>> counters;
   void addStage(const std::string& name, double seconds) { stageSeconds.emplace_back(name, seconds); }
   void addCounter(const std::string& name, uint64_t value) { counters.emplace_back(name, value); }
+  // A counter's value, 0 if there is none of that name.
+  uint64_t counter(const std::string& name) const {
+    for (const auto& [key, value] : counters)
+      if (key == name) return value;
+    return 0;
+  }
   double totalSeconds() const {
     double s = 0;
     for (const auto& st : stageSeconds) s += st.second;
