@@ -34,6 +34,10 @@ struct MicroBuffer {
   std::vector<uint32_t> nearestNode;
   std::vector<uint16_t> rayPixel;  // the pixel of each ray
   std::vector<Vec3> worldDirection;  // per pixel, its sample direction in world space (splats, rays)
+  // Per pixel, its sample direction in the local frame, as three arrays with a border of one empty
+  // pixel (rows of side + 2, and a few floats more), so that a splat reads the rows of its 3 x 3
+  // pixels four floats at a time without bounds checks.
+  std::vector<float> localX, localY, localZ;
   // Per tile: its rays [tileBegin[i], tileBegin[i + 1]) and the cone bounding their directions.
   std::vector<uint32_t> tileBegin;
   std::vector<float> tileAxisX, tileAxisY, tileAxisZ, tileCos, tileSin;
