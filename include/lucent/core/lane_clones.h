@@ -5,4 +5,12 @@
 // in target_clones; Debian bookworm's compiler is GCC 12.)
 #pragma once
 
+// A build for one of the two clones that this machine would not pick (CMake's LUCENT_LANE_TARGET,
+// scripts/check-lane-clones.sh) compiles that clone alone.
+#if defined(LUCENT_LANES_AVX2_ONLY)
+#define LUCENT_LANE_CLONES __attribute__((target("avx2")))
+#elif defined(LUCENT_LANES_BASELINE_ONLY)
+#define LUCENT_LANE_CLONES
+#else
 #define LUCENT_LANE_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
+#endif
