@@ -115,7 +115,7 @@ inline float laneBestFacing(float cosToAxis, float coneSin, float coneCos) {
 // tangent plane, its distance, its direction in the lane's local frame and the pixel there (stored in
 // r with the sphere's cone), and where that pixel's solid angle and spacing are.
 struct LaneGeometry {
-  float vx, vy, vz, height, d2, d, invD, lz;
+  float vx, vy, vz, height, d2, d, invD, lz, sinRadius, cosRadius;
   int32_t at;
 };
 inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict cdfs, const LaneNode& n, int l,
@@ -130,12 +130,12 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
   const float ly = wx * L.tx[l] + wy * L.ty[l] + wz * L.tz[l];
   const float lz = wx * L.nx[l] + wy * L.ny[l] + wz * L.nz[l];
   const PixelCoord pixel = lanePixel(L, cdfs, l, lx, ly);
-  const float sinRadius = n.radius / d;
+  const float sinRadius = n.radius * invD, cosRadius = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
   r.column[l] = pixel.column, r.row[l] = pixel.row;
-  r.cosRadius[l] = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
+  r.cosRadius[l] = cosRadius;
   r.vx[l] = vx, r.vy[l] = vy, r.vz[l] = vz;
   r.lx[l] = lx, r.ly[l] = ly, r.lz[l] = lz, r.d[l] = d;
-  return {vx, vy, vz, height, d2, d, invD, lz, L.pixelBase[l] + pixel.row * L.side + pixel.column};
+  return {vx, vy, vz, height, d2, d, invD, lz, sinRadius, cosRadius, L.pixelBase[l] + pixel.row * L.side + pixel.column};
 }
 
 // 2.2 "Point Hierarchy Cut", one node against every lane, as loops over the lanes that GCC
@@ -172,12 +172,11 @@ LUCENT_LANE_CLONES LaneResults classifyLeaf(const PacketLanes& __restrict L, con
     const float d = g.d;
     const int32_t at = g.at;
     const float facing = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz);
-    const float cosToAxis = facing * g.invD;
     const float solidAngle = discArea * facing / (g.d2 * d);
     int32_t outcome = g.lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
-    outcome = laneBestFacing(cosToAxis, n.coneSin, n.coneCos) > 0 ? outcome : kSkipSubtree;
     outcome = solidAngle > pixelSolidAngle[at] ? kListLeaf : outcome;
     outcome = n.radius > d * pixelSpacing[at] ? kListLeaf : outcome;
+    // Also every lane that no normal of the cone faces (their cosine to the axis is at most -coneSin).
     outcome = facing <= d * n.coneSin + L.selfDistance[l] ? kSkipSubtree : outcome;
     r.outcome[l] = g.height <= -n.radius ? kSkipSubtree : outcome;
   }
@@ -195,7 +194,7 @@ LUCENT_LANE_CLONES LaneResults classifyInterior(const PacketLanes& __restrict L,
     const float d = g.d, invD = g.invD, height = g.height;
     const int32_t at = g.at;
     const float cosToAxis = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz) * invD;
-    const float sinA = n.radius * invD, cosA = std::sqrt(std::max(0.0f, 1.0f - sinA * sinA));
+    const float sinA = g.sinRadius, cosA = g.cosRadius;
     const float horizon = L.selfDistance[l] + kHorizonSlope * (d - n.radius);
     const float cosTilt = std::abs(n.ax * L.nx[l] + n.ay * L.ny[l] + n.az * L.nz[l]);
     const float sinTilt = std::sqrt(std::max(0.0f, 1.0f - cosTilt * cosTilt));
