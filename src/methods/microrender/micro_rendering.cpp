@@ -25,6 +25,7 @@ constexpr float kHorizonSlope = 0.01f;
 struct FloatNodes {
   const TraversalNode* nodes;
   TraversalNode operator()(uint32_t i) const { return nodes[i]; }
+  const void* address(uint32_t i) const { return nodes + i; }
 };
 
 struct PackedNodes {
@@ -32,6 +33,7 @@ struct PackedNodes {
   NodeQuantization quantization;
   const float* coneSin;
   const float* coneCos;
+  const void* address(uint32_t i) const { return nodes + i; }
   TraversalNode operator()(uint32_t i) const {
     const PackedNode& p = nodes[i];
     const uint32_t code = coneCode(p);
@@ -546,6 +548,15 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
   while (i != kTraversalEnd) {
     const uint32_t level = nodeLevel(i);
     const uint32_t active = lanesAtLevel[level];
+    // The two nodes that can come next, the first child and the node after the subtree: in heap
+    // numbering they lie far from this one.
+    if (!isLeafNode(i, leafCount)) {
+      __builtin_prefetch(nodes.address(firstChild(i)));
+      __builtin_prefetch(areas + firstChild(i));
+    }
+    const uint32_t skipTo = nextNodeSkippingSubtree(i);
+    __builtin_prefetch(nodes.address(skipTo));
+    __builtin_prefetch(areas + skipTo);
     const TraversalNode node = nodes(i);
     const LaneNode lane{node.center.x, node.center.y, node.center.z, node.radius, node.axis.x,
                         node.axis.y,   node.axis.z,   node.coneSin,  node.coneCos, areas[i]};
