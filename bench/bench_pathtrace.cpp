@@ -89,12 +89,10 @@ double traceRecorded(const Visibility& vis, const RecordedRays& rays, bool shado
     uint64_t blocked = 0;
     if (!shadowPackets)
       for (size_t i = r.begin(); i != r.end(); ++i) blocked += vis.occluded(rays.shadow[i]);
-    bool occluded[kWidestPacket];
-    for (size_t first = r.begin(); shadowPackets && first < r.end(); first += kWidestPacket) {
-      const int n = int(std::min<size_t>(kWidestPacket, r.end() - first));
-      occludedPacket<kWidestPacket>(vis, n, [&](int j) -> const Ray& { return rays.shadow[first + j]; }, occluded);
-      for (int j = 0; j < n; ++j) blocked += occluded[j];
-    }
+    if (shadowPackets)
+      occludedInPackets(
+          vis, r.size(), [&](size_t i) -> const Ray& { return rays.shadow[r.begin() + i]; },
+          [&](size_t, bool occluded) { blocked += occluded; });
     sink += blocked;
   });
   return clock.seconds();

@@ -1,5 +1,7 @@
 // Visibility queries against the scene's triangles: the only interface to Embree.
 #pragma once
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -109,6 +111,18 @@ void occludedPacket(const Visibility& vis, int count, RayOf rayOf, bool occluded
   RayPacket<N> packet;
   packet.assign(count, rayOf);
   vis.occluded(packet, occluded);
+}
+
+// Whether rays rayOf(0) .. rayOf(count - 1) are blocked, traced in consecutive packets of
+// kWidestPacket; answer(i, blocked) is called for every ray in order.
+template <class RayOf, class Answer>
+void occludedInPackets(const Visibility& vis, size_t count, RayOf rayOf, Answer answer) {
+  bool blocked[kWidestPacket];
+  for (size_t first = 0; first < count; first += kWidestPacket) {
+    const int n = int(std::min<size_t>(kWidestPacket, count - first));
+    occludedPacket<kWidestPacket>(vis, n, [&](int j) -> const Ray& { return rayOf(first + size_t(j)); }, blocked);
+    for (int j = 0; j < n; ++j) answer(first + size_t(j), blocked[j]);
+  }
 }
 
 }  // namespace lucent
