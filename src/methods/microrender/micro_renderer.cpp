@@ -246,6 +246,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   stats.addCounter("micro_buffers_ray_cast", c.buffersRayCast);
   stats.addCounter("upsampling_recomputed", recomputed);
   stats.addCounter("nodes_visited", c.nodesVisited);
+  stats.addCounter("packet_nodes_visited", c.packetNodesVisited);
   stats.addCounter("nodes_splatted", c.nodesSplatted);
   stats.addCounter("leaves_ray_cast", c.leavesListed);
   stats.addCounter("post_traversal_flushes", c.listFlushes);

@@ -479,6 +479,7 @@ void MicroBuffer::resize(int bufferSide) {
 
 MicroCounters& MicroCounters::operator+=(const MicroCounters& o) {
   buffers += o.buffers, buffersRayCast += o.buffersRayCast, nodesVisited += o.nodesVisited;
+  packetNodesVisited += o.packetNodesVisited;
   nodesSplatted += o.nodesSplatted, leavesListed += o.leavesListed, listFlushes += o.listFlushes;
   rayDiscTests += o.rayDiscTests, rayCastSeconds += o.rayCastSeconds;
   return *this;
@@ -543,7 +544,7 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
                     MicroCounters& counters) {
   uint32_t lanesAtLevel[32];  // levels 0 to 31: node indices are 32-bit
   lanesAtLevel[nodeLevel(kRootNode)] = laneMask;
-  uint64_t visited = 0;
+  uint64_t visited = 0, packetVisits = 0;
   uint32_t i = kRootNode;
   while (i != kTraversalEnd) {
     const uint32_t level = nodeLevel(i);
@@ -561,6 +562,7 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
     const LaneNode lane{node.center.x, node.center.y, node.center.z, node.radius, node.axis.x,
                         node.axis.y,   node.axis.z,   node.coneSin,  node.coneCos, areas[i]};
     const LaneResults r = isLeafNode(i, leafCount) ? classifyLeaf(lanes, lane) : classifyInterior(lanes, lane);
+    ++packetVisits;
     uint32_t descend = 0;
     for (uint32_t m = active; m != 0; m &= m - 1) {
       const int l = std::countr_zero(m);
@@ -584,6 +586,7 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
     }
   }
   counters.nodesVisited += visited;
+  counters.packetNodesVisited += packetVisits;
 }
 
 // The lanes' gather points, tables, solid angles and spacings in PacketLanes' arrays. Lanes past the

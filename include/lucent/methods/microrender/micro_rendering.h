@@ -46,13 +46,14 @@ struct MicroBuffer {
 
 struct MicroCounters {
   uint64_t buffers = 0;
-  uint64_t buffersRayCast = 0;    // buffers whose post-traversal list was not empty
-  uint64_t nodesVisited = 0;
-  uint64_t nodesSplatted = 0;     // nodes rasterized into one pixel
-  uint64_t leavesListed = 0;      // leaves put on post-traversal lists
-  uint64_t listFlushes = 0;       // lists ray-cast early because they were full
+  uint64_t buffersRayCast = 0;      // buffers whose post-traversal list was not empty
+  uint64_t nodesVisited = 0;        // by each lane: its cut and the nodes it skipped
+  uint64_t packetNodesVisited = 0;  // by packets: nodes tested for all their lanes at once
+  uint64_t nodesSplatted = 0;       // nodes rasterized into one pixel
+  uint64_t leavesListed = 0;        // leaves put on post-traversal lists
+  uint64_t listFlushes = 0;         // lists ray-cast early because they were full
   uint64_t rayDiscTests = 0;
-  double rayCastSeconds = 0;      // time spent ray casting, within renderMicroBuffers
+  double rayCastSeconds = 0;        // time spent ray casting, within renderMicroBuffers
   MicroCounters& operator+=(const MicroCounters& o);
 };
 
