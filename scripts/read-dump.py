@@ -44,6 +44,8 @@ def read_dump(path):
         magic, version, record_bytes, count, type_name = HEADER.unpack(raw)
         if magic != b"LCNTDUMP":
             raise ValueError(f"{path}: not a Lucent dump")
+        if version != 1:
+            raise ValueError(f"{path}: format version {version}; this reader reads version 1")
         type_name = type_name.rstrip(b"\0").decode("ascii")
         header = {"version": version, "record_bytes": record_bytes, "count": count, "type": type_name}
         dtype = DTYPES.get(type_name)
@@ -54,6 +56,9 @@ def read_dump(path):
         records = np.fromfile(f, dtype=dtype, count=count)
         if len(records) != count:
             raise ValueError(f"{path}: truncated ({len(records)} of {count} records)")
+        trailing = len(f.read())
+        if trailing:
+            raise ValueError(f"{path}: {trailing} bytes after its {count} records")
         return records, header
 
 

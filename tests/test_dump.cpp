@@ -35,20 +35,34 @@ TEST_CASE("Dumps hold their records behind a header that names them", "[dump]") 
   CHECK(readDump<uint32_t>(path, "uint32") == values);
   CHECK(dir.entries().size() == 1);  // no temporary file left behind
 
-  // The wrong type, a file that is not a dump, a truncated one, and a directory that is not there.
+  // The wrong type, a file that is not a dump, another format version, bytes after the records, a
+  // truncated one, and a directory that is not there.
   CHECK_THROWS_WITH(readDump<float>(path, "float"), Catch::Contains("values.bin") && Catch::Contains("uint32"));
   {
     std::ofstream(dir / "not-a-dump.bin") << "hello, this is text and not a dump file at all, sixty-four bytes";
   }
   CHECK_THROWS_WITH(readDumpHeader(dir / "not-a-dump.bin"), Catch::Contains("not a Lucent dump"));
+  auto rewriteHeader = [&](const DumpHeader& h) {
+    std::fstream file(path, std::ios::binary | std::ios::in | std::ios::out);
+    file.write(reinterpret_cast<const char*>(&h), sizeof h);
+  };
+  DumpHeader otherVersion = header;
+  otherVersion.version = kDumpVersion + 1;
+  rewriteHeader(otherVersion);
+  CHECK_THROWS_WITH(readDumpHeader(path), Catch::Contains("values.bin") && Catch::Contains("format version 2"));
+  CHECK_THROWS_WITH(readDump<uint32_t>(path, "uint32"), Catch::Contains("format version 2"));
+  DumpHeader fewer = header;
+  fewer.count = values.size() - 1;
+  rewriteHeader(fewer);
+  CHECK_THROWS_WITH(readDump<uint32_t>(path, "uint32"), Catch::Contains("values.bin") && Catch::Contains("4 bytes after its 3 records"));
+  rewriteHeader(header);
+  REQUIRE(readDump<uint32_t>(path, "uint32") == values);
   std::filesystem::resize_file(path, sizeof(DumpHeader) + 6);
   CHECK_THROWS_WITH(readDump<uint32_t>(path, "uint32"), Catch::Contains("truncated"));
-  {  // a damaged count is refused against the file's length, before anything is allocated
-    DumpHeader damaged = header;
-    damaged.count = uint64_t(1) << 60;
-    std::fstream file(path, std::ios::binary | std::ios::in | std::ios::out);
-    file.write(reinterpret_cast<const char*>(&damaged), sizeof damaged);
-  }
+  // A damaged count is refused against the file's length, before anything is allocated.
+  DumpHeader damaged = header;
+  damaged.count = uint64_t(1) << 60;
+  rewriteHeader(damaged);
   CHECK_THROWS_WITH(readDump<uint32_t>(path, "uint32"), Catch::Contains("truncated"));
   CHECK_THROWS_WITH(writeDump((dir.path / "missing").string(), "values", "uint32", std::span(values)),
                     Catch::Contains("missing/values.bin"));

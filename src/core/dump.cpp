@@ -49,6 +49,9 @@ DumpHeader readHeader(std::ifstream& in, const std::string& path) {
   in.read(reinterpret_cast<char*>(&header), sizeof header);
   if (!in || std::memcmp(header.magic, kMagic, sizeof kMagic) != 0)
     throw std::runtime_error("'" + path + "' is not a Lucent dump");
+  if (header.version != kDumpVersion)
+    throw std::runtime_error("dump '" + path + "' has format version " + std::to_string(header.version) +
+                             "; this Lucent reads version " + std::to_string(kDumpVersion));
   return header;
 }
 }  // namespace
@@ -74,6 +77,11 @@ void readDumpRecords(const std::string& path, const std::string& type, uint32_t 
     throw std::runtime_error("dump '" + path + "' is truncated: " + std::to_string(header.count) + " records of " +
                              std::to_string(recordBytes) + " bytes announced, " + std::to_string(payload) +
                              " bytes present");
+  // Bytes after the records mean the count or the record size is not what the writer meant.
+  if (payload != header.count * recordBytes)
+    throw std::runtime_error("dump '" + path + "' has " + std::to_string(payload - header.count * recordBytes) +
+                             " bytes after its " + std::to_string(header.count) + " records of " +
+                             std::to_string(recordBytes) + " bytes");
   void* records = storage(header.count);
   in.seekg(sizeof(DumpHeader));
   in.read(static_cast<char*>(records), std::streamsize(uint64_t(recordBytes) * header.count));
