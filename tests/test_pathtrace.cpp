@@ -108,6 +108,38 @@ TEST_CASE("Camera rays and Lambertian hits in lanes give the image of one path a
   }
 }
 
+TEST_CASE("Pixel centres: every sample of a pixel takes the centre's camera ray, in lanes and one by one",
+          "[pathtrace]") {
+  // With the path cut at the camera's hit (max depth 0: emission seen directly) a sample's value is
+  // fixed by its camera ray alone. Through the pixel centres, 8 samples then give the image of 1;
+  // spread over the pixels (the default) they differ from it where the light's edge crosses a pixel.
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
+  scene.camera.width = scene.camera.height = 24;
+  const Visibility vis(scene);
+  auto render = [&](int spp, bool centres, bool lanes) {
+    PathTraceOptions opt;
+    opt.spp = spp;
+    opt.maxDepth = 0;
+    opt.pixelCentres = centres;
+    opt.laneShading = lanes;
+    return renderPathTraced(scene, vis, opt).image;
+  };
+  for (const bool lanes : {true, false}) {
+    INFO("lanes " << lanes);
+    const Image one = render(1, true, lanes), eight = render(8, true, lanes), spread = render(8, false, lanes);
+    int lit = 0, differing = 0;
+    for (int y = 0; y < 24; ++y)
+      for (int x = 0; x < 24; ++x) {
+        const float v = one.at(x, y, 0);
+        lit += v > 0;
+        REQUIRE(std::abs(eight.at(x, y, 0) - v) <= 1e-6f * v);
+        differing += std::abs(spread.at(x, y, 0) - v) > 1e-3f * v + 1e-6f;
+      }
+    CHECK(lit > 0);
+    CHECK(differing > 0);
+  }
+}
+
 namespace {
 
 // Renders a scene built in code at 2 spp with Lambertian hits shaded in lanes, then one by one,

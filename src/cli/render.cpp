@@ -191,7 +191,7 @@ int runRender(RenderArgs& a) {
                                              : PathStrategy::Mis;
       options = {{"spp", a.pt.spp},           {"max_depth", a.pt.maxDepth}, {"roulette_depth", a.pt.rouletteDepth},
                  {"seed", a.pt.seed},         {"time_budget", a.pt.timeBudget}, {"layers", a.pt.layers},
-                 {"strategy", a.strategy},    {"robust", a.robust}};
+                 {"strategy", a.strategy},    {"robust", a.robust}, {"pixel_centres", a.pt.pixelCentres}};
       out = renderPathTraced(scene, visibility, a.pt, [&](double f) { bar.update(f); });
     } else if (photonMapping) {
       options = photonMapOptionsJson(a, scene);
@@ -278,6 +278,9 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
            ->check(CLI::Range(1, 4096))->capture_default_str(), pt);
   only(cmd->add_option("--strategy", args->strategy, "pt: mis (default), or light or bsdf sampling alone, for validation")
            ->check(CLI::IsMember({"mis", "light", "bsdf"})), pt);
+  only(cmd->add_flag("--pixel-centres", args->pt.pixelCentres,
+                     "pt: every camera ray through its pixel's centre (the reference for purcell, pmfg and micro at 1 spp)"),
+       pt);
 
   // Photon mapping (purcell, pmfg); some options are micro's too.
   PhotonMapOptions& o = args->pm;

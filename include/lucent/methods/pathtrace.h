@@ -23,6 +23,10 @@ struct PathTraceOptions {
   int tileSize = 16;           // pixels; does not change the image
   bool layers = false;         // add albedo, normal, depth, direct and indirect layers
   PathStrategy strategy = PathStrategy::Mis;
+  // Every camera ray through its pixel's centre instead of uniformly over the pixel: the reference
+  // for renderers that sample pixel centres (purcell, pmfg and micro at one sample per pixel), whose
+  // images are point samples of the image, not its pixels' averages.
+  bool pixelCentres = false;
   // Camera rays are started and Lambertian hits shaded many at a time in vectorized loops
   // (CameraLanes, DiffuseLanes), other hits one by one. Both compute the same numbers; false does
   // everything one path at a time, for tests of exactly that.

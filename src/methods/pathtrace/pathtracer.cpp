@@ -511,7 +511,7 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
               if (++x == x1) x = x0, ++y;
             }
           }
-          if (options.laneShading) startCameraPaths(start, options.seed, camera);
+          if (options.laneShading) startCameraPaths(start, options.seed, camera, options.pixelCentres);
           for (uint32_t k = 0; k < start.count; ++k) {
             Path& path = wave.paths[k];
             path = Path{};
@@ -521,7 +521,8 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
               path.ray = {camera.eye(), {start.dirX[k], start.dirY[k], start.dirZ[k]}};
             } else {  // what startCameraPaths computes, one path at a time
               path.rng = Rng(options.seed, path.pixel, start.sample[k]);
-              const Vec2 jitter = path.rng.uniform2();
+              const Vec2 uniform = path.rng.uniform2();
+              const Vec2 jitter = options.pixelCentres ? Vec2{0.5f, 0.5f} : uniform;
               path.ray = camera.generate(start.x[k] + jitter.x, start.y[k] + jitter.y);
             }
             path.lastPosition = path.ray.origin;
