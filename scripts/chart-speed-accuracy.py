@@ -1,0 +1,165 @@
+#!/usr/bin/env python3
+"""Speed against accuracy, every method on every scene: relMSE against a converged path-traced
+reference over render time, one curve per method, each point one setting of the method's quality
+knob (samples, gather rays, photons, micro-buffer size). A curve that keeps falling converges; one
+that flattens has met its bias, and the height of the flat part is the method's failure on that
+scene. Writes docs/charts/<scene>.png (or --out DIR) and prints every point.
+
+The path tracer averages its pixels (box filter) and is compared with a reference that does too;
+purcell, pmfg and micro take one camera ray through each pixel's centre and are compared with a
+reference traced through the centres (`--pixel-centres`), so that their curves measure the
+method, not the aliasing of point samples at edges.
+
+  /usr/bin/python3 scripts/chart-speed-accuracy.py [--scenes cornell-box glass-ball sponza]
+                                                   [--threads 2] [--out DIR]
+
+The references (path tracer, 16,384 samples per pixel, box-filtered and through the pixel centres)
+are rendered once and kept in out/charts/.
+Needs matplotlib (Debian: python3-matplotlib); run with /usr/bin/python3. About 25 minutes on 2
+cores with all three scenes; run on an otherwise idle machine.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+LUCENT = os.path.join(ROOT, "build", "lucent")
+CACHE = os.path.join(ROOT, "out", "charts")
+
+# Per scene: the resolution, the shadow rays per shading point of purcell, pmfg and micro (many, so
+# that the noise of their direct light does not hide the error of their indirect light: on Sponza,
+# under the sky, micro's relMSE is 0.14 with the default 32 and 0.034 with 1,024), and per method
+# the knob swept (label, options).
+SCENES = {
+    "cornell-box": {
+        "resolution": "128x128",
+        "light_samples": 256,
+        "methods": {
+            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
+            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256, 1024)],
+            "purcell": [(f"{n // 1000}k photons", ["--photons", str(n)])
+                        for n in (16000, 65000, 260000, 1040000)],
+            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24, 32)],
+        },
+    },
+    "glass-ball": {
+        "resolution": "128x96",
+        "light_samples": 256,
+        "methods": {
+            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
+            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256, 1024)],
+            "purcell": [(f"{n // 1000}k caustic photons", ["--caustic-photons", str(n)])
+                        for n in (5000, 20000, 80000, 320000)],
+            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24)],
+        },
+    },
+    "sponza": {
+        "resolution": "160x100",
+        "light_samples": 1024,
+        "methods": {
+            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
+            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256)],
+            "purcell": [(f"{n // 1000}k photons", ["--photons", str(n)])
+                        for n in (65000, 260000, 1040000)],
+            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24)],
+        },
+    },
+}
+REFERENCE_SPP = 16384
+
+
+def run(args):
+    done = subprocess.run([LUCENT] + args, capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"chart-speed-accuracy: lucent {' '.join(args)} failed:\n{done.stderr}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def scene_path(name):
+    return os.path.join(ROOT, "scenes", name + ".json")
+
+
+def reference(scene, resolution, centres):
+    kind = "centres" if centres else "box"
+    path = os.path.join(CACHE, f"{scene}-{resolution}-pt-{REFERENCE_SPP}spp-{kind}.exr")
+    if not os.path.exists(path):
+        print(f"  (path-tracing the reference {os.path.basename(path)})", flush=True)
+        run(["render", scene_path(scene), "--method", "pt", "--spp", str(REFERENCE_SPP), "--seed", "1",
+             "--resolution", resolution, "--quiet", "-o", path] + (["--pixel-centres"] if centres else []))
+    return path
+
+
+def measure(scene, resolution, method, options, threads, ref):
+    image = os.path.join(CACHE, f"point-{os.getpid()}.exr")
+    name = method.split(" ")[0]
+    summary = run(["render", scene_path(scene), "--method", name, "--resolution", resolution, "--threads",
+                   str(threads), "--quiet", "-o", image] + options)
+    error = run(["compare", image, ref, "--metric", "relmse"])["value"]
+    return summary["seconds"], error
+
+
+def chart(scene, results, out):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 5), dpi=110)
+    for method, points in results.items():
+        xs = [p["seconds"] for p in points]
+        ys = [p["relmse"] for p in points]
+        ax.plot(xs, ys, marker="o", label=method)
+        for p in points:
+            ax.annotate(p["setting"], (p["seconds"], p["relmse"]), fontsize=6, textcoords="offset points",
+                        xytext=(4, 3))
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("render time, seconds (2 threads)")
+    ax.set_ylabel(f"relMSE against the path tracer at {REFERENCE_SPP} spp\n(pt: pixel averages; others: pixel centres)")
+    ax.set_title(f"{scene}: speed against accuracy")
+    ax.grid(True, which="both", linewidth=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = os.path.join(out, f"{scene}.png")
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--out", default=os.path.join(ROOT, "docs", "charts"))
+    args = parser.parse_args()
+    try:
+        import matplotlib  # noqa: F401 (checked before anything is rendered)
+    except ImportError:
+        sys.exit("chart-speed-accuracy: needs matplotlib (Debian: apt-get install python3-matplotlib; "
+                 "run with /usr/bin/python3)")
+    os.makedirs(CACHE, exist_ok=True)
+    os.makedirs(args.out, exist_ok=True)
+    everything = {}
+    for scene in args.scenes:
+        setup = SCENES[scene]
+        print(f"== {scene}, {setup['resolution']}, {args.threads} threads", flush=True)
+        box, centres = reference(scene, setup["resolution"], False), reference(scene, setup["resolution"], True)
+        results = {}
+        for method, settings in setup["methods"].items():
+            results[method] = []
+            ref = box if method == "pt" else centres
+            common = [] if method == "pt" else ["--light-samples", str(setup["light_samples"])]
+            for label, options in settings:
+                options = options + common
+                seconds, error = measure(scene, setup["resolution"], method, options, args.threads, ref)
+                results[method].append({"setting": label, "options": options, "seconds": seconds, "relmse": error})
+                print(f"  {method:12s} {label:22s} {seconds:8.2f} s  relMSE {error:.5f}", flush=True)
+        print(f"  chart: {chart(scene, results, args.out)}", flush=True)
+        everything[scene] = results
+    with open(os.path.join(args.out, "speed-accuracy.json"), "w") as f:
+        json.dump(everything, f, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
