@@ -180,22 +180,6 @@ TEST_CASE("Samples whose ray is not finite are dropped and counted, in lanes and
   });
 }
 
-namespace {
-
-// Sum of per-pixel differences over the square root of the sum of their squares: close to a
-// standard normal when the two images estimate the same thing with independent pixels.
-double agreementZ(const Image& a, const Image& b, int channel) {
-  double sum = 0, sum2 = 0;
-  for (int y = 0; y < a.height(); ++y)
-    for (int x = 0; x < a.width(); ++x) {
-      const double d = double(a.at(x, y, channel)) - b.at(x, y, channel);
-      sum += d;
-      sum2 += d * d;
-    }
-  return sum / std::sqrt(sum2);
-}
-
-}  // namespace
 
 TEST_CASE("MIS, light sampling alone and BSDF sampling alone converge to the same image", "[pathtrace]") {
   // Light sampling alone finds what BSDF sampling misses and vice versa: any error in a pdf, a
@@ -216,7 +200,7 @@ TEST_CASE("MIS, light sampling alone and BSDF sampling alone converge to the sam
     }
     for (const auto& [a, b] : {std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}})
       for (int c = 0; c < 3; ++c) {
-        const double z = agreementZ(images[a], images[b], c);
+        const double z = test::agreementZ(images[a], images[b], c);
         INFO(file << ": strategy " << a << " against " << b << ", channel " << c << ": z = " << std::to_string(z));
         CHECK(std::abs(z) < 4.5);
       }

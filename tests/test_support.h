@@ -110,4 +110,17 @@ inline void requireImageMean(const Image& image, Rgb expected) {
   }
 }
 
+// Sum of per-pixel differences over the square root of the sum of their squares: close to a
+// standard normal when the two images estimate the same thing with independent pixels.
+inline double agreementZ(const Image& a, const Image& b, int channel) {
+  double sum = 0, sum2 = 0;
+  for (int y = 0; y < a.height(); ++y)
+    for (int x = 0; x < a.width(); ++x) {
+      const double d = double(a.at(x, y, channel)) - b.at(x, y, channel);
+      sum += d;
+      sum2 += d * d;
+    }
+  return sum / std::sqrt(sum2);
+}
+
 }  // namespace lucent::test
