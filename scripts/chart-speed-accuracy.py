@@ -10,13 +10,13 @@ purcell, pmfg and micro take one camera ray through each pixel's centre and are 
 reference traced through the centres (`--pixel-centres`), so that their curves measure the
 method, not the aliasing of point samples at edges.
 
-  /usr/bin/python3 scripts/chart-speed-accuracy.py [--scenes cornell-box glass-ball sponza]
+  /usr/bin/python3 scripts/chart-speed-accuracy.py [--scenes cornell-box ... sponza]
                                                    [--threads 2] [--out DIR]
 
 The references (path tracer, 16,384 samples per pixel, box-filtered and through the pixel centres)
 are rendered once and kept in out/charts/.
 Needs matplotlib (Debian: python3-matplotlib); run with /usr/bin/python3. About 25 minutes on 2
-cores with all three scenes; run on an otherwise idle machine.
+cores with all six scenes; run on an otherwise idle machine.
 """
 import argparse
 import json
@@ -52,6 +52,38 @@ SCENES = {
             "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256, 1024)],
             "purcell": [(f"{n // 1000}k caustic photons", ["--caustic-photons", str(n)])
                         for n in (5000, 20000, 80000, 320000)],
+            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24)],
+        },
+    },
+    "cornell-box-spheres": {
+        "resolution": "128x128",
+        "light_samples": 256,
+        "methods": {
+            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
+            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256, 1024)],
+            "purcell": [(f"{n // 1000}k photons", ["--photons", str(n), "--caustic-photons", str(n)])
+                        for n in (16000, 65000, 260000, 1040000)],
+            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24)],
+        },
+    },
+    "cornell-box-glossy": {
+        "resolution": "128x128",
+        "light_samples": 256,
+        "methods": {
+            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
+            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256, 1024)],
+            "purcell": [(f"{n // 1000}k photons", ["--photons", str(n)]) for n in (16000, 65000, 260000, 1040000)],
+            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24)],
+        },
+    },
+    "ring-area": {
+        "resolution": "128x96",
+        "light_samples": 256,
+        "methods": {
+            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
+            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256)],
+            "purcell": [(f"{n // 1000}k caustic photons", ["--caustic-photons", str(n)])
+                        for n in (16000, 65000, 260000, 1040000)],
             "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24)],
         },
     },
@@ -139,7 +171,11 @@ def main():
                  "run with /usr/bin/python3)")
     os.makedirs(CACHE, exist_ok=True)
     os.makedirs(args.out, exist_ok=True)
+    data = os.path.join(args.out, "speed-accuracy.json")
     everything = {}
+    if os.path.exists(data):  # the scenes not run this time keep their points
+        with open(data) as f:
+            everything = json.load(f)
     for scene in args.scenes:
         setup = SCENES[scene]
         print(f"== {scene}, {setup['resolution']}, {args.threads} threads", flush=True)
@@ -156,8 +192,8 @@ def main():
                 print(f"  {method:12s} {label:22s} {seconds:8.2f} s  relMSE {error:.5f}", flush=True)
         print(f"  chart: {chart(scene, results, args.out)}", flush=True)
         everything[scene] = results
-    with open(os.path.join(args.out, "speed-accuracy.json"), "w") as f:
-        json.dump(everything, f, indent=1)
+    with open(data, "w") as f:
+        json.dump({scene: everything[scene] for scene in SCENES if scene in everything}, f, indent=1)
     return 0
 
 
