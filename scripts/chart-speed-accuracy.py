@@ -28,76 +28,47 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LUCENT = os.path.join(ROOT, "build", "lucent")
 CACHE = os.path.join(ROOT, "out", "charts")
 
+# Each method's knob swept: (label, options) per setting.
+def pt_samples():
+    return [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)]
+
+
+def gather_rays(*counts):
+    return [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in counts]
+
+
+def photons(flags, label, *counts):
+    """Photon counts given to every option in `flags` at once (purcell's global and caustic maps)."""
+    return [(f"{n // 1000}k {label}", [arg for flag in flags for arg in (flag, str(n))]) for n in counts]
+
+
+def buffers(*sides):
+    return [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in sides]
+
+
+def scene(resolution, light_samples, rays, purcell, sides):
+    return {"resolution": resolution, "light_samples": light_samples,
+            "methods": {"pt": pt_samples(), "pmfg": gather_rays(*rays), "purcell": purcell,
+                        "micro (vpl)": buffers(*sides)}}
+
+
 # Per scene: the resolution, the shadow rays per shading point of purcell, pmfg and micro (many, so
 # that the noise of their direct light does not hide the error of their indirect light: on Sponza,
-# under the sky, micro's relMSE is 0.14 with the default 32 and 0.034 with 1,024), and per method
-# the knob swept (label, options).
+# under the sky, micro's relMSE is 0.14 with the default 32 and 0.034 with 1,024), and the settings.
+MILLION = (16000, 65000, 260000, 1040000)
 SCENES = {
-    "cornell-box": {
-        "resolution": "128x128",
-        "light_samples": 256,
-        "methods": {
-            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
-            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256, 1024)],
-            "purcell": [(f"{n // 1000}k photons", ["--photons", str(n)])
-                        for n in (16000, 65000, 260000, 1040000)],
-            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24, 32)],
-        },
-    },
-    "glass-ball": {
-        "resolution": "128x96",
-        "light_samples": 256,
-        "methods": {
-            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
-            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256, 1024)],
-            "purcell": [(f"{n // 1000}k caustic photons", ["--caustic-photons", str(n)])
-                        for n in (5000, 20000, 80000, 320000)],
-            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24)],
-        },
-    },
-    "cornell-box-spheres": {
-        "resolution": "128x128",
-        "light_samples": 256,
-        "methods": {
-            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
-            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256, 1024)],
-            "purcell": [(f"{n // 1000}k photons", ["--photons", str(n), "--caustic-photons", str(n)])
-                        for n in (16000, 65000, 260000, 1040000)],
-            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24)],
-        },
-    },
-    "cornell-box-glossy": {
-        "resolution": "128x128",
-        "light_samples": 256,
-        "methods": {
-            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
-            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256, 1024)],
-            "purcell": [(f"{n // 1000}k photons", ["--photons", str(n)]) for n in (16000, 65000, 260000, 1040000)],
-            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24)],
-        },
-    },
-    "ring-area": {
-        "resolution": "128x96",
-        "light_samples": 256,
-        "methods": {
-            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
-            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256)],
-            "purcell": [(f"{n // 1000}k caustic photons", ["--caustic-photons", str(n)])
-                        for n in (16000, 65000, 260000, 1040000)],
-            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24)],
-        },
-    },
-    "sponza": {
-        "resolution": "160x100",
-        "light_samples": 1024,
-        "methods": {
-            "pt": [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)],
-            "pmfg": [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in (16, 64, 256)],
-            "purcell": [(f"{n // 1000}k photons", ["--photons", str(n)])
-                        for n in (65000, 260000, 1040000)],
-            "micro (vpl)": [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in (8, 16, 24)],
-        },
-    },
+    "cornell-box": scene("128x128", 256, (16, 64, 256, 1024), photons(["--photons"], "photons", *MILLION),
+                         (8, 16, 24, 32)),
+    "glass-ball": scene("128x96", 256, (16, 64, 256, 1024),
+                        photons(["--caustic-photons"], "caustic photons", 5000, 20000, 80000, 320000), (8, 16, 24)),
+    "cornell-box-spheres": scene("128x128", 256, (16, 64, 256, 1024),
+                                 photons(["--photons", "--caustic-photons"], "photons", *MILLION), (8, 16, 24)),
+    "cornell-box-glossy": scene("128x128", 256, (16, 64, 256, 1024), photons(["--photons"], "photons", *MILLION),
+                                (8, 16, 24)),
+    "ring-area": scene("128x96", 256, (16, 64, 256),
+                       photons(["--caustic-photons"], "caustic photons", *MILLION), (8, 16, 24)),
+    "sponza": scene("160x100", 1024, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
+                    (8, 16, 24)),
 }
 REFERENCE_SPP = 16384
 

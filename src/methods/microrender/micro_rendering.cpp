@@ -582,7 +582,7 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
       lanesAtLevel[level + 1] = descend;
       i = firstChild(i);
     } else {
-      i = nextNodeSkippingSubtree(i);
+      i = skipTo;
     }
   }
   counters.nodesVisited += visited;
