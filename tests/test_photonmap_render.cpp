@@ -10,6 +10,7 @@
 #include "lucent/methods/microrender.h"
 #include "lucent/methods/pathtrace.h"
 #include "lucent/methods/photonmap.h"
+#include "lucent/scene/camera.h"
 #include "lucent/scene/loader.h"
 #include "methods/photonmap/eye_paths.h"
 #include "test_scenes.h"
@@ -118,9 +119,11 @@ TEST_CASE("Closed diffuse furnace: purcell and pmfg give Le / (1 - rho)", "[phot
 
 TEST_CASE("pmfg converges to the path tracer on the Cornell box", "[photonmap-render]") {
   // Three settings with more photons, gather rays and k each; 64 stratified camera samples per
-  // pixel in all, so that edges are resolved alike. relMSE must fall from each to the next by a
-  // margin larger than its spread over seeds (measured: 0.0053, 0.0016, 0.0007; the reference's own
-  // noise adds about 0.0002), and the image means agree within 2% at the last.
+  // pixel in all, so that edges are resolved alike. Each setting is rendered with 8 seeds against
+  // one path-traced reference: relMSE must fall from each setting to the next by more than the
+  // noise of the two means, t = 4.8 standard errors from the seeds' spread (Student's t with 7
+  // degrees of freedom: one-sided p = 1e-3). Per-pixel errors would not do: the pixels share
+  // their photon map, so its noise is correlated across them.
   const Scene scene = smallCornellBox(16);
   const Visibility vis(scene);
   const Image reference = pathTraced(scene, vis, 4096, 1);
@@ -129,7 +132,9 @@ TEST_CASE("pmfg converges to the path tracer on the Cornell box", "[photonmap-re
     int gatherRays;
     uint32_t k;
   };
-  double previous = kInf;
+  constexpr int kSeeds = 8;
+  constexpr double kT = 4.8;
+  test::MeanAndError previous{kInf, 0};
   for (const Setting s : {Setting{500, 1, 10}, Setting{4000, 4, 20}, Setting{32000, 16, 50}}) {
     PhotonMapOptions opt;
     opt.photons = s.photons;
@@ -138,22 +143,37 @@ TEST_CASE("pmfg converges to the path tracer on the Cornell box", "[photonmap-re
     opt.spp = 64;
     opt.lightSamples = 4;
     opt.map = PhotonMapKind::KdTree;
-    opt.seed = 9;
-    const Image image = renderPhotonMapFinalGather(scene, vis, opt).image;
-    const double relmse = compareImages(image, reference).overall.relmse;
-    INFO(s.photons << " photons, " << s.gatherRays << " gather rays, k " << s.k << ": relMSE " << relmse
-                   << " (previous " << previous << ")");
-    CHECK(relmse * 1.5 < previous);
-    previous = relmse;
-    if (s.photons == 32000) {
-      CHECK(relmse < 0.0012);
-      for (int c = 0; c < 3; ++c) {
-        const double mean = test::channelMean(image, c).mean, expected = test::channelMean(reference, c).mean;
-        INFO("channel " << c << ": mean " << mean << ", path tracer " << expected);
-        CHECK(std::abs(mean / expected - 1) < 0.02);
-      }
+    std::vector<double> relmse;
+    for (int seed = 0; seed < kSeeds; ++seed) {
+      opt.seed = 9 + uint64_t(seed);
+      relmse.push_back(compareImages(renderPhotonMapFinalGather(scene, vis, opt).image, reference).overall.relmse);
     }
+    const test::MeanAndError e = test::meanOf(relmse);
+    INFO(s.photons << " photons, " << s.gatherRays << " gather rays, k " << s.k << ": relMSE " << e.mean << " +- "
+                   << e.standardError << " (previous " << previous.mean << " +- " << previous.standardError << ")");
+    CHECK(e.mean + kT * std::hypot(e.standardError, previous.standardError) < previous.mean);
+    previous = e;
   }
+}
+
+TEST_CASE("pmfg at its default settings ends below relMSE 0.005 against the path tracer on the Cornell box",
+          "[photonmap-render]") {
+  // The issue's bar, at the defaults (65,000 photons, k 50, 4,096 gather rays, 32 shadow rays, the
+  // kd-tree): one camera ray through each pixel's centre, against a path tracer traced through the
+  // centres too, so that edges are point-sampled alike. The reference's own noise only adds to the
+  // measured error.
+  const Scene scene = smallCornellBox(24);
+  const Visibility vis(scene);
+  PathTraceOptions pt;
+  pt.spp = 4096;
+  pt.seed = 1;
+  pt.pixelCentres = true;
+  const Image reference = renderPathTraced(scene, vis, pt).image;
+  PhotonMapOptions opt;
+  opt.map = PhotonMapKind::KdTree;
+  const double relmse = compareImages(renderPhotonMapFinalGather(scene, vis, opt).image, reference).overall.relmse;
+  INFO("relMSE " << relmse);
+  CHECK(relmse < 0.005);
 }
 
 // The caustic region's mean green radiance in two path-traced images and in two pmfg images (other
@@ -247,59 +267,81 @@ TEST_CASE("The glass ball's caustic: the caustic map matches the path tracer, an
 TEST_CASE("RING's caustic, lit by an area light: the caustic map matches the path tracer", "[photonmap-render][caustic]") {
   // RING's point light makes its caustic (light reflected by the ring onto the floor, L S D) one
   // that no path tracer can find, so scenes/ring-area.json puts a 2 x 2 emitter of the same power
-  // in its place. The camera is zoomed on the cardioid inside the ring. The region: pixels whose
-  // caustic light, in a pmfg render with other photons (seed 7), is over half of their radiance
-  // (295 pixels); without the caustic map less than 60% must remain. Measured: path tracer 0.296 +-
-  // 0.003, pmfg 0.291 +- 0.001, without the caustic map 0.127 (43%).
+  // in its place. The camera is zoomed on the cardioid inside the ring. The region: pixels where
+  // the path tracer (256 spp, seeds of their own) finds more than twice the radiance of the same
+  // scene with a black ring, that is where light reflected by the ring is over half, and whose
+  // whole footprint sees the floor (a pixel that touches the ring's mirror holds a sliver of the
+  // light's reflection, which 4 camera samples mostly miss); without the caustic map less than
+  // 60% must remain (what gathering finds through the mirror). Measured: 122 pixels, path tracer
+  // 0.301 +- 0.001 (16,384 spp), pmfg 0.294 +- 0.002, without the caustic map 0.140.
   Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/ring-area.json", {true});
   scene.camera.width = 48;
   scene.camera.height = 32;
   scene.camera.lookAt = {0.3f, 0, -0.8f};
   scene.camera.fovY = 18;
   const Visibility vis(scene);
-  PhotonMapOptions opt;
-  opt.causticPhotons = 1000000;
-  opt.k = 64;
-  opt.gatherRays = 1;
-  opt.spp = 4;
-  opt.layers = true;
-  opt.seed = 7;
-  const Image select = renderPhotonMapFinalGather(scene, vis, opt).image;
-  const int caustic = select.channelIndex("caustic.G");
+  Scene blackRing = scene;
+  for (Material& m : blackRing.materials)
+    if (m.type == MaterialType::Mirror) m.ks = Rgb(0.0f);
+  const Image lit = pathTraced(scene, vis, 256, 5), unlit = pathTraced(blackRing, Visibility(blackRing), 256, 6);
+  const PinholeCamera camera(scene.camera);
+  auto seesDiffuse = [&](int x, int y) {  // all of the pixel sees the floor, no part the ring
+    for (int j = 0; j <= 4; ++j)
+      for (int i = 0; i <= 4; ++i) {
+        const Hit hit = vis.intersect(camera.generate(float(x) + 0.25f * float(i), float(y) + 0.25f * float(j)));
+        if (!hit.found() || scene.materials[scene.materialIds[hit.triangle]].type != MaterialType::Diffuse) return false;
+      }
+    return true;
+  };
   std::vector<std::pair<int, int>> region;
   for (int y = 0; y < scene.camera.height; ++y)
     for (int x = 0; x < scene.camera.width; ++x)
-      if (select.at(x, y, caustic) > select.at(x, y, 1) - select.at(x, y, caustic)) region.push_back({x, y});
+      if (seesDiffuse(x, y) && lit.at(x, y, 1) > 2 * unlit.at(x, y, 1)) region.push_back({x, y});
   checkCausticAgainstPathTracer(scene, vis, region, 2048, 1000000, 64, 0.1, 0.6);
 }
 
 TEST_CASE("Every photon map renders the Cornell box alike with purcell", "[photonmap-render]") {
   // The same photons in the four maps. The sorted and the hashed grid find the same photons (the
-  // kNN-grid on the same cells; only the order of the sums differs); stencil routing drops photons
-  // beyond m^2 per cell and redistributes their power; the kd-tree takes the k nearest where the
-  // kNN-grid takes at least k. Measured relMSE between maps: sort-hash 0, sort-stencil 0.0004,
-  // grids-kdtree 0.0016-0.0023, against 0.0091 between sort and the path tracer (1,024 spp).
+  // kNN-grid on the same cells), so only the order of their sums differs: relative differences
+  // of a few float roundings (~1e-6), relMSE below 1e-10. Stencil routing drops photons beyond m^2
+  // per cell and redistributes their power; the kd-tree takes the k nearest where the kNN-grid
+  // takes at least k. Each is its own estimator, so each must be as close to the path tracer as
+  // the sorted grid is, within 4.5 standard deviations of the sorted grid's relMSE over 6 seeds;
+  // and switching maps must change the image less than switching seeds does.
   const Scene scene = smallCornellBox(32);
   const Visibility vis(scene);
   const Image reference = pathTraced(scene, vis, 1024, 1);
-  std::vector<Image> images;
-  const PhotonMapKind kinds[] = {PhotonMapKind::Sort, PhotonMapKind::Stencil, PhotonMapKind::Hash, PhotonMapKind::KdTree};
-  for (PhotonMapKind kind : kinds) {
+  auto render = [&](PhotonMapKind kind, uint64_t seed) {
     PhotonMapOptions opt;
     opt.k = 50;
     opt.spp = 4;
     opt.map = kind;
-    images.push_back(renderPurcell(scene, vis, opt).image);
-  }
-  const double sortToPt = compareImages(images[0], reference).overall.relmse;
+    opt.seed = seed;
+    return renderPurcell(scene, vis, opt).image;
+  };
+  const PhotonMapKind kinds[] = {PhotonMapKind::Sort, PhotonMapKind::Stencil, PhotonMapKind::Hash, PhotonMapKind::KdTree};
+  std::vector<Image> images;
+  for (PhotonMapKind kind : kinds) images.push_back(render(kind, 0));
+  const Image sortSeed1 = render(PhotonMapKind::Sort, 1);
+  const double reseeded = compareImages(sortSeed1, images[0]).overall.relmse;
+  std::vector<double> sortToPt{compareImages(images[0], reference).overall.relmse,
+                               compareImages(sortSeed1, reference).overall.relmse};
+  for (uint64_t seed = 2; seed < 6; ++seed) sortToPt.push_back(compareImages(render(PhotonMapKind::Sort, seed), reference).overall.relmse);
+  const test::MeanAndError sortError = test::meanOf(sortToPt);
+  const double spread = sortError.standardError * std::sqrt(double(sortToPt.size()));
   auto between = [&](int a, int b) { return compareImages(images[a], images[b]).overall.relmse; };
-  INFO("sort against the path tracer " << sortToPt << "; sort-stencil " << between(0, 1) << ", sort-hash "
-                                       << between(0, 2) << ", sort-kdtree " << between(0, 3) << ", stencil-kdtree "
-                                       << between(1, 3) << ", hash-kdtree " << between(2, 3));
-  CHECK(between(0, 2) < 1e-8);
-  CHECK(between(0, 1) < 0.1 * sortToPt);
-  for (int a : {0, 1, 2}) CHECK(between(a, 3) < 0.35 * sortToPt);
-  for (int a = 1; a < 4; ++a) CHECK(compareImages(images[a], reference).overall.relmse < 1.2 * sortToPt);
+  INFO("sort against the path tracer " << sortError.mean << " (sd " << spread << " over seeds); sort-stencil "
+                                       << between(0, 1) << ", sort-hash " << between(0, 2) << ", sort-kdtree "
+                                       << between(0, 3) << ", stencil-kdtree " << between(1, 3) << ", hash-kdtree "
+                                       << between(2, 3) << "; sort, two seeds " << reseeded);
+  CHECK(between(0, 2) < 1e-10);
+  for (int a = 0; a < 4; ++a)
+    for (int b = a + 1; b < 4; ++b) CHECK(between(a, b) < reseeded);
+  for (int a = 1; a < 4; ++a) {
+    const double error = compareImages(images[a], reference).overall.relmse;
+    INFO("map " << a << " against the path tracer " << error);
+    CHECK(std::abs(error - sortError.mean) <= 4.5 * spread);
+  }
 }
 
 TEST_CASE("The kNN-grid's progressive estimate converges shell by shell to the complete one", "[photonmap-render]") {

@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -93,6 +94,16 @@ inline MeanAndError channelMean(const Image& image, int channel) {
       sum += v;
       sum2 += v * v;
     }
+  const double mean = sum / n;
+  const double variance = std::max(0.0, sum2 / n - mean * mean) * n / (n - 1);
+  return {mean, std::sqrt(variance / n)};
+}
+
+// Mean of independent estimates, with its standard error from their spread.
+inline MeanAndError meanOf(const std::vector<double>& values) {
+  const double n = double(values.size());
+  double sum = 0, sum2 = 0;
+  for (const double v : values) sum += v, sum2 += v * v;
   const double mean = sum / n;
   const double variance = std::max(0.0, sum2 / n - mean * mean) * n / (n - 1);
   return {mean, std::sqrt(variance / n)};
