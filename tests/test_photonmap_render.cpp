@@ -444,3 +444,106 @@ TEST_CASE("Direct light with shadow rays packed across points equals each point'
     }
   }
 }
+
+TEST_CASE("A flat mirror's caustic equals the mirrored light's illumination", "[photonmap-render][caustic]") {
+  // A floor (y = 0, Kd 0.5) under a mirror (y = 4, 3 x 3, facing down, Ks 0.8) and between them
+  // a small emitter (y = 1, 0.4 x 0.4) facing the mirror, outside the mirror's bounding sphere, so
+  // that caustic photons are aimed at it: the floor's only light is reflected by the mirror, L S D
+  // paths, which the caustic map alone carries. Seen from the floor through the mirror, the
+  // emitter is its image at y = 7 facing down, of radiance Ks Le, so the floor's caustic radiance
+  // is (Kd / pi) Ks Le times the integral of cos cos / r^2 over that image (midpoint rule on 32 x 32
+  // cells), where the real emitter, seen from behind, does not block the way. Compared in the
+  // floor's pixels whose points lie out of the emitter's penumbra (it ends where |x| or |z| reaches
+  // 0.27) by more than a kernel radius (0.15, below): |x| or |z| beyond 0.45, within 1.5 (the
+  // mirror's reflection covers out to 3.2).
+  Scene scene;
+  auto quad = [&](Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material) {  // counter-clockwise
+    const auto base = static_cast<uint32_t>(scene.positions.size());
+    for (const Vec3& v : {a, b, c, d}) {
+      scene.positions.push_back(v);
+      scene.normals.push_back({0, 0, 0});
+      scene.texcoords.push_back({0, 0});
+    }
+    scene.indices.insert(scene.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    scene.materialIds.insert(scene.materialIds.end(), {material, material});
+  };
+  Material floor, mirror, emitter;
+  floor.kd = Rgb(0.5f);
+  mirror.type = MaterialType::Mirror;
+  mirror.ks = Rgb(0.8f);
+  emitter.kd = Rgb(0.0f);
+  const float le = 50, h = 0.2f;
+  emitter.ke = Rgb(le);
+  quad({-4, 0, -4}, {-4, 0, 4}, {4, 0, 4}, {4, 0, -4}, test::addMaterial(scene, floor, "floor"));
+  quad({-1.5f, 4, -1.5f}, {1.5f, 4, -1.5f}, {1.5f, 4, 1.5f}, {-1.5f, 4, 1.5f}, test::addMaterial(scene, mirror, "mirror"));
+  quad({-h, 1, -h}, {-h, 1, h}, {h, 1, h}, {h, 1, -h}, test::addMaterial(scene, emitter, "emitter"));
+  scene.camera = test::testCamera({0, 1.6f, 2.6f}, {0, 0, 0}, 32, 32, 70);
+  finalizeScene(scene);
+  const Visibility vis(scene);
+  REQUIRE(scene.geometricNormal(0).y > 0.99f);
+  REQUIRE(scene.geometricNormal(2).y < -0.99f);
+  REQUIRE(scene.geometricNormal(4).y > 0.99f);
+
+  const PinholeCamera camera(scene.camera);
+  struct Target {
+    int x, y;
+    double radiance;
+  };
+  std::vector<Target> targets;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const Ray ray = camera.generate(float(x) + 0.5f, float(y) + 0.5f);
+      const Hit hit = vis.intersect(ray);
+      if (!hit.found() || scene.materialIds[hit.triangle] != 0) continue;
+      const Vec3 p = ray.origin + ray.direction * hit.t;
+      if (std::max(std::abs(p.x), std::abs(p.z)) < 0.45f || std::max(std::abs(p.x), std::abs(p.z)) > 1.5f) continue;
+      double integral = 0;
+      constexpr int n = 32;
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          const Vec3 image{-h + 2 * h * (i + 0.5f) / n, 7, -h + 2 * h * (j + 0.5f) / n};
+          const Vec3 d = image - p;
+          const float r2 = dot(d, d), cosFloor = d.y / std::sqrt(r2), cosImage = cosFloor;
+          const Vec3 onMirror = p + d * (4.0f / 7.0f);
+          Ray up{offsetOrigin(p, {0, 1, 0}, d), normalize(d)};
+          up.tMax = length(onMirror - up.origin) * 0.999f;
+          if (vis.occluded(up)) continue;
+          integral += cosFloor * cosImage / r2 * (2 * h / n) * (2 * h / n);
+        }
+      targets.push_back({x, y, 0.5 * kInvPi * 0.8 * le * integral});
+    }
+  REQUIRE(targets.size() >= 200);
+
+  // The caustic photons' (8 seeds) ratio of the region's sum to the quadrature's: within Student's
+  // t for 7 degrees of freedom at two-sided p = 1e-3 (5.41) of its standard error over the seeds
+  // (the pixels share photons, so their spread would not do), plus the kernel's curvature bias: a
+  // disc of radius r averages E to E + r^2 / 8 Laplacian(E); here E ~ (1 + rho^2 / 49)^-2 in the
+  // distance rho from the axis, |Laplacian(E) / E| < 0.2, and r < 0.15 (k 100 of some 5,000
+  // photons per unit area, 2.5 times as many for the kNN-grid's at least k), so under 1e-3.
+  constexpr int kSeeds = 8;
+  constexpr double kT = 5.41, kCurvature = 1e-3;
+
+  for (const PhotonMapKind kind : {PhotonMapKind::KdTree, PhotonMapKind::Sort}) {
+    std::vector<double> ratios;
+    for (uint64_t seed = 0; seed < kSeeds; ++seed) {
+      PhotonMapOptions opt;
+      opt.photons = 1000;
+      opt.causticPhotons = 500000;
+      opt.k = 100;
+      opt.gatherRays = 1;
+      opt.lightSamples = 1;
+      opt.layers = true;
+      opt.map = kind;
+      opt.seed = seed;
+      const Image image = renderPurcell(scene, vis, opt).image;
+      const int caustic = image.channelIndex("caustic.G");
+      double sum = 0, expected = 0;
+      for (const Target& t : targets) sum += image.at(t.x, t.y, caustic), expected += t.radiance;
+      ratios.push_back(sum / expected);
+    }
+    const test::MeanAndError ratio = test::meanOf(ratios);
+    INFO((kind == PhotonMapKind::KdTree ? "kd-tree" : "sorted grid") << ": caustic over the mirrored light's "
+                                                                    << ratio.mean << " +- " << ratio.standardError);
+    CHECK(std::abs(ratio.mean - 1) <= kT * ratio.standardError + kCurvature);
+  }
+}
