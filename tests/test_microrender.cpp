@@ -26,7 +26,7 @@ using namespace lucent;
 namespace {
 
 // Chi-square tests in this file that must pass (negative controls excluded).
-constexpr int kChi2Tests = 9;
+constexpr int kChi2Tests = 6;  // three cases, each against its own density and the exact slice
 const double kAlpha = chi2::sidak(0.01, kChi2Tests);
 
 using test::diffuseBsdf;
@@ -80,9 +80,11 @@ TEST_CASE("Mappings: the inverse of a pixel's direction is that pixel, and forwa
           REQUIRE(std::abs(back.x - uv.x) < 2e-4f);
           REQUIRE(std::abs(back.y - uv.y) < 2e-4f);
         }
-        // Nusselt wastes the corners of the square (1 - pi / 4 = 21%); the warped mapping the parts of
-        // the table cells that the rim cuts (6% at 32 x 32 cells).
-        REQUIRE(inside > (kind == MappingKind::Nusselt ? 1500 : 1850));
+        // Most of the square was tried: Nusselt wastes its corners (1 - pi / 4 = 21%), the warped
+        // mapping the parts of the table cells that the rim cuts (6% at 32 x 32 cells, points README);
+        // at least the binomial mean less 4.5 standard deviations of the 2,000 samples.
+        const double p = kind == MappingKind::Nusselt ? kPi / 4 : 0.94;
+        REQUIRE(inside >= 2000 * p - 4.5 * std::sqrt(2000 * p * (1 - p)));
       }
 }
 
