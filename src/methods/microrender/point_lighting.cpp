@@ -10,6 +10,7 @@
 #include "../photonmap/photon_render.h"
 #include "../points/bottom_up.h"
 #include "lucent/scene/light_sampling.h"
+#include "lucent/scene/particle_scattering.h"
 #include "lucent/scene/surface.h"
 
 namespace lucent {
@@ -92,19 +93,21 @@ std::vector<VirtualPointLight> traceVirtualPointLights(const Scene& scene, const
       const SurfaceBsdf bsdf = bsdfAt(scene, sp);
       const Vec3 wo = -ray.direction;
       const bool front = dot(wo, sp.geometricNormal) > 0;
-      Vec3 n = sp.shadingNormal;
-      if (bsdf.type != MaterialType::Glass && !front) n = -n;
-      if (!bsdf.isDelta() && !bsdf.kd.isBlack())
-        perPath[p].push_back({sp.position, front ? sp.geometricNormal : -sp.geometricNormal, flux, bsdf.kd});
-      const Frame f(n);
-      const BsdfSample s = sampleBsdf(bsdf, f.toLocal(wo), rng.uniform(), rng.uniform2(), Transport::Importance);
+      if (!bsdf.isDelta() && !bsdf.kd.isBlack()) {
+        // With the cosines' ratio, as photons are stored (particle_scattering.h).
+        const float arrival = particleArrivalRatio(sp, particleShadingNormal(bsdf, sp, wo), wo);
+        if (arrival > 0)
+          perPath[p].push_back({sp.position, front ? sp.geometricNormal : -sp.geometricNormal, flux * arrival, bsdf.kd});
+      }
+      const Vec2 u2 = rng.uniform2();
+      const float uLobe = rng.uniform();
+      const ParticleScatter s = scatterParticle(bsdf, sp, wo, uLobe, u2, rng);
       if (!s.valid) break;
       Rgb next = flux * s.weight;
       const float survive = std::min(1.0f, next.maxComponent() / std::max(flux.maxComponent(), 1e-30f));
       if (!(survive > 0) || rng.uniform() >= survive) break;
       flux = next * (1.0f / survive);
-      const Vec3 wi = f.toWorld(s.wi);
-      ray = {offsetOrigin(sp.position, sp.geometricNormal, wi), wi};
+      ray = {offsetOrigin(sp.position, sp.geometricNormal, s.wi), s.wi};
     }
   });
   std::vector<VirtualPointLight> vpls;

@@ -7,6 +7,7 @@
 
 #include "lucent/core/rng.h"
 #include "lucent/scene/light_sampling.h"
+#include "lucent/scene/particle_scattering.h"
 #include "lucent/scene/surface.h"
 
 namespace lucent {
@@ -54,34 +55,30 @@ BounceResult bounce(const Scene& scene, const PhotonPath& path, const Hit& hit, 
   const SurfacePoint sp = surfaceAt(scene, hit.triangle, hit.b1, hit.b2);
   const SurfaceBsdf bsdf = bsdfAt(scene, sp);
   const Vec3 wo = -path.ray.direction;
-  const bool frontFace = dot(wo, sp.geometricNormal) > 0;
 
   if (!bsdf.isDelta() && !(bsdf.kd + bsdf.ks).isBlack()) {
+    // Stored with the ratio of the cosines that viewers above the shading normal see it with
+    // (particle_scattering.h); one from below the shading normal adds nothing for them.
+    const float arrival = particleArrivalRatio(sp, particleShadingNormal(bsdf, sp, wo), wo);
     out.caustic = path.specularOnly && depth > 0;
-    out.photon = {sp.position, path.power, encodeOctahedral(wo),
+    out.photon = {sp.position, path.power * arrival, encodeOctahedral(wo),
                   std::min(depth, kPhotonBounceMask) | (out.caustic ? kPhotonCausticFlag : 0u)};
-    out.stored = !causticOnly || out.caustic;
+    out.stored = (!causticOnly || out.caustic) && arrival > 0;
     if (causticOnly) return out;  // no caustic path continues from a non-specular surface
   }
 
   Rng rng(seed, path.index, depth + 1);
-  Vec3 n = sp.shadingNormal;
-  if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
-  const Frame frame(n);
-  const Vec3 woLocal = frame.toLocal(wo);
   // Russian roulette by reflectance: a grey surface keeps the photon's power unchanged.
   const float survival = bsdf.type == MaterialType::Glass    ? 1.0f
                          : bsdf.type == MaterialType::Mirror ? std::min(1.0f, bsdf.ks.maxComponent())
                                                              : std::min(1.0f, (bsdf.kd + bsdf.ks).maxComponent());
   if (!(rng.uniform() < survival)) return out;
   const float uLobe = rng.uniform();
-  const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, rng.uniform2(), Transport::Importance);
-  if (!bs.valid) return out;
-  const Vec3 wi = frame.toWorld(bs.wi);
-  const bool transmits = bs.wi.z * woLocal.z < 0;
-  if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) return out;
-  out.next = {{offsetOrigin(sp.position, sp.geometricNormal, wi), wi}, path.power * bs.weight * (1.0f / survival),
-              path.index, uint32_t(path.specularOnly && bs.delta)};
+  const ParticleScatter scatter = scatterParticle(bsdf, sp, wo, uLobe, rng.uniform2(), rng);
+  if (!scatter.valid) return out;
+  const Vec3 wi = scatter.wi;
+  out.next = {{offsetOrigin(sp.position, sp.geometricNormal, wi), wi}, path.power * scatter.weight * (1.0f / survival),
+              path.index, uint32_t(path.specularOnly && scatter.delta)};
   out.alive = !out.next.power.isBlack() && isFinite(out.next.power);
   return out;
 }
