@@ -272,22 +272,12 @@ TEST_CASE("Photons under shading normals carry what the path tracer's radiance d
   // as a Poisson process). Photons that kept their flux per unit of true area would store 1.36
   // times as much; scattered about the shading normal alone, 0.85 times (particle_scattering.h).
   Scene scene;
-  auto quad = [&](Vec3 a, Vec3 b, Vec3 c, Vec3 d, Vec3 shading, uint32_t material) {  // counter-clockwise
-    const auto base = static_cast<uint32_t>(scene.positions.size());
-    for (const Vec3& v : {a, b, c, d}) {
-      scene.positions.push_back(v);
-      scene.normals.push_back(shading);
-      scene.texcoords.push_back({0, 0});
-    }
-    scene.indices.insert(scene.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
-    scene.materialIds.insert(scene.materialIds.end(), {material, material});
-  };
   Material floor, wall;
   floor.kd = Rgb(0.8f);
   wall.kd = Rgb(0.5f);
   const Vec3 nsA = normalize(Vec3{0.3f, 1, 0.4f}), nsB = normalize(Vec3{1, 0.5f, -0.3f});
-  quad({0, 0, -2}, {0, 0, 2}, {4, 0, 2}, {4, 0, -2}, nsA, test::addMaterial(scene, floor, "floor"));
-  quad({0, 0, -2}, {0, 2, -2}, {0, 2, 2}, {0, 0, 2}, nsB, test::addMaterial(scene, wall, "wall"));
+  test::addQuad(scene, {0, 0, -2}, {0, 0, 2}, {4, 0, 2}, {4, 0, -2}, test::addMaterial(scene, floor, "floor"), nsA);
+  test::addQuad(scene, {0, 0, -2}, {0, 2, -2}, {0, 2, 2}, {0, 0, 2}, test::addMaterial(scene, wall, "wall"), nsB);
   const float irradiance = 2;
   scene.lights.push_back({LightType::Directional, 0, Vec3{0, -1, 0}, Rgb(irradiance)});
   scene.camera = test::testCamera({2, 1, 3}, {0, 0.5f, 0}, 8, 8);

@@ -459,16 +459,6 @@ TEST_CASE("A flat mirror's caustic equals the mirrored light's illumination", "[
   // 0.27) by more than a kernel radius (0.15, below): |x| or |z| beyond 0.45, within 1.5 (the
   // mirror's reflection covers out to 3.2).
   Scene scene;
-  auto quad = [&](Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material) {  // counter-clockwise
-    const auto base = static_cast<uint32_t>(scene.positions.size());
-    for (const Vec3& v : {a, b, c, d}) {
-      scene.positions.push_back(v);
-      scene.normals.push_back({0, 0, 0});
-      scene.texcoords.push_back({0, 0});
-    }
-    scene.indices.insert(scene.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
-    scene.materialIds.insert(scene.materialIds.end(), {material, material});
-  };
   Material floor, mirror, emitter;
   floor.kd = Rgb(0.5f);
   mirror.type = MaterialType::Mirror;
@@ -476,9 +466,9 @@ TEST_CASE("A flat mirror's caustic equals the mirrored light's illumination", "[
   emitter.kd = Rgb(0.0f);
   const float le = 50, h = 0.2f;
   emitter.ke = Rgb(le);
-  quad({-4, 0, -4}, {-4, 0, 4}, {4, 0, 4}, {4, 0, -4}, test::addMaterial(scene, floor, "floor"));
-  quad({-1.5f, 4, -1.5f}, {1.5f, 4, -1.5f}, {1.5f, 4, 1.5f}, {-1.5f, 4, 1.5f}, test::addMaterial(scene, mirror, "mirror"));
-  quad({-h, 1, -h}, {-h, 1, h}, {h, 1, h}, {h, 1, -h}, test::addMaterial(scene, emitter, "emitter"));
+  test::addQuad(scene, {-4, 0, -4}, {-4, 0, 4}, {4, 0, 4}, {4, 0, -4}, test::addMaterial(scene, floor, "floor"));
+  test::addQuad(scene, {-1.5f, 4, -1.5f}, {1.5f, 4, -1.5f}, {1.5f, 4, 1.5f}, {-1.5f, 4, 1.5f}, test::addMaterial(scene, mirror, "mirror"));
+  test::addQuad(scene, {-h, 1, -h}, {-h, 1, h}, {h, 1, h}, {h, 1, -h}, test::addMaterial(scene, emitter, "emitter"));
   scene.camera = test::testCamera({0, 1.6f, 2.6f}, {0, 0, 0}, 32, 32, 70);
   finalizeScene(scene);
   const Visibility vis(scene);

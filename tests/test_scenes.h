@@ -28,6 +28,19 @@ inline void addBox(Scene& scene, Vec3 lo, Vec3 hi, uint32_t material, bool inwar
   }
 }
 
+// Adds the quad (a, b, c, d), counter-clockwise seen from the side its normal faces, as two
+// triangles with its own vertices; `shading` is their shading normal (zero: the geometric one).
+inline void addQuad(Scene& scene, Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t material, Vec3 shading = {0, 0, 0}) {
+  const auto base = static_cast<uint32_t>(scene.positions.size());
+  for (const Vec3& v : {a, b, c, d}) {
+    scene.positions.push_back(v);
+    scene.normals.push_back(shading);
+    scene.texcoords.push_back({0, 0});
+  }
+  scene.indices.insert(scene.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+  scene.materialIds.insert(scene.materialIds.end(), {material, material});
+}
+
 inline uint32_t addMaterial(Scene& scene, const Material& m, const std::string& name) {
   scene.materials.push_back(m);
   scene.materialNames.push_back(name);
