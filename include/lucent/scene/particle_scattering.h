@@ -17,8 +17,13 @@
 // hemisphere, (1 - cos(shading, geometric)) / 2; without shading normals it is empty, nothing more
 // is drawn, and the result is the BSDF sample unchanged.
 //
-// Mirror and glass reflect about the shading normal alone (their wedge directions, where the path
-// tracer would reflect about the geometric normal, are left out), with the cosine ratios above.
+// Mirror and glass reflect and refract about the shading normal alone (their wedge directions, where
+// the path tracer would reflect about the geometric normal, are left out), with the cosine ratios
+// above; a particle whose arrival is on one side of the shading normal and the other of the true
+// surface goes no further there.
+//
+// Where the shading normal is the geometric one (a face without vertex normals) nothing of this is
+// computed and no number drawn: the weight is the BSDF sample's, bit for bit.
 #pragma once
 #include <cmath>
 
@@ -42,11 +47,16 @@ inline Vec3 particleShadingNormal(const SurfaceBsdf& bsdf, const SurfacePoint& s
   return bsdf.type != MaterialType::Glass && !front ? -sp.shadingNormal : sp.shadingNormal;
 }
 
-// What a particle arriving from wo stores for a viewer above its shading normal: the ratio of the
-// shading to the geometric cosine of wo, zero where wo is below the shading normal.
+inline bool hasShadingNormal(const SurfacePoint& sp) { return !(sp.shadingNormal == sp.geometricNormal); }
+
+// The ratio of the shading to the geometric cosine of a particle's arrival from wo (n: the shading
+// normal on its side), zero where wo lies on one side of the shading normal and the other of the
+// true surface; what it stores for viewers above its shading normal.
 inline float particleArrivalRatio(const SurfacePoint& sp, Vec3 n, Vec3 wo) {
-  const float cosGeometric = std::abs(dot(wo, sp.geometricNormal)), cosShading = dot(wo, n);
-  return cosGeometric > 0 && cosShading > 0 ? cosShading / cosGeometric : 0.0f;
+  if (!hasShadingNormal(sp)) return 1.0f;
+  const float cosGeometric = dot(wo, sp.geometricNormal), cosShading = dot(wo, n);
+  const bool sameSide = (cosShading > 0) == (dot(n, sp.geometricNormal) * cosGeometric > 0);
+  return cosGeometric != 0 && cosShading != 0 && sameSide ? std::abs(cosShading / cosGeometric) : 0.0f;
 }
 
 // Scatters a particle arriving from wo; uLobe and u2 are the BSDF sample's numbers, rng gives the
@@ -56,14 +66,13 @@ inline ParticleScatter scatterParticle(const SurfaceBsdf& bsdf, const SurfacePoi
   ParticleScatter out;
   const Vec3 ng = sp.geometricNormal;
   const Vec3 n = particleShadingNormal(bsdf, sp, wo);
-  const float cosInGeometric = std::abs(dot(wo, ng));
-  const float cosInShading = bsdf.type == MaterialType::Glass ? std::abs(dot(wo, n)) : dot(wo, n);
-  if (!(cosInGeometric > 0)) return out;
-  const float arrival = cosInShading > 0 ? cosInShading / cosInGeometric : 0.0f;
+  if (!(std::abs(dot(wo, ng)) > 0)) return out;
+  const bool shaded = hasShadingNormal(sp);
+  const float arrival = particleArrivalRatio(sp, n, wo);
 
   // The wedge's probability (non-specular surfaces only); no number is drawn where it is empty.
   const Vec3 ngSide = dot(wo, ng) > 0 ? ng : -ng;
-  const float wedge = bsdf.isDelta() ? 0.0f : 0.5f * (1.0f - std::min(1.0f, dot(n, ngSide)));
+  const float wedge = shaded && !bsdf.isDelta() ? 0.5f * (1.0f - std::min(1.0f, dot(n, ngSide))) : 0.0f;
   if (wedge > 0 && rng.uniform() < wedge) {
     // The wedge: the path tracer's viewer there takes the geometric normal, for the BSDF and the
     // cosine of wo (whose ratio to the geometric one is then 1).
@@ -81,15 +90,17 @@ inline ParticleScatter scatterParticle(const SurfaceBsdf& bsdf, const SurfacePoi
   const Frame frame(n);
   const Vec3 woLocal = frame.toLocal(wo);
   const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, u2, Transport::Importance);
-  if (!bs.valid || !(std::abs(bs.wi.z) > 0)) return out;
+  if (!bs.valid) return out;
   const Vec3 wi = frame.toWorld(bs.wi);
   // Leaving on the other side of the true surface than the BSDF means (a shading-normal leak): none.
   const bool transmits = bs.wi.z * woLocal.z < 0;
   if ((dot(wi, ng) * dot(wo, ng) < 0) != transmits) return out;
   out.wi = wi;
   out.weight = bs.weight;
-  // Where the normals agree the ratios are 1 (not computed: rounding would change flat scenes).
-  if (!(n == ngSide)) out.weight = out.weight * (arrival * std::abs(dot(wi, ng)) / std::abs(bs.wi.z) / (1.0f - wedge));
+  if (shaded) {
+    if (!(std::abs(bs.wi.z) > 0)) return out;
+    out.weight = out.weight * (arrival * std::abs(dot(wi, ng)) / std::abs(bs.wi.z) / (1.0f - wedge));
+  }
   out.delta = bs.delta;
   out.valid = true;
   return out;

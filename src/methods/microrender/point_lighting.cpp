@@ -96,7 +96,7 @@ std::vector<VirtualPointLight> traceVirtualPointLights(const Scene& scene, const
       if (!bsdf.isDelta() && !bsdf.kd.isBlack()) {
         // With the cosines' ratio, as photons are stored (particle_scattering.h).
         const float arrival = particleArrivalRatio(sp, particleShadingNormal(bsdf, sp, wo), wo);
-        if (arrival > 0)
+        if (arrival > 0 && isFinite(flux * arrival))
           perPath[p].push_back({sp.position, front ? sp.geometricNormal : -sp.geometricNormal, flux * arrival, bsdf.kd});
       }
       const Vec2 u2 = rng.uniform2();
@@ -104,6 +104,7 @@ std::vector<VirtualPointLight> traceVirtualPointLights(const Scene& scene, const
       const ParticleScatter s = scatterParticle(bsdf, sp, wo, uLobe, u2, rng);
       if (!s.valid) break;
       Rgb next = flux * s.weight;
+      if (!isFinite(next)) break;
       const float survive = std::min(1.0f, next.maxComponent() / std::max(flux.maxComponent(), 1e-30f));
       if (!(survive > 0) || rng.uniform() >= survive) break;
       flux = next * (1.0f / survive);

@@ -63,12 +63,13 @@ BounceResult bounce(const Scene& scene, const PhotonPath& path, const Hit& hit, 
     out.caustic = path.specularOnly && depth > 0;
     out.photon = {sp.position, path.power * arrival, encodeOctahedral(wo),
                   std::min(depth, kPhotonBounceMask) | (out.caustic ? kPhotonCausticFlag : 0u)};
-    out.stored = (!causticOnly || out.caustic) && arrival > 0;
+    out.stored = (!causticOnly || out.caustic) && arrival > 0 && isFinite(out.photon.power);
     if (causticOnly) return out;  // no caustic path continues from a non-specular surface
   }
 
   Rng rng(seed, path.index, depth + 1);
-  // Russian roulette by reflectance: a grey surface keeps the photon's power unchanged.
+  // Russian roulette by reflectance: on a grey surface without shading normals the photon keeps
+  // its power.
   const float survival = bsdf.type == MaterialType::Glass    ? 1.0f
                          : bsdf.type == MaterialType::Mirror ? std::min(1.0f, bsdf.ks.maxComponent())
                                                              : std::min(1.0f, (bsdf.kd + bsdf.ks).maxComponent());
