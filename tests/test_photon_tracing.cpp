@@ -393,6 +393,42 @@ TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, 
         REQUIRE(particleArrivalRatio(flat, n, wo) == 1.0f);
       }
   }
+  SECTION("a mirror with a tilted normal sends the particle to each viewer the path tracer reflects into it") {
+    // Shading normal 35 degrees from the geometric one (+z). Arriving near the normal, only the
+    // reflection about the shading normal is a viewer the path tracer reflects into wo (weight
+    // Ks cos(wi, ng) / cos(wo, ng)); arriving at 77 degrees on the tilt's side, the reflection about
+    // the geometric normal lies in the wedge too (weight Ks): one of the two at random, twice
+    // the weight, each half the time (4.5 binomial standard deviations of 20,000).
+    SurfacePoint tilted = flat;
+    tilted.geometricNormal = {0, 0, 1};
+    tilted.shadingNormal = normalize(Vec3{std::sin(35 * kPi / 180), 0, std::cos(35 * kPi / 180)});
+    Rng rng(8);
+    const Vec3 near = normalize(Vec3{0.1f, 0, 1});
+    const ParticleScatter one = scatterParticle(mirror, tilted, near, 0.5f, {0.5f, 0.5f}, rng);
+    const Vec3 aboutShading = reflect(near, tilted.shadingNormal);
+    REQUIRE(one.valid);
+    REQUIRE(one.delta);
+    CHECK(length(one.wi - aboutShading) < 1e-6f);
+    CHECK(one.weight.r == Approx(0.9 * aboutShading.z / near.z).epsilon(1e-6));
+    const Vec3 grazing = normalize(Vec3{0.9f, 0, 0.2f});
+    const Vec3 viaShading = reflect(grazing, tilted.shadingNormal), viaGeometric = reflect(grazing, {0, 0, 1});
+    REQUIRE(viaShading.z > 0);
+    REQUIRE(dot(viaGeometric, tilted.shadingNormal) < 0);
+    int shading = 0;
+    constexpr int n = 20000;
+    for (int k = 0; k < n; ++k) {
+      const ParticleScatter s = scatterParticle(mirror, tilted, grazing, 0.5f, {0.5f, 0.5f}, rng);
+      REQUIRE(s.valid);
+      if (length(s.wi - viaShading) < 1e-6f) {
+        ++shading;
+        REQUIRE(s.weight.r == Approx(2 * 0.9 * viaShading.z / grazing.z).epsilon(1e-6));
+      } else {
+        REQUIRE(length(s.wi - viaGeometric) < 1e-6f);
+        REQUIRE(s.weight.r == Approx(2 * 0.9).epsilon(1e-6));
+      }
+    }
+    CHECK(std::abs(shading - n / 2) <= 4.5 * std::sqrt(n / 4.0));
+  }
   SECTION("tilted normals: each region's mean weight is the adjoint kernel's integral over it") {
     // A Lambertian surface, shading normal 35 degrees from the geometric one, a particle arriving
     // from wo. The adjoint kernel for a viewer wi above the true surface is

@@ -17,10 +17,13 @@
 // hemisphere, (1 - cos(shading, geometric)) / 2; without shading normals it is empty, nothing more
 // is drawn, and the result is the BSDF sample unchanged.
 //
-// Mirror and glass reflect and refract about the shading normal alone (their wedge directions, where
-// the path tracer would reflect about the geometric normal, are left out), with the cosine ratios
-// above; a particle whose arrival is on one side of the shading normal and the other of the true
-// surface goes no further there.
+// A mirror sends the particle to every viewer direction that the path tracer would reflect into its
+// arrival: reflect(wo, ns) where that lies above both normals (weight Ks |cos(wi, ng)| /
+// |cos(wo, ng)|) and reflect(wo, ng) where that lies in the wedge (weight Ks); where both exist,
+// to one of them at random with twice the weight. Glass refracts and reflects about the shading
+// normal alone (its wedge directions, where the path tracer would use the geometric normal, are
+// left out), with the cosine ratios above; a particle arriving on one side of the shading normal
+// and the other of the true surface goes no further there.
 //
 // Where the shading normal is the geometric one (a face without vertex normals) nothing of this is
 // computed and no number drawn: the weight is the BSDF sample's, bit for bit.
@@ -84,6 +87,19 @@ inline ParticleScatter scatterParticle(const SurfaceBsdf& bsdf, const SurfacePoi
     out.weight = evalBsdf(bsdf, local, frame.toLocal(wo)) * (kPi / wedge);
     out.wi = wi;
     out.valid = !out.weight.isBlack();
+    return out;
+  }
+  if (shaded && bsdf.type == MaterialType::Mirror) {
+    const Vec3 aboutShading = reflect(wo, n), aboutGeometric = reflect(wo, ngSide);
+    const bool viaShading = arrival > 0 && dot(aboutShading, ngSide) > 0;
+    const bool viaGeometric = dot(aboutGeometric, n) <= 0;
+    if (!viaShading && !viaGeometric) return out;
+    const bool both = viaShading && viaGeometric;
+    const bool pickShading = viaShading && (!both || rng.uniform() < 0.5f);
+    out.wi = pickShading ? aboutShading : aboutGeometric;
+    out.weight = bsdf.ks * ((both ? 2.0f : 1.0f) *
+                            (pickShading ? std::abs(dot(aboutShading, ng)) / std::abs(dot(wo, ng)) : 1.0f));
+    out.delta = out.valid = true;
     return out;
   }
   if (!(arrival > 0)) return out;
