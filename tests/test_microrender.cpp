@@ -597,13 +597,8 @@ TEST_CASE("Bilateral upsampling: 1/4 and 1/16 of the pixels gathered, close to g
   o.points = 1u << 14;
   o.layers = true;
   const RenderOutput full = renderMicro(scene, vis, o);
-  auto counter = [](const RenderStats& s, const std::string& name) {
-    for (const auto& [n, v] : s.counters)
-      if (n == name) return v;
-    return uint64_t(0);
-  };
-  const uint64_t points = counter(full.stats, "shading_points");
-  REQUIRE(counter(full.stats, "micro_buffers") == points);
+  const uint64_t points = full.stats.counter("shading_points");
+  REQUIRE(full.stats.counter("micro_buffers") == points);
   const int indirect = full.image.channelIndex("indirect.R");
   const PinholeCamera camera(scene.camera);
   for (const int fraction : {4, 16}) {
@@ -628,7 +623,7 @@ TEST_CASE("Bilateral upsampling: 1/4 and 1/16 of the pixels gathered, close to g
     o.upsampling = fraction;
     const RenderOutput up = renderMicro(scene, vis, o);
     const double e = relMse(up.image, full.image, "indirect.R"), plain = relMse(bilinear, full.image, "indirect.R");
-    const uint64_t buffers = counter(up.stats, "micro_buffers"), recomputed = counter(up.stats, "upsampling_recomputed");
+    const uint64_t buffers = up.stats.counter("micro_buffers"), recomputed = up.stats.counter("upsampling_recomputed");
     INFO("1/" << fraction << ": indirect relMSE " << e << " (bilinear " << plain << "), " << buffers << " buffers for "
               << points << " points, recomputed " << recomputed << ", lattice pixels on a surface " << latticeSurfaces);
     CHECK(e < plain);

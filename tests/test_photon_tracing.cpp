@@ -13,6 +13,7 @@
 #include "methods/photonmap/photon_tracing.h"
 #include "test_bsdfs.h"
 #include "test_scenes.h"
+#include "test_support.h"
 
 using namespace lucent;
 
@@ -322,18 +323,19 @@ TEST_CASE("Photons under shading normals carry what the path tracer's radiance d
     const PinholeCamera camera(view.camera);
     // The standard error from the spread of the pixels' differences to the quadrature: their
     // noise, not the radiance's variation across the wall.
-    double difference = 0, difference2 = 0, quadrature = 0;
-    const int n = 16 * 16;
+    std::vector<double> differences;
+    double quadrature = 0;
     for (int y = 0; y < 16; ++y)
       for (int x = 0; x < 16; ++x) {
         const Ray ray = camera.generate(float(x) + 0.5f, float(y) + 0.5f);
         const double q = 0.5 * kInvPi * irradianceAt(ray.origin + ray.direction * (-ray.origin.x / ray.direction.x));
-        const double d = image.at(x, y, 1) - q;
-        difference += d, difference2 += d * d, quadrature += q;
+        differences.push_back(image.at(x, y, 1) - q);
+        quadrature += q;
       }
-    const double mean = difference / n, standardError = std::sqrt((difference2 / n - mean * mean) / (n - 1));
-    INFO("path tracer minus quadrature " << mean << " +- " << standardError << ", quadrature " << quadrature / n);
-    CHECK(std::abs(mean) <= 4.5 * standardError);
+    const test::MeanAndError difference = test::meanOf(differences);
+    INFO("path tracer minus quadrature " << difference.mean << " +- " << difference.standardError << ", quadrature "
+                                         << quadrature / double(differences.size()));
+    CHECK(std::abs(difference.mean) <= 4.5 * difference.standardError);
   }
 
   // The flux onto the patch y in [0.5, 1.5], z in [-0.5, 0.5] of B (8 x 8 points).
@@ -444,7 +446,7 @@ TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, 
     for (const Vec3 wo : {normalize(Vec3{0.3f, 0.2f, 1}), normalize(Vec3{-0.8f, 0.1f, 0.4f})}) {
       const double r = std::max(0.0f, dot(wo, tilted.shadingNormal)) / dot(wo, tilted.geometricNormal);
       constexpr int n = 200000;
-      double sum[2] = {0, 0}, sum2[2] = {0, 0};
+      std::vector<double> weights[2] = {std::vector<double>(n, 0.0), std::vector<double>(n, 0.0)};  // per region
       Rng rng(5);
       for (int k = 0; k < n; ++k) {
         const float uLobe = rng.uniform();
@@ -452,15 +454,14 @@ TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, 
         const ParticleScatter s = scatterParticle(b, tilted, wo, uLobe, u2, rng);
         if (!s.valid) continue;
         REQUIRE(dot(s.wi, tilted.geometricNormal) > 0);
-        const int region = dot(s.wi, tilted.shadingNormal) > 0 ? 0 : 1;
-        sum[region] += s.weight.r, sum2[region] += double(s.weight.r) * s.weight.r;
+        weights[dot(s.wi, tilted.shadingNormal) > 0 ? 0 : 1][k] = s.weight.r;
       }
       const double expected[2] = {0.6 * r * (1 - w), 0.6 * w};
       for (int region = 0; region < 2; ++region) {
-        const double mean = sum[region] / n, error = std::sqrt((sum2[region] / n - mean * mean) / (n - 1));
-        INFO("wo " << wo.x << " " << wo.y << " " << wo.z << ", region " << region << ": " << mean << " +- " << error
-                   << ", expected " << expected[region]);
-        CHECK(std::abs(mean - expected[region]) <= 4.5 * error);
+        const test::MeanAndError mean = test::meanOf(weights[region]);
+        INFO("wo " << wo.x << " " << wo.y << " " << wo.z << ", region " << region << ": " << mean.mean << " +- "
+                   << mean.standardError << ", expected " << expected[region]);
+        CHECK(std::abs(mean.mean - expected[region]) <= 4.5 * mean.standardError);
       }
     }
   }
