@@ -474,6 +474,47 @@ TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, 
         CHECK(std::abs(adjoint.mean - radiance.mean) <= 4.5 * std::hypot(radiance.standardError, adjoint.standardError));
       }
   }
+  SECTION("glass takes a particle only from the side of the shading normal its surface is on") {
+    // Shading normals 35 and 60 degrees from the geometric one (+z). A particle arriving above the
+    // true surface but below the shading normal, or the other way round, carries nothing further
+    // (the path tracer's glass would see no light from there); one above both reflects about the
+    // shading normal with the geometric cosines' ratio, or refracts into the other side.
+    SurfacePoint tilted = flat;
+    tilted.geometricNormal = {0, 0, 1};
+    tilted.shadingNormal = normalize(Vec3{std::sin(35 * kPi / 180), 0, std::cos(35 * kPi / 180)});
+    Rng rng(12);
+    for (const float degrees : {35.0f, 60.0f}) {
+      const float a = degrees * kPi / 180;
+      SurfacePoint steep = tilted;
+      steep.shadingNormal = normalize(Vec3{std::sin(a), 0, std::cos(a)});
+      int wrongSide = 0;
+      for (int k = 0; k < 20000; ++k) {
+        const Vec3 wo = sampleUniformSphere(rng.uniform2());
+        if (dot(wo, steep.geometricNormal) * dot(wo, steep.shadingNormal) >= 0) continue;
+        ++wrongSide;
+        const float uLobe = rng.uniform();
+        const ParticleScatter s = scatterParticle(glass, steep, wo, uLobe, rng.uniform2(), rng);
+        REQUIRE_FALSE((s.valid && !s.weight.isBlack()));
+      }
+      REQUIRE(wrongSide > 1000);
+    }
+    const Vec3 wo = normalize(Vec3{0.1f, 0.3f, 1});
+    int reflected = 0;
+    for (int k = 0; k < 1000; ++k) {
+      const float uLobe = rng.uniform();
+      const ParticleScatter s = scatterParticle(glass, tilted, wo, uLobe, rng.uniform2(), rng);
+      REQUIRE(s.valid);
+      REQUIRE(s.delta);
+      if (s.wi.z > 0) {
+        ++reflected;
+        REQUIRE(length(s.wi - reflect(wo, tilted.shadingNormal)) < 1e-6f);
+        REQUIRE(s.weight.r == Approx(s.wi.z / wo.z).epsilon(1e-5));
+      } else {
+        REQUIRE(dot(s.wi, tilted.shadingNormal) < 0);
+      }
+    }
+    CHECK(reflected > 0);
+  }
   SECTION("tilted normals: each region's mean weight is the adjoint kernel's integral over it") {
     // A Lambertian surface, shading normal 35 degrees from the geometric one, a particle arriving
     // from wo. The adjoint kernel for a viewer wi above the true surface is
