@@ -512,8 +512,6 @@ TEST_CASE("Closed furnace: one bounce gives Le (1 + rho + rho^2), multiple bounc
                                    {PointLighting::Radiosity, 3, r2 * (1 + rho + rho * rho + rho * rho * rho), 0.02},
                                    {PointLighting::Vpl, 0, r2 / (1 - rho), 0.02},
                                    {PointLighting::Photons, 0, r2 / (1 - rho), 0.05}};
-  constexpr int kSeeds = 8;
-  constexpr double kT = 5.41;
   for (const Case& c : cases) {
     MicroRenderOptions o;
     o.lighting = c.lighting;
@@ -525,7 +523,7 @@ TEST_CASE("Closed furnace: one bounce gives Le (1 + rho + rho^2), multiple bounc
     o.lightSamples = 16;
     o.layers = true;
     std::vector<double> means;
-    for (int seed = 0; seed < kSeeds; ++seed) {
+    for (int seed = 0; seed < test::kSeeds; ++seed) {
       o.seed = uint64_t(seed);
       const Image image = renderMicro(box, vis, o).image;
       if (seed == 0) {
@@ -537,8 +535,8 @@ TEST_CASE("Closed furnace: one bounce gives Le (1 + rho + rho^2), multiple bounc
     }
     const test::MeanAndError indirect = test::meanOf(means);
     INFO("lighting " << int(c.lighting) << ", bounces " << c.bounces << ": indirect " << indirect.mean << " +- "
-                     << indirect.standardError << " over " << kSeeds << " seeds, expected " << c.indirect);
-    CHECK(std::abs(indirect.mean - c.indirect) <= kT * indirect.standardError + c.tolerance * c.indirect);
+                     << indirect.standardError << " over " << test::kSeeds << " seeds, expected " << c.indirect);
+    CHECK(std::abs(indirect.mean - c.indirect) <= test::kStudentTwoSided * indirect.standardError + c.tolerance * c.indirect);
   }
 }
 

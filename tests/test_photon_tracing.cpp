@@ -365,10 +365,15 @@ TEST_CASE("Photons under shading normals carry what the path tracer's radiance d
 
 TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, with them the adjoint's two regions",
           "[photons]") {
-  const Vec3 ng = normalize(Vec3{0.2f, 1, -0.1f});
   SurfacePoint flat;
-  flat.geometricNormal = ng;
-  flat.shadingNormal = ng;
+  flat.geometricNormal = flat.shadingNormal = normalize(Vec3{0.2f, 1, -0.1f});
+  // A face whose geometric normal is +z and whose shading normal leans towards +x by `degrees`.
+  auto tiltedBy = [](float degrees) {
+    SurfacePoint tilted;
+    tilted.geometricNormal = {0, 0, 1};
+    tilted.shadingNormal = normalize(Vec3{std::sin(degrees * kPi / 180), 0, std::cos(degrees * kPi / 180)});
+    return tilted;
+  };
   SurfaceBsdf glass;
   glass.type = MaterialType::Glass;
   glass.ni = 1.5f;
@@ -401,9 +406,7 @@ TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, 
     // Ks cos(wi, ng) / cos(wo, ng)); arriving at 77 degrees on the tilt's side, the reflection about
     // the geometric normal lies in the wedge too (weight Ks): one of the two at random, twice
     // the weight, each half the time (4.5 binomial standard deviations of 20,000).
-    SurfacePoint tilted = flat;
-    tilted.geometricNormal = {0, 0, 1};
-    tilted.shadingNormal = normalize(Vec3{std::sin(35 * kPi / 180), 0, std::cos(35 * kPi / 180)});
+    const SurfacePoint tilted = tiltedBy(35);
     Rng rng(8);
     const Vec3 near = normalize(Vec3{0.1f, 0, 1});
     const ParticleScatter one = scatterParticle(mirror, tilted, near, 0.5f, {0.5f, 0.5f}, rng);
@@ -442,14 +445,10 @@ TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, 
     // cone (a small light) near grazing on the tilt's side, whose reflections about the geometric
     // normal fall in the wedge, or behind the mirror, over a dim linear background; W jumps by 3
     // across the plane of the tilt so that the two reflections of a particle are told apart.
-    SurfacePoint tilted = flat;
-    tilted.geometricNormal = {0, 0, 1};
-    const Vec3 ng = tilted.geometricNormal;
     for (const float degrees : {15.0f, 40.0f})
       for (const Vec3 light : {normalize(Vec3{0.97f, 0.1f, 0.15f}), normalize(Vec3{-0.6f, 0.3f, -0.7f})}) {
-        const float a = degrees * kPi / 180;
-        tilted.shadingNormal = normalize(Vec3{std::sin(a), 0, std::cos(a)});
-        const Vec3 ns = tilted.shadingNormal;
+        const SurfacePoint tilted = tiltedBy(degrees);
+        const Vec3 ng = tilted.geometricNormal, ns = tilted.shadingNormal;
         auto incident = [&](Vec3 l) { return (dot(l, light) > 0.98f ? 1.0 : 0.0) + 0.05 * (1 + l.x); };
         auto importance = [](Vec3 v) { return 1.0 + v.x + 2 * v.y * v.y + (v.x < 0 ? 3.0 : 0.0); };
         Rng rng(17, uint64_t(degrees), uint64_t(light.z < 0));
@@ -479,14 +478,9 @@ TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, 
     // true surface but below the shading normal, or the other way round, carries nothing further
     // (the path tracer's glass would see no light from there); one above both reflects about the
     // shading normal with the geometric cosines' ratio, or refracts into the other side.
-    SurfacePoint tilted = flat;
-    tilted.geometricNormal = {0, 0, 1};
-    tilted.shadingNormal = normalize(Vec3{std::sin(35 * kPi / 180), 0, std::cos(35 * kPi / 180)});
     Rng rng(12);
     for (const float degrees : {35.0f, 60.0f}) {
-      const float a = degrees * kPi / 180;
-      SurfacePoint steep = tilted;
-      steep.shadingNormal = normalize(Vec3{std::sin(a), 0, std::cos(a)});
+      const SurfacePoint steep = tiltedBy(degrees);
       int wrongSide = 0;
       for (int k = 0; k < 20000; ++k) {
         const Vec3 wo = sampleUniformSphere(rng.uniform2());
@@ -498,6 +492,7 @@ TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, 
       }
       REQUIRE(wrongSide > 1000);
     }
+    const SurfacePoint tilted = tiltedBy(35);
     const Vec3 wo = normalize(Vec3{0.1f, 0.3f, 1});
     int reflected = 0;
     for (int k = 0; k < 1000; ++k) {
@@ -522,9 +517,7 @@ TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, 
     // above it, the geometric one in the wedge. Its integral: kd r (1 - w) over the shading
     // region and kd w over the wedge, r = cos(wo, ns) / cos(wo, ng), w = (1 - cos 35) / 2.
     // Required: each region's sample mean within 4.5 standard errors (200,000 samples).
-    SurfacePoint tilted = flat;
-    tilted.geometricNormal = {0, 0, 1};
-    tilted.shadingNormal = normalize(Vec3{std::sin(35 * kPi / 180), 0, std::cos(35 * kPi / 180)});
+    const SurfacePoint tilted = tiltedBy(35);
     const SurfaceBsdf b = test::diffuseBsdf(Rgb(0.6f));
     const float w = 0.5f * (1 - std::cos(35 * kPi / 180));
     for (const Vec3 wo : {normalize(Vec3{0.3f, 0.2f, 1}), normalize(Vec3{-0.8f, 0.1f, 0.4f})}) {

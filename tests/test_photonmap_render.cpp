@@ -145,8 +145,6 @@ TEST_CASE("pmfg converges to the path tracer on the Cornell box", "[photonmap-re
     int gatherRays;
     uint32_t k;
   };
-  constexpr int kSeeds = 8;
-  constexpr double kT = 4.8, kTwoSided = 5.41;
   test::MeanAndError previous{kInf, 0};
   for (const Setting s : {Setting{500, 1, 10}, Setting{4000, 4, 20}, Setting{32000, 16, 50}}) {
     PhotonMapOptions opt;
@@ -157,7 +155,7 @@ TEST_CASE("pmfg converges to the path tracer on the Cornell box", "[photonmap-re
     opt.lightSamples = 4;
     opt.map = PhotonMapKind::KdTree;
     std::vector<double> relmse, means[3];
-    for (int seed = 0; seed < kSeeds; ++seed) {
+    for (int seed = 0; seed < test::kSeeds; ++seed) {
       opt.seed = 9 + uint64_t(seed);
       const Image image = renderPhotonMapFinalGather(scene, vis, opt).image;
       relmse.push_back(compareImages(image, reference).overall.relmse);
@@ -167,7 +165,7 @@ TEST_CASE("pmfg converges to the path tracer on the Cornell box", "[photonmap-re
       for (int c = 0; c < 3; ++c) {  // the energy: image means over the seeds against the reference's
         const test::MeanAndError m = test::meanOf(means[c]);
         const double expected = test::channelMean(reference, c).mean;
-        const double tolerance = std::hypot(kTwoSided * m.standardError, 4.5 * referenceError[c]);
+        const double tolerance = std::hypot(test::kStudentTwoSided * m.standardError, 4.5 * referenceError[c]);
         INFO("channel " << c << ": mean " << m.mean << " +- " << m.standardError << ", path tracer " << expected
                         << " +- " << referenceError[c]);
         CHECK(std::abs(m.mean - expected) <= tolerance);
@@ -175,7 +173,7 @@ TEST_CASE("pmfg converges to the path tracer on the Cornell box", "[photonmap-re
     const test::MeanAndError e = test::meanOf(relmse);
     INFO(s.photons << " photons, " << s.gatherRays << " gather rays, k " << s.k << ": relMSE " << e.mean << " +- "
                    << e.standardError << " (previous " << previous.mean << " +- " << previous.standardError << ")");
-    CHECK(e.mean + kT * std::hypot(e.standardError, previous.standardError) < previous.mean);
+    CHECK(e.mean + test::kStudentOneSided * std::hypot(e.standardError, previous.standardError) < previous.mean);
     previous = e;
   }
 }
@@ -356,7 +354,7 @@ TEST_CASE("Every photon map renders the Cornell box alike with purcell", "[photo
   const double reseeded = compareImages(sortSeed1, images[0]).overall.relmse;
   std::vector<double> sortToPt{compareImages(images[0], reference).overall.relmse,
                                compareImages(sortSeed1, reference).overall.relmse};
-  for (uint64_t seed = 2; seed < 8; ++seed) sortToPt.push_back(compareImages(render(PhotonMapKind::Sort, seed), reference).overall.relmse);
+  for (uint64_t seed = 2; seed < test::kSeeds; ++seed) sortToPt.push_back(compareImages(render(PhotonMapKind::Sort, seed), reference).overall.relmse);
   const test::MeanAndError sortError = test::meanOf(sortToPt);
   const double spread = sortError.standardError * std::sqrt(double(sortToPt.size()));
   auto between = [&](int a, int b) { return compareImages(images[a], images[b]).overall.relmse; };
@@ -370,7 +368,7 @@ TEST_CASE("Every photon map renders the Cornell box alike with purcell", "[photo
   for (int a = 1; a < 4; ++a) {
     const double error = compareImages(images[a], reference).overall.relmse;
     INFO("map " << a << " against the path tracer " << error);
-    CHECK(std::abs(error - sortError.mean) <= 5.41 * std::sqrt(1 + 1.0 / 8) * spread);
+    CHECK(std::abs(error - sortError.mean) <= test::kStudentTwoSided * std::sqrt(1 + 1.0 / test::kSeeds) * spread);
   }
 }
 
@@ -540,12 +538,11 @@ TEST_CASE("A flat mirror's caustic equals the mirrored light's illumination", "[
   // disc of radius r averages E to E + r^2 / 8 Laplacian(E); here E ~ (1 + rho^2 / 49)^-2 in the
   // distance rho from the axis, |Laplacian(E) / E| < 0.2, and r < 0.15 (k 100 of some 5,000
   // photons per unit area, 2.5 times as many for the kNN-grid's at least k), so under 1e-3.
-  constexpr int kSeeds = 8;
-  constexpr double kT = 5.41, kCurvature = 1e-3;
+  constexpr double kCurvature = 1e-3;
 
   for (const PhotonMapKind kind : {PhotonMapKind::KdTree, PhotonMapKind::Sort}) {
     std::vector<double> ratios;
-    for (uint64_t seed = 0; seed < kSeeds; ++seed) {
+    for (uint64_t seed = 0; seed < test::kSeeds; ++seed) {
       PhotonMapOptions opt;
       opt.photons = 1000;
       opt.causticPhotons = 500000;
@@ -564,6 +561,6 @@ TEST_CASE("A flat mirror's caustic equals the mirrored light's illumination", "[
     const test::MeanAndError ratio = test::meanOf(ratios);
     INFO((kind == PhotonMapKind::KdTree ? "kd-tree" : "sorted grid") << ": caustic over the mirrored light's "
                                                                     << ratio.mean << " +- " << ratio.standardError);
-    CHECK(std::abs(ratio.mean - 1) <= kT * ratio.standardError + kCurvature);
+    CHECK(std::abs(ratio.mean - 1) <= test::kStudentTwoSided * ratio.standardError + kCurvature);
   }
 }

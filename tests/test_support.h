@@ -83,10 +83,16 @@ struct MeanAndError {
   double mean = 0, standardError = 0;
 };
 
+// The mean of n samples and its standard error, from their sum and sum of squares.
+inline MeanAndError meanFromSums(double sum, double sum2, double n) {
+  const double mean = sum / n;
+  const double variance = std::max(0.0, sum2 / n - mean * mean) * n / (n - 1);
+  return {mean, std::sqrt(variance / n)};
+}
+
 // Mean of one channel over the image, with its standard error estimated from the spread of the
 // pixels, which are independent estimates when every pixel has its own random streams.
 inline MeanAndError channelMean(const Image& image, int channel) {
-  const size_t n = size_t(image.width()) * image.height();
   double sum = 0, sum2 = 0;
   for (int y = 0; y < image.height(); ++y)
     for (int x = 0; x < image.width(); ++x) {
@@ -94,20 +100,20 @@ inline MeanAndError channelMean(const Image& image, int channel) {
       sum += v;
       sum2 += v * v;
     }
-  const double mean = sum / n;
-  const double variance = std::max(0.0, sum2 / n - mean * mean) * n / (n - 1);
-  return {mean, std::sqrt(variance / n)};
+  return meanFromSums(sum, sum2, double(image.width()) * image.height());
 }
 
 // Mean of independent estimates, with its standard error from their spread.
 inline MeanAndError meanOf(const std::vector<double>& values) {
-  const double n = double(values.size());
   double sum = 0, sum2 = 0;
   for (const double v : values) sum += v, sum2 += v * v;
-  const double mean = sum / n;
-  const double variance = std::max(0.0, sum2 / n - mean * mean) * n / (n - 1);
-  return {mean, std::sqrt(variance / n)};
+  return meanFromSums(sum, sum2, double(values.size()));
 }
+
+// Renders repeated over seeds: kSeeds of them, and Student's t for their mean's standard error (7
+// degrees of freedom) at p = 1e-3, two-sided and one-sided (4.785, rounded up).
+constexpr int kSeeds = 8;
+constexpr double kStudentTwoSided = 5.41, kStudentOneSided = 4.8;
 
 // Requires the image's mean in R, G and B to match `expected` within 4.5 standard errors (two-sided
 // p ~ 7e-6 per channel at a fixed seed; a NaN pixel makes the mean NaN and fails). It also requires

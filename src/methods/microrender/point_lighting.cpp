@@ -99,6 +99,9 @@ std::vector<VirtualPointLight> traceVirtualPointLights(const Scene& scene, const
         if (arrival > 0 && isFinite(flux * arrival))
           perPath[p].push_back({sp.position, front ? sp.geometricNormal : -sp.geometricNormal, flux * arrival, bsdf.kd});
       }
+      // The direction's numbers before the lobe's: the order in which GCC drew them when both were
+      // arguments of one sampleBsdf call, so that faces without vertex normals keep their VPLs bit
+      // for bit.
       const Vec2 u2 = rng.uniform2();
       const float uLobe = rng.uniform();
       const ParticleScatter s = scatterParticle(bsdf, sp, wo, uLobe, u2, rng);
