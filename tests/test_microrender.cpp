@@ -392,6 +392,11 @@ TEST_CASE("A packet of gather points gives every lane the buffer it gets alone",
             const MicroCounters& p = packet.counters;
             REQUIRE(a.buffers == p.buffers);
             REQUIRE(a.nodesVisited == p.nodesVisited);
+            // A packet tests each node it visits for at least one of its lanes and at most all of them;
+            // each lane alone is a packet of one.
+            REQUIRE(p.packetNodesVisited <= p.nodesVisited);
+            REQUIRE(p.nodesVisited <= count * p.packetNodesVisited);
+            REQUIRE(a.packetNodesVisited == a.nodesVisited);
             REQUIRE(a.nodesSplatted == p.nodesSplatted);
             REQUIRE(a.leavesListed == p.leavesListed);
             REQUIRE(a.listFlushes == p.listFlushes);
