@@ -14,6 +14,7 @@
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
 #include "methods/photonmap/bitonic_sort.h"
+#include "methods/photonmap/estimate_by_cell.h"
 #include "methods/photonmap/kd_tree.h"
 #include "methods/photonmap/knn_grid.h"
 #include "methods/photonmap/radiance_estimate.h"
@@ -453,6 +454,86 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
   CHECK(runs > 10000);
   CHECK(glossyRuns > 100);
   CHECK(boxesRead == (kReadShortSearch | kReadAcceptedCube | kReadBeyondCube));
+}
+
+TEST_CASE("Estimates taken cell by cell equal one search per point", "[photonmap][knn]") {
+  // estimate_by_cell.h: a cell's queries share its shells. Every point's estimate must be its own
+  // search's (the same photons, radius and left-out farthest photon; the sums in another order) on
+  // the sorted and stencil grids, fine and coarse, for dense and sparse cells, maximum radii that
+  // cut into a cell's first k photons, fewer than k photons within reach, points outside the
+  // grid and glossy points; and must not depend on which other points share the cell.
+  Rng rng(5);
+  std::vector<Photon> photons = photonCloud(3000, Cloud::Clustered, 41);
+  for (Photon& photon : photons) photon.direction = encodeOctahedral(sampleUniformSphere(rng.uniform2()));
+  // Several points per cell: each query point and jittered copies of it.
+  std::vector<ShadingPoint> points;
+  for (Vec3 p : queryPoints(photons, 120, 13))
+    for (int copy = 0; copy < 4; ++copy) {
+      ShadingPoint sp{};
+      sp.position = p + (copy == 0 ? Vec3() : 0.03f * Vec3(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f));
+      sp.normal = sampleUniformSphere(rng.uniform2());
+      sp.wo = sp.normal;
+      sp.bsdf.kd = Rgb(0.5f, 0.4f, 0.3f);
+      if (points.size() % 7 == 3) {
+        sp.bsdf.type = MaterialType::Phong;
+        sp.bsdf.ks = Rgb(0.4f), sp.bsdf.ns = 20;
+      }
+      sp.pixel = uint32_t(points.size());
+      points.push_back(sp);
+    }
+  GridOptions fine, coarse;
+  fine.cellSize = 0.05f;
+  coarse.photonsPerCell = 40;
+  size_t compared = 0, lit = 0;
+  auto check = [&](const auto& map, uint32_t k, float maxRadius) {
+    const EstimateSettings settings{k, maxRadius, 0};
+    std::vector<Rgb> byCell(points.size());
+    tbb::enumerable_thread_specific<EstimateCounters> counters;
+    estimateAtPoints(&map, std::span<const ShadingPoint>(points), settings, std::span<Rgb>(byCell), counters);
+    EstimateCounters total;
+    for (const EstimateCounters& c : counters) total += c;
+    CHECK(total.queries == points.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+      const EstimatePoint q = estimatePoint(points[i]);
+      EstimateCounters one;
+      const Rgb searched = estimateRadiance(map, q, settings, nullptr, one);
+      INFO("k " << k << ", max radius " << maxRadius << ", point " << i);
+      if (q.bsdf.type != MaterialType::Diffuse) {
+        CHECK((byCell[i] == searched));  // searched on its own
+        continue;
+      }
+      // The same photons summed in two orders: each sum of n positive terms is within (n - 1)
+      // 2^-24 of the exact one; the farthest photon's share, left out of both, is the same.
+      estimate_detail::Accumulator acc(q);
+      const KnnGridSearch search = knnGrid(map, q.position, k, maxRadius, [&](uint32_t, const Photon& p, float d2) { acc.add(p, d2); });
+      const float radius2 = knnGridRadius2(search);
+      if (!(radius2 > 0)) {  // a point on its nearest photon, k = 1: no disc, no estimate
+        CHECK((byCell[i] == Rgb() && searched == Rgb()));
+        continue;
+      }
+      const float scale = float(q.bsdf.kd.maxComponent() * kInvPi / (kPi * radius2));
+      for (int c = 0; c < 3; ++c)
+        CHECK(std::abs(byCell[i][c] - searched[c]) <= 2.0f * float(search.found) * 0x1p-24f * acc.sum[c] * scale + 1e-30f);
+      ++compared;
+      lit += searched.maxComponent() > 0;
+    }
+    // The estimate of a point does not depend on the others in its cell: every other point alone.
+    std::vector<ShadingPoint> half;
+    for (size_t i = 0; i < points.size(); i += 2) half.push_back(points[i]);
+    std::vector<Rgb> halfOut(half.size());
+    estimateAtPoints(&map, std::span<const ShadingPoint>(half), settings, std::span<Rgb>(halfOut), counters);
+    for (size_t i = 0; i < half.size(); ++i) CHECK((halfOut[i] == byCell[2 * i]));
+  };
+  for (const GridOptions& options : {fine, coarse}) {
+    const SortedGrid sorted = buildSortedGrid(photons, options);
+    const StencilGrid stencil = buildStencilGrid(photons, options);
+    for (uint32_t k : {1u, 9u, 64u, 5000u})
+      for (float maxRadius : {0.06f, 0.3f, 4.0f}) {
+        check(sorted, k, maxRadius);
+        check(stencil, k, maxRadius);
+      }
+  }
+  CHECK(lit > compared / 2);
 }
 
 TEST_CASE("kNN-grid and kd-tree agree on a cloud with one photon and on an empty one", "[photonmap][knn]") {

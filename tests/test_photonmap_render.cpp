@@ -374,7 +374,7 @@ TEST_CASE("Every photon map renders the Cornell box alike with purcell", "[photo
 
 TEST_CASE("The kNN-grid's progressive estimate converges shell by shell to the complete one", "[photonmap-render]") {
   // Section 3.4: the running estimate after s shells; the image approaches the complete search's
-  // as s grows and equals it once every search has ended.
+  // as s grows and equals it (to the sums' rounding) once every search has ended.
   const Scene scene = smallCornellBox(24);
   const Visibility vis(scene);
   PhotonMapOptions opt;
@@ -392,8 +392,10 @@ TEST_CASE("The kNN-grid's progressive estimate converges shell by shell to the c
       CHECK(relmse < previous);
       CHECK(unfinished > 0);
     } else {
+      // The complete render estimates cell by cell (estimate_by_cell.h): the same photons and radii
+      // summed in another order, so the images agree to the sums' rounding.
       CHECK(unfinished == 0);
-      CHECK(out.image.pixels() == complete.image.pixels());
+      CHECK(relmse < 1e-10);
     }
     previous = relmse;
   }

@@ -19,6 +19,7 @@
 #include "lucent/core/parallel.h"
 #include "lucent/core/sampling.h"
 #include "lucent/scene/surface.h"
+#include "estimate_by_cell.h"
 #include "photon_render.h"
 
 namespace lucent {
@@ -119,14 +120,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
     withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
       // Caustics: the caustic map's estimate at every shading point.
       Stopwatch causticClock;
-      if (caustic)
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
-          flushDenormals();
-          PhotonDistance* heap = scratch.local().heap.data();
-          EstimateCounters& cc = causticCounters.local();
-          for (size_t i = r.begin(); i != r.end(); ++i)
-            radiance.caustic[i] = estimateRadiance(*caustic, estimatePoint(eye.points[i]), maps.causticSettings, heap, cc);
-        });
+      estimateAtPoints(caustic, eye.points, maps.causticSettings, radiance.caustic, causticCounters);
       totals.estimateSeconds += causticClock.seconds();
 
       // Final gathering: per shading point, trace its gather rays, then estimate at their hits. The

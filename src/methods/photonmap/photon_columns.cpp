@@ -180,6 +180,92 @@ LUCENT_LANE_CLONES void sumPhotonRun(const PhotonColumns& c, uint32_t begin, uin
   s.photonsExamined += end - begin;
 }
 
+void resizeColumns(PhotonColumns& columns, uint32_t count) {
+  for (UninitializedVector<float>* column : {&columns.x, &columns.y, &columns.z, &columns.incomingX, &columns.incomingY,
+                                             &columns.incomingZ, &columns.r, &columns.g, &columns.b})
+    column->resize(size_t(count) + PhotonColumns::kPad);
+}
+
+void copyColumns(const PhotonColumns& from, uint32_t first, uint32_t count, PhotonColumns& to, uint32_t at) {
+  auto copy = [&](const UninitializedVector<float>& f, UninitializedVector<float>& t) {
+    std::memcpy(t.data() + at, f.data() + first, size_t(count) * sizeof(float));
+  };
+  copy(from.x, to.x), copy(from.y, to.y), copy(from.z, to.z);
+  copy(from.incomingX, to.incomingX), copy(from.incomingY, to.incomingY), copy(from.incomingZ, to.incomingZ);
+  copy(from.r, to.r), copy(from.g, to.g), copy(from.b, to.b);
+}
+
+LUCENT_LANE_CLONES GrowingRadius growingRadius(const PhotonColumns& c, uint32_t offered, Vec3 q, Vec3 n,
+                                               float maxRadius2, uint32_t k) {
+  const Query query{broadcast(q.x), broadcast(q.y), broadcast(q.z), broadcast(n.x), broadcast(n.y), broadcast(n.z)};
+  const Floats limit2 = broadcast(maxRadius2);
+  GrowingRadius g;
+  // Whole blocks while the k-th photon is not among them.
+  Floats farthest = broadcast(-1.0f);
+  uint32_t i = 0;
+  LanePositions lanes(0, offered);
+  for (; i < offered; i += kPhotonLanes, lanes.next()) {
+    const Block blk = block(c, i, lanes.valid(), query);
+    const Ints accepted = (blk.d2 <= limit2) & blk.valid;
+    const uint32_t accepting = uint32_t(count(accepted));
+    if (g.found + accepting >= k) break;
+    g.found += accepting;
+    farthest = accepted ? (blk.d2 > farthest ? blk.d2 : farthest) : farthest;
+  }
+  for (int j = 0; j < kPhotonLanes; ++j) g.d2 = std::max(g.d2, farthest[j]);
+  // The block holding the k-th photon, one photon at a time; the search's photons end with it.
+  uint32_t end = std::min(i, offered);
+  if (i < offered) {
+    const Block blk = block(c, i, lanes.valid(), query);
+    for (int j = 0; j < kPhotonLanes && g.found < k; ++j) {
+      if (!blk.valid[j] || !(blk.d2[j] <= maxRadius2)) continue;
+      ++g.found;
+      g.d2 = std::max(g.d2, blk.d2[j]);
+      end = i + uint32_t(j) + 1;
+    }
+  }
+  if (g.found == 0) return g;
+  // The first of them at the farthest distance (any photon there is within the maximum radius),
+  // and the side it came from, by the same arithmetic.
+  LanePositions again(0, end);
+  for (uint32_t first = 0;; first += kPhotonLanes, again.next()) {
+    const Block blk = block(c, first, again.valid(), query);
+    for (int j = 0; j < kPhotonLanes; ++j) {
+      if (!blk.valid[j] || blk.d2[j] != g.d2) continue;
+      g.farthest = first + uint32_t(j);
+      if (blk.cosine[j] > 0) g.share = Rgb(c.r[g.farthest], c.g[g.farthest], c.b[g.farthest]);
+      return g;
+    }
+  }
+}
+
+LUCENT_LANE_CLONES SphereSum sumWithinRadius(const PhotonColumns& c, std::span<const ColumnRun> runs, Vec3 q, Vec3 n,
+                                             float radius2) {
+  const Query query{broadcast(q.x), broadcast(q.y), broadcast(q.z), broadcast(n.x), broadcast(n.y), broadcast(n.z)};
+  const Floats r2 = broadcast(radius2);
+  Floats r = {}, g = {}, b = {}, farthest = broadcast(-1.0f);
+  Ints used = {}, found = {};
+  for (const ColumnRun& run : runs) {
+    const uint32_t end = run.first + run.count;
+    LanePositions lanes(run.first, end);
+    for (uint32_t i = run.first; i < end; i += kPhotonLanes, lanes.next()) {
+      const Block blk = block(c, i, lanes.valid(), query);
+      const Ints accepted = (blk.d2 <= r2) & blk.valid;
+      const Ints lit = accepted & (blk.cosine > 0);
+      r += masked(load(&c.r[i]), lit), g += masked(load(&c.g[i]), lit), b += masked(load(&c.b[i]), lit);
+      used -= lit, found -= accepted;
+      farthest = accepted ? (blk.d2 > farthest ? blk.d2 : farthest) : farthest;
+    }
+  }
+  SphereSum s;
+  for (int j = 0; j < kPhotonLanes; ++j) {
+    s.sum += Rgb(r[j], g[j], b[j]);
+    s.farthestD2 = std::max(s.farthestD2, farthest[j]);
+  }
+  s.found = uint32_t(sum(found)), s.used = uint32_t(sum(used));
+  return s;
+}
+
 PhotonRunTotals photonRunTotals(const PhotonLaneSums& sums) {
   PhotonRunTotals t;
   int far = -1;

@@ -57,4 +57,36 @@ struct PhotonRunTotals {
 };
 PhotonRunTotals photonRunTotals(const PhotonLaneSums& sums);
 
+// Entries [first, first + count) of `from` appended to `to`'s first `at` entries (`to` holds at
+// least at + count + kPad entries).
+void copyColumns(const PhotonColumns& from, uint32_t first, uint32_t count, PhotonColumns& to, uint32_t at);
+// Sizes every column for `count` photons and the padding (entries left unwritten).
+void resizeColumns(PhotonColumns& columns, uint32_t count);
+
+// The growing radius of a search (examinePhotons in knn_grid.h) offered the first `offered` photons
+// of `c` in order: the first k of them within the maximum radius (found of them, if fewer), their
+// farthest squared distance (-1: none), the first of them at it, and its share of the estimate for
+// the normal n on the viewer's side (its power if it came from that side, else nothing).
+struct GrowingRadius {
+  uint32_t found = 0;
+  float d2 = -1;
+  uint32_t farthest = 0;
+  Rgb share;
+};
+GrowingRadius growingRadius(const PhotonColumns& c, uint32_t offered, Vec3 q, Vec3 n, float maxRadius2, uint32_t k);
+
+// Entries [first, first + count) of a map's columns.
+struct ColumnRun {
+  uint32_t first = 0, count = 0;
+};
+
+// Of the photons of `c` in `runs`, those within squared radius radius2 of q: how many, the farthest
+// one's squared distance (-1: none), and the power of those on the viewer's side of n (used of them).
+struct SphereSum {
+  Rgb sum;
+  uint32_t found = 0, used = 0;
+  float farthestD2 = -1;
+};
+SphereSum sumWithinRadius(const PhotonColumns& c, std::span<const ColumnRun> runs, Vec3 q, Vec3 n, float radius2);
+
 }  // namespace lucent

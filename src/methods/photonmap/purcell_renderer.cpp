@@ -2,13 +2,12 @@
 // over the whole image (the paper's breadth-first passes): trace photons, build the maps, trace
 // eye rays through mirrors and glass, shadow rays for direct light, then the radiance estimates of
 // the global and caustic maps at every diffuse hit, visualized directly.
-#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 
 #include <atomic>
 
 #include "lucent/core/parallel.h"
+#include "estimate_by_cell.h"
 #include "photon_render.h"
 
 namespace lucent {
@@ -22,8 +21,6 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::Indirect, out.stats);
 
   ImageAccumulator image(scene, options.layers);
-  const uint32_t heapSize = std::max(maps.globalSettings.k, maps.causticSettings.k);
-  tbb::enumerable_thread_specific<std::vector<PhotonDistance>> heaps([&] { return std::vector<PhotonDistance>(heapSize); });
   tbb::enumerable_thread_specific<EstimateCounters> globalCounters, causticCounters;
   RenderTotals totals;
   const auto bands = imageBands(scene, options.spp, options.bandSamples);
@@ -34,22 +31,15 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
     const size_t n = eye.points.size();
     totals.traceSeconds += rayClock.seconds();
 
-    // The radiance estimate: one work item per shading point, both maps.
+    // The radiance estimate at every shading point, from both maps.
     Stopwatch estimateClock;
     std::atomic<size_t> done{0};
+    auto reportDone = [&](size_t count) {
+      if (progress) progress((double(band) + 0.5 * double(done += count) / double(n)) / double(bands.size()));
+    };
     withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
-        flushDenormals();
-        PhotonDistance* heap = heaps.local().data();
-        EstimateCounters& gc = globalCounters.local();
-        EstimateCounters& cc = causticCounters.local();
-        for (size_t i = r.begin(); i != r.end(); ++i) {
-          const EstimatePoint q = estimatePoint(eye.points[i]);
-          radiance.indirect[i] = estimateIfPresent(global, q, maps.globalSettings, heap, gc);
-          radiance.caustic[i] = estimateIfPresent(caustic, q, maps.causticSettings, heap, cc);
-        }
-        if (progress) progress((double(band) + double(done += r.size()) / double(n)) / double(bands.size()));
-      });
+      estimateAtPoints(global, eye.points, maps.globalSettings, radiance.indirect, globalCounters, reportDone);
+      estimateAtPoints(caustic, eye.points, maps.causticSettings, radiance.caustic, causticCounters, reportDone);
     });
     totals.estimateSeconds += estimateClock.seconds();
     dumpBand(options, band, eye, radiance);

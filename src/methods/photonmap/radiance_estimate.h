@@ -51,6 +51,9 @@ struct EstimateCounters {
 
 namespace estimate_detail {
 
+// A Lambertian surface's estimate from the power `inside` the disc of squared radius radius2 (> 0).
+inline Rgb diffuseRadiance(Rgb inside, Rgb kd, float radius2) { return inside * (kd * kInvPi) * (1.0f / (kPi * radius2)); }
+
 // Sums f * Phi over the photons; a Lambertian f is constant and applied once at the end. Keeps
 // the farthest photon's share apart: when it defines the radius it is left out (see radiance()).
 struct Accumulator {
@@ -79,8 +82,7 @@ struct Accumulator {
   Rgb radiance(float radius2) const {
     if (!(radius2 > 0)) return {};
     const Rgb inside = farthestD2 == radius2 ? sum - farthest : sum;
-    const Rgb flux = diffuse ? inside * (q.bsdf.kd * kInvPi) : inside;
-    return flux * (1.0f / (kPi * radius2));
+    return diffuse ? diffuseRadiance(inside, q.bsdf.kd, radius2) : inside * (1.0f / (kPi * radius2));
   }
 };
 

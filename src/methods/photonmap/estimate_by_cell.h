@@ -1,0 +1,363 @@
+// Every shading point's radiance estimate from one map, as one data-parallel stage.
+//
+// On the sorted and stencil grids the points are taken cell by cell. The kNN-grid search (Purcell
+// et al. 2003, 2.3) explores the same shells, in the same order, for every query in a cell; only the
+// distances differ. While fewer than k photons are accepted, every photon met within the maximum
+// radius is accepted, so when the first k photons of the cell's shell order all lie within a
+// query's maximum radius, they are exactly the k that the query's search accepts first, and the
+// radius is the farthest of them. The search then accepts every photon within that radius, and
+// nothing else: the estimate is a sum over a sphere. A cell's first k photons are found once, by
+// its shells; its queries' spheres are then summed over one contiguous copy of the photons in the
+// box of cells that they reach. A query whose maximum radius would have rejected one of those k
+// photons, or that is not Lambertian, or a search stopped after a number of shells, takes the
+// search of knn_grid.h instead. Both give the same photons, radius and estimate, up to the order of
+// the power sums (and, where two of the first k photons lie at exactly the farthest distance, which
+// one's share is left out: the first in shell order here, possibly another there).
+//
+// The hashed grid and the kd-tree estimate point by point.
+#pragma once
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "eye_paths.h"
+#include "lucent/core/parallel.h"
+#include "radiance_estimate.h"
+
+namespace lucent {
+
+namespace cell_estimate_detail {
+
+// A cell's shells in search order, recorded as the runs of the photon list the search would read.
+struct RunRecorder {
+  std::vector<CellPhotons>& runs;
+  void operator()(uint32_t, const Photon&, float) {}  // unused: every run is taken whole
+  bool takeRun(const CellPhotons& run, KnnGridSearch& s) {
+    runs.push_back(run);
+    s.found += run.count;
+    return true;
+  }
+};
+
+// The distance from any point of cell c to the cells beyond its shells 0..t, less the grid's slack
+// (infinite when there are none).
+inline float gapBeyondShell(const UniformGrid& g, CellCoord c, int32_t t) {
+  const int32_t ci[3] = {c.x, c.y, c.z};
+  float gap = kInf;
+  for (int a = 0; a < 3; ++a)
+    if (ci[a] - t > 0 || ci[a] + t + 1 < g.res[a]) gap = std::min(gap, float(t) * g.cellSize[a]);
+  return gap - g.slack;
+}
+
+// The photons of one cell's shells in search order, copied as columns, recorded shell by shell as
+// far as its queries need.
+struct ShellOrder {
+  std::vector<CellPhotons> runs;
+  PhotonColumns photons;
+  uint32_t recorded = 0;  // photons copied
+  CellCoord cell;
+  int32_t nextShell = 0;
+  bool covers = false;  // every photon within the maximum radius of any point of the cell is recorded
+
+  template <class Map>
+  void begin(const Map& map, CellCoord c, uint32_t k, float maxRadius) {
+    cell = c, nextShell = 0, recorded = 0, covers = false;
+    // Where the cells within the maximum radius of the cell hold fewer than k photons, its
+    // searches accept every photon within their maximum radius in any order: the photon list from
+    // the first of those cells to the last, where short, holds them all (the photons between of
+    // other cells lie beyond the maximum radius), as knn_grid.h's exploreShortSearch reads it.
+    const UniformGrid& g = map.grid;
+    int32_t lo[3], hi[3];
+    const int32_t ci[3] = {c.x, c.y, c.z};
+    for (int a = 0; a < 3; ++a) {
+      const int32_t reach = int32_t(std::ceil((maxRadius + g.slack) * g.invCellSize[a])) + 1;
+      lo[a] = std::max(0, ci[a] - reach), hi[a] = std::min(g.res[a] - 1, ci[a] + reach);
+    }
+    if (map.cellCounts.count(lo, hi) >= k) return;
+    const CellPhotons run = map.cellRangePhotons(g.cellIndex({lo[0], lo[1], lo[2]}), g.cellIndex({hi[0], hi[1], hi[2]}));
+    if (run.count > knn_grid_detail::kShortSearchRun) return;
+    resizeColumns(photons, run.count);
+    copyColumns(*run.columns, run.first, run.count, photons, 0);
+    recorded = run.count;
+    covers = true;
+  }
+  // Records shells until at least `want` photons are recorded or it covers the maximum radius.
+  template <class Map>
+  void extend(const Map& map, uint32_t want, float maxRadius) {
+    using namespace knn_grid_detail;
+    const UniformGrid& g = map.grid;
+    runs.clear();
+    KnnGridSearch s = beginKnnGrid(Vec3(), UINT32_MAX, kInf);  // no radius: every run met is recorded
+    s.found = recorded;
+    RunRecorder record{runs};
+    const Reach whole = Reach::whole(g);
+    while (s.found < want && !covers) {
+      if (gapBeyondShell(g, cell, nextShell - 1) > maxRadius) {
+        covers = true;
+        break;
+      }
+      const uint32_t empty = emptyShellsFrom(map, whole, cell, nextShell);
+      if (empty == kAllEmpty) {
+        covers = true;
+        break;
+      }
+      if (empty > 0) {
+        nextShell += int32_t(empty);
+        continue;
+      }
+      exploreShell(map, s, whole, cell, nextShell++, record);
+    }
+    resizeColumns(photons, s.found);
+    for (const CellPhotons& run : runs) {
+      copyColumns(*run.columns, run.first, run.count, photons, recorded);
+      recorded += run.count;
+    }
+  }
+};
+
+// The runs of the map's photon list that hold every photon within squared radius r2 of p: the rows
+// of cells that the sphere reaches, each trimmed to the sphere's chord as exploreRow trims it.
+template <class Map>
+void sphereRows(const Map& map, Vec3 p, float r2, std::vector<ColumnRun>& rows) {
+  const UniformGrid& g = map.grid;
+  knn_grid_detail::Reach reach;
+  reach.update(g, p, r2);
+  rows.clear();
+  for (int32_t z = reach.lo[2]; z <= reach.hi[2]; ++z)
+    for (int32_t y = reach.lo[1]; y <= reach.hi[1]; ++y) {
+      const float dy = g.axisGap(1, y, p.y), dz = g.axisGap(2, z, p.z);
+      const float rest = r2 - dy * dy - dz * dz;
+      if (rest < 0) continue;
+      const float half = std::sqrt(rest) * 1.00001f + g.slack;
+      const int32_t x0 = std::max(reach.lo[0], g.cellOf(Vec3(p.x - half, p.y, p.z)).x);
+      const int32_t x1 = std::min(reach.hi[0], g.cellOf(Vec3(p.x + half, p.y, p.z)).x);
+      if (x0 > x1) continue;
+      const CellPhotons run = map.rowPhotons(x0, x1, y, z);
+      if (run.count > 0) rows.push_back({run.first, run.count});
+    }
+}
+
+// What the estimate reads of a shading point, gathered in cell order.
+struct CellQuery {
+  Vec3 position, normal;  // the normal on the viewer's side
+  Rgb kd;
+  uint32_t point;         // index of the shading point
+  uint32_t diffuse;       // 1 for a Lambertian surface; others are searched one by one
+};
+static_assert(sizeof(CellQuery) == 44);
+
+// The relative costs of summing a photon and of finding a row's bounds (RING, 2 threads).
+inline constexpr float kPhotonCost = 1, kRowCost = 64;
+// A query whose maximum radius passes over some of its cell's first k photons reads the cell's
+// shells on to this many times k photons (or to the maximum radius) before searching on its own.
+inline constexpr uint32_t kFurtherShells = 8;
+
+// The rows of a box of cells that holds the sphere of every query in the cell whose radius its
+// first k photons set (the box about the cell by the farthest that any point of the cell can be
+// from them), where reading them for each such sphere costs less than reading the sphere's own
+// rows. Found from the cell alone: a query's sum does not depend on the other queries (the image
+// is the same whatever the bands).
+struct SharedRows {
+  bool usable = false;
+  float lo[3] = {}, hi[3] = {};  // the box
+
+  // Whether the box holds the sphere of squared radius r2 about p (as exploreRow bounds it).
+  bool holds(Vec3 p, float r2, float slack) const {
+    if (!usable) return false;
+    const float reach = std::sqrt(r2) * 1.00001f + slack;
+    for (int a = 0; a < 3; ++a)
+      if (!(p[a] - reach >= lo[a] && p[a] + reach <= hi[a])) return false;
+    return true;
+  }
+};
+
+template <class Map>
+SharedRows sharedRows(const Map& map, CellCoord c, const ShellOrder& order, uint32_t k, float maxRadius2,
+                      std::vector<ColumnRun>& rows) {
+  SharedRows shared;
+  rows.clear();
+  if (order.recorded < k) return shared;
+  const UniformGrid& g = map.grid;
+  const int32_t ci[3] = {c.x, c.y, c.z};
+  float cellLo[3], cellHi[3];
+  for (int a = 0; a < 3; ++a) cellLo[a] = g.cellLo(a, ci[a]), cellHi[a] = g.cellLo(a, ci[a] + 1);
+  // The farthest any point of the cell is from the first k photons, by its box's corners.
+  const PhotonColumns& first = order.photons;
+  float far2 = 0;
+  for (uint32_t i = 0; i < k; ++i) {
+    const float p[3] = {first.x[i], first.y[i], first.z[i]};
+    float d2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      const float d = std::max(std::abs(p[a] - cellLo[a]), std::abs(p[a] - cellHi[a]));
+      d2 += d * d;
+    }
+    far2 = std::max(far2, d2);
+  }
+  if (!(far2 <= maxRadius2)) far2 = maxRadius2;  // no radius exceeds the maximum
+  const float reach = std::sqrt(far2) * 1.00001f + g.slack;
+  for (int a = 0; a < 3; ++a) shared.lo[a] = cellLo[a] - reach, shared.hi[a] = cellHi[a] + reach;
+  const CellCoord l = g.cellOf(Vec3(shared.lo[0], shared.lo[1], shared.lo[2]));
+  const CellCoord h = g.cellOf(Vec3(shared.hi[0], shared.hi[1], shared.hi[2]));
+  const int32_t boxLo[3] = {l.x, l.y, l.z}, boxHi[3] = {h.x, h.y, h.z};
+
+  // A sphere's own rows, by the one about the cell's centre.
+  const Vec3 centre((cellLo[0] + cellHi[0]) / 2, (cellLo[1] + cellHi[1]) / 2, (cellLo[2] + cellHi[2]) / 2);
+  const GrowingRadius typical = growingRadius(first, k, centre, Vec3(0, 0, 1), maxRadius2, k);
+  if (typical.found < k) return shared;
+  const float typicalReach = std::sqrt(typical.d2) * 1.00001f + g.slack;
+  const CellCoord tl = g.cellOf(centre - Vec3(typicalReach)), th = g.cellOf(centre + Vec3(typicalReach));
+  const int32_t ownLo[3] = {tl.x, tl.y, tl.z}, ownHi[3] = {th.x, th.y, th.z};
+  const float ownCost = kPhotonCost * float(map.cellCounts.count(ownLo, ownHi)) +
+                        kRowCost * float((th.y - tl.y + 1) * (th.z - tl.z + 1));
+  if (kPhotonCost * float(map.cellCounts.count(boxLo, boxHi)) > ownCost) return shared;
+
+  shared.usable = true;
+  for (int32_t z = l.z; z <= h.z; ++z)
+    for (int32_t y = l.y; y <= h.y; ++y) {
+      const CellPhotons row = map.rowPhotons(l.x, h.x, y, z);
+      if (row.count > 0) rows.push_back({row.first, row.count});
+    }
+  return shared;
+}
+
+struct Scratch {
+  ShellOrder order;
+  std::vector<GrowingRadius> radius;
+  std::vector<ColumnRun> rows, ownRows;  // a cell's shared rows (SharedRows); one sphere's
+  std::vector<PhotonDistance> heap;
+};
+
+}  // namespace cell_estimate_detail
+
+// The estimate of `map` (nullptr: none, black) at every point, into out[i]; per thread counters.
+// `done` is told how many points each finished piece of work held (for progress).
+template <class Map>
+void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, const EstimateSettings& settings,
+                      std::span<Rgb> out, tbb::enumerable_thread_specific<EstimateCounters>& counters,
+                      const std::function<void(size_t)>& done = {}) {
+  using namespace cell_estimate_detail;
+  using estimate_detail::diffuseRadiance;
+  const size_t n = points.size();
+  if (!map) {
+    std::fill(out.begin(), out.end(), Rgb());
+    if (done) done(n);
+    return;
+  }
+  tbb::enumerable_thread_specific<Scratch> scratch([&] {
+    Scratch s;
+    s.heap.resize(settings.k);
+    return s;
+  });
+
+  // By cell only where a whole search is wanted of a map with rows of cells as runs.
+  bool byCell = settings.shells == 0;
+  if constexpr (!(knn_grid_detail::kReadsRuns<Map> && knn_grid_detail::kHasCellCounts<Map>)) byCell = false;
+  if (!byCell) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+      flushDenormals();
+      Scratch& s = scratch.local();
+      EstimateCounters& c = counters.local();
+      for (size_t i = r.begin(); i != r.end(); ++i)
+        out[i] = estimateRadiance(*map, estimatePoint(points[i]), settings, s.heap.data(), c);
+      if (done) done(r.size());
+    });
+    return;
+  }
+  if constexpr (knn_grid_detail::kReadsRuns<Map> && knn_grid_detail::kHasCellCounts<Map>) {
+    const UniformGrid& g = map->grid;
+    const uint32_t k = settings.k;
+    const float maxRadius2 = settings.maxRadius * settings.maxRadius;
+    // The points by cell (then by index: the same groups whatever the thread count), and what the
+    // estimate reads of them in that order.
+    std::vector<uint64_t> byCellIndex(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i)
+        byCellIndex[i] = uint64_t(g.cellIndex(g.cellOf(points[i].position))) << 32 | i;
+    });
+    tbb::parallel_sort(byCellIndex.begin(), byCellIndex.end());
+    UninitializedVector<CellQuery> queries(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t j = r.begin(); j != r.end(); ++j) {
+        const uint32_t i = uint32_t(byCellIndex[j]);
+        const ShadingPoint& p = points[i];
+        queries[j] = {p.position, p.normal, p.bsdf.kd, i, p.bsdf.type == MaterialType::Diffuse};
+      }
+    });
+    std::vector<uint32_t> groupStart;
+    for (size_t j = 0; j < n; ++j)
+      if (j == 0 || byCellIndex[j] >> 32 != byCellIndex[j - 1] >> 32) groupStart.push_back(uint32_t(j));
+    groupStart.push_back(uint32_t(n));
+
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, groupStart.size() - 1, 16), [&](const tbb::blocked_range<size_t>& r) {
+      flushDenormals();
+      Scratch& s = scratch.local();
+      EstimateCounters& c = counters.local();
+      size_t pointsDone = 0;
+      for (size_t group = r.begin(); group != r.end(); ++group) {
+        const std::span<const CellQuery> cell(queries.data() + groupStart[group], groupStart[group + 1] - groupStart[group]);
+        pointsDone += cell.size();
+        const CellCoord cellCoord = g.cellOf(cell[0].position);
+        s.order.begin(*map, cellCoord, k, settings.maxRadius);
+        s.radius.resize(cell.size());
+        const bool anyDiffuse = std::any_of(cell.begin(), cell.end(), [](const CellQuery& q) { return q.diffuse != 0; });
+        if (anyDiffuse && s.order.recorded < k && !s.order.covers) s.order.extend(*map, k, settings.maxRadius);
+        const SharedRows shared = sharedRows(*map, cellCoord, s.order, k, maxRadius2, s.rows);
+
+        // Each query's radius from the cell's shell order (found < k: searched on its own; more
+        // than k: estimated already).
+        for (size_t j = 0; j < cell.size(); ++j) {
+          const CellQuery& q = cell[j];
+          GrowingRadius& radius = s.radius[j];
+          radius = {};
+          if (!q.diffuse) continue;
+          radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.normal, maxRadius2, k);
+          if (radius.found < k && !s.order.covers) {
+            // Some of the first k photons lie beyond this query's maximum radius: record further
+            // (always to the same length, so that what a query sees depends on its cell alone).
+            if (s.order.recorded < kFurtherShells * k) s.order.extend(*map, kFurtherShells * k, settings.maxRadius);
+            radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.normal, maxRadius2, k);
+          }
+          if (radius.found == k || !s.order.covers) continue;
+          // Fewer than k within the maximum radius, all recorded: the search accepts every one.
+          const ColumnRun all{0, s.order.recorded};
+          const SphereSum sphere = sumWithinRadius(s.order.photons, {&all, 1}, q.position, q.normal, maxRadius2);
+          if (sphere.farthestD2 == maxRadius2) continue;  // one exactly on it: its share as the search leaves it out
+          out[q.point] = diffuseRadiance(sphere.sum, q.kd, maxRadius2);
+          radius.found = k + 1;
+          ++c.queries;
+          c.photonsUsed += sphere.used;
+          c.photonsExamined += s.order.recorded;
+        }
+
+        for (size_t j = 0; j < cell.size(); ++j) {
+          const CellQuery& q = cell[j];
+          const GrowingRadius& radius = s.radius[j];
+          if (radius.found > k) continue;  // estimated above
+          if (radius.found < k) {
+            out[q.point] = estimateRadiance(*map, estimatePoint(points[q.point]), settings, s.heap.data(), c);
+            continue;
+          }
+          const bool together = shared.holds(q.position, radius.d2, g.slack);
+          if (!together) sphereRows(*map, q.position, radius.d2, s.ownRows);
+          const std::span<const ColumnRun> rows = together ? std::span<const ColumnRun>(s.rows) : s.ownRows;
+          const SphereSum sphere = sumWithinRadius(map->columns, rows, q.position, q.normal, radius.d2);
+          // The photon that set the radius is left out (see Accumulator::radiance).
+          out[q.point] = radius.d2 > 0 ? diffuseRadiance(sphere.sum - radius.share, q.kd, radius.d2) : Rgb();
+          ++c.queries;
+          c.photonsUsed += sphere.used;
+          c.photonsExamined += radius.farthest + 1;
+          for (const ColumnRun& row : rows) c.photonsExamined += row.count;
+          c.cellsVisited += uint32_t(rows.size());
+        }
+      }
+      if (done) done(pointsDone);
+    });
+  }
+}
+
+}  // namespace lucent
