@@ -456,6 +456,41 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
   CHECK(boxesRead == (kReadShortSearch | kReadAcceptedCube | kReadBeyondCube));
 }
 
+TEST_CASE("A sphere's sum does not depend on the runs that hold its photons", "[photonmap][knn]") {
+  // sumWithinRadius sums entry i in lane i mod 8: the same photons read as one run, as runs split
+  // anywhere, or with runs of rejected photons between, give the same bits.
+  Rng rng(3);
+  std::vector<Photon> photons = photonCloud(2000, Cloud::Uniform, 8);
+  for (Photon& photon : photons) photon.direction = encodeOctahedral(sampleUniformSphere(rng.uniform2()));
+  size_t accepted = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vec3 q = photons[rng.below(2000)].position, n = sampleUniformSphere(rng.uniform2());
+    const float r2 = 0.05f + 0.3f * rng.uniform();
+    // Only entries [100, 1900) lie within the sphere (the others are pushed away below).
+    std::vector<Photon> moved = photons;
+    for (uint32_t i = 0; i < 2000; ++i)
+      if (i < 100 || i >= 1900) moved[i].position = q + Vec3(10, 0, 0);
+    const PhotonColumns c = photonColumns(moved);
+    const ColumnRun whole{0, 2000}, inner{100, 1800};
+    const SphereSum reference = sumWithinRadius(c, {&whole, 1}, q, n, r2);
+    std::vector<ColumnRun> split;
+    for (uint32_t at = 100; at < 1900;) {
+      const uint32_t length = std::min<uint32_t>(1900 - at, 1 + rng.below(40));
+      split.push_back({at, length});
+      at += length;
+    }
+    for (const auto& runs : {std::vector<ColumnRun>{inner}, split}) {
+      const SphereSum sum = sumWithinRadius(c, runs, q, n, r2);
+      CHECK((sum.sum == reference.sum));
+      CHECK(sum.found == reference.found);
+      CHECK(sum.used == reference.used);
+      CHECK(sum.farthestD2 == reference.farthestD2);
+    }
+    accepted += reference.found;
+  }
+  CHECK(accepted > 10000);
+}
+
 TEST_CASE("Estimates taken cell by cell equal one search per point", "[photonmap][knn]") {
   // estimate_by_cell.h: a cell's queries share its shells. Every point's estimate must be its own
   // search's (the same photons, radius and left-out farthest photon; the sums in another order) on

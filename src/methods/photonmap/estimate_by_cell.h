@@ -157,72 +157,35 @@ inline constexpr float kPhotonCost = 1, kRowCost = 64;
 // shells on to this many times k photons (or to the maximum radius) before searching on its own.
 inline constexpr uint32_t kFurtherShells = 8;
 
-// The rows of a box of cells that holds the sphere of every query in the cell whose radius its
-// first k photons set (the box about the cell by the farthest that any point of the cell can be
-// from them), where reading them for each such sphere costs less than reading the sphere's own
-// rows. Found from the cell alone: a query's sum does not depend on the other queries (the image
-// is the same whatever the bands).
-struct SharedRows {
-  bool usable = false;
-  float lo[3] = {}, hi[3] = {};  // the box
-
-  // Whether the box holds the sphere of squared radius r2 about p (as exploreRow bounds it).
-  bool holds(Vec3 p, float r2, float slack) const {
-    if (!usable) return false;
-    const float reach = std::sqrt(r2) * 1.00001f + slack;
-    for (int a = 0; a < 3; ++a)
-      if (!(p[a] - reach >= lo[a] && p[a] + reach <= hi[a])) return false;
-    return true;
-  }
-};
-
-template <class Map>
-SharedRows sharedRows(const Map& map, CellCoord c, const ShellOrder& order, uint32_t k, float maxRadius2,
-                      std::vector<ColumnRun>& rows) {
-  SharedRows shared;
-  rows.clear();
-  if (order.recorded < k) return shared;
-  const UniformGrid& g = map.grid;
-  const int32_t ci[3] = {c.x, c.y, c.z};
-  float cellLo[3], cellHi[3];
-  for (int a = 0; a < 3; ++a) cellLo[a] = g.cellLo(a, ci[a]), cellHi[a] = g.cellLo(a, ci[a] + 1);
-  // The farthest any point of the cell is from the first k photons, by its box's corners.
-  const PhotonColumns& first = order.photons;
-  float far2 = 0;
-  for (uint32_t i = 0; i < k; ++i) {
-    const float p[3] = {first.x[i], first.y[i], first.z[i]};
-    float d2 = 0;
-    for (int a = 0; a < 3; ++a) {
-      const float d = std::max(std::abs(p[a] - cellLo[a]), std::abs(p[a] - cellHi[a]));
-      d2 += d * d;
+// The points' indices ordered by their cell, then index; groupStart: where each cell's begin, and
+// the end. A counting sort where the grid has few cells beside the points, else a parallel sort.
+inline void pointsByCell(const UniformGrid& g, std::span<const ShadingPoint> points, std::vector<uint32_t>& order,
+                         std::vector<uint32_t>& groupStart) {
+  const size_t n = points.size();
+  std::vector<uint32_t> cellOfPoint(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) cellOfPoint[i] = g.cellIndex(g.cellOf(points[i].position));
+  });
+  order.resize(n);
+  groupStart.clear();
+  if (g.cellCount() <= 4 * uint64_t(n)) {
+    std::vector<uint32_t> next(g.cellCount() + 1, 0);
+    for (uint32_t cell : cellOfPoint) ++next[cell + 1];
+    for (size_t c = 1; c < next.size(); ++c) {
+      if (next[c] > 0) groupStart.push_back(next[c - 1]);
+      next[c] += next[c - 1];
     }
-    far2 = std::max(far2, d2);
-  }
-  if (!(far2 <= maxRadius2)) far2 = maxRadius2;  // no radius exceeds the maximum
-  const float reach = std::sqrt(far2) * 1.00001f + g.slack;
-  for (int a = 0; a < 3; ++a) shared.lo[a] = cellLo[a] - reach, shared.hi[a] = cellHi[a] + reach;
-  const CellCoord l = g.cellOf(Vec3(shared.lo[0], shared.lo[1], shared.lo[2]));
-  const CellCoord h = g.cellOf(Vec3(shared.hi[0], shared.hi[1], shared.hi[2]));
-  const int32_t boxLo[3] = {l.x, l.y, l.z}, boxHi[3] = {h.x, h.y, h.z};
-
-  // A sphere's own rows, by the one about the cell's centre.
-  const Vec3 centre((cellLo[0] + cellHi[0]) / 2, (cellLo[1] + cellHi[1]) / 2, (cellLo[2] + cellHi[2]) / 2);
-  const GrowingRadius typical = growingRadius(first, k, centre, Vec3(0, 0, 1), maxRadius2, k);
-  if (typical.found < k) return shared;
-  const float typicalReach = std::sqrt(typical.d2) * 1.00001f + g.slack;
-  const CellCoord tl = g.cellOf(centre - Vec3(typicalReach)), th = g.cellOf(centre + Vec3(typicalReach));
-  const int32_t ownLo[3] = {tl.x, tl.y, tl.z}, ownHi[3] = {th.x, th.y, th.z};
-  const float ownCost = kPhotonCost * float(map.cellCounts.count(ownLo, ownHi)) +
-                        kRowCost * float((th.y - tl.y + 1) * (th.z - tl.z + 1));
-  if (kPhotonCost * float(map.cellCounts.count(boxLo, boxHi)) > ownCost) return shared;
-
-  shared.usable = true;
-  for (int32_t z = l.z; z <= h.z; ++z)
-    for (int32_t y = l.y; y <= h.y; ++y) {
-      const CellPhotons row = map.rowPhotons(l.x, h.x, y, z);
-      if (row.count > 0) rows.push_back({row.first, row.count});
+    for (size_t i = 0; i < n; ++i) order[next[cellOfPoint[i]]++] = uint32_t(i);
+  } else {
+    std::vector<uint64_t> keys(n);
+    for (size_t i = 0; i < n; ++i) keys[i] = uint64_t(cellOfPoint[i]) << 32 | i;
+    tbb::parallel_sort(keys.begin(), keys.end());
+    for (size_t j = 0; j < n; ++j) {
+      order[j] = uint32_t(keys[j]);
+      if (j == 0 || keys[j] >> 32 != keys[j - 1] >> 32) groupStart.push_back(uint32_t(j));
     }
-  return shared;
+  }
+  groupStart.push_back(uint32_t(n));
 }
 
 struct Scratch {
@@ -274,24 +237,15 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
     const float maxRadius2 = settings.maxRadius * settings.maxRadius;
     // The points by cell (then by index: the same groups whatever the thread count), and what the
     // estimate reads of them in that order.
-    std::vector<uint64_t> byCellIndex(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i)
-        byCellIndex[i] = uint64_t(g.cellIndex(g.cellOf(points[i].position))) << 32 | i;
-    });
-    tbb::parallel_sort(byCellIndex.begin(), byCellIndex.end());
+    std::vector<uint32_t> order, groupStart;
+    pointsByCell(g, points, order, groupStart);
     UninitializedVector<CellQuery> queries(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t j = r.begin(); j != r.end(); ++j) {
-        const uint32_t i = uint32_t(byCellIndex[j]);
-        const ShadingPoint& p = points[i];
-        queries[j] = {p.position, p.normal, p.bsdf.kd, i, p.bsdf.type == MaterialType::Diffuse};
+        const ShadingPoint& p = points[order[j]];
+        queries[j] = {p.position, p.normal, p.bsdf.kd, order[j], p.bsdf.type == MaterialType::Diffuse};
       }
     });
-    std::vector<uint32_t> groupStart;
-    for (size_t j = 0; j < n; ++j)
-      if (j == 0 || byCellIndex[j] >> 32 != byCellIndex[j - 1] >> 32) groupStart.push_back(uint32_t(j));
-    groupStart.push_back(uint32_t(n));
 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, groupStart.size() - 1, 16), [&](const tbb::blocked_range<size_t>& r) {
       flushDenormals();
@@ -306,10 +260,12 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
         s.radius.resize(cell.size());
         const bool anyDiffuse = std::any_of(cell.begin(), cell.end(), [](const CellQuery& q) { return q.diffuse != 0; });
         if (anyDiffuse && s.order.recorded < k && !s.order.covers) s.order.extend(*map, k, settings.maxRadius);
-        const SharedRows shared = sharedRows(*map, cellCoord, s.order, k, maxRadius2, s.rows);
 
         // Each query's radius from the cell's shell order (found < k: searched on its own; more
-        // than k: estimated already).
+        // than k: estimated already), and the extent that the spheres reach.
+        float lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+        uint32_t spheres = 0;
+        float ownCost = 0;  // of reading a sphere's own rows
         for (size_t j = 0; j < cell.size(); ++j) {
           const CellQuery& q = cell[j];
           GrowingRadius& radius = s.radius[j];
@@ -322,16 +278,46 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
             if (s.order.recorded < kFurtherShells * k) s.order.extend(*map, kFurtherShells * k, settings.maxRadius);
             radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.normal, maxRadius2, k);
           }
-          if (radius.found == k || !s.order.covers) continue;
-          // Fewer than k within the maximum radius, all recorded: the search accepts every one.
-          const ColumnRun all{0, s.order.recorded};
-          const SphereSum sphere = sumWithinRadius(s.order.photons, {&all, 1}, q.position, q.normal, maxRadius2);
-          if (sphere.farthestD2 == maxRadius2) continue;  // one exactly on it: its share as the search leaves it out
-          out[q.point] = diffuseRadiance(sphere.sum, q.kd, maxRadius2);
-          radius.found = k + 1;
-          ++c.queries;
-          c.photonsUsed += sphere.used;
-          c.photonsExamined += s.order.recorded;
+          if (radius.found < k) {
+            if (!s.order.covers) continue;
+            // Fewer than k within the maximum radius, all recorded: the search accepts every one.
+            const ColumnRun all{0, s.order.recorded};
+            const SphereSum sphere = sumWithinRadius(s.order.photons, {&all, 1}, q.position, q.normal, maxRadius2);
+            if (sphere.farthestD2 == maxRadius2) continue;  // one exactly on it: its share as the search leaves it out
+            out[q.point] = diffuseRadiance(sphere.sum, q.kd, maxRadius2);
+            radius.found = k + 1;
+            ++c.queries;
+            c.photonsUsed += sphere.used;
+            c.photonsExamined += s.order.recorded;
+            continue;
+          }
+          // The cells the sphere reaches, as exploreRow bounds a row by the sphere's chord.
+          const float reach = std::sqrt(radius.d2) * 1.00001f + g.slack;
+          const Vec3 sphereLo = q.position - Vec3(reach), sphereHi = q.position + Vec3(reach);
+          for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], sphereLo[a]), hi[a] = std::max(hi[a], sphereHi[a]);
+          if (spheres++ > 0) continue;
+          // The first sphere's own rows stand for the others' (their radii differ little).
+          const CellCoord l = g.cellOf(sphereLo), h = g.cellOf(sphereHi);
+          const int32_t boxLo[3] = {l.x, l.y, l.z}, boxHi[3] = {h.x, h.y, h.z};
+          ownCost = kPhotonCost * float(map->cellCounts.count(boxLo, boxHi)) + kRowCost * float((h.y - l.y + 1) * (h.z - l.z + 1));
+        }
+
+        // The spheres are read together, as the rows of the box of cells that they all reach
+        // (where the cells are small beside the spheres that box is little larger than each
+        // sphere's), or each on its own, as its rows trimmed to its chords. Both give the same
+        // sums (sumWithinRadius), so a query's estimate does not depend on the others in its cell.
+        s.rows.clear();
+        bool together = false;
+        if (spheres > 0) {
+          const CellCoord l = g.cellOf(Vec3(lo[0], lo[1], lo[2])), h = g.cellOf(Vec3(hi[0], hi[1], hi[2]));
+          const int32_t boxLo[3] = {l.x, l.y, l.z}, boxHi[3] = {h.x, h.y, h.z};
+          together = kPhotonCost * float(map->cellCounts.count(boxLo, boxHi)) <= ownCost;
+          if (together)
+            for (int32_t z = l.z; z <= h.z; ++z)
+              for (int32_t y = l.y; y <= h.y; ++y) {
+                const CellPhotons row = map->rowPhotons(l.x, h.x, y, z);
+                if (row.count > 0) s.rows.push_back({row.first, row.count});
+              }
         }
 
         for (size_t j = 0; j < cell.size(); ++j) {
@@ -342,7 +328,6 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
             out[q.point] = estimateRadiance(*map, estimatePoint(points[q.point]), settings, s.heap.data(), c);
             continue;
           }
-          const bool together = shared.holds(q.position, radius.d2, g.slack);
           if (!together) sphereRows(*map, q.position, radius.d2, s.ownRows);
           const std::span<const ColumnRun> rows = together ? std::span<const ColumnRun>(s.rows) : s.ownRows;
           const SphereSum sphere = sumWithinRadius(map->columns, rows, q.position, q.normal, radius.d2);

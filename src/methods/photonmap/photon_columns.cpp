@@ -246,10 +246,12 @@ LUCENT_LANE_CLONES SphereSum sumWithinRadius(const PhotonColumns& c, std::span<c
   Floats r = {}, g = {}, b = {}, farthest = broadcast(-1.0f);
   Ints used = {}, found = {};
   for (const ColumnRun& run : runs) {
+    // Blocks at multiples of eight: entry i always goes to lane i mod 8 (see the header).
     const uint32_t end = run.first + run.count;
-    LanePositions lanes(run.first, end);
-    for (uint32_t i = run.first; i < end; i += kPhotonLanes, lanes.next()) {
-      const Block blk = block(c, i, lanes.valid(), query);
+    const Ints begin = broadcast(int32_t(run.first));
+    LanePositions lanes(run.first & ~uint32_t(kPhotonLanes - 1), end);
+    for (uint32_t i = run.first & ~uint32_t(kPhotonLanes - 1); i < end; i += kPhotonLanes, lanes.next()) {
+      const Block blk = block(c, i, lanes.valid() & (lanes.position >= begin), query);
       const Ints accepted = (blk.d2 <= r2) & blk.valid;
       const Ints lit = accepted & (blk.cosine > 0);
       r += masked(load(&c.r[i]), lit), g += masked(load(&c.g[i]), lit), b += masked(load(&c.b[i]), lit);

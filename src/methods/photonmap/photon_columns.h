@@ -82,6 +82,9 @@ struct ColumnRun {
 
 // Of the photons of `c` in `runs`, those within squared radius radius2 of q: how many, the farthest
 // one's squared distance (-1: none), and the power of those on the viewer's side of n (used of them).
+// Entry i is summed in lane i mod 8, and the lanes' sums are added in order, so that the sum
+// depends only on the photons accepted, not on the runs that hold them, as long as the runs are
+// in list order: a sphere read from a box of cells or from its own rows gives the same bits.
 struct SphereSum {
   Rgb sum;
   uint32_t found = 0, used = 0;
