@@ -62,11 +62,13 @@ struct ShellOrder {
   uint32_t recorded = 0;  // photons copied
   CellCoord cell;
   int32_t nextShell = 0;
+  uint32_t k = 0;
   bool covers = false;  // every photon within the maximum radius of any point of the cell is recorded
 
   template <class Map>
   void begin(const Map& map, CellCoord c, uint32_t k, float maxRadius) {
     cell = c, nextShell = 0, recorded = 0, covers = false;
+    this->k = k;
     // Where the cells within the maximum radius of the cell hold fewer than k photons, its
     // searches accept every photon within their maximum radius in any order: the photon list from
     // the first of those cells to the last, where short, holds them all (the photons between of
@@ -96,6 +98,29 @@ struct ShellOrder {
     s.found = recorded;
     RunRecorder record{runs};
     const Reach whole = Reach::whole(g);
+    if (nextShell == 0) {
+      // The shells that hold fewer than k photons between them: every query accepts all of those
+      // within its maximum radius before its k-th, in whatever order (as knn_grid.h's
+      // acceptedCube), so they are met as the rows of their box, not shell by shell. Sparse
+      // regions need a dozen shells before k photons.
+      int32_t lo[3], hi[3];
+      auto fewerThanK = [&](int32_t t) {
+        shellBox(whole, cell, t, lo, hi);
+        return map.cellCounts.count(lo, hi) < k;
+      };
+      int32_t yes = -1, no = lastShellOf(whole, cell) + 1;  // the last shell covers the grid
+      while (no - yes > 1) {
+        const int32_t mid = yes + (no - yes) / 2;
+        (fewerThanK(mid) ? yes : no) = mid;
+      }
+      if (yes >= 0) {
+        shellBox(whole, cell, yes, lo, hi);
+        for (int32_t z = lo[2]; z <= hi[2]; ++z)
+          for (int32_t y = lo[1]; y <= hi[1]; ++y) visitRun(map.rowPhotons(lo[0], hi[0], y, z), s, record);
+        nextShell = yes + 1;
+        covers = gapBeyondShell(g, cell, yes) > maxRadius || no > lastShellOf(whole, cell);
+      }
+    }
     while (s.found < want && !covers) {
       if (gapBeyondShell(g, cell, nextShell - 1) > maxRadius) {
         covers = true;
