@@ -167,6 +167,14 @@ void sphereRows(const Map& map, Vec3 p, float r2, std::vector<ColumnRun>& rows) 
     }
 }
 
+// The map whose rows a sphere's photons are summed from: the map itself, or the stencil grid's
+// finer sorted grid of the same photons.
+template <class Map>
+const auto& sumGridOf(const Map& map) {
+  if constexpr (requires { map.sumGrid; }) return map.sumGrid;
+  else return map;
+}
+
 // What the estimate reads of a shading point, gathered in cell order.
 struct CellQuery {
   Vec3 position, normal;  // the normal on the viewer's side
@@ -258,6 +266,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
   }
   if constexpr (knn_grid_detail::kReadsRuns<Map> && knn_grid_detail::kHasCellCounts<Map>) {
     const UniformGrid& g = map->grid;
+    const auto& sums = sumGridOf(*map);
     const uint32_t k = settings.k;
     const float maxRadius2 = settings.maxRadius * settings.maxRadius;
     // The points by cell (then by index: the same groups whatever the thread count), and what the
@@ -317,14 +326,14 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
             continue;
           }
           // The cells the sphere reaches, as exploreRow bounds a row by the sphere's chord.
-          const float reach = std::sqrt(radius.d2) * 1.00001f + g.slack;
+          const float reach = std::sqrt(radius.d2) * 1.00001f + sums.grid.slack;
           const Vec3 sphereLo = q.position - Vec3(reach), sphereHi = q.position + Vec3(reach);
           for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], sphereLo[a]), hi[a] = std::max(hi[a], sphereHi[a]);
           if (spheres++ > 0) continue;
           // The first sphere's own rows stand for the others' (their radii differ little).
-          const CellCoord l = g.cellOf(sphereLo), h = g.cellOf(sphereHi);
+          const CellCoord l = sums.grid.cellOf(sphereLo), h = sums.grid.cellOf(sphereHi);
           const int32_t boxLo[3] = {l.x, l.y, l.z}, boxHi[3] = {h.x, h.y, h.z};
-          ownCost = kPhotonCost * float(map->cellCounts.count(boxLo, boxHi)) + kRowCost * float((h.y - l.y + 1) * (h.z - l.z + 1));
+          ownCost = kPhotonCost * float(sums.cellCounts.count(boxLo, boxHi)) + kRowCost * float((h.y - l.y + 1) * (h.z - l.z + 1));
         }
 
         // The spheres are read together, as the rows of the box of cells that they all reach
@@ -334,13 +343,13 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
         s.rows.clear();
         bool together = false;
         if (spheres > 0) {
-          const CellCoord l = g.cellOf(Vec3(lo[0], lo[1], lo[2])), h = g.cellOf(Vec3(hi[0], hi[1], hi[2]));
+          const CellCoord l = sums.grid.cellOf(Vec3(lo[0], lo[1], lo[2])), h = sums.grid.cellOf(Vec3(hi[0], hi[1], hi[2]));
           const int32_t boxLo[3] = {l.x, l.y, l.z}, boxHi[3] = {h.x, h.y, h.z};
-          together = kPhotonCost * float(map->cellCounts.count(boxLo, boxHi)) <= ownCost;
+          together = kPhotonCost * float(sums.cellCounts.count(boxLo, boxHi)) <= ownCost;
           if (together)
             for (int32_t z = l.z; z <= h.z; ++z)
               for (int32_t y = l.y; y <= h.y; ++y) {
-                const CellPhotons row = map->rowPhotons(l.x, h.x, y, z);
+                const CellPhotons row = sums.rowPhotons(l.x, h.x, y, z);
                 if (row.count > 0) s.rows.push_back({row.first, row.count});
               }
         }
@@ -353,9 +362,9 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
             out[q.point] = estimateRadiance(*map, estimatePoint(points[q.point]), settings, s.heap.data(), c);
             continue;
           }
-          if (!together) sphereRows(*map, q.position, radius.d2, s.ownRows);
+          if (!together) sphereRows(sums, q.position, radius.d2, s.ownRows);
           const std::span<const ColumnRun> rows = together ? std::span<const ColumnRun>(s.rows) : s.ownRows;
-          const SphereSum sphere = sumWithinRadius(map->columns, rows, q.position, q.normal, radius.d2);
+          const SphereSum sphere = sumWithinRadius(sums.columns, rows, q.position, q.normal, radius.d2);
           // The photon that set the radius is left out (see Accumulator::radiance).
           out[q.point] = radius.d2 > 0 ? diffuseRadiance(sphere.sum - radius.share, q.kd, radius.d2) : Rgb();
           ++c.queries;

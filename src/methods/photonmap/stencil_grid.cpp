@@ -105,6 +105,12 @@ StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& opt
   map.listedPhotons = gatherPhotons(map.photons, map.storedList);
   map.columns = photonColumns(map.listedPhotons);
   if (stats) stats->addStage("gather_photons", gatherClock.seconds());
+  Stopwatch sumGridClock;
+  GridOptions sumOptions = options;
+  sumOptions.resolution = {uint32_t(map.grid.res[0]) * StencilGrid::kSumGridSplit, uint32_t(map.grid.res[1]),
+                           uint32_t(map.grid.res[2])};
+  map.sumGrid = buildSortedGrid(map.listedPhotons, sumOptions);
+  if (stats) stats->addStage("sum_grid", sumGridClock.seconds());
   return map;
 }
 

@@ -8,6 +8,7 @@
 
 #include "lucent/core/stats.h"
 #include "photon_columns.h"
+#include "sorted_grid.h"
 #include "uniform_grid.h"
 
 namespace lucent {
@@ -28,6 +29,12 @@ struct StencilGrid {
   std::vector<uint32_t> storedList, firstStored;
   std::vector<Photon> listedPhotons;
   PhotonColumns columns;  // listedPhotons as columns, for the radiance estimate
+  // The stored photons again, in a sorted grid whose cells split each of this grid's into
+  // kSumGridSplit along x (along its rows): the estimate cell by cell (estimate_by_cell.h) sums a
+  // sphere's photons from rows trimmed to its chords, and a coarse stencil cell holds up to m^2
+  // photons. The search, and so the radius, stays this grid's.
+  static constexpr uint32_t kSumGridSplit = 8;
+  SortedGrid sumGrid;
 
   uint32_t capacity() const { return side * side; }
   uint32_t stored(uint32_t cell) const { return std::min(arrived[cell], capacity()); }
@@ -43,7 +50,7 @@ struct StencilGrid {
 
 // Takes the photons by value (move them in: no copy). Stages, timed into `stats` when given: "grid_keys" (cell per photon), "stencil_count" (arrivals
 // per cell), "stencil_route" (photons to their cells' footprints in arrival order, power
-// redistribution), "gather_photons" (the compacted list). The grid has at most min(maxCells, maxStencilSlots / m^2) cells.
+// redistribution), "gather_photons" (the compacted list), "sum_grid" (sumGrid). The grid has at most min(maxCells, maxStencilSlots / m^2) cells.
 StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& options = {},
                              RenderStats* stats = nullptr);
 
