@@ -35,7 +35,7 @@ SCENES = {
     "glass-ball": dict(paper_stored=5000, args=["--photons", "5000", "--caustic-photons", "5600",
                                                 "--k", "32", "--grid-resolution", "250x1x250",
                                                 "--light-samples", "4"]),
-    "ring": dict(paper_stored=16000, args=["--photons", "16000", "--caustic-photons", "65000",
+    "ring": dict(paper_stored=16000, args=["--photons", "16000", "--caustic-photons", "33500",
                                            "--k", "64", "--grid-resolution", "250x1x250",
                                            "--light-samples", "1"]),
     "cornell-box": dict(paper_stored=65000, args=["--photons", "65000", "--caustic-photons", "0",

@@ -543,3 +543,47 @@ TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, 
     }
   }
 }
+
+TEST_CASE("A point light's projection map marks every direction towards a specular triangle", "[photons][caustic]") {
+  // Aiming through the marked cells only is unbiased if no caustic path starts through an unmarked
+  // one: directions from RING's light to random points of every mirror triangle (and to their
+  // corners) must all lie in marked cells. The map must also be tighter than the sphere's cone.
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/ring.json", {true});
+  const std::optional<EmissionTarget> target = specularTarget(scene);
+  REQUIRE(target.has_value());
+  REQUIRE(target->pointLightMaps.size() == scene.lights.size());
+  const ProjectionMap& map = target->pointLightMaps[0];
+  REQUIRE(!map.cells.empty());
+  std::vector<uint8_t> marked(size_t(map.resolution) * map.resolution, 0);
+  for (uint32_t c : map.cells) marked[c] = 1;
+  const Vec3 light = scene.lights[0].vector;
+  Rng rng(12);
+  size_t checked = 0, unmarked = 0;
+  for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
+    if (scene.materials[scene.materialIds[t]].type != MaterialType::Mirror) continue;
+    for (int sample = 0; sample < 8; ++sample) {
+      const Vec2 b = sample < 3 ? Vec2(sample == 1 ? 1.0f : 0.0f, sample == 2 ? 1.0f : 0.0f) : sampleUniformTriangle(rng.uniform2());
+      const Vec3 p = barycentric(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), b.x, b.y);
+      const Vec3 d = map.frame.toLocal(p - light);
+      REQUIRE(d.z > 0);
+      const int32_t cx = int32_t(std::floor((d.x / d.z + map.extent) / map.cellSide()));
+      const int32_t cy = int32_t(std::floor((d.y / d.z + map.extent) / map.cellSide()));
+      REQUIRE((cx >= 0 && cy >= 0 && cx < int32_t(map.resolution) && cy < int32_t(map.resolution)));
+      unmarked += !marked[size_t(cy) * map.resolution + size_t(cx)];
+      ++checked;
+    }
+  }
+  CHECK(checked > 40000);
+  CHECK(unmarked == 0);
+  // The marked cells' solid angle against the cone's (2 pi (1 - cos)).
+  double marked_solid_angle = 0;
+  const float side = map.cellSide();
+  for (uint32_t c : map.cells) {
+    const float x = -map.extent + (float(c % map.resolution) + 0.5f) * side, y = -map.extent + (float(c / map.resolution) + 0.5f) * side;
+    marked_solid_angle += side * side / std::pow(1 + x * x + y * y, 1.5);
+  }
+  TargetCone cone;
+  REQUIRE(coneTowards(*target, light, cone));
+  INFO("marked " << map.cells.size() << " cells, " << marked_solid_angle << " sr against the cone's " << cone.solidAngle);
+  CHECK(marked_solid_angle < 0.6 * cone.solidAngle);
+}

@@ -86,6 +86,49 @@ BounceResult bounce(const Scene& scene, const PhotonPath& path, const Hit& hit, 
 
 }  // namespace
 
+namespace {
+
+// Cells per side of a projection map: RING's ring, 3.8 wide at 13 from its light, covers a
+// sixth of its 256 x 256.
+constexpr uint32_t kProjectionMapResolution = 256;
+
+// The projection map of the specular triangles (three vertices each) seen from a point light at
+// x; no cells where x lies within the target's sphere or a triangle reaches behind the light.
+ProjectionMap projectionMap(const EmissionTarget& target, Vec3 x, const std::vector<Vec3>& triangles) {
+  ProjectionMap map;
+  TargetCone cone;
+  if (!coneTowards(target, x, cone)) return map;
+  map.frame = cone.frame;
+  const float sinMax = std::sqrt(std::max(0.0f, 1 - cone.cosMax * cone.cosMax));
+  map.extent = 1.001f * sinMax / cone.cosMax;  // the cone's disc on the plane, with a margin
+  map.resolution = kProjectionMapResolution;
+  const float side = map.cellSide();
+  std::vector<uint8_t> marked(size_t(map.resolution) * map.resolution, 0);
+  for (size_t t = 0; t < triangles.size(); t += 3) {
+    float lo[2] = {kInf, kInf}, hi[2] = {-kInf, -kInf};
+    for (size_t v = t; v < t + 3; ++v) {
+      const Vec3 p = map.frame.toLocal(triangles[v] - x);
+      if (!(p.z > 1e-6f * length(p))) return ProjectionMap{};
+      const float u[2] = {p.x / p.z, p.y / p.z};
+      for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], u[a]), hi[a] = std::max(hi[a], u[a]);
+    }
+    // Every cell the projection's box touches, with a margin for the rounding of the projection.
+    int32_t first[2], last[2];
+    for (int a = 0; a < 2; ++a) {
+      const float margin = 1e-4f * map.extent;
+      first[a] = std::max(0, int32_t(std::floor((lo[a] - margin + map.extent) / side)));
+      last[a] = std::min(int32_t(map.resolution) - 1, int32_t(std::floor((hi[a] + margin + map.extent) / side)));
+    }
+    for (int32_t cy = first[1]; cy <= last[1]; ++cy)
+      for (int32_t cx = first[0]; cx <= last[0]; ++cx) marked[size_t(cy) * map.resolution + size_t(cx)] = 1;
+  }
+  for (uint32_t c = 0; c < marked.size(); ++c)
+    if (marked[c]) map.cells.push_back(c);
+  return map;
+}
+
+}  // namespace
+
 std::optional<EmissionTarget> specularTarget(const Scene& scene) {
   std::vector<Vec3> vertices;
   for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
@@ -96,10 +139,14 @@ std::optional<EmissionTarget> specularTarget(const Scene& scene) {
   if (vertices.empty()) return std::nullopt;
   Bounds3 bounds;
   for (const Vec3& v : vertices) bounds.extend(v);
-  EmissionTarget target{bounds.center(), 0};
+  EmissionTarget target{bounds.center(), 0, {}};
   for (const Vec3& v : vertices) target.radius = std::max(target.radius, length(v - target.center));
   // Rounding must not put a vertex outside: a margin of the coordinates' scale.
   target.radius += selfIntersectionScale(target.center);
+  target.pointLightMaps.resize(scene.lights.size());
+  for (size_t i = 0; i < scene.lights.size(); ++i)
+    if (scene.lights[i].type == LightType::Point)
+      target.pointLightMaps[i] = projectionMap(target, scene.lights[i].vector, vertices);
   return target;
 }
 
@@ -118,7 +165,8 @@ PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonT
       Rng rng(options.seed, i, 0);
       const float uLight = rng.uniform();
       const Vec2 uPosition = rng.uniform2();
-      const EmissionSample e = sampleEmission(scene, uLight, uPosition, rng.uniform2(), target);
+      const Vec2 uDirection = rng.uniform2();
+      const EmissionSample e = sampleEmission(scene, uLight, uPosition, uDirection, target, target ? rng.uniform() : 0);
       paths[i] = {e.ray, e.power * share, i, 1};
       emitted[i] = e.valid;
     }

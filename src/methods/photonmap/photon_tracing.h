@@ -24,8 +24,9 @@ struct PhotonTracingOptions {
   std::optional<EmissionTarget> target;
 };
 
-// The bounding sphere of the scene's mirror and glass triangles, where caustic paths must start;
-// none when the scene has no specular surface.
+// The bounding sphere of the scene's mirror and glass triangles, where caustic paths must start,
+// with a projection map of them for each point light outside it; none when the scene has no
+// specular surface.
 std::optional<EmissionTarget> specularTarget(const Scene& scene);
 
 // Photons stored at non-specular surfaces. The caustic map holds those that reached a diffuse or
