@@ -200,8 +200,10 @@ LUCENT_LANE_CLONES GrowingRadius growingRadius(const PhotonColumns& c, uint32_t 
   const Query query{broadcast(q.x), broadcast(q.y), broadcast(q.z), broadcast(n.x), broadcast(n.y), broadcast(n.z)};
   const Floats limit2 = broadcast(maxRadius2);
   GrowingRadius g;
-  // Whole blocks while the k-th photon is not among them.
+  // Whole blocks while the k-th photon is not among them; each lane keeps its farthest photon,
+  // the first at that distance (a lane meets its entries in order).
   Floats farthest = broadcast(-1.0f);
+  Ints farthestAt = {};
   uint32_t i = 0;
   LanePositions lanes(0, offered);
   for (; i < offered; i += kPhotonLanes, lanes.next()) {
@@ -210,33 +212,29 @@ LUCENT_LANE_CLONES GrowingRadius growingRadius(const PhotonColumns& c, uint32_t 
     const uint32_t accepting = uint32_t(count(accepted));
     if (g.found + accepting >= k) break;
     g.found += accepting;
-    farthest = accepted ? (blk.d2 > farthest ? blk.d2 : farthest) : farthest;
+    const Ints farther = accepted & (blk.d2 > farthest);
+    farthest = farther ? blk.d2 : farthest;
+    farthestAt = farther ? lanes.position : farthestAt;
   }
-  for (int j = 0; j < kPhotonLanes; ++j) g.d2 = std::max(g.d2, farthest[j]);
-  // The block holding the k-th photon, one photon at a time; the search's photons end with it.
-  uint32_t end = std::min(i, offered);
+  // The first photon at the largest distance: the lanes' by their entries.
+  for (int j = 0; j < kPhotonLanes; ++j)
+    if (farthest[j] > g.d2 || (farthest[j] == g.d2 && farthest[j] >= 0 && uint32_t(farthestAt[j]) < g.farthest))
+      g.d2 = farthest[j], g.farthest = uint32_t(farthestAt[j]);
+  // The block holding the k-th photon, one photon at a time: its entries come after the others.
   if (i < offered) {
     const Block blk = block(c, i, lanes.valid(), query);
     for (int j = 0; j < kPhotonLanes && g.found < k; ++j) {
       if (!blk.valid[j] || !(blk.d2[j] <= maxRadius2)) continue;
       ++g.found;
-      g.d2 = std::max(g.d2, blk.d2[j]);
-      end = i + uint32_t(j) + 1;
+      if (blk.d2[j] > g.d2) g.d2 = blk.d2[j], g.farthest = i + uint32_t(j);
     }
   }
   if (g.found == 0) return g;
-  // The first of them at the farthest distance (any photon there is within the maximum radius),
-  // and the side it came from, by the same arithmetic.
-  LanePositions again(0, end);
-  for (uint32_t first = 0;; first += kPhotonLanes, again.next()) {
-    const Block blk = block(c, first, again.valid(), query);
-    for (int j = 0; j < kPhotonLanes; ++j) {
-      if (!blk.valid[j] || blk.d2[j] != g.d2) continue;
-      g.farthest = first + uint32_t(j);
-      if (blk.cosine[j] > 0) g.share = Rgb(c.r[g.farthest], c.g[g.farthest], c.b[g.farthest]);
-      return g;
-    }
-  }
+  // The side it came from, by the block's arithmetic.
+  const uint32_t at = g.farthest & ~uint32_t(kPhotonLanes - 1);
+  const Block blk = block(c, at, Ints{} - 1, query);
+  if (blk.cosine[g.farthest - at] > 0) g.share = Rgb(c.r[g.farthest], c.g[g.farthest], c.b[g.farthest]);
+  return g;
 }
 
 LUCENT_LANE_CLONES SphereSum sumWithinRadius(const PhotonColumns& c, std::span<const ColumnRun> runs, Vec3 q, Vec3 n,
