@@ -516,9 +516,10 @@ TEST_CASE("Estimates taken cell by cell equal one search per point", "[photonmap
       sp.pixel = uint32_t(points.size());
       points.push_back(sp);
     }
-  GridOptions fine, coarse;
+  GridOptions fine, coarse, boxes;
   fine.cellSize = 0.05f;
   coarse.photonsPerCell = 40;
+  boxes.resolution = {40, 3, 25};  // cells of three shapes, as the paper's 250 x 1 x 250
   size_t compared = 0, lit = 0;
   auto check = [&](const auto& map, uint32_t k, float maxRadius) {
     const EstimateSettings settings{k, maxRadius, 0};
@@ -559,11 +560,11 @@ TEST_CASE("Estimates taken cell by cell equal one search per point", "[photonmap
     estimateAtPoints(&map, std::span<const ShadingPoint>(half), settings, std::span<Rgb>(halfOut), counters);
     for (size_t i = 0; i < half.size(); ++i) CHECK((halfOut[i] == byCell[2 * i]));
   };
-  for (const GridOptions& options : {fine, coarse}) {
+  for (const GridOptions& options : {fine, coarse, boxes}) {
     const SortedGrid sorted = buildSortedGrid(photons, options);
     const StencilGrid stencil = buildStencilGrid(photons, options);
     for (uint32_t k : {1u, 9u, 64u, 5000u})
-      for (float maxRadius : {0.06f, 0.3f, 4.0f}) {
+      for (float maxRadius : {0.06f, 0.3f, 4.0f, 1e10f}) {  // the last beyond any cell count
         check(sorted, k, maxRadius);
         check(stencil, k, maxRadius);
       }

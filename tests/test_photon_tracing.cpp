@@ -586,4 +586,36 @@ TEST_CASE("A point light's projection map marks every direction towards a specul
   REQUIRE(coneTowards(*target, light, cone));
   INFO("marked " << map.cells.size() << " cells, " << marked_solid_angle << " sr against the cone's " << cone.solidAngle);
   CHECK(marked_solid_angle < 0.6 * cone.solidAngle);
+
+  // The sampler: every direction through a marked cell, and the weights' mean (power over
+  // intensity, 1 / density) the marked cells' solid angle, by quadrature (8 x 8 points a cell).
+  double exact = 0;
+  for (uint32_t c : map.cells)
+    for (int i = 0; i < 8; ++i)
+      for (int j = 0; j < 8; ++j) {
+        const double x = -map.extent + (double(c % map.resolution) + (i + 0.5) / 8) * side;
+        const double y = -map.extent + (double(c / map.resolution) + (j + 0.5) / 8) * side;
+        exact += double(side) * side / 64 / std::pow(1 + x * x + y * y, 1.5);
+      }
+  const uint32_t samples = 400000;
+  double sum = 0, sum2 = 0;
+  size_t outside = 0;
+  for (uint32_t i = 0; i < samples; ++i) {
+    Rng r(21, i, 0);
+    const float uLight = r.uniform();
+    const Vec2 uPosition = r.uniform2(), uDirection = r.uniform2();
+    const EmissionSample e = sampleEmission(scene, uLight, uPosition, uDirection, &*target, r.next());
+    REQUIRE(e.valid);
+    const Vec3 d = map.frame.toLocal(e.ray.direction);
+    const int32_t cx = int32_t(std::floor((d.x / d.z + map.extent) / side));
+    const int32_t cy = int32_t(std::floor((d.y / d.z + map.extent) / side));
+    outside += !(cx >= 0 && cy >= 0 && cx < int32_t(map.resolution) && cy < int32_t(map.resolution) &&
+                 marked[size_t(cy) * map.resolution + size_t(cx)]);
+    const double w = double(e.power.r) / double(scene.lights[0].value.r);
+    sum += w, sum2 += w * w;
+  }
+  const double mean = sum / samples, se = std::sqrt(std::max(0.0, sum2 / samples - mean * mean) / samples);
+  INFO("mean weight " << mean << " +- " << se << " against " << exact << " sr");
+  CHECK(outside < samples / 10000);  // rounding at a cell's edge only
+  CHECK(std::abs(mean - exact) <= 4 * se);
 }

@@ -169,9 +169,10 @@ inline bool coneTowards(const EmissionTarget& target, Vec3 x, TargetCone& cone) 
 // point lies outside the sphere; a point light with a projection map through its marked cells)
 // and directional and environment light enter through a disc of the target's radius in front of
 // it: only paths whose first hit lies in the sphere are sampled.
-// uTarget picks a projection map's cell.
+// targetBits, 32 random bits, pick a projection map's cell (with a bias of cells / 2^32 at most:
+// a float's 24 bits would give cells / 2^24).
 inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPosition, Vec2 uDirection,
-                                     const EmissionTarget* target = nullptr, float uTarget = 0) {
+                                     const EmissionTarget* target = nullptr, uint32_t targetBits = 0) {
   EmissionSample s;
   if (scene.lights.empty()) return s;
   float pmf;
@@ -215,7 +216,7 @@ inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPos
       if (target && lightIndex < target->pointLightMaps.size() && !target->pointLightMaps[lightIndex].cells.empty()) {
         const ProjectionMap& map = target->pointLightMaps[lightIndex];
         const uint32_t marked = uint32_t(map.cells.size());
-        const uint32_t cell = map.cells[std::min(marked - 1, uint32_t(uTarget * float(marked)))];
+        const uint32_t cell = map.cells[uint32_t((uint64_t(targetBits) * marked) >> 32)];
         const float side = map.cellSide();
         const float x = -map.extent + (float(cell % map.resolution) + uDirection.x) * side;
         const float y = -map.extent + (float(cell / map.resolution) + uDirection.y) * side;

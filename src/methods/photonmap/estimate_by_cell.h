@@ -3,16 +3,17 @@
 // On the sorted and stencil grids the points are taken cell by cell. The kNN-grid search (Purcell
 // et al. 2003, 2.3) explores the same shells, in the same order, for every query in a cell; only the
 // distances differ. While fewer than k photons are accepted, every photon met within the maximum
-// radius is accepted, so when the first k photons of the cell's shell order all lie within a
-// query's maximum radius, they are exactly the k that the query's search accepts first, and the
-// radius is the farthest of them. The search then accepts every photon within that radius, and
-// nothing else: the estimate is a sum over a sphere. A cell's first k photons are found once, by
-// its shells; its queries' spheres are then summed over one contiguous copy of the photons in the
-// box of cells that they reach. A query whose maximum radius would have rejected one of those k
-// photons, or that is not Lambertian, or a search stopped after a number of shells, takes the
-// search of knn_grid.h instead. Both give the same photons, radius and estimate, up to the order of
-// the power sums (and, where two of the first k photons lie at exactly the farthest distance, which
-// one's share is left out: the first in shell order here, possibly another there).
+// radius is accepted, so a query's first k photons within its maximum radius, in its cell's shell
+// order, are the k its search accepts first, and the radius is the farthest of them. The search
+// then accepts every photon within that radius, and nothing else: the estimate is a sum over a
+// sphere. A cell's photons are met once, in shell order (ShellOrder), as far as its queries need;
+// each query's radius comes from them (growingRadius), and its sphere is summed from the rows of
+// cells that it reaches (sumWithinRadius). A query that is not Lambertian, a search stopped after a
+// number of shells, or a query whose k photons within its maximum radius lie beyond what its cell
+// records takes the search of knn_grid.h instead. Both give the same photons, radius and estimate,
+// up to the order of the power sums (and, where two of the first k photons lie at exactly the
+// farthest distance, which one's share is left out: the first in the order recorded here, which
+// reads a cell's sparse first shells as one box, possibly another there).
 //
 // The hashed grid and the kd-tree estimate point by point.
 #pragma once
@@ -71,14 +72,15 @@ struct ShellOrder {
     this->k = k;
     // Where the cells within the maximum radius of the cell hold fewer than k photons, its
     // searches accept every photon within their maximum radius in any order: the photon list from
-    // the first of those cells to the last, where short, holds them all (the photons between of
+    // the first of those cells to the last, where short, holds them all (the photons in it from
     // other cells lie beyond the maximum radius), as knn_grid.h's exploreShortSearch reads it.
     const UniformGrid& g = map.grid;
     int32_t lo[3], hi[3];
     const int32_t ci[3] = {c.x, c.y, c.z};
-    for (int a = 0; a < 3; ++a) {
-      const int32_t reach = int32_t(std::ceil((maxRadius + g.slack) * g.invCellSize[a])) + 1;
-      lo[a] = std::max(0, ci[a] - reach), hi[a] = std::min(g.res[a] - 1, ci[a] + reach);
+    for (int a = 0; a < 3; ++a) {  // compared as floats: the reach may exceed any integer
+      const float reach = std::ceil((maxRadius + g.slack) * g.invCellSize[a]) + 1;
+      lo[a] = reach >= float(ci[a]) ? 0 : ci[a] - int32_t(reach);
+      hi[a] = reach >= float(g.res[a] - 1 - ci[a]) ? g.res[a] - 1 : ci[a] + int32_t(reach);
     }
     if (map.cellCounts.count(lo, hi) >= k) return;
     const CellPhotons run = map.cellRangePhotons(g.cellIndex({lo[0], lo[1], lo[2]}), g.cellIndex({hi[0], hi[1], hi[2]}));
@@ -221,10 +223,17 @@ inline void pointsByCell(const UniformGrid& g, std::span<const ShadingPoint> poi
   groupStart.push_back(uint32_t(n));
 }
 
+// What becomes of a query of a cell: its own search, a sphere of the radius its cell's photons
+// set, or estimated already (fewer than k photons within its maximum radius).
+struct QueryPlan {
+  GrowingRadius radius;
+  enum How : uint8_t { Search, Sphere, Done } how = Search;
+};
+
 struct Scratch {
   ShellOrder order;
-  std::vector<GrowingRadius> radius;
-  std::vector<ColumnRun> rows, ownRows;  // a cell's shared rows (SharedRows); one sphere's
+  std::vector<QueryPlan> plans;
+  std::vector<ColumnRun> rows, ownRows;  // the rows of a cell's box; one sphere's own
   std::vector<PhotonDistance> heap;
 };
 
@@ -291,40 +300,53 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
         pointsDone += cell.size();
         const CellCoord cellCoord = g.cellOf(cell[0].position);
         s.order.begin(*map, cellCoord, k, settings.maxRadius);
-        s.radius.resize(cell.size());
+        s.plans.resize(cell.size());
         const bool anyDiffuse = std::any_of(cell.begin(), cell.end(), [](const CellQuery& q) { return q.diffuse != 0; });
         if (anyDiffuse && s.order.recorded < k && !s.order.covers) s.order.extend(*map, k, settings.maxRadius);
 
-        // Each query's radius from the cell's shell order (found < k: searched on its own; more
-        // than k: estimated already), and the extent that the spheres reach.
+        // Each query's radius from the cell's shell order, and the extent that the spheres reach.
         float lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
         uint32_t spheres = 0;
         float ownCost = 0;  // of reading a sphere's own rows
         for (size_t j = 0; j < cell.size(); ++j) {
           const CellQuery& q = cell[j];
-          GrowingRadius& radius = s.radius[j];
-          radius = {};
+          QueryPlan& plan = s.plans[j];
+          plan = {{}, QueryPlan::Search};
           if (!q.diffuse) continue;
+          GrowingRadius& radius = plan.radius;
           radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.normal, maxRadius2, k);
           if (radius.found < k && !s.order.covers) {
-            // Some of the first k photons lie beyond this query's maximum radius: record further
-            // (always to the same length, so that what a query sees depends on its cell alone).
-            if (s.order.recorded < kFurtherShells * k) s.order.extend(*map, kFurtherShells * k, settings.maxRadius);
+            // Some of the cell's first photons lie beyond this query's maximum radius. None
+            // within it (a point far outside the grid, its cell clamped): nothing to sum.
+            knn_grid_detail::Reach reach;
+            reach.update(g, q.position, maxRadius2);
+            if (map->cellCounts.count(reach.lo, reach.hi) == 0) {
+              out[q.point] = Rgb();
+              plan.how = QueryPlan::Done;
+              ++c.queries;
+              continue;
+            }
+            // Otherwise the cell records further (always to the same length, so that what a query
+            // sees depends on its cell alone).
+            const uint32_t further = uint32_t(std::min<uint64_t>(uint64_t(kFurtherShells) * k, UINT32_MAX));
+            if (s.order.recorded < further) s.order.extend(*map, further, settings.maxRadius);
             radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.normal, maxRadius2, k);
           }
           if (radius.found < k) {
+            // Fewer than k within the maximum radius, every one recorded: the search accepts them
+            // all, over the maximum radius (Jensen's convention).
             if (!s.order.covers) continue;
-            // Fewer than k within the maximum radius, all recorded: the search accepts every one.
             const ColumnRun all{0, s.order.recorded};
             const SphereSum sphere = sumWithinRadius(s.order.photons, {&all, 1}, q.position, q.normal, maxRadius2);
             if (sphere.farthestD2 == maxRadius2) continue;  // one exactly on it: its share as the search leaves it out
             out[q.point] = diffuseRadiance(sphere.sum, q.kd, maxRadius2);
-            radius.found = k + 1;
+            plan.how = QueryPlan::Done;
             ++c.queries;
             c.photonsUsed += sphere.used;
             c.photonsExamined += s.order.recorded;
             continue;
           }
+          plan.how = QueryPlan::Sphere;
           // The cells the sphere reaches, as exploreRow bounds a row by the sphere's chord.
           const float reach = std::sqrt(radius.d2) * 1.00001f + sums.grid.slack;
           const Vec3 sphereLo = q.position - Vec3(reach), sphereHi = q.position + Vec3(reach);
@@ -336,17 +358,18 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
           ownCost = kPhotonCost * float(sums.cellCounts.count(boxLo, boxHi)) + kRowCost * float((h.y - l.y + 1) * (h.z - l.z + 1));
         }
 
-        // The spheres are read together, as the rows of the box of cells that they all reach
-        // (where the cells are small beside the spheres that box is little larger than each
-        // sphere's), or each on its own, as its rows trimmed to its chords. Both give the same
-        // sums (sumWithinRadius), so a query's estimate does not depend on the others in its cell.
+        // Each sphere reads either the rows of the box of cells that the cell's spheres reach
+        // together (found once; where the cells are small beside the spheres, that box is little
+        // larger than each sphere's) or its own rows trimmed to its chords, whichever holds fewer
+        // photons. Both give the same sums (sumWithinRadius), so a query's estimate does not
+        // depend on the other points in its cell.
         s.rows.clear();
-        bool together = false;
+        bool boxRows = false;
         if (spheres > 0) {
           const CellCoord l = sums.grid.cellOf(Vec3(lo[0], lo[1], lo[2])), h = sums.grid.cellOf(Vec3(hi[0], hi[1], hi[2]));
           const int32_t boxLo[3] = {l.x, l.y, l.z}, boxHi[3] = {h.x, h.y, h.z};
-          together = kPhotonCost * float(sums.cellCounts.count(boxLo, boxHi)) <= ownCost;
-          if (together)
+          boxRows = kPhotonCost * float(sums.cellCounts.count(boxLo, boxHi)) <= ownCost;
+          if (boxRows)
             for (int32_t z = l.z; z <= h.z; ++z)
               for (int32_t y = l.y; y <= h.y; ++y) {
                 const CellPhotons row = sums.rowPhotons(l.x, h.x, y, z);
@@ -356,20 +379,21 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
 
         for (size_t j = 0; j < cell.size(); ++j) {
           const CellQuery& q = cell[j];
-          const GrowingRadius& radius = s.radius[j];
-          if (radius.found > k) continue;  // estimated above
-          if (radius.found < k) {
+          const QueryPlan& plan = s.plans[j];
+          if (plan.how == QueryPlan::Done) continue;
+          if (plan.how == QueryPlan::Search) {
             out[q.point] = estimateRadiance(*map, estimatePoint(points[q.point]), settings, s.heap.data(), c);
             continue;
           }
-          if (!together) sphereRows(sums, q.position, radius.d2, s.ownRows);
-          const std::span<const ColumnRun> rows = together ? std::span<const ColumnRun>(s.rows) : s.ownRows;
+          const GrowingRadius& radius = plan.radius;
+          if (!boxRows) sphereRows(sums, q.position, radius.d2, s.ownRows);
+          const std::span<const ColumnRun> rows = boxRows ? std::span<const ColumnRun>(s.rows) : s.ownRows;
           const SphereSum sphere = sumWithinRadius(sums.columns, rows, q.position, q.normal, radius.d2);
           // The photon that set the radius is left out (see Accumulator::radiance).
           out[q.point] = radius.d2 > 0 ? diffuseRadiance(sphere.sum - radius.share, q.kd, radius.d2) : Rgb();
           ++c.queries;
           c.photonsUsed += sphere.used;
-          c.photonsExamined += radius.farthest + 1;
+          c.photonsExamined += radius.examined;
           for (const ColumnRun& row : rows) c.photonsExamined += row.count;
           c.cellsVisited += uint32_t(rows.size());
         }

@@ -182,8 +182,10 @@ LUCENT_LANE_CLONES void sumPhotonRun(const PhotonColumns& c, uint32_t begin, uin
 
 void resizeColumns(PhotonColumns& columns, uint32_t count) {
   for (UninitializedVector<float>* column : {&columns.x, &columns.y, &columns.z, &columns.incomingX, &columns.incomingY,
-                                             &columns.incomingZ, &columns.r, &columns.g, &columns.b})
+                                             &columns.incomingZ, &columns.r, &columns.g, &columns.b}) {
     column->resize(size_t(count) + PhotonColumns::kPad);
+    std::fill(column->begin() + ptrdiff_t(count), column->end(), 0.0f);
+  }
 }
 
 void copyColumns(const PhotonColumns& from, uint32_t first, uint32_t count, PhotonColumns& to, uint32_t at) {
@@ -220,6 +222,7 @@ LUCENT_LANE_CLONES GrowingRadius growingRadius(const PhotonColumns& c, uint32_t 
   for (int j = 0; j < kPhotonLanes; ++j)
     if (farthest[j] > g.d2 || (farthest[j] == g.d2 && farthest[j] >= 0 && uint32_t(farthestAt[j]) < g.farthest))
       g.d2 = farthest[j], g.farthest = uint32_t(farthestAt[j]);
+  g.examined = std::min(i + kPhotonLanes, offered);
   // The block holding the k-th photon, one photon at a time: its entries come after the others.
   if (i < offered) {
     const Block blk = block(c, i, lanes.valid(), query);

@@ -19,7 +19,7 @@ namespace lucent {
 struct KnnGridSearch;
 
 // A map's listed photons as columns, padded with kPad zero entries so that eight photons can be
-// loaded from any position of the list.
+// loaded from any position of the list (the lanes past the end are masked out).
 struct PhotonColumns {
   static constexpr uint32_t kPad = 8;
   UninitializedVector<float> x, y, z;                          // position
@@ -60,7 +60,7 @@ PhotonRunTotals photonRunTotals(const PhotonLaneSums& sums);
 // Entries [first, first + count) of `from` appended to `to`'s first `at` entries (`to` holds at
 // least at + count + kPad entries).
 void copyColumns(const PhotonColumns& from, uint32_t first, uint32_t count, PhotonColumns& to, uint32_t at);
-// Sizes every column for `count` photons and the padding (entries left unwritten).
+// Sizes every column for `count` photons (entries kept or left unwritten) and the padding (zeros).
 void resizeColumns(PhotonColumns& columns, uint32_t count);
 
 // The growing radius of a search (examinePhotons in knn_grid.h) offered the first `offered` photons
@@ -72,6 +72,7 @@ struct GrowingRadius {
   float d2 = -1;
   uint32_t farthest = 0;
   Rgb share;
+  uint32_t examined = 0;  // entries read
 };
 GrowingRadius growingRadius(const PhotonColumns& c, uint32_t offered, Vec3 q, Vec3 n, float maxRadius2, uint32_t k);
 

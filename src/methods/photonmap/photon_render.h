@@ -62,13 +62,6 @@ void withPhotonMaps(const RenderPhotonMaps& maps, PhotonMapKind kind, F&& f) {
   }
 }
 
-// The estimate of a map that may be absent.
-template <class Map>
-Rgb estimateIfPresent(const Map* map, const EstimatePoint& q, const EstimateSettings& settings, PhotonDistance* heap,
-                      EstimateCounters& counters) {
-  return map ? estimateRadiance(*map, q, settings, heap, counters) : Rgb();
-}
-
 // Per shading point, the radiance each part of the estimate sends towards the camera (before the
 // point's camera-path weight).
 struct PointRadiance {

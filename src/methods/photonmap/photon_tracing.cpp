@@ -113,11 +113,13 @@ ProjectionMap projectionMap(const EmissionTarget& target, Vec3 x, const std::vec
       for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], u[a]), hi[a] = std::max(hi[a], u[a]);
     }
     // Every cell the projection's box touches, with a margin for the rounding of the projection.
+    // A box reaching outside the square (the cone's rounding) would be cut: no map then.
     int32_t first[2], last[2];
     for (int a = 0; a < 2; ++a) {
       const float margin = 1e-4f * map.extent;
-      first[a] = std::max(0, int32_t(std::floor((lo[a] - margin + map.extent) / side)));
-      last[a] = std::min(int32_t(map.resolution) - 1, int32_t(std::floor((hi[a] + margin + map.extent) / side)));
+      const float from = std::floor((lo[a] - margin + map.extent) / side), to = std::floor((hi[a] + margin + map.extent) / side);
+      if (!(from >= 0 && to < float(map.resolution))) return ProjectionMap{};
+      first[a] = int32_t(from), last[a] = int32_t(to);
     }
     for (int32_t cy = first[1]; cy <= last[1]; ++cy)
       for (int32_t cx = first[0]; cx <= last[0]; ++cx) marked[size_t(cy) * map.resolution + size_t(cx)] = 1;
@@ -166,7 +168,7 @@ PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonT
       const float uLight = rng.uniform();
       const Vec2 uPosition = rng.uniform2();
       const Vec2 uDirection = rng.uniform2();
-      const EmissionSample e = sampleEmission(scene, uLight, uPosition, uDirection, target, target ? rng.uniform() : 0);
+      const EmissionSample e = sampleEmission(scene, uLight, uPosition, uDirection, target, target ? rng.next() : 0);
       paths[i] = {e.ray, e.power * share, i, 1};
       emitted[i] = e.valid;
     }

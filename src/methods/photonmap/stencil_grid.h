@@ -29,10 +29,13 @@ struct StencilGrid {
   std::vector<uint32_t> storedList, firstStored;
   std::vector<Photon> listedPhotons;
   PhotonColumns columns;  // listedPhotons as columns, for the radiance estimate
-  // The stored photons again, in a sorted grid whose cells split each of this grid's into
-  // kSumGridSplit along x (along its rows): the estimate cell by cell (estimate_by_cell.h) sums a
-  // sphere's photons from rows trimmed to its chords, and a coarse stencil cell holds up to m^2
-  // photons. The search, and so the radius, stays this grid's.
+  // The stored photons again (a copy, with its own columns), in a sorted grid of kSumGridSplit
+  // times this grid's cells along x over the stored photons' bounds (not nested in this grid's
+  // cells, and coarsened like any grid beyond maxCells): the estimate cell by cell
+  // (estimate_by_cell.h) sums a sphere's photons from rows trimmed to its chords, and this grid's
+  // coarse cells hold up to m^2 photons each. The search, and so the radius, stays this grid's.
+  // Its build, a bitonic sort, is timed in build_map ("sum_grid"); stencil routing itself sorts
+  // nothing.
   static constexpr uint32_t kSumGridSplit = 8;
   SortedGrid sumGrid;
 
