@@ -273,6 +273,8 @@ class LaneRasterizer {
     for (uint32_t bits = withinSphereCone; bits != 0; bits &= bits - 1) {
       const int k = std::countr_zero(bits);
       const size_t p = pixelOf(k);
+      uint32_t& px = b_->pixels[p];
+      if (px <= packed) continue;  // a nearer node (or this one) holds the pixel: the test cannot change it
       const Vec3 dir = b_->worldDirection[p];
       const float cosine = dot(dir, node.axis), b = dot(pc, dir), cos2 = cosine * cosine;
       if (leaf) {
@@ -291,8 +293,7 @@ class LaneRasterizer {
           if (cos2 * pc2 + 2 * b * cosine * e + e * e > r2 * cos2) continue;
         }
       }
-      uint32_t& px = b_->pixels[p];
-      px = std::min(px, packed);
+      px = packed;
     }
   }
 
