@@ -102,25 +102,14 @@ struct ShellOrder {
     const Reach whole = Reach::whole(g);
     if (nextShell == 0) {
       // The shells that hold fewer than k photons between them: every query accepts all of those
-      // within its maximum radius before its k-th, in whatever order (as knn_grid.h's
-      // acceptedCube), so they are met as the rows of their box, not shell by shell. Sparse
-      // regions need a dozen shells before k photons.
-      int32_t lo[3], hi[3];
-      auto fewerThanK = [&](int32_t t) {
-        shellBox(whole, cell, t, lo, hi);
-        return map.cellCounts.count(lo, hi) < k;
-      };
-      int32_t yes = -1, no = lastShellOf(whole, cell) + 1;  // the last shell covers the grid
-      while (no - yes > 1) {
-        const int32_t mid = yes + (no - yes) / 2;
-        (fewerThanK(mid) ? yes : no) = mid;
-      }
-      if (yes >= 0) {
-        shellBox(whole, cell, yes, lo, hi);
-        for (int32_t z = lo[2]; z <= hi[2]; ++z)
-          for (int32_t y = lo[1]; y <= hi[1]; ++y) visitRun(map.rowPhotons(lo[0], hi[0], y, z), s, record);
-        nextShell = yes + 1;
-        covers = gapBeyondShell(g, cell, yes) > maxRadius || no > lastShellOf(whole, cell);
+      // within its maximum radius before its k-th, in whatever order, so they are met as the rows
+      // of their box, not shell by shell (knn_grid.h's acceptedCube, here with no maximum radius:
+      // the count alone decides). Sparse regions need a dozen shells before k photons.
+      const int32_t cube = acceptedCube(map, beginKnnGrid(Vec3(), k, kInf), cell, INT32_MAX);
+      if (cube >= 0) {
+        exploreCube(map, s, cell, cube, record);
+        nextShell = cube + 1;
+        covers = gapBeyondShell(g, cell, cube) > maxRadius || cube >= lastShellOf(whole, cell);
       }
     }
     while (s.found < want && !covers) {
@@ -151,19 +140,13 @@ struct ShellOrder {
 // of cells that the sphere reaches, each trimmed to the sphere's chord as exploreRow trims it.
 template <class Map>
 void sphereRows(const Map& map, Vec3 p, float r2, std::vector<ColumnRun>& rows) {
-  const UniformGrid& g = map.grid;
   knn_grid_detail::Reach reach;
-  reach.update(g, p, r2);
+  reach.update(map.grid, p, r2);
   rows.clear();
   for (int32_t z = reach.lo[2]; z <= reach.hi[2]; ++z)
     for (int32_t y = reach.lo[1]; y <= reach.hi[1]; ++y) {
-      const float dy = g.axisGap(1, y, p.y), dz = g.axisGap(2, z, p.z);
-      const float rest = r2 - dy * dy - dz * dz;
-      if (rest < 0) continue;
-      const float half = std::sqrt(rest) * 1.00001f + g.slack;
-      const int32_t x0 = std::max(reach.lo[0], g.cellOf(Vec3(p.x - half, p.y, p.z)).x);
-      const int32_t x1 = std::min(reach.hi[0], g.cellOf(Vec3(p.x + half, p.y, p.z)).x);
-      if (x0 > x1) continue;
+      int32_t x0 = reach.lo[0], x1 = reach.hi[0];
+      if (!knn_grid_detail::chordOfRow(map.grid, p, r2, y, z, x0, x1)) continue;
       const CellPhotons run = map.rowPhotons(x0, x1, y, z);
       if (run.count > 0) rows.push_back({run.first, run.count});
     }

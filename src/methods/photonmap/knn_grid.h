@@ -197,6 +197,20 @@ void exploreCell(const Map& map, KnnGridSearch& s, CellCoord cell, Visit& visit)
   visitRun(photons, s, visit);
 }
 
+// Cells x0..x1 of the row (y, z) trimmed to those that the chord of the sphere of squared radius r2
+// about p through the row reaches; false when none is left.
+inline bool chordOfRow(const UniformGrid& g, Vec3 p, float r2, int32_t y, int32_t z, int32_t& x0, int32_t& x1) {
+  const float dy = g.axisGap(1, y, p.y), dz = g.axisGap(2, z, p.z);
+  const float rest = r2 - dy * dy - dz * dz;
+  if (rest < 0) return false;
+  const float half = std::sqrt(rest) * 1.00001f + g.slack;  // a margin far above the rounding of d2
+  const float first = std::floor((p.x - half - g.lo[0]) * g.invCellSize[0]);
+  const float last = std::floor((p.x + half - g.lo[0]) * g.invCellSize[0]);
+  if (first > float(x0)) x0 = first > float(x1) ? x1 + 1 : int32_t(first);
+  if (last < float(x1)) x1 = last < float(x0) ? x0 - 1 : int32_t(last);
+  return x0 <= x1;
+}
+
 // A row of cells (x0..x1, y, z), first trimmed to the cells that the acceptance sphere's chord
 // through the row reaches. Where the map keeps a row's photons contiguous in cell order (the sorted
 // and stencil grids), they are read in one run: the same photons in the same order as cell by cell,
@@ -209,19 +223,8 @@ void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_
     // reusing this read where the chord trims nothing made the RING estimate 20% slower, 12e1eda.)
     if (map.rowPhotons(x0, x1, y, z).count == 0) return;
   }
-  const UniformGrid& g = map.grid;
   const float limit2 = acceptanceLimit2(s);
-  if (limit2 < kInf) {
-    const float dy = g.axisGap(1, y, s.position.y), dz = g.axisGap(2, z, s.position.z);
-    const float rest = limit2 - dy * dy - dz * dz;
-    if (rest < 0) return;
-    const float half = std::sqrt(rest) * 1.00001f + g.slack;  // a margin far above the rounding of d2
-    const float first = std::floor((s.position.x - half - g.lo[0]) * g.invCellSize[0]);
-    const float last = std::floor((s.position.x + half - g.lo[0]) * g.invCellSize[0]);
-    if (first > float(x0)) x0 = first > float(x1) ? x1 + 1 : int32_t(first);
-    if (last < float(x1)) x1 = last < float(x0) ? x0 - 1 : int32_t(last);
-    if (x0 > x1) return;
-  }
+  if (limit2 < kInf && !chordOfRow(map.grid, s.position, limit2, y, z, x0, x1)) return;
   if constexpr (kReadsRuns<Map>) {
     visitRun(map.rowPhotons(x0, x1, y, z), s, visit);
   } else {
