@@ -22,6 +22,9 @@ namespace {
 // 0.6 degrees.
 constexpr float kHorizonSlope = 0.01f;
 
+// Packet visits with at most this many active lanes test them one at a time.
+constexpr int kFewLanes = 2;
+
 struct FloatNodes {
   const TraversalNode* nodes;
   TraversalNode operator()(uint32_t i) const { return nodes[i]; }
@@ -163,59 +166,82 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
 // The lanes' results are returned by value: stores to the return slot cannot alias the gathered
 // loads, so the loops vectorize. The tests' precedence is applied last first, one comparison per select
 // (GCC vectorizes chained selects, not selects on combined conditions).
+// One lane's tests, inlined into the loops over every lane below and into the loop over a few
+// active lanes (classifyActiveLanes): the same IEEE operations either way.
+struct PixelTables {
+  const float* __restrict cdfs;
+  const float* __restrict solidAngle;
+  const float* __restrict spacing;
+};
+
+[[gnu::always_inline]] inline void classifyLeafLane(const PacketLanes& __restrict L, const PixelTables& t,
+                                                    const LaneNode& __restrict n, int l, LaneResults& r) {
+  const float discArea = kPi * n.radius * n.radius;
+  const LaneGeometry g = laneGeometry(L, t.cdfs, n, l, r);
+  const float d = g.d;
+  const int32_t at = g.at;
+  const float facing = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz);
+  const float solidAngle = discArea * facing / (g.d2 * d);
+  int32_t outcome = g.lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
+  outcome = solidAngle > t.solidAngle[at] ? kListLeaf : outcome;
+  outcome = n.radius > d * t.spacing[at] ? kListLeaf : outcome;
+  // Also every lane that no normal of the cone faces (their cosine to the axis is at most -coneSin).
+  outcome = facing <= d * n.coneSin + L.selfDistance[l] ? kSkipSubtree : outcome;
+  r.outcome[l] = g.height <= -n.radius ? kSkipSubtree : outcome;
+}
+
+[[gnu::always_inline]] inline void classifyInteriorLane(const PacketLanes& __restrict L, const PixelTables& t,
+                                                        const LaneNode& __restrict n, int l, LaneResults& r) {
+  const float twoPi = 2.0f * kPi;
+  const LaneGeometry g = laneGeometry(L, t.cdfs, n, l, r);
+  const float d = g.d, invD = g.invD, height = g.height;
+  const int32_t at = g.at;
+  const float cosToAxis = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz) * invD;
+  const float sinA = g.sinRadius, cosA = g.cosRadius;
+  const float horizon = L.selfDistance[l] + kHorizonSlope * (d - n.radius);
+  const float cosTilt = std::abs(n.ax * L.nx[l] + n.ay * L.ny[l] + n.az * L.nz[l]);
+  const float sinTilt = std::sqrt(std::max(0.0f, 1.0f - cosTilt * cosTilt));
+  const float cosAll = cosTilt * n.coneCos - sinTilt * n.coneSin;  // cos(tilt + beta)
+  const float sinAll = cosAll > 0 ? n.coneSin * cosTilt + n.coneCos * sinTilt : 1.0f;
+  const float bestFacing = laneBestFacing(cosToAxis, n.coneSin, n.coneCos);
+  const float solidAngle = std::min(twoPi * (1.0f - cosA), n.area * bestFacing * invD * invD);
+  int32_t outcome = g.lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
+  outcome = bestFacing > 0 ? outcome : kSkipSubtree;
+  outcome = solidAngle > t.solidAngle[at] ? kDescend : outcome;
+  outcome = n.radius > d * t.spacing[at] ? kDescend : outcome;
+  const int32_t coplanar = std::abs(height) + n.radius * sinAll <= horizon ? kSkipSubtree : outcome;
+  outcome = std::abs(height) <= horizon ? coplanar : outcome;
+  const int32_t backFacing = cosToAxis < -(sinA * n.coneCos + cosA * n.coneSin) ? kSkipSubtree : outcome;
+  outcome = cosA * n.coneCos - sinA * n.coneSin > 0 ? backFacing : outcome;
+  outcome = d <= n.radius ? kDescend : outcome;
+  r.outcome[l] = height <= -n.radius ? kSkipSubtree : outcome;
+}
+
 LUCENT_LANE_CLONES LaneResults classifyLeaf(const PacketLanes& __restrict L, const LaneNode& __restrict n) {
   LaneResults r;
-  const float discArea = kPi * n.radius * n.radius;
-  const float* __restrict cdfs = L.cdfs;
-  const float* __restrict pixelSolidAngle = L.solidAngle;
-  const float* __restrict pixelSpacing = L.spacing;
-  for (int l = 0; l < kGatherPacket; ++l) {
-    const LaneGeometry g = laneGeometry(L, cdfs, n, l, r);
-    const float d = g.d;
-    const int32_t at = g.at;
-    const float facing = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz);
-    const float solidAngle = discArea * facing / (g.d2 * d);
-    int32_t outcome = g.lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
-    outcome = solidAngle > pixelSolidAngle[at] ? kListLeaf : outcome;
-    outcome = n.radius > d * pixelSpacing[at] ? kListLeaf : outcome;
-    // Also every lane that no normal of the cone faces (their cosine to the axis is at most -coneSin).
-    outcome = facing <= d * n.coneSin + L.selfDistance[l] ? kSkipSubtree : outcome;
-    r.outcome[l] = g.height <= -n.radius ? kSkipSubtree : outcome;
-  }
+  const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
+  for (int l = 0; l < kGatherPacket; ++l) classifyLeafLane(L, t, n, l, r);
   return r;
 }
 
 LUCENT_LANE_CLONES LaneResults classifyInterior(const PacketLanes& __restrict L, const LaneNode& __restrict n) {
   LaneResults r;
-  const float twoPi = 2.0f * kPi;
-  const float* __restrict cdfs = L.cdfs;
-  const float* __restrict pixelSolidAngle = L.solidAngle;
-  const float* __restrict pixelSpacing = L.spacing;
-  for (int l = 0; l < kGatherPacket; ++l) {
-    const LaneGeometry g = laneGeometry(L, cdfs, n, l, r);
-    const float d = g.d, invD = g.invD, height = g.height;
-    const int32_t at = g.at;
-    const float cosToAxis = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz) * invD;
-    const float sinA = g.sinRadius, cosA = g.cosRadius;
-    const float horizon = L.selfDistance[l] + kHorizonSlope * (d - n.radius);
-    const float cosTilt = std::abs(n.ax * L.nx[l] + n.ay * L.ny[l] + n.az * L.nz[l]);
-    const float sinTilt = std::sqrt(std::max(0.0f, 1.0f - cosTilt * cosTilt));
-    const float cosAll = cosTilt * n.coneCos - sinTilt * n.coneSin;  // cos(tilt + beta)
-    const float sinAll = cosAll > 0 ? n.coneSin * cosTilt + n.coneCos * sinTilt : 1.0f;
-    const float bestFacing = laneBestFacing(cosToAxis, n.coneSin, n.coneCos);
-    const float solidAngle = std::min(twoPi * (1.0f - cosA), n.area * bestFacing * invD * invD);
-    int32_t outcome = g.lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
-    outcome = bestFacing > 0 ? outcome : kSkipSubtree;
-    outcome = solidAngle > pixelSolidAngle[at] ? kDescend : outcome;
-    outcome = n.radius > d * pixelSpacing[at] ? kDescend : outcome;
-    const int32_t coplanar = std::abs(height) + n.radius * sinAll <= horizon ? kSkipSubtree : outcome;
-    outcome = std::abs(height) <= horizon ? coplanar : outcome;
-    const int32_t backFacing = cosToAxis < -(sinA * n.coneCos + cosA * n.coneSin) ? kSkipSubtree : outcome;
-    outcome = cosA * n.coneCos - sinA * n.coneSin > 0 ? backFacing : outcome;
-    outcome = d <= n.radius ? kDescend : outcome;
-    r.outcome[l] = height <= -n.radius ? kSkipSubtree : outcome;
-  }
+  const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
+  for (int l = 0; l < kGatherPacket; ++l) classifyInteriorLane(L, t, n, l, r);
   return r;
+}
+
+// The active lanes alone, one after the other: a packet's lanes part ways near their own gather
+// points, where a quarter of the nodes are visited by one lane, and testing all sixteen costs more
+// than testing the few.
+void classifyActiveLanes(const PacketLanes& __restrict L, const LaneNode& __restrict n, bool leaf, uint32_t active,
+                         LaneResults& r) {
+  const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
+  for (uint32_t m = active; m != 0; m &= m - 1) {
+    const int l = std::countr_zero(m);
+    if (leaf) classifyLeafLane(L, t, n, l, r);
+    else classifyInteriorLane(L, t, n, l, r);
+  }
 }
 
 // One lane's micro-buffer: splats, the post-traversal list and its ray casting.
@@ -562,7 +588,10 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
     const TraversalNode node = nodes(i);
     const LaneNode lane{node.center.x, node.center.y, node.center.z, node.radius, node.axis.x,
                         node.axis.y,   node.axis.z,   node.coneSin,  node.coneCos, areas[i]};
-    const LaneResults r = isLeafNode(i, leafCount) ? classifyLeaf(lanes, lane) : classifyInterior(lanes, lane);
+    const bool leaf = isLeafNode(i, leafCount);
+    LaneResults r;
+    if (std::popcount(active) <= kFewLanes) classifyActiveLanes(lanes, lane, leaf, active, r);
+    else r = leaf ? classifyLeaf(lanes, lane) : classifyInterior(lanes, lane);
     ++packetVisits;
     uint32_t descend = 0;
     for (uint32_t m = active; m != 0; m &= m - 1) {
