@@ -255,14 +255,17 @@ class LaneRasterizer {
         b_(&buffer), c_(&counters) {}
 
   void start() {
-    b_->pixels.assign(size_t(m_->width) * m_->height, kEmptyMicroPixel);
     for (size_t p = 0; p < m_->direction.size(); ++p) b_->worldDirection[p] = g_->frame.toWorld(m_->direction[p]);
     const int stride = m_->width + 2;
+    std::fill(b_->grid.begin(), b_->grid.end(), 0u);  // the border: nearer than any node, never written
     for (int y = 0; y < m_->height; ++y)
       for (int x = 0; x < m_->width; ++x) {
-        const Vec3 d = m_->direction[size_t(y * m_->width + x)];
+        const size_t p = size_t(y * m_->width + x);
+        const Vec3 d = m_->direction[p], w = b_->worldDirection[p];
         const size_t q = size_t((y + 1) * stride + x + 1);
         b_->localX[q] = d.x, b_->localY[q] = d.y, b_->localZ[q] = d.z;
+        b_->worldX[q] = w.x, b_->worldY[q] = w.y, b_->worldZ[q] = w.z;
+        b_->grid[q] = kEmptyMicroPixel;
       }
     b_->listed = 0;
     ++c_->buffers;
@@ -271,6 +274,10 @@ class LaneRasterizer {
   void finish() {
     if (b_->listed > 0) castRays();
     c_->buffersRayCast += listedAny_;
+    const int stride = m_->width + 2;
+    b_->pixels.resize(size_t(m_->width) * m_->height);
+    for (int y = 0; y < m_->height; ++y)
+      std::copy_n(b_->grid.begin() + (y + 1) * stride + 1, m_->width, b_->pixels.begin() + y * m_->width);
   }
 
   // A node of at most a pixel's solid angle goes to the pixels of its 3 x 3 neighbourhood whose
@@ -293,33 +300,49 @@ class LaneRasterizer {
     const bool leaf = index >= leafCount_;
     const float thickness = thickness_[index];
     const bool flat = thickness < node.radius;  // else the slab cuts nothing off the sphere
-    const int w = m_->width;
-    auto pixelOf = [&](int k) { return size_t((y + k / 4 - 1) * w + x + k % 4 - 1); };
-    // The tests are multiplied through by cosine^2 (no division per pixel).
-    for (uint32_t bits = withinSphereCone; bits != 0; bits &= bits - 1) {
-      const int k = std::countr_zero(bits);
-      const size_t p = pixelOf(k);
-      uint32_t& px = b_->pixels[p];
-      if (px <= packed) continue;  // a nearer node (or this one) holds the pixel: the test cannot change it
-      const Vec3 dir = b_->worldDirection[p];
-      const float cosine = dot(dir, node.axis), b = dot(pc, dir), cos2 = cosine * cosine;
+    // Each row of the 3 x 3 pixels four at a time (the fourth column is written back unchanged),
+    // without branches: which of them pass is data, not control flow. The tests are multiplied
+    // through by cosine^2 (no division per pixel). A pixel that a nearer node (or this one) holds
+    // keeps it: min(pixel, packed).
+    using Floats = float __attribute__((vector_size(16)));
+    using Ints = int32_t __attribute__((vector_size(16)));
+    using Words = uint32_t __attribute__((vector_size(16)));
+    const size_t stride = size_t(m_->width) + 2;
+    const Ints column = {1, 2, 4, 0};
+    const Ints signBit = Ints{} + int32_t(0x80000000u);
+    const Ints thicknessBits = Ints{} + std::bit_cast<int32_t>(thickness);
+    const float minusSelf = -g_->selfDistance;
+    for (int r = 0; r < 3; ++r) {
+      const size_t q = size_t(y + r) * stride + size_t(x);  // (x - 1, y + r - 1) with the border
+      Floats dx, dy, dz;
+      Words pixel;
+      std::memcpy(&dx, b_->worldX.data() + q, sizeof dx);
+      std::memcpy(&dy, b_->worldY.data() + q, sizeof dy);
+      std::memcpy(&dz, b_->worldZ.data() + q, sizeof dz);
+      std::memcpy(&pixel, b_->grid.data() + q, sizeof pixel);
+      const Floats cosine = dx * node.axis.x + dy * node.axis.y + dz * node.axis.z;
+      const Floats b = pc.x * dx + pc.y * dy + pc.z * dz;
+      const Floats cos2 = cosine * cosine;
+      Ints hit;
       if (leaf) {
         // The ray meets the disc's plane at t = height / -cosine, beyond the receiver's own
         // surface, within the radius: |pc cosine - dir height| <= r |cosine|.
-        if (!(cosine < 0) || !(height > -g_->selfDistance * cosine)) continue;
-        const Vec3 q = pc * cosine - dir * height;
-        if (dot(q, q) > r2 * cos2) continue;
+        const Floats qx = pc.x * cosine - dx * height, qy = pc.y * cosine - dy * height, qz = pc.z * cosine - dz * height;
+        hit = (cosine < 0) & (height > minusSelf * cosine) & ~(qx * qx + qy * qy + qz * qz > r2 * cos2);
       } else {
         // |pc + t dir|^2 = pc2 + 2 b t + t^2 is least at t = -b (the ray meets the sphere: the
         // cone test), and over the slab's stretch of the ray at t = -b if the slab holds that
         // point, else at the slab's face nearer to it, where t cosine = e.
-        const float g = height - b * cosine;  // signed distance from the plane at t = -b
-        if (flat && std::abs(g) > thickness) {
-          const float e = std::copysign(thickness, g) - height;
-          if (cos2 * pc2 + 2 * b * cosine * e + e * e > r2 * cos2) continue;
-        }
+        const Floats g = height - b * cosine;  // signed distance from the plane at t = -b
+        const Floats e = (Floats)(thicknessBits | ((Ints)g & signBit)) - height;  // copysign(thickness, g) - height
+        const Floats absG = (Floats)((Ints)g & ~signBit);
+        const Ints outside = (absG > thickness) & (cos2 * pc2 + 2 * b * cosine * e + e * e > r2 * cos2);
+        hit = flat ? ~outside : Ints{} - 1;
       }
-      px = packed;
+      const Ints within = ((Ints{} + int32_t(withinSphereCone >> (4 * r))) & column) != 0;
+      const Words nearer = pixel > packed;
+      pixel = (Words)(hit & within & (Ints)nearer) != 0 ? Words{} + packed : pixel;
+      std::memcpy(b_->grid.data() + q, &pixel, sizeof pixel);
     }
   }
 
@@ -459,7 +482,8 @@ class LaneRasterizer {
     }
     for (size_t k = 0; k < used; ++k)
       if (nearestT[k] < kInf) {
-        uint32_t& px = b_->pixels[b_->rayPixel[k]];
+        const int pixel = b_->rayPixel[k];
+        uint32_t& px = b_->grid[size_t((pixel / m_->width + 1) * (m_->width + 2) + pixel % m_->width + 1)];
         px = std::min(px, packMicroPixel(s_->depth.code(nearestT[k]), nearestNode[k]));
       }
     b_->listed = 0;
@@ -498,7 +522,8 @@ void MicroBuffer::resize(int bufferSide) {
   dirX.resize(n), dirY.resize(n), dirZ.resize(n), nearestT.resize(n), nearestNode.resize(n), rayPixel.resize(n);
   worldDirection.resize(n);
   const size_t padded = size_t(side + 2) * size_t(side + 2) + 4;
-  for (auto* v : {&localX, &localY, &localZ}) v->assign(padded, 0.0f);
+  for (auto* v : {&localX, &localY, &localZ, &worldX, &worldY, &worldZ}) v->assign(padded, 0.0f);
+  grid.assign(padded, 0u);
   const size_t tiles = size_t((side + kRayTile - 1) / kRayTile) * size_t((side + kRayTile - 1) / kRayTile);
   tileBegin.resize(tiles + 1);
   for (auto* v : {&tileAxisX, &tileAxisY, &tileAxisZ, &tileCos, &tileSin}) v->resize(tiles);

@@ -38,6 +38,10 @@ struct MicroBuffer {
   // pixel (rows of side + 2, and a few floats more), so that a splat reads the rows of its 3 x 3
   // pixels four floats at a time without bounds checks.
   std::vector<float> localX, localY, localZ;
+  // The same for the world-space directions, and the pixels themselves while the buffer is
+  // rendered (copied to `pixels` when it is done; the border holds 0, nearer than any node).
+  std::vector<float> worldX, worldY, worldZ;
+  std::vector<uint32_t> grid;
   // Per tile: its rays [tileBegin[i], tileBegin[i + 1]) and the cone bounding their directions.
   std::vector<uint32_t> tileBegin;
   std::vector<float> tileAxisX, tileAxisY, tileAxisZ, tileCos, tileSin;
