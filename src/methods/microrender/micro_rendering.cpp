@@ -255,13 +255,12 @@ class LaneRasterizer {
         b_(&buffer), c_(&counters) {}
 
   void start() {
-    for (size_t p = 0; p < m_->direction.size(); ++p) b_->worldDirection[p] = g_->frame.toWorld(m_->direction[p]);
     const int stride = m_->width + 2;
     std::fill(b_->grid.begin(), b_->grid.end(), 0u);  // the border: nearer than any node, never written
     for (int y = 0; y < m_->height; ++y)
       for (int x = 0; x < m_->width; ++x) {
         const size_t p = size_t(y * m_->width + x);
-        const Vec3 d = m_->direction[p], w = b_->worldDirection[p];
+        const Vec3 d = m_->direction[p], w = g_->frame.toWorld(d);
         const size_t q = size_t((y + 1) * stride + x + 1);
         b_->localX[q] = d.x, b_->localY[q] = d.y, b_->localZ[q] = d.z;
         b_->worldX[q] = w.x, b_->worldY[q] = w.y, b_->worldZ[q] = w.z;
@@ -395,7 +394,8 @@ class LaneRasterizer {
           for (int x = tx * kRayTile; x < std::min(m_->width, (tx + 1) * kRayTile); ++x) {
             const int pixel = y * m_->width + x;
             if (m_->direction[size_t(pixel)] == Vec3{}) continue;  // unused: no direction
-            const Vec3 w = b_->worldDirection[size_t(pixel)];
+            const size_t q = size_t((y + 1) * (m_->width + 2) + x + 1);
+            const Vec3 w{b_->worldX[q], b_->worldY[q], b_->worldZ[q]};
             b_->dirX[k] = w.x, b_->dirY[k] = w.y, b_->dirZ[k] = w.z;
             b_->rayPixel[k++] = uint16_t(pixel);
             sum += w;
@@ -520,7 +520,6 @@ void MicroBuffer::resize(int bufferSide) {
   pixels.resize(n);
   postTraversal.resize(n);
   dirX.resize(n), dirY.resize(n), dirZ.resize(n), nearestT.resize(n), nearestNode.resize(n), rayPixel.resize(n);
-  worldDirection.resize(n);
   const size_t padded = size_t(side + 2) * size_t(side + 2) + 4;
   for (auto* v : {&localX, &localY, &localZ, &worldX, &worldY, &worldZ}) v->assign(padded, 0.0f);
   grid.assign(padded, 0u);

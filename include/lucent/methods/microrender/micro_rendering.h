@@ -33,13 +33,12 @@ struct MicroBuffer {
   std::vector<float> dirX, dirY, dirZ, nearestT;
   std::vector<uint32_t> nearestNode;
   std::vector<uint16_t> rayPixel;  // the pixel of each ray
-  std::vector<Vec3> worldDirection;  // per pixel, its sample direction in world space (splats, rays)
   // Per pixel, its sample direction in the local frame, as three arrays with a border of one empty
   // pixel (rows of side + 2, and a few floats more), so that a splat reads the rows of its 3 x 3
   // pixels four floats at a time without bounds checks.
   std::vector<float> localX, localY, localZ;
-  // The same for the world-space directions, and the pixels themselves while the buffer is
-  // rendered (copied to `pixels` when it is done; the border holds 0, nearer than any node).
+  // The same for the world-space directions (splats' exact tests, rays), and the pixels themselves
+  // while the buffer is rendered (copied to `pixels` when it is done; the border holds 0, nearer than any node).
   std::vector<float> worldX, worldY, worldZ;
   std::vector<uint32_t> grid;
   // Per tile: its rays [tileBegin[i], tileBegin[i + 1]) and the cone bounding their directions.
