@@ -1,9 +1,10 @@
 // Micro-rendering (Ritschel et al. 2009): the mappings (forward and inverse, solid angles, the warped
-// directions' distribution), coverage of micro-buffers with and without ray casting, packed against
-// float nodes, packets of gather points against each point alone (a packet of one: the node tests
-// themselves are checked against physics by the furnaces and the path tracer, not against a scalar
-// copy), gathering against analytic answers (a uniform radiance field, closed furnaces), and the
-// renderer against the path tracer limited to one indirect bounce.
+// directions' distribution), coverage of micro-buffers with and without ray casting, each pixel's
+// node against its sample ray, packed against float nodes, packets of gather points against each
+// point alone (a packet of one tests its lane alone, classifyActiveLanes, while a packet's vector
+// loop tests all; the node tests themselves are checked against physics by the furnaces and the
+// path tracer), gathering against analytic answers (a uniform radiance field, closed furnaces), and
+// the renderer against the path tracer limited to one indirect bounce.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -313,6 +314,67 @@ TEST_CASE("A plane seen edge-on covers no direction that passes below it", "[mic
     REQUIRE(below > 1000);
     REQUIRE(coveredBelow == 0);
     REQUIRE(coveredAbove >= 0.99 * above);  // the horizon's neighbourhood stays covered
+  }
+}
+
+TEST_CASE("Every pixel of a micro-buffer shows a node that its ray meets", "[microrender]") {
+  // What a splat or a ray cast puts in a pixel, checked in double precision against the pixel's
+  // sample ray from the gather point: a leaf's one-sided disc, or an interior node's bounding sphere
+  // within its slab (MicroHierarchy::thickness). Points on the Cornell box's walls and blocks, both
+  // mappings, a diffuse and a glossy receiver.
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
+  const struct {
+    Vec3 position, normal;
+  } sites[] = {{{278, 0, 278}, {0, 1, 0}},  {{100, 0, 450}, {0, 1, 0}},   {{278, 300, 559.2f}, {0, 0, -1}},
+               {{1, 200, 300}, {1, 0, 0}},  {{200, 165, 170}, {0, 1, 0}}, {{555, 100, 100}, {-1, 0, 0}},
+               {{300, 548.7f, 300}, {0, -1, 0}}};
+  const SurfaceBsdf bsdfs[] = {diffuseBsdf(Rgb(0.7f)), phongBsdf(Rgb(0.2f), Rgb(0.6f), 30)};
+  for (const MappingKind kind : {MappingKind::Nusselt, MappingKind::Warped}) {
+    const GatherSetup s(scene, 1u << 13, NodeEncoding::Float, kind, true, unitRadiance);
+    const uint32_t leafCount = s.hierarchy.leafCount;
+    size_t leafPixels = 0, interiorPixels = 0;
+    for (size_t site = 0; site < std::size(sites); ++site)
+      for (const SurfaceBsdf& bsdf : bsdfs) {
+        GatherScratch scratch;
+        Rng rng(11, site);
+        const Vec3 p = sites[site].position, n = sites[site].normal;
+        gatherAt(s.ctx, p, n, normalize(n + Vec3{0.3f, 0.2f, -0.4f}), bsdf, rng, s.radiance, scratch);
+        const GatherLane& lane = scratch.lanes[0];
+        for (const uint16_t i : lane.mapping.used) {
+          const uint32_t px = lane.buffer.pixels[i];
+          if (px == kEmptyMicroPixel) continue;
+          const uint32_t index = microPixelNode(px);
+          const TraversalNode& node = s.micro.floatNodes[index];
+          const Vec3 w = lane.point.frame.toWorld(lane.mapping.direction[i]);
+          const double wx = w.x, wy = w.y, wz = w.z;
+          const double ax = node.axis.x, ay = node.axis.y, az = node.axis.z, r = node.radius;
+          // From the node's centre to the gather point.
+          const double qx = double(p.x) - node.center.x, qy = double(p.y) - node.center.y, qz = double(p.z) - node.center.z;
+          const double cosine = wx * ax + wy * ay + wz * az, height = qx * ax + qy * ay + qz * az;
+          INFO("mapping " << int(kind) << ", site " << site << ", pixel " << i << ", node " << index);
+          if (index >= leafCount) {
+            ++leafPixels;
+            REQUIRE(cosine < 0);  // the disc's front
+            const double t = height / -cosine;
+            REQUIRE(t > 0);
+            const double hx = qx + t * wx, hy = qy + t * wy, hz = qz + t * wz;
+            REQUIRE(std::sqrt(hx * hx + hy * hy + hz * hz) <= r * (1 + 1e-3));
+          } else {
+            ++interiorPixels;
+            // The ray's stretch [t0, t1] inside the sphere, and the least distance from the node's
+            // plane along it.
+            const double b = qx * wx + qy * wy + qz * wz, c = qx * qx + qy * qy + qz * qz - r * r;
+            REQUIRE(b * b - c >= -2e-3 * r * r);
+            const double root = std::sqrt(std::max(0.0, b * b - c)), t0 = -b - root, t1 = -b + root;
+            const double f0 = height + t0 * cosine, f1 = height + t1 * cosine;
+            const double nearest = f0 * f1 <= 0 ? 0.0 : std::min(std::abs(f0), std::abs(f1));
+            REQUIRE(nearest <= s.micro.thickness[index] + 1e-3 * r);
+          }
+        }
+      }
+    INFO("mapping " << int(kind) << ": " << leafPixels << " leaf and " << interiorPixels << " interior pixels");
+    REQUIRE(leafPixels > 1000);
+    REQUIRE(interiorPixels > 1000);
   }
 }
 

@@ -143,6 +143,13 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
   return {vx, vy, vz, height, d2, d, invD, lz, sinRadius, cosRadius, L.pixelBase[l] + pixel.row * L.side + pixel.column};
 }
 
+// What the tests read of the lanes' mappings (PacketLanes).
+struct PixelTables {
+  const float* __restrict cdfs;
+  const float* __restrict solidAngle;
+  const float* __restrict spacing;
+};
+
 // 2.2 "Point Hierarchy Cut", one node against every lane, as loops over the lanes that GCC
 // vectorizes (selects, no branches; LUCENT_LANE_CLONES). The tests, in their order of precedence:
 //  - below the tangent plane altogether: skip;
@@ -163,17 +170,10 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
 //  - at most a pixel: splat, unless the centre lies in the tangent plane or below it (nodes of the
 //    receiver's own plane straddle it: no ray from the receiver meets them) or no normal of the cone
 //    faces the receiver.
-// The lanes' results are returned by value: stores to the return slot cannot alias the gathered
-// loads, so the loops vectorize. The tests' precedence is applied last first, one comparison per select
-// (GCC vectorizes chained selects, not selects on combined conditions).
-// One lane's tests, inlined into the loops over every lane below and into the loop over a few
-// active lanes (classifyActiveLanes): the same IEEE operations either way.
-struct PixelTables {
-  const float* __restrict cdfs;
-  const float* __restrict solidAngle;
-  const float* __restrict spacing;
-};
-
+// The tests' precedence is applied last first, one comparison per select (GCC vectorizes chained
+// selects, not selects on combined conditions). One lane's tests are inlined into the loops over
+// every lane (classifyLeaf, classifyInterior) and into the loop over a few active lanes
+// (classifyActiveLanes): the same IEEE operations either way.
 [[gnu::always_inline]] inline void classifyLeafLane(const PacketLanes& __restrict L, const PixelTables& t,
                                                     const LaneNode& __restrict n, int l, LaneResults& r) {
   const float discArea = kPi * n.radius * n.radius;
@@ -217,6 +217,8 @@ struct PixelTables {
   r.outcome[l] = height <= -n.radius ? kSkipSubtree : outcome;
 }
 
+// The lanes' results are returned by value: stores to the return slot cannot alias the gathered
+// loads, so the loops vectorize.
 LUCENT_LANE_CLONES LaneResults classifyLeaf(const PacketLanes& __restrict L, const LaneNode& __restrict n) {
   LaneResults r;
   const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
@@ -255,13 +257,11 @@ class LaneRasterizer {
         b_(&buffer), c_(&counters) {}
 
   void start() {
-    const int stride = m_->width + 2;
-    std::fill(b_->grid.begin(), b_->grid.end(), 0u);  // the border: nearer than any node, never written
     for (int y = 0; y < m_->height; ++y)
       for (int x = 0; x < m_->width; ++x) {
         const size_t p = size_t(y * m_->width + x);
         const Vec3 d = m_->direction[p], w = g_->frame.toWorld(d);
-        const size_t q = size_t((y + 1) * stride + x + 1);
+        const size_t q = gridIndex(x, y);
         b_->localX[q] = d.x, b_->localY[q] = d.y, b_->localZ[q] = d.z;
         b_->worldX[q] = w.x, b_->worldY[q] = w.y, b_->worldZ[q] = w.z;
         b_->grid[q] = kEmptyMicroPixel;
@@ -273,10 +273,9 @@ class LaneRasterizer {
   void finish() {
     if (b_->listed > 0) castRays();
     c_->buffersRayCast += listedAny_;
-    const int stride = m_->width + 2;
     b_->pixels.resize(size_t(m_->width) * m_->height);
     for (int y = 0; y < m_->height; ++y)
-      std::copy_n(b_->grid.begin() + (y + 1) * stride + 1, m_->width, b_->pixels.begin() + y * m_->width);
+      std::copy_n(b_->grid.begin() + ptrdiff_t(gridIndex(0, y)), m_->width, b_->pixels.begin() + y * m_->width);
   }
 
   // A node of at most a pixel's solid angle goes to the pixels of its 3 x 3 neighbourhood whose
@@ -306,7 +305,7 @@ class LaneRasterizer {
     using Floats = float __attribute__((vector_size(16)));
     using Ints = int32_t __attribute__((vector_size(16)));
     using Words = uint32_t __attribute__((vector_size(16)));
-    const size_t stride = size_t(m_->width) + 2;
+    const size_t stride = gridStride();
     const Ints column = {1, 2, 4, 0};
     const Ints signBit = Ints{} + int32_t(0x80000000u);
     const Ints thicknessBits = Ints{} + std::bit_cast<int32_t>(thickness);
@@ -356,13 +355,17 @@ class LaneRasterizer {
   }
 
  private:
+  // Pixel (x, y) in the padded arrays (localX, worldX, grid: rows of width + 2 with a border).
+  size_t gridStride() const { return size_t(m_->width) + 2; }
+  size_t gridIndex(int x, int y) const { return size_t(y + 1) * gridStride() + size_t(x + 1); }
+
   // The pixels of the 3 x 3 about (x, y) within the image whose direction lies within the cone of the
   // node's sphere: bit 4 r + c for row y + r - 1 and column x + c - 1. One row of the padded local
   // directions is four floats, tested together (vector extensions: SSE in the default build).
   uint32_t withinCone(int x, int y, Vec3 local, float cosRadius) const {
     using Floats = float __attribute__((vector_size(16)));
     using Ints = int32_t __attribute__((vector_size(16)));
-    const size_t stride = size_t(m_->width) + 2;
+    const size_t stride = gridStride();
     const size_t first = size_t(y) * stride + size_t(x);  // (x - 1, y - 1) with the border
     uint32_t bits = 0;
     for (int r = 0; r < 3; ++r) {
@@ -394,10 +397,10 @@ class LaneRasterizer {
           for (int x = tx * kRayTile; x < std::min(m_->width, (tx + 1) * kRayTile); ++x) {
             const int pixel = y * m_->width + x;
             if (m_->direction[size_t(pixel)] == Vec3{}) continue;  // unused: no direction
-            const size_t q = size_t((y + 1) * (m_->width + 2) + x + 1);
+            const size_t q = gridIndex(x, y);
             const Vec3 w{b_->worldX[q], b_->worldY[q], b_->worldZ[q]};
             b_->dirX[k] = w.x, b_->dirY[k] = w.y, b_->dirZ[k] = w.z;
-            b_->rayPixel[k++] = uint16_t(pixel);
+            b_->rayGridIndex[k++] = uint16_t(q);
             sum += w;
           }
         const float len = length(sum);
@@ -482,8 +485,7 @@ class LaneRasterizer {
     }
     for (size_t k = 0; k < used; ++k)
       if (nearestT[k] < kInf) {
-        const int pixel = b_->rayPixel[k];
-        uint32_t& px = b_->grid[size_t((pixel / m_->width + 1) * (m_->width + 2) + pixel % m_->width + 1)];
+        uint32_t& px = b_->grid[b_->rayGridIndex[k]];
         px = std::min(px, packMicroPixel(s_->depth.code(nearestT[k]), nearestNode[k]));
       }
     b_->listed = 0;
@@ -519,10 +521,10 @@ void MicroBuffer::resize(int bufferSide) {
   const size_t n = size_t(side) * side;
   pixels.resize(n);
   postTraversal.resize(n);
-  dirX.resize(n), dirY.resize(n), dirZ.resize(n), nearestT.resize(n), nearestNode.resize(n), rayPixel.resize(n);
+  dirX.resize(n), dirY.resize(n), dirZ.resize(n), nearestT.resize(n), nearestNode.resize(n), rayGridIndex.resize(n);
   const size_t padded = size_t(side + 2) * size_t(side + 2) + 4;
   for (auto* v : {&localX, &localY, &localZ, &worldX, &worldY, &worldZ}) v->assign(padded, 0.0f);
-  grid.assign(padded, 0u);
+  grid.assign(padded, 0u);  // the border: nearer than any node, so never written (LaneRasterizer::start fills the rest)
   const size_t tiles = size_t((side + kRayTile - 1) / kRayTile) * size_t((side + kRayTile - 1) / kRayTile);
   tileBegin.resize(tiles + 1);
   for (auto* v : {&tileAxisX, &tileAxisY, &tileAxisZ, &tileCos, &tileSin}) v->resize(tiles);

@@ -32,7 +32,7 @@ struct MicroBuffer {
   // Ray-casting scratch, one entry per used pixel of the mapping, in tiles of 4 x 4 pixels.
   std::vector<float> dirX, dirY, dirZ, nearestT;
   std::vector<uint32_t> nearestNode;
-  std::vector<uint16_t> rayPixel;  // the pixel of each ray
+  std::vector<uint16_t> rayGridIndex;  // each ray's pixel in `grid` (below)
   // Per pixel, its sample direction in the local frame, as three arrays with a border of one empty
   // pixel (rows of side + 2, and a few floats more), so that a splat reads the rows of its 3 x 3
   // pixels four floats at a time without bounds checks.
