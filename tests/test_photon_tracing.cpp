@@ -200,8 +200,8 @@ TEST_CASE("Caustic-only tracing stores the caustic photons of full tracing, flag
 TEST_CASE("Caustic emission aimed at the specular objects stores the same caustic power", "[photons][caustic]") {
   // Aiming changes the density of the sampled paths, not their expectation: the caustic map's
   // total power with and without aiming agrees within the two estimates' standard errors, for an
-  // area light, a point light, a directional light and an environment, while aiming stores many
-  // more photons per path.
+  // area light, a point light, a directional light, an environment and two point lights apart (each
+  // aimed through its own projection map), while aiming stores many more photons per path.
   auto caustic = [](const Scene& scene, uint32_t photons, bool aimed) {
     const Visibility vis(scene);
     PhotonTracingOptions opt;
@@ -220,7 +220,8 @@ TEST_CASE("Caustic emission aimed at the specular objects stores the same causti
     const double variance = std::max(0.0, sum2 - sum * sum / photons);
     return std::tuple{sum, std::sqrt(variance), stored.size()};
   };
-  auto mirrorOnPlane = [](bool environment) {
+  enum class Sky { Directional, Environment, TwoPointLights };
+  auto mirrorOnPlane = [](Sky sky) {
     Scene scene;
     Material grey, mirror;
     grey.kd = Rgb(0.5f);
@@ -229,11 +230,14 @@ TEST_CASE("Caustic emission aimed at the specular objects stores the same causti
     mirror.ks = Rgb(0.9f);
     test::addBox(scene, {-2, -0.01f, -2}, {2, 0, 2}, test::addMaterial(scene, grey, "grey"), false);
     test::addBox(scene, {-0.3f, 0.2f, -0.3f}, {0.3f, 0.5f, 0.3f}, test::addMaterial(scene, mirror, "mirror"), false);
-    if (environment) {
+    if (sky == Sky::Environment) {
       scene.environment.present = true;
       scene.environment.radiance = Rgb(1.0f);
-    } else {
+    } else if (sky == Sky::Directional) {
       scene.lights.push_back({LightType::Directional, 0, normalize(Vec3{0.4f, -1.0f, 0.1f}), Rgb(2.0f)});
+    } else {
+      scene.lights.push_back({LightType::Point, 0, {-1.5f, 1.5f, 0.3f}, Rgb(2.0f)});
+      scene.lights.push_back({LightType::Point, 0, {1.2f, 1.0f, -0.8f}, Rgb(3.0f)});
     }
     scene.camera = test::testCamera({0, 3, 3}, {0, 0, 0}, 8, 8);
     finalizeScene(scene);
@@ -247,8 +251,9 @@ TEST_CASE("Caustic emission aimed at the specular objects stores the same causti
   std::vector<Case> cases;
   cases.push_back({"area light", loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true}), 100000});
   cases.push_back({"point light", loadScene(LUCENT_SOURCE_DIR "/scenes/ring.json", {true}), 400000});
-  cases.push_back({"directional", mirrorOnPlane(false), 100000});
-  cases.push_back({"environment", mirrorOnPlane(true), 200000});
+  cases.push_back({"directional", mirrorOnPlane(Sky::Directional), 100000});
+  cases.push_back({"environment", mirrorOnPlane(Sky::Environment), 200000});
+  cases.push_back({"two point lights", mirrorOnPlane(Sky::TwoPointLights), 200000});
   for (const Case& c : cases) {
     const auto [plain, plainError, plainStored] = caustic(c.scene, c.photons, false);
     const auto [aimed, aimedError, aimedStored] = caustic(c.scene, c.photons / 4, true);

@@ -18,6 +18,9 @@ constexpr uint64_t hashKey(uint64_t a, uint64_t b = 0, uint64_t c = 0) {
   return mix64(a + 0x9e3779b97f4a7c15ull * mix64(b + 0x632be59bd9b4e019ull * mix64(c + 1)));
 }
 
+// Uniform integer in [0, n) from 32 random bits by Lemire's multiply-shift (bias below 2^-32 * n).
+constexpr uint32_t uniformBelow(uint32_t bits, uint32_t n) { return static_cast<uint32_t>((uint64_t(bits) * n) >> 32); }
+
 // PCG32 (O'Neill 2014, XSH-RR output) with the stream chosen by the key.
 class Rng {
  public:
@@ -43,8 +46,7 @@ class Rng {
     const float a = uniform();
     return {a, uniform()};
   }
-  // Uniform integer in [0, n) by Lemire's multiply-shift (bias below 2^-32 * n).
-  uint32_t below(uint32_t n) { return static_cast<uint32_t>((uint64_t(next()) * n) >> 32); }
+  uint32_t below(uint32_t n) { return uniformBelow(next(), n); }
 
  private:
   uint64_t state_ = 0;

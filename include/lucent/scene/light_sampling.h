@@ -1,6 +1,7 @@
 // Next-event estimation: sampling a point or direction on the scene's lights from a receiver, and
 // the density with which it would have been chosen (for multiple importance sampling).
 #pragma once
+#include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
 #include "lucent/scene/scene.h"
 #include "lucent/scene/texture.h"
@@ -171,8 +172,10 @@ inline bool coneTowards(const EmissionTarget& target, Vec3 x, TargetCone& cone) 
 // it: only paths whose first hit lies in the sphere are sampled.
 // targetBits, 32 random bits, pick a projection map's cell (with a bias of cells / 2^32 at most:
 // a float's 24 bits would give cells / 2^24).
+// (A target comes with its bits: no default that a caller could forget, sending every photon
+// through the first marked cell.)
 inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPosition, Vec2 uDirection,
-                                     const EmissionTarget* target = nullptr, uint32_t targetBits = 0) {
+                                     const EmissionTarget* target, uint32_t targetBits) {
   EmissionSample s;
   if (scene.lights.empty()) return s;
   float pmf;
@@ -216,7 +219,7 @@ inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPos
       if (target && lightIndex < target->pointLightMaps.size() && !target->pointLightMaps[lightIndex].cells.empty()) {
         const ProjectionMap& map = target->pointLightMaps[lightIndex];
         const uint32_t marked = uint32_t(map.cells.size());
-        const uint32_t cell = map.cells[uint32_t((uint64_t(targetBits) * marked) >> 32)];
+        const uint32_t cell = map.cells[uniformBelow(targetBits, marked)];
         const float side = map.cellSide();
         const float x = -map.extent + (float(cell % map.resolution) + uDirection.x) * side;
         const float y = -map.extent + (float(cell / map.resolution) + uDirection.y) * side;
@@ -259,6 +262,11 @@ inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPos
   }
   s.valid = !s.power.isBlack() && isFinite(s.power);
   return s;
+}
+
+// Without a target: every light emits over its whole range.
+inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPosition, Vec2 uDirection) {
+  return sampleEmission(scene, uLight, uPosition, uDirection, nullptr, 0);
 }
 
 }  // namespace lucent

@@ -26,6 +26,7 @@
 #include <span>
 #include <vector>
 
+#include "bitonic_sort.h"
 #include "eye_paths.h"
 #include "lucent/core/parallel.h"
 #include "radiance_estimate.h"
@@ -73,21 +74,23 @@ struct ShellOrder {
     // Where the cells within the maximum radius of the cell hold fewer than k photons, its
     // searches accept every photon within their maximum radius in any order: the photon list from
     // the first of those cells to the last, where short, holds them all (the photons in it from
-    // other cells lie beyond the maximum radius), as knn_grid.h's exploreShortSearch reads it.
+    // other cells lie beyond the maximum radius): knn_grid.h's exploreShortSearch, over the reach
+    // of the whole cell instead of one query's.
     const UniformGrid& g = map.grid;
-    int32_t lo[3], hi[3];
+    knn_grid_detail::Reach reach;
     const int32_t ci[3] = {c.x, c.y, c.z};
     for (int a = 0; a < 3; ++a) {  // compared as floats: the reach may exceed any integer
-      const float reach = std::ceil((maxRadius + g.slack) * g.invCellSize[a]) + 1;
-      lo[a] = reach >= float(ci[a]) ? 0 : ci[a] - int32_t(reach);
-      hi[a] = reach >= float(g.res[a] - 1 - ci[a]) ? g.res[a] - 1 : ci[a] + int32_t(reach);
+      const float cells = std::ceil((maxRadius + g.slack) * g.invCellSize[a]) + 1;
+      reach.lo[a] = cells >= float(ci[a]) ? 0 : ci[a] - int32_t(cells);
+      reach.hi[a] = cells >= float(g.res[a] - 1 - ci[a]) ? g.res[a] - 1 : ci[a] + int32_t(cells);
     }
-    if (map.cellCounts.count(lo, hi) >= k) return;
-    const CellPhotons run = map.cellRangePhotons(g.cellIndex({lo[0], lo[1], lo[2]}), g.cellIndex({hi[0], hi[1], hi[2]}));
-    if (run.count > knn_grid_detail::kShortSearchRun) return;
-    resizeColumns(photons, run.count);
-    copyColumns(*run.columns, run.first, run.count, photons, 0);
-    recorded = run.count;
+    runs.clear();
+    RunRecorder record{runs};
+    KnnGridSearch s = beginKnnGrid(Vec3(), k, kInf);
+    if (!knn_grid_detail::exploreShortSearch(map, s, reach, record)) return;
+    recorded = runs.empty() ? 0 : runs.front().count;  // an empty run is not recorded
+    resizeColumns(photons, recorded);
+    if (recorded > 0) copyColumns(*runs.front().columns, runs.front().first, recorded, photons, 0);
     covers = true;
   }
   // Records shells until at least `want` photons are recorded or it covers the maximum radius.
@@ -196,11 +199,11 @@ inline void pointsByCell(const UniformGrid& g, std::span<const ShadingPoint> poi
     for (size_t i = 0; i < n; ++i) order[next[cellOfPoint[i]]++] = uint32_t(i);
   } else {
     std::vector<uint64_t> keys(n);
-    for (size_t i = 0; i < n; ++i) keys[i] = uint64_t(cellOfPoint[i]) << 32 | i;
+    for (size_t i = 0; i < n; ++i) keys[i] = packSortKey(cellOfPoint[i], uint32_t(i));
     tbb::parallel_sort(keys.begin(), keys.end());
     for (size_t j = 0; j < n; ++j) {
-      order[j] = uint32_t(keys[j]);
-      if (j == 0 || keys[j] >> 32 != keys[j - 1] >> 32) groupStart.push_back(uint32_t(j));
+      order[j] = sortIndexOf(keys[j]);
+      if (j == 0 || sortKeyOf(keys[j]) != sortKeyOf(keys[j - 1])) groupStart.push_back(uint32_t(j));
     }
   }
   groupStart.push_back(uint32_t(n));
@@ -312,8 +315,10 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
             // Otherwise the cell records further (always to the same length, so that what a query
             // sees depends on its cell alone).
             const uint32_t further = uint32_t(std::min<uint64_t>(uint64_t(kFurtherShells) * k, UINT32_MAX));
-            if (s.order.recorded < further) s.order.extend(*map, further, settings.maxRadius);
-            radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.normal, maxRadius2, k);
+            if (s.order.recorded < further) {  // else an earlier query extended it: radius has seen it all
+              s.order.extend(*map, further, settings.maxRadius);
+              radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.normal, maxRadius2, k);
+            }
           }
           if (radius.found < k) {
             // Fewer than k within the maximum radius, every one recorded: the search accepts them

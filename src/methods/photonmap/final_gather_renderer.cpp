@@ -99,7 +99,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::All, out.stats);
 
   ImageAccumulator image(scene, options.layers);
-  const uint32_t heapSize = std::max(maps.globalSettings.k, maps.causticSettings.k);
+  const uint32_t heapSize = maps.globalSettings.k;  // the caustic map is estimated by estimateAtPoints
   tbb::enumerable_thread_specific<GatherScratch> scratch([&] {
     GatherScratch s;
     s.hits.resize(size_t(options.gatherRays));

@@ -115,8 +115,8 @@ struct Reach {
 
 inline float acceptanceLimit2(const KnnGridSearch& s) { return s.found < s.k ? s.maxRadius2 : s.radius2; }
 
-// Offers photons to the running estimate in the order given. sumPhotonRun (photon_columns.cpp)
-// applies the same rule eight photons at a time: keep the two in step.
+// Offers photons to the running estimate in the order given. sumPhotonRun and growingRadius
+// (photon_columns.cpp) apply the same rule eight photons at a time: keep the three in step.
 template <class Visit>
 void examinePhotons(const CellPhotons& cp, KnnGridSearch& s, Visit& visit) {
   auto otherCell = [&](uint32_t i) {  // another cell's photon in a hash bucket

@@ -14,12 +14,8 @@ namespace lucent {
 
 PhotonColumns photonColumns(std::span<const Photon> listed) {
   PhotonColumns c;
-  // Every entry is written once: the photons by the parallel fill, the padding here.
-  const size_t n = listed.size() + PhotonColumns::kPad;
-  for (UninitializedVector<float>* column : {&c.x, &c.y, &c.z, &c.incomingX, &c.incomingY, &c.incomingZ, &c.r, &c.g, &c.b}) {
-    column->resize(n);
-    std::fill(column->begin() + ptrdiff_t(listed.size()), column->end(), 0.0f);
-  }
+  // Every entry is written once: the photons by the parallel fill, the padding by resizeColumns.
+  resizeColumns(c, uint32_t(listed.size()));
   tbb::parallel_for(tbb::blocked_range<size_t>(0, listed.size(), 4096), [&](const auto& range) {
     for (size_t i = range.begin(); i != range.end(); ++i) {
       const Photon& p = listed[i];

@@ -29,7 +29,8 @@ struct StencilGrid {
   std::vector<uint32_t> storedList, firstStored;
   std::vector<Photon> listedPhotons;
   PhotonColumns columns;  // listedPhotons as columns, for the radiance estimate
-  // The stored photons again (a copy, with its own columns), in a sorted grid of kSumGridSplit
+  // The stored photons again (a third copy, after `photons` and `listedPhotons`, with its own
+  // photon list and columns), in a sorted grid of kSumGridSplit
   // times this grid's cells along x over the stored photons' bounds (not nested in this grid's
   // cells, and coarsened like any grid beyond maxCells): the estimate cell by cell
   // (estimate_by_cell.h) sums a sphere's photons from rows trimmed to its chords, and this grid's
