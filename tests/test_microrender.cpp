@@ -7,6 +7,7 @@
 // the renderer against the path tracer limited to one indirect bounce.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -225,6 +226,19 @@ struct GatherSetup {
 
 Rgb unitRadiance(Vec3) { return Rgb(1.0f); }
 
+// Gather points on the Cornell box's floor, walls, ceiling and blocks, facing different ways.
+struct GatherSite {
+  Vec3 position, normal;
+};
+const GatherSite kCornellSites[] = {{{278, 0, 278}, {0, 1, 0}},       {{100, 0, 450}, {0, 1, 0}},
+                                    {{278, 300, 559.2f}, {0, 0, -1}}, {{1, 200, 300}, {1, 0, 0}},
+                                    {{200, 165, 170}, {0, 1, 0}},     {{555, 100, 100}, {-1, 0, 0}},
+                                    {{300, 548.7f, 300}, {0, -1, 0}}, {{420, 330, 380}, {0, 1, 0}},
+                                    {{278, 1, 279}, {0, 1, 0}}};
+
+// A diffuse and a glossy receiver (lanes with the shared table and with their own).
+std::array<SurfaceBsdf, 2> diffuseAndGlossy() { return {diffuseBsdf(Rgb(0.7f)), phongBsdf(Rgb(0.2f), Rgb(0.6f), 30)}; }
+
 // A square of side 2 * half at height y = 1, facing down.
 Scene ceilingPlane(float half) {
   Scene scene;
@@ -323,12 +337,8 @@ TEST_CASE("Every pixel of a micro-buffer shows a node that its ray meets", "[mic
   // within its slab (MicroHierarchy::thickness). Points on the Cornell box's walls and blocks, both
   // mappings, a diffuse and a glossy receiver.
   const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
-  const struct {
-    Vec3 position, normal;
-  } sites[] = {{{278, 0, 278}, {0, 1, 0}},  {{100, 0, 450}, {0, 1, 0}},   {{278, 300, 559.2f}, {0, 0, -1}},
-               {{1, 200, 300}, {1, 0, 0}},  {{200, 165, 170}, {0, 1, 0}}, {{555, 100, 100}, {-1, 0, 0}},
-               {{300, 548.7f, 300}, {0, -1, 0}}};
-  const SurfaceBsdf bsdfs[] = {diffuseBsdf(Rgb(0.7f)), phongBsdf(Rgb(0.2f), Rgb(0.6f), 30)};
+  const auto& sites = kCornellSites;
+  const std::array<SurfaceBsdf, 2> bsdfs = diffuseAndGlossy();
   for (const MappingKind kind : {MappingKind::Nusselt, MappingKind::Warped}) {
     const GatherSetup s(scene, 1u << 13, NodeEncoding::Float, kind, true, unitRadiance);
     const uint32_t leafCount = s.hierarchy.leafCount;
@@ -417,12 +427,8 @@ TEST_CASE("A packet of gather points gives every lane the buffer it gets alone",
   // mappings, both encodings, ray casting on and off, and 8 x 8 buffers over 2^9 large leaves whose
   // short post-traversal lists fill up and are flushed mid-traversal.
   const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
-  const struct {
-    Vec3 position, normal;
-  } sites[] = {{{278, 0, 278}, {0, 1, 0}},    {{100, 0, 450}, {0, 1, 0}},       {{278, 300, 559.2f}, {0, 0, -1}},
-               {{1, 200, 300}, {1, 0, 0}},    {{200, 165, 170}, {0, 1, 0}},     {{555, 100, 100}, {-1, 0, 0}},
-               {{300, 548.7f, 300}, {0, -1, 0}}, {{420, 330, 380}, {0, 1, 0}}, {{278, 1, 279}, {0, 1, 0}}};
-  const SurfaceBsdf bsdfs[] = {diffuseBsdf(Rgb(0.7f)), phongBsdf(Rgb(0.2f), Rgb(0.6f), 30)};
+  const auto& sites = kCornellSites;
+  const std::array<SurfaceBsdf, 2> bsdfs = diffuseAndGlossy();
   for (const NodeEncoding encoding : {NodeEncoding::Float, NodeEncoding::Packed})
     for (const MappingKind kind : {MappingKind::Nusselt, MappingKind::Warped})
       for (const bool rayCasting : {true, false})
