@@ -108,6 +108,7 @@ nlohmann::json microOptionsJson(const RenderArgs& a, const Scene& scene) {
                       {"mapping", a.mapping},
                       {"table_size", o.tableSize},
                       {"ray_casting", o.rayCasting},
+                      {"splat_reach", o.splatReach},
                       {"upsampling", o.upsampling},
                       {"encoding", a.encoding},
                       {"light_samples", o.lightSamples},
@@ -346,6 +347,9 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
            ->check(CLI::Range(4, 256))->capture_default_str(), micro);
   only(cmd->add_flag("--no-raycast", args->noRayCasting, "micro: no post-traversal ray casting (holes, as the paper's Fig. 11)"),
        micro);
+  only(cmd->add_option("--splat-reach", m.splatReach,
+                       "micro: interior nodes are splatted up to this many pixel spacings wide (1: 3 x 3 pixels, 2: 5 x 5)")
+           ->check(CLI::Range(1, kMaxSplatReach))->capture_default_str(), micro);
   only(cmd->add_option("--upsampling", m.upsampling, "micro: gather at 1/N of the pixels, N = 1, 4 or 16, with bilateral upsampling")
            ->check(CLI::IsMember({1, 4, 16}))->capture_default_str(), micro);
   only(cmd->add_option("--encoding", args->encoding, "micro: float nodes, or packed (the paper's 128-bit nodes, half-float radiance)")

@@ -30,6 +30,7 @@ struct MicroRenderOptions {
   MappingKind mapping = MappingKind::Warped;
   int tableSize = 32;              // cells per side of the tabulated BRDF slice (warped mapping)
   bool rayCasting = true;          // false: no post-traversal ray casting (the paper's Fig. 11)
+  int splatReach = 1;              // interior nodes splatted up to this many pixel spacings wide: 1 or 2 (README)
   int upsampling = 1;              // gather at 1/upsampling of the pixels: 1, 4 or 16 (bilateral upsampling)
   // Float nodes, or the paper's 128-bit nodes and half-float radiance. Float by default: on the CPU
   // they gather 5-10% faster (decoding costs more than the memory saved) and no less accurately

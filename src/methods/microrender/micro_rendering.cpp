@@ -25,6 +25,10 @@ constexpr float kHorizonSlope = 0.01f;
 // Packet visits with at most this many active lanes test them one at a time.
 constexpr int kFewLanes = 2;
 
+// The padded arrays' border (MicroBuffer): a splat's window reaches up to kMaxSplatReach pixels past
+// its node's.
+constexpr int kGridBorder = kMaxSplatReach;
+
 struct FloatNodes {
   const TraversalNode* nodes;
   TraversalNode operator()(uint32_t i) const { return nodes[i]; }
@@ -85,6 +89,7 @@ struct PacketLanes {
   const float* solidAngle = nullptr;
   const float* spacing = nullptr;
   int32_t side = 0, tableSize = 0;
+  float splatReach = 1;  // MicroRenderSettings::splatReach
 };
 
 // A node as every lane tests it.
@@ -208,7 +213,7 @@ struct PixelTables {
   int32_t outcome = g.lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
   outcome = bestFacing > 0 ? outcome : kSkipSubtree;
   outcome = solidAngle > t.solidAngle[at] ? kDescend : outcome;
-  outcome = n.radius > d * t.spacing[at] ? kDescend : outcome;
+  outcome = n.radius > L.splatReach * (d * t.spacing[at]) ? kDescend : outcome;
   const int32_t coplanar = std::abs(height) + n.radius * sinAll <= horizon ? kSkipSubtree : outcome;
   outcome = std::abs(height) <= horizon ? coplanar : outcome;
   const int32_t backFacing = cosToAxis < -(sinA * n.coneCos + cosA * n.coneSin) ? kSkipSubtree : outcome;
@@ -278,70 +283,21 @@ class LaneRasterizer {
       std::copy_n(b_->grid.begin() + ptrdiff_t(gridIndex(0, y)), m_->width, b_->pixels.begin() + y * m_->width);
   }
 
-  // A node of at most a pixel's solid angle goes to the pixels of its 3 x 3 neighbourhood whose
-  // sample ray meets it: a leaf's disc (one-sided), an interior node's sphere within its slab
-  // (MicroHierarchy::thickness). Nodes at the threshold are up to a pixel wide, so the centre's
+  // A node of at most a pixel's solid angle goes to the pixels about its own whose sample ray meets
+  // it: a leaf's disc (one-sided), an interior node's sphere within its slab
+  // (MicroHierarchy::thickness). Nodes are up to splatReach pixel spacings wide, so the centre's
   // pixel alone would leave holes that let the background through (about 2% of the pixels); the
   // bounding sphere alone would widen every silhouette by up to a pixel, showing near surfaces
-  // in front of far ones or of the open sky (on the Cornell box, 10% more indirect light).
+  // in front of far ones or of the open sky (on the Cornell box, 10% more indirect light). A node
+  // no wider than its pixel's spacing reaches its 3 x 3 pixels, a wider one its 5 x 5.
   // (x, y) is the node's pixel, cosRadius the cosine of the half-angle its sphere subtends.
   void splat(int x, int y, float cosRadius, const TraversalNode& node, Vec3 toCentre, Vec3 local, float distance,
              uint32_t index) {
     ++c_->nodesSplatted;
-    // First the bounding sphere's cone (the local directions' dot products, a row at a time), then
-    // the exact test.
-    const uint32_t withinSphereCone = withinCone(x, y, local, cosRadius);
-    if (withinSphereCone == 0) return;
-    const uint32_t packed = packMicroPixel(s_->depth.code(distance), index);
-    const Vec3 pc = -toCentre;  // gather point minus node centre
-    const float height = dot(pc, node.axis), r2 = node.radius * node.radius, pc2 = dot(pc, pc);
-    const bool leaf = index >= leafCount_;
-    const float thickness = thickness_[index];
-    const bool flat = thickness < node.radius;  // else the slab cuts nothing off the sphere
-    // Each row of the 3 x 3 pixels four at a time (the fourth column is written back unchanged),
-    // without branches: which of them pass is data, not control flow. The tests are multiplied
-    // through by cosine^2 (no division per pixel). A pixel that a nearer node (or this one) holds
-    // keeps it: min(pixel, packed).
-    using Floats = float __attribute__((vector_size(16)));
-    using Ints = int32_t __attribute__((vector_size(16)));
-    using Words = uint32_t __attribute__((vector_size(16)));
-    const size_t stride = gridStride();
-    const Ints column = {1, 2, 4, 0};
-    const Ints signBit = Ints{} + int32_t(0x80000000u);
-    const Ints thicknessBits = Ints{} + std::bit_cast<int32_t>(thickness);
-    const float minusSelf = -g_->selfDistance;
-    for (int r = 0; r < 3; ++r) {
-      const size_t q = size_t(y + r) * stride + size_t(x);  // (x - 1, y + r - 1) with the border
-      Floats dx, dy, dz;
-      Words pixel;
-      std::memcpy(&dx, b_->worldX.data() + q, sizeof dx);
-      std::memcpy(&dy, b_->worldY.data() + q, sizeof dy);
-      std::memcpy(&dz, b_->worldZ.data() + q, sizeof dz);
-      std::memcpy(&pixel, b_->grid.data() + q, sizeof pixel);
-      const Floats cosine = dx * node.axis.x + dy * node.axis.y + dz * node.axis.z;
-      const Floats b = pc.x * dx + pc.y * dy + pc.z * dz;
-      const Floats cos2 = cosine * cosine;
-      Ints hit;
-      if (leaf) {
-        // The ray meets the disc's plane at t = height / -cosine, beyond the receiver's own
-        // surface, within the radius: |pc cosine - dir height| <= r |cosine|.
-        const Floats qx = pc.x * cosine - dx * height, qy = pc.y * cosine - dy * height, qz = pc.z * cosine - dz * height;
-        hit = (cosine < 0) & (height > minusSelf * cosine) & ~(qx * qx + qy * qy + qz * qz > r2 * cos2);
-      } else {
-        // |pc + t dir|^2 = pc2 + 2 b t + t^2 is least at t = -b (the ray meets the sphere: the
-        // cone test), and over the slab's stretch of the ray at t = -b if the slab holds that
-        // point, else at the slab's face nearer to it, where t cosine = e.
-        const Floats g = height - b * cosine;  // signed distance from the plane at t = -b
-        const Floats e = (Floats)(thicknessBits | ((Ints)g & signBit)) - height;  // copysign(thickness, g) - height
-        const Floats absG = (Floats)((Ints)g & ~signBit);
-        const Ints outside = (absG > thickness) & (cos2 * pc2 + 2 * b * cosine * e + e * e > r2 * cos2);
-        hit = flat ? ~outside : Ints{} - 1;
-      }
-      const Ints within = ((Ints{} + int32_t(withinSphereCone >> (4 * r))) & column) != 0;
-      const Words nearer = pixel > packed;
-      pixel = (Words)(hit & within & (Ints)nearer) != 0 ? Words{} + packed : pixel;
-      std::memcpy(b_->grid.data() + q, &pixel, sizeof pixel);
-    }
+    if (node.radius > distance * m_->spacing[size_t(y * m_->width + x)])
+      splatWithin<2>(x, y, cosRadius, node, toCentre, local, distance, index);
+    else
+      splatWithin<1>(x, y, cosRadius, node, toCentre, local, distance, index);
   }
 
   void listLeaf(uint32_t node) {
@@ -355,33 +311,107 @@ class LaneRasterizer {
   }
 
  private:
-  // Pixel (x, y) in the padded arrays (localX, worldX, grid: rows of width + 2 with a border).
-  size_t gridStride() const { return size_t(m_->width) + 2; }
-  size_t gridIndex(int x, int y) const { return size_t(y + 1) * gridStride() + size_t(x + 1); }
+  // Pixel (x, y) in the padded arrays (localX, worldX, grid: rows of width + 2 kGridBorder with a
+  // border of kGridBorder pixels).
+  size_t gridStride() const { return size_t(m_->width) + 2 * kGridBorder; }
+  size_t gridIndex(int x, int y) const {
+    return size_t(y + kGridBorder) * gridStride() + size_t(x + kGridBorder);
+  }
 
-  // The pixels of the 3 x 3 about (x, y) within the image whose direction lies within the cone of the
-  // node's sphere: bit 4 r + c for row y + r - 1 and column x + c - 1. One row of the padded local
-  // directions is four floats, tested together (vector extensions: SSE in the default build).
-  uint32_t withinCone(int x, int y, Vec3 local, float cosRadius) const {
-    using Floats = float __attribute__((vector_size(16)));
-    using Ints = int32_t __attribute__((vector_size(16)));
-    const size_t stride = gridStride();
-    const size_t first = size_t(y) * stride + size_t(x);  // (x - 1, y - 1) with the border
-    uint32_t bits = 0;
-    for (int r = 0; r < 3; ++r) {
-      Floats dx, dy, dz;
-      std::memcpy(&dx, b_->localX.data() + first + size_t(r) * stride, sizeof dx);
-      std::memcpy(&dy, b_->localY.data() + first + size_t(r) * stride, sizeof dy);
-      std::memcpy(&dz, b_->localZ.data() + first + size_t(r) * stride, sizeof dz);
-      const Ints within = ~(dx * local.x + dy * local.y + dz * local.z < cosRadius);  // also unused pixels: (0, 0, 0)
-      bits |= uint32_t((within[0] & 1) | (within[1] & 2) | (within[2] & 4)) << (4 * r);
-    }
+  // The (2 reach + 1)^2 pixels about (x, y) are read from the padded arrays a row at a time, each
+  // row as one vector of four floats (reach 1) or two (reach 2), the columns past the window ignored
+  // (vector extensions: SSE in the default build).
+  using Floats = float __attribute__((vector_size(16)));
+  using Ints = int32_t __attribute__((vector_size(16)));
+  using Words = uint32_t __attribute__((vector_size(16)));
+  static constexpr int windowSide(int reach) { return 2 * reach + 1; }
+  static constexpr int rowChunks(int reach) { return reach == 1 ? 1 : 2; }
+  // Bit c of lane c for the columns 4 k to 4 k + 3 of the window that lie in it.
+  static Ints columnBits(int reach, int k) {
+    Ints bits{};
+    for (int c = 0; c < 4; ++c) bits[c] = 4 * k + c < windowSide(reach) ? 1 << c : 0;
+    return bits;
+  }
+
+  template <int Reach>
+  void splatWithin(int x, int y, float cosRadius, const TraversalNode& node, Vec3 toCentre, Vec3 local, float distance,
+                   uint32_t index) {
+    // First the bounding sphere's cone (the local directions' dot products, a row at a time), then
+    // the exact test.
+    const uint64_t withinSphereCone = withinCone<Reach>(x, y, local, cosRadius);
+    if (withinSphereCone == 0) return;
+    const uint32_t packed = packMicroPixel(s_->depth.code(distance), index);
+    const Vec3 pc = -toCentre;  // gather point minus node centre
+    const float height = dot(pc, node.axis), r2 = node.radius * node.radius, pc2 = dot(pc, pc);
+    const bool leaf = index >= leafCount_;
+    const float thickness = thickness_[index];
+    const bool flat = thickness < node.radius;  // else the slab cuts nothing off the sphere
+    // Each row of the window four pixels at a time (columns past it are written back unchanged),
+    // without branches: which pixels pass is data, not control flow. The tests are multiplied
+    // through by cosine^2 (no division per pixel). A pixel that a nearer node (or this one) holds
+    // keeps it: min(pixel, packed).
+    const Ints signBit = Ints{} + int32_t(0x80000000u);
+    const Ints thicknessBits = Ints{} + std::bit_cast<int32_t>(thickness);
+    const float minusSelf = -g_->selfDistance;
+    for (int r = 0; r < windowSide(Reach); ++r)
+      for (int k = 0; k < rowChunks(Reach); ++k) {
+        const uint32_t chunkBits = uint32_t(withinSphereCone >> (8 * r + 4 * k)) & 0xfu;
+        if (chunkBits == 0) continue;
+        const size_t q = gridIndex(x - Reach + 4 * k, y - Reach + r);
+        Floats dx, dy, dz;
+        Words pixel;
+        std::memcpy(&dx, b_->worldX.data() + q, sizeof dx);
+        std::memcpy(&dy, b_->worldY.data() + q, sizeof dy);
+        std::memcpy(&dz, b_->worldZ.data() + q, sizeof dz);
+        std::memcpy(&pixel, b_->grid.data() + q, sizeof pixel);
+        const Floats cosine = dx * node.axis.x + dy * node.axis.y + dz * node.axis.z;
+        const Floats b = pc.x * dx + pc.y * dy + pc.z * dz;
+        const Floats cos2 = cosine * cosine;
+        Ints hit;
+        if (leaf) {
+          // The ray meets the disc's plane at t = height / -cosine, beyond the receiver's own
+          // surface, within the radius: |pc cosine - dir height| <= r |cosine|.
+          const Floats qx = pc.x * cosine - dx * height, qy = pc.y * cosine - dy * height, qz = pc.z * cosine - dz * height;
+          hit = (cosine < 0) & (height > minusSelf * cosine) & ~(qx * qx + qy * qy + qz * qz > r2 * cos2);
+        } else {
+          // |pc + t dir|^2 = pc2 + 2 b t + t^2 is least at t = -b (the ray meets the sphere: the
+          // cone test), and over the slab's stretch of the ray at t = -b if the slab holds that
+          // point, else at the slab's face nearer to it, where t cosine = e.
+          const Floats g = height - b * cosine;  // signed distance from the plane at t = -b
+          const Floats e = (Floats)(thicknessBits | ((Ints)g & signBit)) - height;  // copysign(thickness, g) - height
+          const Floats absG = (Floats)((Ints)g & ~signBit);
+          const Ints outside = (absG > thickness) & (cos2 * pc2 + 2 * b * cosine * e + e * e > r2 * cos2);
+          hit = flat ? ~outside : Ints{} - 1;
+        }
+        const Ints within = ((Ints{} + int32_t(chunkBits)) & Ints{1, 2, 4, 8}) != 0;
+        const Words nearer = pixel > packed;
+        pixel = (Words)(hit & within & (Ints)nearer) != 0 ? Words{} + packed : pixel;
+        std::memcpy(b_->grid.data() + q, &pixel, sizeof pixel);
+      }
+  }
+
+  // The pixels of the window about (x, y) within the image whose direction lies within the cone of
+  // the node's sphere: bit 8 r + c for row y + r - Reach and column x + c - Reach.
+  template <int Reach>
+  uint64_t withinCone(int x, int y, Vec3 local, float cosRadius) const {
+    uint64_t bits = 0;
+    for (int r = 0; r < windowSide(Reach); ++r)
+      for (int k = 0; k < rowChunks(Reach); ++k) {
+        const size_t q = gridIndex(x - Reach + 4 * k, y - Reach + r);
+        Floats dx, dy, dz;
+        std::memcpy(&dx, b_->localX.data() + q, sizeof dx);
+        std::memcpy(&dy, b_->localY.data() + q, sizeof dy);
+        std::memcpy(&dz, b_->localZ.data() + q, sizeof dz);
+        const Ints within = ~(dx * local.x + dy * local.y + dz * local.z < cosRadius) & columnBits(Reach, k);  // also unused pixels: (0, 0, 0)
+        bits |= uint64_t(uint32_t(within[0] | within[1] | within[2] | within[3])) << (8 * r + 4 * k);
+      }
     // Pixels beyond the image's edges (the border) are never reached.
-    const uint32_t columns = (x > 0 ? 1u : 0u) | 2u | (x + 1 < m_->width ? 4u : 0u);
-    const uint32_t rows = (y > 0 ? 1u : 0u) | 2u | (y + 1 < m_->height ? 4u : 0u);
-    uint32_t reached = 0;
-    for (int r = 0; r < 3; ++r)
-      if (rows >> r & 1) reached |= columns << (4 * r);
+    uint32_t columns = 0;
+    for (int c = 0; c < windowSide(Reach); ++c)
+      if (x - Reach + c >= 0 && x - Reach + c < m_->width) columns |= 1u << c;
+    uint64_t reached = 0;
+    for (int r = 0; r < windowSide(Reach); ++r)
+      if (y - Reach + r >= 0 && y - Reach + r < m_->height) reached |= uint64_t(columns) << (8 * r);
     return bits & reached;
   }
 
@@ -522,7 +552,7 @@ void MicroBuffer::resize(int bufferSide) {
   pixels.resize(n);
   postTraversal.resize(n);
   dirX.resize(n), dirY.resize(n), dirZ.resize(n), nearestT.resize(n), nearestNode.resize(n), rayGridIndex.resize(n);
-  const size_t padded = size_t(side + 2) * size_t(side + 2) + 4;
+  const size_t padded = size_t(side + 2 * kGridBorder) * size_t(side + 2 * kGridBorder) + 8;
   for (auto* v : {&localX, &localY, &localZ, &worldX, &worldY, &worldZ}) v->assign(padded, 0.0f);
   grid.assign(padded, 0u);  // the border: nearer than any node, so never written (LaneRasterizer::start fills the rest)
   const size_t tiles = size_t((side + kRayTile - 1) / kRayTile) * size_t((side + kRayTile - 1) / kRayTile);
@@ -651,11 +681,13 @@ struct PacketArrays {
   std::vector<float> cdfs, solidAngle, spacing;
 };
 
-void preparePacketLanes(std::span<const MicroLane> lanes, PacketLanes& L, PacketArrays& a) {
+void preparePacketLanes(std::span<const MicroLane> lanes, const MicroRenderSettings& settings, PacketLanes& L,
+                        PacketArrays& a) {
   const HemisphereMapping& first = *lanes[0].mapping;
   const int32_t side = first.width, pixels = side * side;
   const WarpTable* firstTable = first.kind == MappingKind::Warped ? first.table : nullptr;
   L.side = side;
+  L.splatReach = float(settings.splatReach);
   L.tableSize = firstTable ? firstTable->size : 1;
   a.solidAngle.resize(size_t(pixels) * lanes.size());
   a.spacing.resize(size_t(pixels) * lanes.size());
@@ -707,7 +739,7 @@ void renderPacket(const Nodes& nodes, const MicroHierarchy& mh, std::span<const 
   const PointHierarchy& h = *mh.hierarchy;
   PacketLanes packet;
   PacketArrays arrays;
-  preparePacketLanes(lanes, packet, arrays);
+  preparePacketLanes(lanes, settings, packet, arrays);
   std::vector<LaneRasterizer<Nodes>> rasterizers;
   rasterizers.reserve(lanes.size());
   for (const MicroLane& lane : lanes) {
@@ -726,6 +758,8 @@ void renderPacket(const Nodes& nodes, const MicroHierarchy& mh, std::span<const 
 void renderMicroBuffers(const MicroHierarchy& mh, std::span<const MicroLane> lanes, const MicroRenderSettings& settings,
                         MicroCounters& counters) {
   if (lanes.empty()) return;
+  if (settings.splatReach < 1 || settings.splatReach > kMaxSplatReach)
+    throw std::logic_error("micro-rendering splats reach 1 to " + std::to_string(kMaxSplatReach) + " pixel spacings");
   if (lanes.size() > size_t(kGatherPacket)) throw std::logic_error("a micro-rendering packet has at most " + std::to_string(kGatherPacket) + " lanes");
   const PointHierarchy& h = *mh.hierarchy;
   if (h.encoding == NodeEncoding::Packed)

@@ -11,6 +11,10 @@ namespace lucent {
 // Buffer sides the paper uses (8 x 8 to 24 x 24) and up to 32 x 32.
 inline constexpr int kMinMicroBufferSide = 8;
 inline constexpr int kMaxMicroBufferSide = 32;
+// Interior nodes are splatted when at most a pixel's solid angle (the paper's criterion) and at most
+// MicroRenderSettings::splatReach pixel spacings wide (HemisphereMapping::spacing): into their
+// pixel's 3 x 3 neighbourhood, or 5 x 5 when wider than one spacing. Wider ones are refined.
+constexpr int kMaxSplatReach = 2;
 
 // 24 index bits hold heap numbers up to 2^24 - 1: at most 2^23 leaves (3.1).
 inline constexpr uint32_t kMicroIndexBits = 24;

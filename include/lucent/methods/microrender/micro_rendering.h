@@ -33,9 +33,9 @@ struct MicroBuffer {
   std::vector<float> dirX, dirY, dirZ, nearestT;
   std::vector<uint32_t> nearestNode;
   std::vector<uint16_t> rayGridIndex;  // each ray's pixel in `grid` (below)
-  // Per pixel, its sample direction in the local frame, as three arrays with a border of one empty
-  // pixel (rows of side + 2, and a few floats more), so that a splat reads the rows of its 3 x 3
-  // pixels four floats at a time without bounds checks.
+  // Per pixel, its sample direction in the local frame, as three arrays with a border of
+  // kMaxSplatReach empty pixels (rows of side + 2 kMaxSplatReach, and a few floats more), so that a
+  // splat reads the rows of its window four floats at a time without bounds checks.
   std::vector<float> localX, localY, localZ;
   // The same for the world-space directions (splats' exact tests, rays), and the pixels themselves
   // while the buffer is rendered (copied to `pixels` when it is done; the border holds 0, nearer than any node).
@@ -63,6 +63,7 @@ struct MicroCounters {
 struct MicroRenderSettings {
   bool rayCasting = true;  // false: leaves larger than a pixel are splatted like the rest (Fig. 11's holes)
   DepthCoding depth;
+  int splatReach = 1;  // 1 to kMaxSplatReach (micro_buffer.h)
 };
 
 // Nodes as the traversal reads them: sphere, cone axis, and the sine and cosine of the cone angle.
