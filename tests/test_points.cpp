@@ -667,6 +667,55 @@ TEST_CASE("Radiance pull: interior nodes hold their leaves' area-weighted averag
 }
 
 
+TEST_CASE("Directional radiance: a node's sums over its leaves, read back towards a direction", "[points]") {
+  // Every interior node's six sums equal the brute-force sums over its leaves (area x radiance x
+  // max(0, n . e_k) and area x max(0, n . e_k)); towards an axis direction a node sends the mean of
+  // the leaves that face it; a flat node (one normal) sends its mean every way it faces.
+  const Scene& scene = cornellBox();
+  const uint32_t n = 1u << 10;
+  const PointHierarchy h = buildPointHierarchy(scene, hierarchyOptions(n, NodeEncoding::Float));
+  std::vector<Rgb> radiance(h.nodeCount());
+  for (uint32_t j = 0; j < n; ++j) radiance[n + j] = Rgb(float(j % 7), float(j % 3), 1.0f);
+  pullRadiance(h, radiance);
+  const std::vector<DirectionalRadiance> d = directionalRadiance(h, radiance);
+  REQUIRE(d.size() == n);
+  const Vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  int flatChecked = 0;
+  for (uint32_t i = kRootNode; i < n; ++i) {
+    double shown[6][3] = {}, area[6] = {};
+    bool flat = true;
+    const uint32_t first = firstLeafPoint(i, n), count = leavesBelow(i, n);
+    for (uint32_t j = first; j < first + count; ++j) {
+      const Vec3 normal = h.floatNodes[n + j].cone.axis;
+      flat &= dot(normal, h.floatNodes[n + first].cone.axis) > 0.99999f;
+      for (int k = 0; k < 6; ++k) {
+        const double a = double(h.nodeAreas[n + j]) * std::max(0.0f, dot(normal, axes[k]));
+        area[k] += a;
+        for (int c = 0; c < 3; ++c) shown[k][c] += a * radiance[n + j][c];
+      }
+    }
+    INFO("node " << i);
+    for (int k = 0; k < 6; ++k) {
+      REQUIRE(d[i].area[k] == Approx(area[k]).epsilon(1e-4).margin(1e-6 * h.nodeAreas[i]));
+      for (int c = 0; c < 3; ++c)
+        REQUIRE(d[i].shown[k][c] == Approx(shown[k][c]).epsilon(1e-4).margin(1e-5 * h.nodeAreas[i]));
+      if (area[k] > 0) {
+        const Rgb towards = radianceTowards(d[i], axes[k], Rgb(-1.0f));
+        for (int c = 0; c < 3; ++c) REQUIRE(towards[c] == Approx(shown[k][c] / area[k]).epsilon(1e-4));
+      } else {
+        REQUIRE(radianceTowards(d[i], axes[k], Rgb(-1.0f)).r == -1.0f);  // no leaf faces that way
+      }
+    }
+    if (!flat) continue;
+    ++flatChecked;
+    const Vec3 facing = normalize(h.floatNodes[n + first].cone.axis + Vec3{0.2f, -0.3f, 0.1f});
+    const Rgb towards = radianceTowards(d[i], facing, Rgb(-1.0f));
+    for (int c = 0; c < 3; ++c) REQUIRE(towards[c] == Approx(radiance[i][c]).epsilon(1e-4));
+  }
+  CHECK(flatChecked > 100);
+  CHECK_THROWS_AS(directionalRadiance(h, std::span<const Rgb>(radiance).first(n)), std::invalid_argument);
+}
+
 TEST_CASE("Half floats: exact round trip and round-to-nearest-even", "[points]") {
   for (uint32_t h = 0; h < 65536; ++h) {
     const bool nan = (h & 0x7c00u) == 0x7c00u && (h & 0x3ffu) != 0;

@@ -29,7 +29,7 @@ struct RenderArgs {
   MicroRenderOptions micro;
   std::string map, gridResolution;  // map: empty for the method's default
   std::string dump;                 // purcell, pmfg, micro: the dump directory
-  std::string lighting = "direct", mapping = "warped", encoding = "float";
+  std::string lighting = "direct", mapping = "warped", encoding = "float", nodeRadiance = "directional";
   bool noRayCasting = false;
   CLI::Option* photons = nullptr;  // shared by purcell, pmfg and micro, with different defaults
   // Options that belong to some methods only, with those methods, to reject them with the others.
@@ -109,6 +109,7 @@ nlohmann::json microOptionsJson(const RenderArgs& a, const Scene& scene) {
                       {"table_size", o.tableSize},
                       {"ray_casting", o.rayCasting},
                       {"splat_reach", o.splatReach},
+                      {"node_radiance", a.nodeRadiance},
                       {"upsampling", o.upsampling},
                       {"encoding", a.encoding},
                       {"light_samples", o.lightSamples},
@@ -147,6 +148,7 @@ int runRender(RenderArgs& a) {
     m.mapping = a.mapping == "nusselt" ? MappingKind::Nusselt : MappingKind::Warped;
     m.encoding = a.encoding == "float" ? NodeEncoding::Float : NodeEncoding::Packed;
     m.rayCasting = !a.noRayCasting;
+    m.nodeRadiance = a.nodeRadiance == "isotropic" ? NodeRadianceKind::Isotropic : NodeRadianceKind::Directional;
     // Shared option names: the photon-mapping values given on the command line.
     m.lightSamples = a.pm.lightSamples;
     m.maxSpecularDepth = a.pm.maxSpecularDepth;
@@ -347,6 +349,9 @@ void addRenderCommand(CLI::App& app, int& exitCode) {
            ->check(CLI::Range(4, 256))->capture_default_str(), micro);
   only(cmd->add_flag("--no-raycast", args->noRayCasting, "micro: no post-traversal ray casting (holes, as the paper's Fig. 11)"),
        micro);
+  only(cmd->add_option("--node-radiance", args->nodeRadiance,
+                       "micro: what interior nodes send: isotropic (their leaves' mean, the paper's) or directional")
+           ->check(CLI::IsMember({"isotropic", "directional"}))->capture_default_str(), micro);
   only(cmd->add_option("--splat-reach", m.splatReach,
                        "micro: interior nodes are splatted up to this many pixel spacings wide (1: 3 x 3 pixels, 2: 5 x 5)")
            ->check(CLI::Range(1, kMaxSplatReach))->capture_default_str(), micro);

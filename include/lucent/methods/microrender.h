@@ -8,6 +8,7 @@
 
 #include "lucent/methods/microrender/hemisphere_mapping.h"
 #include "lucent/methods/points/point_hierarchy.h"
+#include "lucent/methods/points/point_radiance.h"
 #include "lucent/methods/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
@@ -30,7 +31,8 @@ struct MicroRenderOptions {
   MappingKind mapping = MappingKind::Warped;
   int tableSize = 32;              // cells per side of the tabulated BRDF slice (warped mapping)
   bool rayCasting = true;          // false: no post-traversal ray casting (the paper's Fig. 11)
-  int splatReach = 1;              // interior nodes splatted up to this many pixel spacings wide: 1 or 2 (README)
+  int splatReach = 2;              // interior nodes splatted up to this many pixel spacings wide: 1 or 2 (README)
+  NodeRadianceKind nodeRadiance = NodeRadianceKind::Directional;  // what interior nodes send each way (README)
   int upsampling = 1;              // gather at 1/upsampling of the pixels: 1, 4 or 16 (bilateral upsampling)
   // Float nodes, or the paper's 128-bit nodes and half-float radiance. Float by default: on the CPU
   // they gather 5-10% faster (decoding costs more than the memory saved) and no less accurately

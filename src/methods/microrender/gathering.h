@@ -20,13 +20,18 @@
 
 namespace lucent {
 
-// The radiance each node sends towards the gather points: float RGB, and for the packed encoding
-// the half floats the paper stores beside the nodes (3.1), which gathering then reads.
+// The radiance each node sends towards the gather points: float RGB, for the packed encoding the
+// half floats the paper stores beside the nodes (3.1), which gathering then reads, and with
+// directional node radiance the interior nodes' DirectionalRadiance. finish() derives the last two
+// from `rgb` once it holds every node's radiance.
 struct NodeRadiance {
+  NodeRadianceKind kind = NodeRadianceKind::Isotropic;
   std::vector<Rgb> rgb;
   std::vector<HalfRgb> half;
-  void finish(NodeEncoding encoding) {
-    if (encoding == NodeEncoding::Packed) half = packRadiance(rgb);
+  std::vector<DirectionalRadiance> directional;
+  void finish(const PointHierarchy& h) {
+    if (h.encoding == NodeEncoding::Packed) half = packRadiance(rgb);
+    if (kind == NodeRadianceKind::Directional) directional = directionalRadiance(h, rgb);
   }
 };
 
@@ -116,8 +121,9 @@ inline void gatherPacket(const GatherContext& ctx, std::span<const GatherRequest
   const Stopwatch convolveClock;
   for (size_t l = 0; l < requests.size(); ++l) {
     const GatherLane& lane = s.lanes[l];
-    results[l] = radiance.half.empty() ? convolveMicroBuffer(lane.buffer, lane.mapping, radiance.rgb)
-                                       : convolveMicroBuffer(lane.buffer, lane.mapping, radiance.half);
+    results[l] = radiance.half.empty()
+                     ? convolveMicroBuffer(lane.buffer, lane.mapping, radiance.rgb, radiance.directional)
+                     : convolveMicroBuffer(lane.buffer, lane.mapping, radiance.half, radiance.directional);
   }
   s.convolveSeconds += convolveClock.seconds();
 }

@@ -251,6 +251,12 @@ void classifyActiveLanes(const PacketLanes& __restrict L, const LaneNode& __rest
   }
 }
 
+// Pixel (x, y) of a buffer `width` pixels wide in its padded arrays (MicroBuffer::localX, worldX,
+// grid: rows of width + 2 kGridBorder with a border of kGridBorder pixels).
+inline size_t paddedIndex(int width, int x, int y) {
+  return size_t(y + kGridBorder) * size_t(width + 2 * kGridBorder) + size_t(x + kGridBorder);
+}
+
 // One lane's micro-buffer: splats, the post-traversal list and its ray casting.
 template <class Nodes>
 class LaneRasterizer {
@@ -311,12 +317,8 @@ class LaneRasterizer {
   }
 
  private:
-  // Pixel (x, y) in the padded arrays (localX, worldX, grid: rows of width + 2 kGridBorder with a
-  // border of kGridBorder pixels).
   size_t gridStride() const { return size_t(m_->width) + 2 * kGridBorder; }
-  size_t gridIndex(int x, int y) const {
-    return size_t(y + kGridBorder) * gridStride() + size_t(x + kGridBorder);
-  }
+  size_t gridIndex(int x, int y) const { return paddedIndex(m_->width, x, y); }
 
   // The (2 reach + 1)^2 pixels about (x, y) are read from the padded arrays a row at a time, each
   // row as one vector of four floats (reach 1) or two (reach 2), the columns past the window ignored
@@ -534,12 +536,23 @@ class LaneRasterizer {
   uint32_t rayCount_ = 0, tileCount_ = 0;
 };
 
+// The pixels' radiance times their weights. An interior node with directional radiance is read
+// towards the gather point: against the pixel's direction.
 template <class Radiance>
-Rgb convolve(const MicroBuffer& b, const HemisphereMapping& m, Radiance radiance) {
+Rgb convolve(const MicroBuffer& b, const HemisphereMapping& m, Radiance radiance,
+             std::span<const DirectionalRadiance> directional) {
+  const uint32_t directionalNodes = uint32_t(directional.size());  // the interior nodes, or none
   Rgb sum;
   for (const uint16_t k : m.used) {
     const uint32_t px = b.pixels[k];
-    if (px != kEmptyMicroPixel) sum += radiance(microPixelNode(px)) * m.weight[k];
+    if (px == kEmptyMicroPixel) continue;
+    const uint32_t node = microPixelNode(px);
+    Rgb l = radiance(node);
+    if (node < directionalNodes) {
+      const size_t q = paddedIndex(m.width, k % m.width, k / m.width);
+      l = radianceTowards(directional[node], {-b.worldX[q], -b.worldY[q], -b.worldZ[q]}, l);
+    }
+    sum += l * m.weight[k];
   }
   return sum;
 }
@@ -775,12 +788,14 @@ void renderMicroBuffer(const MicroHierarchy& mh, const GatherPoint& gather, cons
   renderMicroBuffers(mh, std::span(&lane, 1), settings, counters);
 }
 
-Rgb convolveMicroBuffer(const MicroBuffer& b, const HemisphereMapping& m, std::span<const Rgb> radiance) {
-  return convolve(b, m, [&](uint32_t node) { return radiance[node]; });
+Rgb convolveMicroBuffer(const MicroBuffer& b, const HemisphereMapping& m, std::span<const Rgb> radiance,
+                        std::span<const DirectionalRadiance> directional) {
+  return convolve(b, m, [&](uint32_t node) { return radiance[node]; }, directional);
 }
 
-Rgb convolveMicroBuffer(const MicroBuffer& b, const HemisphereMapping& m, std::span<const HalfRgb> radiance) {
-  return convolve(b, m, [&](uint32_t node) { return toFloat(radiance[node]); });
+Rgb convolveMicroBuffer(const MicroBuffer& b, const HemisphereMapping& m, std::span<const HalfRgb> radiance,
+                        std::span<const DirectionalRadiance> directional) {
+  return convolve(b, m, [&](uint32_t node) { return toFloat(radiance[node]); }, directional);
 }
 
 }  // namespace lucent

@@ -176,7 +176,7 @@ void radiosityBounces(const Scene& scene, const PointHierarchy& h, const GatherC
         [&](size_t k, Rgb result) { gathered[k] = result; }, [](size_t) {});
     points::parallelFor(0, h.leafCount, [&](uint32_t j) { irradiance[j] = directOverPi[j] + gathered[j / leavesPerNode]; });
     setLeavesAndPull(h, irradiance, radiance.rgb);
-    radiance.finish(h.encoding);
+    radiance.finish(h);
   }
   MicroCounters c;
   for (const GatherScratch& s : scratch) c += s.counters;
@@ -188,6 +188,7 @@ void radiosityBounces(const Scene& scene, const PointHierarchy& h, const GatherC
 NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointHierarchy& h, const GatherContext& ctx,
                         const MicroRenderOptions& o, RenderStats& stats) {
   NodeRadiance radiance;
+  radiance.kind = o.nodeRadiance;
   uint64_t rays = 0;
   if (o.lighting == PointLighting::Photons) {
     PhotonMapOptions pm;
@@ -219,7 +220,7 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
       });
     });
     pullRadiance(h, radiance.rgb);
-    radiance.finish(h.encoding);
+    radiance.finish(h);
     return radiance;
   }
 
@@ -231,7 +232,7 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
     stats.addCounter("vpls", vpls.size());
   }
   setLeavesAndPull(h, irradiance, radiance.rgb);
-  radiance.finish(h.encoding);
+  radiance.finish(h);
   if (o.lighting == PointLighting::Radiosity) {
     const int level = std::min(o.radiosityLevel, int(leafLevel(h.leafCount)) - 1);
     radiosityBounces(scene, h, ctx, std::max(level, 0), o.bounces, o.seed, irradiance, radiance, stats);

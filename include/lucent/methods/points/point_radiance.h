@@ -48,6 +48,37 @@ static_assert(sizeof(HalfRgb) == 6, "half-float RGB radiance, 48 bits per node")
 inline HalfRgb toHalf(Rgb c) { return {floatToHalf(c.r), floatToHalf(c.g), floatToHalf(c.b)}; }
 inline Rgb toFloat(HalfRgb c) { return {halfToFloat(c.r), halfToFloat(c.g), halfToFloat(c.b)}; }
 
+// What a node sends: its leaves' area-weighted mean every way (the paper's nodes), or towards each
+// direction its leaves' radiance weighted by the area they show that way (DirectionalRadiance).
+enum class NodeRadianceKind { Isotropic, Directional };
+
+// A node's radiance by direction (a departure from the paper; micro-rendering README, "Directional
+// node radiance"): seen from direction w, a leaf of area A and normal n shows A max(0, n . w), so the
+// node's radiance towards w is sum(A L max(0, n . w)) / sum(A max(0, n . w)) over its leaves. Both
+// sums are kept for the six axis directions (an ambient cube), where they add up exactly from
+// child to parent; towards w they are blended with the weights |w_x|, |w_y|, |w_z| of the three
+// axis directions on w's side, which gives sum(A max(0, n . w)) exactly for normals in w's octant.
+// A flat node sends its mean every way; a node over a column's sunlit and shaded sides sends each
+// side's radiance towards the receivers that side faces.
+struct DirectionalRadiance {
+  Rgb shown[6];   // sum of A L max(0, n . e_k), e_k = +x, -x, +y, -y, +z, -z
+  float area[6];  // sum of A max(0, n . e_k)
+};
+static_assert(sizeof(DirectionalRadiance) == 96, "a node's directional radiance is 24 floats");
+
+// Towards direction w (unit, world space); `mean` where no leaf shows itself that way.
+inline Rgb radianceTowards(const DirectionalRadiance& d, Vec3 w, Rgb mean) {
+  const int x = w.x >= 0 ? 0 : 1, y = w.y >= 0 ? 2 : 3, z = w.z >= 0 ? 4 : 5;
+  const float wx = std::abs(w.x), wy = std::abs(w.y), wz = std::abs(w.z);
+  const float area = d.area[x] * wx + d.area[y] * wy + d.area[z] * wz;
+  if (!(area > 0)) return mean;
+  return (d.shown[x] * wx + d.shown[y] * wy + d.shown[z] * wz) * (1.0f / area);
+}
+
+// The interior nodes' (1 .. n - 1; entry 0 unused) from the leaves' radiance (nodes n .. 2n - 1 of
+// `radiance`), normals (the leaf nodes' cone axes) and areas, bottom up.
+std::vector<DirectionalRadiance> directionalRadiance(const PointHierarchy& hierarchy, std::span<const Rgb> radiance);
+
 // Interior radiance from the leaves' (nodes n .. 2n-1 of `radiance`, which has nodeCount() entries):
 // every interior node gets the area-weighted average of its two children (nodeAreas), level by level
 // from the leaves up; children of zero total area average equally.
