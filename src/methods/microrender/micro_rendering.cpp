@@ -106,6 +106,7 @@ struct LaneResults {
   alignas(64) float vx[kGatherPacket], vy[kGatherPacket], vz[kGatherPacket];
   alignas(64) float lx[kGatherPacket], ly[kGatherPacket], lz[kGatherPacket], d[kGatherPacket];
   alignas(64) float cosRadius[kGatherPacket];  // of the cone the node's sphere subtends
+  alignas(64) int32_t wide[kGatherPacket];     // wider than its pixel's spacing: a 5 x 5 splat
 };
 
 // A direction's pixel in lane l's mapping: HemisphereMapping::pixelOf over the lanes' tables.
@@ -192,6 +193,7 @@ struct PixelTables {
   outcome = n.radius > d * t.spacing[at] ? kListLeaf : outcome;
   // Also every lane that no normal of the cone faces (their cosine to the axis is at most -coneSin).
   outcome = facing <= d * n.coneSin + L.selfDistance[l] ? kSkipSubtree : outcome;
+  r.wide[l] = 0;  // splatted leaves are no wider than a spacing (without ray casting, as the paper's)
   r.outcome[l] = g.height <= -n.radius ? kSkipSubtree : outcome;
 }
 
@@ -213,12 +215,14 @@ struct PixelTables {
   int32_t outcome = g.lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
   outcome = bestFacing > 0 ? outcome : kSkipSubtree;
   outcome = solidAngle > t.solidAngle[at] ? kDescend : outcome;
-  outcome = n.radius > L.splatReach * (d * t.spacing[at]) ? kDescend : outcome;
+  const float spacing = d * t.spacing[at];
+  outcome = n.radius > L.splatReach * spacing ? kDescend : outcome;
   const int32_t coplanar = std::abs(height) + n.radius * sinAll <= horizon ? kSkipSubtree : outcome;
   outcome = std::abs(height) <= horizon ? coplanar : outcome;
   const int32_t backFacing = cosToAxis < -(sinA * n.coneCos + cosA * n.coneSin) ? kSkipSubtree : outcome;
   outcome = cosA * n.coneCos - sinA * n.coneSin > 0 ? backFacing : outcome;
   outcome = d <= n.radius ? kDescend : outcome;
+  r.wide[l] = n.radius > spacing;
   r.outcome[l] = height <= -n.radius ? kSkipSubtree : outcome;
 }
 
@@ -296,11 +300,12 @@ class LaneRasterizer {
   // bounding sphere alone would widen every silhouette by up to a pixel, showing near surfaces
   // in front of far ones or of the open sky (on the Cornell box, 10% more indirect light). A node
   // no wider than its pixel's spacing reaches its 3 x 3 pixels, a wider one its 5 x 5.
-  // (x, y) is the node's pixel, cosRadius the cosine of the half-angle its sphere subtends.
-  void splat(int x, int y, float cosRadius, const TraversalNode& node, Vec3 toCentre, Vec3 local, float distance,
-             uint32_t index) {
+  // (x, y) is the node's pixel, cosRadius the cosine of the half-angle its sphere subtends, wide
+  // whether it is wider than the pixel's spacing (an interior node: classifyInteriorLane).
+  void splat(int x, int y, float cosRadius, bool wide, const TraversalNode& node, Vec3 toCentre, Vec3 local,
+             float distance, uint32_t index) {
     ++c_->nodesSplatted;
-    if (node.radius > distance * m_->spacing[size_t(y * m_->width + x)])
+    if (wide)
       splatWithin<2>(x, y, cosRadius, node, toCentre, local, distance, index);
     else
       splatWithin<1>(x, y, cosRadius, node, toCentre, local, distance, index);
@@ -673,8 +678,8 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
       } else if (outcome == kListLeaf && rayCasting) {
         rasterizers[size_t(l)].listLeaf(i);
       } else {  // splat, or without ray casting a leaf larger than its pixel (Fig. 11's holes)
-        rasterizers[size_t(l)].splat(r.column[l], r.row[l], r.cosRadius[l], node, {r.vx[l], r.vy[l], r.vz[l]}, {r.lx[l], r.ly[l], r.lz[l]},
-                                     r.d[l], i);
+        rasterizers[size_t(l)].splat(r.column[l], r.row[l], r.cosRadius[l], r.wide[l] != 0, node,
+                                     {r.vx[l], r.vy[l], r.vz[l]}, {r.lx[l], r.ly[l], r.lz[l]}, r.d[l], i);
       }
     }
     if (descend != 0) {
