@@ -25,6 +25,7 @@ DTYPES = {
                              ("res", "<i4", (3,)), ("slack", "<f4")]),
     "float": np.dtype("<f4"),
     "HalfRgb": np.dtype([("rgb", "<f2", (3,))]),
+    "DirectionalRadiance": np.dtype([("shown", "<f4", (6, 3)), ("area", "<f4", (6,))]),
     "PointSample": np.dtype([("triangle", "<u4"), ("b1", "<f4"), ("b2", "<f4")]),
     "FloatNode": np.dtype([("center",) + F3, ("radius", "<f4"), ("cone_axis",) + F3, ("cone_angle", "<f4"),
                            ("albedo",) + F3]),

@@ -220,6 +220,14 @@ TEST_CASE("A micro dump's interior radiance pulls up from its leaves", "[dump][m
     rounded += half[i].r == expected.r && half[i].g == expected.g && half[i].b == expected.b;
   }
   CHECK(rounded == 2047);
+  // The interior nodes' directional radiance, recomputed from the dumped leaves.
+  h.floatNodes = readDump<FloatNode>(dir / "hierarchy.float_nodes.bin", "FloatNode");
+  const auto directional = readDump<DirectionalRadiance>(dir / "point_radiance_directional.bin", "DirectionalRadiance");
+  REQUIRE(directional.size() == 1024);
+  const std::vector<DirectionalRadiance> expected = directionalRadiance(h, radiance);
+  size_t same = 0;
+  for (uint32_t i = 1; i < 1024; ++i) same += std::memcmp(&expected[i], &directional[i], sizeof(DirectionalRadiance)) == 0;
+  CHECK(same == 1023);
   const auto points = readDump<ShadingPoint>(dir / "shading_points.bin", "ShadingPoint");
   CHECK(points.size() > 100);
   CHECK(readDump<Rgb>(dir / "indirect.bin", "Rgb").size() == points.size());

@@ -113,6 +113,8 @@ void dumpHierarchy(const std::string& dir, const PointHierarchy& h) {
 void dumpPointRadiance(const std::string& dir, const NodeRadiance& radiance) {
   writeDump(dir, "point_radiance", "Rgb", std::span(radiance.rgb));
   if (!radiance.half.empty()) writeDump(dir, "point_radiance_half", "HalfRgb", std::span(radiance.half));
+  if (!radiance.directional.empty())
+    writeDump(dir, "point_radiance_directional", "DirectionalRadiance", std::span(radiance.directional));
 }
 
 }  // namespace
