@@ -8,6 +8,8 @@
            samples per second against the total number of gather samples (upsampling 1/16, 1/4, 1);
   targets  (issue 4) 512 x 512 with 24 x 24 buffers at every pixel in under 60 s, at 1/16 of the
            pixels with upsampling in under 5 s, on 2 cores;
+  departures indirect error and time with the paper's isotropic node radiance and the directional one,
+           each with splats up to one and two pixel spacings wide (--node-radiance, --splat-reach);
   breakdown the paper's time shares (hierarchy update, mappings built and evaluated, rasterizing,
            ray casting, upsampling and the rest) and the share of micro-buffers that needed ray casting.
 
@@ -99,6 +101,19 @@ def main():
             share = c["micro_buffers_ray_cast"] / max(1, c["micro_buffers"])
             r["fig12"].append(dict(buffer=side, seconds=s["seconds"], relmse=e, indirect_relmse=ei, ray_cast_share=share))
             print(f"{side:>5}^2 {s['seconds']:8.2f} {e:8.4f} {ei:9.4f} {share:16.0%}", flush=True)
+
+        print("Departures: node radiance and splat reach at 256 x 256 (every pixel, default points)")
+        print(f"{'radiance':>12} {'reach':>6} {'seconds':>8} {'gathering':>10} {'relMSE':>8} {'indirect':>9}")
+        r["departures"] = []
+        for radiance in ("isotropic", "directional"):
+            for reach in (1, 2):
+                s, img = micro(scene, "256x256", args.threads, ["--node-radiance", radiance, "--splat-reach", str(reach)])
+                e, ei = relmse(img, ref256)
+                row = dict(node_radiance=radiance, splat_reach=reach, seconds=s["seconds"],
+                           gathering=s["stages"]["final_gathering"], relmse=e, indirect_relmse=ei)
+                r["departures"].append(row)
+                print(f"{radiance:>12} {reach:>6} {row['seconds']:8.2f} {row['gathering']:10.2f} {e:8.4f} {ei:9.4f}",
+                      flush=True)
 
         print("Fig. 13 (left): points at 256 x 256, 24 x 24 buffers")
         print(f"{'points':>8} {'seconds':>8} {'gathering':>10} {'hierarchy update':>17} {'nodes/buffer':>13} {'relMSE':>8} "
