@@ -350,26 +350,34 @@ TEST_CASE("A plane seen edge-on covers no direction that passes below it", "[mic
   }
 }
 
+// The micro-buffers of gather points at the Cornell box's sites (kCornellSites), a diffuse and a
+// glossy receiver at each, with 2^13 float nodes, one mapping and splat reach: visit(setup, lane,
+// gather point's position, site) for each.
+template <class Visit>
+void forEachCornellBuffer(MappingKind kind, int reach, uint64_t seed, Visit visit) {
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
+  const GatherSetup s(scene, 1u << 13, NodeEncoding::Float, kind, true, unitRadiance, 24, reach);
+  const std::array<SurfaceBsdf, 2> bsdfs = diffuseAndGlossy();
+  for (size_t site = 0; site < std::size(kCornellSites); ++site)
+    for (const SurfaceBsdf& bsdf : bsdfs) {
+      GatherScratch scratch;
+      Rng rng(seed, site);
+      const Vec3 p = kCornellSites[site].position, n = kCornellSites[site].normal;
+      gatherAt(s.ctx, p, n, normalize(n + Vec3{0.3f, 0.2f, -0.4f}), bsdf, rng, s.radiance, scratch);
+      visit(s, scratch.lanes[0], p, site);
+    }
+}
+
 TEST_CASE("Every pixel of a micro-buffer shows a node that its ray meets", "[microrender]") {
   // What a splat or a ray cast puts in a pixel, checked in double precision against the pixel's
   // sample ray from the gather point: a leaf's one-sided disc, or an interior node's bounding sphere
   // within its slab (MicroHierarchy::thickness). Points on the Cornell box's walls and blocks, both
-  // mappings, a diffuse and a glossy receiver.
-  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
-  const auto& sites = kCornellSites;
-  const std::array<SurfaceBsdf, 2> bsdfs = diffuseAndGlossy();
+  // mappings and splat reaches, a diffuse and a glossy receiver.
   for (const int reach : {1, 2})
-  for (const MappingKind kind : {MappingKind::Nusselt, MappingKind::Warped}) {
-    const GatherSetup s(scene, 1u << 13, NodeEncoding::Float, kind, true, unitRadiance, 24, reach);
-    const uint32_t leafCount = s.hierarchy.leafCount;
-    size_t leafPixels = 0, interiorPixels = 0;
-    for (size_t site = 0; site < std::size(sites); ++site)
-      for (const SurfaceBsdf& bsdf : bsdfs) {
-        GatherScratch scratch;
-        Rng rng(11, site);
-        const Vec3 p = sites[site].position, n = sites[site].normal;
-        gatherAt(s.ctx, p, n, normalize(n + Vec3{0.3f, 0.2f, -0.4f}), bsdf, rng, s.radiance, scratch);
-        const GatherLane& lane = scratch.lanes[0];
+    for (const MappingKind kind : {MappingKind::Nusselt, MappingKind::Warped}) {
+      size_t leafPixels = 0, interiorPixels = 0;
+      forEachCornellBuffer(kind, reach, 11, [&](const GatherSetup& s, const GatherLane& lane, Vec3 p, size_t site) {
+        const uint32_t leafCount = s.hierarchy.leafCount;
         for (const uint16_t i : lane.mapping.used) {
           const uint32_t px = lane.buffer.pixels[i];
           if (px == kEmptyMicroPixel) continue;
@@ -401,11 +409,12 @@ TEST_CASE("Every pixel of a micro-buffer shows a node that its ray meets", "[mic
             REQUIRE(nearest <= s.micro.thickness[index] + 1e-3 * r);
           }
         }
-      }
-    INFO("mapping " << int(kind) << ": " << leafPixels << " leaf and " << interiorPixels << " interior pixels");
-    REQUIRE(leafPixels > 1000);
-    REQUIRE(interiorPixels > 1000);
-  }
+      });
+      INFO("reach " << reach << ", mapping " << int(kind) << ": " << leafPixels << " leaf and " << interiorPixels
+                    << " interior pixels");
+      REQUIRE(leafPixels > 1000);
+      REQUIRE(interiorPixels > 1000);
+    }
 }
 
 TEST_CASE("An interior node in a micro-buffer reaches every pixel whose ray crosses its plane well inside it", "[microrender]") {
@@ -415,49 +424,39 @@ TEST_CASE("An interior node in a micro-buffer reaches every pixel whose ray cros
   // its slab, whatever the slab's thickness) holds it or something no farther (the depth code of the
   // node's centre). Cornell box, both mappings and reaches, diffuse and glossy receivers.
   // Also measures the sheared warped pixels' misses (below).
-  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
-  const auto& sites = kCornellSites;
-  const std::array<SurfaceBsdf, 2> bsdfs = diffuseAndGlossy();
   for (const int reach : {1, 2})
     for (const MappingKind kind : {MappingKind::Nusselt, MappingKind::Warped}) {
-      const GatherSetup s(scene, 1u << 13, NodeEncoding::Float, kind, true, unitRadiance, 24, reach);
-      const uint32_t leafCount = s.hierarchy.leafCount;
       size_t checked = 0, wide = 0, violations = 0;
-      for (size_t site = 0; site < std::size(sites); ++site)
-        for (const SurfaceBsdf& bsdf : bsdfs) {
-          GatherScratch scratch;
-          Rng rng(17, site);
-          const Vec3 p = sites[site].position, n = sites[site].normal;
-          gatherAt(s.ctx, p, n, normalize(n + Vec3{0.3f, 0.2f, -0.4f}), bsdf, rng, s.radiance, scratch);
-          const GatherLane& lane = scratch.lanes[0];
-          std::vector<uint32_t> shown;
-          for (const uint16_t i : lane.mapping.used)
-            if (lane.buffer.pixels[i] != kEmptyMicroPixel && microPixelNode(lane.buffer.pixels[i]) < leafCount)
-              shown.push_back(microPixelNode(lane.buffer.pixels[i]));
-          std::sort(shown.begin(), shown.end());
-          shown.erase(std::unique(shown.begin(), shown.end()), shown.end());
-          for (const uint32_t index : shown) {
-            const TraversalNode& node = s.micro.floatNodes[index];
-            const Vec3 toCentre = node.center - p;
-            const uint32_t depth = s.ctx.settings.depth.code(length(toCentre) * 1.0001f);
-            const double d = length(toCentre);
-            for (const uint16_t i : lane.mapping.used) {
-              const Vec3 w = lane.point.frame.toWorld(lane.mapping.direction[i]);
-              const double cosine = double(w.x) * node.axis.x + double(w.y) * node.axis.y + double(w.z) * node.axis.z;
-              const double height = -(double(toCentre.x) * node.axis.x + double(toCentre.y) * node.axis.y +
-                                      double(toCentre.z) * node.axis.z);  // of p above the plane
-              if (cosine == 0) continue;
-              const double t = height / -cosine;
-              if (!(t > 0)) continue;
-              const double hx = p.x + t * w.x - node.center.x, hy = p.y + t * w.y - node.center.y,
-                           hz = p.z + t * w.z - node.center.z;
-              if (std::sqrt(hx * hx + hy * hy + hz * hz) > 0.98 * node.radius) continue;
-              ++checked;
-              wide += node.radius > d * lane.mapping.spacing[i];
-              violations += microPixelDepth(lane.buffer.pixels[i]) > depth;
-            }
+      forEachCornellBuffer(kind, reach, 17, [&](const GatherSetup& s, const GatherLane& lane, Vec3 p, size_t) {
+        const uint32_t leafCount = s.hierarchy.leafCount;
+        std::vector<uint32_t> shown;
+        for (const uint16_t i : lane.mapping.used)
+          if (lane.buffer.pixels[i] != kEmptyMicroPixel && microPixelNode(lane.buffer.pixels[i]) < leafCount)
+            shown.push_back(microPixelNode(lane.buffer.pixels[i]));
+        std::sort(shown.begin(), shown.end());
+        shown.erase(std::unique(shown.begin(), shown.end()), shown.end());
+        for (const uint32_t index : shown) {
+          const TraversalNode& node = s.micro.floatNodes[index];
+          const Vec3 toCentre = node.center - p;
+          const uint32_t depth = s.ctx.settings.depth.code(length(toCentre) * 1.0001f);
+          const double d = length(toCentre);
+          for (const uint16_t i : lane.mapping.used) {
+            const Vec3 w = lane.point.frame.toWorld(lane.mapping.direction[i]);
+            const double cosine = double(w.x) * node.axis.x + double(w.y) * node.axis.y + double(w.z) * node.axis.z;
+            const double height = -(double(toCentre.x) * node.axis.x + double(toCentre.y) * node.axis.y +
+                                    double(toCentre.z) * node.axis.z);  // of p above the plane
+            if (cosine == 0) continue;
+            const double t = height / -cosine;
+            if (!(t > 0)) continue;
+            const double hx = p.x + t * w.x - node.center.x, hy = p.y + t * w.y - node.center.y,
+                         hz = p.z + t * w.z - node.center.z;
+            if (std::sqrt(hx * hx + hy * hy + hz * hz) > 0.98 * node.radius) continue;
+            ++checked;
+            wide += node.radius > d * lane.mapping.spacing[i];
+            violations += microPixelDepth(lane.buffer.pixels[i]) > depth;
           }
         }
+      });
       INFO("reach " << reach << ", mapping " << int(kind) << ": " << checked << " pixels checked, " << wide
                     << " of them reached by a node wider than their spacing, " << violations << " not reached");
       REQUIRE(checked > 1000);
