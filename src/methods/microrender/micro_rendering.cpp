@@ -100,11 +100,11 @@ struct LaneNode {
 enum LaneOutcome : int32_t { kSkipSubtree = 0, kDescend = 1, kSplat = 2, kListLeaf = 3 };
 
 // Per lane: what to do with the node, and for splats the node's pixel, the vector to its centre, its
-// direction in the lane's local frame, its distance and its sphere's cone.
+// distance, its sphere's cone and whether it needs 5 x 5 pixels.
 struct LaneResults {
   alignas(64) int32_t outcome[kGatherPacket], column[kGatherPacket], row[kGatherPacket];
   alignas(64) float vx[kGatherPacket], vy[kGatherPacket], vz[kGatherPacket];
-  alignas(64) float lx[kGatherPacket], ly[kGatherPacket], lz[kGatherPacket], d[kGatherPacket];
+  alignas(64) float d[kGatherPacket];
   alignas(64) float cosRadius[kGatherPacket];  // of the cone the node's sphere subtends
   alignas(64) int32_t wide[kGatherPacket];     // wider than its pixel's spacing: a 5 x 5 splat
 };
@@ -145,7 +145,7 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
   r.column[l] = pixel.column, r.row[l] = pixel.row;
   r.cosRadius[l] = cosRadius;
   r.vx[l] = vx, r.vy[l] = vy, r.vz[l] = vz;
-  r.lx[l] = lx, r.ly[l] = ly, r.lz[l] = lz, r.d[l] = d;
+  r.d[l] = d;
   return {vx, vy, vz, height, d2, d, invD, lz, sinRadius, cosRadius, L.pixelBase[l] + pixel.row * L.side + pixel.column};
 }
 
@@ -255,7 +255,7 @@ void classifyActiveLanes(const PacketLanes& __restrict L, const LaneNode& __rest
   }
 }
 
-// Pixel (x, y) of a buffer `width` pixels wide in its padded arrays (MicroBuffer::localX, worldX,
+// Pixel (x, y) of a buffer `width` pixels wide in its padded arrays (MicroBuffer::worldX, worldY,
 // grid: rows of width + 2 kGridBorder with a border of kGridBorder pixels).
 inline size_t paddedIndex(int width, int x, int y) {
   return size_t(y + kGridBorder) * size_t(width + 2 * kGridBorder) + size_t(x + kGridBorder);
@@ -277,7 +277,6 @@ class LaneRasterizer {
         const size_t p = size_t(y * m_->width + x);
         const Vec3 d = m_->direction[p], w = g_->frame.toWorld(d);
         const size_t q = gridIndex(x, y);
-        b_->localX[q] = d.x, b_->localY[q] = d.y, b_->localZ[q] = d.z;
         b_->worldX[q] = w.x, b_->worldY[q] = w.y, b_->worldZ[q] = w.z;
         b_->grid[q] = kEmptyMicroPixel;
       }
@@ -302,13 +301,13 @@ class LaneRasterizer {
   // no wider than its pixel's spacing reaches its 3 x 3 pixels, a wider one its 5 x 5.
   // (x, y) is the node's pixel, cosRadius the cosine of the half-angle its sphere subtends, wide
   // whether it is wider than the pixel's spacing (an interior node: classifyInteriorLane).
-  void splat(int x, int y, float cosRadius, bool wide, const TraversalNode& node, Vec3 toCentre, Vec3 local,
-             float distance, uint32_t index) {
+  void splat(int x, int y, float cosRadius, bool wide, const TraversalNode& node, Vec3 toCentre, float distance,
+             uint32_t index) {
     ++c_->nodesSplatted;
     if (wide)
-      splatWithin<2>(x, y, cosRadius, node, toCentre, local, distance, index);
+      splatWithin<2>(x, y, cosRadius, node, toCentre, distance, index);
     else
-      splatWithin<1>(x, y, cosRadius, node, toCentre, local, distance, index);
+      splatWithin<1>(x, y, cosRadius, node, toCentre, distance, index);
   }
 
   void listLeaf(uint32_t node) {
@@ -341,11 +340,11 @@ class LaneRasterizer {
   }
 
   template <int Reach>
-  void splatWithin(int x, int y, float cosRadius, const TraversalNode& node, Vec3 toCentre, Vec3 local, float distance,
+  void splatWithin(int x, int y, float cosRadius, const TraversalNode& node, Vec3 toCentre, float distance,
                    uint32_t index) {
-    // First the bounding sphere's cone (the local directions' dot products, a row at a time), then
-    // the exact test.
-    const uint64_t withinSphereCone = withinCone<Reach>(x, y, local, cosRadius);
+    // First the bounding sphere's cone (the pixels' directions against the one to the node's centre,
+    // a row at a time), then the exact test; both read the same rows of world directions.
+    const uint64_t withinSphereCone = withinCone<Reach>(x, y, toCentre * (1.0f / distance), cosRadius);
     if (withinSphereCone == 0) return;
     const uint32_t packed = packMicroPixel(s_->depth.code(distance), index);
     const Vec3 pc = -toCentre;  // gather point minus node centre
@@ -398,18 +397,19 @@ class LaneRasterizer {
   }
 
   // The pixels of the window about (x, y) within the image whose direction lies within the cone of
-  // the node's sphere: bit 8 r + c for row y + r - Reach and column x + c - Reach.
+  // the node's sphere (toNode: the unit direction to its centre): bit 8 r + c for row y + r - Reach
+  // and column x + c - Reach.
   template <int Reach>
-  uint64_t withinCone(int x, int y, Vec3 local, float cosRadius) const {
+  uint64_t withinCone(int x, int y, Vec3 toNode, float cosRadius) const {
     uint64_t bits = 0;
     for (int r = 0; r < windowSide(Reach); ++r)
       for (int k = 0; k < rowChunks(Reach); ++k) {
         const size_t q = gridIndex(x - Reach + 4 * k, y - Reach + r);
         Floats dx, dy, dz;
-        std::memcpy(&dx, b_->localX.data() + q, sizeof dx);
-        std::memcpy(&dy, b_->localY.data() + q, sizeof dy);
-        std::memcpy(&dz, b_->localZ.data() + q, sizeof dz);
-        const Ints within = ~(dx * local.x + dy * local.y + dz * local.z < cosRadius) & columnBits(Reach, k);  // also unused pixels: (0, 0, 0)
+        std::memcpy(&dx, b_->worldX.data() + q, sizeof dx);
+        std::memcpy(&dy, b_->worldY.data() + q, sizeof dy);
+        std::memcpy(&dz, b_->worldZ.data() + q, sizeof dz);
+        const Ints within = ~(dx * toNode.x + dy * toNode.y + dz * toNode.z < cosRadius) & columnBits(Reach, k);  // also unused pixels: (0, 0, 0)
         bits |= uint64_t(uint32_t(within[0] | within[1] | within[2] | within[3])) << (8 * r + 4 * k);
       }
     // Pixels beyond the image's edges (the border) are never reached.
@@ -571,7 +571,7 @@ void MicroBuffer::resize(int bufferSide) {
   postTraversal.resize(n);
   dirX.resize(n), dirY.resize(n), dirZ.resize(n), nearestT.resize(n), nearestNode.resize(n), rayGridIndex.resize(n);
   const size_t padded = size_t(side + 2 * kGridBorder) * size_t(side + 2 * kGridBorder) + 8;
-  for (auto* v : {&localX, &localY, &localZ, &worldX, &worldY, &worldZ}) v->assign(padded, 0.0f);
+  for (auto* v : {&worldX, &worldY, &worldZ}) v->assign(padded, 0.0f);
   grid.assign(padded, 0u);  // the border: nearer than any node, so never written (LaneRasterizer::start fills the rest)
   const size_t tiles = size_t((side + kRayTile - 1) / kRayTile) * size_t((side + kRayTile - 1) / kRayTile);
   tileBegin.resize(tiles + 1);
@@ -679,7 +679,7 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
         rasterizers[size_t(l)].listLeaf(i);
       } else {  // splat, or without ray casting a leaf larger than its pixel (Fig. 11's holes)
         rasterizers[size_t(l)].splat(r.column[l], r.row[l], r.cosRadius[l], r.wide[l] != 0, node,
-                                     {r.vx[l], r.vy[l], r.vz[l]}, {r.lx[l], r.ly[l], r.lz[l]}, r.d[l], i);
+                                     {r.vx[l], r.vy[l], r.vz[l]}, r.d[l], i);
       }
     }
     if (descend != 0) {

@@ -33,12 +33,11 @@ struct MicroBuffer {
   std::vector<float> dirX, dirY, dirZ, nearestT;
   std::vector<uint32_t> nearestNode;
   std::vector<uint16_t> rayGridIndex;  // each ray's pixel in `grid` (below)
-  // Per pixel, its sample direction in the local frame, as three arrays with a border of
-  // kMaxSplatReach empty pixels (rows of side + 2 kMaxSplatReach, and a few floats more), so that a
-  // splat reads the rows of its window four floats at a time without bounds checks.
-  std::vector<float> localX, localY, localZ;
-  // The same for the world-space directions (splats' exact tests, rays), and the pixels themselves
-  // while the buffer is rendered (copied to `pixels` when it is done; the border holds 0, nearer than any node).
+  // Per pixel, its sample direction in world space (the splats' cone and exact tests, the rays), as
+  // three arrays with a border of kMaxSplatReach empty pixels (rows of side + 2 kMaxSplatReach, and a
+  // few floats more), so that a splat reads the rows of its window four floats at a time without
+  // bounds checks; and the same for the pixels themselves while the buffer is rendered (copied to
+  // `pixels` when it is done; the border holds 0, nearer than any node).
   std::vector<float> worldX, worldY, worldZ;
   std::vector<uint32_t> grid;
   // Per tile: its rays [tileBegin[i], tileBegin[i + 1]) and the cone bounding their directions.
