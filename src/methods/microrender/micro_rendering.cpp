@@ -332,11 +332,18 @@ class LaneRasterizer {
   using Words = uint32_t __attribute__((vector_size(16)));
   static constexpr int windowSide(int reach) { return 2 * reach + 1; }
   static constexpr int rowChunks(int reach) { return reach == 1 ? 1 : 2; }
-  // Bit c of lane c for the columns 4 k to 4 k + 3 of the window that lie in it.
-  static Ints columnBits(int reach, int k) {
-    Ints bits{};
-    for (int c = 0; c < 4; ++c) bits[c] = 4 * k + c < windowSide(reach) ? 1 << c : 0;
-    return bits;
+  // Bit c for each of the columns 4 k to 4 k + 3 of the window that lie in it.
+  static constexpr uint32_t columnBits(int reach, int k) {
+    const int inWindow = std::min(4, windowSide(reach) - 4 * k);
+    return (1u << inWindow) - 1;
+  }
+  // Bit c where lane c of a comparison's result is set (movmskps where there is SSE).
+  static uint32_t laneBits(Ints m) {
+#if defined(__SSE__)
+    return uint32_t(__builtin_ia32_movmskps(Floats(m)));
+#else
+    return uint32_t((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8));
+#endif
   }
 
   template <int Reach>
@@ -359,17 +366,21 @@ class LaneRasterizer {
     const Ints signBit = Ints{} + int32_t(0x80000000u);
     const Ints thicknessBits = Ints{} + std::bit_cast<int32_t>(thickness);
     const float minusSelf = -g_->selfDistance;
+    // The window's first pixel and the arrays, read once: the pixel stores could alias them.
+    const size_t stride = gridStride(), first = gridIndex(x - Reach, y - Reach);
+    const float *worldX = b_->worldX.data(), *worldY = b_->worldY.data(), *worldZ = b_->worldZ.data();
+    uint32_t* grid = b_->grid.data();
     for (int r = 0; r < windowSide(Reach); ++r)
       for (int k = 0; k < rowChunks(Reach); ++k) {
         const uint32_t chunkBits = uint32_t(withinSphereCone >> (8 * r + 4 * k)) & 0xfu;
         if (chunkBits == 0) continue;
-        const size_t q = gridIndex(x - Reach + 4 * k, y - Reach + r);
+        const size_t q = first + size_t(r) * stride + size_t(4 * k);
         Floats dx, dy, dz;
         Words pixel;
-        std::memcpy(&dx, b_->worldX.data() + q, sizeof dx);
-        std::memcpy(&dy, b_->worldY.data() + q, sizeof dy);
-        std::memcpy(&dz, b_->worldZ.data() + q, sizeof dz);
-        std::memcpy(&pixel, b_->grid.data() + q, sizeof pixel);
+        std::memcpy(&dx, worldX + q, sizeof dx);
+        std::memcpy(&dy, worldY + q, sizeof dy);
+        std::memcpy(&dz, worldZ + q, sizeof dz);
+        std::memcpy(&pixel, grid + q, sizeof pixel);
         const Floats cosine = dx * node.axis.x + dy * node.axis.y + dz * node.axis.z;
         const Floats b = pc.x * dx + pc.y * dy + pc.z * dz;
         const Floats cos2 = cosine * cosine;
@@ -392,7 +403,7 @@ class LaneRasterizer {
         const Ints within = ((Ints{} + int32_t(chunkBits)) & Ints{1, 2, 4, 8}) != 0;
         const Words nearer = pixel > packed;
         pixel = (Words)(hit & within & (Ints)nearer) != 0 ? Words{} + packed : pixel;
-        std::memcpy(b_->grid.data() + q, &pixel, sizeof pixel);
+        std::memcpy(grid + q, &pixel, sizeof pixel);
       }
   }
 
@@ -402,15 +413,17 @@ class LaneRasterizer {
   template <int Reach>
   uint64_t withinCone(int x, int y, Vec3 toNode, float cosRadius) const {
     uint64_t bits = 0;
+    const size_t stride = gridStride(), first = gridIndex(x - Reach, y - Reach);
+    const float *worldX = b_->worldX.data(), *worldY = b_->worldY.data(), *worldZ = b_->worldZ.data();
     for (int r = 0; r < windowSide(Reach); ++r)
       for (int k = 0; k < rowChunks(Reach); ++k) {
-        const size_t q = gridIndex(x - Reach + 4 * k, y - Reach + r);
+        const size_t q = first + size_t(r) * stride + size_t(4 * k);
         Floats dx, dy, dz;
-        std::memcpy(&dx, b_->worldX.data() + q, sizeof dx);
-        std::memcpy(&dy, b_->worldY.data() + q, sizeof dy);
-        std::memcpy(&dz, b_->worldZ.data() + q, sizeof dz);
-        const Ints within = ~(dx * toNode.x + dy * toNode.y + dz * toNode.z < cosRadius) & columnBits(Reach, k);  // also unused pixels: (0, 0, 0)
-        bits |= uint64_t(uint32_t(within[0] | within[1] | within[2] | within[3])) << (8 * r + 4 * k);
+        std::memcpy(&dx, worldX + q, sizeof dx);
+        std::memcpy(&dy, worldY + q, sizeof dy);
+        std::memcpy(&dz, worldZ + q, sizeof dz);
+        const Ints within = ~(dx * toNode.x + dy * toNode.y + dz * toNode.z < cosRadius);  // also unused pixels: (0, 0, 0)
+        bits |= uint64_t(laneBits(within) & columnBits(Reach, k)) << (8 * r + 4 * k);
       }
     // Pixels beyond the image's edges (the border) are never reached.
     uint32_t columns = 0;
