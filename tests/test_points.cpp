@@ -680,7 +680,7 @@ TEST_CASE("Directional radiance: a node's sums over its leaves, read back toward
   const std::vector<DirectionalRadiance> d = directionalRadiance(h, radiance);
   REQUIRE(d.size() == n);
   const Vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  int flatChecked = 0;
+  int flatChecked = 0, octantChecked = 0;
   for (uint32_t i = kRootNode; i < n; ++i) {
     double shown[6][3] = {}, area[6] = {};
     bool flat = true;
@@ -706,6 +706,27 @@ TEST_CASE("Directional radiance: a node's sums over its leaves, read back toward
         REQUIRE(radianceTowards(d[i], axes[k], Rgb(-1.0f)).r == -1.0f);  // no leaf faces that way
       }
     }
+    // Towards the mean of its leaves' normals, when every normal lies in that direction's octant,
+    // the blend is exact: sum(A L max(0, n . w)) / sum(A max(0, n . w)).
+    Vec3 mean;
+    for (uint32_t j = first; j < first + count; ++j) mean += h.floatNodes[n + j].cone.axis;
+    if (length(mean) > 0.1f) {
+      const Vec3 w = normalize(mean);
+      bool inOctant = true;
+      double shownW[3] = {}, areaW = 0;
+      for (uint32_t j = first; j < first + count; ++j) {
+        const Vec3 normal = h.floatNodes[n + j].cone.axis;
+        inOctant &= normal.x * w.x >= 0 && normal.y * w.y >= 0 && normal.z * w.z >= 0;
+        const double a = double(h.nodeAreas[n + j]) * std::max(0.0f, dot(normal, w));
+        areaW += a;
+        for (int c = 0; c < 3; ++c) shownW[c] += a * radiance[n + j][c];
+      }
+      if (inOctant && areaW > 0) {
+        ++octantChecked;
+        const Rgb towards = radianceTowards(d[i], w, Rgb(-1.0f));
+        for (int c = 0; c < 3; ++c) REQUIRE(towards[c] == Approx(shownW[c] / areaW).epsilon(1e-4));
+      }
+    }
     if (!flat) continue;
     ++flatChecked;
     const Vec3 facing = normalize(h.floatNodes[n + first].cone.axis + Vec3{0.2f, -0.3f, 0.1f});
@@ -713,6 +734,7 @@ TEST_CASE("Directional radiance: a node's sums over its leaves, read back toward
     for (int c = 0; c < 3; ++c) REQUIRE(towards[c] == Approx(radiance[i][c]).epsilon(1e-4));
   }
   CHECK(flatChecked > 100);
+  CHECK(octantChecked > flatChecked);  // also nodes over corners (normals along two or three axes)
   CHECK_THROWS_AS(directionalRadiance(h, std::span<const Rgb>(radiance).first(n)), std::invalid_argument);
 }
 

@@ -83,7 +83,7 @@ void validateMicroRenderOptions(const MicroRenderOptions& o) {
   if (!(o.pointSpacing > 0) || !std::isfinite(o.pointSpacing)) fail("point spacing must be positive");
   if (o.bufferSide < kMinMicroBufferSide || o.bufferSide > kMaxMicroBufferSide)
     fail("micro-buffer size must be in [8, 32]");
-  if (o.splatReach < 1 || o.splatReach > kMaxSplatReach) fail("splat reach must be 1 or 2 pixel spacings");
+  if (o.splatReach < 1 || o.splatReach > kMaxSplatReach) fail("splat reach must be 1 to " + std::to_string(kMaxSplatReach) + " pixel spacings");
   if (o.tableSize < 4 || o.tableSize > 256) fail("BRDF table size must be in [4, 256]");
   if (o.upsampling != 1 && o.upsampling != 4 && o.upsampling != 16) fail("upsampling must be 1, 4 or 16");
   if (o.spp < 1) fail("spp must be at least 1");

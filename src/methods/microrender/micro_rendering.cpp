@@ -170,9 +170,10 @@ struct PixelTables {
 //    most the cone's angle plus the axis's tilt, and within the sphere rise at most r sin(tilt) above
 //    the centre's height); its solid angle is its area seen at the best cosine its cone allows, at
 //    most the sphere's cap (the cap alone, QSplat's measure, is 1.5 to 3 times that for flat nodes and
-//    made the cut's nodes a third of a pixel; the spacing bound keeps the sphere within a pixel's reach);
-//  - larger than its pixel (the paper's criterion) or wider than the pixel spacing (see
-//    HemisphereMapping::spacing): descend (a leaf: to the post-traversal list);
+//    made the cut's nodes a third of a pixel; the spacing bound keeps the sphere within its splat's
+//    window);
+//  - larger than its pixel (the paper's criterion), or wider than splatReach pixel spacings (a leaf:
+//    one spacing; see HemisphereMapping::spacing): descend (a leaf: to the post-traversal list);
 //  - at most a pixel: splat, unless the centre lies in the tangent plane or below it (nodes of the
 //    receiver's own plane straddle it: no ray from the receiver meets them) or no normal of the cone
 //    faces the receiver.
@@ -193,7 +194,7 @@ struct PixelTables {
   outcome = n.radius > d * t.spacing[at] ? kListLeaf : outcome;
   // Also every lane that no normal of the cone faces (their cosine to the axis is at most -coneSin).
   outcome = facing <= d * n.coneSin + L.selfDistance[l] ? kSkipSubtree : outcome;
-  r.wide[l] = 0;  // splatted leaves are no wider than a spacing (without ray casting, as the paper's)
+  r.wide[l] = 0;  // leaves are splatted into 3 x 3 pixels (wider ones only without ray casting: Fig. 11)
   r.outcome[l] = g.height <= -n.radius ? kSkipSubtree : outcome;
 }
 

@@ -20,7 +20,7 @@ void pullRadiance(const PointHierarchy& h, std::span<Rgb> radiance) {
 }
 
 std::vector<DirectionalRadiance> directionalRadiance(const PointHierarchy& h, std::span<const Rgb> radiance) {
-  if (radiance.size() != h.nodeCount() || h.floatNodes.size() != h.nodeCount())
+  if (radiance.size() != h.nodeCount() || h.floatNodes.size() != h.nodeCount() || h.nodeAreas.size() != h.nodeCount())
     throw std::invalid_argument("directionalRadiance: the array needs one entry per node (nodeCount())");
   std::vector<DirectionalRadiance> d(h.leafCount);
   auto add = [&](DirectionalRadiance& to, uint32_t child) {

@@ -25,8 +25,9 @@ inline constexpr uint32_t kEmptyMicroPixel = 0xffffffffu;
 inline constexpr uint32_t kMaxDepthCode = 254;  // 255 with index 2^24 - 1 is the empty pixel
 
 // Depth in 8 bits, logarithmic over 12 octaves below the scene's extent: 254 / 12 codes per unit of
-// log2Bits (below), 15 to 29 per octave, so depths 4.8% apart get different codes at any distance.
-// Nearer than 2^-12 of the extent is code 0. With the depth in the high byte, "nearer, then lower
+// log2Bits (below; codesPerOctave counts those units), 15 to 29 per octave, so depths 4.8% apart get
+// different codes at any distance. Nearer than 2^-12 of the extent (up to 6% beyond it, as
+// log2Bits reads low) is code 0. With the depth in the high byte, "nearer, then lower
 // node index" is one unsigned comparison of packed words (the order an atomicMin would keep on a
 // GPU).
 struct DepthCoding {

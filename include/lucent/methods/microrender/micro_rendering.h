@@ -114,7 +114,8 @@ void renderMicroBuffer(const MicroHierarchy& hierarchy, const GatherPoint& gathe
 // The convolution: the sum over the buffer's pixels of the visible node's radiance times the pixel's
 // weight. One overload per radiance layout: float RGB, or the paper's half floats (3.1).
 // `directional`: the interior nodes' DirectionalRadiance (entries 1 .. n - 1), read towards the
-// gather point instead of `radiance`; empty: every node sends `radiance` every way.
+// gather point instead of `radiance`; empty: every node sends `radiance` every way. Reads the
+// buffer's pixel directions (MicroBuffer::worldX): for a buffer just rendered with this mapping.
 Rgb convolveMicroBuffer(const MicroBuffer& buffer, const HemisphereMapping& mapping, std::span<const Rgb> radiance,
                         std::span<const DirectionalRadiance> directional = {});
 Rgb convolveMicroBuffer(const MicroBuffer& buffer, const HemisphereMapping& mapping, std::span<const HalfRgb> radiance,
