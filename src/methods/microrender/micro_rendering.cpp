@@ -556,7 +556,9 @@ class LaneRasterizer {
 };
 
 // The pixels' radiance times their weights. An interior node with directional radiance is read
-// towards the gather point: against the pixel's direction.
+// towards the gather point (against the pixel's direction); one whose leaves all face away (its
+// normal cone let it through) sends nothing: at 256 x 256, indirect relMSE against the path tracer
+// 0.0592 and 0.00634 (Sponza, the Cornell box) against 0.0606 and 0.00638 sending its mean.
 template <class Radiance>
 Rgb convolve(const MicroBuffer& b, const HemisphereMapping& m, Radiance radiance,
              std::span<const DirectionalRadiance> directional) {
@@ -566,12 +568,12 @@ Rgb convolve(const MicroBuffer& b, const HemisphereMapping& m, Radiance radiance
     const uint32_t px = b.pixels[k];
     if (px == kEmptyMicroPixel) continue;
     const uint32_t node = microPixelNode(px);
-    Rgb l = radiance(node);
     if (node < directionalNodes) {
       const size_t q = paddedIndex(m.width, k % m.width, k / m.width);
-      l = radianceTowards(directional[node], {-b.worldX[q], -b.worldY[q], -b.worldZ[q]}, l);
+      sum += radianceTowards(directional[node], {-b.worldX[q], -b.worldY[q], -b.worldZ[q]}, Rgb()) * m.weight[k];
+    } else {
+      sum += radiance(node) * m.weight[k];
     }
-    sum += l * m.weight[k];
   }
   return sum;
 }

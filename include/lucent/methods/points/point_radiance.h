@@ -66,12 +66,12 @@ struct DirectionalRadiance {
 };
 static_assert(sizeof(DirectionalRadiance) == 96, "a node's directional radiance is 24 floats");
 
-// Towards direction w (unit, world space); `mean` where no leaf shows itself that way.
-inline Rgb radianceTowards(const DirectionalRadiance& d, Vec3 w, Rgb mean) {
+// Towards direction w (unit, world space); `none` where no leaf shows itself that way.
+inline Rgb radianceTowards(const DirectionalRadiance& d, Vec3 w, Rgb none) {
   const int x = w.x >= 0 ? 0 : 1, y = w.y >= 0 ? 2 : 3, z = w.z >= 0 ? 4 : 5;
   const float wx = std::abs(w.x), wy = std::abs(w.y), wz = std::abs(w.z);
   const float area = d.area[x] * wx + d.area[y] * wy + d.area[z] * wz;
-  if (!(area > 0)) return mean;
+  if (!(area > 0)) return none;
   return (d.shown[x] * wx + d.shown[y] * wy + d.shown[z] * wz) * (1.0f / area);
 }
 
