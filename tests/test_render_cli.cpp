@@ -163,7 +163,10 @@ TEST_CASE("render --method micro: options, the paper's time breakdown and counte
   const test::TempDir dir("render-cli");
   for (const std::string lighting : {"direct", "vpl", "radiosity", "photons"}) {
     const std::string exr = dir / (lighting + ".exr");
+    // Half of the runs with the paper's node radiance and 3 x 3 splats, half with the defaults.
+    const bool paperNodes = lighting == "direct" || lighting == "radiosity";
     const test::CliRun r = runLucent("render " + kScene + " --method micro --lighting " + lighting +
+                                     (paperNodes ? " --node-radiance isotropic --splat-reach 1" : "") +
                                      " --points 4096 --buffer-size 16 --mapping nusselt --upsampling 4 --encoding packed"
                                      " --light-samples 4 --point-light-samples 2 --vpls 16 --radiosity-level 6 --bounces 1"
                                      " --photons 2000 --k 10 --resolution 24x20 --seed 4 --threads 2 --layers --quiet -o " + exr);
@@ -180,6 +183,8 @@ TEST_CASE("render --method micro: options, the paper's time breakdown and counte
     REQUIRE(options["encoding"] == "packed");
     REQUIRE(options["light_samples"] == 4);
     REQUIRE(options["ray_casting"] == true);
+    REQUIRE(options["node_radiance"] == (paperNodes ? "isotropic" : "directional"));
+    REQUIRE(options["splat_reach"] == (paperNodes ? 1 : 2));
     REQUIRE(options.contains("vpls") == (lighting == "vpl"));
     REQUIRE(options.contains("bounces") == (lighting == "radiosity"));
     REQUIRE(options.contains("photons") == (lighting == "photons"));
@@ -213,6 +218,9 @@ TEST_CASE("render: impossible micro options are rejected with a message and no o
            {"--method micro --buffer-size 40", "--buffer-size"},
            {"--method micro --upsampling 3", "--upsampling"},
            {"--method micro --lighting sunlight", "--lighting"},
+           {"--method micro --splat-reach 3", "--splat-reach"},
+           {"--method micro --node-radiance mean", "--node-radiance"},
+           {"--method pt --splat-reach 1", "--splat-reach"},
            {"--method micro --gather-rays 16", "--gather-rays"},
            {"--method pmfg --no-raycast", "--no-raycast"},
            {"--method pt --lighting vpl", "--lighting"}}) {

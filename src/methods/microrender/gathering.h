@@ -25,7 +25,7 @@ namespace lucent {
 // directional node radiance the interior nodes' DirectionalRadiance. finish() derives the last two
 // from `rgb` once it holds every node's radiance.
 struct NodeRadiance {
-  NodeRadianceKind kind = NodeRadianceKind::Isotropic;
+  NodeRadianceKind kind = NodeRadianceKind::Isotropic;  // the renderer's default: MicroRenderOptions::nodeRadiance
   std::vector<Rgb> rgb;
   std::vector<HalfRgb> half;
   std::vector<DirectionalRadiance> directional;

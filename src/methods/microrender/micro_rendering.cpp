@@ -332,7 +332,7 @@ class LaneRasterizer {
   using Ints = int32_t __attribute__((vector_size(16)));
   using Words = uint32_t __attribute__((vector_size(16)));
   static constexpr int windowSide(int reach) { return 2 * reach + 1; }
-  static constexpr int rowChunks(int reach) { return reach == 1 ? 1 : 2; }
+  static constexpr int rowChunks(int reach) { return (windowSide(reach) + 3) / 4; }
   // Bit c for each of the columns 4 k to 4 k + 3 of the window that lie in it.
   static constexpr uint32_t columnBits(int reach, int k) {
     const int inWindow = std::min(4, windowSide(reach) - 4 * k);
@@ -361,8 +361,9 @@ class LaneRasterizer {
     const float thickness = thickness_[index];
     const bool flat = thickness < node.radius;  // else the slab cuts nothing off the sphere
     // Each row of the window four pixels at a time (columns past it are written back unchanged),
-    // without branches: which pixels pass is data, not control flow. The tests are multiplied
-    // through by cosine^2 (no division per pixel). A pixel that a nearer node (or this one) holds
+    // without branches within the four: which pixels pass is data, not control flow; a four with no
+    // pixel in the sphere's cone is skipped. The tests are multiplied through by cosine^2 (no
+    // division per pixel). A pixel that a nearer node (or this one) holds
     // keeps it: min(pixel, packed).
     const Ints signBit = Ints{} + int32_t(0x80000000u);
     const Ints thicknessBits = Ints{} + std::bit_cast<int32_t>(thickness);
@@ -564,12 +565,15 @@ Rgb convolve(const MicroBuffer& b, const HemisphereMapping& m, Radiance radiance
              std::span<const DirectionalRadiance> directional) {
   const uint32_t directionalNodes = uint32_t(directional.size());  // the interior nodes, or none
   Rgb sum;
+  // The used pixels come in row order: their rows are followed rather than divided out.
+  int row = 0, rowEnd = m.width;
   for (const uint16_t k : m.used) {
+    while (k >= rowEnd) ++row, rowEnd += m.width;
     const uint32_t px = b.pixels[k];
     if (px == kEmptyMicroPixel) continue;
     const uint32_t node = microPixelNode(px);
     if (node < directionalNodes) {
-      const size_t q = paddedIndex(m.width, k % m.width, k / m.width);
+      const size_t q = paddedIndex(m.width, k - (rowEnd - m.width), row);
       sum += radianceTowards(directional[node], {-b.worldX[q], -b.worldY[q], -b.worldZ[q]}, Rgb()) * m.weight[k];
     } else {
       sum += radiance(node) * m.weight[k];

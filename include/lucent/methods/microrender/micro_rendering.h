@@ -62,7 +62,9 @@ struct MicroCounters {
 struct MicroRenderSettings {
   bool rayCasting = true;  // false: leaves larger than a pixel are splatted like the rest (Fig. 11's holes)
   DepthCoding depth;
-  int splatReach = 1;  // 1 to kMaxSplatReach (micro_buffer.h)
+  // 1 to kMaxSplatReach (micro_buffer.h); 1 here, as the kernel's tests build it, while the
+  // renderer's default is MicroRenderOptions::splatReach.
+  int splatReach = 1;
 };
 
 // Nodes as the traversal reads them: sphere, cone axis, and the sine and cosine of the cone angle.
