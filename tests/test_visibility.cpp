@@ -1,4 +1,5 @@
-// Embree visibility against brute-force ray-triangle intersection, and packets against single rays.
+// Embree visibility against brute-force ray-triangle intersection, and packets against single rays,
+// with the kernels of every instruction set this CPU runs (those of older CPUs included).
 #include <catch2/catch.hpp>
 
 #include <limits>
@@ -50,7 +51,10 @@ std::vector<Ray> randomRays(const Scene& scene, int n, uint64_t seed) {
 
 TEST_CASE("Closest-hit and any-hit queries agree with brute force", "[visibility]") {
   const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-glossy.json", {true});
-  const Visibility vis(scene);
+  const std::string isa = GENERATE(from_range(supportedEmbreeIsas()));
+  INFO("Embree ISA " << isa);
+  const Visibility vis(scene, {.isa = isa});
+  REQUIRE(vis.isa() == isa);
   int hits = 0;
   for (const Ray& ray : randomRays(scene, 3000, 1)) {
     const Hit expected = bruteForce(scene, ray);
@@ -101,7 +105,9 @@ void checkPackets(const Visibility& vis, const std::vector<Ray>& rays) {
 TEST_CASE("RayPacket::assign fills the first lanes and leaves the rest inactive", "[visibility]") {
   const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
   const auto rays = randomRays(scene, 160, 5);
-  const Visibility vis(scene);
+  const std::string isa = GENERATE(from_range(supportedEmbreeIsas()));
+  INFO("Embree ISA " << isa);
+  const Visibility vis(scene, {.isa = isa});
   for (int count = 1; count <= 16; ++count) {
     RayPacket<16> packet;
     packet.assign(count, [&](int i) -> const Ray& { return rays[size_t(count + i)]; });
@@ -133,8 +139,10 @@ TEST_CASE("RayPacket::assign fills the first lanes and leaves the rest inactive"
 TEST_CASE("8- and 16-wide packets give the single-ray answers", "[visibility]") {
   const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
   const auto rays = randomRays(scene, 1600, 2);
+  const std::string isa = GENERATE(from_range(supportedEmbreeIsas()));
+  INFO("Embree ISA " << isa);
   for (bool robust : {false, true}) {
-    const Visibility vis(scene, {robust});
+    const Visibility vis(scene, {.robust = robust, .isa = isa});
     checkPackets<8>(vis, rays);
     checkPackets<16>(vis, rays);
   }
@@ -143,20 +151,24 @@ TEST_CASE("8- and 16-wide packets give the single-ray answers", "[visibility]") 
 
 TEST_CASE("Packets of 1 to N rays, some of them untraceable, give the single-ray answers", "[visibility]") {
   // intersectPacket and occludedPacket trace partial packets (the last of a wave or a tile); rays
-  // with a NaN or infinite origin or direction, or a NaN interval, miss and are not occluded, alone
+  // with a NaN, infinite or huge origin or direction, or a NaN interval, miss and are not occluded, alone
   // or in a packet, and do not disturb the packet's other rays.
   const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
   std::vector<Ray> rays = randomRays(scene, 400, 9);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (size_t i = 0; i < rays.size(); i += 7) {
-    switch (i % 4) {
+    switch (i % 5) {
       case 0: rays[i].origin.y = nan; break;
       case 1: rays[i].direction.x = kInf; break;
       case 2: rays[i].tMax = nan; break;
+      case 3: rays[i].origin.x = 1e20f; break;  // finite, but beyond what Embree's kernels accept
       default: rays[i].direction.z = -kInf; break;
     }
   }
-  const Visibility vis(scene);
+  const std::string isa = GENERATE(from_range(supportedEmbreeIsas()));
+  INFO("Embree ISA " << isa);
+  const Visibility vis(scene, {.isa = isa});
+  REQUIRE(vis.isa() == isa);
   int hitsFound = 0, blockedFound = 0, untraceable = 0;
   for (int count = 1; count <= 16; ++count) {
     for (size_t first = 0; first + size_t(count) <= rays.size(); first += 23) {

@@ -2,6 +2,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
@@ -20,6 +21,7 @@ struct EmbreeError {
 struct Visibility::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
+  std::string isa;
   EmbreeError error;
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
@@ -36,19 +38,23 @@ void recordError(void* user, RTCError code, const char* message) {
 }
 
 // The packet in Embree's layout, and the lanes to trace: its active lanes whose rays are traceable.
+// Every other lane gets a harmless ray (the origin, an empty interval): Embree's kernels for some
+// ISAs (SSE, AVX2) check the rays of masked lanes too and abort on a NaN or infinite one.
 template <class RayHitN, int N>
 void toEmbree(const RayPacket<N>& rays, RayHitN& rh, int32_t valid[N]) {
   for (int i = 0; i < N; ++i) {
     const Ray ray{{rays.ox[i], rays.oy[i], rays.oz[i]}, {rays.dx[i], rays.dy[i], rays.dz[i]}, rays.tMin[i], rays.tMax[i]};
     valid[i] = traceable(ray) ? rays.valid[i] : 0;
-    rh.ray.org_x[i] = rays.ox[i];
-    rh.ray.org_y[i] = rays.oy[i];
-    rh.ray.org_z[i] = rays.oz[i];
-    rh.ray.dir_x[i] = rays.dx[i];
-    rh.ray.dir_y[i] = rays.dy[i];
-    rh.ray.dir_z[i] = rays.dz[i];
-    rh.ray.tnear[i] = rays.tMin[i];
-    rh.ray.tfar[i] = rays.tMax[i];
+    const Ray harmless{{0, 0, 0}, {0, 0, 1}, 1, 0};
+    const Ray& r = valid[i] ? ray : harmless;
+    rh.ray.org_x[i] = r.origin.x;
+    rh.ray.org_y[i] = r.origin.y;
+    rh.ray.org_z[i] = r.origin.z;
+    rh.ray.dir_x[i] = r.direction.x;
+    rh.ray.dir_y[i] = r.direction.y;
+    rh.ray.dir_z[i] = r.direction.z;
+    rh.ray.tnear[i] = r.tMin;
+    rh.ray.tfar[i] = r.tMax;
     rh.ray.time[i] = 0;
     rh.ray.mask[i] = 0xffffffffu;
     rh.ray.id[i] = 0;
@@ -59,8 +65,18 @@ void toEmbree(const RayPacket<N>& rays, RayHitN& rh, int32_t valid[N]) {
 
 Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : impl_(std::make_unique<Impl>()) {
   flushDenormals();
-  impl_->device = rtcNewDevice(nullptr);
-  if (!impl_->device) throw std::runtime_error("Embree: cannot create device");
+  // Embree runs the requested ISA's kernels, or this CPU's best where it lacks the requested one.
+  const auto rank = [](const std::string& isa) {
+    return std::find(std::begin(kEmbreeIsas), std::end(kEmbreeIsas), isa) - std::begin(kEmbreeIsas);
+  };
+  if (!options.isa.empty() && rank(options.isa) == std::ssize(kEmbreeIsas))
+    throw std::invalid_argument("Embree ISA '" + options.isa + "': expected sse4.2, avx, avx2 or avx512");
+  const std::vector<std::string> supported = supportedEmbreeIsas();
+  impl_->isa = supported.empty() ? "sse2" : supported.back();
+  if (!options.isa.empty() && rank(options.isa) < rank(impl_->isa)) impl_->isa = options.isa;
+  const std::string config = options.isa.empty() ? std::string() : "isa=" + options.isa;
+  impl_->device = rtcNewDevice(config.c_str());
+  if (!impl_->device) throw std::runtime_error("Embree: cannot create device (" + config + ")");
   rtcSetDeviceErrorFunction(impl_->device, recordError, &impl_->error);
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneFlags(impl_->scene, options.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
@@ -139,7 +155,7 @@ bool Visibility::occluded(const Ray& ray) const {
     RTCIntersectContext context;                                                                   \
     rtcInitIntersectContext(&context);                                                             \
     RTCRayHit##N rh;                                                                               \
-    int32_t valid[N];                                                                              \
+    alignas(64) int32_t valid[N];                                                                  \
     toEmbree(rays, rh, valid);                                                                     \
     for (int i = 0; i < N; ++i) rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;                        \
     rtcIntersect##N(valid, impl_->scene, &context, &rh);                                           \
@@ -155,7 +171,7 @@ bool Visibility::occluded(const Ray& ray) const {
     RTCIntersectContext context;                                                                   \
     rtcInitIntersectContext(&context);                                                             \
     RTCRayHit##N rh;                                                                               \
-    int32_t valid[N];                                                                              \
+    alignas(64) int32_t valid[N];                                                                  \
     toEmbree(rays, rh, valid);                                                                     \
     rtcOccluded##N(valid, impl_->scene, &context, &rh.ray);                                        \
     for (int i = 0; i < N; ++i) occluded[i] = valid[i] && rh.ray.tfar[i] < 0;                      \
@@ -164,16 +180,25 @@ LUCENT_PACKET_QUERIES(8)
 LUCENT_PACKET_QUERIES(16)
 #undef LUCENT_PACKET_QUERIES
 
+std::vector<std::string> supportedEmbreeIsas() {
+  __builtin_cpu_init();
+  const bool runs[] = {
+      __builtin_cpu_supports("sse4.2") != 0, __builtin_cpu_supports("avx") != 0,
+      __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2"),
+      // Embree's AVX-512 kernels are Skylake-X's.
+      __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") && __builtin_cpu_supports("avx512dq") &&
+          __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vl")};
+  std::vector<std::string> isas;
+  for (size_t i = 0; i < std::size(kEmbreeIsas); ++i)
+    if (runs[i]) isas.push_back(kEmbreeIsas[i]);
+  return isas;
+}
+
 std::string Visibility::embreeVersion() {
   return std::to_string(RTC_VERSION_MAJOR) + "." + std::to_string(RTC_VERSION_MINOR) + "." +
          std::to_string(RTC_VERSION_PATCH);
 }
 
-std::string Visibility::isa() const {
-  if (rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED)) return "avx512";
-  if (rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED))
-    return __builtin_cpu_supports("avx2") ? "avx2" : "avx";
-  return "sse4.2";
-}
+std::string Visibility::isa() const { return impl_->isa; }
 
 }  // namespace lucent

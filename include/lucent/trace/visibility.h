@@ -1,10 +1,12 @@
 // Visibility queries against the scene's triangles: the only interface to Embree.
 #pragma once
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "lucent/core/math.h"
 #include "lucent/scene/scene.h"
@@ -20,20 +22,32 @@ struct Hit {
   bool found() const { return triangle != kNoHit; }
 };
 
-// Every query traces only rays with a finite origin and direction and an interval tMin <= tMax
-// (false for NaN): any other ray misses and is not occluded, alone or in a packet. Callers that
-// must tell such a ray from a miss (to drop the sample) test it themselves.
+// Every query traces only rays whose origin and direction components are at most
+// kMaxRayComponent in magnitude (so finite) and whose interval is tMin <= tMax (false for NaN):
+// any other ray misses and is not occluded, alone or in a packet. Callers that must tell such a
+// ray from a miss (to drop the sample) test it themselves.
+inline constexpr float kMaxRayComponent = 1.8e18f;  // Embree's kernels abort above 1.844e18
 inline bool traceable(const Ray& ray) {
-  // Embree's answer for other rays is not defined (without this check on single rays, the test of
-  // packets with untraceable rays fails: Embree's single-ray answer differs from a miss). The check
-  // costs single rays about 3% of their throughput (bench_pathtrace's raw loop, Cornell box, 1
-  // thread); & rather than && keeps it one branch.
-  return isFinite(ray.origin) & isFinite(ray.direction) & (ray.tMin <= ray.tMax);
+  // Embree's answer for other rays is not defined, and its SSE and AVX2 kernels abort on them.
+  // The check costs single rays about 3% of their throughput (bench_pathtrace's raw loop, Cornell
+  // box, 1 thread); & rather than && keeps it one branch (a NaN fails every comparison).
+  const Vec3 o = ray.origin, d = ray.direction;
+  const float m = kMaxRayComponent;
+  return (std::abs(o.x) <= m) & (std::abs(o.y) <= m) & (std::abs(o.z) <= m) & (std::abs(d.x) <= m) &
+         (std::abs(d.y) <= m) & (std::abs(d.z) <= m) & (ray.tMin <= ray.tMax);
 }
 
 struct VisibilityOptions {
   bool robust = false;  // Embree's robust traversal (watertight at edges), slower
+  // The instruction set of Embree's kernels: "" for the best this CPU supports, or one of
+  // kEmbreeIsas, so that a machine can check the kernels of CPUs older than itself.
+  std::string isa;
 };
+
+// The instruction sets Embree's kernels can be asked for, oldest first.
+inline constexpr const char* kEmbreeIsas[] = {"sse4.2", "avx", "avx2", "avx512"};
+// Those of kEmbreeIsas that this CPU runs.
+std::vector<std::string> supportedEmbreeIsas();
 
 // Embree's widest packet (native with AVX-512): what camera, photon and shadow rays are traced in.
 inline constexpr int kWidestPacket = 16;
@@ -79,7 +93,7 @@ class Visibility {
   void occluded(const RayPacket<16>& rays, bool occluded[16]) const;
 
   static std::string embreeVersion();
-  // The widest ray packet Embree's kernels support natively here ("avx512", "avx2", "sse4.2").
+  // The instruction set of Embree's kernels: one of kEmbreeIsas, or "sse2" on CPUs older than all.
   std::string isa() const;
 
  private:
