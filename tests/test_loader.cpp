@@ -8,10 +8,12 @@
 #include <catch2/catch.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "lucent/core/stats.h"
 #include "lucent/scene/loader.h"
 #include "test_support.h"
 
@@ -39,6 +41,8 @@ const std::vector<BadCase> kBadCases = {
     {"obj-inf-vertex", {"obj-inf-vertex/mesh.obj:4:", "non-finite"}},
     {"obj-overflow-vertex", {"obj-overflow-vertex/mesh.obj:4:", "'1e39' is out of range"}},
     {"obj-face-out-of-range", {"obj-face-out-of-range/mesh.obj:14:", "vertex 9 but only 8"}},
+    {"obj-face-empty-texcoord", {"obj-face-empty-texcoord/mesh.obj:12:", "malformed face vertex '1/'"}},
+    {"obj-face-empty-normal", {"obj-face-empty-normal/mesh.obj:12:", "malformed face vertex '1//'"}},
     {"obj-texcoord-out-of-range", {"obj-texcoord-out-of-range/mesh.obj:14:", "texture coordinate 1 but only 0"}},
     {"obj-unknown-statement", {"obj-unknown-statement/mesh.obj:13:", "unsupported OBJ statement 'l'"}},
     {"obj-usemtl-undefined", {"obj-usemtl-undefined/mesh.obj:13:", "material 'lamp' is not defined"}},
@@ -223,6 +227,109 @@ TEST_CASE("loader: the Cornell box loads with its geometry, materials, lights an
   CHECK(!scene.environment.present);
 }
 
+namespace {
+
+// A scene of one OBJ face in the plane y = 0, lit from above, written to `dir`: the polygon's
+// vertices (x, z), then `faceLine`.
+std::string writePolygonScene(const TempDir& dir, const std::vector<Vec2>& polygon, const std::string& faceLine) {
+  std::ofstream obj(dir / "mesh.obj");
+  obj.precision(9);  // every float exactly
+  for (const Vec2& p : polygon) obj << "v " << p.x << " 0 " << p.y << "\n";
+  obj << faceLine << "\n";
+  obj.close();
+  std::ofstream json(dir / "scene.json");
+  json << R"({"camera": {"eye": [0, 5, 0.1], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov_y": 45, "resolution": [8, 8]},)"
+       << R"("meshes": [{"obj": "mesh.obj"}], "lights": [{"type": "directional", "direction": [0, -1, 0], )"
+       << R"("irradiance": [1, 1, 1]}]})";
+  return dir / "scene.json";
+}
+
+std::string faceOf(size_t n, const std::string& suffix = "") {
+  std::string f = "f";
+  for (size_t k = 1; k <= n; ++k) f += " " + std::to_string(k);
+  return f + suffix;
+}
+
+// The signed area of a simple polygon (shoelace formula), and of the triangles it was split into.
+double polygonArea(const std::vector<Vec2>& p) {
+  double a = 0;
+  for (size_t k = 0; k < p.size(); ++k) {
+    const Vec2 u = p[k], v = p[(k + 1) % p.size()];
+    a += double(u.x) * v.y - double(v.x) * u.y;
+  }
+  return std::abs(a) / 2;
+}
+double totalArea(const Scene& scene) {
+  double a = 0;
+  for (uint32_t t = 0; t < scene.triangleCount(); ++t) a += scene.triangleArea(t);
+  return a;
+}
+
+}  // namespace
+
+TEST_CASE("loader: faces with more than three vertices are split into triangles that cover them exactly", "[loader]") {
+  TempDir dir;
+  SECTION("a convex face of 64,000 vertices, in linear time") {
+    std::vector<Vec2> circle;
+    for (int k = 0; k < 64000; ++k) circle.push_back({float(std::cos(2 * M_PI * k / 64000)), float(std::sin(2 * M_PI * k / 64000))});
+    const std::string path = writePolygonScene(dir, circle, faceOf(circle.size(), " # a trailing comment"));
+    Stopwatch clock;
+    const Scene scene = loadScene(path, {true});
+    CHECK(clock.seconds() < 2.0);  // ear clipping took 25 s
+    CHECK(scene.triangleCount() + scene.droppedDegenerateTriangles == 63998);
+    CHECK(totalArea(scene) == Approx(polygonArea(circle)).epsilon(1e-4));
+  }
+  SECTION("non-convex faces by ear clipping, whichever way they wind") {
+    // A comb: a base 0 < z < 1 and four teeth up to z = 3, so that a fan from any vertex would
+    // leave the face.
+    std::vector<Vec2> comb = {{0, 0}, {7, 0}, {7, 3}};
+    for (int gap = 2; gap >= 0; --gap)
+      comb.insert(comb.end(), {{2.0f * gap + 2, 3}, {2.0f * gap + 2, 1}, {2.0f * gap + 1, 1}, {2.0f * gap + 1, 3}});
+    comb.push_back({0, 3});
+    for (bool reversed : {false, true}) {
+      CAPTURE(reversed);
+      std::vector<Vec2> face = comb;
+      if (reversed) std::reverse(face.begin(), face.end());
+      const Scene scene = loadScene(writePolygonScene(dir, face, faceOf(face.size())), {true});
+      CHECK(scene.triangleCount() + scene.droppedDegenerateTriangles == face.size() - 2);
+      CHECK(totalArea(scene) == Approx(polygonArea(face)).epsilon(1e-6));
+      // Every triangle lies inside the comb: its centroid is not in a gap between teeth.
+      for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
+        const Vec3 c = (scene.vertex(t, 0) + scene.vertex(t, 1) + scene.vertex(t, 2)) / 3.0f;
+        const bool inGap = c.z > 1 && std::fmod(c.x, 2.0f) > 1;
+        CHECK_FALSE(inGap);
+      }
+    }
+  }
+  SECTION("a non-convex face too large to split quickly, and one that crosses itself, are refused") {
+    std::vector<Vec2> star;
+    for (int k = 0; k < 300; ++k) {
+      const float r = k % 2 ? 1.0f : 0.5f, a = 2 * kPi * k / 300.0f;
+      star.push_back({r * std::cos(a), r * std::sin(a)});
+    }
+    std::string message;
+    try {
+      loadScene(writePolygonScene(dir, star, faceOf(star.size())), {true});
+    } catch (const SceneError& e) {
+      message = e.what();
+    }
+    CHECK_THAT(message, Catch::Matchers::Contains("mesh.obj:301: a non-convex face with 300 vertices"));
+    // Bow ties, of four and of five vertices.
+    for (const std::vector<Vec2>& bowTie : {std::vector<Vec2>{{0, 0}, {2, 2}, {2, 0}, {0, 2}},
+                                            std::vector<Vec2>{{0, 0}, {2, 2}, {2, 0}, {1, -1}, {0, 2}}}) {
+      CAPTURE(bowTie.size());
+      message.clear();
+      try {
+        loadScene(writePolygonScene(dir, bowTie, faceOf(bowTie.size())), {true});
+      } catch (const SceneError& e) {
+        message = e.what();
+      }
+      CHECK_THAT(message, Catch::Matchers::Contains("mesh.obj:" + std::to_string(bowTie.size() + 1) +
+                                                    ": the face crosses itself"));
+    }
+  }
+}
+
 TEST_CASE("loader: zero-area triangles are dropped and counted", "[loader]") {
   const Scene base = loadScene(goodScene("base"), {true});
   CHECK(base.triangleCount() == 4);
@@ -249,7 +356,7 @@ TEST_CASE("loader: MTL entries are classified as in docs/scene-format.md, and sc
   CHECK(material("matte").type == MaterialType::Diffuse);  // Kd only
   checkRgb(material("matte").kd, {0.5f, 0.5f, 0.0f});      // 1e-50 underflows to zero
   CHECK(material("grey").type == MaterialType::Diffuse);
-  checkRgb(material("grey").kd, Rgb(0.6f));  // one number is grey (tinyobjloader alone reads 0.6 0 0)
+  checkRgb(material("grey").kd, Rgb(0.6f));  // one number is a grey
   CHECK(material("forced").type == MaterialType::Diffuse);  // Kd + Ks in the MTL, "type": "diffuse" in JSON
   checkRgb(material("forced").ks, Rgb(0.0f));
   checkRgb(material("overridden").kd, {0.2f, 0.3f, 0.4f});  // JSON Kd replaces the MTL's 0.5

@@ -1,12 +1,11 @@
 #include "obj_import.h"
 
-#include <tiny_obj_loader.h>
-
 #include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -84,20 +83,14 @@ std::vector<float> expectNumbers(const std::string& file, int line, const std::v
   return values;
 }
 
-struct MtlScan {
-  std::map<std::string, int> definitionLine;
-  // Colours as we read them: tinyobjloader reads "Kd 0.5" as (0.5, 0, 0), the MTL format as grey.
-  std::map<std::string, std::map<std::string, Rgb>> colours;
-};
-
-// MTL keys Lucent understands, and those it accepts but ignores (docs/scene-format.md).
-MtlScan scanMtl(const std::string& path) {
+// An MTL file's materials in the order they are defined, each with the values Lucent reads
+// (docs/scene-format.md); the defaults of an absent key are the MTL format's (Ns 1, Ni 1, illum 0).
+std::vector<MaterialSpec> readMtl(const std::string& path) {
   static const std::set<std::string> colourKeys = {"Kd", "Ks", "Ke", "Tf", "Ka"};
-  static const std::set<std::string> scalarKeys = {"Ns", "Ni", "illum", "d", "Tr"};
-  static const std::set<std::string> ignoredKeys = {"map_bump", "bump"};
-  MtlScan scan;
+  static const std::set<std::string> ignoredKeys = {"map_bump", "bump", "d", "Tr"};
+  std::vector<MaterialSpec> materials;
+  std::map<std::string, int> definitionLine;
   const auto lines = readLines(path, "material library");
-  std::string material;
   for (size_t i = 0; i < lines.size(); ++i) {
     const int line = static_cast<int>(i + 1);
     const auto t = tokens(lines[i]);
@@ -105,147 +98,226 @@ MtlScan scanMtl(const std::string& path) {
     const std::string& key = t[0];
     if (key == "newmtl") {
       if (t.size() != 2) failAt(path, line, "'newmtl' expects one name");
-      const auto [it, inserted] = scan.definitionLine.emplace(t[1], line);
+      const auto [it, inserted] = definitionLine.emplace(t[1], line);
       if (!inserted)
         failAt(path, line,
                "material '" + t[1] + "' is defined twice (first at line " + std::to_string(it->second) + ")");
-      material = t[1];
+      MaterialSpec& spec = materials.emplace_back();
+      spec.name = t[1];
+      spec.origin = path + ":" + std::to_string(line);
       continue;
     }
-    if (material.empty()) failAt(path, line, "'" + key + "' before any 'newmtl'");
+    if (materials.empty()) failAt(path, line, "'" + key + "' before any 'newmtl'");
+    MaterialSpec& spec = materials.back();
     if (colourKeys.count(key)) {
       if (t.size() == 3) failAt(path, line, "'" + key + "' expects 3 numbers (r g b) or 1 (grey), found 2");
       const auto v = expectNumbers(path, line, t, 1, 3, "3 numbers (r g b) or 1 (grey)");
       for (float f : v)
         if (f < 0) failAt(path, line, "'" + key + "' must not be negative");
-      scan.colours[material][key] = v.size() == 1 ? Rgb(v[0]) : Rgb{v[0], v[1], v[2]};
-    } else if (scalarKeys.count(key)) {
-      expectNumbers(path, line, t, 1, 1, "1 number");
+      const Rgb colour = v.size() == 1 ? Rgb(v[0]) : Rgb{v[0], v[1], v[2]};
+      if (key == "Kd") spec.kd = colour;
+      else if (key == "Ks") spec.ks = colour;
+      else if (key == "Ke") spec.ke = colour;
+      else if (key == "Tf") spec.tf = colour;
+    } else if (key == "Ns") {
+      spec.ns = expectNumbers(path, line, t, 1, 1, "1 number")[0];
+    } else if (key == "Ni") {
+      spec.ni = expectNumbers(path, line, t, 1, 1, "1 number")[0];
+    } else if (key == "illum") {
+      const float illum = expectNumbers(path, line, t, 1, 1, "1 number")[0];
+      if (illum != std::floor(illum) || illum < 0 || illum > 10)
+        failAt(path, line, "'illum' expects an illumination model, an integer from 0 to 10");
+      spec.illum = int(illum);
     } else if (key == "map_Kd") {
       if (t.size() != 2) failAt(path, line, "'map_Kd' expects one file name (options are not supported)");
-      if (!fs::is_regular_file(fs::path(path).parent_path() / t[1]))
-        failAt(path, line, "texture '" + t[1] + "' not found");
+      const fs::path texture = fs::path(path).parent_path() / t[1];
+      if (!fs::is_regular_file(texture)) failAt(path, line, "texture '" + t[1] + "' not found");
+      spec.mapKd = fs::absolute(texture).lexically_normal().string();
     } else if (!ignoredKeys.count(key)) {
       failAt(path, line, "unknown MTL key '" + key + "'");
     }
   }
-  return scan;
+  return materials;
 }
 
-struct ObjScan {
-  std::map<std::string, std::string> materialOrigin;  // name -> "file.mtl:line" (first definition wins)
-  std::map<std::string, std::map<std::string, Rgb>> colours;
+// One vertex of a face: indices into the file's v, vt and vn lists, -1 where absent.
+struct FaceVertex {
+  int32_t v = -1, vt = -1, vn = -1;
+  bool operator==(const FaceVertex&) const = default;
+};
+struct FaceVertexHash {
+  size_t operator()(const FaceVertex& k) const {
+    return std::hash<int64_t>()((int64_t(k.v) << 40) ^ (int64_t(k.vn) << 20) ^ k.vt);
+  }
 };
 
-// Validates the OBJ statements Lucent reads, and the material libraries they name, with line numbers
-// tinyobjloader cannot give.
-ObjScan scanObj(const std::string& path) {
-  const auto lines = readLines(path, "OBJ file");
-  long nv = 0, nvt = 0, nvn = 0;
-  ObjScan scan;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    const int line = static_cast<int>(i + 1);
-    const auto t = tokens(lines[i]);
-    if (t.empty()) continue;
-    const std::string& key = t[0];
-    if (key == "v") {
-      expectNumbers(path, line, t, 3, 3, "3 numbers");
-      ++nv;
-    } else if (key == "vn") {
-      expectNumbers(path, line, t, 3, 3, "3 numbers");
-      ++nvn;
-    } else if (key == "vt") {
-      expectNumbers(path, line, t, 2, 3, "2 or 3 numbers");
-      ++nvt;
-    } else if (key == "f") {
-      if (t.size() < 4) failAt(path, line, "a face needs at least 3 vertices");
-      for (size_t k = 1; k < t.size(); ++k) {
-        std::string part;
-        std::istringstream refs(t[k]);
-        const long counts[3] = {nv, nvt, nvn};
-        const char* names[3] = {"vertex", "texture coordinate", "normal"};
-        for (int slot = 0; std::getline(refs, part, '/'); ++slot) {
-          if (slot > 2) failAt(path, line, "malformed face vertex '" + t[k] + "'");
-          if (part.empty() && slot > 0) continue;
-          long idx;
-          if (!parseInt(part, idx) || idx == 0) failAt(path, line, "malformed face vertex '" + t[k] + "'");
-          if ((idx > 0 && idx > counts[slot]) || (idx < 0 && -idx > counts[slot]))
-            failAt(path, line, "face refers to " + std::string(names[slot]) + " " + std::to_string(idx) +
-                                   " but only " + std::to_string(counts[slot]) + " are defined");
-        }
-      }
-    } else if (key == "mtllib") {
-      if (t.size() < 2) failAt(path, line, "'mtllib' expects a file name");
-      for (size_t k = 1; k < t.size(); ++k) {
-        const fs::path mtl = fs::path(path).parent_path() / t[k];
-        if (!fs::is_regular_file(mtl)) failAt(path, line, "material library '" + t[k] + "' not found");
-        const MtlScan mtlScan = scanMtl(mtl.string());
-        for (const auto& [name, defLine] : mtlScan.definitionLine)
-          if (scan.materialOrigin.emplace(name, mtl.string() + ":" + std::to_string(defLine)).second &&
-              mtlScan.colours.count(name))
-            scan.colours[name] = mtlScan.colours.at(name);
-      }
-    } else if (key == "usemtl") {
-      // tinyobjloader would give faces of an undefined material no material, silently.
-      if (t.size() != 2) failAt(path, line, "'usemtl' expects one material name");
-      if (!scan.materialOrigin.count(t[1]))
-        failAt(path, line, "material '" + t[1] + "' is not defined in a material library named before it");
-    } else if (key != "o" && key != "g" && key != "s") {
-      failAt(path, line, "unsupported OBJ statement '" + key + "'");
-    }
+// Parses "v", "v/vt", "v//vn" or "v/vt/vn", each index 1-based or negative (relative to the end of
+// its list so far), into 0-based indices.
+FaceVertex parseFaceVertex(const std::string& file, int line, const std::string& token, const long counts[3]) {
+  static const char* names[3] = {"vertex", "texture coordinate", "normal"};
+  const auto malformed = [&] {
+    failAt(file, line, "malformed face vertex '" + token + "' (expected v, v/vt, v//vn or v/vt/vn)");
+  };
+  std::vector<std::string> parts;
+  for (size_t start = 0;;) {
+    const size_t slash = token.find('/', start);
+    parts.push_back(token.substr(start, slash == std::string::npos ? std::string::npos : slash - start));
+    if (slash == std::string::npos) break;
+    start = slash + 1;
   }
-  return scan;
+  // Only the texture coordinate of "v//vn" may be left out.
+  if (parts.size() > 3 || parts[0].empty() || parts.back().empty() || (parts.size() == 2 && parts[1].empty()))
+    malformed();
+  int32_t index[3] = {-1, -1, -1};
+  for (size_t slot = 0; slot < parts.size(); ++slot) {
+    if (parts[slot].empty()) continue;
+    long idx;
+    if (!parseInt(parts[slot], idx) || idx == 0) malformed();
+    if ((idx > 0 && idx > counts[slot]) || (idx < 0 && -idx > counts[slot]))
+      failAt(file, line, "face refers to " + std::string(names[slot]) + " " + std::to_string(idx) + " but only " +
+                             std::to_string(counts[slot]) + " are defined");
+    index[slot] = int32_t(idx > 0 ? idx - 1 : counts[slot] + idx);
+  }
+  return {index[0], index[1], index[2]};
 }
 
-Rgb toRgb(const float v[3]) { return {v[0], v[1], v[2]}; }
+// The largest face that is split by ear clipping, which takes time quadratic in its vertices;
+// convex faces of any size are split as a fan.
+constexpr size_t kMaxNonConvexFace = 256;
+
+// A face's triangles, as corners into `face`, covering it exactly once: triangles as they are;
+// quads along their shorter diagonal unless only the other one stays inside; larger faces, in the
+// plane of their Newell normal, as a fan when convex and by ear clipping otherwise. A face that
+// crosses itself is refused.
+void triangulateFace(const std::string& file, int line, const std::vector<Vec3>& positions,
+                     const std::vector<FaceVertex>& face, std::vector<uint32_t>& corners) {
+  const size_t n = face.size();
+  const auto at = [&](size_t k) { return positions[size_t(face[k].v)]; };
+  corners.clear();
+  if (n == 3) {
+    corners = {0, 1, 2};
+    return;
+  }
+  const auto crossesItself = [&] { failAt(file, line, "the face crosses itself and cannot be split into triangles"); };
+  // The face in its plane, in double precision.
+  double nx = 0, ny = 0, nz = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const Vec3 a = at(k), b = at((k + 1) % n);
+    nx += (double(a.y) - b.y) * (double(a.z) + b.z);
+    ny += (double(a.z) - b.z) * (double(a.x) + b.x);
+    nz += (double(a.x) - b.x) * (double(a.y) + b.y);
+  }
+  const double nLength = std::sqrt(nx * nx + ny * ny + nz * nz);
+  if (!(nLength > 0)) {
+    // No area enclosed: the vertices lie on a line (a fan of zero-area triangles, all dropped) or
+    // the face winds both ways around equal areas.
+    for (uint32_t k = 1; k + 1 < n; ++k) {
+      if (length(cross(at(k) - at(0), at(k + 1) - at(0))) > 0) crossesItself();
+      corners.insert(corners.end(), {0, k, k + 1});
+    }
+    return;
+  }
+  const Frame frame(Vec3{float(nx / nLength), float(ny / nLength), float(nz / nLength)});
+  struct Point {
+    double x, y;
+  };
+  std::vector<Point> p(n);
+  for (size_t k = 0; k < n; ++k) {
+    const double dx = double(at(k).x) - at(0).x, dy = double(at(k).y) - at(0).y, dz = double(at(k).z) - at(0).z;
+    p[k] = {dx * frame.s.x + dy * frame.s.y + dz * frame.s.z, dx * frame.t.x + dy * frame.t.y + dz * frame.t.z};
+  }
+  // Twice the signed area of triangle abc: positive where it winds as the face does.
+  const auto turn = [&](size_t a, size_t b, size_t c) {
+    return (p[b].x - p[a].x) * (p[c].y - p[a].y) - (p[b].y - p[a].y) * (p[c].x - p[a].x);
+  };
+  if (n == 4) {
+    // The shorter diagonal first (as most OBJ readers split quads), in float as they compute it.
+    const Vec3 e02 = at(2) - at(0), e13 = at(3) - at(1);
+    const bool first02 = dot(e02, e02) < dot(e13, e13);
+    const auto inside02 = [&] { return turn(0, 1, 2) >= 0 && turn(0, 2, 3) >= 0; };
+    const auto inside13 = [&] { return turn(0, 1, 3) >= 0 && turn(1, 2, 3) >= 0; };
+    if (first02 ? inside02() : !inside13() && inside02()) corners = {0, 1, 2, 0, 2, 3};
+    else if (inside13()) corners = {0, 1, 3, 1, 2, 3};
+    else crossesItself();
+    return;
+  }
+  double area = 0;  // twice the face's, by the shoelace formula
+  for (size_t k = 0; k < n; ++k) area += p[k].x * p[(k + 1) % n].y - p[(k + 1) % n].x * p[k].y;
+  // Convex up to rounding: every corner turns the face's way, or strays from straight by less than
+  // a thousandth of a radian (the corners of a finely tessellated circle, written as floats, do).
+  bool convex = true;
+  for (size_t k = 0; k < n && convex; ++k) {
+    const size_t a = (k + n - 1) % n, c = (k + 1) % n;
+    const double ea = std::hypot(p[k].x - p[a].x, p[k].y - p[a].y), ec = std::hypot(p[c].x - p[k].x, p[c].y - p[k].y);
+    convex = turn(a, k, c) >= -1e-3 * ea * ec;
+  }
+  if (convex) {
+    for (uint32_t k = 1; k + 1 < n; ++k) corners.insert(corners.end(), {0, k, k + 1});
+  } else {
+    if (n > kMaxNonConvexFace)
+      failAt(file, line, "a non-convex face with " + std::to_string(n) + " vertices (at most " +
+                             std::to_string(kMaxNonConvexFace) + "; split it into smaller faces)");
+    std::vector<uint32_t> left(n);
+    for (uint32_t k = 0; k < n; ++k) left[k] = k;
+    const auto coincide = [&](uint32_t a, uint32_t b) { return p[a].x == p[b].x && p[a].y == p[b].y; };
+    const auto inside = [&](uint32_t a, uint32_t b, uint32_t c, uint32_t q) {
+      return turn(a, b, q) >= 0 && turn(b, c, q) >= 0 && turn(c, a, q) >= 0;
+    };
+    while (left.size() > 3) {
+      const size_t m = left.size();
+      size_t ear = m;
+      for (size_t k = 0; k < m && ear == m; ++k) {
+        const uint32_t a = left[(k + m - 1) % m], b = left[k], c = left[(k + 1) % m];
+        if (!(turn(a, b, c) > 0)) continue;
+        bool empty = true;
+        for (size_t j = 0; j < m && empty; ++j) {
+          const uint32_t q = left[j];
+          empty = coincide(q, a) || coincide(q, b) || coincide(q, c) || !inside(a, b, c, q);
+        }
+        if (empty) ear = k;
+      }
+      // No proper ear: a corner where the boundary runs straight on is cut off as a zero-area
+      // triangle (dropped as degenerate).
+      for (size_t k = 0; k < m && ear == m; ++k)
+        if (turn(left[(k + m - 1) % m], left[k], left[(k + 1) % m]) == 0) ear = k;
+      if (ear == m) crossesItself();
+      corners.insert(corners.end(), {left[(ear + m - 1) % m], left[ear], left[(ear + 1) % m]});
+      left.erase(left.begin() + std::ptrdiff_t(ear));
+    }
+    corners.insert(corners.end(), left.begin(), left.end());
+  }
+  // The triangles cover the face once exactly when their areas add up to the face's; on a face
+  // that crosses itself, the shoelace formula subtracts the parts that wind the other way.
+  double covered = 0;
+  for (size_t c = 0; c < corners.size(); c += 3) covered += std::abs(turn(corners[c], corners[c + 1], corners[c + 2]));
+  if (std::abs(covered - area) > 1e-4 * covered) crossesItself();
+}
 
 }  // namespace
 
 void importObj(const std::string& objPath, Scene& scene, ObjImport& import) {
-  const ObjScan scan = scanObj(objPath);
-
-  tinyobj::ObjReaderConfig config;
-  config.triangulate = true;
-  config.vertex_color = false;
-  tinyobj::ObjReader reader;
-  if (!reader.ParseFromFile(objPath, config)) throw SceneError(objPath + ": " + reader.Error());
-  const auto& attrib = reader.GetAttrib();
-  const auto& materials = reader.GetMaterials();
-  const fs::path objDir = fs::path(objPath).parent_path();
-
-  // Map this file's material ids onto the scene-wide list (first definition of a name wins).
-  std::vector<uint32_t> materialMap(materials.size());
-  for (size_t m = 0; m < materials.size(); ++m) {
-    const auto& mat = materials[m];
-    auto [it, inserted] = import.materialIndex.emplace(mat.name, static_cast<uint32_t>(import.specs.size()));
-    materialMap[m] = it->second;
-    if (!inserted) continue;
-    MaterialSpec spec;
-    spec.name = mat.name;
-    spec.kd = toRgb(mat.diffuse);
-    spec.ks = toRgb(mat.specular);
-    spec.ke = toRgb(mat.emission);
-    spec.tf = toRgb(mat.transmittance);
-    spec.ns = mat.shininess;
-    spec.ni = mat.ior;
-    spec.illum = mat.illum;
-    const auto colours = scan.colours.find(mat.name);
-    if (colours != scan.colours.end()) {
-      const auto& c = colours->second;
-      for (auto [key, value] : {std::pair{"Kd", &spec.kd}, {"Ks", &spec.ks}, {"Ke", &spec.ke}, {"Tf", &spec.tf}})
-        if (c.count(key)) *value = c.at(key);
+  const auto lines = readLines(objPath, "OBJ file");
+  std::vector<Vec3> positions, normals;
+  std::vector<Vec2> texcoords;
+  std::unordered_map<FaceVertex, uint32_t, FaceVertexHash> vertexOf;
+  // The scene's vertex for a face vertex, shared by every face that names the same three indices.
+  const auto sceneVertex = [&](const FaceVertex& fv) {
+    const auto [it, inserted] = vertexOf.emplace(fv, static_cast<uint32_t>(scene.positions.size()));
+    if (inserted) {
+      scene.positions.push_back(positions[size_t(fv.v)]);
+      Vec3 n{0, 0, 0};
+      if (fv.vn >= 0) {
+        n = normals[size_t(fv.vn)];
+        const float len = length(n);
+        n = len > 0 ? n / len : Vec3{0, 0, 0};
+      }
+      scene.normals.push_back(n);
+      scene.texcoords.push_back(fv.vt >= 0 ? texcoords[size_t(fv.vt)] : Vec2{0, 0});
     }
-    const auto origin = scan.materialOrigin.find(mat.name);
-    spec.origin = origin != scan.materialOrigin.end() ? origin->second : objPath;
-    if (!mat.diffuse_texname.empty()) {
-      const auto mtlDir = fs::path(spec.origin.substr(0, spec.origin.rfind(':'))).parent_path();
-      spec.mapKd = fs::absolute(mtlDir / mat.diffuse_texname).lexically_normal().string();
-    }
-    import.specs.push_back(spec);
-  }
-
+    return it->second;
+  };
   // Faces without a material get a neutral diffuse one, created on first use.
-  auto defaultMaterial = [&]() -> uint32_t {
+  const auto defaultMaterial = [&]() -> uint32_t {
     auto [it, inserted] = import.materialIndex.emplace("(default)", static_cast<uint32_t>(import.specs.size()));
     if (inserted) {
       MaterialSpec spec;
@@ -257,52 +329,62 @@ void importObj(const std::string& objPath, Scene& scene, ObjImport& import) {
     return it->second;
   };
 
-  struct KeyHash {
-    size_t operator()(const std::tuple<int, int, int>& k) const {
-      return std::hash<int64_t>()((int64_t(std::get<0>(k)) << 40) ^ (int64_t(std::get<1>(k)) << 20) ^
-                                  std::get<2>(k));
-    }
-  };
-  std::unordered_map<std::tuple<int, int, int>, uint32_t, KeyHash> vertexOf;
-  auto vertexIndex = [&](const tinyobj::index_t& idx) {
-    const auto key = std::make_tuple(idx.vertex_index, idx.normal_index, idx.texcoord_index);
-    auto [it, inserted] = vertexOf.emplace(key, static_cast<uint32_t>(scene.positions.size()));
-    if (inserted) {
-      const float* p = &attrib.vertices[3 * idx.vertex_index];
-      scene.positions.push_back({p[0], p[1], p[2]});
-      Vec3 n{0, 0, 0};
-      if (idx.normal_index >= 0) {
-        const float* q = &attrib.normals[3 * idx.normal_index];
-        n = {q[0], q[1], q[2]};
-        const float len = length(n);
-        n = len > 0 ? n / len : Vec3{0, 0, 0};
+  std::set<std::string> libraryMaterials;  // defined by this file's mtllib statements so far
+  std::optional<uint32_t> material;
+  std::vector<FaceVertex> face;
+  std::vector<uint32_t> corners;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const int line = static_cast<int>(i + 1);
+    const auto t = tokens(lines[i]);
+    if (t.empty()) continue;
+    const std::string& key = t[0];
+    if (key == "v") {
+      const auto v = expectNumbers(objPath, line, t, 3, 3, "3 numbers");
+      positions.push_back({v[0], v[1], v[2]});
+    } else if (key == "vn") {
+      const auto v = expectNumbers(objPath, line, t, 3, 3, "3 numbers");
+      normals.push_back({v[0], v[1], v[2]});
+    } else if (key == "vt") {
+      const auto v = expectNumbers(objPath, line, t, 2, 3, "2 or 3 numbers");
+      texcoords.push_back({v[0], v[1]});
+    } else if (key == "f") {
+      if (t.size() < 4) failAt(objPath, line, "a face needs at least 3 vertices");
+      const long counts[3] = {long(positions.size()), long(texcoords.size()), long(normals.size())};
+      face.clear();
+      for (size_t k = 1; k < t.size(); ++k) face.push_back(parseFaceVertex(objPath, line, t[k], counts));
+      triangulateFace(objPath, line, positions, face, corners);
+      const uint32_t materialId = material ? *material : defaultMaterial();
+      for (size_t c = 0; c < corners.size(); c += 3) {
+        const FaceVertex& a = face[corners[c]];
+        const FaceVertex& b = face[corners[c + 1]];
+        const FaceVertex& d = face[corners[c + 2]];
+        const Vec3 p0 = positions[size_t(a.v)];
+        if (!(length(cross(positions[size_t(b.v)] - p0, positions[size_t(d.v)] - p0)) > 0)) {
+          ++scene.droppedDegenerateTriangles;
+          continue;
+        }
+        for (const FaceVertex* fv : {&a, &b, &d}) scene.indices.push_back(sceneVertex(*fv));
+        scene.materialIds.push_back(materialId);
       }
-      scene.normals.push_back(n);
-      Vec2 uv{0, 0};
-      if (idx.texcoord_index >= 0) uv = {attrib.texcoords[2 * idx.texcoord_index],
-                                         attrib.texcoords[2 * idx.texcoord_index + 1]};
-      scene.texcoords.push_back(uv);
-    }
-    return it->second;
-  };
-
-  for (const auto& shape : reader.GetShapes()) {
-    const auto& mesh = shape.mesh;
-    for (size_t f = 0; f < mesh.num_face_vertices.size(); ++f) {
-      const tinyobj::index_t* idx = &mesh.indices[3 * f];
-      auto pos = [&](int k) {
-        const float* p = &attrib.vertices[3 * idx[k].vertex_index];
-        return Vec3{p[0], p[1], p[2]};
-      };
-      const Vec3 p0 = pos(0);
-      const Vec3 e = cross(pos(1) - p0, pos(2) - p0);
-      if (!(length(e) > 0)) {
-        ++scene.droppedDegenerateTriangles;
-        continue;
+    } else if (key == "mtllib") {
+      if (t.size() < 2) failAt(objPath, line, "'mtllib' expects a file name");
+      for (size_t k = 1; k < t.size(); ++k) {
+        const fs::path mtl = fs::path(objPath).parent_path() / t[k];
+        if (!fs::is_regular_file(mtl)) failAt(objPath, line, "material library '" + t[k] + "' not found");
+        // The first definition of a name, in this file or an earlier one, is the material.
+        for (MaterialSpec& spec : readMtl(mtl.string())) {
+          libraryMaterials.insert(spec.name);
+          if (import.materialIndex.emplace(spec.name, static_cast<uint32_t>(import.specs.size())).second)
+            import.specs.push_back(std::move(spec));
+        }
       }
-      for (int k = 0; k < 3; ++k) scene.indices.push_back(vertexIndex(idx[k]));
-      const int m = mesh.material_ids[f];
-      scene.materialIds.push_back(m >= 0 ? materialMap[m] : defaultMaterial());
+    } else if (key == "usemtl") {
+      if (t.size() != 2) failAt(objPath, line, "'usemtl' expects one material name");
+      if (!libraryMaterials.count(t[1]))
+        failAt(objPath, line, "material '" + t[1] + "' is not defined in a material library named before it");
+      material = import.materialIndex.at(t[1]);
+    } else if (key != "o" && key != "g" && key != "s") {
+      failAt(objPath, line, "unsupported OBJ statement '" + key + "'");
     }
   }
 }
