@@ -48,9 +48,16 @@ std::vector<Photon> photonCloud(uint32_t n, Cloud cloud, uint64_t seed, bool equ
       }
     }
     const float power = equalPower ? 0.01f : 0.001f + 0.02f * rng.uniform();
-    photons[i] = {p, Rgb(power, 0.5f * power, 0.25f * power), encodeOctahedral(normalize(Vec3{0.3f, 1, 0.2f})), i % 5};
+    photons[i] = {p, Rgb(power, 0.5f * power, 0.25f * power), encodeOctahedral(normalize(Vec3{0.3f, 1, 0.2f})),
+                  i % 5 | photonFacingBits({0, 1, 0})};
   }
   return photons;
+}
+
+// A photon arriving from a random direction on a surface facing a random way.
+void randomizeSides(Photon& photon, Rng& rng) {
+  photon.direction = encodeOctahedral(sampleUniformSphere(rng.uniform2()));
+  photon.flags = (photon.flags & ((1u << kPhotonFacingShift) - 1)) | photonFacingBits(sampleUniformSphere(rng.uniform2()));
 }
 
 // Queries inside the cloud, at photons, and outside its bounds.
@@ -377,13 +384,14 @@ TEST_CASE("kNN-grid's boxes and rows stop where shell by shell stops, at any num
 TEST_CASE("The estimate's runs of photons summed eight at a time equal one photon at a time", "[photonmap][knn]") {
   // photon_columns.h: the lanes must accept the photons examinePhotons accepts, grow the radius to
   // the same bits and subtract the same farthest photon; only the order of the power sums differs.
-  // Photons come from random directions (so the front test matters), and a third of them repeat an
+  // Photons come from random directions and lie on surfaces facing random ways (so both tests of
+  // photonLights matter), and a third of them repeat an
   // earlier photon's position with another power and direction, so that the farthest distance is
   // often shared and the tie goes to the first photon in search order.
   Rng rng(77);
   std::vector<Photon> photons = photonCloud(3000, Cloud::Clustered, 31);
   for (uint32_t i = 0; i < photons.size(); ++i) {
-    photons[i].direction = encodeOctahedral(sampleUniformSphere(rng.uniform2()));
+    randomizeSides(photons[i], rng);
     if (i > 0 && rng.below(3) == 0) photons[i].position = photons[rng.below(i)].position;
   }
   GridOptions fine, coarse;
@@ -398,6 +406,7 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
       EstimatePoint q;
       q.position = p;
       q.frame = Frame(n);
+      q.facingNormal = n;
       q.bsdf.kd = Rgb(0.5f);
       estimate_detail::Accumulator one(q), eight(q);
       KnnGridSearch a = beginKnnGrid(p, k, maxRadius), b = a;
@@ -461,7 +470,7 @@ TEST_CASE("A sphere's sum does not depend on the runs that hold its photons", "[
   // anywhere, or with runs of rejected photons between, give the same bits.
   Rng rng(3);
   std::vector<Photon> photons = photonCloud(2000, Cloud::Uniform, 8);
-  for (Photon& photon : photons) photon.direction = encodeOctahedral(sampleUniformSphere(rng.uniform2()));
+  for (Photon& photon : photons) randomizeSides(photon, rng);
   size_t accepted = 0;
   for (int trial = 0; trial < 200; ++trial) {
     const Vec3 q = photons[rng.below(2000)].position, n = sampleUniformSphere(rng.uniform2());
@@ -472,7 +481,7 @@ TEST_CASE("A sphere's sum does not depend on the runs that hold its photons", "[
       if (i < 100 || i >= 1900) moved[i].position = q + Vec3(10, 0, 0);
     const PhotonColumns c = photonColumns(moved);
     const ColumnRun whole{0, 2000}, inner{100, 1800};
-    const SphereSum reference = sumWithinRadius(c, {&whole, 1}, q, n, r2);
+    const SphereSum reference = sumWithinRadius(c, {&whole, 1}, q, {n, n}, r2);
     std::vector<ColumnRun> split;
     for (uint32_t at = 100; at < 1900;) {
       const uint32_t length = std::min<uint32_t>(1900 - at, 1 + rng.below(40));
@@ -480,7 +489,7 @@ TEST_CASE("A sphere's sum does not depend on the runs that hold its photons", "[
       at += length;
     }
     for (const auto& runs : {std::vector<ColumnRun>{inner}, split}) {
-      const SphereSum sum = sumWithinRadius(c, runs, q, n, r2);
+      const SphereSum sum = sumWithinRadius(c, runs, q, {n, n}, r2);
       CHECK((sum.sum == reference.sum));
       CHECK(sum.found == reference.found);
       CHECK(sum.used == reference.used);
@@ -499,7 +508,7 @@ TEST_CASE("Estimates taken cell by cell equal one search per point", "[photonmap
   // grid and glossy points; and must not depend on which other points share the cell.
   Rng rng(5);
   std::vector<Photon> photons = photonCloud(3000, Cloud::Clustered, 41);
-  for (Photon& photon : photons) photon.direction = encodeOctahedral(sampleUniformSphere(rng.uniform2()));
+  for (Photon& photon : photons) randomizeSides(photon, rng);
   // Several points per cell: each query point and jittered copies of it.
   std::vector<ShadingPoint> points;
   for (Vec3 p : queryPoints(photons, 120, 13))
@@ -507,6 +516,7 @@ TEST_CASE("Estimates taken cell by cell equal one search per point", "[photonmap
       ShadingPoint sp{};
       sp.position = p + (copy == 0 ? Vec3() : 0.03f * Vec3(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f));
       sp.normal = sampleUniformSphere(rng.uniform2());
+      sp.geometricNormal = sp.normal;
       sp.wo = sp.normal;
       sp.bsdf.kd = Rgb(0.5f, 0.4f, 0.3f);
       if (points.size() % 7 == 3) {

@@ -215,6 +215,7 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
         q.frame = Frame(leaf.normal);
         q.woLocal = {0, 0, 1};
         q.bsdf.kd = leaf.albedo;
+        q.facingNormal = leaf.faceNormal;
         radiance.rgb[h.leafCount + j] =
             estimateRadiance(*global, q, maps.globalSettings, heaps.local().data(), counters.local());
       });

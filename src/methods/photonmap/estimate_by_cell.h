@@ -165,12 +165,13 @@ const auto& sumGridOf(const Map& map) {
 
 // What the estimate reads of a shading point, gathered in cell order.
 struct CellQuery {
-  Vec3 position, normal;  // the normal on the viewer's side
+  Vec3 position;
+  SurfaceSide side;
   Rgb kd;
-  uint32_t point;         // index of the shading point
-  uint32_t diffuse;       // 1 for a Lambertian surface; others are searched one by one
+  uint32_t point;    // index of the shading point
+  uint32_t diffuse;  // 1 for a Lambertian surface; others are searched one by one
 };
-static_assert(sizeof(CellQuery) == 44);
+static_assert(sizeof(CellQuery) == 56);
 
 // The relative costs of summing a photon and of finding a row's bounds (RING, 2 threads).
 inline constexpr float kPhotonCost = 1, kRowCost = 64;
@@ -272,7 +273,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t j = r.begin(); j != r.end(); ++j) {
         const ShadingPoint& p = points[order[j]];
-        queries[j] = {p.position, p.normal, p.bsdf.kd, order[j], p.bsdf.type == MaterialType::Diffuse};
+        queries[j] = {p.position, estimatePoint(p).side(), p.bsdf.kd, order[j], p.bsdf.type == MaterialType::Diffuse};
       }
     });
 
@@ -300,7 +301,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
           plan = {{}, QueryPlan::Search};
           if (!q.diffuse) continue;
           GrowingRadius& radius = plan.radius;
-          radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.normal, maxRadius2, k);
+          radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.side, maxRadius2, k);
           if (radius.found < k && !s.order.covers) {
             // Some of the cell's first photons lie beyond this query's maximum radius. None
             // within it (a point far outside the grid, its cell clamped): nothing to sum.
@@ -317,7 +318,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
             const uint32_t further = uint32_t(std::min<uint64_t>(uint64_t(kFurtherShells) * k, UINT32_MAX));
             if (s.order.recorded < further) {  // else an earlier query extended it: radius has seen it all
               s.order.extend(*map, further, settings.maxRadius);
-              radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.normal, maxRadius2, k);
+              radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.side, maxRadius2, k);
             }
           }
           if (radius.found < k) {
@@ -325,7 +326,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
             // all, over the maximum radius (Jensen's convention).
             if (!s.order.covers) continue;
             const ColumnRun all{0, s.order.recorded};
-            const SphereSum sphere = sumWithinRadius(s.order.photons, {&all, 1}, q.position, q.normal, maxRadius2);
+            const SphereSum sphere = sumWithinRadius(s.order.photons, {&all, 1}, q.position, q.side, maxRadius2);
             if (sphere.farthestD2 == maxRadius2) continue;  // one exactly on it: its share as the search leaves it out
             out[q.point] = diffuseRadiance(sphere.sum, q.kd, maxRadius2);
             plan.how = QueryPlan::Done;
@@ -376,7 +377,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
           const GrowingRadius& radius = plan.radius;
           if (!boxRows) sphereRows(sums, q.position, radius.d2, s.ownRows);
           const std::span<const ColumnRun> rows = boxRows ? std::span<const ColumnRun>(s.rows) : s.ownRows;
-          const SphereSum sphere = sumWithinRadius(sums.columns, rows, q.position, q.normal, radius.d2);
+          const SphereSum sphere = sumWithinRadius(sums.columns, rows, q.position, q.side, radius.d2);
           // The photon that set the radius is left out (see Accumulator::radiance).
           out[q.point] = radius.d2 > 0 ? diffuseRadiance(sphere.sum - radius.share, q.kd, radius.d2) : Rgb();
           ++c.queries;

@@ -41,6 +41,7 @@ inline EstimatePoint estimatePoint(const ShadingPoint& sp) {
   q.frame = Frame(sp.normal);
   q.woLocal = q.frame.toLocal(sp.wo);
   q.bsdf = sp.bsdf;
+  q.facingNormal = dot(sp.wo, sp.geometricNormal) > 0 ? sp.geometricNormal : -sp.geometricNormal;
   return q;
 }
 

@@ -12,7 +12,9 @@ struct Photon {
   Rgb power;           // flux carried, W
   uint32_t direction;  // octahedral unit vector towards where the photon came from, 2 x 16 bits
   uint32_t flags;      // bounce count in the low byte; bits 8-9: kd-tree split axis (PhotonKdTree);
-                       // bit 10: caustic (only specular bounces since the light, at least one)
+                       // bit 10: caustic (only specular bounces since the light, at least one);
+                       // bits 11-30: facing normal, octahedral, 2 x 10 bits: the geometric normal of
+                       // the surface on the side the photon arrived from
 };
 static_assert(sizeof(Photon) == 32, "Photon is a fixed-size 32-byte record");
 
@@ -20,17 +22,46 @@ inline constexpr uint32_t kPhotonBounceMask = 0xffu;
 inline constexpr uint32_t kPhotonAxisShift = 8;
 inline constexpr uint32_t kPhotonAxisMask = 3u << kPhotonAxisShift;
 inline constexpr uint32_t kPhotonCausticFlag = 1u << 10;
+inline constexpr uint32_t kPhotonFacingShift = 11;
+inline constexpr int kPhotonFacingBits = 10;
 
 inline uint32_t photonBounce(const Photon& p) { return p.flags & kPhotonBounceMask; }
 inline int photonSplitAxis(const Photon& p) { return int((p.flags & kPhotonAxisMask) >> kPhotonAxisShift); }
 inline bool photonIsCaustic(const Photon& p) { return (p.flags & kPhotonCausticFlag) != 0; }
 inline Vec3 photonIncoming(const Photon& p) { return decodeOctahedral(p.direction); }
+inline uint32_t photonFacingBits(Vec3 facingNormal) {
+  return encodeOctahedral<kPhotonFacingBits>(facingNormal) << kPhotonFacingShift;
+}
+inline Vec3 photonFacing(const Photon& p) { return decodeOctahedral<kPhotonFacingBits>(p.flags >> kPhotonFacingShift); }
 
 // Squared distance as every photon map computes it, so that maps and brute force agree to the bit
 // on which photons lie inside a radius.
 inline float distance2(Vec3 a, Vec3 b) {
   const Vec3 d = a - b;
   return dot(d, d);
+}
+
+// Which photons light a surface point's side, the rule of every estimate: those arriving from
+// above its shading normal, landed on a surface facing within 60 degrees of its facing normal (its
+// geometric normal on the viewer's side), and lying where a smooth surface through the point would
+// put them: off its tangent plane by at most what the angle between the two normals explains (the
+// chord of an arc of angle a rises to sin(a / 2) of its length; allowed here: sqrt(1 - cos a), plus
+// kOffPlane of the distance for the rounding of positions). Photons on the far side of a thin wall,
+// on another wall where two meet, or on a parallel surface nearby (a panel h above a floor, unless
+// farther than h / kOffPlane) do not light the point; without these tests photons on the outside
+// of a closed box lit its inside.
+inline constexpr float kSameSurfaceCos = 0.5f;
+inline constexpr float kOffPlane = 0.01f;
+struct SurfaceSide {
+  Vec3 shadingNormal;  // on the viewer's side
+  Vec3 facingNormal;   // the geometric normal on the viewer's side
+};
+// incoming: the photon's octahedralDirection (any length); facing: photonFacing(photon); offset:
+// the photon's position less the point's, and d2 its squared length (distance2).
+inline bool photonLights(Vec3 incoming, Vec3 facing, Vec3 offset, float d2, const SurfaceSide& side) {
+  const float c = dot(facing, side.facingNormal), h = dot(offset, side.facingNormal);
+  return (dot(incoming, side.shadingNormal) > 0) & (c > kSameSurfaceCos) &
+         (h * h <= d2 * (1 - c + kOffPlane * kOffPlane));
 }
 
 }  // namespace lucent

@@ -19,9 +19,10 @@ PhotonColumns photonColumns(std::span<const Photon> listed) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, listed.size(), 4096), [&](const auto& range) {
     for (size_t i = range.begin(); i != range.end(); ++i) {
       const Photon& p = listed[i];
-      const Vec3 incoming = octahedralDirection(p.direction);
+      const Vec3 incoming = octahedralDirection(p.direction), facing = photonFacing(p);
       c.x[i] = p.position.x, c.y[i] = p.position.y, c.z[i] = p.position.z;
       c.incomingX[i] = incoming.x, c.incomingY[i] = incoming.y, c.incomingZ[i] = incoming.z;
+      c.facingX[i] = facing.x, c.facingY[i] = facing.y, c.facingZ[i] = facing.z;
       c.r[i] = p.power.r, c.g[i] = p.power.g, c.b[i] = p.power.b;
     }
   });
@@ -30,50 +31,57 @@ PhotonColumns photonColumns(std::span<const Photon> listed) {
 
 namespace {
 
-// The helpers below pass eight-lane vectors by value; they are inlined within this file, so GCC's
-// note that the default clone passes them differently from the AVX2 and AVX-512 ones concerns no interface.
+// The helpers below pass eight-lane vectors by value. The default clone passes them differently
+// from the AVX2 and AVX-512 ones, so every helper that takes or returns one is forced inline into
+// the clone that calls it (a call from a clone to an out-of-line helper reads garbage lanes); GCC's
+// note on the difference then concerns no interface.
 #pragma GCC diagnostic ignored "-Wpsabi"
+#define LUCENT_LANE_HELPER [[gnu::always_inline]] inline
 
 // Eight lanes as GCC vector types: one AVX register in the AVX2 and AVX-512 clones (the latter with
 // mask registers for the comparisons), two SSE registers otherwise.
 typedef float Floats __attribute__((vector_size(32)));
 typedef int32_t Ints __attribute__((vector_size(32)));
 
-Floats load(const float* p) {
+LUCENT_LANE_HELPER Floats load(const float* p) {
   Floats v;
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-Ints load(const int32_t* p) {
+LUCENT_LANE_HELPER Ints load(const int32_t* p) {
   Ints v;
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-void store(float* p, Floats v) { std::memcpy(p, &v, sizeof v); }
-void store(int32_t* p, Ints v) { std::memcpy(p, &v, sizeof v); }
-Floats broadcast(float f) { return Floats{} + f; }
-Ints broadcast(int32_t i) { return Ints{} + i; }
+LUCENT_LANE_HELPER void store(float* p, Floats v) { std::memcpy(p, &v, sizeof v); }
+LUCENT_LANE_HELPER void store(int32_t* p, Ints v) { std::memcpy(p, &v, sizeof v); }
+LUCENT_LANE_HELPER Floats broadcast(float f) { return Floats{} + f; }
+LUCENT_LANE_HELPER Ints broadcast(int32_t i) { return Ints{} + i; }
 // The lanes of v where mask is set (all ones), zero elsewhere.
-Floats masked(Floats v, Ints mask) { return Floats(Ints(v) & mask); }
-int32_t sum(Ints v) {
+LUCENT_LANE_HELPER Floats masked(Floats v, Ints mask) { return Floats(Ints(v) & mask); }
+LUCENT_LANE_HELPER int32_t sum(Ints v) {
   int32_t n = 0;
   for (int j = 0; j < kPhotonLanes; ++j) n += v[j];
   return n;
 }
 // Lanes set in a mask.
-int32_t count(Ints mask) { return -sum(mask); }
+LUCENT_LANE_HELPER int32_t count(Ints mask) { return -sum(mask); }
 
 constexpr Ints kLane = {0, 1, 2, 3, 4, 5, 6, 7};
 
-// Eight photons from `first` on: squared distance (as distance2) and the cosine sign's operand (as
-// the estimate's front test), lanes past the run's end invalid.
+// Eight photons from `first` on: squared distance (as distance2) and whether each lights the
+// query's side (as photonLights), lanes past the run's end invalid.
 struct Block {
-  Floats d2, cosine;
-  Ints valid;
+  Floats d2;
+  Ints lights, valid;
 };
 
 struct Query {
-  Floats x, y, z, nx, ny, nz;
+  Floats x, y, z, nx, ny, nz, fx, fy, fz;
+  LUCENT_LANE_HELPER Query(Vec3 q, const SurfaceSide& side)
+      : x(broadcast(q.x)), y(broadcast(q.y)), z(broadcast(q.z)), nx(broadcast(side.shadingNormal.x)),
+        ny(broadcast(side.shadingNormal.y)), nz(broadcast(side.shadingNormal.z)), fx(broadcast(side.facingNormal.x)),
+        fy(broadcast(side.facingNormal.y)), fz(broadcast(side.facingNormal.z)) {}
 };
 
 // The list positions of a block's lanes, advanced block by block: a lane is valid while its position
@@ -81,27 +89,30 @@ struct Query {
 // instructions per block, a fifth of the loop.)
 struct LanePositions {
   Ints position, end;
-  LanePositions(uint32_t first, uint32_t runEnd)
+  LUCENT_LANE_HELPER LanePositions(uint32_t first, uint32_t runEnd)
       : position(kLane + broadcast(int32_t(first))), end(broadcast(int32_t(runEnd))) {}
-  Ints valid() const { return position < end; }
-  void next() { position += kPhotonLanes; }
+  LUCENT_LANE_HELPER Ints valid() const { return position < end; }
+  LUCENT_LANE_HELPER void next() { position += kPhotonLanes; }
 };
 
-Block block(const PhotonColumns& c, uint32_t first, Ints valid, const Query& q) {
+LUCENT_LANE_HELPER Block block(const PhotonColumns& c, uint32_t first, Ints valid, const Query& q) {
   const Floats dx = load(&c.x[first]) - q.x, dy = load(&c.y[first]) - q.y, dz = load(&c.z[first]) - q.z;
   Block b;
   b.d2 = dx * dx + dy * dy + dz * dz;
-  b.cosine = load(&c.incomingX[first]) * q.nx + load(&c.incomingY[first]) * q.ny + load(&c.incomingZ[first]) * q.nz;
+  const Floats cosine =
+      load(&c.incomingX[first]) * q.nx + load(&c.incomingY[first]) * q.ny + load(&c.incomingZ[first]) * q.nz;
+  const Floats facing = load(&c.facingX[first]) * q.fx + load(&c.facingY[first]) * q.fy + load(&c.facingZ[first]) * q.fz;
+  const Floats h = dx * q.fx + dy * q.fy + dz * q.fz;
+  b.lights = (cosine > 0) & (facing > kSameSurfaceCos) & (h * h <= b.d2 * (1 - facing + kOffPlane * kOffPlane));
   b.valid = valid;
   return b;
 }
 
 }  // namespace
 
-LUCENT_LANE_CLONES void sumPhotonRun(const PhotonColumns& c, uint32_t begin, uint32_t end, Vec3 n, KnnGridSearch& s,
-                                     PhotonLaneSums& sums) {
-  const Query q{broadcast(s.position.x), broadcast(s.position.y), broadcast(s.position.z),
-                broadcast(n.x),          broadcast(n.y),          broadcast(n.z)};
+LUCENT_LANE_CLONES void sumPhotonRun(const PhotonColumns& c, uint32_t begin, uint32_t end, const SurfaceSide& side,
+                                     KnnGridSearch& s, PhotonLaneSums& sums) {
+  const Query q(s.position, side);
   const uint32_t examinedBefore = s.photonsExamined;
   uint32_t i = begin;
 
@@ -121,7 +132,7 @@ LUCENT_LANE_CLONES void sumPhotonRun(const PhotonColumns& c, uint32_t begin, uin
       const int32_t accepting = count(accepted);
       if (s.found + uint32_t(accepting) > s.k) break;  // the k-th photon is in this block
       s.found += uint32_t(accepting);
-      const Ints lit = accepted & (blk.cosine > 0);
+      const Ints lit = accepted & blk.lights;
       const Floats pr = masked(load(&c.r[i]), lit), pg = masked(load(&c.g[i]), lit), pb = masked(load(&c.b[i]), lit);
       r += pr, g += pg, b += pb, used -= lit;
       radius2 = accepted ? (blk.d2 > radius2 ? blk.d2 : radius2) : radius2;
@@ -144,7 +155,7 @@ LUCENT_LANE_CLONES void sumPhotonRun(const PhotonColumns& c, uint32_t begin, uin
         const bool growing = s.found < s.k;
         if (!(d2 <= (growing ? s.maxRadius2 : s.radius2))) continue;
         ++s.found;
-        const bool lit = blk.cosine[j] > 0;
+        const bool lit = blk.lights[j] != 0;
         const float pr = lit ? c.r[i] : 0.0f, pg = lit ? c.g[i] : 0.0f, pb = lit ? c.b[i] : 0.0f;
         sums.r[j] += pr, sums.g[j] += pg, sums.b[j] += pb, sums.used[j] += lit;
         if (!growing) continue;
@@ -166,7 +177,7 @@ LUCENT_LANE_CLONES void sumPhotonRun(const PhotonColumns& c, uint32_t begin, uin
     for (LanePositions lanes(i, end); i < end; i += kPhotonLanes, lanes.next()) {
       const Block blk = block(c, i, lanes.valid(), q);
       const Ints accepted = (blk.d2 <= radius2) & blk.valid;
-      const Ints lit = accepted & (blk.cosine > 0);
+      const Ints lit = accepted & blk.lights;
       r += masked(load(&c.r[i]), lit), g += masked(load(&c.g[i]), lit), b += masked(load(&c.b[i]), lit);
       used -= lit, found -= accepted;
     }
@@ -177,8 +188,9 @@ LUCENT_LANE_CLONES void sumPhotonRun(const PhotonColumns& c, uint32_t begin, uin
 }
 
 void resizeColumns(PhotonColumns& columns, uint32_t count) {
-  for (UninitializedVector<float>* column : {&columns.x, &columns.y, &columns.z, &columns.incomingX, &columns.incomingY,
-                                             &columns.incomingZ, &columns.r, &columns.g, &columns.b}) {
+  for (UninitializedVector<float>* column :
+       {&columns.x, &columns.y, &columns.z, &columns.incomingX, &columns.incomingY, &columns.incomingZ, &columns.facingX,
+        &columns.facingY, &columns.facingZ, &columns.r, &columns.g, &columns.b}) {
     column->resize(size_t(count) + PhotonColumns::kPad);
     std::fill(column->begin() + ptrdiff_t(count), column->end(), 0.0f);
   }
@@ -190,12 +202,13 @@ void copyColumns(const PhotonColumns& from, uint32_t first, uint32_t count, Phot
   };
   copy(from.x, to.x), copy(from.y, to.y), copy(from.z, to.z);
   copy(from.incomingX, to.incomingX), copy(from.incomingY, to.incomingY), copy(from.incomingZ, to.incomingZ);
+  copy(from.facingX, to.facingX), copy(from.facingY, to.facingY), copy(from.facingZ, to.facingZ);
   copy(from.r, to.r), copy(from.g, to.g), copy(from.b, to.b);
 }
 
-LUCENT_LANE_CLONES GrowingRadius growingRadius(const PhotonColumns& c, uint32_t offered, Vec3 q, Vec3 n,
+LUCENT_LANE_CLONES GrowingRadius growingRadius(const PhotonColumns& c, uint32_t offered, Vec3 q, const SurfaceSide& side,
                                                float maxRadius2, uint32_t k) {
-  const Query query{broadcast(q.x), broadcast(q.y), broadcast(q.z), broadcast(n.x), broadcast(n.y), broadcast(n.z)};
+  const Query query(q, side);
   const Floats limit2 = broadcast(maxRadius2);
   GrowingRadius g;
   // Whole blocks while the k-th photon is not among them; each lane keeps its farthest photon,
@@ -229,16 +242,16 @@ LUCENT_LANE_CLONES GrowingRadius growingRadius(const PhotonColumns& c, uint32_t 
     }
   }
   if (g.found == 0) return g;
-  // The side it came from, by the block's arithmetic.
+  // Whether it lights the side, by the block's arithmetic.
   const uint32_t at = g.farthest & ~uint32_t(kPhotonLanes - 1);
   const Block blk = block(c, at, Ints{} - 1, query);
-  if (blk.cosine[g.farthest - at] > 0) g.share = Rgb(c.r[g.farthest], c.g[g.farthest], c.b[g.farthest]);
+  if (blk.lights[g.farthest - at]) g.share = Rgb(c.r[g.farthest], c.g[g.farthest], c.b[g.farthest]);
   return g;
 }
 
-LUCENT_LANE_CLONES SphereSum sumWithinRadius(const PhotonColumns& c, std::span<const ColumnRun> runs, Vec3 q, Vec3 n,
-                                             float radius2) {
-  const Query query{broadcast(q.x), broadcast(q.y), broadcast(q.z), broadcast(n.x), broadcast(n.y), broadcast(n.z)};
+LUCENT_LANE_CLONES SphereSum sumWithinRadius(const PhotonColumns& c, std::span<const ColumnRun> runs, Vec3 q,
+                                             const SurfaceSide& side, float radius2) {
+  const Query query(q, side);
   const Floats r2 = broadcast(radius2);
   Floats r = {}, g = {}, b = {}, farthest = broadcast(-1.0f);
   Ints used = {}, found = {};
@@ -250,7 +263,7 @@ LUCENT_LANE_CLONES SphereSum sumWithinRadius(const PhotonColumns& c, std::span<c
     for (uint32_t i = run.first & ~uint32_t(kPhotonLanes - 1); i < end; i += kPhotonLanes, lanes.next()) {
       const Block blk = block(c, i, lanes.valid() & (lanes.position >= begin), query);
       const Ints accepted = (blk.d2 <= r2) & blk.valid;
-      const Ints lit = accepted & (blk.cosine > 0);
+      const Ints lit = accepted & blk.lights;
       r += masked(load(&c.r[i]), lit), g += masked(load(&c.g[i]), lit), b += masked(load(&c.b[i]), lit);
       used -= lit, found -= accepted;
       farthest = accepted ? (blk.d2 > farthest ? blk.d2 : farthest) : farthest;

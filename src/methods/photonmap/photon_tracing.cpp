@@ -61,8 +61,9 @@ BounceResult bounce(const Scene& scene, const PhotonPath& path, const Hit& hit, 
     // (particle_scattering.h); one from below the shading normal adds nothing for them.
     const float arrival = particleArrivalRatio(sp, particleShadingNormal(bsdf, sp, wo), wo);
     out.caustic = path.specularOnly && depth > 0;
+    const Vec3 facing = dot(wo, sp.geometricNormal) > 0 ? sp.geometricNormal : -sp.geometricNormal;
     out.photon = {sp.position, path.power * arrival, encodeOctahedral(wo),
-                  std::min(depth, kPhotonBounceMask) | (out.caustic ? kPhotonCausticFlag : 0u)};
+                  std::min(depth, kPhotonBounceMask) | (out.caustic ? kPhotonCausticFlag : 0u) | photonFacingBits(facing)};
     out.stored = (!causticOnly || out.caustic) && arrival > 0 && isFinite(out.photon.power);
     if (causticOnly) return out;  // no caustic path continues from a non-specular surface
   }

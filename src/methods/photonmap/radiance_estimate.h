@@ -3,8 +3,8 @@
 //
 //   L(x, wo) ~ sum over photons p near x of f(x, wo, wi_p) * Phi_p / (pi r^2),
 //
-// over the photons within radius r of x whose incoming direction wi_p lies on the viewer's side of
-// the surface (photons on the other side of a thin wall do not light this side). r is the radius of
+// over the photons within radius r of x that light the viewer's side of its surface (photonLights:
+// photons on the other side of a thin wall, or on another wall at a corner, do not). r is the radius of
 // the search: the kNN-grid's final radius on the grids (all photons within it are summed, at least
 // k of them, section 2.3), the k-th nearest photon's distance on the kd-tree; the maximum radius
 // when fewer than k photons lie within it.
@@ -24,9 +24,11 @@ namespace lucent {
 // A diffuse or glossy surface point seen from direction wo.
 struct EstimatePoint {
   Vec3 position;
-  Frame frame;       // shading frame whose normal is on the viewer's side
-  Vec3 woLocal;      // towards the viewer, in `frame`
-  SurfaceBsdf bsdf;  // Diffuse or Phong
+  Frame frame;        // shading frame whose normal is on the viewer's side
+  Vec3 woLocal;       // towards the viewer, in `frame`
+  SurfaceBsdf bsdf;   // Diffuse or Phong
+  Vec3 facingNormal;  // the geometric normal on the viewer's side
+  SurfaceSide side() const { return {frame.n, facingNormal}; }
 };
 
 struct EstimateSettings {
@@ -38,7 +40,7 @@ struct EstimateSettings {
 // Per-thread counters of the estimate stage, summed at the end.
 struct EstimateCounters {
   uint64_t queries = 0;
-  uint64_t photonsUsed = 0;      // photons within the radius on the viewer's side
+  uint64_t photonsUsed = 0;      // photons within the radius that light the viewer's side
   uint64_t photonsExamined = 0;  // distances computed (grids) or nodes visited (kd-tree)
   uint64_t cellsVisited = 0;     // grids only
   uint64_t unfinished = 0;       // kNN-grid searches stopped by `shells` before their end
@@ -58,16 +60,18 @@ inline Rgb diffuseRadiance(Rgb inside, Rgb kd, float radius2) { return inside * 
 // the farthest photon's share apart: when it defines the radius it is left out (see radiance()).
 struct Accumulator {
   const EstimatePoint& q;
+  SurfaceSide side;
   bool diffuse;
   Rgb sum, farthest;
   float farthestD2 = -1;
   uint32_t used = 0;
 
-  explicit Accumulator(const EstimatePoint& point) : q(point), diffuse(point.bsdf.type == MaterialType::Diffuse) {}
+  explicit Accumulator(const EstimatePoint& point)
+      : q(point), side(point.side()), diffuse(point.bsdf.type == MaterialType::Diffuse) {}
   [[gnu::always_inline]] void add(const Photon& p, float d2) {
-    // Which side the photon came from needs no unit vector; the BRDF of a glossy surface does.
-    // Photons from the other side of the surface are not counted.
-    const bool front = dot(octahedralDirection(p.direction), q.frame.n) > 0;
+    // Which side the photon came from needs no unit incoming direction; the BRDF of a glossy
+    // surface does.
+    const bool front = photonLights(octahedralDirection(p.direction), photonFacing(p), p.position - q.position, d2, side);
     const Rgb share = diffuse ? p.power * float(front) : front ? glossyShare(p) : Rgb();
     used += front;
     sum += share;
@@ -95,7 +99,7 @@ struct GridVisitor {
   void operator()(uint32_t, const Photon& p, float d2) { acc.add(p, d2); }
   bool takeRun(const CellPhotons& run, KnnGridSearch& s) {
     if (!acc.diffuse || !run.columns) return false;
-    sumPhotonRun(*run.columns, run.first, run.first + run.count, acc.q.frame.n, s, lanes);
+    sumPhotonRun(*run.columns, run.first, run.first + run.count, acc.side, s, lanes);
     return true;
   }
   // Adds the lanes' sums to the accumulator at the end of the search; call it exactly once (the
