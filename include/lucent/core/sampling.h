@@ -1,6 +1,7 @@
 // Warping functions from the unit square. Directions are in a local frame with the normal on +z;
 // each sampler has a matching pdf (solid-angle measure unless said otherwise).
 #pragma once
+#include <algorithm>
 #include <cmath>
 
 #include "lucent/core/math.h"
@@ -68,7 +69,7 @@ inline Vec3 samplePhongLobe(Vec2 u, float exponent) {
 // The density of samplePhongLobe given cos^n of the angle, for callers that have the power already.
 inline float phongLobePdfOfPower(float power, float exponent) { return (exponent + 1.0f) * (0.5f * kInvPi) * power; }
 inline float phongLobePdf(float cosAlpha, float exponent) {
-  return cosAlpha > 0 ? phongLobePdfOfPower(std::pow(cosAlpha, exponent), exponent) : 0.0f;
+  return cosAlpha > 0 ? phongLobePdfOfPower(std::pow(std::min(cosAlpha, 1.0f), exponent), exponent) : 0.0f;
 }
 
 // Sample i of n over the unit square, stratified: the first nx * ny samples (nx = floor(sqrt(n)),

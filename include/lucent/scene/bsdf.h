@@ -1,6 +1,7 @@
 // The four materials' scattering functions, in the local shading frame (normal on +z, wo and wi
 // pointing away from the surface). Shared by every method.
 #pragma once
+#include <algorithm>
 #include <cmath>
 
 #include "lucent/core/sampling.h"
@@ -54,7 +55,9 @@ inline BsdfValue evalBsdfAndPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
   if (b.isDelta() || wo.z <= 0 || wi.z <= 0) return {Rgb(0.0f), 0.0f};
   BsdfValue v{b.kd * kInvPi, cosineHemispherePdf(wi.z)};
   if (b.type == MaterialType::Phong) {
-    const float cosAlpha = dot(reflect(wo, {0, 0, 1}), wi);
+    // A cosine, rounded: above 1 by an ulp or two, its power overflowed for exponents of 1e8 and
+    // more (f and pdf infinite, their ratio NaN).
+    const float cosAlpha = std::min(dot(reflect(wo, {0, 0, 1}), wi), 1.0f);
     const float power = cosAlpha > 0 ? std::pow(cosAlpha, b.ns) : 0.0f;
     if (cosAlpha > 0) v.f += b.ks * ((b.ns + 2.0f) * 0.5f * kInvPi * power);
     const float pd = b.diffuseChoice();

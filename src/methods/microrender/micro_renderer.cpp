@@ -257,7 +257,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   stats.addCounter("eye_rays", eye.rays);
   stats.addCounter("shadow_rays", shadowRays);
   stats.addCounter("shading_points", n);
-  stats.addCounter("invalid_samples", eye.invalid);
+  stats.addCounter("invalid_samples", eye.invalid + image.dropped());
   stats.addCounter("micro_buffers", c.buffers);
   stats.addCounter("micro_buffers_ray_cast", c.buffersRayCast);
   stats.addCounter("upsampling_recomputed", recomputed);

@@ -168,6 +168,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
 
   out.image = image.finish();
   out.sppDone = options.spp;
+  totals.invalid += image.dropped();
   EstimateCounters gc, cc;
   uint64_t gatherRays = 0;
   for (const GatherScratch& s : scratch) gc += s.counters, gatherRays += s.rays;

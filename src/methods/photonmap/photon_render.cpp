@@ -139,12 +139,16 @@ void ImageAccumulator::add(const EyePaths& eye, const PointRadiance& radiance) {
     pixels_[p] = eye.pixels[i];
     for (int c = 0; c < 3; ++c) direct_[p * 3 + c] += eye.pixels[i].emitted[c];
   }
-  // The points in their (fixed) order.
+  // The points in their (fixed) order; one whose light is not finite is dropped and counted.
   for (size_t i = 0; i < eye.points.size(); ++i) {
     const ShadingPoint& sp = eye.points[i];
     const size_t p = sp.pixel;
     const Rgb d = sp.weight * radiance.direct[i], ind = sp.weight * radiance.indirect[i],
               ca = sp.weight * radiance.caustic[i];
+    if (!isFinite(d + ind + ca)) {
+      ++dropped_;
+      continue;
+    }
     for (int c = 0; c < 3; ++c) {
       direct_[p * 3 + c] += d[c];
       indirect_[p * 3 + c] += ind[c];

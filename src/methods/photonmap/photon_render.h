@@ -92,10 +92,13 @@ class ImageAccumulator {
   ImageAccumulator(const Scene& scene, bool layers);
   void add(const EyePaths& band, const PointRadiance& radiance);
   Image finish() const;
+  // Shading points whose light was not finite, left out of the image.
+  uint64_t dropped() const { return dropped_; }
 
  private:
   int width_, height_;
   bool layers_;
+  uint64_t dropped_ = 0;
   std::vector<double> direct_, indirect_, caustic_;  // 3 per pixel
   std::vector<EyePixel> pixels_;
 };
@@ -116,7 +119,7 @@ void dumpShadingPoints(const std::string& dir, const std::string& prefix, const 
 // trace_rays and radiance_estimate, and the ray, point and estimate counters.
 struct RenderTotals {
   double traceSeconds = 0, estimateSeconds = 0;
-  uint64_t eyeRays = 0, shadowRays = 0, points = 0, invalid = 0;
+  uint64_t eyeRays = 0, shadowRays = 0, points = 0, invalid = 0;  // invalid: camera paths and shading points dropped
   void addBand(const EyePaths& eye) {
     eyeRays += eye.rays;
     points += eye.points.size();

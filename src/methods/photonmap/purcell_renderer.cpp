@@ -49,6 +49,7 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
 
   out.image = image.finish();
   out.sppDone = options.spp;
+  totals.invalid += image.dropped();
   EstimateCounters gc, cc;
   for (const auto& c : globalCounters) gc += c;
   for (const auto& c : causticCounters) cc += c;
