@@ -150,6 +150,32 @@ TEST_CASE("Reading a missing or broken file names it") {
   CHECK_THROWS_WITH(readImage(dir / "broken.exr"), Catch::Contains(dir / "broken.exr"));
 }
 
+TEST_CASE("An image header claiming more than 2^26 pixels is refused before its pixels are allocated") {
+  // A valid 1 x 1 PNG whose header is then made to claim 20,000 x 20,000: 69 bytes.
+  TempDir dir;
+  writePng(makeImage(1, 1, {"R", "G", "B"}, {0.5f, 0.5f, 0.5f}), dir / "small.png");
+  std::string bytes;
+  {
+    std::ifstream in(dir / "small.png", std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  REQUIRE(bytes.substr(12, 4) == "IHDR");
+  auto putBigEndian = [&](size_t at, uint32_t value) {
+    for (int k = 0; k < 4; ++k) bytes[at + size_t(k)] = char((value >> (8 * (3 - k))) & 0xff);
+  };
+  putBigEndian(16, 20000);  // width
+  putBigEndian(20, 20000);  // height
+  // The chunk's CRC-32 over its type and data (PNG specification, annex D).
+  uint32_t crc = 0xffffffffu;
+  for (size_t i = 12; i < 12 + 4 + 13; ++i) {
+    crc ^= uint8_t(bytes[i]);
+    for (int b = 0; b < 8; ++b) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  putBigEndian(12 + 4 + 13, crc ^ 0xffffffffu);
+  std::ofstream(dir / "huge.png", std::ios::binary) << bytes;
+  CHECK_THROWS_WITH(readImage(dir / "huge.png"), Catch::Contains("huge.png") && Catch::Contains("20000 x 20000"));
+}
+
 TEST_CASE("Metrics match hand-computed values on a 2x1 image") {
   // Pixels (R,G): image (1,0) (3,0.5); reference (1,0) (2,1).
   const Image image = makeImage(2, 1, {"R", "G"}, {1, 0, 3, 0.5f});
@@ -253,10 +279,44 @@ TEST_CASE("lucent compare reports metrics and exits by threshold") {
     CHECK(json["metric"] == "mae");
     CHECK(json["passed"] == false);
   }
-  SECTION("no threshold always passes") {
+  SECTION("no threshold passes an image of finite values") {
     const test::CliRun r = runLucent("compare " + files);
     CHECK(r.status == 0);
-    CHECK_FALSE(nlohmann::json::parse(r.output).contains("passed"));
+    CHECK(nlohmann::json::parse(r.output)["passed"] == true);
+  }
+  SECTION("NaN or infinite values fail whatever the metric, and are counted") {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    writeExr(makeImage(2, 1, {"R", "G", "B"}, {nan, nan, nan, nan, nan, nan}), dir / "nan.exr");
+    writeExr(makeImage(2, 1, {"R", "G", "B"}, {1, 1, 1, 1, kInf, 1}), dir / "inf.exr");
+    for (const char* candidate : {"nan.exr", "inf.exr"})
+      for (const char* metric : {"smape", "relmse", "rmse", "mae"}) {
+        CAPTURE(candidate, metric);
+        const test::CliRun r = runLucent("compare " + quoted(dir / candidate) + " " + quoted(dir / "ref.exr") +
+                                         " --metric " + metric + " --max-error 1e9");
+        CHECK(r.status == 1);
+        const auto json = nlohmann::json::parse(r.output);
+        CHECK(json["non_finite"] == (std::string(candidate) == "nan.exr" ? 6 : 1));
+        CHECK(json["passed"] == false);
+      }
+    // In the reference they are bad input.
+    const test::CliRun r = runLucent("compare " + quoted(dir / "ref.exr") + " " + quoted(dir / "nan.exr"));
+    CHECK(r.status == 2);
+    CHECK_THAT(r.output, Catch::Contains("NaN or infinite"));
+  }
+  SECTION("an 8-bit sRGB image is compared as linear values") {
+    // A PNG of mid grey holds code 188, which decodes to 0.503; read as stored it is 0.737.
+    const Image grey = makeImage(2, 1, {"R", "G", "B"}, {0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 0.5f});
+    writeExr(grey, dir / "grey.exr");
+    writePng(grey, dir / "grey.png");
+    const test::CliRun r = runLucent("compare " + quoted(dir / "grey.png") + " " + quoted(dir / "grey.exr") +
+                                     " --metric mae --max-error 0.005");
+    CHECK(r.status == 0);
+    CHECK(nlohmann::json::parse(r.output)["value"].get<double>() < 0.005);
+  }
+  SECTION("a device is refused, not read for ever") {
+    const test::CliRun r = runLucent("compare /dev/zero " + quoted(dir / "ref.exr"));
+    CHECK(r.status == 2);
+    CHECK_THAT(r.output, Catch::Contains("/dev/zero") && Catch::Contains("not a regular file"));
   }
   SECTION("a missing file is an error naming it") {
     const test::CliRun r = runLucent("compare " + quoted(dir / "img.exr") + " " +

@@ -1,6 +1,8 @@
 // lucent compare IMAGE REFERENCE [--metric rmse|relmse|smape|mae] [--max-error X]
 //                [--heatmap OUT.png]
-// Exit status: 0 passed (or no threshold), 1 the chosen metric exceeds --max-error, 2 error.
+// Exit status: 0 passed (or no threshold), 1 the chosen metric exceeds --max-error or the image
+// has NaN or infinite values, 2 error (the reference's NaN or infinite values among them).
+// 8-bit images (PNG, JPEG) are decoded from sRGB to linear before they are compared.
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -24,8 +26,8 @@ nlohmann::ordered_json metricsJson(const ChannelError& e) {
 
 int runCompare(const CompareOptions& opt) {
   const ErrorMetric metric = parseErrorMetric(opt.metric);
-  const Image image = readImage(opt.image);
-  const Image reference = readImage(opt.reference);
+  const Image image = readLinearImage(opt.image);
+  const Image reference = readLinearImage(opt.reference);
   ImageError error;
   try {
     error = compareImages(image, reference);
@@ -44,12 +46,11 @@ int runCompare(const CompareOptions& opt) {
   out["overall"] = metricsJson(error.overall);
   out["channels"] = nlohmann::ordered_json::object();
   for (const ChannelError& c : error.perChannel) out["channels"][c.channel] = metricsJson(c);
+  out["non_finite"] = error.nonFinite;
   // A NaN error must fail, hence "<=" rather than "not >".
-  const bool passed = !opt.maxError || value <= *opt.maxError;
-  if (opt.maxError) {
-    out["max_error"] = *opt.maxError;
-    out["passed"] = passed;
-  }
+  const bool passed = error.nonFinite == 0 && (!opt.maxError || value <= *opt.maxError);
+  if (opt.maxError) out["max_error"] = *opt.maxError;
+  out["passed"] = passed;
   if (!opt.heatmap.empty()) {
     writePng(errorHeatmap(image, reference, metric), opt.heatmap);
     out["heatmap"] = opt.heatmap;

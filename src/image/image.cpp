@@ -2,12 +2,14 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <stdexcept>
 
 #include "lucent/core/files.h"
 #include "lucent/core/srgb.h"
+#include "lucent/scene/scene.h"
 
 namespace lucent {
 
@@ -85,9 +87,18 @@ void writePng(const Image& image, const std::string& path) {
 Image readImage(const std::string& path, ImageMetadata* metadata) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw std::runtime_error("image file not found: '" + path + "'");
+  // A device or pipe (/dev/zero) would be read for ever.
+  if (!fs::is_regular_file(path, ec)) throw std::runtime_error("cannot read image '" + path + "': not a regular file");
   auto in = OIIO::ImageInput::open(path);
   if (!in) throw std::runtime_error("cannot read image '" + path + "': " + OIIO::geterror());
   const OIIO::ImageSpec& spec = in->spec();
+  // The header's size is checked before any pixel is allocated (a 69-byte PNG may claim 20,000 x
+  // 20,000).
+  if (spec.width < 1 || spec.height < 1 || spec.nchannels < 1 || spec.nchannels > 1024 ||
+      uint64_t(spec.width) * uint64_t(spec.height) > kMaxImagePixels)
+    throw std::runtime_error("cannot read image '" + path + "': its header claims " + std::to_string(spec.width) + " x " +
+                             std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
+                             " channels (at most 2^26 pixels and 1,024 channels)");
   std::vector<std::string> names = spec.channelnames;
   for (int c = int(names.size()); c < spec.nchannels; ++c)
     names.push_back("channel" + std::to_string(c));
@@ -102,6 +113,29 @@ Image readImage(const std::string& path, ImageMetadata* metadata) {
         metadata->emplace_back(p.name().string(), p.get_string());
   }
   in->close();
+  return image;
+}
+
+bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata) {
+  auto lowercase = [](std::string text) {
+    for (char& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return text;
+  };
+  for (const auto& [key, value] : metadata)
+    if (key == "oiio:ColorSpace") return lowercase(value).find("srgb") != std::string::npos;
+  const std::string ext = lowercase(fs::path(path).extension().string());
+  return ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".bmp" || ext == ".tga";
+}
+
+Image readLinearImage(const std::string& path) {
+  ImageMetadata metadata;
+  Image image = readImage(path, &metadata);
+  if (!isSrgbEncoded(path, metadata)) return image;
+  for (int c = 0; c < image.channelCount(); ++c) {
+    if (image.channels()[size_t(c)] == "A") continue;  // alpha is stored linear
+    for (int y = 0; y < image.height(); ++y)
+      for (int x = 0; x < image.width(); ++x) image.at(x, y, c) = srgbToLinear(image.at(x, y, c));
+  }
   return image;
 }
 

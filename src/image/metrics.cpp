@@ -78,19 +78,31 @@ std::array<float, 3> viridis(double t) {
 
 ImageError compareImages(const Image& image, const Image& reference) {
   const std::vector<int> map = matchChannels(image, reference);
+  for (const float v : reference.pixels())
+    if (!std::isfinite(v)) throw std::invalid_argument("the reference has NaN or infinite values");
   const int channels = image.channelCount();
   std::vector<ErrorSums> sums(channels);
+  std::vector<double> counted(channels, 0.0);
+  ImageError result;
   for (int y = 0; y < image.height(); ++y)
     for (int x = 0; x < image.width(); ++x)
-      for (int c = 0; c < channels; ++c) sums[c].add(image.at(x, y, c), reference.at(x, y, map[c]));
-  ImageError result;
+      for (int c = 0; c < channels; ++c) {
+        const float v = image.at(x, y, c);
+        if (!std::isfinite(v)) {
+          ++result.nonFinite;
+          continue;
+        }
+        sums[c].add(v, reference.at(x, y, map[c]));
+        ++counted[c];
+      }
   ErrorSums total;
-  const double pixels = double(image.width()) * image.height();
+  double all = 0;
   for (int c = 0; c < channels; ++c) {
-    result.perChannel.push_back(sums[c].mean(image.channels()[c], pixels));
+    result.perChannel.push_back(sums[c].mean(image.channels()[c], counted[c]));
     total.add(sums[c]);
+    all += counted[c];
   }
-  result.overall = total.mean("all", pixels * channels);
+  result.overall = total.mean("all", all);
   return result;
 }
 

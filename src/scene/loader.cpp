@@ -16,20 +16,6 @@ using detail::JsonFields;
 
 namespace {
 
-std::string lowercase(std::string s) {
-  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-// Whether stored values are sRGB-encoded: the colour space OpenImageIO reports for the file (sRGB
-// for 8-bit JPEG, PNG, TIFF...; linear for EXR and HDR), or, where it reports none, the extension.
-bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata) {
-  for (const auto& [key, value] : metadata)
-    if (key == "oiio:ColorSpace") return lowercase(value).find("srgb") != std::string::npos;
-  const std::string ext = lowercase(fs::path(path).extension().string());
-  return ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".bmp" || ext == ".tga";
-}
-
 // Reads an RGB (or grey) image into texels, convert(channel values as stored, sRGB-encoded or not)
 // giving each; row 0 is the top row.
 template <class Convert>

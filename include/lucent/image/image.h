@@ -42,7 +42,13 @@ using ImageMetadata = std::vector<std::pair<std::string, std::string>>;
 void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata = {});
 // Writes the R, G, B channels as 8-bit sRGB-encoded PNG, clamped to [0,1]; atomically, as writeExr.
 void writePng(const Image& image, const std::string& path);
-// Reads any image OpenImageIO reads, as float, with its channel names and string metadata.
+// Reads any image OpenImageIO reads, as float, with its channel names and string metadata: the
+// values as stored. Refuses anything but a regular file, and headers of more than 2^26 pixels.
 Image readImage(const std::string& path, ImageMetadata* metadata = nullptr);
+// Whether stored values are sRGB-encoded: the colour space OpenImageIO reports for the file (sRGB
+// for 8-bit JPEG, PNG, TIFF...; linear for EXR and HDR), or, where it reports none, the extension.
+bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata);
+// readImage with sRGB-encoded values decoded to linear (every channel but alpha).
+Image readLinearImage(const std::string& path);
 
 }  // namespace lucent

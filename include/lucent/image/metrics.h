@@ -15,11 +15,15 @@ struct ChannelError {
 struct ImageError {
   std::vector<ChannelError> perChannel;
   ChannelError overall;  // over all pixels and the compared channels
+  // Values of the image that are NaN or infinite: an error of the image, however small the
+  // metrics over its other values are (they leave these out).
+  uint64_t nonFinite = 0;
 };
 
 // relMSE = mean((v - r)^2 / (r + 0.01)^2); SMAPE = mean(2|v - r| / (|v| + |r|)), 0 where both are 0.
 // Compares the channels both images have in common only if the sets are equal; throws
-// std::invalid_argument with a clear message for different sizes or channel sets.
+// std::invalid_argument with a clear message for different sizes or channel sets, or for a
+// reference with a non-finite value.
 ImageError compareImages(const Image& image, const Image& reference);
 
 enum class ErrorMetric { Rmse, Mae, RelMse, Smape };
