@@ -246,8 +246,12 @@ std::string writePolygonScene(const TempDir& dir, const std::vector<Vec2>& polyg
 
 std::string faceOf(size_t n, const std::string& suffix = "") {
   std::string f = "f";
-  for (size_t k = 1; k <= n; ++k) f += " " + std::to_string(k);
-  return f + suffix;
+  for (size_t k = 1; k <= n; ++k) {
+    f += ' ';
+    f += std::to_string(k);  // += rather than + dodges a GCC 12 -Wrestrict false positive
+  }
+  f += suffix;
+  return f;
 }
 
 // The signed area of a simple polygon (shoelace formula), and of the triangles it was split into.

@@ -1,0 +1,79 @@
+#!/usr/bin/env python3
+"""Renders every method on every scene at small resolutions with this build (build/lucent) and with
+another binary (a build of an earlier commit), and says for each whether the images are
+bit-identical: what a change that must not change images is checked with.
+
+    scripts/compare-renders.py OTHER_LUCENT [--out DIR] [--quick]
+
+A case differs when any pixel of any channel differs (`lucent compare` finds an RMSE above 0) or
+the two images do not have the same channels. Exit status 1 when any case differs.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+LUCENT = os.path.join(ROOT, "build", "lucent")
+
+SCENES = ["cornell-box", "cornell-box-glossy", "cornell-box-spheres", "glass-ball", "ring", "ring-area", "sponza"]
+
+# Per method: the options every scene is rendered with, and extra variants on the Cornell box.
+METHODS = {
+    "pt": (["--spp", "4"], [["--strategy", "light"], ["--max-depth", "2", "--layers"]]),
+    "purcell": (["--photons", "20000", "--caustic-photons", "20000", "--light-samples", "4"],
+                [["--map", "stencil"], ["--map", "hash"], ["--map", "kdtree"], ["--layers"]]),
+    "pmfg": (["--photons", "20000", "--caustic-photons", "20000", "--gather-rays", "16", "--light-samples", "4"],
+             [["--map", "sort"], ["--layers"]]),
+    "micro": (["--light-samples", "4"],
+              [["--lighting", "vpl"], ["--lighting", "radiosity"], ["--lighting", "photons"], ["--upsampling", "4"],
+               ["--encoding", "packed", "--mapping", "nusselt"]]),
+}
+
+
+def cases(quick):
+    for method, (base, variants) in METHODS.items():
+        for scene in (["cornell-box", "glass-ball"] if quick else SCENES):
+            resolution = "64x40" if scene == "sponza" else "48x48"
+            yield f"{scene} {method}", scene, method, ["--resolution", resolution] + base
+        for variant in variants:
+            yield f"cornell-box {method} {' '.join(variant)}", "cornell-box", method, ["--resolution", "48x48"] + base + variant
+
+
+def render(binary, scene, method, args, output):
+    command = [binary, "render", os.path.join(ROOT, "scenes", scene + ".json"), "--method", method, "--threads", "2",
+               "--quiet", "-o", output] + args
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise RuntimeError(" ".join(command) + ": " + result.stderr.strip())
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("other", help="the lucent binary to compare with")
+    parser.add_argument("--out", help="keep the images in this directory")
+    parser.add_argument("--quick", action="store_true", help="two scenes per method")
+    args = parser.parse_args()
+    out = args.out or tempfile.mkdtemp(prefix="lucent-compare-")
+    os.makedirs(out, exist_ok=True)
+    differing = 0
+    for i, (name, scene, method, options) in enumerate(cases(args.quick)):
+        mine, theirs = os.path.join(out, f"{i}-this.exr"), os.path.join(out, f"{i}-other.exr")
+        render(LUCENT, scene, method, options, mine)
+        render(args.other, scene, method, options, theirs)
+        result = subprocess.run([LUCENT, "compare", mine, theirs], capture_output=True, text=True)
+        if result.returncode == 2:
+            verdict = "differs: " + result.stderr.strip().split(": ", 2)[-1]
+        else:
+            rmse = json.loads(result.stdout)["overall"]["rmse"]
+            verdict = "identical" if rmse == 0 else f"differs: RMSE {rmse:.3g}"
+        differing += verdict != "identical"
+        print(f"{name:60s} {verdict}", flush=True)
+    print(f"{differing} of {i + 1} cases differ; images in {out}")
+    return 1 if differing else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Installs the build into a temporary prefix, builds tests/consumer against it with find_package,
+# and runs it: it renders the Cornell box and must match `lucent render`'s image bit for bit.
+# Usage: run.sh BUILD_DIR SOURCE_DIR LUCENT_CLI
+set -euo pipefail
+build=$1 source=$2 cli=$3
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+cmake --install "$build" --prefix "$tmp/prefix" > "$tmp/install.log"
+cmake -S "$source/tests/consumer" -B "$tmp/build" -DCMAKE_PREFIX_PATH="$tmp/prefix" -DCMAKE_BUILD_TYPE=Release \
+  > "$tmp/configure.log" || { cat "$tmp/configure.log"; exit 1; }
+cmake --build "$tmp/build" > "$tmp/build.log" 2>&1 || { cat "$tmp/build.log"; exit 1; }
+"$cli" render "$source/scenes/cornell-box.json" --method pt --spp 16 --seed 1 --resolution 16x16 --quiet \
+  -o "$tmp/reference.exr" > /dev/null
+"$tmp/build/consumer" "$source/scenes/cornell-box.json" "$tmp/reference.exr"
