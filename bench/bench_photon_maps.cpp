@@ -21,7 +21,7 @@
 #include "lucent/core/sampling.h"
 #include "lucent/core/stats.h"
 #include "methods/photonmap/bitonic_sort.h"
-#include "methods/photonmap/kd_tree.h"
+#include "lucent/methods/photons/kd_tree.h"
 #include "methods/photonmap/knn_grid.h"
 #include "methods/photonmap/sorted_grid.h"
 #include "methods/photonmap/stencil_grid.h"

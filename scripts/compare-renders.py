@@ -29,7 +29,7 @@ METHODS = {
              [["--map", "sort"], ["--layers"]]),
     "micro": (["--light-samples", "4"],
               [["--lighting", "vpl"], ["--lighting", "radiosity"], ["--lighting", "photons"], ["--upsampling", "4"],
-               ["--encoding", "packed", "--mapping", "nusselt"]]),
+               ["--encoding", "packed", "--mapping", "nusselt"], ["--layers"]]),
 }
 
 

@@ -10,7 +10,7 @@
 #include "lucent/methods/photonmap.h"
 #include "lucent/methods/points/point_radiance.h"
 #include "lucent/scene/loader.h"
-#include "methods/photonmap/eye_paths.h"
+#include "lucent/pipeline/shading_points.h"
 #include "methods/photonmap/photon_render.h"
 #include "methods/photonmap/radiance_estimate.h"
 #include "methods/photonmap/sorted_grid.h"

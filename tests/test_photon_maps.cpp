@@ -15,7 +15,7 @@
 #include "lucent/core/sampling.h"
 #include "methods/photonmap/bitonic_sort.h"
 #include "methods/photonmap/estimate_by_cell.h"
-#include "methods/photonmap/kd_tree.h"
+#include "lucent/methods/photons/kd_tree.h"
 #include "methods/photonmap/knn_grid.h"
 #include "methods/photonmap/radiance_estimate.h"
 #include "methods/photonmap/sorted_grid.h"

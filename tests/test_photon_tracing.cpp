@@ -10,7 +10,7 @@
 #include "lucent/scene/loader.h"
 #include "lucent/scene/particle_scattering.h"
 #include "lucent/trace/visibility.h"
-#include "methods/photonmap/photon_tracing.h"
+#include "lucent/methods/photons/photon_tracing.h"
 #include "test_bsdfs.h"
 #include "test_scenes.h"
 #include "test_support.h"

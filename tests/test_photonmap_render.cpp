@@ -5,7 +5,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <map>
 #include <tuple>
 
@@ -16,8 +15,8 @@
 #include "lucent/methods/photonmap.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/loader.h"
-#include "methods/photonmap/eye_paths.h"
-#include "methods/photonmap/photon_render.h"
+#include "lucent/pipeline/direct_light.h"
+#include "lucent/pipeline/shading_points.h"
 #include "test_scenes.h"
 #include "test_support.h"
 
@@ -618,28 +617,4 @@ TEST_CASE("A flat mirror's caustic equals the mirrored light's illumination", "[
                                                                     << ratio.mean << " +- " << ratio.standardError);
     CHECK(std::abs(ratio.mean - 1) <= test::kStudentTwoSided * ratio.standardError + kCurvature);
   }
-}
-
-TEST_CASE("A shading point whose light is not finite is left out of the image and counted", "[photonmap-render]") {
-  Scene scene = furnace(Rgb(0.5f), Rgb(1.0f), 2);
-  EyePaths eye;
-  eye.pixels.resize(4);
-  for (EyePixel& p : eye.pixels) p = EyePixel{Rgb(0.25f), Rgb(), Vec3(), 0, 1};
-  eye.points.resize(3);
-  for (uint32_t i = 0; i < 3; ++i) {
-    eye.points[i] = ShadingPoint{};
-    eye.points[i].weight = Rgb(1.0f);
-    eye.points[i].pixel = i;
-  }
-  PointRadiance radiance(3);
-  radiance.direct = {Rgb(1.0f), Rgb(1.0f), Rgb(1.0f)};
-  radiance.indirect[1] = Rgb(std::numeric_limits<float>::quiet_NaN());
-  radiance.caustic[2] = Rgb(kInf);
-  ImageAccumulator image(scene, false);
-  image.add(eye, radiance);
-  const Image out = image.finish();
-  CHECK(image.dropped() == 2);
-  CHECK(out.at(0, 0, 0) == 1.25f);
-  CHECK(out.at(1, 0, 0) == 0.25f);
-  CHECK(out.at(0, 1, 0) == 0.25f);
 }

@@ -11,6 +11,7 @@
 #include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/methods/pathtrace.h"
 #include "lucent/methods/photonmap.h"
+#include "lucent/methods/photons/photon_estimate.h"
 #include "lucent/scene/loader.h"
 
 namespace lucent::cli {

@@ -9,7 +9,7 @@
 #include "lucent/methods/microrender/hemisphere_mapping.h"
 #include "lucent/methods/points/point_hierarchy.h"
 #include "lucent/methods/points/point_radiance.h"
-#include "lucent/methods/render_output.h"
+#include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
 

@@ -3,7 +3,7 @@
 #pragma once
 #include <cstdint>
 
-#include "lucent/methods/render_output.h"
+#include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "lucent/methods/render_output.h"
+#include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
 
@@ -48,9 +48,6 @@ struct PhotonMapOptions {
   // (docs/dump-format.md); empty: none.
   std::string dumpDirectory;
 };
-
-// The maximum search radius that `options.maxRadius` = 0 stands for.
-float defaultMaxRadius(const Scene& scene);
 
 // Throws std::invalid_argument for impossible options.
 void validatePhotonMapOptions(const PhotonMapOptions& options);

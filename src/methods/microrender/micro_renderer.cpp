@@ -14,12 +14,14 @@
 #include <stdexcept>
 #include <string>
 
-#include "../photonmap/eye_paths.h"
-#include "../photonmap/photon_render.h"
 #include "gathering.h"
 #include "lucent/core/dump.h"
 #include "lucent/core/parallel.h"
 #include "lucent/methods/microrender.h"
+#include "lucent/pipeline/direct_light.h"
+#include "lucent/pipeline/dumps.h"
+#include "lucent/pipeline/film.h"
+#include "lucent/pipeline/shading_points.h"
 #include "point_lighting.h"
 #include "upsampling.h"
 
@@ -247,9 +249,9 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
 
   Stopwatch imageClock;
-  ImageAccumulator image(scene, o.layers);
-  image.add(eye, shading);
-  out.image = image.finish();
+  Film film(scene.camera.width, scene.camera.height, Film::Sums::PerPart, {o.layers, false});
+  film.add(eye, shading);
+  out.image = film.image();
   out.sppDone = o.spp;
   stats.addStage("image", imageClock.seconds());
 
@@ -257,7 +259,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   stats.addCounter("eye_rays", eye.rays);
   stats.addCounter("shadow_rays", shadowRays);
   stats.addCounter("shading_points", n);
-  stats.addCounter("invalid_samples", eye.invalid + image.dropped());
+  stats.addCounter("invalid_samples", eye.invalid + film.droppedPoints());
   stats.addCounter("micro_buffers", c.buffers);
   stats.addCounter("micro_buffers_ray_cast", c.buffersRayCast);
   stats.addCounter("upsampling_recomputed", recomputed);

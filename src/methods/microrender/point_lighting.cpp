@@ -6,9 +6,11 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
-#include "../photonmap/eye_paths.h"
-#include "../photonmap/photon_render.h"
-#include "../points/bottom_up.h"
+#include "lucent/methods/points/bottom_up.h"
+#include "lucent/core/dump.h"
+#include "lucent/methods/photons/photon_estimate.h"
+#include "lucent/methods/photons/photon_tracing.h"
+#include "lucent/pipeline/direct_light.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/particle_scattering.h"
 #include "lucent/scene/surface.h"
@@ -191,21 +193,26 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
   radiance.kind = o.nodeRadiance;
   uint64_t rays = 0;
   if (o.lighting == PointLighting::Photons) {
-    PhotonMapOptions pm;
-    pm.photons = o.photons;
-    pm.causticPhotons = 0;
-    pm.k = o.k;
-    pm.map = PhotonMapKind::KdTree;
-    pm.seed = lightingSeed(o.seed, LightingStream::Photons);
-    pm.dumpDirectory = o.dumpDirectory;  // the map the leaves' estimates read
-    RenderStats photonStats;
-    const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, pm, GlobalPhotons::All, photonStats);
-    for (const auto& [name, s] : photonStats.stageSeconds) stats.addStage("point_lighting." + name, s);
-    for (const auto& [name, v] : photonStats.counters) stats.addCounter(name, v);
+    // The photon map of every stored photon (direct ones included), in Jensen's kd-tree; each
+    // leaf's radiance is its estimate.
+    Stopwatch traceClock;
+    PhotonTracingOptions tracing;
+    tracing.photons = o.photons;
+    tracing.seed = lightingSeed(o.seed, LightingStream::Photons);
+    PhotonMaps traced = tracePhotons(scene, vis, tracing);
+    stats.addStage("point_lighting.trace_photons", traceClock.seconds());
+    Stopwatch buildClock;
+    RenderStats buildStats;
+    const PhotonKdTree tree = buildPhotonKdTree(traced.global, &buildStats);
+    stats.addStage("point_lighting.build_map", buildClock.seconds());
+    for (const auto& [name, s] : buildStats.stageSeconds) stats.addStage("point_lighting.build_map.global." + name, s);
+    if (!o.dumpDirectory.empty()) dumpPhotonKdTree(o.dumpDirectory, "global", tree);
+    stats.addCounter("photons_emitted", traced.emitted);
+    stats.addCounter("global_photons", tree.photons.size());
     radiance.rgb.assign(h.nodeCount(), Rgb());
-    withPhotonMaps(maps, PhotonMapKind::KdTree, [&](const auto* global, const auto*) {
-      if (!global) return;
-      tbb::enumerable_thread_specific<std::vector<PhotonDistance>> heaps(std::vector<PhotonDistance>(maps.globalSettings.k));
+    if (!tree.photons.empty()) {
+      const EstimateSettings settings{o.k, defaultMaxRadius(scene), 0};
+      tbb::enumerable_thread_specific<std::vector<PhotonDistance>> heaps(std::vector<PhotonDistance>(settings.k));
       tbb::enumerable_thread_specific<EstimateCounters> counters;
       points::parallelFor(0, h.leafCount, [&](uint32_t j) {
         const LeafSurface leaf = leafSurface(scene, h, j);
@@ -216,10 +223,9 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
         q.woLocal = {0, 0, 1};
         q.bsdf.kd = leaf.albedo;
         q.facingNormal = leaf.faceNormal;
-        radiance.rgb[h.leafCount + j] =
-            estimateRadiance(*global, q, maps.globalSettings, heaps.local().data(), counters.local());
+        radiance.rgb[h.leafCount + j] = estimateRadiance(tree, q, settings, heaps.local().data(), counters.local());
       });
-    });
+    }
     pullRadiance(h, radiance.rgb);
     radiance.finish(h);
     return radiance;

@@ -7,7 +7,7 @@
 #include <span>
 #include <vector>
 
-#include "../photonmap/eye_paths.h"
+#include "lucent/pipeline/shading_points.h"
 
 namespace lucent {
 

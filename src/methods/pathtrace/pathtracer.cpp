@@ -8,6 +8,7 @@
 #include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
 #include "lucent/methods/pathtrace.h"
+#include "lucent/pipeline/film.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"
@@ -31,6 +32,7 @@ struct PathResult {
 struct Counters {
   uint64_t rays = 0;
   uint64_t laneShadedHits = 0;
+  uint64_t invalidSamples = 0;  // dropped for a non-finite value
 };
 
 // One camera path in flight. Paths advance together, one bounce per stage (a wavefront), so that
@@ -439,15 +441,6 @@ class PathTracer {
   const bool prefetchSceneData_ = sceneArrayBytes(scene_) > (size_t(1) << 20);
 };
 
-std::vector<std::string> channelNames(bool layers) {
-  std::vector<std::string> c = {"R", "G", "B"};
-  if (layers)
-    for (const char* name : {"albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z", "depth.Z",
-                             "direct.R", "direct.G", "direct.B", "indirect.R", "indirect.G", "indirect.B"})
-      c.push_back(name);
-  return c;
-}
-
 }  // namespace
 
 RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, const PathTraceOptions& options,
@@ -458,12 +451,8 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
   if (!(options.timeBudget >= 0 && options.timeBudget < kInf))
     throw std::invalid_argument("time budget must be finite and not negative (0: none)");
   const int width = scene.camera.width, height = scene.camera.height;
-  const auto channels = channelNames(options.layers);
-  const size_t nc = channels.size();
-  // Sums in double, one slot per pixel and channel; every pixel is owned by one tile, and samples
-  // are added in sample order, so the image does not depend on threads or tiles.
-  std::vector<double> sums(size_t(width) * height * nc, 0.0);
-  std::vector<uint32_t> invalid(size_t(width) * height, 0);
+  // Every pixel is owned by one tile, and its samples are added in sample order.
+  Film film(width, height, Film::Sums::PerSample, {options.layers, false});
 
   const PathTracer tracer(scene, visibility, options);
   const PinholeCamera camera(scene.camera);
@@ -529,20 +518,12 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
           }
           tracer.traceWave(wave, local);
           for (const Path& path : wave.paths) {
-            const uint64_t pixel = path.pixel;
             const PathResult& p = path.result;
-            const Rgb L = p.direct + p.indirect;
-            if (!p.valid || !isFinite(L)) {
-              ++invalid[pixel];
+            if (!p.valid || !isFinite(p.direct + p.indirect)) {
+              ++local.invalidSamples;
               continue;
             }
-            double* sum = &sums[pixel * nc];
-            for (int c = 0; c < 3; ++c) sum[c] += L[c];
-            if (options.layers) {
-              const float v[13] = {p.albedo.r, p.albedo.g, p.albedo.b, p.normal.x, p.normal.y, p.normal.z, p.depth,
-                                   p.direct.r, p.direct.g, p.direct.b, p.indirect.r, p.indirect.g, p.indirect.b};
-              for (int c = 0; c < 13; ++c) sum[3 + c] += v[c];
-            }
+            film.addSample(path.pixel, p.direct, p.indirect, p.albedo, p.normal, p.depth);
           }
         }
         const uint64_t done = pixelSamplesDone += uint64_t(x1 - x0) * (y1 - y0) * (passEnd - sppDone);
@@ -554,23 +535,18 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
 
   RenderOutput out;
   out.sppDone = sppDone;
-  out.image = Image(width, height, channels);
-  uint64_t invalidTotal = 0;
-  for (size_t p = 0; p < size_t(width) * height; ++p) {
-    invalidTotal += invalid[p];
-    const double n = std::max<double>(1, sppDone - invalid[p]);
-    for (size_t c = 0; c < nc; ++c) out.image.pixels()[p * nc + c] = float(sums[p * nc + c] / n);
-  }
+  out.image = film.image();
   Counters total;
   for (const Counters& c : counters) {
     total.rays += c.rays;
     total.laneShadedHits += c.laneShadedHits;
+    total.invalidSamples += c.invalidSamples;
   }
   out.stats.addStage("trace_paths", clock.seconds());
   out.stats.addCounter("rays", total.rays);
   out.stats.addCounter("lane_shaded_hits", total.laneShadedHits);
   out.stats.addCounter("samples", uint64_t(width) * height * sppDone);
-  out.stats.addCounter("invalid_samples", invalidTotal);
+  out.stats.addCounter("invalid_samples", total.invalidSamples);
   return out;
 }
 

@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "bitonic_sort.h"
-#include "eye_paths.h"
+#include "lucent/pipeline/shading_points.h"
 #include "lucent/core/parallel.h"
 #include "radiance_estimate.h"
 

@@ -100,7 +100,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   RenderOutput out;
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::All, out.stats);
 
-  ImageAccumulator image(scene, options.layers);
+  Film film(scene.camera.width, scene.camera.height, Film::Sums::PerPart, {options.layers, true});
   const uint32_t heapSize = maps.globalSettings.k;  // the caustic map is estimated by estimateAtPoints
   tbb::enumerable_thread_specific<GatherScratch> scratch([&] {
     GatherScratch s;
@@ -162,13 +162,13 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
       totals.estimateSeconds += wall * (1 - share);
     });
     dumpBand(options, band, eye, radiance);
-    image.add(eye, radiance);
+    film.add(eye, radiance);
     totals.addBand(eye);
   }
 
-  out.image = image.finish();
+  out.image = film.image();
   out.sppDone = options.spp;
-  totals.invalid += image.dropped();
+  totals.invalid += film.droppedPoints();
   EstimateCounters gc, cc;
   uint64_t gatherRays = 0;
   for (const GatherScratch& s : scratch) gc += s.counters, gatherRays += s.rays;

@@ -6,11 +6,9 @@
 #include <string>
 
 #include "lucent/core/dump.h"
-#include "photon_tracing.h"
+#include "lucent/methods/photons/photon_tracing.h"
 
 namespace lucent {
-
-float defaultMaxRadius(const Scene& scene) { return 0.1f * length(scene.bounds.extent()); }
 
 void validatePhotonMapOptions(const PhotonMapOptions& o) {
   auto fail = [](const std::string& message) { throw std::invalid_argument(message); };
@@ -116,74 +114,6 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
   return maps;
 }
 
-std::vector<std::pair<int, int>> imageBands(const Scene& scene, int spp, uint64_t bandSamples) {
-  const uint64_t rowSamples = uint64_t(scene.camera.width) * uint64_t(std::max(1, spp));
-  const int rows = int(std::clamp<uint64_t>(bandSamples / rowSamples, 1, uint64_t(scene.camera.height)));
-  std::vector<std::pair<int, int>> bands;
-  for (int y = 0; y < scene.camera.height; y += rows) bands.push_back({y, std::min(scene.camera.height, y + rows)});
-  return bands;
-}
-
-ImageAccumulator::ImageAccumulator(const Scene& scene, bool layers)
-    : width_(scene.camera.width), height_(scene.camera.height), layers_(layers) {
-  const size_t pixels = size_t(width_) * height_;
-  direct_.assign(pixels * 3, 0.0);
-  indirect_.assign(pixels * 3, 0.0);
-  caustic_.assign(pixels * 3, 0.0);
-  pixels_.resize(pixels);
-}
-
-void ImageAccumulator::add(const EyePaths& eye, const PointRadiance& radiance) {
-  for (size_t i = 0; i < eye.pixels.size(); ++i) {
-    const size_t p = eye.firstPixel + i;
-    pixels_[p] = eye.pixels[i];
-    for (int c = 0; c < 3; ++c) direct_[p * 3 + c] += eye.pixels[i].emitted[c];
-  }
-  // The points in their (fixed) order; one whose light is not finite is dropped and counted.
-  for (size_t i = 0; i < eye.points.size(); ++i) {
-    const ShadingPoint& sp = eye.points[i];
-    const size_t p = sp.pixel;
-    const Rgb d = sp.weight * radiance.direct[i], ind = sp.weight * radiance.indirect[i],
-              ca = sp.weight * radiance.caustic[i];
-    if (!isFinite(d + ind + ca)) {
-      ++dropped_;
-      continue;
-    }
-    for (int c = 0; c < 3; ++c) {
-      direct_[p * 3 + c] += d[c];
-      indirect_[p * 3 + c] += ind[c];
-      caustic_[p * 3 + c] += ca[c];
-    }
-  }
-}
-
-Image ImageAccumulator::finish() const {
-  std::vector<std::string> channels = {"R", "G", "B"};
-  if (layers_)
-    for (const char* name : {"albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z", "depth.Z",
-                             "direct.R", "direct.G", "direct.B", "indirect.R", "indirect.G", "indirect.B",
-                             "caustic.R", "caustic.G", "caustic.B"})
-      channels.push_back(name);
-  const size_t nc = channels.size(), pixels = size_t(width_) * height_;
-  Image image(width_, height_, channels);
-  float* out = image.pixels().data();
-  for (size_t p = 0; p < pixels; ++p) {
-    const EyePixel& px = pixels_[p];
-    const double n = std::max<uint32_t>(1, px.validSamples);
-    float* o = out + p * nc;
-    for (int c = 0; c < 3; ++c) o[c] = float((direct_[p * 3 + c] + indirect_[p * 3 + c] + caustic_[p * 3 + c]) / n);
-    if (!layers_) continue;
-    const float v[7] = {px.albedo.r, px.albedo.g, px.albedo.b, px.normal.x, px.normal.y, px.normal.z, px.depth};
-    for (int c = 0; c < 7; ++c) o[3 + c] = float(v[c] / n);
-    for (int c = 0; c < 3; ++c) {
-      o[10 + c] = float(direct_[p * 3 + c] / n);
-      o[13 + c] = float(indirect_[p * 3 + c] / n);
-      o[16 + c] = float(caustic_[p * 3 + c] / n);
-    }
-  }
-  return image;
-}
-
 void dumpPhotonMap(const PhotonMapOptions& options, const std::string& prefix, const BuiltPhotonMap& built) {
   const std::string& dir = options.dumpDirectory;
   if (dir.empty()) return;
@@ -211,17 +141,8 @@ void dumpPhotonMap(const PhotonMapOptions& options, const std::string& prefix, c
     dump("cell_keys", "uint64", m->cellKeys);
     dump("first_photon", "uint32", m->firstPhoton);
   } else if (const auto* m = std::get_if<PhotonKdTree>(&built.map)) {
-    dump("photons", "Photon", m->photons);
-    dump("source_index", "uint32", m->sourceIndex);
+    dumpPhotonKdTree(dir, prefix, *m);
   }
-}
-
-void dumpShadingPoints(const std::string& dir, const std::string& prefix, const EyePaths& eye,
-                       const PointRadiance& radiance, bool caustic) {
-  writeDump(dir, prefix + "shading_points", "ShadingPoint", std::span(eye.points));
-  writeDump(dir, prefix + "direct", "Rgb", std::span(radiance.direct));
-  writeDump(dir, prefix + "indirect", "Rgb", std::span(radiance.indirect));
-  if (caustic) writeDump(dir, prefix + "caustic", "Rgb", std::span(radiance.caustic));
 }
 
 void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance) {

@@ -4,9 +4,12 @@
 #include <span>
 #include <variant>
 
-#include "eye_paths.h"
-#include "kd_tree.h"
+#include "lucent/methods/photons/kd_tree.h"
 #include "lucent/methods/photonmap.h"
+#include "lucent/pipeline/direct_light.h"
+#include "lucent/pipeline/dumps.h"
+#include "lucent/pipeline/film.h"
+#include "lucent/pipeline/shading_points.h"
 #include "radiance_estimate.h"
 #include "sorted_grid.h"
 #include "stencil_grid.h"
@@ -62,18 +65,6 @@ void withPhotonMaps(const RenderPhotonMaps& maps, PhotonMapKind kind, F&& f) {
   }
 }
 
-// Per shading point, the radiance each part of the estimate sends towards the camera (before the
-// point's camera-path weight).
-struct PointRadiance {
-  std::vector<Rgb> direct, indirect, caustic;
-  explicit PointRadiance(size_t n) : direct(n), indirect(n), caustic(n) {}
-};
-
-// The bands of rows, each of at most `bandSamples` camera samples (at least one row), so that the
-// shading points held at once stay bounded whatever the resolution and spp (512 x 512 at 1 spp is
-// one band by default: the paper's whole-screen passes).
-std::vector<std::pair<int, int>> imageBands(const Scene& scene, int spp, uint64_t bandSamples);
-
 // The first stage of both renderers for one band of rows: eye rays through mirrors and glass to
 // their shading points, and the direct light at those points by shadow rays.
 struct BandShadingPoints {
@@ -83,26 +74,6 @@ struct BandShadingPoints {
 BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                             std::pair<int, int> band, uint64_t& shadowRays);
 
-// The image: per pixel, the emission its camera samples saw plus each shading point's radiance
-// times its weight, averaged over the pixel's samples (in a fixed order: the same image whatever
-// the thread count). Layers: albedo, normal, depth (first hit), direct (emission and shadow rays),
-// indirect (global map or final gathering), caustic (caustic map).
-class ImageAccumulator {
- public:
-  ImageAccumulator(const Scene& scene, bool layers);
-  void add(const EyePaths& band, const PointRadiance& radiance);
-  Image finish() const;
-  // Shading points whose light was not finite, left out of the image.
-  uint64_t dropped() const { return dropped_; }
-
- private:
-  int width_, height_;
-  bool layers_;
-  uint64_t dropped_ = 0;
-  std::vector<double> direct_, indirect_, caustic_;  // 3 per pixel
-  std::vector<EyePixel> pixels_;
-};
-
 void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& counters);
 
 // Dumps (docs/dump-format.md) into options.dumpDirectory, when it is set: a map's arrays as
@@ -110,10 +81,6 @@ void addEstimateCounters(RenderStats& stats, const std::string& prefix, const Es
 // each part of the estimate gives them as "band<N>.<array>".
 void dumpPhotonMap(const PhotonMapOptions& options, const std::string& prefix, const BuiltPhotonMap& map);
 void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance);
-// The shading points and the light each part of the image gives them, as <prefix>shading_points,
-// direct, indirect and (where the renderer has a caustic part) caustic.
-void dumpShadingPoints(const std::string& dir, const std::string& prefix, const EyePaths& eye,
-                       const PointRadiance& radiance, bool caustic);
 
 // What both renderers add up over the bands, and report the same way: the paper's Table 1 stages
 // trace_rays and radiance_estimate, and the ray, point and estimate counters.

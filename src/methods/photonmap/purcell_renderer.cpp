@@ -20,7 +20,7 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
   // caustics from the caustic map, so each light path is counted once.
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::Indirect, out.stats);
 
-  ImageAccumulator image(scene, options.layers);
+  Film film(scene.camera.width, scene.camera.height, Film::Sums::PerPart, {options.layers, true});
   tbb::enumerable_thread_specific<EstimateCounters> globalCounters, causticCounters;
   RenderTotals totals;
   const auto bands = imageBands(scene, options.spp, options.bandSamples);
@@ -43,13 +43,13 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
     });
     totals.estimateSeconds += estimateClock.seconds();
     dumpBand(options, band, eye, radiance);
-    image.add(eye, radiance);
+    film.add(eye, radiance);
     totals.addBand(eye);
   }
 
-  out.image = image.finish();
+  out.image = film.image();
   out.sppDone = options.spp;
-  totals.invalid += image.dropped();
+  totals.invalid += film.droppedPoints();
   EstimateCounters gc, cc;
   for (const auto& c : globalCounters) gc += c;
   for (const auto& c : causticCounters) cc += c;

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "lucent/core/math.h"
-#include "photon.h"
+#include "lucent/methods/photons/photon.h"
 
 namespace lucent {
 

@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "bottom_up.h"
+#include "lucent/methods/points/bottom_up.h"
 #include "lucent/scene/surface.h"
 
 namespace lucent {

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "bottom_up.h"
+#include "lucent/methods/points/bottom_up.h"
 #include "lucent/methods/points/point_hierarchy.h"
 
 namespace lucent {

@@ -9,7 +9,7 @@
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
-#include "photon.h"
+#include "lucent/methods/photons/photon.h"
 
 namespace lucent {
 

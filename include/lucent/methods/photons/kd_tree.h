@@ -6,10 +6,11 @@
 // at [mid + 1, hi). The split axis sits in the photon's flags (photonSplitAxis). No pointers.
 #pragma once
 #include <span>
+#include <string>
 #include <vector>
 
 #include "lucent/core/stats.h"
-#include "photon.h"
+#include "lucent/methods/photons/photon.h"
 
 namespace lucent {
 
@@ -35,6 +36,9 @@ struct KdTreeResult {
                         // (the searched sphere: Jensen's convention)
   uint32_t nodesVisited = 0;
 };
+
+// Dumps (docs/dump-format.md) into `directory`: <prefix>.photons and <prefix>.source_index.
+void dumpPhotonKdTree(const std::string& directory, const std::string& prefix, const PhotonKdTree& tree);
 
 // The k nearest photons within maxRadius (squared distance <= maxRadius^2), into heap[0 .. found):
 // a max-heap on d2 once k were found (heap[0] the farthest), in visiting order before. `heap` holds

@@ -1,11 +1,12 @@
-// The ray-tracing stages shared by the photon-mapping renderers (Purcell et al. 2003, section 2.4:
-// "a stochastic ray tracer ... recursive ray tracing for specular reflection and refraction and
-// distributed tracing of shadow rays"): camera rays followed through mirrors and glass to the
-// diffuse or glossy surfaces they reach, and direct light there by shadow rays.
+// The first stage of every method that shades surface points (all but the path tracer): camera
+// rays followed through mirrors and glass to the diffuse or glossy surfaces they reach (Purcell et
+// al. 2003, section 2.4: "recursive ray tracing for specular reflection and refraction"), in bands
+// of image rows.
 #pragma once
 #include <cstdint>
 #include <span>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "lucent/core/rng.h"
@@ -13,11 +14,10 @@
 #include "lucent/scene/bsdf.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
-#include "radiance_estimate.h"
 
 namespace lucent {
 
-// Random-number streams of the renderers, so that no two stages share numbers.
+// Random-number streams of the pipeline's and the methods' stages, so that no two share numbers.
 enum class RenderStream : uint64_t { Eye = 1, Direct = 2, Gather = 3, CausticPhotons = 4 };
 inline uint64_t streamSeed(uint64_t seed, RenderStream stream) { return hashKey(seed, uint64_t(stream)); }
 
@@ -34,16 +34,6 @@ struct ShadingPoint {
   uint32_t branch = 0;   // index of this point among its camera sample's (specular splitting)
 };
 static_assert(sizeof(ShadingPoint) == 108 && std::is_trivially_copyable_v<ShadingPoint>, "dumped as records");
-
-inline EstimatePoint estimatePoint(const ShadingPoint& sp) {
-  EstimatePoint q;
-  q.position = sp.position;
-  q.frame = Frame(sp.normal);
-  q.woLocal = q.frame.toLocal(sp.wo);
-  q.bsdf = sp.bsdf;
-  q.facingNormal = dot(sp.wo, sp.geometricNormal) > 0 ? sp.geometricNormal : -sp.geometricNormal;
-  return q;
-}
 
 struct EyePathSettings {
   int spp = 1;
@@ -81,16 +71,9 @@ struct EyePaths {
 inline constexpr float kSplitWeight = 0.05f;
 EyePaths traceEyePaths(const Scene& scene, const Visibility& visibility, const EyePathSettings& settings);
 
-// Stage "trace_rays" (shadow rays): direct light reflected towards the viewer at every point, by
-// `samples` light samples (stratified over the light's area, lights chosen by power), each tested
-// by one shadow ray; emitters, point, directional and environment lights alike. Adds the shadow
-// rays traced to `rays`.
-void estimateDirectLight(const Scene& scene, const Visibility& visibility, std::span<const ShadingPoint> points,
-                         int samples, uint64_t seed, std::span<Rgb> direct, uint64_t& rays);
-
-// One point's direct light, its shadow rays in packets of its own samples (estimateDirectLight
-// packs rays across points instead).
-Rgb directLight(const Scene& scene, const Visibility& visibility, const ShadingPoint& point, int samples,
-                uint64_t seed, uint64_t& rays);
+// The bands of rows, each of at most `bandSamples` camera samples (at least one row), so that the
+// shading points held at once stay bounded whatever the resolution and spp (512 x 512 at 1 spp is
+// one band by default: the paper's whole-screen passes).
+std::vector<std::pair<int, int>> imageBands(const Scene& scene, int spp, uint64_t bandSamples);
 
 }  // namespace lucent

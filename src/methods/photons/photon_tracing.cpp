@@ -1,4 +1,4 @@
-#include "photon_tracing.h"
+#include "lucent/methods/photons/photon_tracing.h"
 
 #include "lucent/core/uninitialized.h"
 

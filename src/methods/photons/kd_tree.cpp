@@ -1,4 +1,6 @@
-#include "kd_tree.h"
+#include "lucent/methods/photons/kd_tree.h"
+
+#include "lucent/core/dump.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -128,6 +130,11 @@ PhotonKdTree buildPhotonKdTree(std::span<const Photon> photons, RenderStats* sta
   });
   if (stats) stats->addStage("kdtree_build", clock.seconds());
   return tree;
+}
+
+void dumpPhotonKdTree(const std::string& directory, const std::string& prefix, const PhotonKdTree& tree) {
+  writeDump(directory, prefix + ".photons", "Photon", std::span(tree.photons));
+  writeDump(directory, prefix + ".source_index", "uint32", std::span(tree.sourceIndex));
 }
 
 KdTreeResult kdTreeNearest(const PhotonKdTree& tree, Vec3 position, uint32_t k, float maxRadius,

@@ -1,0 +1,23 @@
+// Direct light at shading points by shadow rays (Purcell et al. 2003, 2.4: "distributed tracing of
+// shadow rays"): the light reflected towards the viewer from emitters, point, directional and
+// environment lights, each sample tested by one Embree shadow ray.
+#pragma once
+#include <cstdint>
+#include <span>
+
+#include "lucent/pipeline/shading_points.h"
+
+namespace lucent {
+
+// Stage "trace_rays" (shadow rays): direct light reflected towards the viewer at every point, by
+// `samples` light samples (stratified over the light's area, lights chosen by power), each tested
+// by one shadow ray. Adds the shadow rays traced to `rays`.
+void estimateDirectLight(const Scene& scene, const Visibility& visibility, std::span<const ShadingPoint> points,
+                         int samples, uint64_t seed, std::span<Rgb> direct, uint64_t& rays);
+
+// One point's direct light, its shadow rays in packets of its own samples (estimateDirectLight
+// packs rays across points instead).
+Rgb directLight(const Scene& scene, const Visibility& visibility, const ShadingPoint& point, int samples,
+                uint64_t seed, uint64_t& rays);
+
+}  // namespace lucent
