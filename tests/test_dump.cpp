@@ -6,8 +6,8 @@
 #include <fstream>
 
 #include "lucent/core/dump.h"
-#include "lucent/methods/microrender.h"
-#include "lucent/methods/photonmap.h"
+#include "methods/microrender/micro_renderer.h"
+#include "methods/photonmap/photon_mapping.h"
 #include "lucent/methods/points/point_radiance.h"
 #include "lucent/scene/loader.h"
 #include "lucent/pipeline/shading_points.h"

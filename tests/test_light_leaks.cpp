@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "lucent/methods/microrender.h"
-#include "lucent/methods/pathtrace.h"
-#include "lucent/methods/photonmap.h"
+#include "methods/microrender/micro_renderer.h"
+#include "methods/pathtrace/path_tracer.h"
+#include "methods/photonmap/photon_mapping.h"
 #include "test_scenes.h"
 
 using namespace lucent;

@@ -5,7 +5,7 @@
 #include <cstring>
 
 #include "lucent/core/parallel.h"
-#include "lucent/methods/pathtrace.h"
+#include "methods/pathtrace/path_tracer.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/loader.h"
 #include "lucent/scene/particle_scattering.h"

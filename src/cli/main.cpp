@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   int exitCode = 0;
   lucent::cli::addRenderCommand(app, exitCode);
   lucent::cli::addCompareCommand(app, exitCode);
+  lucent::cli::addMethodsCommand(app, exitCode);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

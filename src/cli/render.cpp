@@ -1,17 +1,18 @@
-// lucent render SCENE.json --method NAME [options] -o OUT.exr [--png OUT.png]
+// lucent render SCENE.json [--method NAME] -o OUT.exr [--png OUT.png] [render options] [method options]
+// The method's options come from its declaration (pipeline/options.h): their flags, parsing,
+// validation, JSON echo, EXR metadata and help. Precedence: the method's defaults, then the scene
+// file's render block (when it names this method), then the command line.
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "cli/commands.h"
+#include "cli/method_options.h"
 #include "cli/progress.h"
 #include "lucent/core/parallel.h"
-#include "lucent/methods/microrender.h"
-#include "lucent/methods/microrender/micro_buffer.h"
-#include "lucent/methods/pathtrace.h"
-#include "lucent/methods/photonmap.h"
-#include "lucent/methods/photons/photon_estimate.h"
+#include "lucent/methods/methods.h"
 #include "lucent/scene/loader.h"
 
 namespace lucent::cli {
@@ -20,70 +21,68 @@ namespace fs = std::filesystem;
 namespace {
 
 struct RenderArgs {
-  std::string scene, method = "pt", output, png, resolution, strategy = "mis";
+  std::string scene, method, output, png, resolution, isa;
   int threads = 0;
-  int spp = 0;  // 0: the method's default
-  bool quiet = false, robust = false, layers = false;
-  uint64_t seed = 0;
-  PathTraceOptions pt;
-  PhotonMapOptions pm;
-  MicroRenderOptions micro;
-  std::string map, gridResolution;  // map: empty for the method's default
-  std::string dump;                 // purcell, pmfg, micro: the dump directory
-  std::string lighting = "direct", mapping = "warped", encoding = "float", nodeRadiance = "directional";
-  bool noRayCasting = false;
-  CLI::Option* photons = nullptr;  // shared by purcell, pmfg and micro, with different defaults
-  // Options that belong to some methods only, with those methods, to reject them with the others.
-  std::vector<std::pair<CLI::Option*, std::vector<std::string>>> methodOptions;
+  bool quiet = false, robust = false, help = false;
+  OptionValues methodOptions;  // as given, in order
 };
 
-const std::vector<std::string> kMethods = {"pt", "purcell", "pmfg", "micro"};
+// The render command's own options, beside the method's: name, value placeholder ("" for a
+// flag), help.
+struct RenderFlag {
+  const char* names;
+  const char* value;
+  const char* help;
+};
+const RenderFlag kRenderFlags[] = {
+    {"--method", "NAME", "rendering method (lucent methods lists them; default: the scene's render block's, else pt)"},
+    {"-o, --output", "FILE", "output EXR file (required)"},
+    {"--png", "FILE", "also write an sRGB PNG"},
+    {"--threads", "N", "worker threads (0: all cores; default 0)"},
+    {"--resolution", "WxH", "override the camera's resolution"},
+    {"--robust", "", "Embree's robust traversal (watertight at edges)"},
+    {"--embree-isa", "ISA", "Embree's kernels for sse4.2, avx, avx2 or avx512 (default: the CPU's best)"},
+    {"-q, --quiet", "", "no progress bar or warnings"},
+    {"-h, --help", "", "this help, with the options of --method NAME"},
+};
 
-PhotonMapKind parseMapKind(const std::string& name) {
-  if (name == "sort") return PhotonMapKind::Sort;
-  if (name == "stencil") return PhotonMapKind::Stencil;
-  if (name == "hash") return PhotonMapKind::Hash;
-  return PhotonMapKind::KdTree;
-}
-
-std::array<uint32_t, 3> parseGridResolution(const std::string& text) {
-  std::array<uint32_t, 3> r{0, 0, 0};
-  if (text.empty()) return r;
-  long long v[3];
-  char x1 = 0, x2 = 0, rest = 0;
-  std::istringstream in(text);
-  if (!(in >> v[0] >> x1 >> v[1] >> x2 >> v[2]) || x1 != 'x' || x2 != 'x' || (in >> rest))
-    throw std::invalid_argument("--grid-resolution '" + text + "': expected XxYxZ, e.g. 25x25x50");
-  for (int a = 0; a < 3; ++a) {
-    if (v[a] < 1 || v[a] > (1 << 21))
-      throw std::invalid_argument("--grid-resolution '" + text + "': cell counts must be in [1, 2^21]");
-    r[a] = uint32_t(v[a]);
+// Splits the arguments into the render command's own and the methods' (every method's options are
+// known by name, so each can be told to take a value or not before the method is chosen).
+RenderArgs parseArgs(const std::vector<std::string>& args) {
+  RenderArgs a;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    const size_t eq = arg.find('=');
+    const bool inlineValue = arg.rfind("--", 0) == 0 && eq != std::string::npos;
+    const std::string key = inlineValue ? arg.substr(0, eq) : arg;
+    auto value = [&]() -> std::string {
+      if (inlineValue) return arg.substr(eq + 1);
+      if (i + 1 >= args.size()) throw std::invalid_argument(key + " needs a value");
+      return args[++i];
+    };
+    if (key == "-h" || key == "--help") a.help = true;
+    else if (key == "-q" || key == "--quiet") a.quiet = true;
+    else if (key == "--robust") a.robust = true;
+    else if (key == "-o" || key == "--output") a.output = value();
+    else if (key == "--png") a.png = value();
+    else if (key == "--method") a.method = value();
+    else if (key == "--resolution") a.resolution = value();
+    else if (key == "--embree-isa") a.isa = value();
+    else if (key == "--threads") {
+      const std::string text = value();
+      a.threads = int(parseOptionInteger("threads", text, 0, 4096));
+    } else if (key.rfind("--", 0) == 0) {
+      a.methodOptions.push_back(methodOptionArg(key, inlineValue ? std::optional(arg.substr(eq + 1)) : std::nullopt,
+                                                [&] { return value(); }));
+    } else if (key.rfind("-", 0) == 0 && key.size() > 1) {
+      throw std::invalid_argument("unknown option " + key);
+    } else if (a.scene.empty()) {
+      a.scene = arg;
+    } else {
+      throw std::invalid_argument("one scene file only: '" + a.scene + "' and '" + arg + "'");
+    }
   }
-  return r;
-}
-
-nlohmann::json photonMapOptionsJson(const RenderArgs& a, const Scene& scene) {
-  const PhotonMapOptions& o = a.pm;
-  nlohmann::json j = {{"spp", o.spp},
-                      {"seed", o.seed},
-                      {"photons", o.photons},
-                      {"caustic_photons", o.causticPhotons},
-                      {"k", o.k},
-                      {"caustic_k", o.causticK > 0 ? o.causticK : o.k},
-                      {"max_radius", o.maxRadius > 0 ? o.maxRadius : defaultMaxRadius(scene)},
-                      {"map", a.map},
-                      {"shells", o.shells},
-                      {"light_samples", o.lightSamples},
-                      {"max_specular_depth", o.maxSpecularDepth},
-                      {"photon_bounces", o.maxPhotonBounces},
-                      {"grid_resolution", a.gridResolution.empty() ? "auto" : a.gridResolution},
-                      {"cell_size", o.cellSize},
-                      {"photons_per_cell", o.photonsPerCell > 0 ? nlohmann::json(o.photonsPerCell) : nlohmann::json("auto")},
-                      {"stencil_side", o.stencilSide},
-                      {"layers", o.layers},
-                      {"robust", a.robust}};
-  if (a.method == "pmfg") j["gather_rays"] = o.gatherRays;
-  return j;
+  return a;
 }
 
 std::string hex(uint64_t v) {
@@ -98,72 +97,54 @@ void checkOutputPath(const std::string& path, const std::string& extension, cons
   if (!fs::is_directory(dir)) throw std::invalid_argument(flag + ": directory '" + dir.string() + "' does not exist");
 }
 
-nlohmann::json microOptionsJson(const RenderArgs& a, const Scene& scene) {
-  const MicroRenderOptions& o = a.micro;
-  nlohmann::json j = {{"spp", o.spp},
-                      {"seed", o.seed},
-                      {"lighting", a.lighting},
-                      {"points", o.points > 0 ? o.points : defaultPointCount(scene, o.pointSpacing)},
-                      {"point_spacing", o.pointSpacing},
-                      {"buffer_size", o.bufferSide},
-                      {"mapping", a.mapping},
-                      {"table_size", o.tableSize},
-                      {"ray_casting", o.rayCasting},
-                      {"splat_reach", o.splatReach},
-                      {"node_radiance", a.nodeRadiance},
-                      {"upsampling", o.upsampling},
-                      {"encoding", a.encoding},
-                      {"light_samples", o.lightSamples},
-                      {"point_light_samples", o.pointLightSamples},
-                      {"max_specular_depth", o.maxSpecularDepth},
-                      {"layers", o.layers},
-                      {"robust", a.robust}};
-  if (o.lighting == PointLighting::Vpl) j["vpls"] = o.vpls;
-  if (o.lighting == PointLighting::Radiosity) j["radiosity_level"] = o.radiosityLevel, j["bounces"] = o.bounces;
-  if (o.lighting == PointLighting::Photons) j["photons"] = o.photons, j["k"] = o.k;
-  return j;
+void printHelp(const Method& method) {
+  std::cout << "Usage: lucent render SCENE.json [--method NAME] -o OUT.exr [options]\n\nRender options:\n";
+  for (const RenderFlag& f : kRenderFlags)
+    std::cout << "  " << f.names << (*f.value ? std::string(" ") + f.value : "") << "\n      " << f.help << "\n";
+  std::cout << "\nOptions of --method " << method.name() << " (" << method.summary() << "):\n"
+            << methodOptionsHelp(method);
 }
 
-int runRender(RenderArgs& a) {
-  const bool photonMapping = a.method == "purcell" || a.method == "pmfg";
-  if (std::find(kMethods.begin(), kMethods.end(), a.method) == kMethods.end())
-    throw std::invalid_argument("--method '" + a.method + "': unknown method (available: pt, purcell, pmfg, micro)");
-  for (const auto& [option, methods] : a.methodOptions)
-    if (option->count() > 0 && std::find(methods.begin(), methods.end(), a.method) == methods.end())
-      throw std::invalid_argument(option->get_name() + " does not apply to --method " + a.method);
-  a.pt.spp = a.spp > 0 ? a.spp : a.pt.spp;
-  a.pt.seed = a.pm.seed = a.micro.seed = a.seed;
-  a.pt.layers = a.pm.layers = a.micro.layers = a.layers;
-  a.pm.dumpDirectory = a.micro.dumpDirectory = a.dump;
-  if (a.spp > 0) a.pm.spp = a.micro.spp = a.spp;
-  if (a.map.empty()) a.map = a.method == "pmfg" ? "kdtree" : "sort";
-  a.pm.map = parseMapKind(a.map);
-  a.pm.gridResolution = parseGridResolution(a.gridResolution);
-  if (photonMapping) validatePhotonMapOptions(a.pm);
-  if (a.method == "micro") {
-    MicroRenderOptions& m = a.micro;
-    m.lighting = a.lighting == "vpl"         ? PointLighting::Vpl
-                 : a.lighting == "radiosity" ? PointLighting::Radiosity
-                 : a.lighting == "photons"   ? PointLighting::Photons
-                                             : PointLighting::Direct;
-    m.mapping = a.mapping == "nusselt" ? MappingKind::Nusselt : MappingKind::Warped;
-    m.encoding = a.encoding == "float" ? NodeEncoding::Float : NodeEncoding::Packed;
-    m.rayCasting = !a.noRayCasting;
-    m.nodeRadiance = a.nodeRadiance == "isotropic" ? NodeRadianceKind::Isotropic : NodeRadianceKind::Directional;
-    // Shared option names: the photon-mapping values given on the command line.
-    m.lightSamples = a.pm.lightSamples;
-    m.maxSpecularDepth = a.pm.maxSpecularDepth;
-    if (a.photons->count() > 0) m.photons = a.pm.photons;
-    m.k = a.pm.k;
-    validateMicroRenderOptions(m);
-  }
-  checkOutputPath(a.output, ".exr", "-o");
-  if (!a.png.empty()) checkOutputPath(a.png, ".png", "--png");
-
+int runRender(const RenderArgs& a) {
+  const Method* method = nullptr;
+  Scene scene;
   Stopwatch total;
   RenderStats stats;
-  Stopwatch loadClock;
-  Scene scene = loadScene(a.scene, {a.quiet});
+  if (!a.help || !a.scene.empty()) {
+    if (a.scene.empty()) throw std::invalid_argument("no scene file given (lucent render SCENE.json -o OUT.exr)");
+    if (a.output.empty() && !a.help) throw std::invalid_argument("no output file given (-o OUT.exr)");
+    if (!a.help) {
+      checkOutputPath(a.output, ".exr", "-o");
+      if (!a.png.empty()) checkOutputPath(a.png, ".png", "--png");
+    }
+    Stopwatch loadClock;
+    scene = loadScene(a.scene, {a.quiet});
+    stats.addStage("load_scene", loadClock.seconds());
+  }
+  const std::string methodName = !a.method.empty()       ? a.method
+                                 : !scene.render.method.empty() ? scene.render.method
+                                                                 : "pt";
+  method = &renderingMethod(methodName);
+  if (a.help) {
+    printHelp(*method);
+    return 0;
+  }
+  // The scene's render block applies when it names this method (or none).
+  OptionValues values;
+  std::vector<std::string> origins;
+  if (scene.render.present && (scene.render.method.empty() || scene.render.method == method->name()))
+    for (const auto& [name, text] : scene.render.options) {
+      origins.push_back(a.scene + ": render." + name);
+      checkMethodOption(*method, name, origins.back());
+      values.emplace_back(name, text);
+    }
+  for (const auto& [name, text] : a.methodOptions) {
+    origins.push_back(flagOf(name));
+    checkMethodOption(*method, name, flagOf(name));
+    values.emplace_back(name, text);
+  }
+  const OptionValues resolved = resolveMethodOptions(*method, values, origins);
+
   if (!a.resolution.empty()) {
     int w = 0, h = 0;
     char x = 0, rest = 0;
@@ -176,45 +157,35 @@ int runRender(RenderArgs& a) {
     scene.camera.height = h;
     scene.contentHash = sceneContentHash(scene);
   }
-  stats.addStage("load_scene", loadClock.seconds());
 
   ParallelScope parallel(a.threads);
   Stopwatch bvhClock;
   VisibilityOptions visOptions;
   visOptions.robust = a.robust;
+  visOptions.isa = a.isa;
   const Visibility visibility(scene, visOptions);
   stats.addStage("build_bvh", bvhClock.seconds());
 
-  nlohmann::json options;
   RenderOutput out;
   {
     ProgressBar bar(!a.quiet);
-    if (a.method == "pt") {
-      a.pt.strategy = a.strategy == "light" ? PathStrategy::LightSampling
-                      : a.strategy == "bsdf" ? PathStrategy::BsdfSampling
-                                             : PathStrategy::Mis;
-      options = {{"spp", a.pt.spp},           {"max_depth", a.pt.maxDepth}, {"roulette_depth", a.pt.rouletteDepth},
-                 {"seed", a.pt.seed},         {"time_budget", a.pt.timeBudget}, {"layers", a.pt.layers},
-                 {"strategy", a.strategy},    {"robust", a.robust}, {"pixel_centres", a.pt.pixelCentres}};
-      out = renderPathTraced(scene, visibility, a.pt, [&](double f) { bar.update(f); });
-    } else if (photonMapping) {
-      options = photonMapOptionsJson(a, scene);
-      const ProgressFn progress = [&](double f) { bar.update(f); };
-      out = a.method == "purcell" ? renderPurcell(scene, visibility, a.pm, progress)
-                                  : renderPhotonMapFinalGather(scene, visibility, a.pm, progress);
-    } else {
-      options = microOptionsJson(a, scene);
-      out = renderMicro(scene, visibility, a.micro, [&](double f) { bar.update(f); });
-    }
+    out = method->render(scene, visibility, resolved, [&](double f) { bar.update(f); });
   }
   for (const auto& s : out.stats.stageSeconds) stats.addStage(s.first, s.second);
   stats.counters = out.stats.counters;
   const double renderSeconds = total.seconds();
 
-  ImageMetadata meta = {{"lucent:method", a.method},
+  const nlohmann::ordered_json options = methodOptionsJson(*method, resolved);
+  nlohmann::ordered_json derived = nlohmann::ordered_json::object();
+  for (const auto& [name, value] : out.stats.derived) derived[name] = value;
+  std::string seed = "0";
+  for (const auto& [name, text] : resolved)
+    if (name == "seed") seed = text;
+  ImageMetadata meta = {{"lucent:method", method->name()},
                         {"lucent:options", options.dump()},
+                        {"lucent:derived", derived.dump()},
                         {"lucent:spp", std::to_string(out.sppDone)},
-                        {"lucent:seed", std::to_string(a.seed)},
+                        {"lucent:seed", seed},
                         {"lucent:render_seconds", std::to_string(renderSeconds)},
                         {"lucent:version", LUCENT_VERSION},
                         {"lucent:embree_version", Visibility::embreeVersion()},
@@ -227,14 +198,17 @@ int runRender(RenderArgs& a) {
   if (!a.png.empty()) writePng(out.image, a.png);
   stats.addStage("write_images", writeClock.seconds());
 
-  nlohmann::json summary;
-  summary["method"] = a.method;
+  nlohmann::ordered_json summary;
+  summary["method"] = method->name();
   summary["options"] = options;
   summary["spp"] = out.sppDone;
   summary["threads"] = parallel.threads();
+  summary["robust"] = a.robust;
+  summary["embree_isa"] = visibility.isa();
   summary["seconds"] = total.seconds();
   for (const auto& [name, seconds] : stats.stageSeconds) summary["stages"][name] = seconds;
   for (const auto& [name, value] : stats.counters) summary["counters"][name] = value;
+  summary["derived"] = derived;
   summary["output"] = a.output;
   if (!a.png.empty()) summary["png"] = a.png;
   summary["scene_hash"] = hex(scene.contentHash);
@@ -245,130 +219,15 @@ int runRender(RenderArgs& a) {
 }  // namespace
 
 void addRenderCommand(CLI::App& app, int& exitCode) {
-  auto args = std::make_shared<RenderArgs>();
-  CLI::App* cmd = app.add_subcommand("render", "Render a scene to an EXR (and optionally a PNG)");
-  cmd->add_option("scene", args->scene, "Scene file (JSON)")->required();
-  cmd->add_option("--method", args->method, "Rendering method: pt, purcell, pmfg, micro")->capture_default_str();
-  cmd->add_option("-o,--output", args->output, "Output EXR file")->required();
-  cmd->add_option("--png", args->png, "Also write an sRGB PNG");
-  cmd->add_option("--spp", args->spp, "Samples per pixel (default: pt 64; purcell and pmfg 1, through the pixel centre)")
-      ->check(CLI::Range(1, 1 << 24));
-  cmd->add_option("--seed", args->seed, "Random seed, a non-negative integer")
-      ->check(CLI::Validator(
-          // CLI11 wraps a negative number into an unsigned option instead of rejecting it.
-          [](std::string& value) { return value.find('-') == std::string::npos ? std::string() : "must not be negative"; },
-          "NONNEGATIVE"))
-      ->capture_default_str();
-  cmd->add_option("--threads", args->threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 4096));
-  cmd->add_option("--resolution", args->resolution, "Override the camera resolution, WIDTHxHEIGHT");
-  cmd->add_flag("--layers", args->layers,
-                "Add albedo, normal, depth, direct and indirect layers to the EXR (purcell, pmfg: and caustic)");
-  cmd->add_flag("--robust", args->robust, "Embree robust traversal mode");
-  cmd->add_flag("-q,--quiet", args->quiet, "No progress bar or warnings");
-
-  auto only = [&](CLI::Option* option, std::vector<std::string> methods) {
-    args->methodOptions.emplace_back(option, std::move(methods));
-  };
-  const std::vector<std::string> pt = {"pt"}, pm = {"purcell", "pmfg"}, micro = {"micro"};
-
-  // Path tracer (pt).
-  only(cmd->add_option("--time-budget", args->pt.timeBudget, "pt: stop sampling within this many seconds (at least 1 spp)")
-           ->check(CLI::Range(0.0, 1e9)), pt);
-  only(cmd->add_option("--max-depth", args->pt.maxDepth, "pt: path length in bounces (1: direct light only)")
-           ->check(CLI::Range(0, 1 << 16))->capture_default_str(), pt);
-  only(cmd->add_option("--roulette-depth", args->pt.rouletteDepth, "pt: Russian roulette from this bounce on")
-           ->check(CLI::Range(1, 1 << 16))->capture_default_str(), pt);
-  only(cmd->add_option("--tile-size", args->pt.tileSize, "pt: tile size in pixels (does not change the image)")
-           ->check(CLI::Range(1, 4096))->capture_default_str(), pt);
-  only(cmd->add_option("--strategy", args->strategy, "pt: mis (default), or light or bsdf sampling alone, for validation")
-           ->check(CLI::IsMember({"mis", "light", "bsdf"})), pt);
-  only(cmd->add_flag("--pixel-centres", args->pt.pixelCentres,
-                     "pt: every camera ray through its pixel's centre (the reference for purcell, pmfg and micro at 1 spp)"),
-       pt);
-
-  // Photon mapping (purcell, pmfg); some options are micro's too.
-  PhotonMapOptions& o = args->pm;
-  const std::vector<std::string> pmMicro = {"purcell", "pmfg", "micro"};
-  args->photons = cmd->add_option("--photons", o.photons,
-                                  "purcell, pmfg: photon paths emitted for the global map; micro: for --lighting photons (default 200000)")
-                      ->check(CLI::Range(0u, 1u << 28))->capture_default_str();
-  only(args->photons, pmMicro);
-  only(cmd->add_option("--dump", args->dump,
-                       "purcell, pmfg, micro: write every stage's arrays (photons and maps, or the point hierarchy "
-                       "and its radiance; shading points, direct and indirect light) into this existing directory, "
-                       "for checking another backend stage by stage (docs/dump-format.md)"),
-       pmMicro);
-  only(cmd->add_option("--caustic-photons", o.causticPhotons,
-                       "purcell, pmfg: photon paths emitted for the caustic map, towards the mirrors and glass (0: no caustic map)")
-           ->check(CLI::Range(0u, 1u << 28))->capture_default_str(), pm);
-  only(cmd->add_option("--k", o.k, "purcell, pmfg, micro (--lighting photons): photons sought per radiance estimate")
-           ->check(CLI::Range(1u, 1u << 20))->capture_default_str(), pmMicro);
-  only(cmd->add_option("--caustic-k", o.causticK, "purcell, pmfg: photons sought in the caustic map (0: --k)")
-           ->check(CLI::Range(0u, 1u << 20))->capture_default_str(), pm);
-  only(cmd->add_option("--max-radius", o.maxRadius,
-                       "purcell, pmfg: maximum search radius (0: 0.1 x the scene's bounding-box diagonal)")
-           ->check(CLI::Range(0.0f, 1e30f))->capture_default_str(), pm);
-  only(cmd->add_option("--map", args->map,
-                       "purcell, pmfg: photon map: sort, stencil, hash, kdtree (default: purcell sort, pmfg kdtree)")
-           ->check(CLI::IsMember({"sort", "stencil", "hash", "kdtree"})), pm);
-  only(cmd->add_option("--shells", o.shells,
-                       "purcell, pmfg: stop each kNN-grid search after N shells (progressive estimate; 0: to the end)")
-           ->check(CLI::Range(0u, 1u << 20))->capture_default_str(), pm);
-  only(cmd->add_option("--light-samples", o.lightSamples, "purcell, pmfg, micro: shadow rays per shading point")
-           ->check(CLI::Range(0, 1 << 16))->capture_default_str(), pmMicro);
-  only(cmd->add_option("--gather-rays", o.gatherRays, "pmfg: final-gather rays per shading point")
-           ->check(CLI::Range(0, 1 << 20))->capture_default_str(), {"pmfg"});
-  only(cmd->add_option("--max-specular-depth", o.maxSpecularDepth,
-                       "purcell, pmfg, micro: mirror and glass bounces followed from the camera (pmfg: and by gather rays)")
-           ->check(CLI::Range(0, 64))->capture_default_str(), pmMicro);
-  only(cmd->add_option("--photon-bounces", o.maxPhotonBounces, "purcell, pmfg: interactions followed per photon path")
-           ->check(CLI::Range(1u, 255u))->capture_default_str(), pm);
-  only(cmd->add_option("--grid-resolution", args->gridResolution,
-                       "purcell, pmfg: grid cells per axis, XxYxZ (default: from the photons)"), pm);
-  only(cmd->add_option("--cell-size", o.cellSize, "purcell, pmfg: cubic grid cells of this side")
-           ->check(CLI::Range(0.0f, 1e30f)), pm);
-  only(cmd->add_option("--photons-per-cell", o.photonsPerCell,
-                       "purcell, pmfg: otherwise, about this many photons per cell of the photons' bounds (0: max(1, k / 16))")
-           ->check(CLI::Range(0.0f, 1e9f))->capture_default_str(), pm);
-  only(cmd->add_option("--stencil-side", o.stencilSide, "purcell, pmfg: m, with m x m photons per stencil-routed cell")
-           ->check(CLI::Range(1u, 1024u))->capture_default_str(), pm);
-
-  // Micro-rendering (micro).
-  MicroRenderOptions& m = args->micro;
-  only(cmd->add_option("--lighting", args->lighting,
-                       "micro: how the points are lit: direct (one bounce), vpl, radiosity, photons")
-           ->check(CLI::IsMember({"direct", "vpl", "radiosity", "photons"}))->capture_default_str(), micro);
-  only(cmd->add_option("--points", m.points, "micro: points in the hierarchy, a power of two (0: from the scene's area and the image footprint)")
-           ->check(CLI::Range(0u, 1u << 31))->capture_default_str(), micro);
-  only(cmd->add_option("--point-spacing", m.pointSpacing, "micro: for the default point count, the points' spacing in pixels")
-           ->check(CLI::Range(0.01f, 1e6f))->capture_default_str(), micro);
-  only(cmd->add_option("--buffer-size", m.bufferSide, "micro: micro-buffer side in pixels, 8 to 32")
-           ->check(CLI::Range(kMinMicroBufferSide, kMaxMicroBufferSide))->capture_default_str(), micro);
-  only(cmd->add_option("--mapping", args->mapping, "micro: warped (BRDF importance warping) or nusselt")
-           ->check(CLI::IsMember({"warped", "nusselt"}))->capture_default_str(), micro);
-  only(cmd->add_option("--table-size", m.tableSize, "micro: cells per side of the tabulated BRDF slice")
-           ->check(CLI::Range(4, 256))->capture_default_str(), micro);
-  only(cmd->add_flag("--no-raycast", args->noRayCasting, "micro: no post-traversal ray casting (holes, as the paper's Fig. 11)"),
-       micro);
-  only(cmd->add_option("--node-radiance", args->nodeRadiance,
-                       "micro: what interior nodes send: isotropic (their leaves' mean, the paper's) or directional")
-           ->check(CLI::IsMember({"isotropic", "directional"}))->capture_default_str(), micro);
-  only(cmd->add_option("--splat-reach", m.splatReach,
-                       "micro: interior nodes are splatted up to this many pixel spacings wide (1: 3 x 3 pixels, 2: 5 x 5)")
-           ->check(CLI::Range(1, kMaxSplatReach))->capture_default_str(), micro);
-  only(cmd->add_option("--upsampling", m.upsampling, "micro: gather at 1/N of the pixels, N = 1, 4 or 16, with bilateral upsampling")
-           ->check(CLI::IsMember({1, 4, 16}))->capture_default_str(), micro);
-  only(cmd->add_option("--encoding", args->encoding, "micro: float nodes, or packed (the paper's 128-bit nodes, half-float radiance)")
-           ->check(CLI::IsMember({"packed", "float"}))->capture_default_str(), micro);
-  only(cmd->add_option("--point-light-samples", m.pointLightSamples, "micro: shadow rays per point of the hierarchy")
-           ->check(CLI::Range(0, 1 << 16))->capture_default_str(), micro);
-  only(cmd->add_option("--vpls", m.vpls, "micro: light paths for virtual point lights (--lighting vpl)")
-           ->check(CLI::Range(1u, 1u << 20))->capture_default_str(), micro);
-  only(cmd->add_option("--radiosity-level", m.radiosityLevel, "micro: tree level gathered at (--lighting radiosity)")
-           ->check(CLI::Range(1, 22))->capture_default_str(), micro);
-  only(cmd->add_option("--bounces", m.bounces, "micro: Jacobi iterations (--lighting radiosity)")
-           ->check(CLI::Range(0, 64))->capture_default_str(), micro);
-  cmd->callback([args, &exitCode] { exitCode = runRender(*args); });
+  CLI::App* cmd = app.add_subcommand("render", "Render a scene to an EXR (lucent render --method NAME --help)");
+  // Every argument after `render` is this command's: its own options and the chosen method's,
+  // which are known only once the method is (parseArgs).
+  cmd->prefix_command();
+  cmd->set_help_flag();
+  cmd->callback([cmd, &exitCode] {
+    RenderArgs args = parseArgs(cmd->remaining());
+    exitCode = runRender(args);
+  });
 }
 
 }  // namespace lucent::cli

@@ -182,6 +182,21 @@ void loadLight(JsonFields light, Scene& scene, const fs::path& base) {
   light.finish();
 }
 
+// Each option's value as text: numbers as written, flags as true or false, strings as they are.
+void loadRenderBlock(JsonFields fields, const nlohmann::json& block, RenderBlock& render) {
+  render.present = true;
+  if (fields.has("method")) render.method = fields.string("method");
+  for (const auto& [key, value] : block.items()) {
+    if (key == "method") continue;
+    fields.raw(key);  // read: no unknown key here, the method's declaration judges the names
+    if (value.is_boolean()) render.options.emplace_back(key, value.get<bool>() ? "true" : "false");
+    else if (value.is_number()) render.options.emplace_back(key, value.dump());
+    else if (value.is_string()) render.options.emplace_back(key, value.get<std::string>());
+    else fields.failKey(key, "expected a number, true or false, or a string");
+  }
+  fields.finish();
+}
+
 }  // namespace
 
 Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
@@ -240,6 +255,8 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
     scene.materials.push_back(m);
     scene.materialNames.push_back(spec.name);
   }
+
+  if (top.has("render")) loadRenderBlock(top.object("render"), root.at("render"), scene.render);
 
   if (top.has("lights")) {
     const auto& lights = top.raw("lights");

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the build into a temporary prefix, builds tests/consumer against it with find_package,
-# and runs it: it renders the Cornell box and must match `lucent render`'s image bit for bit.
+# and runs it: it renders the Cornell box, which must match `lucent render`'s image bit for bit, and
+# reads back a stage dump.
 # Usage: run.sh BUILD_DIR SOURCE_DIR LUCENT_CLI
 set -euo pipefail
 build=$1 source=$2 cli=$3
@@ -12,4 +13,5 @@ cmake -S "$source/tests/consumer" -B "$tmp/build" -DCMAKE_PREFIX_PATH="$tmp/pref
 cmake --build "$tmp/build" > "$tmp/build.log" 2>&1 || { cat "$tmp/build.log"; exit 1; }
 "$cli" render "$source/scenes/cornell-box.json" --method pt --spp 16 --seed 1 --resolution 16x16 --quiet \
   -o "$tmp/reference.exr" > /dev/null
-"$tmp/build/consumer" "$source/scenes/cornell-box.json" "$tmp/reference.exr"
+mkdir "$tmp/dumps"
+"$tmp/build/consumer" "$source/scenes/cornell-box.json" "$tmp/reference.exr" "$tmp/dumps"

@@ -11,8 +11,12 @@ namespace lucent {
 struct RenderStats {
   std::vector<std::pair<std::string, double>> stageSeconds;
   std::vector<std::pair<std::string, uint64_t>> counters;
+  // Values a method chose from the scene where an option left the choice to it (an option of 0
+  // for "auto": the maximum search radius, the point count), so that a render can be repeated.
+  std::vector<std::pair<std::string, double>> derived;
   void addStage(const std::string& name, double seconds) { stageSeconds.emplace_back(name, seconds); }
   void addCounter(const std::string& name, uint64_t value) { counters.emplace_back(name, value); }
+  void addDerived(const std::string& name, double value) { derived.emplace_back(name, value); }
   // A counter's value, 0 if there is none of that name.
   uint64_t counter(const std::string& name) const {
     for (const auto& [key, value] : counters)

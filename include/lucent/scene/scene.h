@@ -2,6 +2,7 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "lucent/core/distribution.h"
@@ -63,6 +64,15 @@ struct Environment {
   std::string source;  // the map's path, for metadata
 };
 
+// A scene file's "render" block: the method and options a batch job renders it with (the command
+// line overrides them). The options are kept as text, by name, for the method's declaration to
+// read (pipeline/method.h); the scene itself does not depend on them.
+struct RenderBlock {
+  bool present = false;
+  std::string method;  // empty: none named
+  std::vector<std::pair<std::string, std::string>> options;
+};
+
 struct Scene {
   // Vertices (one entry per unique position/normal/uv combination).
   std::vector<Vec3> positions;
@@ -87,6 +97,7 @@ struct Scene {
   uint64_t contentHash = 0;  // hash of geometry, materials, lights, camera: for image metadata
   uint32_t droppedDegenerateTriangles = 0;
   std::string sourcePath;
+  RenderBlock render;
 
   uint32_t triangleCount() const { return static_cast<uint32_t>(materialIds.size()); }
   Vec3 vertex(uint32_t tri, int k) const { return positions[indices[3 * tri + k]]; }

@@ -17,7 +17,7 @@
 #include "gathering.h"
 #include "lucent/core/dump.h"
 #include "lucent/core/parallel.h"
-#include "lucent/methods/microrender.h"
+#include "methods/microrender/micro_renderer.h"
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 #include "lucent/pipeline/film.h"
@@ -76,29 +76,6 @@ struct GatherTotals {
 
 }  // namespace
 
-void validateMicroRenderOptions(const MicroRenderOptions& o) {
-  auto fail = [](const std::string& m) { throw std::invalid_argument(m); };
-  if (o.points != 0 && (!std::has_single_bit(o.points) || o.points < 2))
-    fail("points must be a power of two of at least 2 (the hierarchy is a complete binary tree)");
-  if (o.points > kMaxMicroRenderPoints)
-    fail("points: at most 2^23: micro-buffer pixels hold 24-bit node indices (2^24 nodes)");
-  if (!(o.pointSpacing > 0) || !std::isfinite(o.pointSpacing)) fail("point spacing must be positive");
-  if (o.bufferSide < kMinMicroBufferSide || o.bufferSide > kMaxMicroBufferSide)
-    fail("micro-buffer size must be in [8, 32]");
-  if (o.splatReach < 1 || o.splatReach > kMaxSplatReach) fail("splat reach must be 1 to " + std::to_string(kMaxSplatReach) + " pixel spacings");
-  if (o.tableSize < 4 || o.tableSize > 256) fail("BRDF table size must be in [4, 256]");
-  if (o.upsampling != 1 && o.upsampling != 4 && o.upsampling != 16) fail("upsampling must be 1, 4 or 16");
-  if (o.spp < 1) fail("spp must be at least 1");
-  if (o.lightSamples < 0 || o.pointLightSamples < 0) fail("light samples must not be negative");
-  if (o.maxSpecularDepth < 0 || o.maxSpecularDepth > 64) fail("max specular depth must be in [0, 64]");
-  if (o.lighting == PointLighting::Vpl && o.vpls < 1) fail("vpls must be at least 1");
-  if (o.radiosityLevel < 1 || o.radiosityLevel > 22) fail("radiosity level must be in [1, 22]");
-  if (o.bounces < 0 || o.bounces > 64) fail("bounces must be in [0, 64]");
-  if (o.lighting == PointLighting::Photons && o.photons < 1) fail("photons must be at least 1");
-  if (o.k < 1) fail("k must be at least 1");
-  if (const std::string why = dumpDirectoryProblem(o.dumpDirectory); !why.empty()) fail(why);
-}
-
 namespace {
 
 // Dumps (docs/dump-format.md): the hierarchy, the points' radiance, and the shading points with the
@@ -134,7 +111,7 @@ uint32_t defaultPointCount(const Scene& scene, float spacing) {
 
 RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroRenderOptions& o,
                          const ProgressFn& progress) {
-  validateMicroRenderOptions(o);
+  microOptionTable().validate(o);
   RenderOutput out;
   RenderStats& stats = out.stats;
 
@@ -156,6 +133,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   }
   stats.addStage("hierarchy_update", update);
   stats.addCounter("points", hierarchy.leafCount);
+  stats.addDerived("points", hierarchy.leafCount);
   if (!o.dumpDirectory.empty()) dumpHierarchy(o.dumpDirectory, hierarchy);
 
   MicroRenderSettings settings;

@@ -7,7 +7,7 @@
 
 #include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
-#include "lucent/methods/pathtrace.h"
+#include "methods/pathtrace/path_tracer.h"
 #include "lucent/pipeline/film.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/light_sampling.h"
@@ -445,11 +445,7 @@ class PathTracer {
 
 RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, const PathTraceOptions& options,
                               const ProgressFn& progress) {
-  if (options.spp < 1) throw std::invalid_argument("spp must be at least 1");
-  if (options.maxDepth < 0) throw std::invalid_argument("max depth must not be negative");
-  if (options.tileSize < 1) throw std::invalid_argument("tile size must be at least 1");
-  if (!(options.timeBudget >= 0 && options.timeBudget < kInf))
-    throw std::invalid_argument("time budget must be finite and not negative (0: none)");
+  pathTraceOptionTable().validate(options);
   const int width = scene.camera.width, height = scene.camera.height;
   // Every pixel is owned by one tile, and its samples are added in sample order.
   Film film(width, height, Film::Sums::PerSample, {options.layers, false});

@@ -96,7 +96,8 @@ size_t traceGatherRays(const Scene& scene, const Visibility& vis, const ShadingP
 
 RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                                         const ProgressFn& progress) {
-  validatePhotonMapOptions(options);
+  pmfgOptionTable().validate(options);
+  if (options.bandSamples < 1) throw std::invalid_argument("band samples must be at least 1");
   RenderOutput out;
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::All, out.stats);
 

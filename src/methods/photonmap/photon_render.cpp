@@ -10,29 +10,6 @@
 
 namespace lucent {
 
-void validatePhotonMapOptions(const PhotonMapOptions& o) {
-  auto fail = [](const std::string& message) { throw std::invalid_argument(message); };
-  if (o.k < 1) fail("k must be at least 1");
-  if (!(o.maxRadius >= 0) || !std::isfinite(o.maxRadius)) fail("max radius must be finite and not negative");
-  if (o.lightSamples < 0) fail("light samples must not be negative");
-  if (o.gatherRays < 0) fail("gather rays must not be negative");
-  if (o.spp < 1) fail("spp must be at least 1");
-  if (o.bandSamples < 1) fail("band samples must be at least 1");
-  if (o.maxSpecularDepth < 0 || o.maxSpecularDepth > 64) fail("max specular depth must be in [0, 64]");
-  if (o.maxPhotonBounces < 1 || o.maxPhotonBounces > 255)
-    fail("max photon bounces must be in [1, 255] (a photon's bounce count is 8 bits)");
-  if (o.shells > 0 && o.map == PhotonMapKind::KdTree) fail("shells apply to the grid maps (sort, stencil, hash), not kdtree");
-  if (!(o.cellSize >= 0) || !std::isfinite(o.cellSize)) fail("cell size must be finite and not negative");
-  if (!(o.photonsPerCell >= 0) || !std::isfinite(o.photonsPerCell)) fail("photons per cell must not be negative");
-  if (o.stencilSide < 1 || o.stencilSide > 1024) fail("stencil side must be in [1, 1024]");
-  const auto& r = o.gridResolution;
-  const bool anyRes = r[0] > 0 || r[1] > 0 || r[2] > 0;
-  if (anyRes && !(r[0] > 0 && r[1] > 0 && r[2] > 0)) fail("grid resolution needs three positive cell counts");
-  for (uint32_t c : r)
-    if (c > uint32_t(UniformGrid::kMaxResolution)) fail("grid resolution exceeds 2^21 cells per axis");
-  if (const std::string why = dumpDirectoryProblem(o.dumpDirectory); !why.empty()) fail(why);
-}
-
 GridOptions gridOptionsFor(const PhotonMapOptions& options, uint32_t k) {
   GridOptions grid;
   grid.resolution = options.gridResolution;
@@ -71,6 +48,8 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
                                    GlobalPhotons which, RenderStats& stats) {
   RenderPhotonMaps maps;
   const MapEstimateSettings settings = estimateSettingsFor(scene, options);
+  stats.addDerived("max_radius", settings.global.maxRadius);
+  stats.addDerived("caustic_k", settings.caustic.k);
   maps.globalSettings = settings.global;
   maps.causticSettings = settings.caustic;
 

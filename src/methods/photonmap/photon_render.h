@@ -5,7 +5,7 @@
 #include <variant>
 
 #include "lucent/methods/photons/kd_tree.h"
-#include "lucent/methods/photonmap.h"
+#include "methods/photonmap/photon_mapping.h"
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 #include "lucent/pipeline/film.h"

@@ -14,7 +14,8 @@ namespace lucent {
 
 RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                            const ProgressFn& progress) {
-  validatePhotonMapOptions(options);
+  purcellOptionTable().validate(options);
+  if (options.bandSamples < 1) throw std::invalid_argument("band samples must be at least 1");
   RenderOutput out;
   // The global map without direct and caustic photons: direct light comes from shadow rays and
   // caustics from the caustic map, so each light path is counted once.

@@ -1,7 +1,8 @@
 // Micro-rendering (Ritschel et al. 2009, "Micro-Rendering for Scalable, Parallel Final Gathering"),
 // --method micro: final gathering at the camera's diffuse and glossy surface points by rasterizing a
 // point hierarchy of the scene into importance-warped micro-buffers. src/methods/microrender/README.md
-// maps the paper to the code and lists the departures.
+// maps the paper to the code and lists the departures. The options are declared in
+// microOptionTable (method.cpp).
 #pragma once
 #include <cstdint>
 #include <string>
@@ -9,6 +10,7 @@
 #include "lucent/methods/microrender/hemisphere_mapping.h"
 #include "lucent/methods/points/point_hierarchy.h"
 #include "lucent/methods/points/point_radiance.h"
+#include "lucent/pipeline/method.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
@@ -54,14 +56,15 @@ struct MicroRenderOptions {
   std::string dumpDirectory;
 };
 
-// Throws std::invalid_argument for impossible options (naming the option).
-void validateMicroRenderOptions(const MicroRenderOptions& options);
+const OptionTable<MicroRenderOptions>& microOptionTable();
+const Method& microMethod();
 
 // The point count a scene needs when none is given: leaves spaced about `spacing` pixels of the
 // camera's footprint apart at the distance from the eye to the centre of the scene's bounds, over
 // the scene's whole surface area, rounded to a power of two in [2^12, 2^22].
 uint32_t defaultPointCount(const Scene& scene, float spacing);
 
+// Throws OptionError for options outside their declared ranges.
 RenderOutput renderMicro(const Scene& scene, const Visibility& visibility, const MicroRenderOptions& options,
                          const ProgressFn& progress = {});
 

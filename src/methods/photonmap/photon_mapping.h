@@ -1,11 +1,13 @@
 // The photon-mapping renderers: Purcell et al. 2003's ray tracer that visualizes the photon maps at
 // diffuse hits (--method purcell), and the RT/PM/FG ground truth with final gathering (--method pmfg).
-// src/methods/photonmap/README.md maps the papers to the code and lists the departures.
+// src/methods/photonmap/README.md maps the papers to the code and lists the departures. The options
+// are declared in purcellOptionTable and pmfgOptionTable (method.cpp).
 #pragma once
 #include <array>
 #include <cstdint>
 #include <string>
 
+#include "lucent/pipeline/method.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
@@ -24,8 +26,8 @@ struct PhotonMapOptions {
   uint32_t k = 50;                  // photons sought per radiance estimate (paper: 32, 64, 500)
   uint32_t causticK = 0;            // for the caustic map; 0: k
   float maxRadius = 0;              // maximum search radius; 0: 0.1 x the scene's bounding-box diagonal
-  PhotonMapKind map = PhotonMapKind::Sort;  // the CLI's default: sort for purcell (the paper's),
-                                            // kdtree for pmfg (Jensen's, the ground truth)
+  PhotonMapKind map = PhotonMapKind::Sort;  // purcell's default (the paper's); pmfg's is kdtree
+                                            // (Jensen's, the ground truth)
   uint32_t shells = 0;              // kNN-grid: stop after this many shells (the progressive estimate
                                     // of section 3.4); 0: run every search to the end
   int lightSamples = 32;            // shadow rays per shading point for direct light (paper: 4, 32)
@@ -49,12 +51,16 @@ struct PhotonMapOptions {
   std::string dumpDirectory;
 };
 
-// Throws std::invalid_argument for impossible options.
-void validatePhotonMapOptions(const PhotonMapOptions& options);
+// purcell's options and pmfg's (with gather_rays, and the kd-tree by default).
+const OptionTable<PhotonMapOptions>& purcellOptionTable();
+const OptionTable<PhotonMapOptions>& pmfgOptionTable();
+const Method& purcellMethod();
+const Method& pmfgMethod();
 
 // Section 3: per pixel, camera rays through mirrors and glass (deterministic splitting), and at
 // every diffuse or glossy hit direct light by `lightSamples` shadow rays plus the radiance
 // estimates of the global map (indirect photons only) and of the caustic map.
+// Both throw OptionError for options outside their declared ranges.
 RenderOutput renderPurcell(const Scene& scene, const Visibility& visibility, const PhotonMapOptions& options,
                            const ProgressFn& progress = {});
 

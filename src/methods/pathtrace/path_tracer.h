@@ -1,8 +1,10 @@
 // The unbiased reference path tracer (--method pt): next-event estimation combined with BSDF
-// sampling by multiple importance sampling, Russian roulette, box-filtered pixels.
+// sampling by multiple importance sampling, Russian roulette, box-filtered pixels. Its options are
+// declared in pathTraceOptionTable (method.cpp).
 #pragma once
 #include <cstdint>
 
+#include "lucent/pipeline/method.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
@@ -33,6 +35,10 @@ struct PathTraceOptions {
   bool laneShading = true;
 };
 
+const OptionTable<PathTraceOptions>& pathTraceOptionTable();
+const Method& pathTraceMethod();
+
+// Throws OptionError for options outside their declared ranges.
 RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, const PathTraceOptions& options,
                               const ProgressFn& progress = {});
 

@@ -1,0 +1,58 @@
+// A rendering method as the command line, scene files and other programs see it: a name, a line
+// of summary, its declared options (pipeline/options.h), and a render call that takes option
+// values by name over the defaults. `lucent/methods/methods.h` lists the methods.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lucent/pipeline/options.h"
+#include "lucent/pipeline/render_output.h"
+#include "lucent/scene/scene.h"
+#include "lucent/trace/visibility.h"
+
+namespace lucent {
+
+class Method {
+ public:
+  virtual ~Method() = default;
+  virtual const std::string& name() const = 0;
+  virtual const std::string& summary() const = 0;
+  virtual const std::vector<OptionSpec>& options() const = 0;
+  // Every option's value once `values` are set over the defaults, in declaration order, as text.
+  // Throws OptionError for an unknown option or a value the option does not take.
+  virtual OptionValues resolve(const OptionValues& values) const = 0;
+  // Renders with `values` set over the defaults; throws OptionError as resolve does.
+  virtual RenderOutput render(const Scene& scene, const Visibility& visibility, const OptionValues& values,
+                              const ProgressFn& progress = {}) const = 0;
+};
+
+// A method whose options are the struct Options, declared by `table`, rendered by `render`.
+template <class Options>
+class DeclaredMethod final : public Method {
+ public:
+  using RenderFn = RenderOutput (*)(const Scene&, const Visibility&, const Options&, const ProgressFn&);
+  DeclaredMethod(std::string name, std::string summary, const OptionTable<Options>& table, RenderFn render)
+      : name_(std::move(name)), summary_(std::move(summary)), table_(table), render_(render) {}
+  const std::string& name() const override { return name_; }
+  const std::string& summary() const override { return summary_; }
+  const std::vector<OptionSpec>& options() const override { return table_.specs(); }
+  OptionValues resolve(const OptionValues& values) const override { return table_.values(parse(values)); }
+  RenderOutput render(const Scene& scene, const Visibility& visibility, const OptionValues& values,
+                      const ProgressFn& progress) const override {
+    return render_(scene, visibility, parse(values), progress);
+  }
+
+ private:
+  Options parse(const OptionValues& values) const {
+    Options options = table_.defaults();
+    for (const auto& [name, text] : values) table_.set(options, name, text);
+    table_.validate(options);
+    return options;
+  }
+  std::string name_, summary_;
+  const OptionTable<Options>& table_;
+  RenderFn render_;
+};
+
+}  // namespace lucent

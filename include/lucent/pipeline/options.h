@@ -1,0 +1,217 @@
+// Options declared once. A method's options are a plain struct, whose member initializers are the
+// defaults, and one OptionTable that declares each option: its name, kind, range, unit and one line
+// of help, and where in the struct it lives. The command line's flags, the parsing and validation
+// of values and their messages, the JSON echo and the EXR metadata, the help text and `lucent
+// methods` all come from that table (src/cli/, pipeline/method.h).
+#pragma once
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace lucent {
+
+// A value an option does not take, or a name no option has: `option` is the option's name.
+class OptionError : public std::invalid_argument {
+ public:
+  OptionError(std::string option, const std::string& problem)
+      : std::invalid_argument(problem), option_(std::move(option)) {}
+  const std::string& option() const { return option_; }
+
+ private:
+  std::string option_;
+};
+
+enum class OptionKind {
+  Integer,  // whole numbers in [min, max]
+  Real,     // finite numbers in [min, max]
+  Flag,     // true or false
+  Choice,   // one of `choices`
+  Text,     // any text (a directory)
+  Triple,   // three whole numbers XxYxZ in [min, max] each, or 0x0x0 for none
+};
+
+struct OptionSpec {
+  std::string name;  // snake_case: the key in JSON; on the command line --name with '-' for '_'
+  OptionKind kind = OptionKind::Integer;
+  double min = 0, max = 0;           // Integer, Real, Triple
+  std::vector<std::string> choices;  // Choice
+  std::string unit;                  // "" for none
+  std::string help;                  // one line
+  std::string defaultText;           // the default as text
+  std::string flag() const;          // "--gather-rays"
+};
+
+// Text of a number or a flag as options print and parse them (reals exactly, shortest form).
+std::string optionText(double value, OptionKind kind);
+// The parsers behind OptionTable: the text's value, or an OptionError naming `option`.
+int64_t parseOptionInteger(const std::string& option, std::string_view text, double min, double max);
+double parseOptionReal(const std::string& option, std::string_view text, double min, double max);
+bool parseOptionFlag(const std::string& option, std::string_view text);
+std::array<uint32_t, 3> parseOptionTriple(const std::string& option, std::string_view text, double min, double max);
+std::string tripleText(const std::array<uint32_t, 3>& value);
+// "must be in [min, max]", with powers of two written as 2^n.
+std::string rangeText(double min, double max, OptionKind kind);
+
+// Option values by name, as text, in the order they were given.
+using OptionValues = std::vector<std::pair<std::string, std::string>>;
+
+template <class Options>
+class OptionTable {
+ public:
+  // The defaults are the struct's member initializers, or those of `defaults` where a method's
+  // defaults differ from the struct's (purcell and pmfg share one struct).
+  explicit OptionTable(Options defaults = Options{}) : defaults_(std::move(defaults)) {}
+  const Options& defaults() const { return defaults_; }
+
+  // `access` maps the options to the field: [](Options& o) -> auto& { return o.field; }.
+  template <class Access>
+  OptionTable& integer(std::string name, Access access, double min, double max, std::string unit, std::string help) {
+    using T = std::remove_reference_t<decltype(access(std::declval<Options&>()))>;
+    static_assert(std::is_integral_v<T>);
+    OptionSpec spec{std::move(name), OptionKind::Integer, min, max, {}, std::move(unit), std::move(help), {}};
+    const std::string n = spec.name;
+    return add(std::move(spec),
+               [=](Options& o, std::string_view text) { access(o) = T(parseOptionInteger(n, text, min, max)); },
+               [=](const Options& o) { return std::to_string(access(const_cast<Options&>(o))); },
+               [=](const Options& o) {
+                 const double v = double(access(const_cast<Options&>(o)));
+                 return v >= min && v <= max ? std::string() : rangeText(min, max, OptionKind::Integer);
+               });
+  }
+  template <class Access>
+  OptionTable& real(std::string name, Access access, double min, double max, std::string unit, std::string help) {
+    using T = std::remove_reference_t<decltype(access(std::declval<Options&>()))>;
+    static_assert(std::is_floating_point_v<T>);
+    OptionSpec spec{std::move(name), OptionKind::Real, min, max, {}, std::move(unit), std::move(help), {}};
+    const std::string n = spec.name;
+    return add(std::move(spec), [=](Options& o, std::string_view text) { access(o) = T(parseOptionReal(n, text, min, max)); },
+               [=](const Options& o) { return optionText(double(access(const_cast<Options&>(o))), OptionKind::Real); },
+               [=](const Options& o) {
+                 const double v = double(access(const_cast<Options&>(o)));
+                 return v >= min && v <= max ? std::string() : rangeText(min, max, OptionKind::Real);  // NaN too
+               });
+  }
+  template <class Access>
+  OptionTable& flag(std::string name, Access access, std::string help) {
+    OptionSpec spec{std::move(name), OptionKind::Flag, 0, 1, {}, {}, std::move(help), {}};
+    const std::string n = spec.name;
+    return add(std::move(spec), [=](Options& o, std::string_view text) { access(o) = parseOptionFlag(n, text); },
+               [=](const Options& o) { return std::string(access(const_cast<Options&>(o)) ? "true" : "false"); },
+               [](const Options&) { return std::string(); });
+  }
+  template <class Access, class Enum>
+  OptionTable& choice(std::string name, Access access, std::vector<std::pair<std::string, Enum>> values, std::string help) {
+    OptionSpec spec{std::move(name), OptionKind::Choice, 0, 0, {}, {}, std::move(help), {}};
+    for (const auto& [text, value] : values) spec.choices.push_back(text);
+    const std::string n = spec.name;
+    const std::vector<std::string> choices = spec.choices;
+    return add(
+        std::move(spec),
+        [=](Options& o, std::string_view text) {
+          for (const auto& [t, value] : values)
+            if (t == text) {
+              access(o) = value;
+              return;
+            }
+          std::string list;
+          for (const std::string& c : choices) list += (list.empty() ? "" : ", ") + c;
+          throw OptionError(n, "'" + std::string(text) + "' is not one of " + list);
+        },
+        [=](const Options& o) {
+          for (const auto& [t, value] : values)
+            if (value == access(const_cast<Options&>(o))) return t;
+          return std::string("?");
+        },
+        [=](const Options& o) {
+          for (const auto& [t, value] : values)
+            if (value == access(const_cast<Options&>(o))) return std::string();
+          return std::string("has a value that is not one of its choices");
+        });
+  }
+  template <class Access>
+  OptionTable& text(std::string name, Access access, std::string unit, std::string help) {
+    OptionSpec spec{std::move(name), OptionKind::Text, 0, 0, {}, std::move(unit), std::move(help), {}};
+    return add(std::move(spec), [=](Options& o, std::string_view text) { access(o) = std::string(text); },
+               [=](const Options& o) { return access(const_cast<Options&>(o)); },
+               [](const Options&) { return std::string(); });
+  }
+  template <class Access>
+  OptionTable& triple(std::string name, Access access, double min, double max, std::string unit, std::string help) {
+    OptionSpec spec{std::move(name), OptionKind::Triple, min, max, {}, std::move(unit), std::move(help), {}};
+    const std::string n = spec.name;
+    return add(std::move(spec), [=](Options& o, std::string_view text) { access(o) = parseOptionTriple(n, text, min, max); },
+               [=](const Options& o) { return tripleText(access(const_cast<Options&>(o))); },
+               [=](const Options& o) {
+                 const std::array<uint32_t, 3>& v = access(const_cast<Options&>(o));
+                 if (v[0] == 0 && v[1] == 0 && v[2] == 0) return std::string();
+                 for (uint32_t c : v)
+                   if (c < min || c > max) return "each of three " + rangeText(min, max, OptionKind::Integer) + ", or 0x0x0";
+                 return std::string();
+               });
+  }
+  // A condition beyond the option's range (a power of two, a pairing with another option):
+  // check(options) returns why the options break it, or "".
+  OptionTable& rule(std::string option, std::function<std::string(const Options&)> check) {
+    rules_.push_back({std::move(option), std::move(check)});
+    return *this;
+  }
+
+  const std::vector<OptionSpec>& specs() const { return specs_; }
+  bool has(std::string_view name) const { return find(name) != nullptr; }
+
+  // Sets one option from text; throws OptionError for an unknown name or a bad value.
+  void set(Options& options, std::string_view name, std::string_view text) const {
+    const Entry* e = find(name);
+    if (!e) throw OptionError(std::string(name), "no such option");
+    e->parse(options, text);
+  }
+  // Every option's value as text, in declaration order.
+  OptionValues values(const Options& options) const {
+    OptionValues out;
+    for (size_t i = 0; i < entries_.size(); ++i) out.emplace_back(specs_[i].name, entries_[i].format(options));
+    return out;
+  }
+  // Every range and rule, in declaration order: the first broken one throws OptionError.
+  void validate(const Options& options) const {
+    for (size_t i = 0; i < entries_.size(); ++i)
+      if (const std::string why = entries_[i].check(options); !why.empty()) throw OptionError(specs_[i].name, why);
+    for (const Rule& r : rules_)
+      if (const std::string why = r.check(options); !why.empty()) throw OptionError(r.option, why);
+  }
+
+ private:
+  struct Entry {
+    std::function<void(Options&, std::string_view)> parse;
+    std::function<std::string(const Options&)> format;
+    std::function<std::string(const Options&)> check;
+  };
+  struct Rule {
+    std::string option;
+    std::function<std::string(const Options&)> check;
+  };
+  OptionTable& add(OptionSpec spec, std::function<void(Options&, std::string_view)> parse,
+                   std::function<std::string(const Options&)> format, std::function<std::string(const Options&)> check) {
+    if (has(spec.name)) throw std::logic_error("option '" + spec.name + "' declared twice");
+    spec.defaultText = format(defaults_);
+    specs_.push_back(std::move(spec));
+    entries_.push_back({std::move(parse), std::move(format), std::move(check)});
+    return *this;
+  }
+  const Entry* find(std::string_view name) const {
+    for (size_t i = 0; i < specs_.size(); ++i)
+      if (specs_[i].name == name) return &entries_[i];
+    return nullptr;
+  }
+  Options defaults_;
+  std::vector<OptionSpec> specs_;
+  std::vector<Entry> entries_;
+  std::vector<Rule> rules_;
+};
+
+}  // namespace lucent

@@ -1,0 +1,111 @@
+#include "cli/method_options.h"
+
+#include <sstream>
+
+#include "lucent/methods/methods.h"
+
+namespace lucent::cli {
+
+namespace {
+
+const OptionSpec* anySpec(const std::string& name) {
+  for (const Method* m : renderingMethods())
+    for (const OptionSpec& spec : m->options())
+      if (spec.name == name) return &spec;
+  return nullptr;
+}
+
+std::string optionName(const std::string& flag) {
+  std::string name = flag.substr(2);
+  for (char& c : name)
+    if (c == '-') c = '_';
+  return name;
+}
+
+std::string valuePlaceholder(const OptionSpec& spec) {
+  switch (spec.kind) {
+    case OptionKind::Integer: return "N";
+    case OptionKind::Real: return "X";
+    case OptionKind::Flag: return "";
+    case OptionKind::Choice: {
+      std::string c;
+      for (const std::string& choice : spec.choices) c += (c.empty() ? "" : "|") + choice;
+      return c;
+    }
+    case OptionKind::Text: return "DIR";
+    case OptionKind::Triple: return "XxYxZ";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string flagOf(const std::string& option) { return OptionSpec{option}.flag(); }
+
+std::pair<std::string, std::string> methodOptionArg(const std::string& key, const std::optional<std::string>& inlineValue,
+                                                    const std::function<std::string()>& nextValue) {
+  const std::string name = optionName(key);
+  if (const OptionSpec* spec = anySpec(name)) {
+    if (spec->kind == OptionKind::Flag) return {name, inlineValue ? *inlineValue : "true"};
+    return {name, inlineValue ? *inlineValue : nextValue()};
+  }
+  if (name.rfind("no_", 0) == 0 && !inlineValue)
+    if (const OptionSpec* spec = anySpec(name.substr(3)); spec && spec->kind == OptionKind::Flag)
+      return {spec->name, "false"};
+  throw std::invalid_argument("unknown option " + key + " (lucent methods lists every method's options)");
+}
+
+void checkMethodOption(const Method& method, const std::string& name, const std::string& where) {
+  for (const OptionSpec& spec : method.options())
+    if (spec.name == name) return;
+  if (const Method* other = methodWithOption(name, &method))
+    throw std::invalid_argument(where + ": an option of --method " + other->name() + ", not of --method " +
+                                method.name());
+  throw std::invalid_argument(where + ": not an option of --method " + method.name());
+}
+
+OptionValues resolveMethodOptions(const Method& method, const OptionValues& values, const std::vector<std::string>& origins) {
+  try {
+    return method.resolve(values);
+  } catch (const OptionError& e) {
+    // Named after the last value given for the option (the command line's over the scene's).
+    for (size_t i = values.size(); i-- > 0;)
+      if (values[i].first == e.option()) throw std::invalid_argument(origins[i] + ": " + e.what());
+    throw std::invalid_argument(flagOf(e.option()) + ": " + e.what());
+  }
+}
+
+nlohmann::ordered_json methodOptionsJson(const Method& method, const OptionValues& resolved) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::object();
+  for (const auto& [name, text] : resolved) {
+    const OptionSpec* spec = nullptr;
+    for (const OptionSpec& s : method.options())
+      if (s.name == name) spec = &s;
+    switch (spec ? spec->kind : OptionKind::Text) {
+      case OptionKind::Integer: out[name] = std::stoll(text); break;
+      case OptionKind::Real: out[name] = std::stod(text); break;
+      case OptionKind::Flag: out[name] = text == "true"; break;
+      default: out[name] = text;
+    }
+  }
+  return out;
+}
+
+std::string methodOptionsHelp(const Method& method) {
+  std::ostringstream out;
+  for (const OptionSpec& spec : method.options()) {
+    const std::string value = valuePlaceholder(spec);
+    out << "  " << spec.flag() << (value.empty() ? "" : " " + value) << "\n      " << spec.help << "\n      ";
+    if (spec.kind == OptionKind::Integer || spec.kind == OptionKind::Real || spec.kind == OptionKind::Triple) {
+      std::string range = rangeText(spec.min, spec.max, spec.kind);  // "must be in [a, b]" or "must be ..."
+      range = range.rfind("must be in ", 0) == 0 ? range.substr(11) : range.substr(8);
+      out << range << (spec.unit.empty() ? "" : " " + spec.unit) << ", ";
+    } else if (!spec.unit.empty()) {
+      out << spec.unit << ", ";
+    }
+    out << "default " << (spec.defaultText.empty() ? "none" : spec.defaultText) << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace lucent::cli

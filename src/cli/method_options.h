@@ -1,0 +1,38 @@
+// The command line's view of the methods' declared options: flags from names and back, checks that
+// name the method an option belongs to, typed JSON, and help text (lucent render, lucent methods).
+#pragma once
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "lucent/pipeline/method.h"
+
+namespace lucent::cli {
+
+// "--gather-rays" for "gather_rays".
+std::string flagOf(const std::string& option);
+
+// A method option as given: `--name VALUE`, `--name=VALUE`, and for flags `--name` (true) or
+// `--no-name` (false). Whether the option takes a value is known from any method that declares
+// it; a name no method declares is an error.
+std::pair<std::string, std::string> methodOptionArg(const std::string& key, const std::optional<std::string>& inlineValue,
+                                                    const std::function<std::string()>& nextValue);
+
+// Throws std::invalid_argument, `where` first, if `method` has no option `name` (naming the method
+// that has it, if one does).
+void checkMethodOption(const Method& method, const std::string& name, const std::string& where);
+
+// The method's options with `values` over its defaults. A value an option does not take throws
+// std::invalid_argument naming where it came from: origins[i] for values[i].
+OptionValues resolveMethodOptions(const Method& method, const OptionValues& values,
+                                  const std::vector<std::string>& origins);
+
+// The options as a JSON object: numbers, true or false, and strings, by each option's kind.
+nlohmann::ordered_json methodOptionsJson(const Method& method, const OptionValues& resolved);
+
+// One entry per option: the flag and its values, then the help, unit, range and default.
+std::string methodOptionsHelp(const Method& method);
+
+}  // namespace lucent::cli

@@ -1,0 +1,35 @@
+#include "lucent/methods/methods.h"
+
+#include <stdexcept>
+
+#include "methods/microrender/micro_renderer.h"
+#include "methods/pathtrace/path_tracer.h"
+#include "methods/photonmap/photon_mapping.h"
+
+namespace lucent {
+
+const std::vector<const Method*>& renderingMethods() {
+  static const std::vector<const Method*> methods = {&pathTraceMethod(), &purcellMethod(), &pmfgMethod(),
+                                                     &microMethod()};
+  return methods;
+}
+
+const Method& renderingMethod(const std::string& name) {
+  std::string names;
+  for (const Method* m : renderingMethods()) {
+    if (m->name() == name) return *m;
+    names += (names.empty() ? "" : ", ") + m->name();
+  }
+  throw std::invalid_argument("unknown method '" + name + "' (available: " + names + ")");
+}
+
+const Method* methodWithOption(const std::string& option, const Method* except) {
+  for (const Method* m : renderingMethods()) {
+    if (m == except) continue;
+    for (const OptionSpec& spec : m->options())
+      if (spec.name == option) return m;
+  }
+  return nullptr;
+}
+
+}  // namespace lucent

@@ -1,0 +1,41 @@
+// --method pt: the path tracer's options, declared once, and its entry in the method list.
+#include "lucent/pipeline/render_options.h"
+#include "methods/pathtrace/path_tracer.h"
+
+namespace lucent {
+
+const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
+  static const OptionTable<PathTraceOptions> table = [] {
+    using O = PathTraceOptions;
+    OptionTable<O> t;
+    t.integer("spp", [](O& o) -> auto& { return o.spp; }, 1, 1 << 24, "samples",
+              "samples per pixel (the most taken when a time budget is set)");
+    declareSeed(t);
+    declareLayers(t);
+    t.integer("max_depth", [](O& o) -> auto& { return o.maxDepth; }, 0, 1 << 24, "bounces",
+              "path length: 1 is direct light alone, 2 adds one indirect bounce");
+    t.integer("roulette_depth", [](O& o) -> auto& { return o.rouletteDepth; }, 1, 1 << 16, "bounces",
+              "Russian roulette from this bounce on");
+    t.real("time_budget", [](O& o) -> auto& { return o.timeBudget; }, 0, 1e9, "s",
+           "stop sampling within this many seconds (at least one sample per pixel); 0: no budget");
+    t.integer("tile_size", [](O& o) -> auto& { return o.tileSize; }, 1, 4096, "pixels",
+              "side of the tiles the image is rendered in (does not change the image)");
+    t.choice("strategy", [](O& o) -> auto& { return o.strategy; },
+             std::vector<std::pair<std::string, PathStrategy>>{
+                 {"mis", PathStrategy::Mis}, {"light", PathStrategy::LightSampling}, {"bsdf", PathStrategy::BsdfSampling}},
+             "mis combines light and BSDF sampling; light or bsdf alone, for validating the other two");
+    t.flag("pixel_centres", [](O& o) -> auto& { return o.pixelCentres; },
+           "every camera ray through its pixel's centre (the reference for methods at one sample per pixel)");
+    return t;
+  }();
+  return table;
+}
+
+const Method& pathTraceMethod() {
+  static const DeclaredMethod<PathTraceOptions> method(
+      "pt", "the unbiased reference path tracer: next-event estimation and BSDF sampling by MIS",
+      pathTraceOptionTable(), renderPathTraced);
+  return method;
+}
+
+}  // namespace lucent
