@@ -22,7 +22,7 @@ SCENES = ["cornell-box", "cornell-box-glossy", "cornell-box-spheres", "glass-bal
 
 # Per method: the options every scene is rendered with, and extra variants on the Cornell box.
 METHODS = {
-    "pt": (["--spp", "4"], [["--strategy", "light"], ["--max-depth", "2", "--layers"]]),
+    "pt": (["--spp", "4"], [["--strategy", "light"], ["--strategy", "bsdf"], ["--max-depth", "2", "--layers"]]),
     "purcell": (["--photons", "20000", "--caustic-photons", "20000", "--light-samples", "4"],
                 [["--map", "stencil"], ["--map", "hash"], ["--map", "kdtree"], ["--layers"]]),
     "pmfg": (["--photons", "20000", "--caustic-photons", "20000", "--gather-rays", "16", "--light-samples", "4"],

@@ -66,7 +66,7 @@ TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "
   }
 }
 
-TEST_CASE("Camera rays and Lambertian hits in lanes give the image of one path at a time, bit for bit",
+TEST_CASE("Camera rays and Lambertian hits in a wave's lanes give the image of one path at a time, bit for bit",
           "[pathtrace][determinism]") {
   // Every kind of light and material: the Cornell box with mirror and glass spheres, plus a point
   // light, a directional light and a constant environment; walls with interpolated normals made
@@ -89,23 +89,25 @@ TEST_CASE("Camera rays and Lambertian hits in lanes give the image of one path a
     if (m.type == MaterialType::Diffuse && m.ke.isBlack()) m.kdTexture = 0;
   finalizeScene(scene);
   const Visibility vis(scene);
-  for (const int maxDepth : {1024, 2}) {
-    PathTraceOptions opt;
-    opt.spp = 6;
-    opt.layers = true;
-    opt.seed = 9;
-    opt.maxDepth = maxDepth;
-    const RenderOutput lanes = renderPathTraced(scene, vis, opt);
-    opt.laneShading = false;
-    const RenderOutput scalar = renderPathTraced(scene, vis, opt);
-    INFO("max depth " << maxDepth);
-    REQUIRE(lanes.image.pixels() == scalar.image.pixels());
-    // Not a vacuous comparison: light arrives, and most hits were shaded in lanes (and none when
-    // lane shading is off).
-    REQUIRE(test::channelMean(lanes.image, 0).mean > 0.01);
-    CHECK(lanes.stats.counter("lane_shaded_hits") > lanes.stats.counter("rays") / 4);
-    CHECK(scalar.stats.counter("lane_shaded_hits") == 0);
-  }
+  for (const PathStrategy strategy : {PathStrategy::Mis, PathStrategy::LightSampling, PathStrategy::BsdfSampling})
+    for (const int maxDepth : {1024, 2}) {
+      PathTraceOptions opt;
+      opt.spp = 6;
+      opt.layers = true;
+      opt.seed = 9;
+      opt.maxDepth = maxDepth;
+      opt.strategy = strategy;
+      const RenderOutput lanes = renderPathTraced(scene, vis, opt);
+      opt.laneShading = false;
+      const RenderOutput scalar = renderPathTraced(scene, vis, opt);
+      INFO("strategy " << int(strategy) << ", max depth " << maxDepth);
+      REQUIRE(lanes.image.pixels() == scalar.image.pixels());
+      // Not a vacuous comparison: light arrives, and most hits were Lambertian (shaded in a wave's
+      // lanes, or one path at a time, each in a lane of its own).
+      REQUIRE(test::channelMean(lanes.image, 0).mean > 0.01);
+      CHECK(lanes.stats.counter("lane_shaded_hits") > lanes.stats.counter("rays") / 4);
+      CHECK(scalar.stats.counter("lane_shaded_hits") == lanes.stats.counter("lane_shaded_hits"));
+    }
 }
 
 TEST_CASE("Pixel centres: every sample of a pixel takes the centre's camera ray, in lanes and one by one",

@@ -26,9 +26,10 @@ LUCENT_LANE_CLONES void startCameraPaths(CameraLanes& l, uint64_t seed, const Pi
 }
 
 // The rest of surfaceAt (the shading normal), the start of PathTracer::shade for a two-sided
-// material, then PathTracer::sampleDirect (the emitting triangle's sample as sampleLight takes it)
-// and sampleBsdf's Lambertian case, with shadowRay and offsetOrigin.
+// material, then next-event estimation as PathTracer::sampleDirect (the emitting triangle's sample
+// as sampleLight takes it) and sampleBsdf's Lambertian case, with shadowRay and offsetOrigin.
 LUCENT_LANE_CLONES void shadeDiffuseLanes(DiffuseLanes& l) {
+  const bool lightOnly = l.strategy == PathStrategy::LightSampling, bsdfOnly = l.strategy == PathStrategy::BsdfSampling;
   for (uint32_t k = 0; k < l.count; ++k) {
     const Vec3 ng = Vec3{l.ngx[k], l.ngy[k], l.ngz[k]};
     const Vec3 interpolated{l.normalX[k], l.normalY[k], l.normalZ[k]};
@@ -78,11 +79,13 @@ LUCENT_LANE_CLONES void shadeDiffuseLanes(DiffuseLanes& l) {
                 bothAbove == 0 ? 0.0f : kd.b * kInvPi};
     const float lambertPdf = bothAbove == 0 ? 0.0f : cosineHemispherePdf(wiLocal.z);
     const float mis = powerHeuristic(pdf, lambertPdf);
-    const float w = onTriangle ? mis : l.lightDelta[k] != 0 ? 1.0f : mis;  // delta lights: weight 1
+    const bool delta = onTriangle ? false : l.lightDelta[k] != 0;  // point and directional lights
+    const float w = delta ? 1.0f : lightOnly ? 1.0f : mis;          // they cannot be hit: weight 1
     const Rgb direct = f * le * (wiLocal.z * w / pdf);
-    // sampleDirect's tests, in its order.
+    // sampleDirect's tests, in its order; BSDF sampling alone samples only the lights it cannot hit.
     l.shadowQueued[k] = !(pdf > 0)                      ? 0
                         : !notBlack(le)                 ? 0
+                        : bsdfOnly && !delta            ? 0
                         : wiLocal.z <= 0                ? 0
                         : dot(wi, ng) * dot(n, ng) <= 0 ? 0
                         : notBlack(f)                   ? 1

@@ -2,13 +2,14 @@
 // random numbers of each hit are fetched into a structure of arrays (one slot per path, a "lane"),
 // then every step that is the same arithmetic for all lanes runs as one loop over the lanes, which
 // the compiler vectorizes (eight lanes per instruction with AVX2, sixteen with AVX-512, chosen at
-// run time). Each lane computes exactly what PathTracer::shade computes for its path, in the same
-// order, so images are bit-identical whichever code shades a hit.
+// run time). It is the only code that shades a Lambertian hit: rendering one path at a time shades
+// each in a lane of its own.
 #pragma once
 #include <cstdint>
 
 #include "lucent/core/rng.h"
 #include "lucent/scene/camera.h"
+#include "methods/pathtrace/path_tracer.h"
 
 namespace lucent {
 
@@ -23,6 +24,7 @@ inline constexpr int kLaneSlots = kMaxLanes + 16;
 
 struct DiffuseLanes {
   uint32_t count = 0;
+  PathStrategy strategy = PathStrategy::Mis;  // how light is found, the same for every lane
   // Fetched per lane (PathTracer::fetchDiffuseLane). Normals: ng* the triangle's geometric one,
   // normal* the vertex normals interpolated (not yet normalized).
   alignas(64) float dirX[kLaneSlots], dirY[kLaneSlots], dirZ[kLaneSlots];  // the incoming ray

@@ -30,8 +30,8 @@ struct PathTraceOptions {
   // images are point samples of the image, not its pixels' averages.
   bool pixelCentres = false;
   // Camera rays are started and Lambertian hits shaded many at a time in vectorized loops
-  // (CameraLanes, DiffuseLanes), other hits one by one. Both compute the same numbers; false does
-  // everything one path at a time, for tests of exactly that.
+  // (CameraLanes, DiffuseLanes), other hits one by one. False does everything one path at a time
+  // (a Lambertian hit in a lane of its own), for tests that the batches change nothing.
   bool laneShading = true;
 };
 

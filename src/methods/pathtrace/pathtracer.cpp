@@ -206,11 +206,14 @@ class PathTracer {
       w.shadows.clear();
       DiffuseLanes& lanes = *w.lanes;
       lanes.count = 0;
+      lanes.strategy = opt_.strategy;
       w.textured.clear();
       w.otherLights.clear();
       for (const uint32_t i : w.active) {
         if (inDiffuseLane(w.paths[i], w.hits[i])) {
           fetchDiffuseLane(w.paths[i], w.hits[i], i, lanes, w.textured, w.otherLights);
+          // One path at a time: its lane is shaded at once, alone.
+          if (!opt_.laneShading) shadeLanes(w, counters);
           continue;
         }
         ShadowQuery shadow;
@@ -221,16 +224,7 @@ class PathTracer {
           w.shadows.push_back(shadow);
         }
       }
-      counters.laneShadedHits += lanes.count;
-      if (lanes.count > 0) {
-        for (const TexturedLane& t : w.textured) {
-          const Rgb kd = t.kd * bilinear(t.footprint);
-          lanes.kdR[t.lane] = kd.r, lanes.kdG[t.lane] = kd.g, lanes.kdB[t.lane] = kd.b;
-        }
-        sampleOtherLights(lanes, w.otherLights);
-        shadeDiffuseLanes(lanes);
-        finishDiffuseLanes(lanes, w);
-      }
+      shadeLanes(w, counters);
       counters.rays += w.shadows.size();
       traceShadows(w);
       std::swap(w.active, w.next);
@@ -265,10 +259,28 @@ class PathTracer {
     }
   }
 
-  // Hits that DiffuseLanes shades: Lambertian surfaces below the depth limit.
+  // The Lambertian hits fetched into the wave's lanes: their textures' texels, their lights other
+  // than triangles, the lanes' shading, and what it gives their paths; the lanes are then empty.
+  void shadeLanes(Wave& w, Counters& counters) const {
+    DiffuseLanes& lanes = *w.lanes;
+    if (lanes.count == 0) return;
+    counters.laneShadedHits += lanes.count;
+    for (const TexturedLane& t : w.textured) {
+      const Rgb kd = t.kd * bilinear(t.footprint);
+      lanes.kdR[t.lane] = kd.r, lanes.kdG[t.lane] = kd.g, lanes.kdB[t.lane] = kd.b;
+    }
+    sampleOtherLights(lanes, w.otherLights);
+    shadeDiffuseLanes(lanes);
+    finishDiffuseLanes(lanes, w);
+    lanes.count = 0;
+    w.textured.clear();
+    w.otherLights.clear();
+  }
+
+  // Hits that DiffuseLanes shades: Lambertian surfaces below the depth limit (every one: shade()
+  // takes the other materials).
   bool inDiffuseLane(const Path& path, const Hit& hit) const {
-    return lanesEnabled_ && hit.found() && path.bounce < opt_.maxDepth &&
-           material(hit.triangle).type == MaterialType::Diffuse;
+    return hit.found() && path.bounce < opt_.maxDepth && material(hit.triangle).type == MaterialType::Diffuse;
   }
 
   // The lane's surface data and the random numbers shade would draw, in its order.
@@ -309,20 +321,21 @@ class PathTracer {
     l.uBsdfY[k] = path.rng.uniform();
 
     // The light: an emitting triangle's data for the lanes' own sampling; any other light is
-    // sampled whole once the lane's surface point is known (sampleOtherLights).
-    const TriangleLightRecord& light = lightRecords_[s.lightDistribution.pick(l.uLight[k])];
-    l.lightIsTriangle[k] = light.isTriangle;
-    if (!light.isTriangle) {
+    // sampled whole once the lane's surface point is known (sampleOtherLights), as is the no light
+    // of a scene without one (sampleLight gives no sample then).
+    const TriangleLightRecord* light = s.lights.empty() ? nullptr : &lightRecords_[s.lightDistribution.pick(l.uLight[k])];
+    l.lightIsTriangle[k] = light && light->isTriangle;
+    if (!l.lightIsTriangle[k]) {
       otherLights.push_back(k);
       return;
     }
-    l.q0x[k] = light.q0.x, l.q0y[k] = light.q0.y, l.q0z[k] = light.q0.z;
-    l.q1x[k] = light.q1.x, l.q1y[k] = light.q1.y, l.q1z[k] = light.q1.z;
-    l.q2x[k] = light.q2.x, l.q2y[k] = light.q2.y, l.q2z[k] = light.q2.z;
-    l.lightNx[k] = light.normal.x, l.lightNy[k] = light.normal.y, l.lightNz[k] = light.normal.z;
-    l.lightArea[k] = light.area;
-    l.lightPmf[k] = light.pmf;
-    l.leR[k] = light.le.r, l.leG[k] = light.le.g, l.leB[k] = light.le.b;
+    l.q0x[k] = light->q0.x, l.q0y[k] = light->q0.y, l.q0z[k] = light->q0.z;
+    l.q1x[k] = light->q1.x, l.q1y[k] = light->q1.y, l.q1z[k] = light->q1.z;
+    l.q2x[k] = light->q2.x, l.q2y[k] = light->q2.y, l.q2z[k] = light->q2.z;
+    l.lightNx[k] = light->normal.x, l.lightNy[k] = light->normal.y, l.lightNz[k] = light->normal.z;
+    l.lightArea[k] = light->area;
+    l.lightPmf[k] = light->pmf;
+    l.leR[k] = light->le.r, l.leG[k] = light->le.g, l.leB[k] = light->le.b;
   }
 
   // Point, directional and environment lights, sampled by sampleLight at the lanes' surface points.
@@ -432,9 +445,6 @@ class PathTracer {
   const Visibility& vis_;
   const PathTraceOptions& opt_;
   std::vector<TriangleLightRecord> lightRecords_;  // by light index
-  // Lanes shade Lambertian hits when lights are combined by MIS and there is a light to sample
-  // (scenes built in code may have none).
-  const bool lanesEnabled_ = opt_.laneShading && opt_.strategy == PathStrategy::Mis && !scene_.lights.empty();
   // A hit's triangle and vertex records are prefetched when the scene's arrays outgrow a core's
   // second-level cache (1 MiB here): Sponza's shading reads then wait on memory (its fetch stage
   // is 1.5x slower without), while the Cornell box's stay cached and prefetching costs it 1%.
