@@ -11,7 +11,7 @@
 #include "lucent/methods/points/point_radiance.h"
 #include "lucent/scene/loader.h"
 #include "lucent/pipeline/shading_points.h"
-#include "methods/photonmap/photon_render.h"
+#include "methods/photonmap/photon_maps.h"
 #include "methods/photonmap/radiance_estimate.h"
 #include "methods/photonmap/sorted_grid.h"
 #include "methods/photonmap/stencil_grid.h"

@@ -14,8 +14,9 @@ Vec3 select(bool c, Vec3 a, Vec3 b) { return {c ? a.x : b.x, c ? a.y : b.y, c ? 
 bool notBlack(Rgb c) { return (c.r != 0 ? 1.0f : 0.0f) + (c.g != 0 ? 1.0f : 0.0f) + (c.b != 0 ? 1.0f : 0.0f) > 0; }
 }  // namespace
 
-LUCENT_LANE_CLONES void startCameraPaths(CameraLanes& l, uint64_t seed, const PinholeCamera& camera, bool pixelCentres) {
-  for (uint32_t k = 0; k < l.count; ++k) {
+LUCENT_LANE_CLONES void startCameraPaths(CameraLanes& l, uint32_t first, uint32_t last, uint64_t seed,
+                                         const PinholeCamera& camera, bool pixelCentres) {
+  for (uint32_t k = first; k < last; ++k) {
     Rng rng(seed, l.pixel[k], l.sample[k]);
     const Vec2 uniform = rng.uniform2();  // drawn either way: the path's later numbers do not move
     const Vec2 jitter = pixelCentres ? Vec2{0.5f, 0.5f} : uniform;

@@ -73,7 +73,9 @@ struct CameraLanes {
   alignas(64) Rng rng[kLaneSlots];
   alignas(64) float dirX[kLaneSlots], dirY[kLaneSlots], dirZ[kLaneSlots];
 };
-void startCameraPaths(CameraLanes& lanes, uint64_t seed, const PinholeCamera& camera, bool pixelCentres);
+// Lanes [first, last).
+void startCameraPaths(CameraLanes& lanes, uint32_t first, uint32_t last, uint64_t seed, const PinholeCamera& camera,
+                      bool pixelCentres);
 
 // Every lane's shading normal and frame, its light sample's shadow ray and what it brings, and the
 // cosine-distributed next direction.

@@ -97,7 +97,7 @@ size_t sceneArrayBytes(const Scene& s) {
 class PathTracer {
  public:
   PathTracer(const Scene& scene, const Visibility& vis, const PathTraceOptions& opt)
-      : scene_(scene), vis_(vis), opt_(opt), lightRecords_(scene.lights.size()) {
+      : scene_(scene), vis_(vis), opt_(opt), camera_(scene.camera), lightRecords_(scene.lights.size()) {
     for (uint32_t li = 0; li < scene.lights.size(); ++li) {
       const Light& light = scene.lights[li];
       if (light.type != LightType::Triangle) continue;
@@ -171,6 +171,11 @@ class PathTracer {
     std::vector<TexturedLane> textured;
     std::vector<uint32_t> otherLights;  // lanes whose light is not a triangle
   };
+
+  // The samples [sampleBegin, sampleEnd) of the tile's pixels, in pixel order, then sample order,
+  // in waves; added to the film in that order, so that every pixel sums its samples in sample order.
+  void renderTile(int x0, int y0, int x1, int y1, int sampleBegin, int sampleEnd, Wave& wave, Counters& counters,
+                  Film& film) const;
 
   // Advances every path of the wave to its end: closest hits for all live paths, then shading,
   // then the queued shadow rays, bounce after bounce. Each path sees the same random numbers and the
@@ -444,12 +449,65 @@ class PathTracer {
   const Scene& scene_;
   const Visibility& vis_;
   const PathTraceOptions& opt_;
+  const PinholeCamera camera_;
   std::vector<TriangleLightRecord> lightRecords_;  // by light index
   // A hit's triangle and vertex records are prefetched when the scene's arrays outgrow a core's
   // second-level cache (1 MiB here): Sponza's shading reads then wait on memory (its fetch stage
   // is 1.5x slower without), while the Cornell box's stay cached and prefetching costs it 1%.
   const bool prefetchSceneData_ = sceneArrayBytes(scene_) > (size_t(1) << 20);
 };
+
+void PathTracer::renderTile(int x0, int y0, int x1, int y1, int sampleBegin, int sampleEnd, Wave& wave,
+                            Counters& counters, Film& film) const {
+  const int64_t items = int64_t(x1 - x0) * (y1 - y0) * (sampleEnd - sampleBegin);
+  int x = x0, y = y0, sample = sampleBegin;  // of the next item
+  for (int64_t first = 0; first < items; first += kWaveSize) {
+    CameraLanes& start = *wave.camera;
+    start.count = uint32_t(std::min<int64_t>(items - first, kWaveSize));
+    for (uint32_t k = 0; k < start.count; ++k) {
+      start.pixel[k] = uint64_t(y) * uint64_t(scene_.camera.width) + uint64_t(x), start.sample[k] = uint64_t(sample);
+      start.x[k] = float(x), start.y[k] = float(y);
+      if (++sample == sampleEnd) {
+        sample = sampleBegin;
+        if (++x == x1) x = x0, ++y;
+      }
+    }
+    // The camera rays, all lanes at once, or one path at a time.
+    if (opt_.laneShading) startCameraPaths(start, 0, start.count, opt_.seed, camera_, opt_.pixelCentres);
+    else
+      for (uint32_t k = 0; k < start.count; ++k) startCameraPaths(start, k, k + 1, opt_.seed, camera_, opt_.pixelCentres);
+    wave.paths.resize(start.count);
+    for (uint32_t k = 0; k < start.count; ++k) {
+      Path& path = wave.paths[k];
+      path = Path{};
+      path.pixel = start.pixel[k];
+      path.rng = start.rng[k];
+      path.ray = {camera_.eye(), {start.dirX[k], start.dirY[k], start.dirZ[k]}};
+      path.lastPosition = path.ray.origin;
+    }
+    traceWave(wave, counters);
+    for (const Path& path : wave.paths) {
+      const PathResult& p = path.result;
+      if (!p.valid || !isFinite(p.direct + p.indirect)) {
+        ++counters.invalidSamples;
+        continue;
+      }
+      film.addSample(path.pixel, p.direct, p.indirect, p.albedo, p.normal, p.depth);
+    }
+  }
+}
+
+// The end of the next pass of samples. Without a time budget everything is one pass. With one, the
+// first pass takes one sample per pixel and each later pass as many as the remaining time allows
+// at the measured rate (no more: the returned end is sppDone). The image depends only on the
+// number of samples taken, never on how they were split into passes.
+int nextPassEnd(const PathTraceOptions& options, int sppDone, double elapsed) {
+  if (!(options.timeBudget > 0)) return options.spp;
+  if (sppDone == 0) return 1;
+  const double affordable = (options.timeBudget - elapsed) / (elapsed / sppDone);
+  if (affordable < 1) return sppDone;
+  return int(std::min<double>(options.spp, sppDone + std::min<double>(affordable, 2.0 * sppDone + 1)));
+}
 
 }  // namespace
 
@@ -459,11 +517,8 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
   const int width = scene.camera.width, height = scene.camera.height;
   // Every pixel is owned by one tile, and its samples are added in sample order.
   Film film(width, height, Film::Sums::PerSample, {options.layers, false});
-
   const PathTracer tracer(scene, visibility, options);
-  const PinholeCamera camera(scene.camera);
-  const int tilesX = (width + options.tileSize - 1) / options.tileSize;
-  const int tilesY = (height + options.tileSize - 1) / options.tileSize;
+  const int tile = options.tileSize, tilesX = (width + tile - 1) / tile, tilesY = (height + tile - 1) / tile;
   tbb::enumerable_thread_specific<Counters> counters;
   tbb::enumerable_thread_specific<PathTracer::Wave> waves;
   std::atomic<uint64_t> pixelSamplesDone{0};
@@ -471,72 +526,18 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
 
   Stopwatch clock;
   int sppDone = 0;
-  while (sppDone < options.spp) {
-    // Without a time budget everything is one pass. With one, the first pass takes one sample per
-    // pixel and each later pass as many as the remaining time allows at the measured rate. The
-    // image depends only on the number of samples taken, never on how they were split into passes.
-    int passEnd = options.spp;
-    if (options.timeBudget > 0) {
-      const double elapsed = clock.seconds(), perSample = sppDone > 0 ? elapsed / sppDone : 0;
-      const double affordable = sppDone > 0 ? (options.timeBudget - elapsed) / perSample : 1;
-      if (affordable < 1) break;
-      passEnd = int(std::min<double>(options.spp, sppDone + std::min<double>(affordable, 2.0 * sppDone + 1)));
-    }
+  for (int passEnd; sppDone < options.spp && (passEnd = nextPassEnd(options, sppDone, clock.seconds())) > sppDone;
+       sppDone = passEnd) {
     tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& r) {
       flushDenormals();  // every thread computes alike, whoever created it
-      Counters& local = counters.local();
-      PathTracer::Wave& wave = waves.local();
-      for (int tile = r.begin(); tile != r.end(); ++tile) {
-        const int x0 = (tile % tilesX) * options.tileSize, y0 = (tile / tilesX) * options.tileSize;
-        const int x1 = std::min(width, x0 + options.tileSize), y1 = std::min(height, y0 + options.tileSize);
-        // The tile's (pixel, sample) pairs in pixel order, then sample order, in waves; results are
-        // added in that order, so every pixel sums its samples in sample order.
-        const int64_t items = int64_t(x1 - x0) * (y1 - y0) * (passEnd - sppDone);
-        int x = x0, y = y0, sample = sppDone;  // of the next item
-        for (int64_t first = 0; first < items; first += kWaveSize) {
-          const int64_t last = std::min(items, first + kWaveSize);
-          wave.paths.resize(size_t(last - first));
-          CameraLanes& start = *wave.camera;
-          start.count = uint32_t(last - first);
-          for (uint32_t k = 0; k < start.count; ++k) {
-            start.pixel[k] = uint64_t(y) * width + x, start.sample[k] = uint64_t(sample);
-            start.x[k] = float(x), start.y[k] = float(y);
-            if (++sample == passEnd) {
-              sample = sppDone;
-              if (++x == x1) x = x0, ++y;
-            }
-          }
-          if (options.laneShading) startCameraPaths(start, options.seed, camera, options.pixelCentres);
-          for (uint32_t k = 0; k < start.count; ++k) {
-            Path& path = wave.paths[k];
-            path = Path{};
-            path.pixel = start.pixel[k];
-            if (options.laneShading) {
-              path.rng = start.rng[k];
-              path.ray = {camera.eye(), {start.dirX[k], start.dirY[k], start.dirZ[k]}};
-            } else {  // what startCameraPaths computes, one path at a time
-              path.rng = Rng(options.seed, path.pixel, start.sample[k]);
-              const Vec2 uniform = path.rng.uniform2();
-              const Vec2 jitter = options.pixelCentres ? Vec2{0.5f, 0.5f} : uniform;
-              path.ray = camera.generate(start.x[k] + jitter.x, start.y[k] + jitter.y);
-            }
-            path.lastPosition = path.ray.origin;
-          }
-          tracer.traceWave(wave, local);
-          for (const Path& path : wave.paths) {
-            const PathResult& p = path.result;
-            if (!p.valid || !isFinite(p.direct + p.indirect)) {
-              ++local.invalidSamples;
-              continue;
-            }
-            film.addSample(path.pixel, p.direct, p.indirect, p.albedo, p.normal, p.depth);
-          }
-        }
+      for (int t = r.begin(); t != r.end(); ++t) {
+        const int x0 = (t % tilesX) * tile, y0 = (t / tilesX) * tile;
+        const int x1 = std::min(width, x0 + tile), y1 = std::min(height, y0 + tile);
+        tracer.renderTile(x0, y0, x1, y1, sppDone, passEnd, waves.local(), counters.local(), film);
         const uint64_t done = pixelSamplesDone += uint64_t(x1 - x0) * (y1 - y0) * (passEnd - sppDone);
         if (progress) progress(std::min(1.0, done / totalPixelSamples));
       }
     });
-    sppDone = passEnd;
   }
 
   RenderOutput out;

@@ -20,7 +20,8 @@
 #include "lucent/core/sampling.h"
 #include "lucent/scene/surface.h"
 #include "estimate_by_cell.h"
-#include "photon_render.h"
+#include "band_stages.h"
+#include "photon_maps.h"
 
 namespace lucent {
 namespace {

@@ -8,7 +8,8 @@
 
 #include "lucent/core/parallel.h"
 #include "estimate_by_cell.h"
-#include "photon_render.h"
+#include "band_stages.h"
+#include "photon_maps.h"
 
 namespace lucent {
 

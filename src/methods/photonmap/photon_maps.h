@@ -1,15 +1,11 @@
-// What the two photon-mapping renderers share: their photon maps (traced, selected and built into
-// the chosen structure), the dispatch to one instantiation per map type, and the image assembly.
+// The photon maps of the two photon-mapping renderers: traced, selected and built into the chosen
+// structure, and the dispatch to one instantiation of a stage per map type.
 #pragma once
 #include <span>
 #include <variant>
 
 #include "lucent/methods/photons/kd_tree.h"
 #include "methods/photonmap/photon_mapping.h"
-#include "lucent/pipeline/direct_light.h"
-#include "lucent/pipeline/dumps.h"
-#include "lucent/pipeline/film.h"
-#include "lucent/pipeline/shading_points.h"
 #include "radiance_estimate.h"
 #include "sorted_grid.h"
 #include "stencil_grid.h"
@@ -65,34 +61,8 @@ void withPhotonMaps(const RenderPhotonMaps& maps, PhotonMapKind kind, F&& f) {
   }
 }
 
-// The first stage of both renderers for one band of rows: eye rays through mirrors and glass to
-// their shading points, and the direct light at those points by shadow rays.
-struct BandShadingPoints {
-  EyePaths eye;
-  PointRadiance radiance;
-};
-BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
-                            std::pair<int, int> band, uint64_t& shadowRays);
-
-void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& counters);
-
-// Dumps (docs/dump-format.md) into options.dumpDirectory, when it is set: a map's arrays as
-// "<prefix>.<array>" (prefix "global" or "caustic"), and a band's shading points and the radiance
-// each part of the estimate gives them as "band<N>.<array>".
+// Dumps (docs/dump-format.md) a map's arrays as "<prefix>.<array>" (prefix "global" or "caustic")
+// into options.dumpDirectory, when it is set.
 void dumpPhotonMap(const PhotonMapOptions& options, const std::string& prefix, const BuiltPhotonMap& map);
-void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance);
-
-// What both renderers add up over the bands, and report the same way: the paper's Table 1 stages
-// trace_rays and radiance_estimate, and the ray, point and estimate counters.
-struct RenderTotals {
-  double traceSeconds = 0, estimateSeconds = 0;
-  uint64_t eyeRays = 0, shadowRays = 0, points = 0, invalid = 0;  // invalid: camera paths and shading points dropped
-  void addBand(const EyePaths& eye) {
-    eyeRays += eye.rays;
-    points += eye.points.size();
-    invalid += eye.invalid;
-  }
-  void report(RenderStats& stats, const EstimateCounters& global, const EstimateCounters& caustic) const;
-};
 
 }  // namespace lucent

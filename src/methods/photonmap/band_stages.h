@@ -1,0 +1,44 @@
+// What purcell and pmfg do alike for each band of image rows: the shading points and their direct
+// light, the band's dumps, and the totals both report the same way (the paper's Table 1 stages).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <utility>
+
+#include "lucent/core/stats.h"
+#include "lucent/methods/photons/photon_estimate.h"
+#include "lucent/pipeline/film.h"
+#include "lucent/pipeline/shading_points.h"
+#include "methods/photonmap/photon_mapping.h"
+
+namespace lucent {
+
+// The first stage of both renderers for one band of rows: eye rays through mirrors and glass to
+// their shading points, and the direct light at those points by shadow rays.
+struct BandShadingPoints {
+  EyePaths eye;
+  PointRadiance radiance;
+};
+BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
+                            std::pair<int, int> band, uint64_t& shadowRays);
+
+void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& counters);
+
+// Dumps (docs/dump-format.md) a band's shading points and the radiance each part of the estimate
+// gives them as "band<N>.<array>" into options.dumpDirectory, when it is set.
+void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance);
+
+// What both renderers add up over the bands, and report the same way: the paper's Table 1 stages
+// trace_rays and radiance_estimate, and the ray, point and estimate counters.
+struct RenderTotals {
+  double traceSeconds = 0, estimateSeconds = 0;
+  uint64_t eyeRays = 0, shadowRays = 0, points = 0, invalid = 0;  // invalid: camera paths and shading points dropped
+  void addBand(const EyePaths& eye) {
+    eyeRays += eye.rays;
+    points += eye.points.size();
+    invalid += eye.invalid;
+  }
+  void report(RenderStats& stats, const EstimateCounters& global, const EstimateCounters& caustic) const;
+};
+
+}  // namespace lucent
