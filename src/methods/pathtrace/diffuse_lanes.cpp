@@ -79,14 +79,18 @@ LUCENT_LANE_CLONES void shadeDiffuseLanes(DiffuseLanes& l) {
     const Rgb f{bothAbove == 0 ? 0.0f : kd.r * kInvPi, bothAbove == 0 ? 0.0f : kd.g * kInvPi,
                 bothAbove == 0 ? 0.0f : kd.b * kInvPi};
     const float lambertPdf = bothAbove == 0 ? 0.0f : cosineHemispherePdf(wiLocal.z);
+    // Point and directional lights cannot be hit: weight 1, as with light sampling alone. BSDF
+    // sampling alone samples only them (a pdf of 0 queues no shadow ray). Selects chained on one
+    // comparison each, for the vectorizer.
     const float mis = powerHeuristic(pdf, lambertPdf);
-    const bool delta = onTriangle ? false : l.lightDelta[k] != 0;  // point and directional lights
-    const float w = delta ? 1.0f : lightOnly ? 1.0f : mis;          // they cannot be hit: weight 1
+    const float misWeight = lightOnly ? 1.0f : mis;
+    const float w = onTriangle ? misWeight : l.lightDelta[k] != 0 ? 1.0f : misWeight;
+    const float deltaLight = onTriangle ? 0.0f : l.lightDelta[k] != 0 ? 1.0f : 0.0f;
+    const float queuedPdf = pdf * (bsdfOnly ? deltaLight : 1.0f);
     const Rgb direct = f * le * (wiLocal.z * w / pdf);
-    // sampleDirect's tests, in its order; BSDF sampling alone samples only the lights it cannot hit.
-    l.shadowQueued[k] = !(pdf > 0)                      ? 0
+    // sampleDirect's tests, in its order.
+    l.shadowQueued[k] = !(queuedPdf > 0)                ? 0
                         : !notBlack(le)                 ? 0
-                        : bsdfOnly && !delta            ? 0
                         : wiLocal.z <= 0                ? 0
                         : dot(wi, ng) * dot(n, ng) <= 0 ? 0
                         : notBlack(f)                   ? 1
