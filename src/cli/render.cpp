@@ -11,6 +11,7 @@
 #include "cli/commands.h"
 #include "cli/method_options.h"
 #include "cli/progress.h"
+#include "lucent/core/lane_clones.h"
 #include "lucent/core/parallel.h"
 #include "lucent/methods/methods.h"
 #include "lucent/scene/loader.h"
@@ -41,7 +42,8 @@ const RenderFlag kRenderFlags[] = {
     {"--threads", "N", "worker threads (0: all cores; default 0)"},
     {"--resolution", "WxH", "override the camera's resolution"},
     {"--robust", "", "Embree's robust traversal (watertight at edges)"},
-    {"--embree-isa", "ISA", "Embree's kernels for sse4.2, avx, avx2 or avx512 (default: the CPU's best)"},
+    {"--isa", "ISA", "run as a CPU of sse4.2, avx, avx2 or avx512 would: Embree's kernels and the lane loops "
+                     "(default: this CPU's best)"},
     {"-q, --quiet", "", "no progress bar or warnings"},
     {"-h, --help", "", "this help, with the options of --method NAME"},
 };
@@ -67,7 +69,7 @@ RenderArgs parseArgs(const std::vector<std::string>& args) {
     else if (key == "--png") a.png = value();
     else if (key == "--method") a.method = value();
     else if (key == "--resolution") a.resolution = value();
-    else if (key == "--embree-isa") a.isa = value();
+    else if (key == "--isa") a.isa = value();
     else if (key == "--threads") {
       const std::string text = value();
       a.threads = int(parseOptionInteger("threads", text, 0, 4096));
@@ -158,6 +160,20 @@ int runRender(const RenderArgs& a) {
     scene.contentHash = sceneContentHash(scene);
   }
 
+  // Embree's kernels and the lane loops of the instruction set asked for (SSE 4.2 and AVX have
+  // the baseline lane loops).
+  if (!a.isa.empty() && a.isa != "sse4.2" && a.isa != "avx" && a.isa != "avx2" && a.isa != "avx512")
+    throw std::invalid_argument("--isa '" + a.isa + "': expected sse4.2, avx, avx2 or avx512");
+  if (!a.isa.empty()) {
+    const std::vector<std::string> runs = supportedEmbreeIsas();
+    if (std::find(runs.begin(), runs.end(), a.isa) == runs.end()) {
+      std::string list;
+      for (const std::string& isa : runs) list += (list.empty() ? "" : ", ") + isa;
+      throw std::invalid_argument("--isa " + a.isa + ": this CPU does not run it (it runs " + list + ")");
+    }
+  }
+  if (!a.isa.empty())
+    setLaneIsa(a.isa == "avx512" ? LaneIsa::Avx512 : a.isa == "avx2" ? LaneIsa::Avx2 : LaneIsa::Baseline);
   ParallelScope parallel(a.threads);
   Stopwatch bvhClock;
   VisibilityOptions visOptions;
@@ -190,6 +206,7 @@ int runRender(const RenderArgs& a) {
                         {"lucent:version", LUCENT_VERSION},
                         {"lucent:embree_version", Visibility::embreeVersion()},
                         {"lucent:embree_isa", visibility.isa()},
+                        {"lucent:lane_isa", laneIsaName(laneIsa())},
                         {"lucent:scene", fs::absolute(a.scene).lexically_normal().string()},
                         {"lucent:scene_hash", hex(scene.contentHash)},
                         {"lucent:threads", std::to_string(parallel.threads())}};
@@ -205,6 +222,7 @@ int runRender(const RenderArgs& a) {
   summary["threads"] = parallel.threads();
   summary["robust"] = a.robust;
   summary["embree_isa"] = visibility.isa();
+  summary["lane_isa"] = laneIsaName(laneIsa());
   summary["seconds"] = total.seconds();
   for (const auto& [name, seconds] : stats.stageSeconds) summary["stages"][name] = seconds;
   for (const auto& [name, value] : stats.counters) summary["counters"][name] = value;

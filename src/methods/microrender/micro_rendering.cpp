@@ -49,7 +49,7 @@ struct PackedNodes {
 };
 
 // One listed disc against every pixel's ray: the innermost loop of ray casting, over structure of
-// arrays with selects, so that it vectorizes (LUCENT_LANE_CLONES).
+// arrays with selects, so that it vectorizes (LUCENT_LANE_LOOP).
 // Rays are cast in tiles of kRayTile x kRayTile pixels, each bounded by a cone of directions.
 constexpr int kRayTile = 4;
 constexpr int kMaxRayTiles = (kMaxMicroBufferSide + kRayTile - 1) / kRayTile * ((kMaxMicroBufferSide + kRayTile - 1) / kRayTile);
@@ -61,9 +61,8 @@ struct DiscForRays {
   float height;      // of the gather point above the disc's plane
   float radius2, tMin;
 };
-LUCENT_LANE_CLONES void intersectDisc(
-    const DiscForRays disc, uint32_t index, const float* dx, const float* dy, const float* dz, size_t count,
-    float* nearestT, uint32_t* nearestNode) {
+LUCENT_LANE_LOOP(void, intersectDisc, (const DiscForRays disc, uint32_t index, const float* dx, const float* dy, const float* dz,
+                  size_t count, float* nearestT, uint32_t* nearestNode)) {
   for (size_t k = 0; k < count; ++k) {
     const float cosine = dx[k] * disc.ax + dy[k] * disc.ay + dz[k] * disc.az;  // < 0 towards the disc
     const float t = disc.height / -cosine;
@@ -73,6 +72,8 @@ LUCENT_LANE_CLONES void intersectDisc(
     nearestNode[k] = hit ? index : nearestNode[k];
   }
 }
+LUCENT_LANE_VERSIONS(void, intersectDisc, (const DiscForRays disc, uint32_t index, const float* dx, const float* dy, const float* dz,
+                  size_t count, float* nearestT, uint32_t* nearestNode), (disc, index, dx, dy, dz, count, nearestT, nearestNode))
 
 // The packet's gather points as SIMD lanes (structure of arrays), and what the traversal's tests
 // read of their mappings: every lane's inverse CDFs (M^-1 and C^-1 of 2.3; an identity table of one
@@ -157,7 +158,7 @@ struct PixelTables {
 };
 
 // 2.2 "Point Hierarchy Cut", one node against every lane, as loops over the lanes that GCC
-// vectorizes (selects, no branches; LUCENT_LANE_CLONES). The tests, in their order of precedence:
+// vectorizes (selects, no branches; LUCENT_LANE_LOOP). The tests, in their order of precedence:
 //  - below the tangent plane altogether: skip;
 //  - a leaf is a disc in its triangle's plane: it faces p exactly when p lies in front of the plane
 //    (coneSin is the slack of a quantized normal, 0 for float nodes); its solid angle is the projected
@@ -229,19 +230,21 @@ struct PixelTables {
 
 // The lanes' results are returned by value: stores to the return slot cannot alias the gathered
 // loads, so the loops vectorize.
-LUCENT_LANE_CLONES LaneResults classifyLeaf(const PacketLanes& __restrict L, const LaneNode& __restrict n) {
+LUCENT_LANE_LOOP(LaneResults, classifyLeaf, (const PacketLanes& __restrict L, const LaneNode& __restrict n)) {
   LaneResults r;
   const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
   for (int l = 0; l < kGatherPacket; ++l) classifyLeafLane(L, t, n, l, r);
   return r;
 }
+LUCENT_LANE_VERSIONS(LaneResults, classifyLeaf, (const PacketLanes& __restrict L, const LaneNode& __restrict n), (L, n))
 
-LUCENT_LANE_CLONES LaneResults classifyInterior(const PacketLanes& __restrict L, const LaneNode& __restrict n) {
+LUCENT_LANE_LOOP(LaneResults, classifyInterior, (const PacketLanes& __restrict L, const LaneNode& __restrict n)) {
   LaneResults r;
   const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
   for (int l = 0; l < kGatherPacket; ++l) classifyInteriorLane(L, t, n, l, r);
   return r;
 }
+LUCENT_LANE_VERSIONS(LaneResults, classifyInterior, (const PacketLanes& __restrict L, const LaneNode& __restrict n), (L, n))
 
 // The active lanes alone, one after the other: a packet's lanes part ways near their own gather
 // points, where a quarter of the nodes are visited by one lane, and testing all sixteen costs more

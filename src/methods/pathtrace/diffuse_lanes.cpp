@@ -14,8 +14,8 @@ Vec3 select(bool c, Vec3 a, Vec3 b) { return {c ? a.x : b.x, c ? a.y : b.y, c ? 
 bool notBlack(Rgb c) { return (c.r != 0 ? 1.0f : 0.0f) + (c.g != 0 ? 1.0f : 0.0f) + (c.b != 0 ? 1.0f : 0.0f) > 0; }
 }  // namespace
 
-LUCENT_LANE_CLONES void startCameraPaths(CameraLanes& l, uint32_t first, uint32_t last, uint64_t seed,
-                                         const PinholeCamera& camera, bool pixelCentres) {
+LUCENT_LANE_LOOP(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32_t last, uint64_t seed, const PinholeCamera& camera,
+                  bool pixelCentres)) {
   for (uint32_t k = first; k < last; ++k) {
     Rng rng(seed, l.pixel[k], l.sample[k]);
     const Vec2 uniform = rng.uniform2();  // drawn either way: the path's later numbers do not move
@@ -25,11 +25,13 @@ LUCENT_LANE_CLONES void startCameraPaths(CameraLanes& l, uint32_t first, uint32_
     l.dirX[k] = direction.x, l.dirY[k] = direction.y, l.dirZ[k] = direction.z;
   }
 }
+LUCENT_LANE_VERSIONS(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32_t last, uint64_t seed, const PinholeCamera& camera,
+                  bool pixelCentres), (l, first, last, seed, camera, pixelCentres))
 
 // The rest of surfaceAt (the shading normal), the start of PathTracer::shade for a two-sided
 // material, then next-event estimation as PathTracer::sampleDirect (the emitting triangle's sample
 // as sampleLight takes it) and sampleBsdf's Lambertian case, with shadowRay and offsetOrigin.
-LUCENT_LANE_CLONES void shadeDiffuseLanes(DiffuseLanes& l) {
+LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l)) {
   const bool lightOnly = l.strategy == PathStrategy::LightSampling, bsdfOnly = l.strategy == PathStrategy::BsdfSampling;
   for (uint32_t k = 0; k < l.count; ++k) {
     const Vec3 ng = Vec3{l.ngx[k], l.ngy[k], l.ngz[k]};
@@ -118,5 +120,6 @@ LUCENT_LANE_CLONES void shadeDiffuseLanes(DiffuseLanes& l) {
     store(wiWorld, l.nextDx, l.nextDy, l.nextDz, k);
   }
 }
+LUCENT_LANE_VERSIONS(void, shadeDiffuseLanes, (DiffuseLanes& l), (l))
 
 }  // namespace lucent

@@ -110,8 +110,8 @@ LUCENT_LANE_HELPER Block block(const PhotonColumns& c, uint32_t first, Ints vali
 
 }  // namespace
 
-LUCENT_LANE_CLONES void sumPhotonRun(const PhotonColumns& c, uint32_t begin, uint32_t end, const SurfaceSide& side,
-                                     KnnGridSearch& s, PhotonLaneSums& sums) {
+LUCENT_LANE_LOOP(void, sumPhotonRun, (const PhotonColumns& c, uint32_t begin, uint32_t end, const SurfaceSide& side, KnnGridSearch& s,
+                  PhotonLaneSums& sums)) {
   const Query q(s.position, side);
   const uint32_t examinedBefore = s.photonsExamined;
   uint32_t i = begin;
@@ -186,6 +186,8 @@ LUCENT_LANE_CLONES void sumPhotonRun(const PhotonColumns& c, uint32_t begin, uin
   }
   s.photonsExamined += end - begin;
 }
+LUCENT_LANE_VERSIONS(void, sumPhotonRun, (const PhotonColumns& c, uint32_t begin, uint32_t end, const SurfaceSide& side, KnnGridSearch& s,
+                  PhotonLaneSums& sums), (c, begin, end, side, s, sums))
 
 void resizeColumns(PhotonColumns& columns, uint32_t count) {
   for (UninitializedVector<float>* column :
@@ -206,8 +208,8 @@ void copyColumns(const PhotonColumns& from, uint32_t first, uint32_t count, Phot
   copy(from.r, to.r), copy(from.g, to.g), copy(from.b, to.b);
 }
 
-LUCENT_LANE_CLONES GrowingRadius growingRadius(const PhotonColumns& c, uint32_t offered, Vec3 q, const SurfaceSide& side,
-                                               float maxRadius2, uint32_t k) {
+LUCENT_LANE_LOOP(GrowingRadius, growingRadius, (const PhotonColumns& c, uint32_t offered, Vec3 q, const SurfaceSide& side, float maxRadius2,
+                  uint32_t k)) {
   const Query query(q, side);
   const Floats limit2 = broadcast(maxRadius2);
   GrowingRadius g;
@@ -248,9 +250,11 @@ LUCENT_LANE_CLONES GrowingRadius growingRadius(const PhotonColumns& c, uint32_t 
   if (blk.lights[g.farthest - at]) g.share = Rgb(c.r[g.farthest], c.g[g.farthest], c.b[g.farthest]);
   return g;
 }
+LUCENT_LANE_VERSIONS(GrowingRadius, growingRadius, (const PhotonColumns& c, uint32_t offered, Vec3 q, const SurfaceSide& side, float maxRadius2,
+                  uint32_t k), (c, offered, q, side, maxRadius2, k))
 
-LUCENT_LANE_CLONES SphereSum sumWithinRadius(const PhotonColumns& c, std::span<const ColumnRun> runs, Vec3 q,
-                                             const SurfaceSide& side, float radius2) {
+LUCENT_LANE_LOOP(SphereSum, sumWithinRadius, (const PhotonColumns& c, std::span<const ColumnRun> runs, Vec3 q, const SurfaceSide& side,
+                  float radius2)) {
   const Query query(q, side);
   const Floats r2 = broadcast(radius2);
   Floats r = {}, g = {}, b = {}, farthest = broadcast(-1.0f);
@@ -277,6 +281,8 @@ LUCENT_LANE_CLONES SphereSum sumWithinRadius(const PhotonColumns& c, std::span<c
   s.found = uint32_t(sum(found)), s.used = uint32_t(sum(used));
   return s;
 }
+LUCENT_LANE_VERSIONS(SphereSum, sumWithinRadius, (const PhotonColumns& c, std::span<const ColumnRun> runs, Vec3 q, const SurfaceSide& side,
+                  float radius2), (c, runs, q, side, radius2))
 
 PhotonRunTotals photonRunTotals(const PhotonLaneSums& sums) {
   PhotonRunTotals t;
