@@ -6,8 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/build.sh > /dev/null
-scenes=(scenes/cornell-box.json)
-if [ -f ../shared/scenes/sponza-dabrovic/sponza.obj ]; then scenes+=(scenes/sponza.json); else echo "Sponza not found beside the repository; Cornell box only" >&2; fi
+scenes=(scenes/cornell-box.json scenes/sponza.json)
 for scene in "${scenes[@]}"; do
   build/lucent_bench_points "$scene" --min-log2 "${MIN_LOG2:-16}" --max-log2 "${MAX_LOG2:-21}" \
     --threads "${THREADS:-2}" --repeats "${REPEATS:-3}" ${NO_QUALITY:+--no-quality}
