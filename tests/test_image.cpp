@@ -313,6 +313,13 @@ TEST_CASE("lucent compare reports metrics and exits by threshold") {
     CHECK(r.status == 0);
     CHECK(nlohmann::json::parse(r.output)["value"].get<double>() < 0.005);
   }
+  SECTION("a heatmap that would overwrite an image compared is refused") {
+    const auto before = fs::last_write_time(dir / "ref.exr");
+    const test::CliRun r = runLucent("compare " + files + " --heatmap " + quoted(dir / "ref.exr"));
+    CHECK(r.status == 2);
+    CHECK_THAT(r.output, Catch::Contains("--heatmap"));
+    CHECK(fs::last_write_time(dir / "ref.exr") == before);
+  }
   SECTION("a device is refused, not read for ever") {
     const test::CliRun r = runLucent("compare /dev/zero " + quoted(dir / "ref.exr"));
     CHECK(r.status == 2);

@@ -63,7 +63,9 @@ TEST_CASE("Every instruction set's Embree kernels render every method's image al
   REQUIRE(isas.size() >= 2);
   for (const bool robust : {false, true})
     for (auto [method, values] : kRenders) {
-      const Visibility native(scene, {.robust = robust});
+      VisibilityOptions nativeOptions;
+      nativeOptions.robust = robust;
+      const Visibility native(scene, nativeOptions);
       const Image reference = renderingMethod(method).render(scene, native, values).image;
       values.emplace_back("seed", "1");
       const double noise = compareImages(renderingMethod(method).render(scene, native, values).image, reference).overall.relmse;

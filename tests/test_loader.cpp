@@ -37,6 +37,7 @@ const std::vector<BadCase> kBadCases = {
     {"obj-truncated-face", {"obj-truncated-face/mesh.obj:14:", "at least 3 vertices"}},
     {"obj-missing", {"obj-missing/scene.json", "meshes[0].obj", "nothere.obj", "not found"}},
     {"obj-directory", {"obj-directory/scene.json", "meshes[0].obj", "not a regular file"}},
+    {"obj-symlink-loop", {"obj-symlink-loop/scene.json", "meshes[0].obj", "loop.obj", "symbolic links"}},
     {"obj-nan-vertex", {"obj-nan-vertex/mesh.obj:3:", "non-finite"}},
     {"obj-inf-vertex", {"obj-inf-vertex/mesh.obj:4:", "non-finite"}},
     {"obj-overflow-vertex", {"obj-overflow-vertex/mesh.obj:4:", "'1e39' is out of range"}},
@@ -61,6 +62,7 @@ const std::vector<BadCase> kBadCases = {
     {"mtl-emission-overflow", {"mtl-emission-overflow/mesh.mtl:6:", "exceeds 1e15"}},
     // JSON syntax and structure
     {"json-malformed", {"json-malformed/scene.json", "invalid JSON", "line 3"}},
+    {"json-number-overflow", {"json-number-overflow/scene.json", "invalid JSON", "number overflow", "1e400"}},
     {"json-not-object", {"json-not-object/scene.json", "top level: expected an object"}},
     {"json-unknown-key", {"json-unknown-key/scene.json", ": shadows: unknown key"}},
     {"json-wrong-type", {"json-wrong-type/scene.json", "camera.fov_y: expected a number"}},

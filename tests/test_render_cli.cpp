@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "lucent/image/image.h"
@@ -152,7 +153,10 @@ TEST_CASE("render: impossible photon-mapping options are rejected with a message
            {"--method purcell --gather-rays 16", "--gather-rays"},
            {"--method pt --photons 1000", "--photons"},
            {"--method pmfg --time-budget 2", "--time-budget"},
-           {"--method pmfg --grid-resolution 25x25", "--grid-resolution"}}) {
+           {"--method pmfg --grid-resolution 25x25", "--grid-resolution"},
+           // Searches that would read billions of cells (they ran for hours) are refused at once.
+           {"--method purcell --map hash --cell-size 1e-5", "--cell-size"},
+           {"--method purcell --map hash --grid-resolution 2000x2000x2000 --max-radius 100", "--grid-resolution"}}) {
     const test::CliRun r = runLucent("render " + kScene + " " + args + " --resolution 8x8 --quiet -o " + exr);
     INFO(args << ": " << r.output);
     REQUIRE(r.status == 1);
@@ -234,4 +238,58 @@ TEST_CASE("render: impossible micro options are rejected with a message and no o
     REQUIRE(r.output.find(message) != std::string::npos);
     REQUIRE(dir.entries().empty());
   }
+}
+
+TEST_CASE("render writes its outputs as one and touches no other file", "[cli][render]") {
+  const test::TempDir dir("render-cli");
+  // A scene beside its own environment map.
+  Image sky(4, 2, {"R", "G", "B"});
+  for (float& v : sky.pixels()) v = 0.5f;
+  writeExr(sky, dir / "sky.exr");
+  std::ofstream(dir / "scene.json") << R"({"camera": {"eye": [0, 0.5, 3], "look_at": [0, 0.5, 0], "up": [0, 1, 0],
+    "fov_y": 45, "resolution": [8, 8]}, "meshes": [{"obj": ")" LUCENT_SOURCE_DIR R"(/tests/data/good/base/base.obj"}],
+    "lights": [{"type": "environment", "map": "sky.exr"}]})";
+  const std::string scene = test::quoted(dir / "scene.json");
+  const auto skyBefore = fs::last_write_time(dir / "sky.exr");
+  SECTION("an output that is one of the scene's files is refused") {
+    const test::CliRun r = runLucent("render " + scene + " --spp 1 --quiet -o " + test::quoted(dir / "sky.exr"));
+    CHECK(r.status == 1);
+    CHECK_THAT(r.output, Catch::Contains("is a file the scene is read from"));
+    CHECK(fs::last_write_time(dir / "sky.exr") == skyBefore);
+    const test::CliRun same = runLucent("render " + scene + " --spp 1 --quiet -o " + test::quoted(dir / "a.exr") +
+                                        " --png " + test::quoted(dir / "scene.json"));
+    CHECK(same.status == 1);
+  }
+  SECTION("a PNG that cannot be written leaves no EXR and no temporary file") {
+    fs::create_directory(dir / "out.png");  // a directory: the PNG cannot take its place
+    const test::CliRun r = runLucent("render " + scene + " --spp 1 --quiet -o " + test::quoted(dir / "out.exr") +
+                                     " --png " + test::quoted(dir / "out.png"));
+    INFO(r.output);
+    CHECK(r.status == 1);
+    CHECK_FALSE(fs::exists(dir / "out.exr"));
+    for (const std::string& name : dir.entries()) CHECK(name.find(".tmp-") == std::string::npos);
+  }
+  SECTION("temporary files that a killed render left are removed; a running process's are kept") {
+    std::ofstream(dir / ".out.tmp-999999999-0.exr") << "half an image";  // no such process
+    const std::string alive = ".out.tmp-1-0.exr";                           // pid 1 runs
+    std::ofstream(dir / alive) << "being written";
+    const test::CliRun r = runLucent("render " + scene + " --spp 1 --quiet -o " + test::quoted(dir / "out.exr"));
+    INFO(r.output);
+    CHECK(r.status == 0);
+    CHECK_FALSE(fs::exists(dir / ".out.tmp-999999999-0.exr"));
+    CHECK(fs::exists(dir / alive));
+    CHECK(fs::exists(dir / "out.exr"));
+  }
+}
+
+TEST_CASE("Every command's bad arguments exit 1, compare's 2, and help 0", "[cli]") {
+  CHECK(runLucent("--help").status == 0);
+  CHECK(runLucent("render --help").status == 0);
+  CHECK(runLucent("methods --bogus").status == 1);
+  CHECK(runLucent("compare a.exr").status == 2);
+  CHECK(runLucent("compare a.exr b.exr --metric psnr").status == 2);
+  CHECK(runLucent("compare a.exr b.exr --max-error -1").status == 2);
+  CHECK(runLucent("render " + kScene + " --spp x -o x.exr").status == 1);
+  CHECK(runLucent("render " + kScene + " --threads -2 -o x.exr").status == 1);
+  CHECK(runLucent("nonsense").status == 1);
 }

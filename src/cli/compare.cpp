@@ -3,6 +3,7 @@
 // Exit status: 0 passed (or no threshold), 1 the chosen metric exceeds --max-error or the image
 // has NaN or infinite values, 2 error (the reference's NaN or infinite values among them).
 // 8-bit images (PNG, JPEG) are decoded from sRGB to linear before they are compared.
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -26,6 +27,13 @@ nlohmann::ordered_json metricsJson(const ChannelError& e) {
 
 int runCompare(const CompareOptions& opt) {
   const ErrorMetric metric = parseErrorMetric(opt.metric);
+  if (!opt.heatmap.empty()) {
+    std::error_code ec;
+    const auto heatmap = std::filesystem::weakly_canonical(opt.heatmap, ec);
+    for (const std::string& input : {opt.image, opt.reference})
+      if (heatmap == std::filesystem::weakly_canonical(input, ec))
+        throw std::invalid_argument("--heatmap '" + opt.heatmap + "' is one of the images compared");
+  }
   const Image image = readLinearImage(opt.image);
   const Image reference = readLinearImage(opt.reference);
   ImageError error;

@@ -1,5 +1,6 @@
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include "cli/commands.h"
 #include "lucent/core/parallel.h"
@@ -15,7 +16,11 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // CLI11 prints the message (or the help); the status is Lucent's: 0 for help, 2 for a
+    // compare's bad input, 1 for any other command's.
+    const int status = app.exit(e);
+    if (status == 0) return 0;
+    return argc > 1 && std::string(argv[1]) == "compare" ? 2 : 1;
   } catch (const std::exception& e) {
     std::cerr << "lucent: error: " << e.what() << "\n";
     return 1;

@@ -40,7 +40,11 @@ std::string valuePlaceholder(const OptionSpec& spec) {
 
 }  // namespace
 
-std::string flagOf(const std::string& option) { return OptionSpec{option}.flag(); }
+std::string flagOf(const std::string& option) {
+  OptionSpec spec;
+  spec.name = option;
+  return spec.flag();
+}
 
 std::pair<std::string, std::string> methodOptionArg(const std::string& key, const std::optional<std::string>& inlineValue,
                                                     const std::function<std::string()>& nextValue) {

@@ -99,6 +99,15 @@ void checkOutputPath(const std::string& path, const std::string& extension, cons
   if (!fs::is_directory(dir)) throw std::invalid_argument(flag + ": directory '" + dir.string() + "' does not exist");
 }
 
+// An output must not be one of the scene's inputs (an environment map, a texture).
+void refuseToOverwrite(const std::vector<std::string>& inputs, const std::string& output, const std::string& flag) {
+  std::error_code ec;
+  const fs::path out = fs::weakly_canonical(output, ec);
+  for (const std::string& input : inputs)
+    if (out == fs::weakly_canonical(input, ec))
+      throw std::invalid_argument(flag + " '" + output + "' is a file the scene is read from; choose another output");
+}
+
 void printHelp(const Method& method) {
   std::cout << "Usage: lucent render SCENE.json [--method NAME] -o OUT.exr [options]\n\nRender options:\n";
   for (const RenderFlag& f : kRenderFlags)
@@ -118,10 +127,17 @@ int runRender(const RenderArgs& a) {
     if (!a.help) {
       checkOutputPath(a.output, ".exr", "-o");
       if (!a.png.empty()) checkOutputPath(a.png, ".png", "--png");
+      std::error_code ec;
+      if (!a.png.empty() && fs::weakly_canonical(a.output, ec) == fs::weakly_canonical(a.png, ec))
+        throw std::invalid_argument("-o and --png name the same file");
     }
     Stopwatch loadClock;
     scene = loadScene(a.scene, {a.quiet});
     stats.addStage("load_scene", loadClock.seconds());
+    if (!a.help) {
+      refuseToOverwrite(scene.inputFiles, a.output, "-o");
+      if (!a.png.empty()) refuseToOverwrite(scene.inputFiles, a.png, "--png");
+    }
   }
   const std::string methodName = !a.method.empty()       ? a.method
                                  : !scene.render.method.empty() ? scene.render.method
@@ -211,8 +227,7 @@ int runRender(const RenderArgs& a) {
                         {"lucent:scene_hash", hex(scene.contentHash)},
                         {"lucent:threads", std::to_string(parallel.threads())}};
   Stopwatch writeClock;
-  writeExr(out.image, a.output, meta);
-  if (!a.png.empty()) writePng(out.image, a.png);
+  writeExrAndPng(out.image, a.output, meta, a.png);
   stats.addStage("write_images", writeClock.seconds());
 
   nlohmann::ordered_json summary;

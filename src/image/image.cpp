@@ -29,20 +29,18 @@ int Image::channelIndex(const std::string& name) const {
 
 namespace {
 
-// Writes `data` (interleaved, `format`) with `spec` to `path`, whole or not at all.
-void writeAtomically(const std::string& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc format,
-                     const void* data) {
-  writeFileAtomically(path, "image", [&](const fs::path& tmp) {
-    auto out = OIIO::ImageOutput::create(tmp.string());
-    if (!out) throw WriteFailure(OIIO::geterror());
-    if (!out->open(tmp.string(), spec)) throw WriteFailure(out->geterror());
-    if (!out->write_image(format, data)) {
-      std::string why = out->geterror();
-      out->close();
-      throw WriteFailure(why);
-    }
-    if (!out->close()) throw WriteFailure(out->geterror());
-  });
+// Writes `data` (interleaved, `format`) with `spec` to the file `path` as it is.
+void writeImageFile(const std::filesystem::path& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc format,
+                    const void* data) {
+  auto out = OIIO::ImageOutput::create(path.string());
+  if (!out) throw WriteFailure(OIIO::geterror());
+  if (!out->open(path.string(), spec)) throw WriteFailure(out->geterror());
+  if (!out->write_image(format, data)) {
+    std::string why = out->geterror();
+    out->close();
+    throw WriteFailure(why);
+  }
+  if (!out->close()) throw WriteFailure(out->geterror());
 }
 
 void checkPixelCount(const Image& image, const std::string& path) {
@@ -56,39 +54,60 @@ void checkPixelCount(const Image& image, const std::string& path) {
 
 }  // namespace
 
-void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata) {
+namespace {
+
+FileToWrite exrFile(const Image& image, const std::string& path, const ImageMetadata& metadata) {
   checkPixelCount(image, path);
-  OIIO::ImageSpec spec(image.width(), image.height(), image.channelCount(), OIIO::TypeDesc::FLOAT);
-  spec.channelnames = image.channels();
-  spec.alpha_channel = image.channelIndex("A");
-  for (const auto& [key, value] : metadata) spec.attribute(key, value);
-  writeAtomically(path, spec, OIIO::TypeDesc::FLOAT, image.pixels().data());
+  return {path, "image", [&image, metadata](const fs::path& tmp) {
+            OIIO::ImageSpec spec(image.width(), image.height(), image.channelCount(), OIIO::TypeDesc::FLOAT);
+            spec.channelnames = image.channels();
+            spec.alpha_channel = image.channelIndex("A");
+            for (const auto& [key, value] : metadata) spec.attribute(key, value);
+            writeImageFile(tmp, spec, OIIO::TypeDesc::FLOAT, image.pixels().data());
+          }};
 }
 
-void writePng(const Image& image, const std::string& path) {
+FileToWrite pngFile(const Image& image, const std::string& path) {
   checkPixelCount(image, path);
   const int rgb[3] = {image.channelIndex("R"), image.channelIndex("G"), image.channelIndex("B")};
   if (rgb[0] < 0 || rgb[1] < 0 || rgb[2] < 0)
     throw std::runtime_error("cannot write image '" + path + "': it needs R, G and B channels");
-  std::vector<unsigned char> bytes(size_t(image.width()) * image.height() * 3);
-  size_t i = 0;
-  for (int y = 0; y < image.height(); ++y)
-    for (int x = 0; x < image.width(); ++x)
-      for (int c : rgb) {
-        float v = image.at(x, y, c);
-        v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-        bytes[i++] = linearToSrgb8(v);
-      }
-  OIIO::ImageSpec spec(image.width(), image.height(), 3, OIIO::TypeDesc::UINT8);
-  spec.attribute("oiio:ColorSpace", "sRGB");
-  writeAtomically(path, spec, OIIO::TypeDesc::UINT8, bytes.data());
+  return {path, "image", [&image, rgb](const fs::path& tmp) {
+            std::vector<unsigned char> bytes(size_t(image.width()) * image.height() * 3);
+            size_t i = 0;
+            for (int y = 0; y < image.height(); ++y)
+              for (int x = 0; x < image.width(); ++x)
+                for (int c : rgb) {
+                  float v = image.at(x, y, c);
+                  v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
+                  bytes[i++] = linearToSrgb8(v);
+                }
+            OIIO::ImageSpec spec(image.width(), image.height(), 3, OIIO::TypeDesc::UINT8);
+            spec.attribute("oiio:ColorSpace", "sRGB");
+            writeImageFile(tmp, spec, OIIO::TypeDesc::UINT8, bytes.data());
+          }};
+}
+
+}  // namespace
+
+void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata) {
+  writeFilesAtomically({exrFile(image, path, metadata)});
+}
+
+void writePng(const Image& image, const std::string& path) { writeFilesAtomically({pngFile(image, path)}); }
+
+void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageMetadata& metadata,
+                    const std::string& pngPath) {
+  std::vector<FileToWrite> files = {exrFile(image, exrPath, metadata)};
+  if (!pngPath.empty()) files.push_back(pngFile(image, pngPath));
+  writeFilesAtomically(files);
 }
 
 Image readImage(const std::string& path, ImageMetadata* metadata) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw std::runtime_error("image file not found: '" + path + "'");
   // A device or pipe (/dev/zero) would be read for ever.
-  if (!fs::is_regular_file(path, ec)) throw std::runtime_error("cannot read image '" + path + "': not a regular file");
+  const std::string problem = regularFileProblem(path);
+  if (problem == "not found") throw std::runtime_error("image file not found: '" + path + "'");
+  if (!problem.empty()) throw std::runtime_error("cannot read image '" + path + "': " + problem);
   auto in = OIIO::ImageInput::open(path);
   if (!in) throw std::runtime_error("cannot read image '" + path + "': " + OIIO::geterror());
   const OIIO::ImageSpec& spec = in->spec();

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "json_fields.h"
+#include "lucent/core/files.h"
 #include "lucent/image/image.h"
 #include "lucent/scene/texture.h"
 #include "obj_import.h"
@@ -85,8 +86,8 @@ std::string resolve(const fs::path& base, const std::string& relative) {
 
 // The file a JSON key names must exist and be a regular file (a directory opens, then reads as empty).
 void requireFile(const JsonFields& fields, const std::string& key, const std::string& path) {
-  if (!fs::exists(path)) fields.failKey(key, "file '" + path + "' not found");
-  if (!fs::is_regular_file(path)) fields.failKey(key, "'" + path + "' is not a regular file");
+  const std::string problem = regularFileProblem(path);
+  if (!problem.empty()) fields.failKey(key, "file '" + path + "' " + problem);
 }
 
 void loadCamera(JsonFields camera, Scene& scene) {
@@ -155,6 +156,7 @@ void loadLight(JsonFields light, Scene& scene, const fs::path& base) {
     if (light.has("map")) {
       env.source = resolve(base, light.string("map"));
       requireFile(light, "map", env.source);
+      scene.inputFiles.push_back(env.source);
       const float scale = light.number("scale", 1.0f);
       if (!(scale >= 0)) light.failKey("scale", "must not be negative");
       env.texels = readTexels(env.source, light.file() + ": " + light.keyPath("map"), env.width, env.height);
@@ -200,7 +202,8 @@ void loadRenderBlock(JsonFields fields, const nlohmann::json& block, RenderBlock
 }  // namespace
 
 Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
-  if (!fs::is_regular_file(jsonPath)) throw SceneError(jsonPath + ": scene file not found");
+  const std::string problem = regularFileProblem(jsonPath);
+  if (!problem.empty()) throw SceneError(jsonPath + ": scene file " + problem);
   std::ifstream in(jsonPath);
   if (!in) throw SceneError(jsonPath + ": cannot open scene file");
   nlohmann::json root;
@@ -211,10 +214,16 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
     const std::string what = e.what();
     const size_t start = what.rfind("] ", what.find("parse error"));
     throw SceneError(jsonPath + ": invalid JSON: " + (start == std::string::npos ? what : what.substr(start + 2)));
+  } catch (const nlohmann::json::exception& e) {
+    // A number beyond double's range ("1e400") is out_of_range.406 rather than a parse error.
+    const std::string what = e.what();
+    const size_t start = what.find("] ");
+    throw SceneError(jsonPath + ": invalid JSON: " + (start == std::string::npos ? what : what.substr(start + 2)));
   }
   const fs::path base = fs::absolute(jsonPath).parent_path();
   Scene scene;
   scene.sourcePath = jsonPath;
+  scene.inputFiles.push_back(jsonPath);
   JsonFields top(root, jsonPath, "");
 
   loadCamera(top.object("camera"), scene);
@@ -227,6 +236,7 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
     const std::string obj = resolve(base, mesh.string("obj"));
     requireFile(mesh, "obj", obj);
     mesh.finish();
+    scene.inputFiles.push_back(obj);
     detail::importObj(obj, scene, import);
   }
   if (scene.triangleCount() == 0) top.failKey("meshes", "the scene has no (non-degenerate) triangles");
@@ -242,9 +252,11 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
     materials.finish();
   }
 
+  scene.inputFiles.insert(scene.inputFiles.end(), import.libraries.begin(), import.libraries.end());
   for (const auto& spec : import.specs) {
     Material m = detail::classifyMaterial(spec);
     if (!spec.mapKd.empty()) {
+      scene.inputFiles.push_back(spec.mapKd);
       Texture tex;
       tex.offset = static_cast<uint32_t>(scene.texels.size());
       const auto texels = readSrgb8Texels(spec.mapKd, spec.origin + ": material '" + spec.name + "'", tex.width, tex.height);

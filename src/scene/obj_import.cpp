@@ -10,6 +10,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "lucent/core/files.h"
 #include "lucent/scene/loader.h"
 
 namespace lucent::detail {
@@ -53,7 +54,8 @@ bool parseInt(const std::string& s, long& out) {
 }
 
 std::vector<std::string> readLines(const std::string& path, const std::string& what) {
-  if (!fs::is_regular_file(path)) throw SceneError(path + ": " + what + " is not a regular file");
+  const std::string problem = regularFileProblem(path);
+  if (!problem.empty()) throw SceneError(path + ": " + what + " " + problem);
   std::ifstream in(path);
   if (!in) throw SceneError(path + ": cannot open " + what);
   std::vector<std::string> lines;
@@ -131,7 +133,8 @@ std::vector<MaterialSpec> readMtl(const std::string& path) {
     } else if (key == "map_Kd") {
       if (t.size() != 2) failAt(path, line, "'map_Kd' expects one file name (options are not supported)");
       const fs::path texture = fs::path(path).parent_path() / t[1];
-      if (!fs::is_regular_file(texture)) failAt(path, line, "texture '" + t[1] + "' not found");
+      const std::string problem = regularFileProblem(texture);
+      if (!problem.empty()) failAt(path, line, "texture '" + t[1] + "' " + problem);
       spec.mapKd = fs::absolute(texture).lexically_normal().string();
     } else if (!ignoredKeys.count(key)) {
       failAt(path, line, "unknown MTL key '" + key + "'");
@@ -370,7 +373,9 @@ void importObj(const std::string& objPath, Scene& scene, ObjImport& import) {
       if (t.size() < 2) failAt(objPath, line, "'mtllib' expects a file name");
       for (size_t k = 1; k < t.size(); ++k) {
         const fs::path mtl = fs::path(objPath).parent_path() / t[k];
-        if (!fs::is_regular_file(mtl)) failAt(objPath, line, "material library '" + t[k] + "' not found");
+        const std::string problem = regularFileProblem(mtl);
+        if (!problem.empty()) failAt(objPath, line, "material library '" + t[k] + "' " + problem);
+        import.libraries.push_back(mtl.string());
         // The first definition of a name, in this file or an earlier one, is the material.
         for (MaterialSpec& spec : readMtl(mtl.string())) {
           libraryMaterials.insert(spec.name);

@@ -24,6 +24,7 @@ struct MaterialSpec {
 struct ObjImport {
   std::map<std::string, uint32_t> materialIndex;  // name -> index into specs
   std::vector<MaterialSpec> specs;
+  std::vector<std::string> libraries;             // the MTL files read
 };
 
 // Validates the OBJ (and its MTL files) line by line, then appends its triangles to `scene`, with

@@ -42,6 +42,10 @@ using ImageMetadata = std::vector<std::pair<std::string, std::string>>;
 void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata = {});
 // Writes the R, G, B channels as 8-bit sRGB-encoded PNG, clamped to [0,1]; atomically, as writeExr.
 void writePng(const Image& image, const std::string& path);
+// The EXR and, when pngPath is not empty, the PNG, written as one: if either cannot be written,
+// neither exists afterwards.
+void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageMetadata& metadata,
+                    const std::string& pngPath);
 // Reads any image OpenImageIO reads, as float, with its channel names and string metadata: the
 // values as stored. Refuses anything but a regular file, and headers of more than 2^26 pixels.
 Image readImage(const std::string& path, ImageMetadata* metadata = nullptr);

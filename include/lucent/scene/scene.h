@@ -97,6 +97,7 @@ struct Scene {
   uint64_t contentHash = 0;  // hash of geometry, materials, lights, camera: for image metadata
   uint32_t droppedDegenerateTriangles = 0;
   std::string sourcePath;
+  std::vector<std::string> inputFiles;  // every file the scene was read from (JSON, OBJ, MTL, images)
   RenderBlock render;
 
   uint32_t triangleCount() const { return static_cast<uint32_t>(materialIds.size()); }

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "lucent/core/dump.h"
+#include "lucent/pipeline/options.h"
 #include "lucent/methods/photons/photon_tracing.h"
 
 namespace lucent {
@@ -34,6 +35,30 @@ BuiltPhotonMap buildMap(std::vector<Photon> photons, PhotonMapKind kind, const G
     case PhotonMapKind::KdTree: built.map = buildPhotonKdTree(photons, &sub); break;
   }
   return built;
+}
+
+// The most cells a kNN-grid search may read: one that finds fewer than k photons reads every cell
+// within its maximum radius. The grids chosen from the photons stay far below (the Cornell box's:
+// a few thousand; GLASS BALL's paper grid, 250 x 1 x 250: 16,641); cells the options make tiny
+// (--cell-size 0.001, --grid-resolution 2000000x...) would take hours per search, and are refused.
+constexpr double kMaxCellsInReach = double(1 << 24);
+
+void checkSearchReach(const PhotonMapOptions& options, const BuiltPhotonMap& built, const EstimateSettings& settings) {
+  if (options.cellSize <= 0 && options.gridResolution[0] == 0) return;  // chosen from the photons
+  const UniformGrid* grid = nullptr;
+  if (const auto* m = std::get_if<SortedGrid>(&built.map)) grid = &m->grid;
+  if (const auto* m = std::get_if<StencilGrid>(&built.map)) grid = &m->grid;
+  if (const auto* m = std::get_if<HashedGrid>(&built.map)) grid = &m->grid;
+  if (!grid) return;
+  double cells = 1;
+  for (int a = 0; a < 3; ++a)
+    cells *= std::min(double(grid->res[a]), 2 * std::ceil(double(settings.maxRadius) * grid->invCellSize[a]) + 1);
+  if (!(cells <= kMaxCellsInReach))
+    throw std::invalid_argument(std::string(options.cellSize > 0 ? "--cell-size" : "--grid-resolution") +
+                                ": cells this small make a search within the maximum radius (" +
+                                optionText(settings.maxRadius, OptionKind::Real) + ") read up to " +
+                                optionText(cells, OptionKind::Real) +
+                                " cells (at most 2^24): use larger cells or a smaller --max-radius");
 }
 
 }  // namespace
@@ -82,6 +107,8 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
   maps.global = buildMap(std::move(globalPhotons), options.map, gridOptionsFor(options, maps.globalSettings.k), globalSub);
   maps.caustic = buildMap(std::move(caustic.caustic), options.map, gridOptionsFor(options, maps.causticSettings.k), causticSub);
   stats.addStage("build_map", buildClock.seconds());
+  checkSearchReach(options, maps.global, maps.globalSettings);
+  checkSearchReach(options, maps.caustic, maps.causticSettings);
   for (const auto& [name, s] : globalSub.stageSeconds) stats.addStage("build_map.global." + name, s);
   for (const auto& [name, s] : causticSub.stageSeconds) stats.addStage("build_map.caustic." + name, s);
 
