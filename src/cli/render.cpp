@@ -12,6 +12,7 @@
 #include "cli/method_options.h"
 #include "cli/progress.h"
 #include "lucent/core/lane_clones.h"
+#include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
 #include "lucent/methods/methods.h"
 #include "lucent/scene/loader.h"
@@ -24,6 +25,7 @@ namespace {
 struct RenderArgs {
   std::string scene, method, output, png, resolution, isa;
   int threads = 0;
+  uint64_t memoryLimit = 0;  // 0: the available memory
   bool quiet = false, robust = false, help = false;
   OptionValues methodOptions;  // as given, in order
 };
@@ -41,6 +43,8 @@ const RenderFlag kRenderFlags[] = {
     {"--png", "FILE", "also write an sRGB PNG"},
     {"--threads", "N", "worker threads (0: all cores; default 0)"},
     {"--resolution", "WxH", "override the camera's resolution"},
+    {"--memory-limit", "SIZE", "the most memory the render may hold, as 512M, 8G or bytes; one that would need more "
+                               "stops at once, naming the option to lower (default: the available memory)"},
     {"--robust", "", "Embree's robust traversal (watertight at edges)"},
     {"--isa", "ISA", "run as a CPU of sse4.2, avx, avx2 or avx512 would: Embree's kernels and the lane loops "
                      "(default: this CPU's best)"},
@@ -70,6 +74,15 @@ RenderArgs parseArgs(const std::vector<std::string>& args) {
     else if (key == "--method") a.method = value();
     else if (key == "--resolution") a.resolution = value();
     else if (key == "--isa") a.isa = value();
+    else if (key == "--memory-limit") {
+      const std::string text = value();
+      try {
+        a.memoryLimit = parseMemorySize(text);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument("--memory-limit " + std::string(e.what()));
+      }
+      if (a.memoryLimit == 0) throw std::invalid_argument("--memory-limit must be more than 0 bytes");
+    }
     else if (key == "--threads") {
       const std::string text = value();
       a.threads = int(parseOptionInteger("threads", text, 0, 4096));
@@ -191,6 +204,7 @@ int runRender(const RenderArgs& a) {
   if (!a.isa.empty())
     setLaneIsa(a.isa == "avx512" ? LaneIsa::Avx512 : a.isa == "avx2" ? LaneIsa::Avx2 : LaneIsa::Baseline);
   ParallelScope parallel(a.threads);
+  setMemoryLimit(a.memoryLimit);
   Stopwatch bvhClock;
   VisibilityOptions visOptions;
   visOptions.robust = a.robust;
@@ -238,6 +252,7 @@ int runRender(const RenderArgs& a) {
   summary["robust"] = a.robust;
   summary["embree_isa"] = visibility.isa();
   summary["lane_isa"] = laneIsaName(laneIsa());
+  summary["memory_limit"] = memoryLimit();
   summary["seconds"] = total.seconds();
   for (const auto& [name, seconds] : stats.stageSeconds) summary["stages"][name] = seconds;
   for (const auto& [name, value] : stats.counters) summary["counters"][name] = value;

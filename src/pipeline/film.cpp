@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "lucent/core/memory.h"
+
 namespace lucent {
 
 Film::Film(int width, int height, Sums sums, FilmLayers layers) : width_(width), height_(height), mode_(sums), layers_(layers) {
@@ -12,6 +14,10 @@ Film::Film(int width, int height, Sums sums, FilmLayers layers) : width_(width),
   if (sums == Sums::PerPart || layers.features) reserve(direct_, 3), reserve(indirect_, 3);
   if (sums == Sums::PerPart) reserve(caustic_, 3);
   if (layers.features) reserve(features_, 7);
+  const uint64_t pixels = uint64_t(width) * uint64_t(height);
+  // The sums and sample counts, and the image made of them (about as many channels, in floats).
+  requireMemory(pixels * (uint64_t(stride_) * (sizeof(double) + sizeof(float)) + sizeof(uint32_t)), "the film",
+                "lower --resolution");
   sums_.assign(size_t(width) * size_t(height) * size_t(stride_), 0.0);
   samples_.assign(size_t(width) * size_t(height), 0);
 }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <memory>
 
+#include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
 #include "lucent/core/sampling.h"
 #include "lucent/scene/camera.h"
@@ -133,6 +134,11 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
   const PinholeCamera camera(scene.camera);
   const uint64_t seed = streamSeed(settings.seed, RenderStream::Eye);
 
+  // Most camera samples end in one shading point, held per tile, then in the band's array, with the
+  // radiance the method computes at it (direct and indirect).
+  const uint64_t bandPixels = uint64_t(width) * uint64_t(rowEnd - rowBegin);
+  requireMemory(bandPixels * (sizeof(EyePixel) + uint64_t(settings.spp) * (2 * sizeof(ShadingPoint) + 2 * sizeof(Rgb))),
+                "the camera paths' shading points", "lower --spp or --resolution");
   EyePaths out;
   out.firstPixel = uint32_t(rowBegin) * uint32_t(width);
   out.pixels.resize(size_t(width) * size_t(rowEnd - rowBegin));  // constructed by the tiles

@@ -16,6 +16,7 @@
 
 #include "gathering.h"
 #include "lucent/core/dump.h"
+#include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
 #include "methods/microrender/micro_renderer.h"
 #include "lucent/pipeline/direct_light.h"
@@ -121,6 +122,11 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   ho.pointCount = o.points > 0 ? o.points : defaultPointCount(scene, o.pointSpacing);
   ho.encoding = o.encoding;
   ho.sampling.seed = hashKey(o.seed, uint64_t(MicroStream::Points));
+  // Two nodes per point (leaves and interior), each as floats in the hierarchy and in the micro
+  // copy, packed, with its area, radiance and thickness; the samples and the median split's keys.
+  const uint64_t nodeBytes = 2 * sizeof(FloatNode) + sizeof(PackedNode) + sizeof(float) + sizeof(Rgb) + 2 * sizeof(float);
+  requireMemory(uint64_t(ho.pointCount) * (2 * nodeBytes + sizeof(PointSample) + 32), "the point hierarchy",
+                "lower --points or raise --point-spacing");
   RenderStats hierarchyStats;
   Stopwatch hierarchyClock;
   const PointHierarchy hierarchy = buildPointHierarchy(scene, ho, &hierarchyStats);

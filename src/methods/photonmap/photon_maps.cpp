@@ -6,6 +6,7 @@
 #include <string>
 
 #include "lucent/core/dump.h"
+#include "lucent/core/memory.h"
 #include "lucent/pipeline/options.h"
 #include "lucent/methods/photons/photon_tracing.h"
 
@@ -24,10 +25,17 @@ GridOptions gridOptionsFor(const PhotonMapOptions& options, uint32_t k) {
 
 namespace {
 
-BuiltPhotonMap buildMap(std::vector<Photon> photons, PhotonMapKind kind, const GridOptions& grid, RenderStats& sub) {
+// What a map's build takes beside its photons, per photon: keys, sorted keys and indices, and the
+// photons gathered in their cells' order (the kd-tree's order, split axes and reordered photons are
+// less). The grids' cell arrays are bounded by GridOptions (at most 2^24 cells).
+constexpr uint64_t kMapBuildBytesPerPhoton = 64;
+
+BuiltPhotonMap buildMap(std::vector<Photon> photons, PhotonMapKind kind, const GridOptions& grid, RenderStats& sub,
+                        const std::string& what, const std::string& photonsOption) {
   BuiltPhotonMap built;
   built.photons = photons.size();
   if (photons.empty()) return built;
+  requireMemory(photons.size() * kMapBuildBytesPerPhoton, "building the " + what, "lower " + photonsOption);
   switch (kind) {
     case PhotonMapKind::Sort: built.map = buildSortedGrid(std::move(photons), grid, &sub); break;
     case PhotonMapKind::Stencil: built.map = buildStencilGrid(std::move(photons), grid, &sub); break;
@@ -95,6 +103,7 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
     tracing.photons = options.causticPhotons;
     tracing.seed = streamSeed(options.seed, RenderStream::CausticPhotons);
     tracing.causticOnly = true;
+    tracing.photonsOption = "--caustic-photons";
     caustic = tracePhotons(scene, vis, tracing);
   }
   std::vector<Photon> globalPhotons = std::move(global.global);
@@ -104,8 +113,10 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
 
   Stopwatch buildClock;
   RenderStats globalSub, causticSub;
-  maps.global = buildMap(std::move(globalPhotons), options.map, gridOptionsFor(options, maps.globalSettings.k), globalSub);
-  maps.caustic = buildMap(std::move(caustic.caustic), options.map, gridOptionsFor(options, maps.causticSettings.k), causticSub);
+  maps.global = buildMap(std::move(globalPhotons), options.map, gridOptionsFor(options, maps.globalSettings.k), globalSub,
+                         "global photon map", "--photons");
+  maps.caustic = buildMap(std::move(caustic.caustic), options.map, gridOptionsFor(options, maps.causticSettings.k),
+                          causticSub, "caustic photon map", "--caustic-photons");
   stats.addStage("build_map", buildClock.seconds());
   checkSearchReach(options, maps.global, maps.globalSettings);
   checkSearchReach(options, maps.caustic, maps.causticSettings);

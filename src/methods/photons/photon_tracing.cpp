@@ -5,6 +5,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "lucent/core/memory.h"
 #include "lucent/core/rng.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/particle_scattering.h"
@@ -127,6 +128,15 @@ ProjectionMap projectionMap(const EmissionTarget& target, Vec3 x, const std::vec
   return map;
 }
 
+// Makes room for `more` photons in `map`, growing it geometrically, once the memory is checked.
+void reserveStored(std::vector<Photon>& map, size_t more, const std::string& option) {
+  const size_t needed = map.size() + more;
+  if (needed <= map.capacity()) return;
+  const size_t capacity = std::max(needed, map.capacity() + map.capacity() / 2);
+  requireMemory(capacity * sizeof(Photon), "storing the photons", "lower " + option);
+  map.reserve(capacity);
+}
+
 }  // namespace
 
 std::optional<EmissionTarget> specularTarget(const Scene& scene) {
@@ -158,6 +168,9 @@ PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonT
   const EmissionTarget* target = options.target ? &*options.target : nullptr;
   // Stage 0: emission, one work item per photon.
   Stopwatch emitClock;
+  // The paths, and the hits and results of the first bounce (later bounces have fewer paths).
+  requireMemory(uint64_t(options.photons) * (sizeof(PhotonPath) + 1 + sizeof(Hit) + sizeof(BounceResult)),
+                "tracing the photon paths", "lower " + options.photonsOption);
   std::vector<PhotonPath> paths(options.photons);
   std::vector<uint8_t> emitted(options.photons);
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, options.photons, 1024), [&](const auto& r) {
@@ -190,6 +203,10 @@ PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonT
       for (size_t i = r.begin(); i != r.end(); ++i)
         results[i] = bounce(scene, paths[i], hits[i], depth, options.seed, options.causticOnly);
     });
+    size_t stored = 0;
+    for (const BounceResult& b : results) stored += b.stored;
+    reserveStored(maps.global, options.causticOnly ? 0 : stored, options.photonsOption);
+    reserveStored(maps.caustic, stored, options.photonsOption);
     size_t next = 0;
     for (const BounceResult& b : results) {
       if (b.stored) {

@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "lucent/core/stats.h"
@@ -22,6 +23,8 @@ struct PhotonTracingOptions {
   bool causticOnly = false;
   // Emit only towards this sphere (see EmissionTarget); with causticOnly, the specular objects'.
   std::optional<EmissionTarget> target;
+  // The option that sets `photons`, named when they would not fit in memory (requireMemory).
+  std::string photonsOption = "--photons";
 };
 
 // The bounding sphere of the scene's mirror and glass triangles, where caustic paths must start,
