@@ -33,19 +33,24 @@ const char* laneIsaName(LaneIsa isa);
 // may be inlined into an AVX2 or AVX-512 one, which then vectorizes it for its target); `name`
 // calls the one laneIsa() names. The versions are kept out of interprocedural analysis (noipa):
 // GCC 12's modref summarized a target-attributed version as free of side effects and dropped the
-// calls to it.
+// calls to it. Clang has no noipa; noinline keeps its versions apart.
+#if defined(__clang__)
+#define LUCENT_LANE_NO_IPA noinline
+#else
+#define LUCENT_LANE_NO_IPA noipa
+#endif
 #define LUCENT_LANE_LOOP(ret, name, params) [[gnu::always_inline]] inline ret name##Loop params
 
-#define LUCENT_LANE_VERSIONS(ret, name, params, args)                                      \
-  __attribute__((target("arch=x86-64-v4"), noipa)) static ret name##Avx512 params {       \
-    return name##Loop args;                                                                \
-  }                                                                                        \
-  __attribute__((target("avx2"), noipa)) static ret name##Avx2 params { return name##Loop args; } \
-  __attribute__((noipa)) static ret name##Baseline params { return name##Loop args; }      \
-  ret name params {                                                                        \
-    switch (::lucent::laneIsa()) {                                                         \
-      case ::lucent::LaneIsa::Avx512: return name##Avx512 args;                            \
-      case ::lucent::LaneIsa::Avx2: return name##Avx2 args;                                \
-      default: return name##Baseline args;                                                 \
-    }                                                                                      \
+#define LUCENT_LANE_VERSIONS(ret, name, params, args)                                                          \
+  __attribute__((target("arch=x86-64-v4"), LUCENT_LANE_NO_IPA)) static ret name##Avx512 params {               \
+    return name##Loop args;                                                                                    \
+  }                                                                                                            \
+  __attribute__((target("avx2"), LUCENT_LANE_NO_IPA)) static ret name##Avx2 params { return name##Loop args; } \
+  __attribute__((LUCENT_LANE_NO_IPA)) static ret name##Baseline params { return name##Loop args; }             \
+  ret name params {                                                                                            \
+    switch (::lucent::laneIsa()) {                                                                             \
+      case ::lucent::LaneIsa::Avx512: return name##Avx512 args;                                                \
+      case ::lucent::LaneIsa::Avx2: return name##Avx2 args;                                                    \
+      default: return name##Baseline args;                                                                     \
+    }                                                                                                          \
   }

@@ -33,8 +33,14 @@ inline bool traceable(const Ray& ray) {
   // box, 1 thread); & rather than && keeps it one branch (a NaN fails every comparison).
   const Vec3 o = ray.origin, d = ray.direction;
   const float m = kMaxRayComponent;
-  return (std::abs(o.x) <= m) & (std::abs(o.y) <= m) & (std::abs(o.z) <= m) & (std::abs(d.x) <= m) &
-         (std::abs(d.y) <= m) & (std::abs(d.z) <= m) & (ray.tMin <= ray.tMax);
+  int ok = std::abs(o.x) <= m;
+  ok &= std::abs(o.y) <= m;
+  ok &= std::abs(o.z) <= m;
+  ok &= std::abs(d.x) <= m;
+  ok &= std::abs(d.y) <= m;
+  ok &= std::abs(d.z) <= m;
+  ok &= ray.tMin <= ray.tMax;
+  return ok;
 }
 
 struct VisibilityOptions {

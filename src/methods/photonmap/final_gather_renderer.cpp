@@ -117,7 +117,9 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   for (size_t band = 0; band < bands.size(); ++band) {
     // Eye rays and shadow rays.
     Stopwatch rayClock;
-    auto [eye, radiance] = traceBand(scene, vis, options, bands[band], totals.shadowRays);
+    BandShadingPoints traced = traceBand(scene, vis, options, bands[band], totals.shadowRays);
+    const EyePaths& eye = traced.eye;
+    PointRadiance& radiance = traced.radiance;
     const size_t n = eye.points.size();
     totals.traceSeconds += rayClock.seconds();
 

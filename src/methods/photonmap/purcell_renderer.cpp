@@ -29,7 +29,9 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
   for (size_t band = 0; band < bands.size(); ++band) {
     // Eye rays and shadow rays.
     Stopwatch rayClock;
-    auto [eye, radiance] = traceBand(scene, vis, options, bands[band], totals.shadowRays);
+    BandShadingPoints traced = traceBand(scene, vis, options, bands[band], totals.shadowRays);
+    const EyePaths& eye = traced.eye;
+    PointRadiance& radiance = traced.radiance;
     const size_t n = eye.points.size();
     totals.traceSeconds += rayClock.seconds();
 

@@ -1,0 +1,75 @@
+// libFuzzer target for the scene loader: JSON, OBJ, MTL and the images it reads (a texture, an
+// environment map). One input is a scene's files separated by NUL bytes: scene.json, mesh.obj,
+// mesh.mtl, then one image, the rest of the input whatever NULs it holds, written both as
+// texture.png and as sky.hdr (the image readers go by content where the name misleads). A missing
+// part is a missing file. Every
+// rejection must be a SceneError; anything else that escapes, a crash, a sanitizer report, a hang
+// (-timeout) or a large allocation (-malloc_limit_mb) is a defect. Seeds: scripts/fuzz-corpus.py.
+#include <unistd.h>
+
+#include <cstdint>
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <string_view>
+
+#include "lucent/scene/loader.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kTextFiles[] = {"scene.json", "mesh.obj", "mesh.mtl"};
+constexpr const char* kImageFiles[] = {"texture.png", "sky.hdr"};
+
+void writeFile(const fs::path& path, std::string_view content) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc).write(content.data(), std::streamsize(content.size()));
+}
+
+// A directory of this process's own, in memory where /dev/shm exists, removed at exit.
+const fs::path& scratchDirectory() {
+  static const fs::path dir = [] {
+    std::string pattern = (fs::is_directory("/dev/shm") ? "/dev/shm" : fs::temp_directory_path().string()) +
+                          "/lucent-fuzz-XXXXXX";
+    if (!mkdtemp(pattern.data())) std::abort();
+    std::atexit([] {
+      std::error_code ec;
+      fs::remove_all(scratchDirectory(), ec);
+    });
+    return fs::path(pattern);
+  }();
+  return dir;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string_view input(reinterpret_cast<const char*>(data), size);
+  const fs::path& dir = scratchDirectory();
+  size_t start = 0;
+  for (const char* name : kTextFiles) {
+    const size_t end = std::min(input.find('\0', start), input.size());
+    if (start > input.size()) {
+      std::error_code ec;
+      fs::remove(dir / name, ec);
+    } else {
+      writeFile(dir / name, input.substr(start, end - start));
+    }
+    start = end + 1;
+  }
+  for (const char* name : kImageFiles) {
+    if (start > input.size()) {
+      std::error_code ec;
+      fs::remove(dir / name, ec);
+    } else {
+      writeFile(dir / name, input.substr(start));
+    }
+  }
+  try {
+    lucent::loadScene((dir / kTextFiles[0]).string(), {.quiet = true});
+  } catch (const lucent::SceneError&) {
+  }
+  return 0;
+}
