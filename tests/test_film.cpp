@@ -16,7 +16,10 @@ struct TwoByTwo {
   PointRadiance light{3};
   TwoByTwo() {
     eye.pixels.resize(4);
-    for (EyePixel& p : eye.pixels) p = EyePixel{Rgb(0.25f), Rgb(0.5f), Vec3(0, 1, 0), 2, 1};
+    for (EyePixel& p : eye.pixels) {
+      p = EyePixel{};
+      p.addSample(Rgb(0.25f), FirstHit{Rgb(0.5f), Vec3(0, 1, 0), 2}, true);
+    }
     eye.points.resize(3);
     for (uint32_t i = 0; i < 3; ++i) {
       eye.points[i] = ShadingPoint{};

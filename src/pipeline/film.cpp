@@ -1,12 +1,18 @@
 #include "lucent/pipeline/film.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "lucent/core/memory.h"
 
 namespace lucent {
 
-Film::Film(int width, int height, Sums sums, FilmLayers layers) : width_(width), height_(height), mode_(sums), layers_(layers) {
+Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers)
+    : width_(width), height_(height), region_(region), wholeImage_(region == PixelRect{0, 0, width, height}),
+      mode_(sums), layers_(layers) {
+  if (!(region.x0 >= 0 && region.y0 >= 0 && region.x0 < region.x1 && region.y0 < region.y1 && region.x1 <= width &&
+        region.y1 <= height))
+    throw std::invalid_argument("film: the region is not a non-empty part of the image");
   layers_.caustic = layers.features && layers.caustic;
   // The parts are kept wherever the image needs them: for the layers, or (PerPart) for the total.
   auto reserve = [&](int& offset, int channels) { offset = stride_, stride_ += channels; };
@@ -14,46 +20,65 @@ Film::Film(int width, int height, Sums sums, FilmLayers layers) : width_(width),
   if (sums == Sums::PerPart || layers.features) reserve(direct_, 3), reserve(indirect_, 3);
   if (sums == Sums::PerPart) reserve(caustic_, 3);
   if (layers.features) reserve(features_, 7);
-  const uint64_t pixels = uint64_t(width) * uint64_t(height);
+  const uint64_t pixels = region.pixelCount();
   // The sums and sample counts, and the image made of them (about as many channels, in floats).
-  requireMemory(pixels * (uint64_t(stride_) * (sizeof(double) + sizeof(float)) + sizeof(uint32_t)), "the film",
-                "lower --resolution");
-  sums_.assign(size_t(width) * size_t(height) * size_t(stride_), 0.0);
-  samples_.assign(size_t(width) * size_t(height), 0);
+  requireMemory(pixels * (uint64_t(stride_) * (sizeof(ExactSum) + sizeof(float)) + 2 * sizeof(uint32_t)), "the film",
+                "lower --resolution or render it in parts (--crop)");
+  sums_.resize(pixels * size_t(stride_));
+  samples_.assign(pixels, 0);
+  taken_.assign(pixels, 0);
 }
 
 void Film::addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 normal, float depth) {
-  double* sum = at(pixel);
+  const size_t p = local(pixel);
+  ExactSum* sum = &sums_[p * size_t(stride_)];
+  ++samples_[p];
+  // The total is summed apart from its parts: (direct + indirect) rounded once per sample.
   const Rgb total = direct + indirect;
-  for (int c = 0; c < 3; ++c) sum[total_ + c] += total[c];
-  ++samples_[pixel];
+  for (int c = 0; c < 3; ++c) sum[total_ + c].add(total[c]);
   if (!layers_.features) return;
   const float features[7] = {albedo.r, albedo.g, albedo.b, normal.x, normal.y, normal.z, depth};
-  for (int c = 0; c < 7; ++c) sum[features_ + c] += features[c];
-  for (int c = 0; c < 3; ++c) sum[direct_ + c] += direct[c], sum[indirect_ + c] += indirect[c];
+  for (int c = 0; c < 7; ++c) sum[features_ + c].add(features[c]);
+  for (int c = 0; c < 3; ++c) sum[direct_ + c].add(direct[c]), sum[indirect_ + c].add(indirect[c]);
 }
 
 void Film::add(const EyePaths& band, const PointRadiance& light) {
   for (size_t i = 0; i < band.pixels.size(); ++i) {
     const EyePixel& px = band.pixels[i];
     const uint64_t p = band.firstPixel + i;
-    double* sum = at(p);
-    samples_[p] += px.validSamples;
-    for (int c = 0; c < 3; ++c) sum[direct_ + c] += px.emitted[c];
+    ExactSum* sum = at(p);
+    samples_[local(p)] += px.validSamples;
+    for (int c = 0; c < 3; ++c) sum[direct_ + c].add(px.emitted[c]);
     if (!layers_.features) continue;
-    const float features[7] = {px.albedo.r, px.albedo.g, px.albedo.b, px.normal.x, px.normal.y, px.normal.z, px.depth};
-    for (int c = 0; c < 7; ++c) sum[features_ + c] += features[c];
+    for (int c = 0; c < 7; ++c) sum[features_ + c].add(px.features[c]);
   }
   for (size_t i = 0; i < band.points.size(); ++i) {
     const ShadingPoint& sp = band.points[i];
     const Rgb d = sp.weight * light.direct[i], ind = sp.weight * light.indirect[i], ca = sp.weight * light.caustic[i];
-    if (!isFinite(d + ind + ca)) {
+    if (!summable(d) || !summable(ind) || !summable(ca)) {
       ++dropped_;
       continue;
     }
-    double* sum = at(sp.pixel);
-    for (int c = 0; c < 3; ++c) sum[direct_ + c] += d[c], sum[indirect_ + c] += ind[c], sum[caustic_ + c] += ca[c];
+    ExactSum* sum = at(sp.pixel);
+    for (int c = 0; c < 3; ++c) sum[direct_ + c].add(d[c]), sum[indirect_ + c].add(ind[c]), sum[caustic_ + c].add(ca[c]);
   }
+}
+
+void Film::add(const Film& part) {
+  if (part.width_ != width_ || part.height_ != height_ || part.mode_ != mode_ || !(part.layers_ == layers_) ||
+      part.stride_ != stride_ || part.region_.x0 < region_.x0 || part.region_.y0 < region_.y0 ||
+      part.region_.x1 > region_.x1 || part.region_.y1 > region_.y1)
+    throw std::invalid_argument("film: a part of another image, layout or region");
+  const PixelRect& r = part.region_;
+  for (int y = r.y0; y < r.y1; ++y)
+    for (int x = r.x0; x < r.x1; ++x) {
+      const uint64_t pixel = uint64_t(y) * uint64_t(width_) + uint64_t(x);
+      const size_t from = part.local(pixel), to = local(pixel);
+      for (int c = 0; c < stride_; ++c) sums_[to * stride_ + c].add(part.sums_[from * stride_ + c]);
+      samples_[to] += part.samples_[from];
+      taken_[to] += part.taken_[from];
+    }
+  dropped_ += part.dropped_;
 }
 
 Image Film::image() const {
@@ -64,20 +89,24 @@ Image Film::image() const {
       channels.push_back(name);
   if (layers_.caustic)
     for (const char* name : {"caustic.R", "caustic.G", "caustic.B"}) channels.push_back(name);
-  const size_t nc = channels.size(), pixels = size_t(width_) * size_t(height_);
-  Image image(width_, height_, channels);
+  const size_t nc = channels.size(), pixels = region_.pixelCount();
+  Image image(region_.width(), region_.height(), channels);
   float* out = image.pixels().data();
   for (size_t p = 0; p < pixels; ++p) {
-    const double* sum = &sums_[p * size_t(stride_)];
+    const ExactSum* sum = &sums_[p * size_t(stride_)];
     const double n = std::max<uint32_t>(1, samples_[p]);
     float* o = out + p * nc;
-    for (int c = 0; c < 3; ++c)
-      o[c] = float((mode_ == Sums::PerSample ? sum[total_ + c] : sum[direct_ + c] + sum[indirect_ + c] + sum[caustic_ + c]) / n);
+    for (int c = 0; c < 3; ++c) {
+      ExactSum total = sum[mode_ == Sums::PerSample ? total_ + c : direct_ + c];
+      if (mode_ == Sums::PerPart) total.add(sum[indirect_ + c]), total.add(sum[caustic_ + c]);
+      o[c] = float(total.value() / n);
+    }
     if (!layers_.features) continue;
-    for (int c = 0; c < 7; ++c) o[3 + c] = float(sum[features_ + c] / n);
-    for (int c = 0; c < 3; ++c) o[10 + c] = float(sum[direct_ + c] / n), o[13 + c] = float(sum[indirect_ + c] / n);
+    for (int c = 0; c < 7; ++c) o[3 + c] = float(sum[features_ + c].value() / n);
+    for (int c = 0; c < 3; ++c)
+      o[10 + c] = float(sum[direct_ + c].value() / n), o[13 + c] = float(sum[indirect_ + c].value() / n);
     if (layers_.caustic)
-      for (int c = 0; c < 3; ++c) o[16 + c] = float(sum[caustic_ + c] / n);
+      for (int c = 0; c < 3; ++c) o[16 + c] = float(sum[caustic_ + c].value() / n);
   }
   return image;
 }

@@ -39,7 +39,7 @@ struct SampleResult {
 // Follows one camera ray, whose closest hit is given, through specular bounces; appends the shading
 // points it reaches.
 SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const EyePathSettings& settings, Ray ray,
-                               const Hit& cameraHit, uint32_t pixel, uint32_t sample, Rng& rng, EyePixel* firstHit,
+                               const Hit& cameraHit, uint32_t pixel, uint32_t sample, Rng& rng, FirstHit* firstHit,
                                std::vector<ShadingPoint>& points, uint64_t& rays) {
   SampleResult out;
   BranchSlot stack[kMaxBranchStack];
@@ -167,19 +167,15 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
           const Hit& hit = hits[j];
           EyePixel& px = out.pixels[cs.pixel - out.firstPixel];
           const size_t before = points.size();
-          EyePixel first;
+          FirstHit first;
           const SampleResult res = traceCameraSample(scene, vis, settings, cs.ray, hit, cs.pixel, cs.sample, cs.rng,
                                                      settings.layers ? &first : nullptr, points, tileRays[t]);
-          if (!res.valid || !isFinite(res.emitted)) {
+          if (!res.valid || !summable(res.emitted)) {
             points.resize(before);
             ++tileInvalid[t];
             continue;
           }
-          ++px.validSamples;
-          px.emitted += res.emitted;
-          px.albedo += first.albedo;
-          px.normal += first.normal;
-          px.depth += first.depth;
+          px.addSample(res.emitted, first, settings.layers);
         }
         queued = 0;
       };

@@ -1,16 +1,30 @@
-// The film every method writes its image to: per pixel, sums in double of the light its camera
-// samples bring and of the first hit's features for the auxiliary layers (--layers); the image
-// divides each by the pixel's valid samples. Every pixel is written by one work item at a time and
-// its samples are added in a fixed order, so the image does not depend on threads or tiles.
+// The film every method writes its image to: per pixel, exact sums (ExactSum) of the light its
+// camera samples bring and of the first hit's features for the auxiliary layers (--layers), and the
+// camera samples taken; the image divides each sum by the pixel's valid samples. The sums do not
+// depend on the order in which samples are added, so the image depends neither on threads and
+// tiles nor on how a render was split into regions and sample ranges, resumed and merged. A film
+// covers a region of the image (a crop), all of it by default.
 #pragma once
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "lucent/core/exact_sum.h"
 #include "lucent/image/image.h"
 #include "lucent/pipeline/shading_points.h"
 
 namespace lucent {
+
+// The pixels [x0, x1) x [y0, y1) of an image.
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  int width() const { return x1 - x0; }
+  int height() const { return y1 - y0; }
+  uint64_t pixelCount() const { return uint64_t(width()) * uint64_t(height()); }
+  bool contains(int x, int y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
+  bool operator==(const PixelRect&) const = default;
+};
 
 // The layers an image carries beside R, G, B: none, or the first hit's albedo, normal and depth
 // and the light split into direct and indirect parts, with a caustic part for the methods that
@@ -18,6 +32,7 @@ namespace lucent {
 struct FilmLayers {
   bool features = false;  // albedo, normal, depth, direct, indirect
   bool caustic = false;   // and caustic (only with features)
+  bool operator==(const FilmLayers&) const = default;
 };
 
 // Per shading point, the light each part of the estimate sends towards the camera (before the
@@ -33,27 +48,61 @@ class Film {
   // PerSample, each camera sample's total (the path tracer); PerPart, each part apart (emission
   // and direct light, indirect, caustic: the methods that shade points), added at the end.
   enum class Sums { PerSample, PerPart };
-  Film(int width, int height, Sums sums, FilmLayers layers);
+  // A film of the pixels of `region` in a width x height image.
+  Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers);
+  Film(int width, int height, Sums sums, FilmLayers layers) : Film(width, height, {0, 0, width, height}, sums, layers) {}
 
-  // Sums::PerSample: one valid camera sample of `pixel`, its light split into direct and indirect.
+  // Sums::PerSample: one camera sample of `pixel` (an index in the whole image), its light split
+  // into direct and indirect, both summable().
   void addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 normal, float depth);
-  // Sums::PerPart: a band of camera samples, then the light of its shading points in their order
-  // (each times its camera-path weight). A point whose light is not finite is left out and counted.
+  // Sums::PerPart: a band of camera samples, then the light of its shading points (each times its
+  // camera-path weight). A point whose light is not summable() is left out and counted.
   void add(const EyePaths& band, const PointRadiance& light);
   uint64_t droppedPoints() const { return dropped_; }
 
-  // R, G, B, then the layers' channels.
+  // Camera samples taken at a pixel (valid or not), from the first of the render's sample range:
+  // where a checkpoint's render resumes. Methods set it as they finish a pixel's samples.
+  void setTaken(uint64_t pixel, uint32_t taken) { taken_[local(pixel)] = taken; }
+  uint32_t taken(uint64_t pixel) const { return taken_[local(pixel)]; }
+
+  // The region's pixels: R, G, B, then the layers' channels.
   Image image() const;
 
+  // Another film of the same image, layout and layers whose region lies inside this one's: its
+  // sums, valid samples and samples taken are added to this film's.
+  void add(const Film& part);
+
+  // The state, as film files store it (pipeline/film_file.h).
+  int imageWidth() const { return width_; }
+  int imageHeight() const { return height_; }
+  const PixelRect& region() const { return region_; }
+  Sums sums() const { return mode_; }
+  FilmLayers layers() const { return layers_; }
+  int sumsPerPixel() const { return stride_; }
+  std::span<ExactSum> pixelSums() { return sums_; }
+  std::span<const ExactSum> pixelSums() const { return sums_; }
+  std::span<uint32_t> validSamples() { return samples_; }
+  std::span<const uint32_t> validSamples() const { return samples_; }
+  std::span<uint32_t> samplesTaken() { return taken_; }
+  std::span<const uint32_t> samplesTaken() const { return taken_; }
+
  private:
-  double* at(uint64_t pixel) { return &sums_[pixel * stride_]; }
+  size_t local(uint64_t pixel) const {
+    if (wholeImage_) return size_t(pixel);
+    const int x = int(pixel % uint64_t(width_)), y = int(pixel / uint64_t(width_));
+    return size_t(y - region_.y0) * size_t(region_.width()) + size_t(x - region_.x0);
+  }
+  ExactSum* at(uint64_t pixel) { return &sums_[local(pixel) * size_t(stride_)]; }
   int width_, height_;
+  PixelRect region_;
+  bool wholeImage_;
   Sums mode_;
   FilmLayers layers_;
   // Offsets into a pixel's sums: the total (PerSample), the parts, the features; -1 where absent.
   int total_ = -1, direct_ = -1, indirect_ = -1, caustic_ = -1, features_ = -1, stride_ = 0;
-  std::vector<double> sums_;
+  std::vector<ExactSum> sums_;
   std::vector<uint32_t> samples_;  // valid camera samples per pixel
+  std::vector<uint32_t> taken_;    // camera samples taken per pixel
   uint64_t dropped_ = 0;
 };
 

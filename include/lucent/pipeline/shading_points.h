@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "lucent/core/exact_sum.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/uninitialized.h"
 #include "lucent/scene/bsdf.h"
@@ -44,13 +45,31 @@ struct EyePathSettings {
   int tileSize = 16;
 };
 
-// Per pixel, summed over its camera samples.
-struct EyePixel {
-  Rgb emitted;   // emission seen directly or through mirrors and glass (and the environment)
-  Rgb albedo;    // first hit: reflectance (1 for glass); layers only
-  Vec3 normal;   // first hit's shading normal; layers only
+// Light the film can sum: finite, and within ExactSum's range (a value beyond 10^21 is as
+// unusable as a NaN). Samples and points whose light is not are dropped and counted.
+inline bool summable(Rgb c) { return ExactSum::accepts(c.r) && ExactSum::accepts(c.g) && ExactSum::accepts(c.b); }
+
+// The first hit of a camera sample, for the layers.
+struct FirstHit {
+  Rgb albedo;  // reflectance (1 for glass)
+  Vec3 normal;  // shading normal
   float depth = 0;
+};
+
+// Per pixel, summed over its camera samples (exactly, as the film sums).
+struct EyePixel {
+  ExactSum emitted[3];   // emission seen directly or through mirrors and glass (and the environment)
+  ExactSum features[7];  // first hit: reflectance (1 for glass), shading normal, depth; layers only
   uint32_t validSamples = 0;  // camera samples kept (those with non-finite values are dropped)
+  void addSample(Rgb light, const FirstHit& first, bool layers) {
+    ++validSamples;
+    for (int c = 0; c < 3; ++c) emitted[c].add(light[c]);
+    if (!layers) return;
+    const Rgb a = first.albedo;
+    const Vec3 n = first.normal;
+    const float values[7] = {a.r, a.g, a.b, n.x, n.y, n.z, first.depth};
+    for (int c = 0; c < 7; ++c) features[c].add(values[c]);
+  }
 };
 
 // The arrays are written by the tiles in parallel (UninitializedVector).

@@ -488,7 +488,7 @@ void PathTracer::renderTile(int x0, int y0, int x1, int y1, int sampleBegin, int
     traceWave(wave, counters);
     for (const Path& path : wave.paths) {
       const PathResult& p = path.result;
-      if (!p.valid || !isFinite(p.direct + p.indirect)) {
+      if (!p.valid || !summable(p.direct) || !summable(p.indirect) || !summable(p.direct + p.indirect)) {
         ++counters.invalidSamples;
         continue;
       }
