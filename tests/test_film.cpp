@@ -15,6 +15,7 @@ struct TwoByTwo {
   EyePaths eye;
   PointRadiance light{3};
   TwoByTwo() {
+    eye.region = {0, 0, 2, 2};
     eye.pixels.resize(4);
     for (EyePixel& p : eye.pixels) {
       p = EyePixel{};

@@ -290,6 +290,9 @@ TEST_CASE("Every command's bad arguments exit 1, compare's 2, and help 0", "[cli
   CHECK(runLucent("compare a.exr b.exr --metric psnr").status == 2);
   CHECK(runLucent("compare a.exr b.exr --max-error -1").status == 2);
   CHECK(runLucent("render " + kScene + " --spp x -o x.exr").status == 1);
-  CHECK(runLucent("render " + kScene + " --threads -2 -o x.exr").status == 1);
+  const test::CliRun threads = runLucent("render " + kScene + " --threads -2 -o x.exr");
+  CHECK(threads.status == 1);
+  CHECK_THAT(threads.output, Catch::Contains("--threads: '-2'"));
   CHECK(runLucent("nonsense").status == 1);
+  CHECK(runLucent("merge").status == 1);
 }

@@ -7,4 +7,5 @@ namespace lucent::cli {
 void addRenderCommand(CLI::App& app, int& exitCode);
 void addCompareCommand(CLI::App& app, int& exitCode);
 void addMethodsCommand(CLI::App& app, int& exitCode);
+void addMergeCommand(CLI::App& app, int& exitCode);
 }  // namespace lucent::cli

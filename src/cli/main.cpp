@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   lucent::cli::addRenderCommand(app, exitCode);
   lucent::cli::addCompareCommand(app, exitCode);
   lucent::cli::addMethodsCommand(app, exitCode);
+  lucent::cli::addMergeCommand(app, exitCode);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

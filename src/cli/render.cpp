@@ -2,19 +2,26 @@
 // The method's options come from its declaration (pipeline/options.h): their flags, parsing,
 // validation, JSON echo, EXR metadata and help. Precedence: the method's defaults, then the scene
 // file's render block (when it names this method), then the command line.
+#include <signal.h>
+
+#include <atomic>
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "cli/commands.h"
+#include "cli/film_outputs.h"
 #include "cli/method_options.h"
 #include "cli/progress.h"
 #include "lucent/core/lane_clones.h"
 #include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
 #include "lucent/methods/methods.h"
+#include "lucent/pipeline/film_file.h"
 #include "lucent/scene/loader.h"
 
 namespace lucent::cli {
@@ -24,7 +31,12 @@ namespace {
 
 struct RenderArgs {
   std::string scene, method, output, png, resolution, isa;
+  PixelRect crop;                     // empty: the whole image
+  std::pair<int, int> samples{0, 0};  // first, count; count 0: all
+  std::string part;                   // --part as given
   int threads = 0;
+  double checkpointSeconds = 0;
+  bool resume = false;
   uint64_t memoryLimit = 0;  // 0: the available memory
   bool quiet = false, robust = false, help = false;
   OptionValues methodOptions;  // as given, in order
@@ -43,6 +55,14 @@ const RenderFlag kRenderFlags[] = {
     {"--png", "FILE", "also write an sRGB PNG"},
     {"--threads", "N", "worker threads (0: all cores; default 0)"},
     {"--resolution", "WxH", "override the camera's resolution"},
+    {"--crop", "X0,Y0,X1,Y1", "render only the pixels [X0, X1) x [Y0, Y1): a part of a split render, with OUT.film "
+                              "for lucent merge"},
+    {"--samples", "FIRST:COUNT", "take only the camera samples FIRST to FIRST+COUNT-1 of each pixel: a part of a "
+                                 "split render, with OUT.film for lucent merge"},
+    {"--part", "rows|samples:K/N", "the K-th of N parts (K from 0) of the image's rows or of each pixel's samples, as "
+                                   "--crop or --samples would give it (for job arrays)"},
+    {"--checkpoint", "SECONDS", "every SECONDS, write the render's state to OUT.film (also on SIGINT and SIGTERM)"},
+    {"--resume", "", "continue from OUT.film, left by a checkpoint or a stop, if there is one"},
     {"--memory-limit", "SIZE", "the most memory the render may hold, as 512M, 8G or bytes; one that would need more "
                                "stops at once, naming the option to lower (default: the available memory)"},
     {"--robust", "", "Embree's robust traversal (watertight at edges)"},
@@ -54,6 +74,56 @@ const RenderFlag kRenderFlags[] = {
 
 // Splits the arguments into the render command's own and the methods' (every method's options are
 // known by name, so each can be told to take a value or not before the method is chosen).
+// The value `parse` reads from a render flag's text; its OptionError named after the flag.
+template <class Parse>
+auto flagged(Parse parse) {
+  try {
+    return parse();
+  } catch (const OptionError& e) {
+    throw std::invalid_argument("--" + e.option() + ": " + e.what());
+  }
+}
+
+// "X0,Y0,X1,Y1": integers with X0 < X1, Y0 < Y1 (inside the image: checked once its size is known).
+PixelRect parseCrop(const std::string& text) {
+  PixelRect r;
+  char c1 = 0, c2 = 0, c3 = 0, rest = 0;
+  std::istringstream in(text);
+  if (!(in >> r.x0 >> c1 >> r.y0 >> c2 >> r.x1 >> c3 >> r.y1) || c1 != ',' || c2 != ',' || c3 != ',' || (in >> rest) ||
+      r.x0 < 0 || r.y0 < 0 || r.x0 >= r.x1 || r.y0 >= r.y1)
+    throw std::invalid_argument("--crop '" + text + "': expected X0,Y0,X1,Y1 with 0 <= X0 < X1 and 0 <= Y0 < Y1");
+  return r;
+}
+
+// "FIRST:COUNT", FIRST >= 0, COUNT >= 1 (inside the samples per pixel: checked by the method).
+std::pair<int, int> parseSamples(const std::string& text) {
+  const size_t colon = text.find(':');
+  if (colon == std::string::npos) throw std::invalid_argument("--samples '" + text + "': expected FIRST:COUNT");
+  const int first = int(flagged([&] { return parseOptionInteger("samples", text.substr(0, colon), 0, 1 << 24); }));
+  const int count = int(flagged([&] { return parseOptionInteger("samples", text.substr(colon + 1), 1, 1 << 24); }));
+  return {first, count};
+}
+
+// --part rows:K/N or samples:K/N: the K-th of N equal parts of the image's rows (a crop of whole
+// rows) or of each pixel's spp samples, set in `control`.
+void applyPart(const std::string& text, const Scene& scene, int spp, RenderControl& control) {
+  const size_t colon = text.find(':'), slash = text.find('/');
+  const std::string axis = text.substr(0, colon);
+  if (colon == std::string::npos || slash == std::string::npos || slash < colon || (axis != "rows" && axis != "samples"))
+    throw std::invalid_argument("--part '" + text + "': expected rows:K/N or samples:K/N");
+  const int count = int(flagged([&] { return parseOptionInteger("part", text.substr(slash + 1), 1, 1 << 24); }));
+  const int index = int(flagged([&] { return parseOptionInteger("part", text.substr(colon + 1, slash - colon - 1), 0, count - 1); }));
+  if (!control.crop.empty() || control.firstSample != 0 || control.sampleCount != 0)
+    throw std::invalid_argument("--part: give either --part or --crop and --samples");
+  const int total = axis == "rows" ? scene.camera.height : spp;
+  if (count > total)
+    throw std::invalid_argument("--part " + text + ": " + std::to_string(count) + " parts of " + std::to_string(total) +
+                                (axis == "rows" ? " rows" : " samples per pixel (--spp)"));
+  const int first = int(int64_t(index) * total / count), end = int(int64_t(index + 1) * total / count);
+  if (axis == "rows") control.crop = {0, first, scene.camera.width, end};
+  else control.firstSample = first, control.sampleCount = end - first;
+}
+
 RenderArgs parseArgs(const std::vector<std::string>& args) {
   RenderArgs a;
   for (size_t i = 0; i < args.size(); ++i) {
@@ -69,6 +139,14 @@ RenderArgs parseArgs(const std::vector<std::string>& args) {
     if (key == "-h" || key == "--help") a.help = true;
     else if (key == "-q" || key == "--quiet") a.quiet = true;
     else if (key == "--robust") a.robust = true;
+    else if (key == "--resume") a.resume = true;
+    else if (key == "--crop") a.crop = parseCrop(value());
+    else if (key == "--samples") a.samples = parseSamples(value());
+    else if (key == "--part") a.part = value();
+    else if (key == "--checkpoint") {
+      const std::string text = value();
+      a.checkpointSeconds = flagged([&] { return parseOptionReal("checkpoint", text, 1e-3, 1e9); });
+    }
     else if (key == "-o" || key == "--output") a.output = value();
     else if (key == "--png") a.png = value();
     else if (key == "--method") a.method = value();
@@ -85,7 +163,7 @@ RenderArgs parseArgs(const std::vector<std::string>& args) {
     }
     else if (key == "--threads") {
       const std::string text = value();
-      a.threads = int(parseOptionInteger("threads", text, 0, 4096));
+      a.threads = int(flagged([&] { return parseOptionInteger("threads", text, 0, 4096); }));
     } else if (key.rfind("--", 0) == 0) {
       a.methodOptions.push_back(methodOptionArg(key, inlineValue ? std::optional(arg.substr(eq + 1)) : std::nullopt,
                                                 [&] { return value(); }));
@@ -120,6 +198,38 @@ void refuseToOverwrite(const std::vector<std::string>& inputs, const std::string
     if (out == fs::weakly_canonical(input, ec))
       throw std::invalid_argument(flag + " '" + output + "' is a file the scene is read from; choose another output");
 }
+
+// While alive: SIGINT and SIGTERM ask the render to stop; a second one ends the process as usual.
+class StopOnSignals {
+ public:
+  StopOnSignals() {
+    requested_ = false;
+    signal_ = 0;
+    struct sigaction action {};
+    action.sa_handler = &StopOnSignals::handle;
+    action.sa_flags = SA_RESETHAND;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &previousInt_);
+    sigaction(SIGTERM, &action, &previousTerm_);
+  }
+  ~StopOnSignals() {
+    sigaction(SIGINT, &previousInt_, nullptr);
+    sigaction(SIGTERM, &previousTerm_, nullptr);
+  }
+  StopOnSignals(const StopOnSignals&) = delete;
+  StopOnSignals& operator=(const StopOnSignals&) = delete;
+  const std::atomic<bool>& requested() const { return requested_; }
+  int signal() const { return signal_; }
+
+ private:
+  static void handle(int signal) {
+    signal_ = signal;
+    requested_ = true;
+  }
+  static inline std::atomic<bool> requested_{false};
+  static inline std::atomic<int> signal_{0};
+  struct sigaction previousInt_ {}, previousTerm_ {};
+};
 
 void printHelp(const Method& method) {
   std::cout << "Usage: lucent render SCENE.json [--method NAME] -o OUT.exr [options]\n\nRender options:\n";
@@ -212,42 +322,102 @@ int runRender(const RenderArgs& a) {
   const Visibility visibility(scene, visOptions);
   stats.addStage("build_bvh", bvhClock.seconds());
 
+  // The part, the film file, and what it would be a film of.
+  RenderControl control;
+  int spp = 1;
+  for (const auto& [name, text] : resolved)
+    if (name == "spp") spp = int(parseOptionInteger("spp", text, 1, 1 << 24));
+  control.crop = a.crop;
+  std::tie(control.firstSample, control.sampleCount) = a.samples;
+  if (!a.part.empty()) applyPart(a.part, scene, spp, control);
+  const RenderPart part = resolvePart(control, scene, spp);
+  const nlohmann::ordered_json options = methodOptionsJson(*method, resolved);
+  FilmFileInfo info;
+  info.method = method->name();
+  info.options = options.dump();
+  info.scene = fs::absolute(a.scene).lexically_normal().string();
+  info.sceneHash = hex(scene.contentHash);
+  info.version = LUCENT_VERSION;
+  info.embreeIsa = visibility.isa();
+  info.laneIsa = laneIsaName(laneIsa());
+  info.spp = spp;
+  info.firstSample = part.sampleBegin;
+  info.sampleCount = part.samples();
+  const std::string filmPath = filmPathFor(a.output);
+  refuseToOverwrite(scene.inputFiles, filmPath, "-o (its film file)");
+  if ((control.checkpointSeconds = a.checkpointSeconds) > 0 || a.resume) {
+    if (!method->interruptible())
+      throw std::invalid_argument(std::string(a.resume ? "--resume" : "--checkpoint") + ": --method " + method->name() +
+                                  " cannot be checkpointed or resumed; render it in parts (--crop, --samples) instead");
+  }
+  std::optional<FilmFile> resumed;
+  if (a.resume && fs::exists(filmPath)) {
+    resumed = readFilmFile(filmPath);
+    std::string difference = renderDifference(resumed->info, info);
+    if (difference.empty() && !(resumed->film->region() == part.region)) difference = "it is of another --crop";
+    if (difference.empty() && (resumed->info.firstSample != info.firstSample || resumed->info.sampleCount != info.sampleCount))
+      difference = "it is of --samples " + std::to_string(resumed->info.firstSample) + ":" +
+                   std::to_string(resumed->info.sampleCount);
+    if (!difference.empty())
+      throw std::invalid_argument("--resume: '" + filmPath + "' is not a film of this render: " + difference);
+    control.resume = resumed->film.get();
+  }
+  bool checkpointed = false;
+  control.checkpoint = [&](const Film& film) {
+    writeFilmFile(filmPath, film, info);
+    checkpointed = true;
+  };
+
   RenderOutput out;
+  int stopSignal = 0;
   {
     ProgressBar bar(!a.quiet);
-    out = method->render(scene, visibility, resolved, [&](double f) { bar.update(f); });
+    control.progress = [&](double f) { bar.update(f); };
+    std::optional<StopOnSignals> signals;
+    if (method->interruptible()) {
+      signals.emplace();
+      control.stop = &signals->requested();
+    }
+    out = method->render(scene, visibility, resolved, control);
+    if (signals) stopSignal = signals->signal();
   }
   for (const auto& s : out.stats.stageSeconds) stats.addStage(s.first, s.second);
   stats.counters = out.stats.counters;
-  const double renderSeconds = total.seconds();
 
-  const nlohmann::ordered_json options = methodOptionsJson(*method, resolved);
   nlohmann::ordered_json derived = nlohmann::ordered_json::object();
   for (const auto& [name, value] : out.stats.derived) derived[name] = value;
-  std::string seed = "0";
-  for (const auto& [name, text] : resolved)
-    if (name == "seed") seed = text;
-  ImageMetadata meta = {{"lucent:method", method->name()},
-                        {"lucent:options", options.dump()},
-                        {"lucent:derived", derived.dump()},
-                        {"lucent:spp", std::to_string(out.sppDone)},
-                        {"lucent:seed", seed},
-                        {"lucent:render_seconds", std::to_string(renderSeconds)},
-                        {"lucent:version", LUCENT_VERSION},
-                        {"lucent:embree_version", Visibility::embreeVersion()},
-                        {"lucent:embree_isa", visibility.isa()},
-                        {"lucent:lane_isa", laneIsaName(laneIsa())},
-                        {"lucent:scene", fs::absolute(a.scene).lexically_normal().string()},
-                        {"lucent:scene_hash", hex(scene.contentHash)},
-                        {"lucent:threads", std::to_string(parallel.threads())}};
+  info.derived = derived.dump();
+  info.complete = out.complete;
+  info.counters = out.stats.counters;
+  ImageMetadata meta = filmMetadata(info, *out.film);
+  meta.emplace_back("lucent:render_seconds", std::to_string(total.seconds()));
+  meta.emplace_back("lucent:threads", std::to_string(parallel.threads()));
+  // A part of a split render and an interrupted render keep their film (merged later, or resumed);
+  // a whole render that completes removes the checkpoint it resumed from or wrote.
+  std::vector<FileToWrite> alsoWrite;
+  const bool keepFilm = control.isPart() || !out.complete;
+  if (keepFilm) alsoWrite.push_back(filmFile(filmPath, *out.film, info));
   Stopwatch writeClock;
-  writeExrAndPng(out.image, a.output, meta, a.png);
+  writeExrAndPng(out.image, a.output, meta, a.png, std::move(alsoWrite));
+  if (!keepFilm && (checkpointed || resumed)) fs::remove(filmPath);
   stats.addStage("write_images", writeClock.seconds());
 
   nlohmann::ordered_json summary;
   summary["method"] = method->name();
   summary["options"] = options;
   summary["spp"] = out.sppDone;
+  summary["complete"] = out.complete;
+  if (!out.complete) summary["stopped_by"] = stopSignal == SIGINT ? "SIGINT" : stopSignal == SIGTERM ? "SIGTERM" : "stop";
+  if (control.isPart()) {
+    const PixelRect& r = part.region;
+    summary["crop"] = {r.x0, r.y0, r.x1, r.y1};
+    summary["samples"] = {part.sampleBegin, part.samples()};
+  }
+  if (resumed) {
+    uint64_t samples = 0;
+    for (uint32_t taken : resumed->film->samplesTaken()) samples += taken;
+    summary["resumed_samples"] = samples;
+  }
   summary["threads"] = parallel.threads();
   summary["robust"] = a.robust;
   summary["embree_isa"] = visibility.isa();
@@ -259,9 +429,11 @@ int runRender(const RenderArgs& a) {
   summary["derived"] = derived;
   summary["output"] = a.output;
   if (!a.png.empty()) summary["png"] = a.png;
+  if (keepFilm) summary["film"] = filmPath;
   summary["scene_hash"] = hex(scene.contentHash);
   std::cout << summary.dump() << std::endl;
-  return 0;
+  // Interrupted: the status a shell gives a process that the signal ended.
+  return out.complete ? 0 : 128 + (stopSignal > 0 ? stopSignal : SIGTERM);
 }
 
 }  // namespace

@@ -97,9 +97,10 @@ void writeExr(const Image& image, const std::string& path, const ImageMetadata& 
 void writePng(const Image& image, const std::string& path) { writeFilesAtomically({pngFile(image, path)}); }
 
 void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageMetadata& metadata,
-                    const std::string& pngPath) {
+                    const std::string& pngPath, std::vector<FileToWrite> alsoWrite) {
   std::vector<FileToWrite> files = {exrFile(image, exrPath, metadata)};
   if (!pngPath.empty()) files.push_back(pngFile(image, pngPath));
+  for (FileToWrite& f : alsoWrite) files.push_back(std::move(f));
   writeFilesAtomically(files);
 }
 

@@ -10,8 +10,7 @@ namespace lucent {
 Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers)
     : width_(width), height_(height), region_(region), wholeImage_(region == PixelRect{0, 0, width, height}),
       mode_(sums), layers_(layers) {
-  if (!(region.x0 >= 0 && region.y0 >= 0 && region.x0 < region.x1 && region.y0 < region.y1 && region.x1 <= width &&
-        region.y1 <= height))
+  if (region.empty() || !PixelRect{0, 0, width, height}.contains(region))
     throw std::invalid_argument("film: the region is not a non-empty part of the image");
   layers_.caustic = layers.features && layers.caustic;
   // The parts are kept wherever the image needs them: for the layers, or (PerPart) for the total.
@@ -45,7 +44,7 @@ void Film::addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 
 void Film::add(const EyePaths& band, const PointRadiance& light) {
   for (size_t i = 0; i < band.pixels.size(); ++i) {
     const EyePixel& px = band.pixels[i];
-    const uint64_t p = band.firstPixel + i;
+    const uint64_t p = band.imagePixel(i, width_);
     ExactSum* sum = at(p);
     samples_[local(p)] += px.validSamples;
     for (int c = 0; c < 3; ++c) sum[direct_ + c].add(px.emitted[c]);
@@ -66,8 +65,7 @@ void Film::add(const EyePaths& band, const PointRadiance& light) {
 
 void Film::add(const Film& part) {
   if (part.width_ != width_ || part.height_ != height_ || part.mode_ != mode_ || !(part.layers_ == layers_) ||
-      part.stride_ != stride_ || part.region_.x0 < region_.x0 || part.region_.y0 < region_.y0 ||
-      part.region_.x1 > region_.x1 || part.region_.y1 > region_.y1)
+      part.stride_ != stride_ || !region_.contains(part.region_))
     throw std::invalid_argument("film: a part of another image, layout or region");
   const PixelRect& r = part.region_;
   for (int y = r.y0; y < r.y1; ++y)

@@ -127,32 +127,37 @@ struct CameraSample {
 
 EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathSettings& settings) {
   const int width = scene.camera.width;
-  const int rowBegin = settings.rowBegin, rowEnd = settings.rowEnd > 0 ? settings.rowEnd : scene.camera.height;
+  const PixelRect region = settings.region.empty() ? PixelRect{0, 0, width, scene.camera.height} : settings.region;
+  const int sampleBegin = settings.sampleBegin, sampleEnd = settings.sampleEnd > 0 ? settings.sampleEnd : settings.spp;
+  const int samples = sampleEnd - sampleBegin;
+  // Tiles of the image's fixed grid, cut to the region: a crop's packets are the whole image's
+  // where the crop's edges are on the grid.
   const int tile = settings.tileSize;
-  const int tilesX = (width + tile - 1) / tile, tilesY = (rowEnd - rowBegin + tile - 1) / tile;
+  const int tileX0 = region.x0 / tile, tileY0 = region.y0 / tile;
+  const int tilesX = (region.x1 + tile - 1) / tile - tileX0, tilesY = (region.y1 + tile - 1) / tile - tileY0;
   const int tiles = tilesX * tilesY;
   const PinholeCamera camera(scene.camera);
   const uint64_t seed = streamSeed(settings.seed, RenderStream::Eye);
 
   // Most camera samples end in one shading point, held per tile, then in the band's array, with the
   // radiance the method computes at it (direct and indirect).
-  const uint64_t bandPixels = uint64_t(width) * uint64_t(rowEnd - rowBegin);
-  requireMemory(bandPixels * (sizeof(EyePixel) + uint64_t(settings.spp) * (2 * sizeof(ShadingPoint) + 2 * sizeof(Rgb))),
-                "the camera paths' shading points", "lower --spp or --resolution");
+  requireMemory(region.pixelCount() * (sizeof(EyePixel) + uint64_t(samples) * (2 * sizeof(ShadingPoint) + 2 * sizeof(Rgb))),
+                "the camera paths' shading points", "lower --spp or --resolution, or render in parts (--crop)");
   EyePaths out;
-  out.firstPixel = uint32_t(rowBegin) * uint32_t(width);
-  out.pixels.resize(size_t(width) * size_t(rowEnd - rowBegin));  // constructed by the tiles
+  out.region = region;
+  out.pixels.resize(size_t(region.pixelCount()));  // constructed by the tiles
   std::vector<std::vector<ShadingPoint>> tilePoints(tiles);
   std::vector<uint64_t> tileRays(tiles, 0), tileInvalid(tiles, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
     flushDenormals();
     for (int t = r.begin(); t != r.end(); ++t) {
-      const int x0 = (t % tilesX) * tile, y0 = rowBegin + (t / tilesX) * tile;
-      const int x1 = std::min(width, x0 + tile), y1 = std::min(rowEnd, y0 + tile);
+      const int x0 = std::max(region.x0, (tileX0 + t % tilesX) * tile), y0 = std::max(region.y0, (tileY0 + t / tilesX) * tile);
+      const int x1 = std::min(region.x1, (tileX0 + t % tilesX + 1) * tile), y1 = std::min(region.y1, (tileY0 + t / tilesX + 1) * tile);
+      auto pixelIndex = [&](int x, int y) { return size_t(y - region.y0) * size_t(region.width()) + size_t(x - region.x0); };
       for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x) ::new (&out.pixels[size_t(y - rowBegin) * width + x]) EyePixel{};
+        for (int x = x0; x < x1; ++x) ::new (&out.pixels[pixelIndex(x, y)]) EyePixel{};
       std::vector<ShadingPoint>& points = tilePoints[t];
-      points.reserve(size_t(x1 - x0) * size_t(y1 - y0) * size_t(settings.spp));  // most samples end in one point
+      points.reserve(size_t(x1 - x0) * size_t(y1 - y0) * size_t(samples));  // most samples end in one point
       // The tile's camera samples in order (row, pixel, sample), their rays traced sixteen at a
       // time as a packet (coherent rays: several times Embree's single-ray speed). A packet never
       // spans two rows, so its rays depend only on the row and the fixed 16-pixel tile columns:
@@ -165,7 +170,7 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
         for (int j = 0; j < queued; ++j) {
           CameraSample& cs = batch[j];
           const Hit& hit = hits[j];
-          EyePixel& px = out.pixels[cs.pixel - out.firstPixel];
+          EyePixel& px = out.pixels[pixelIndex(int(cs.pixel % uint32_t(width)), int(cs.pixel / uint32_t(width)))];
           const size_t before = points.size();
           FirstHit first;
           const SampleResult res = traceCameraSample(scene, vis, settings, cs.ray, hit, cs.pixel, cs.sample, cs.rng,
@@ -182,7 +187,7 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
       for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
           const uint32_t pixel = uint32_t(y) * uint32_t(width) + uint32_t(x);
-          for (int s = 0; s < settings.spp; ++s) {
+          for (int s = sampleBegin; s < sampleEnd; ++s) {
             CameraSample& cs = batch[queued];
             cs.rng = Rng(seed, pixel, uint64_t(s));
             const Vec2 offset = settings.spp == 1 ? Vec2{0.5f, 0.5f}
@@ -210,14 +215,6 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
     }
   });
   return out;
-}
-
-std::vector<std::pair<int, int>> imageBands(const Scene& scene, int spp, uint64_t bandSamples) {
-  const uint64_t rowSamples = uint64_t(scene.camera.width) * uint64_t(std::max(1, spp));
-  const int rows = int(std::clamp<uint64_t>(bandSamples / rowSamples, 1, uint64_t(scene.camera.height)));
-  std::vector<std::pair<int, int>> bands;
-  for (int y = 0; y < scene.camera.height; y += rows) bands.push_back({y, std::min(scene.camera.height, y + rows)});
-  return bands;
 }
 
 }  // namespace lucent

@@ -4,6 +4,7 @@
 #include <utility>
 #include <vector>
 
+#include "lucent/core/files.h"
 #include "lucent/core/math.h"
 
 namespace lucent {
@@ -42,10 +43,10 @@ using ImageMetadata = std::vector<std::pair<std::string, std::string>>;
 void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata = {});
 // Writes the R, G, B channels as 8-bit sRGB-encoded PNG, clamped to [0,1]; atomically, as writeExr.
 void writePng(const Image& image, const std::string& path);
-// The EXR and, when pngPath is not empty, the PNG, written as one: if either cannot be written,
-// neither exists afterwards.
+// The EXR and, when pngPath is not empty, the PNG, and any other files given (a render's film file),
+// written as one: if any cannot be written, none exists afterwards.
 void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageMetadata& metadata,
-                    const std::string& pngPath);
+                    const std::string& pngPath, std::vector<FileToWrite> alsoWrite = {});
 // Reads any image OpenImageIO reads, as float, with its channel names and string metadata: the
 // values as stored. Refuses anything but a regular file, and headers of more than 2^26 pixels.
 Image readImage(const std::string& path, ImageMetadata* metadata = nullptr);

@@ -12,19 +12,10 @@
 
 #include "lucent/core/exact_sum.h"
 #include "lucent/image/image.h"
+#include "lucent/pipeline/pixel_rect.h"
 #include "lucent/pipeline/shading_points.h"
 
 namespace lucent {
-
-// The pixels [x0, x1) x [y0, y1) of an image.
-struct PixelRect {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  int width() const { return x1 - x0; }
-  int height() const { return y1 - y0; }
-  uint64_t pixelCount() const { return uint64_t(width()) * uint64_t(height()); }
-  bool contains(int x, int y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
-  bool operator==(const PixelRect&) const = default;
-};
 
 // The layers an image carries beside R, G, B: none, or the first hit's albedo, normal and depth
 // and the light split into direct and indirect parts, with a caustic part for the methods that

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lucent/pipeline/options.h"
+#include "lucent/pipeline/render_control.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
@@ -24,24 +25,30 @@ class Method {
   virtual OptionValues resolve(const OptionValues& values) const = 0;
   // Renders with `values` set over the defaults; throws OptionError as resolve does.
   virtual RenderOutput render(const Scene& scene, const Visibility& visibility, const OptionValues& values,
-                              const ProgressFn& progress = {}) const = 0;
+                              const RenderControl& control = {}) const = 0;
+  // Whether the method honours RenderControl's stop requests, checkpoints and resume (a method that
+  // does not refuses a control that asks for checkpoints or a resume, and ignores stop requests).
+  virtual bool interruptible() const = 0;
 };
 
 // A method whose options are the struct Options, declared by `table`, rendered by `render`.
 template <class Options>
 class DeclaredMethod final : public Method {
  public:
-  using RenderFn = RenderOutput (*)(const Scene&, const Visibility&, const Options&, const ProgressFn&);
-  DeclaredMethod(std::string name, std::string summary, const OptionTable<Options>& table, RenderFn render)
-      : name_(std::move(name)), summary_(std::move(summary)), table_(table), render_(render) {}
+  using RenderFn = RenderOutput (*)(const Scene&, const Visibility&, const Options&, const RenderControl&);
+  DeclaredMethod(std::string name, std::string summary, const OptionTable<Options>& table, RenderFn render,
+                 bool interruptible)
+      : name_(std::move(name)), summary_(std::move(summary)), table_(table), render_(render),
+        interruptible_(interruptible) {}
   const std::string& name() const override { return name_; }
   const std::string& summary() const override { return summary_; }
   const std::vector<OptionSpec>& options() const override { return table_.specs(); }
   OptionValues resolve(const OptionValues& values) const override { return table_.values(parse(values)); }
   RenderOutput render(const Scene& scene, const Visibility& visibility, const OptionValues& values,
-                      const ProgressFn& progress) const override {
-    return render_(scene, visibility, parse(values), progress);
+                      const RenderControl& control) const override {
+    return render_(scene, visibility, parse(values), control);
   }
+  bool interruptible() const override { return interruptible_; }
 
  private:
   Options parse(const OptionValues& values) const {
@@ -53,6 +60,7 @@ class DeclaredMethod final : public Method {
   std::string name_, summary_;
   const OptionTable<Options>& table_;
   RenderFn render_;
+  bool interruptible_;
 };
 
 }  // namespace lucent

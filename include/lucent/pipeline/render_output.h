@@ -1,6 +1,7 @@
 // What every rendering method returns, and its progress callback.
 #pragma once
 #include <functional>
+#include <memory>
 
 #include "lucent/core/stats.h"
 #include "lucent/image/image.h"
@@ -10,10 +11,16 @@ namespace lucent {
 // Called from worker threads with the fraction of work done; must be thread-safe.
 using ProgressFn = std::function<void(double)>;
 
+class Film;
+
 struct RenderOutput {
-  Image image;
+  Image image;  // of the render's part (RenderControl): its crop's pixels
   RenderStats stats;
   int sppDone = 0;
+  // The film the image was made of (its sums, for checkpoints and merges), and whether it holds
+  // every sample of the part (false after a stop request).
+  std::shared_ptr<const Film> film;
+  bool complete = true;
 };
 
 }  // namespace lucent

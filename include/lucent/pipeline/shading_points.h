@@ -12,6 +12,7 @@
 #include "lucent/core/exact_sum.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/uninitialized.h"
+#include "lucent/pipeline/pixel_rect.h"
 #include "lucent/scene/bsdf.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
@@ -37,11 +38,12 @@ struct ShadingPoint {
 static_assert(sizeof(ShadingPoint) == 108 && std::is_trivially_copyable_v<ShadingPoint>, "dumped as records");
 
 struct EyePathSettings {
-  int spp = 1;
+  int spp = 1;  // camera samples per pixel, stratified over the pixel
   int maxSpecularDepth = 10;
   uint64_t seed = 0;
   bool layers = false;
-  int rowBegin = 0, rowEnd = 0;  // the band of image rows traced; rowEnd 0: to the last row
+  PixelRect region;  // the pixels traced (a band of rows, of a crop); empty: the whole image
+  int sampleBegin = 0, sampleEnd = 0;  // the camera samples [sampleBegin, sampleEnd) of spp; end 0: spp
   int tileSize = 16;
 };
 
@@ -75,8 +77,13 @@ struct EyePixel {
 // The arrays are written by the tiles in parallel (UninitializedVector).
 struct EyePaths {
   UninitializedVector<ShadingPoint> points;  // by tile, then pixel, then sample, then branch
-  UninitializedVector<EyePixel> pixels;      // the band's, from pixel firstPixel on (row rowBegin)
-  uint32_t firstPixel = 0;
+  UninitializedVector<EyePixel> pixels;      // the region's, row by row
+  PixelRect region;
+  // The index in the whole image of the region's i-th pixel.
+  uint64_t imagePixel(size_t i, int imageWidth) const {
+    const int w = region.width();
+    return uint64_t(region.y0 + int(i / size_t(w))) * uint64_t(imageWidth) + uint64_t(region.x0 + int(i % size_t(w)));
+  }
   uint64_t rays = 0;
   uint64_t invalid = 0;  // camera paths dropped for non-finite values
 };
@@ -90,9 +97,5 @@ struct EyePaths {
 inline constexpr float kSplitWeight = 0.05f;
 EyePaths traceEyePaths(const Scene& scene, const Visibility& visibility, const EyePathSettings& settings);
 
-// The bands of rows, each of at most `bandSamples` camera samples (at least one row), so that the
-// shading points held at once stay bounded whatever the resolution and spp (512 x 512 at 1 spp is
-// one band by default: the paper's whole-screen passes).
-std::vector<std::pair<int, int>> imageBands(const Scene& scene, int spp, uint64_t bandSamples);
 
 }  // namespace lucent

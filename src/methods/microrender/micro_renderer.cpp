@@ -22,6 +22,7 @@
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 #include "lucent/pipeline/film.h"
+#include "lucent/pipeline/render_control.h"
 #include "lucent/pipeline/shading_points.h"
 #include "point_lighting.h"
 #include "upsampling.h"
@@ -111,8 +112,15 @@ uint32_t defaultPointCount(const Scene& scene, float spacing) {
 }
 
 RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroRenderOptions& o,
-                         const ProgressFn& progress) {
+                         const RenderControl& control) {
   microOptionTable().validate(o);
+  // Gathering runs over the whole part at once (its Morton order and the upsampling lattice span
+  // it): there is no state between stages to checkpoint.
+  if (control.resume || control.checkpointSeconds > 0)
+    throw std::invalid_argument("--method micro gathers the whole image at once and cannot checkpoint or resume; "
+                                "render it in parts (--crop, --samples) to bound the work a kill loses");
+  const RenderPart part = resolvePart(control, scene, o.spp);
+  const ProgressFn& progress = control.progress;
   RenderOutput out;
   RenderStats& stats = out.stats;
 
@@ -158,6 +166,9 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   // Camera paths and direct light, at every pixel.
   Stopwatch eyeClock;
   EyePathSettings eyeSettings{o.spp, o.maxSpecularDepth, o.seed, o.layers};
+  eyeSettings.region = part.region;
+  eyeSettings.sampleBegin = part.sampleBegin;
+  eyeSettings.sampleEnd = part.sampleEnd;
   const EyePaths eye = traceEyePaths(scene, vis, eyeSettings);
   const size_t n = eye.points.size();
   PointRadiance shading(n);
@@ -233,17 +244,19 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
 
   Stopwatch imageClock;
-  Film film(scene.camera.width, scene.camera.height, Film::Sums::PerPart, {o.layers, false});
-  film.add(eye, shading);
-  out.image = film.image();
-  out.sppDone = o.spp;
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {o.layers, false}));
+  film->add(eye, shading);
+  for (size_t i = 0; i < eye.pixels.size(); ++i) film->setTaken(eye.imagePixel(i, width), uint32_t(part.samples()));
+  out.image = film->image();
+  out.film = film;
+  out.sppDone = part.samples();
   stats.addStage("image", imageClock.seconds());
 
   const MicroCounters& c = totals.counters;
   stats.addCounter("eye_rays", eye.rays);
   stats.addCounter("shadow_rays", shadowRays);
   stats.addCounter("shading_points", n);
-  stats.addCounter("invalid_samples", eye.invalid + film.droppedPoints());
+  stats.addCounter("invalid_samples", eye.invalid + film->droppedPoints());
   stats.addCounter("micro_buffers", c.buffers);
   stats.addCounter("micro_buffers_ray_cast", c.buffersRayCast);
   stats.addCounter("upsampling_recomputed", recomputed);

@@ -66,6 +66,6 @@ uint32_t defaultPointCount(const Scene& scene, float spacing);
 
 // Throws OptionError for options outside their declared ranges.
 RenderOutput renderMicro(const Scene& scene, const Visibility& visibility, const MicroRenderOptions& options,
-                         const ProgressFn& progress = {});
+                         const RenderControl& control = {});
 
 }  // namespace lucent

@@ -34,7 +34,7 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
 const Method& pathTraceMethod() {
   static const DeclaredMethod<PathTraceOptions> method(
       "pt", "the unbiased reference path tracer: next-event estimation and BSDF sampling by MIS",
-      pathTraceOptionTable(), renderPathTraced);
+      pathTraceOptionTable(), renderPathTraced, true);
   return method;
 }
 

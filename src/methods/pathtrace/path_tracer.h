@@ -40,6 +40,6 @@ const Method& pathTraceMethod();
 
 // Throws OptionError for options outside their declared ranges.
 RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, const PathTraceOptions& options,
-                              const ProgressFn& progress = {});
+                              const RenderControl& control = {});
 
 }  // namespace lucent

@@ -9,6 +9,7 @@
 #include "lucent/core/rng.h"
 #include "methods/pathtrace/path_tracer.h"
 #include "lucent/pipeline/film.h"
+#include "lucent/pipeline/render_control.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"
@@ -174,7 +175,7 @@ class PathTracer {
 
   // The samples [sampleBegin, sampleEnd) of the tile's pixels, in pixel order, then sample order,
   // in waves; added to the film in that order, so that every pixel sums its samples in sample order.
-  void renderTile(int x0, int y0, int x1, int y1, int sampleBegin, int sampleEnd, Wave& wave, Counters& counters,
+  void renderTile(const PixelRect& tile, int sampleBegin, int sampleEnd, Wave& wave, Counters& counters,
                   Film& film) const;
 
   // Advances every path of the wave to its end: closest hits for all live paths, then shading,
@@ -457,20 +458,31 @@ class PathTracer {
   const bool prefetchSceneData_ = sceneArrayBytes(scene_) > (size_t(1) << 20);
 };
 
-void PathTracer::renderTile(int x0, int y0, int x1, int y1, int sampleBegin, int sampleEnd, Wave& wave,
-                            Counters& counters, Film& film) const {
-  const int64_t items = int64_t(x1 - x0) * (y1 - y0) * (sampleEnd - sampleBegin);
-  int x = x0, y = y0, sample = sampleBegin;  // of the next item
-  for (int64_t first = 0; first < items; first += kWaveSize) {
+// The samples of the tile's pixels from each pixel's next (sampleBegin plus the samples the film
+// has taken there) to sampleEnd, in order (row, pixel, sample); then the film takes them all.
+void PathTracer::renderTile(const PixelRect& tile, int sampleBegin, int sampleEnd, Wave& wave, Counters& counters,
+                            Film& film) const {
+  const uint64_t width = uint64_t(scene_.camera.width);
+  auto pixelOf = [&](int x, int y) { return uint64_t(y) * width + uint64_t(x); };
+  int x = tile.x0, y = tile.y0;
+  int sample = sampleBegin + int(film.taken(pixelOf(x, y)));
+  // Moves (x, y, sample) to the next sample to take, if any; false at the end of the tile.
+  auto settle = [&] {
+    while (sample >= sampleEnd) {
+      if (++x == tile.x1) x = tile.x0, ++y;
+      if (y == tile.y1) return false;
+      sample = sampleBegin + int(film.taken(pixelOf(x, y)));
+    }
+    return true;
+  };
+  for (bool more = settle(); more;) {
     CameraLanes& start = *wave.camera;
-    start.count = uint32_t(std::min<int64_t>(items - first, kWaveSize));
-    for (uint32_t k = 0; k < start.count; ++k) {
-      start.pixel[k] = uint64_t(y) * uint64_t(scene_.camera.width) + uint64_t(x), start.sample[k] = uint64_t(sample);
+    start.count = 0;
+    for (; more && start.count < uint32_t(kWaveSize); more = settle()) {
+      const uint32_t k = start.count++;
+      start.pixel[k] = pixelOf(x, y), start.sample[k] = uint64_t(sample);
       start.x[k] = float(x), start.y[k] = float(y);
-      if (++sample == sampleEnd) {
-        sample = sampleBegin;
-        if (++x == x1) x = x0, ++y;
-      }
+      ++sample;
     }
     // The camera rays, all lanes at once, or one path at a time.
     if (opt_.laneShading) startCameraPaths(start, 0, start.count, opt_.seed, camera_, opt_.pixelCentres);
@@ -495,64 +507,98 @@ void PathTracer::renderTile(int x0, int y0, int x1, int y1, int sampleBegin, int
       film.addSample(path.pixel, p.direct, p.indirect, p.albedo, p.normal, p.depth);
     }
   }
+  for (int py = tile.y0; py < tile.y1; ++py)
+    for (int px = tile.x0; px < tile.x1; ++px) {
+      const uint64_t pixel = pixelOf(px, py);
+      film.setTaken(pixel, std::max(film.taken(pixel), uint32_t(sampleEnd - sampleBegin)));
+    }
 }
 
-// The end of the next pass of samples. Without a time budget everything is one pass. With one, the
-// first pass takes one sample per pixel and each later pass as many as the remaining time allows
-// at the measured rate (no more: the returned end is sppDone). The image depends only on the
-// number of samples taken, never on how they were split into passes.
-int nextPassEnd(const PathTraceOptions& options, int sppDone, double elapsed) {
-  if (!(options.timeBudget > 0)) return options.spp;
-  if (sppDone == 0) return 1;
-  const double affordable = (options.timeBudget - elapsed) / (elapsed / sppDone);
-  if (affordable < 1) return sppDone;
-  return int(std::min<double>(options.spp, sppDone + std::min<double>(affordable, 2.0 * sppDone + 1)));
+// The end of the next pass of samples, counted from the part's first. With a time budget, the
+// first pass takes one sample per pixel and each later pass as many as the remaining time allows at
+// the measured rate (no more: the returned end is done). Otherwise passes double (1, 2, 4, ...
+// samples) up to 64 samples each, so that a tile's work in a pass stays short (a stop request waits
+// for the tiles in flight) and checkpoints come between passes. The image depends only on the
+// samples taken, never on how they were split into passes.
+int nextPassEnd(const PathTraceOptions& options, int samples, int done, double elapsed) {
+  if (options.timeBudget > 0) {
+    if (done == 0) return 1;
+    const double affordable = (options.timeBudget - elapsed) / (elapsed / done);
+    if (affordable < 1) return done;
+    return int(std::min<double>(samples, done + std::min<double>(affordable, 2.0 * done + 1)));
+  }
+  return std::min(samples, done + std::clamp(done, 1, 64));
 }
 
 }  // namespace
 
 RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, const PathTraceOptions& options,
-                              const ProgressFn& progress) {
+                              const RenderControl& control) {
   pathTraceOptionTable().validate(options);
-  const int width = scene.camera.width, height = scene.camera.height;
+  if (options.timeBudget > 0 && (control.isPart() || control.resume || control.checkpointSeconds > 0))
+    throw OptionError("time_budget",
+                      "--time-budget: a render with a time budget takes as many samples as time allows, so it cannot "
+                      "be split (--crop, --samples), checkpointed or resumed");
+  const RenderPart part = resolvePart(control, scene, options.spp);
   // Every pixel is owned by one tile, and its samples are added in sample order.
-  Film film(width, height, Film::Sums::PerSample, {options.layers, false});
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, {options.layers, false}));
   const PathTracer tracer(scene, visibility, options);
-  const int tile = options.tileSize, tilesX = (width + tile - 1) / tile, tilesY = (height + tile - 1) / tile;
+  // Tiles of the image's grid, cut to the part's region.
+  const PixelRect& region = part.region;
+  const int tile = options.tileSize;
+  const int tileX0 = region.x0 / tile, tileY0 = region.y0 / tile;
+  const int tilesX = (region.x1 + tile - 1) / tile - tileX0, tilesY = (region.y1 + tile - 1) / tile - tileY0;
   tbb::enumerable_thread_specific<Counters> counters;
   tbb::enumerable_thread_specific<PathTracer::Wave> waves;
-  std::atomic<uint64_t> pixelSamplesDone{0};
-  const double totalPixelSamples = double(width) * height * options.spp;
+  uint64_t resumedSamples = 0;
+  for (uint32_t taken : film->samplesTaken()) resumedSamples += taken;
+  std::atomic<uint64_t> pixelSamplesDone{resumedSamples};
+  const double totalPixelSamples = double(region.pixelCount()) * part.samples();
+  CheckpointClock checkpoints(control);
 
   Stopwatch clock;
-  int sppDone = 0;
-  for (int passEnd; sppDone < options.spp && (passEnd = nextPassEnd(options, sppDone, clock.seconds())) > sppDone;
-       sppDone = passEnd) {
+  // A resumed render goes on from the fewest samples any pixel has (pixels with more skip them).
+  int done = int(*std::min_element(film->samplesTaken().begin(), film->samplesTaken().end()));
+  std::atomic<bool> stopped{false};
+  for (int passEnd; done < part.samples() && !stopped &&
+                    (passEnd = nextPassEnd(options, part.samples(), done, clock.seconds())) > done;
+       done = passEnd) {
     tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& r) {
       flushDenormals();  // every thread computes alike, whoever created it
       for (int t = r.begin(); t != r.end(); ++t) {
-        const int x0 = (t % tilesX) * tile, y0 = (t / tilesX) * tile;
-        const int x1 = std::min(width, x0 + tile), y1 = std::min(height, y0 + tile);
-        tracer.renderTile(x0, y0, x1, y1, sppDone, passEnd, waves.local(), counters.local(), film);
-        const uint64_t done = pixelSamplesDone += uint64_t(x1 - x0) * (y1 - y0) * (passEnd - sppDone);
-        if (progress) progress(std::min(1.0, done / totalPixelSamples));
+        if (control.stopRequested()) {
+          stopped = true;
+          return;
+        }
+        const int tx = tileX0 + t % tilesX, ty = tileY0 + t / tilesX;
+        const PixelRect cut{std::max(region.x0, tx * tile), std::max(region.y0, ty * tile),
+                            std::min(region.x1, (tx + 1) * tile), std::min(region.y1, (ty + 1) * tile)};
+        tracer.renderTile(cut, part.sampleBegin, part.sampleBegin + passEnd, waves.local(), counters.local(), *film);
+        const uint64_t samples = pixelSamplesDone += cut.pixelCount() * uint64_t(passEnd - done);
+        if (control.progress) control.progress(std::min(1.0, double(samples) / totalPixelSamples));
       }
     });
+    if (!stopped) checkpoints.reached(*film);
   }
 
   RenderOutput out;
-  out.sppDone = sppDone;
-  out.image = film.image();
+  // A render that its time budget ended is whole; one that a stop request ended is not.
+  out.complete = options.timeBudget > 0 ? !stopped.load() : filmComplete(*film, part);
+  out.sppDone = int(*std::min_element(film->samplesTaken().begin(), film->samplesTaken().end()));
+  out.image = film->image();
+  out.film = film;
   Counters total;
   for (const Counters& c : counters) {
     total.rays += c.rays;
     total.laneShadedHits += c.laneShadedHits;
     total.invalidSamples += c.invalidSamples;
   }
+  uint64_t samples = 0;
+  for (uint32_t taken : film->samplesTaken()) samples += taken;
   out.stats.addStage("trace_paths", clock.seconds());
   out.stats.addCounter("rays", total.rays);
   out.stats.addCounter("lane_shaded_hits", total.laneShadedHits);
-  out.stats.addCounter("samples", uint64_t(width) * height * sppDone);
+  out.stats.addCounter("samples", samples - resumedSamples);
   out.stats.addCounter("invalid_samples", total.invalidSamples);
   return out;
 }

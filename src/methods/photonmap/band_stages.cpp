@@ -19,15 +19,55 @@ void addEstimateCounters(RenderStats& stats, const std::string& prefix, const Es
 }
 
 BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
-                            std::pair<int, int> band, uint64_t& shadowRays) {
+                            const PixelRect& band, const RenderPart& part, uint64_t& shadowRays) {
   EyePathSettings eyeSettings{options.spp, options.maxSpecularDepth, options.seed, options.layers};
-  eyeSettings.rowBegin = band.first;
-  eyeSettings.rowEnd = band.second;
+  eyeSettings.region = band;
+  eyeSettings.sampleBegin = part.sampleBegin;
+  eyeSettings.sampleEnd = part.sampleEnd;
   BandShadingPoints out{traceEyePaths(scene, vis, eyeSettings), PointRadiance(0)};
   out.radiance = PointRadiance(out.eye.points.size());
   if (options.lightSamples > 0)
     estimateDirectLight(scene, vis, out.eye.points, options.lightSamples, options.seed, out.radiance.direct, shadowRays);
   return out;
+}
+
+bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
+                 const RenderControl& control, const RenderPart& part, Film& film, RenderTotals& totals,
+                 const std::function<void(BandShadingPoints& band, const std::function<void(double)>& progress)>& estimate) {
+  const PixelRect& region = part.region;
+  const int width = scene.camera.width;
+  auto rowDone = [&](int y) {
+    for (int x = region.x0; x < region.x1; ++x)
+      if (film.taken(uint64_t(y) * uint64_t(width) + uint64_t(x)) != uint32_t(part.samples())) return false;
+    return true;
+  };
+  int row = region.y0;
+  while (row < region.y1 && rowDone(row)) ++row;
+  // Dumped bands are named by their index: fixed bands, whatever the time they take.
+  RowBands bands(part, options.bandSamples, options.dumpDirectory.empty() ? 2.0 : 0.0);
+  CheckpointClock checkpoints(control);
+  const double rows = region.height();
+  for (size_t index = 0; row < region.y1; ++index) {
+    if (control.stopRequested()) return false;
+    Stopwatch bandClock;
+    const auto [first, end] = bands.next(row);
+    const PixelRect band{region.x0, first, region.x1, end};
+    Stopwatch rayClock;
+    BandShadingPoints traced = traceBand(scene, vis, options, band, part, totals.shadowRays);
+    totals.traceSeconds += rayClock.seconds();
+    estimate(traced, [&](double fraction) {
+      if (control.progress) control.progress((double(first - region.y0) + fraction * (end - first)) / rows);
+    });
+    dumpBand(options, index, traced.eye, traced.radiance);
+    film.add(traced.eye, traced.radiance);
+    for (int y = first; y < end; ++y)
+      for (int x = region.x0; x < region.x1; ++x) film.setTaken(uint64_t(y) * uint64_t(width) + uint64_t(x), uint32_t(part.samples()));
+    totals.addBand(traced.eye);
+    bands.finished(end - first, bandClock.seconds());
+    row = end;
+    if (row < region.y1) checkpoints.reached(film);
+  }
+  return true;
 }
 
 void RenderTotals::report(RenderStats& stats, const EstimateCounters& global, const EstimateCounters& caustic) const {

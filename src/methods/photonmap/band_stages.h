@@ -2,12 +2,14 @@
 // light, the band's dumps, and the totals both report the same way (the paper's Table 1 stages).
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 
 #include "lucent/core/stats.h"
 #include "lucent/methods/photons/photon_estimate.h"
 #include "lucent/pipeline/film.h"
+#include "lucent/pipeline/render_control.h"
 #include "lucent/pipeline/shading_points.h"
 #include "methods/photonmap/photon_mapping.h"
 
@@ -20,13 +22,24 @@ struct BandShadingPoints {
   PointRadiance radiance;
 };
 BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
-                            std::pair<int, int> band, uint64_t& shadowRays);
+                            const PixelRect& band, const RenderPart& part, uint64_t& shadowRays);
 
 void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& counters);
 
 // Dumps (docs/dump-format.md) a band's shading points and the radiance each part of the estimate
 // gives them as "band<N>.<array>" into options.dumpDirectory, when it is set.
 void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance);
+
+// The band loop of both renderers: the part's rows in bands (RowBands: at most
+// options.bandSamples camera samples, and about two seconds of work unless stages are dumped), from
+// the first row the film does not hold in full (a resumed render). Each band is traced by
+// traceBand, finished by `estimate` (the method's radiance estimates at its points; its progress
+// callback takes the fraction of the band done), dumped, and added to the film. Between bands:
+// checkpoints, and stop requests, after which it returns false.
+struct RenderTotals;
+bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
+                 const RenderControl& control, const RenderPart& part, Film& film, RenderTotals& totals,
+                 const std::function<void(BandShadingPoints& band, const std::function<void(double)>& progress)>& estimate);
 
 // What both renderers add up over the bands, and report the same way: the paper's Table 1 stages
 // trace_rays and radiance_estimate, and the ray, point and estimate counters.

@@ -96,13 +96,14 @@ size_t traceGatherRays(const Scene& scene, const Visibility& vis, const ShadingP
 }  // namespace
 
 RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
-                                        const ProgressFn& progress) {
+                                        const RenderControl& control) {
   pmfgOptionTable().validate(options);
   if (options.bandSamples < 1) throw std::invalid_argument("band samples must be at least 1");
+  const RenderPart part = resolvePart(control, scene, options.spp);
   RenderOutput out;
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::All, out.stats);
 
-  Film film(scene.camera.width, scene.camera.height, Film::Sums::PerPart, {options.layers, true});
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {options.layers, true}));
   const uint32_t heapSize = maps.globalSettings.k;  // the caustic map is estimated by estimateAtPoints
   tbb::enumerable_thread_specific<GatherScratch> scratch([&] {
     GatherScratch s;
@@ -113,16 +114,10 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   tbb::enumerable_thread_specific<EstimateCounters> causticCounters;
   const uint64_t gatherSeed = streamSeed(options.seed, RenderStream::Gather);
   RenderTotals totals;
-  const auto bands = imageBands(scene, options.spp, options.bandSamples);
-  for (size_t band = 0; band < bands.size(); ++band) {
-    // Eye rays and shadow rays.
-    Stopwatch rayClock;
-    BandShadingPoints traced = traceBand(scene, vis, options, bands[band], totals.shadowRays);
-    const EyePaths& eye = traced.eye;
-    PointRadiance& radiance = traced.radiance;
+  renderBands(scene, vis, options, control, part, *film, totals, [&](BandShadingPoints& band, const auto& progress) {
+    const EyePaths& eye = band.eye;
+    PointRadiance& radiance = band.radiance;
     const size_t n = eye.points.size();
-    totals.traceSeconds += rayClock.seconds();
-
     withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
       // Caustics: the caustic map's estimate at every shading point.
       Stopwatch causticClock;
@@ -156,7 +151,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
           radiance.indirect[i] = Rgb(float(sum[0] * inv), float(sum[1] * inv), float(sum[2] * inv));
           s.estimateSeconds += estimateClock.seconds();
         }
-        if (progress) progress((double(band) + double(done += r.size()) / double(n)) / double(bands.size()));
+        progress(double(done += r.size()) / double(n));
       });
       const double wall = gatherClock.seconds();
       double t = 0, e = 0;
@@ -165,14 +160,13 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
       totals.traceSeconds += wall * share;
       totals.estimateSeconds += wall * (1 - share);
     });
-    dumpBand(options, band, eye, radiance);
-    film.add(eye, radiance);
-    totals.addBand(eye);
-  }
+  });
 
-  out.image = film.image();
-  out.sppDone = options.spp;
-  totals.invalid += film.droppedPoints();
+  out.complete = filmComplete(*film, part);
+  out.sppDone = out.complete ? part.samples() : 0;
+  out.image = film->image();
+  out.film = film;
+  totals.invalid += film->droppedPoints();
   EstimateCounters gc, cc;
   uint64_t gatherRays = 0;
   for (const GatherScratch& s : scratch) gc += s.counters, gatherRays += s.rays;

@@ -62,11 +62,11 @@ const Method& pmfgMethod();
 // estimates of the global map (indirect photons only) and of the caustic map.
 // Both throw OptionError for options outside their declared ranges.
 RenderOutput renderPurcell(const Scene& scene, const Visibility& visibility, const PhotonMapOptions& options,
-                           const ProgressFn& progress = {});
+                           const RenderControl& control = {});
 
 // Jensen's RT/PM/FG: as renderPurcell, but indirect light at the first diffuse or glossy hit comes
 // from `gatherRays` final-gather rays whose hits use the global map's estimate (all photons).
 RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& visibility,
-                                        const PhotonMapOptions& options, const ProgressFn& progress = {});
+                                        const PhotonMapOptions& options, const RenderControl& control = {});
 
 }  // namespace lucent

@@ -14,46 +14,36 @@
 namespace lucent {
 
 RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
-                           const ProgressFn& progress) {
+                           const RenderControl& control) {
   purcellOptionTable().validate(options);
   if (options.bandSamples < 1) throw std::invalid_argument("band samples must be at least 1");
+  const RenderPart part = resolvePart(control, scene, options.spp);
   RenderOutput out;
   // The global map without direct and caustic photons: direct light comes from shadow rays and
   // caustics from the caustic map, so each light path is counted once.
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::Indirect, out.stats);
 
-  Film film(scene.camera.width, scene.camera.height, Film::Sums::PerPart, {options.layers, true});
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {options.layers, true}));
   tbb::enumerable_thread_specific<EstimateCounters> globalCounters, causticCounters;
   RenderTotals totals;
-  const auto bands = imageBands(scene, options.spp, options.bandSamples);
-  for (size_t band = 0; band < bands.size(); ++band) {
-    // Eye rays and shadow rays.
-    Stopwatch rayClock;
-    BandShadingPoints traced = traceBand(scene, vis, options, bands[band], totals.shadowRays);
-    const EyePaths& eye = traced.eye;
-    PointRadiance& radiance = traced.radiance;
-    const size_t n = eye.points.size();
-    totals.traceSeconds += rayClock.seconds();
-
+  renderBands(scene, vis, options, control, part, *film, totals, [&](BandShadingPoints& band, const auto& progress) {
     // The radiance estimate at every shading point, from both maps.
     Stopwatch estimateClock;
+    const size_t n = band.eye.points.size();
     std::atomic<size_t> done{0};
-    auto reportDone = [&](size_t count) {
-      if (progress) progress((double(band) + 0.5 * double(done += count) / double(n)) / double(bands.size()));
-    };
+    auto reportDone = [&](size_t count) { progress(0.5 * double(done += count) / double(n)); };
     withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
-      estimateAtPoints(global, eye.points, maps.globalSettings, radiance.indirect, globalCounters, reportDone);
-      estimateAtPoints(caustic, eye.points, maps.causticSettings, radiance.caustic, causticCounters, reportDone);
+      estimateAtPoints(global, band.eye.points, maps.globalSettings, band.radiance.indirect, globalCounters, reportDone);
+      estimateAtPoints(caustic, band.eye.points, maps.causticSettings, band.radiance.caustic, causticCounters, reportDone);
     });
     totals.estimateSeconds += estimateClock.seconds();
-    dumpBand(options, band, eye, radiance);
-    film.add(eye, radiance);
-    totals.addBand(eye);
-  }
+  });
 
-  out.image = film.image();
-  out.sppDone = options.spp;
-  totals.invalid += film.droppedPoints();
+  out.complete = filmComplete(*film, part);
+  out.sppDone = out.complete ? part.samples() : 0;
+  out.image = film->image();
+  out.film = film;
+  totals.invalid += film->droppedPoints();
   EstimateCounters gc, cc;
   for (const auto& c : globalCounters) gc += c;
   for (const auto& c : causticCounters) cc += c;

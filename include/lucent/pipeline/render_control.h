@@ -1,0 +1,83 @@
+// How a render runs beyond its method's options: the part of the image and of its camera samples
+// that it covers (one part of a render split over processes or machines, merged by `lucent
+// merge`), the film of an interrupted run to resume from, checkpoints, and a request to stop
+// (SIGINT, SIGTERM). Every method takes one; the default is the whole render, uninterrupted.
+#pragma once
+#include <atomic>
+#include <functional>
+
+#include "lucent/pipeline/film.h"
+#include "lucent/pipeline/pixel_rect.h"
+#include "lucent/pipeline/render_output.h"
+#include "lucent/scene/scene.h"
+
+namespace lucent {
+
+struct RenderControl {
+  ProgressFn progress;
+  // The part: the pixels of `crop` (empty: the whole image), and of each pixel the camera samples
+  // [firstSample, firstSample + sampleCount) of the method's spp (sampleCount 0: to the last).
+  PixelRect crop;
+  int firstSample = 0, sampleCount = 0;
+  // The film of an earlier run of the same render and part, left by a checkpoint: its samples are
+  // kept and the render goes on from where each pixel stopped.
+  const Film* resume = nullptr;
+  // Called every `checkpointSeconds` (0: never) at a point where the film holds whole samples of
+  // whole pixels, with that film (the state a resumed run needs).
+  double checkpointSeconds = 0;
+  std::function<void(const Film&)> checkpoint;
+  // Set from outside (a signal handler): the method finishes the work in flight and returns what it
+  // has, with RenderOutput::complete false.
+  const std::atomic<bool>* stop = nullptr;
+
+  bool stopRequested() const { return stop && stop->load(std::memory_order_relaxed); }
+  bool isPart() const { return !crop.empty() || firstSample != 0 || sampleCount != 0; }
+};
+
+// A control's part made concrete for a scene and a method's spp: throws std::invalid_argument
+// naming --crop or --samples when it is not inside the image or the samples.
+struct RenderPart {
+  PixelRect region;
+  int sampleBegin = 0, sampleEnd = 0;
+  int samples() const { return sampleEnd - sampleBegin; }
+};
+RenderPart resolvePart(const RenderControl& control, const Scene& scene, int spp);
+
+// The film a render starts from: empty, or a copy of control.resume, which must be a film of this
+// part with this layout (std::invalid_argument otherwise).
+Film startFilm(const RenderControl& control, const Scene& scene, const RenderPart& part, Film::Sums sums,
+               FilmLayers layers);
+
+// Whether every pixel of the part has all its samples.
+bool filmComplete(const Film& film, const RenderPart& part);
+
+// Calls control.checkpoint when control.checkpointSeconds have passed since the last call (or the
+// start) and a checkpoint is wanted.
+class CheckpointClock {
+ public:
+  explicit CheckpointClock(const RenderControl& control) : control_(control) {}
+  void reached(const Film& film);
+
+ private:
+  const RenderControl& control_;
+  Stopwatch sinceLast_;
+};
+
+// Bands of rows of a region for the methods that render band by band, sized by the work: at most
+// `maxSamples` camera samples each (memory), and, once the time per row is known, about
+// `targetSeconds` of work, so that a stop request or a checkpoint waits for little. Bands never
+// change the image.
+class RowBands {
+ public:
+  RowBands(const RenderPart& part, uint64_t maxSamples, double targetSeconds);
+  // The next band [first, second) of rows from `row` on, after the last band took `seconds`.
+  std::pair<int, int> next(int row);
+  void finished(int rows, double seconds);
+
+ private:
+  RenderPart part_;
+  uint64_t maxRows_;
+  double targetSeconds_, secondsPerRow_ = 0;
+};
+
+}  // namespace lucent

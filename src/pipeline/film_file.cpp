@@ -1,0 +1,201 @@
+#include "lucent/pipeline/film_file.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "lucent/core/files.h"
+#include "lucent/core/memory.h"
+
+namespace lucent {
+
+namespace {
+
+constexpr char kMagic[8] = {'L', 'C', 'N', 'T', 'F', 'I', 'L', 'M'};
+constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kMaxHeaderBytes = 1 << 20;
+
+// FNV-1a over the arrays as stored (padding included), as 64-bit little-endian words: the format's
+// data hash.
+struct DataHash {
+  uint64_t value = 0xcbf29ce484222325ull;
+  void add(const void* data, size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; i += 8) {
+      uint64_t word = 0;  // the last word's missing bytes are the padding's zeros
+      std::memcpy(&word, p + i, std::min<size_t>(8, bytes - i));
+      value = (value ^ word) * 0x100000001b3ull;
+    }
+  }
+};
+
+std::string hex(uint64_t v) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(v));
+  return text;
+}
+
+// The count arrays (32-bit words) are padded to 8 bytes: every array starts 8-byte aligned.
+size_t padded(size_t bytes) { return (bytes + 7) / 8 * 8; }
+
+}  // namespace
+
+FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileInfo& info) {
+  const auto sums = film.pixelSums();
+  const auto valid = film.validSamples(), taken = film.samplesTaken();
+  const size_t countBytes = padded(valid.size_bytes());
+  DataHash hash;
+  hash.add(sums.data(), sums.size_bytes());
+  hash.add(valid.data(), valid.size_bytes());
+  hash.add(taken.data(), taken.size_bytes());
+
+  nlohmann::ordered_json header;
+  header["method"] = info.method;
+  header["options"] = nlohmann::json::parse(info.options.empty() ? "{}" : info.options);
+  header["derived"] = nlohmann::json::parse(info.derived.empty() ? "{}" : info.derived);
+  header["scene"] = info.scene;
+  header["scene_hash"] = info.sceneHash;
+  header["version"] = info.version;
+  header["embree_isa"] = info.embreeIsa;
+  header["lane_isa"] = info.laneIsa;
+  header["width"] = film.imageWidth();
+  header["height"] = film.imageHeight();
+  const PixelRect& r = film.region();
+  header["crop"] = {r.x0, r.y0, r.x1, r.y1};
+  header["spp"] = info.spp;
+  header["first_sample"] = info.firstSample;
+  header["sample_count"] = info.sampleCount;
+  header["complete"] = info.complete;
+  header["sums"] = film.sums() == Film::Sums::PerSample ? "per_sample" : "per_part";
+  header["layers"] = {{"features", film.layers().features}, {"caustic", film.layers().caustic}};
+  header["sums_per_pixel"] = film.sumsPerPixel();
+  header["counters"] = nlohmann::ordered_json::object();
+  for (const auto& [name, value] : info.counters) header["counters"][name] = value;
+  header["data_hash"] = hex(hash.value);
+  std::string text = header.dump();
+  text.resize(padded(text.size()), ' ');
+
+  return {path, "film", [&film, text, countBytes](const std::filesystem::path& tmp) {
+            const auto sums = film.pixelSums();
+            const auto valid = film.validSamples(), taken = film.samplesTaken();
+            const uint64_t zeros = 0;
+            std::ofstream out(tmp, std::ios::binary);
+            const uint32_t version = kFormatVersion, headerBytes = uint32_t(text.size());
+            out.write(kMagic, 8);
+            out.write(reinterpret_cast<const char*>(&version), 4);
+            out.write(reinterpret_cast<const char*>(&headerBytes), 4);
+            out.write(text.data(), std::streamsize(text.size()));
+            out.write(reinterpret_cast<const char*>(sums.data()), std::streamsize(sums.size_bytes()));
+            for (const auto& counts : {valid, taken}) {
+              out.write(reinterpret_cast<const char*>(counts.data()), std::streamsize(counts.size_bytes()));
+              out.write(reinterpret_cast<const char*>(&zeros), std::streamsize(countBytes - counts.size_bytes()));
+            }
+            if (!out.flush()) throw WriteFailure("write failed (disk full?)");
+          }};
+}
+
+void writeFilmFile(const std::string& path, const Film& film, const FilmFileInfo& info) {
+  writeFilesAtomically({filmFile(path, film, info)});
+}
+
+FilmFile readFilmFile(const std::string& path) {
+  auto fail = [&](const std::string& why) { return std::runtime_error("film file '" + path + "': " + why); };
+  const std::string problem = regularFileProblem(path);
+  if (!problem.empty()) throw fail(problem);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw fail("cannot be opened");
+  char magic[8];
+  uint32_t version = 0, headerBytes = 0;
+  in.read(magic, 8);
+  in.read(reinterpret_cast<char*>(&version), 4);
+  in.read(reinterpret_cast<char*>(&headerBytes), 4);
+  if (!in || std::memcmp(magic, kMagic, 8) != 0) throw fail("not a Lucent film file");
+  if (version != kFormatVersion)
+    throw fail("format version " + std::to_string(version) + "; this Lucent reads version " + std::to_string(kFormatVersion));
+  if (headerBytes > kMaxHeaderBytes) throw fail("header of " + std::to_string(headerBytes) + " bytes");
+  std::string text(headerBytes, ' ');
+  in.read(text.data(), headerBytes);
+  if (!in) throw fail("truncated header");
+
+  FilmFile file;
+  FilmFileInfo& info = file.info;
+  nlohmann::json header;
+  int width, height, sumsPerPixel;
+  PixelRect region;
+  Film::Sums sums;
+  FilmLayers layers;
+  std::string dataHash;
+  try {
+    header = nlohmann::json::parse(text);
+    info.method = header.at("method").get<std::string>();
+    info.options = header.at("options").dump();
+    info.derived = header.at("derived").dump();
+    info.scene = header.at("scene").get<std::string>();
+    info.sceneHash = header.at("scene_hash").get<std::string>();
+    info.version = header.at("version").get<std::string>();
+    info.embreeIsa = header.at("embree_isa").get<std::string>();
+    info.laneIsa = header.at("lane_isa").get<std::string>();
+    info.spp = header.at("spp").get<int>();
+    info.firstSample = header.at("first_sample").get<int>();
+    info.sampleCount = header.at("sample_count").get<int>();
+    info.complete = header.at("complete").get<bool>();
+    for (const auto& [name, value] : header.at("counters").items()) info.counters.emplace_back(name, value.get<uint64_t>());
+    width = header.at("width").get<int>();
+    height = header.at("height").get<int>();
+    const auto crop = header.at("crop").get<std::vector<int>>();
+    if (crop.size() != 4) throw fail("'crop' is not [x0, y0, x1, y1]");
+    region = {crop[0], crop[1], crop[2], crop[3]};
+    const std::string sumsName = header.at("sums").get<std::string>();
+    if (sumsName != "per_sample" && sumsName != "per_part") throw fail("unknown 'sums' '" + sumsName + "'");
+    sums = sumsName == "per_sample" ? Film::Sums::PerSample : Film::Sums::PerPart;
+    layers.features = header.at("layers").at("features").get<bool>();
+    layers.caustic = header.at("layers").at("caustic").get<bool>();
+    sumsPerPixel = header.at("sums_per_pixel").get<int>();
+    dataHash = header.at("data_hash").get<std::string>();
+  } catch (const nlohmann::json::exception& e) {
+    throw fail(std::string("header: ") + e.what());
+  }
+  if (!(width > 0 && height > 0 && uint64_t(width) * uint64_t(height) <= (uint64_t(1) << 26)))
+    throw fail("image of " + std::to_string(width) + " x " + std::to_string(height) + " pixels");
+  if (region.empty() || !PixelRect{0, 0, width, height}.contains(region)) throw fail("'crop' is not inside the image");
+  if (!(info.spp > 0 && info.firstSample >= 0 && info.sampleCount > 0 && info.firstSample + info.sampleCount <= info.spp))
+    throw fail("samples " + std::to_string(info.firstSample) + ":" + std::to_string(info.sampleCount) + " of " +
+               std::to_string(info.spp));
+
+  const uint64_t pixels = region.pixelCount();
+  requireMemory(pixels * (uint64_t(sumsPerPixel) * sizeof(ExactSum) + 8), "the film of '" + path + "'",
+                "raise --memory-limit if the machine has the memory");
+  file.film = std::make_unique<Film>(width, height, region, sums, layers);
+  Film& film = *file.film;
+  if (film.sumsPerPixel() != sumsPerPixel) throw fail("'sums_per_pixel' does not match its sums and layers");
+  const auto sumsData = film.pixelSums();
+  const auto valid = film.validSamples(), taken = film.samplesTaken();
+  const size_t countBytes = padded(valid.size_bytes());
+  const uint64_t expected = 16 + uint64_t(headerBytes) + sumsData.size_bytes() + 2 * countBytes;
+  std::error_code ec;
+  if (std::filesystem::file_size(path, ec) != expected)
+    throw fail("its size is not the " + std::to_string(expected) + " bytes its header makes (truncated or damaged)");
+  in.read(reinterpret_cast<char*>(sumsData.data()), std::streamsize(sumsData.size_bytes()));
+  std::vector<char> padding(8);
+  for (const auto& counts : {valid, taken}) {
+    in.read(reinterpret_cast<char*>(counts.data()), std::streamsize(counts.size_bytes()));
+    in.read(padding.data(), std::streamsize(countBytes - counts.size_bytes()));
+  }
+  if (!in) throw fail("truncated data");
+  DataHash hash;
+  hash.add(sumsData.data(), sumsData.size_bytes());
+  hash.add(valid.data(), valid.size_bytes());
+  hash.add(taken.data(), taken.size_bytes());
+  if (hex(hash.value) != dataHash) throw fail("its data does not match its hash (damaged)");
+  for (uint32_t t : taken)
+    if (t > uint32_t(info.sampleCount)) throw fail("a pixel has taken more samples than the part has");
+  for (size_t i = 0; i < valid.size(); ++i)
+    if (valid[i] > taken[i]) throw fail("a pixel has more valid samples than it took");
+  return file;
+}
+
+}  // namespace lucent

@@ -1,0 +1,75 @@
+#include "lucent/pipeline/render_control.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace lucent {
+
+RenderPart resolvePart(const RenderControl& control, const Scene& scene, int spp) {
+  const PixelRect image{0, 0, scene.camera.width, scene.camera.height};
+  RenderPart part;
+  part.region = control.crop.empty() ? image : control.crop;
+  if (!image.contains(part.region))
+    throw std::invalid_argument("--crop " + std::to_string(part.region.x0) + "," + std::to_string(part.region.y0) + "," +
+                                std::to_string(part.region.x1) + "," + std::to_string(part.region.y1) +
+                                ": not inside the " + std::to_string(image.x1) + " x " + std::to_string(image.y1) +
+                                " image");
+  part.sampleBegin = control.firstSample;
+  part.sampleEnd = control.sampleCount > 0 ? control.firstSample + control.sampleCount : spp;
+  if (part.sampleBegin < 0 || part.sampleBegin >= part.sampleEnd || part.sampleEnd > spp)
+    throw std::invalid_argument("--samples " + std::to_string(control.firstSample) + ":" +
+                                std::to_string(control.sampleCount) + ": not inside the " + std::to_string(spp) +
+                                " samples per pixel (--spp)");
+  return part;
+}
+
+Film startFilm(const RenderControl& control, const Scene& scene, const RenderPart& part, Film::Sums sums,
+               FilmLayers layers) {
+  Film film(scene.camera.width, scene.camera.height, part.region, sums, layers);
+  if (!control.resume) return film;
+  const Film& from = *control.resume;
+  if (from.imageWidth() != film.imageWidth() || from.imageHeight() != film.imageHeight() ||
+      !(from.region() == film.region()) || from.sums() != film.sums() || !(from.layers() == film.layers()))
+    throw std::invalid_argument("the film to resume from is of another image, part or layout");
+  for (uint32_t taken : from.samplesTaken())
+    if (taken > uint32_t(part.samples()))
+      throw std::invalid_argument("the film to resume from has more samples than the part");
+  film.add(from);
+  return film;
+}
+
+bool filmComplete(const Film& film, const RenderPart& part) {
+  return std::all_of(film.samplesTaken().begin(), film.samplesTaken().end(),
+                     [&](uint32_t taken) { return taken == uint32_t(part.samples()); });
+}
+
+void CheckpointClock::reached(const Film& film) {
+  if (!(control_.checkpointSeconds > 0) || !control_.checkpoint) return;
+  if (sinceLast_.seconds() < control_.checkpointSeconds) return;
+  control_.checkpoint(film);
+  sinceLast_ = Stopwatch();
+}
+
+RowBands::RowBands(const RenderPart& part, uint64_t maxSamples, double targetSeconds)
+    : part_(part), targetSeconds_(targetSeconds) {
+  const uint64_t rowSamples = uint64_t(part.region.width()) * uint64_t(std::max(1, part.samples()));
+  maxRows_ = std::clamp<uint64_t>(maxSamples / rowSamples, 1, uint64_t(part.region.height()));
+}
+
+std::pair<int, int> RowBands::next(int row) {
+  uint64_t rows = maxRows_;
+  if (targetSeconds_ > 0) {
+    // Until a band has been timed: a thirty-second of the region.
+    const double wanted = secondsPerRow_ > 0 ? targetSeconds_ / secondsPerRow_ : std::ceil(part_.region.height() / 32.0);
+    rows = std::clamp<uint64_t>(uint64_t(std::max(1.0, wanted)), 1, maxRows_);
+  }
+  return {row, int(std::min<uint64_t>(uint64_t(part_.region.y1), uint64_t(row) + rows))};
+}
+
+void RowBands::finished(int rows, double seconds) {
+  if (rows > 0) secondsPerRow_ = seconds / rows;
+}
+
+}  // namespace lucent
