@@ -119,10 +119,11 @@ int runMerge(const MergeArgs& a) {
   info.counters.clear();
   for (FilmFile& f : films) {
     merged.add(*f.film);
-    for (const auto& [name, value] : f.info.counters) {
-      auto it = std::find_if(info.counters.begin(), info.counters.end(), [&](const auto& c) { return c.first == name; });
-      if (it == info.counters.end()) info.counters.emplace_back(name, value);
-      else it->second += value;
+    for (const std::pair<std::string, uint64_t>& counter : f.info.counters) {
+      auto it = std::find_if(info.counters.begin(), info.counters.end(),
+                             [&](const auto& c) { return c.first == counter.first; });
+      if (it == info.counters.end()) info.counters.push_back(counter);
+      else it->second += counter.second;
     }
     f.film.reset();  // one part's memory at a time beside the merged film
   }

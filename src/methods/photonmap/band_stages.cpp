@@ -50,7 +50,9 @@ bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptio
   for (size_t index = 0; row < region.y1; ++index) {
     if (control.stopRequested()) return false;
     Stopwatch bandClock;
-    const auto [first, end] = bands.next(row);
+    // Not a structured binding: the lambda below captures them (Clang 14 cannot).
+    const std::pair<int, int> next = bands.next(row);
+    const int first = next.first, end = next.second;
     const PixelRect band{region.x0, first, region.x1, end};
     Stopwatch rayClock;
     BandShadingPoints traced = traceBand(scene, vis, options, band, part, totals.shadowRays);
