@@ -34,6 +34,24 @@ float projectedCellSolidAngle(double x0, double x1, double y0, double y1) {
   return float(sum * (x1 - x0) / kNodes);
 }
 
+// The same for the paraboloid projection, dOmega = 4 dx dy / (1 + x^2 + y^2)^2: in y, with a = 1 + x^2,
+// the integral of 4 / (a + y^2)^2 is 2 (y / (a (a + y^2)) + atan(y / sqrt a) / a^1.5), over the
+// column's part of the disc.
+float paraboloidCellSolidAngle(double x0, double x1, double y0, double y1) {
+  constexpr int kNodes = 256;
+  auto primitive = [](double a, double y) { return 2.0 * (y / (a * (a + y * y)) + std::atan(y / std::sqrt(a)) / (a * std::sqrt(a))); };
+  double sum = 0;
+  for (int i = 0; i < kNodes; ++i) {
+    const double x = x0 + (x1 - x0) * (i + 0.5) / kNodes;
+    const double s = std::sqrt(std::max(0.0, 1.0 - x * x));
+    const double lo = std::max(y0, -s), hi = std::min(y1, s);
+    if (!(hi > lo)) continue;
+    const double a = 1.0 + x * x;
+    sum += primitive(a, hi) - primitive(a, lo);
+  }
+  return float(sum * (x1 - x0) / kNodes);
+}
+
 void buildCdfs(WarpTable& t) {
   const int n = t.size;
   t.columnCdf.assign(size_t(n) + 1, 0.0f);
@@ -101,10 +119,14 @@ MappingTables makeMappingTables(int bufferSide, int tableSize) {
 
   const int N = bufferSide;
   m.nusseltSolidAngle.resize(size_t(N) * N);
+  m.paraboloidSolidAngle.resize(size_t(N) * N);
   for (int y = 0; y < N; ++y)
-    for (int x = 0; x < N; ++x)
-      m.nusseltSolidAngle[size_t(y) * N + x] =
-          projectedCellSolidAngle(-1.0 + 2.0 * x / N, -1.0 + 2.0 * (x + 1) / N, -1.0 + 2.0 * y / N, -1.0 + 2.0 * (y + 1) / N);
+    for (int x = 0; x < N; ++x) {
+      const double x0 = -1.0 + 2.0 * x / N, x1 = -1.0 + 2.0 * (x + 1) / N;
+      const double y0 = -1.0 + 2.0 * y / N, y1 = -1.0 + 2.0 * (y + 1) / N;
+      m.nusseltSolidAngle[size_t(y) * N + x] = projectedCellSolidAngle(x0, x1, y0, y1);
+      m.paraboloidSolidAngle[size_t(y) * N + x] = paraboloidCellSolidAngle(x0, x1, y0, y1);
+    }
   return m;
 }
 
@@ -173,6 +195,10 @@ Vec2 HemisphereMapping::forwardDisc(Column c, float v) const {
 
 Vec3 HemisphereMapping::forward(Vec2 uv, bool& inside) const {
   const Vec2 q = forwardDisc(uv);
+  if (kind == MappingKind::Paraboloid) {
+    inside = q.x * q.x + q.y * q.y < 1.0f;
+    return inside ? paraboloidDirection(q) : Vec3{};
+  }
   const float z2 = 1.0f - q.x * q.x - q.y * q.y;
   inside = z2 > 0;
   return inside ? Vec3{q.x, q.y, std::sqrt(z2)} : Vec3{};
@@ -180,6 +206,9 @@ Vec3 HemisphereMapping::forward(Vec2 uv, bool& inside) const {
 
 float HemisphereMapping::pdf(Vec3 local) const {
   if (!(local.z > 0)) return 0.0f;
+  // Uniform (u, v) over [0, 1]^2: a quarter over the square [-1, 1]^2, whose paraboloid points
+  // have the density (1 + x^2 + y^2)^2 / 4 = 1 / (1 + z)^2 over solid angle.
+  if (kind == MappingKind::Paraboloid) return 0.25f / ((1.0f + local.z) * (1.0f + local.z));
   float density = 0.25f;  // Nusselt: uniform over [-1, 1]^2
   if (kind == MappingKind::Warped) {
     const int n = table->size;
@@ -220,11 +249,16 @@ void evaluatePixels(HemisphereMapping& m, MappingKind kind, int side, Vec2 jitte
       // (at the rim): they get the solid angle and spacing of the direction at the rim.
       const float shrink = inside ? 1.0f : 0.9999f / std::sqrt(r2);
       const Vec2 c{q.x * shrink, q.y * shrink};
-      const Vec3 w{c.x, c.y, std::sqrt(std::max(0.0f, 1.0f - c.x * c.x - c.y * c.y))};
+      const Vec3 w = kind == MappingKind::Paraboloid ? paraboloidDirection(c)
+                                                     : Vec3{c.x, c.y, std::sqrt(std::max(0.0f, 1.0f - c.x * c.x - c.y * c.y))};
       m.probe[i] = w;
       m.direction[i] = inside ? w : Vec3{};
       m.weight[i] = Rgb();
-      if (kind == MappingKind::Nusselt) {
+      if (kind == MappingKind::Paraboloid) {
+        m.solidAngle[i] = tables.paraboloidSolidAngle[i];
+        const float jacobian = 4.0f / ((1.0f + r2) * (1.0f + r2));  // dOmega / dx dy at the sample
+        if (inside) m.weight[i] = evalBsdf(bsdf, woLocal, w) * (w.z * jacobian * 4.0f * invN);
+      } else if (kind == MappingKind::Nusselt) {
         m.solidAngle[i] = tables.nusseltSolidAngle[i];
         if (inside) m.weight[i] = evalBsdf(bsdf, woLocal, w) * (4.0f * invN);  // f cos dOmega = f dA, dA = 4 / N
       } else {

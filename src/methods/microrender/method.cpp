@@ -34,8 +34,10 @@ const OptionTable<MicroRenderOptions>& microOptionTable() {
               "pixels", "micro-buffer side");
     t.choice("mapping", [](O& o) -> auto& { return o.mapping; },
              std::vector<std::pair<std::string, MappingKind>>{{"warped", MappingKind::Warped},
-                                                              {"nusselt", MappingKind::Nusselt}},
-             "micro-buffer mapping: warped by the BRDF (importance warping) or Nusselt's");
+                                                              {"nusselt", MappingKind::Nusselt},
+                                                              {"paraboloid", MappingKind::Paraboloid}},
+             "micro-buffer mapping: warped by the BRDF (importance warping), Nusselt's, or the paraboloid "
+             "projection");
     t.integer("table_size", [](O& o) -> auto& { return o.tableSize; }, 4, 256, "cells",
               "cells per side of the tabulated BRDF slice (warped mapping)");
     t.flag("ray_casting", [](O& o) -> auto& { return o.rayCasting; },

@@ -91,6 +91,9 @@ struct PacketLanes {
   const float* spacing = nullptr;
   int32_t side = 0, tableSize = 0;
   float splatReach = 1;  // MicroRenderSettings::splatReach
+  // The paraboloid mapping's identity table reads a direction's paraboloid point (x, y) / (1 + z),
+  // the others' tables read (x, y): the node tests come in a version for each.
+  bool paraboloid = false;
 };
 
 // A node as every lane tests it.
@@ -130,6 +133,7 @@ struct LaneGeometry {
   float vx, vy, vz, height, d2, d, invD, lz, sinRadius, cosRadius;
   int32_t at;
 };
+template <bool Paraboloid>
 inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict cdfs, const LaneNode& n, int l,
                                  LaneResults& r) {
   const float vx = n.cx - L.px[l], vy = n.cy - L.py[l], vz = n.cz - L.pz[l];
@@ -141,7 +145,13 @@ inline LaneGeometry laneGeometry(const PacketLanes& L, const float* __restrict c
   const float lx = wx * L.sx[l] + wy * L.sy[l] + wz * L.sz[l];
   const float ly = wx * L.tx[l] + wy * L.ty[l] + wz * L.tz[l];
   const float lz = wx * L.nx[l] + wy * L.ny[l] + wz * L.nz[l];
-  const PixelCoord pixel = lanePixel(L, cdfs, l, lx, ly);
+  PixelCoord pixel;
+  if constexpr (Paraboloid) {
+    const float toPlane = std::max(1.0f + lz, 1e-6f);  // bounded away from 0 below the horizon
+    pixel = lanePixel(L, cdfs, l, lx / toPlane, ly / toPlane);
+  } else {
+    pixel = lanePixel(L, cdfs, l, lx, ly);
+  }
   const float sinRadius = n.radius * invD, cosRadius = std::sqrt(std::max(0.0f, 1.0f - sinRadius * sinRadius));
   r.column[l] = pixel.column, r.row[l] = pixel.row;
   r.cosRadius[l] = cosRadius;
@@ -182,10 +192,11 @@ struct PixelTables {
 // selects, not selects on combined conditions). One lane's tests are inlined into the loops over
 // every lane (classifyLeaf, classifyInterior) and into the loop over a few active lanes
 // (classifyActiveLanes): the same IEEE operations either way.
+template <bool Paraboloid>
 [[gnu::always_inline]] inline void classifyLeafLane(const PacketLanes& __restrict L, const PixelTables& t,
                                                     const LaneNode& __restrict n, int l, LaneResults& r) {
   const float discArea = kPi * n.radius * n.radius;
-  const LaneGeometry g = laneGeometry(L, t.cdfs, n, l, r);
+  const LaneGeometry g = laneGeometry<Paraboloid>(L, t.cdfs, n, l, r);
   const float d = g.d;
   const int32_t at = g.at;
   const float facing = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz);
@@ -199,10 +210,11 @@ struct PixelTables {
   r.outcome[l] = g.height <= -n.radius ? kSkipSubtree : outcome;
 }
 
+template <bool Paraboloid>
 [[gnu::always_inline]] inline void classifyInteriorLane(const PacketLanes& __restrict L, const PixelTables& t,
                                                         const LaneNode& __restrict n, int l, LaneResults& r) {
   const float twoPi = 2.0f * kPi;
-  const LaneGeometry g = laneGeometry(L, t.cdfs, n, l, r);
+  const LaneGeometry g = laneGeometry<Paraboloid>(L, t.cdfs, n, l, r);
   const float d = g.d, invD = g.invD, height = g.height;
   const int32_t at = g.at;
   const float cosToAxis = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz) * invD;
@@ -233,7 +245,7 @@ struct PixelTables {
 LUCENT_LANE_LOOP(LaneResults, classifyLeaf, (const PacketLanes& __restrict L, const LaneNode& __restrict n)) {
   LaneResults r;
   const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
-  for (int l = 0; l < kGatherPacket; ++l) classifyLeafLane(L, t, n, l, r);
+  for (int l = 0; l < kGatherPacket; ++l) classifyLeafLane<false>(L, t, n, l, r);
   return r;
 }
 LUCENT_LANE_VERSIONS(LaneResults, classifyLeaf, (const PacketLanes& __restrict L, const LaneNode& __restrict n), (L, n))
@@ -241,10 +253,34 @@ LUCENT_LANE_VERSIONS(LaneResults, classifyLeaf, (const PacketLanes& __restrict L
 LUCENT_LANE_LOOP(LaneResults, classifyInterior, (const PacketLanes& __restrict L, const LaneNode& __restrict n)) {
   LaneResults r;
   const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
-  for (int l = 0; l < kGatherPacket; ++l) classifyInteriorLane(L, t, n, l, r);
+  for (int l = 0; l < kGatherPacket; ++l) classifyInteriorLane<false>(L, t, n, l, r);
   return r;
 }
 LUCENT_LANE_VERSIONS(LaneResults, classifyInterior, (const PacketLanes& __restrict L, const LaneNode& __restrict n), (L, n))
+
+LUCENT_LANE_LOOP(LaneResults, classifyLeafParaboloid, (const PacketLanes& __restrict L, const LaneNode& __restrict n)) {
+  LaneResults r;
+  const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
+  for (int l = 0; l < kGatherPacket; ++l) classifyLeafLane<true>(L, t, n, l, r);
+  return r;
+}
+LUCENT_LANE_VERSIONS(LaneResults, classifyLeafParaboloid, (const PacketLanes& __restrict L, const LaneNode& __restrict n),
+                     (L, n))
+
+LUCENT_LANE_LOOP(LaneResults, classifyInteriorParaboloid, (const PacketLanes& __restrict L, const LaneNode& __restrict n)) {
+  LaneResults r;
+  const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
+  for (int l = 0; l < kGatherPacket; ++l) classifyInteriorLane<true>(L, t, n, l, r);
+  return r;
+}
+LUCENT_LANE_VERSIONS(LaneResults, classifyInteriorParaboloid,
+                     (const PacketLanes& __restrict L, const LaneNode& __restrict n), (L, n))
+
+// Every lane's test of a node, in the version for the packet's mapping.
+inline LaneResults classifyAllLanes(const PacketLanes& L, const LaneNode& n, bool leaf) {
+  if (L.paraboloid) return leaf ? classifyLeafParaboloid(L, n) : classifyInteriorParaboloid(L, n);
+  return leaf ? classifyLeaf(L, n) : classifyInterior(L, n);
+}
 
 // The active lanes alone, one after the other: a packet's lanes part ways near their own gather
 // points, where a quarter of the nodes are visited by one lane, and testing all sixteen costs more
@@ -254,8 +290,13 @@ void classifyActiveLanes(const PacketLanes& __restrict L, const LaneNode& __rest
   const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
   for (uint32_t m = active; m != 0; m &= m - 1) {
     const int l = std::countr_zero(m);
-    if (leaf) classifyLeafLane(L, t, n, l, r);
-    else classifyInteriorLane(L, t, n, l, r);
+    if (L.paraboloid) {
+      if (leaf) classifyLeafLane<true>(L, t, n, l, r);
+      else classifyInteriorLane<true>(L, t, n, l, r);
+    } else {
+      if (leaf) classifyLeafLane<false>(L, t, n, l, r);
+      else classifyInteriorLane<false>(L, t, n, l, r);
+    }
   }
 }
 
@@ -688,7 +729,7 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
     const bool leaf = isLeafNode(i, leafCount);
     LaneResults r;
     if (std::popcount(active) <= kFewLanes) classifyActiveLanes(lanes, lane, leaf, active, r);
-    else r = leaf ? classifyLeaf(lanes, lane) : classifyInterior(lanes, lane);
+    else r = classifyAllLanes(lanes, lane, leaf);
     ++packetVisits;
     uint32_t descend = 0;
     for (uint32_t m = active; m != 0; m &= m - 1) {
@@ -729,6 +770,7 @@ void preparePacketLanes(std::span<const MicroLane> lanes, const MicroRenderSetti
   const WarpTable* firstTable = first.kind == MappingKind::Warped ? first.table : nullptr;
   L.side = side;
   L.splatReach = float(settings.splatReach);
+  L.paraboloid = first.kind == MappingKind::Paraboloid;
   L.tableSize = firstTable ? firstTable->size : 1;
   a.solidAngle.resize(size_t(pixels) * lanes.size());
   a.spacing.resize(size_t(pixels) * lanes.size());
@@ -759,7 +801,7 @@ void preparePacketLanes(std::span<const MicroLane> lanes, const MicroRenderSetti
       a.cdfs.insert(a.cdfs.end(), table->columnCdf.begin(), table->columnCdf.end());
       L.rowBase[l] = int32_t(a.cdfs.size());
       a.cdfs.insert(a.cdfs.end(), table->rowCdf.begin(), table->rowCdf.end());
-    } else {  // Nusselt: the identity table (inverseCdfs)
+    } else {  // Nusselt and paraboloid: the identity table (inverseCdfs)
       L.columnBase[l] = int32_t(a.cdfs.size());
       L.rowBase[l] = L.columnBase[l];
       a.cdfs.insert(a.cdfs.end(), std::begin(kIdentityCdf), std::end(kIdentityCdf));

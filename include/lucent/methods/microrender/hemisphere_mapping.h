@@ -9,7 +9,13 @@
 //            inverse marginal and conditional CDFs map uniform pixels to directions distributed as
 //            f cos (the cosine comes with the parameterization). The convolution is then a plain sum.
 //
-// Both give every pixel a direction (at a sample point inside the pixel, jittered per gather point),
+//   Paraboloid  the paraboloid projection (Heidrich and Seidel 1999; the environment-lighting PBGI
+//            paper's micro-buffers): (x, y) over [-1, 1]^2 is the direction (2x, 2y, 1 - x^2 - y^2) /
+//            (1 + x^2 + y^2); pixels outside the unit disc are unused. A pixel at the centre subtends
+//            4 times the solid angle of one at the rim (the Nusselt mapping's rim pixels are the
+//            largest). The convolution weighs each pixel as the Nusselt mapping does.
+//
+// All give every pixel a direction (at a sample point inside the pixel, jittered per gather point),
 // the solid angle it subtends (the traversal's refinement threshold) and the weight of its radiance
 // in the convolution. src/methods/microrender/README.md says where this departs from the paper.
 #pragma once
@@ -22,7 +28,15 @@
 
 namespace lucent {
 
-enum class MappingKind : uint32_t { Nusselt = 0, Warped = 1 };
+enum class MappingKind : uint32_t { Nusselt = 0, Warped = 1, Paraboloid = 2 };
+
+// The paraboloid projection's point (x, y) of a local direction with z > -1, and the direction of
+// a point of the plane (below the horizon outside the unit disc).
+inline Vec2 paraboloidPoint(Vec3 local) { return {local.x / (1.0f + local.z), local.y / (1.0f + local.z)}; }
+inline Vec3 paraboloidDirection(Vec2 p) {
+  const float r2 = p.x * p.x + p.y * p.y, s = 1.0f / (1.0f + r2);
+  return {2.0f * p.x * s, 2.0f * p.y * s, (1.0f - r2) * s};
+}
 
 // A density over the projected disc, piecewise constant on T x T cells of [-1, 1]^2 in
 // (omega_x, omega_y), with its marginal CDF over columns (omega_x) and per column the conditional
@@ -77,7 +91,8 @@ struct MappingTables {
   std::vector<float> cellInside;      // T x T: fraction of the cell's area inside the disc
   std::vector<Vec2> cellCentroid;     // T x T: centroid of that part
   WarpTable lambertian;
-  std::vector<float> nusseltSolidAngle;  // per pixel: the exact solid angle of the pixel's part of the disc
+  std::vector<float> nusseltSolidAngle;     // per pixel: the exact solid angle of the pixel's part of the disc
+  std::vector<float> paraboloidSolidAngle;  // the same for the paraboloid projection
 };
 MappingTables makeMappingTables(int bufferSide, int tableSize);
 
@@ -110,11 +125,16 @@ struct HemisphereMapping {
   // direction of (u, v) (Phi); `inside` is false where (u, v) maps outside the disc.
   Vec2 inverse(Vec3 local) const {
     if (kind == MappingKind::Nusselt) return inverseCdfs(kIdentityCdf, 0, kIdentityCdf, 0, 1, local.x, local.y);
+    if (kind == MappingKind::Paraboloid) {
+      const Vec2 p = paraboloidPoint(local);
+      return inverseCdfs(kIdentityCdf, 0, kIdentityCdf, 0, 1, p.x, p.y);
+    }
     return inverseCdfs(table->columnCdf.data(), 0, table->rowCdf.data(), 0, table->size, local.x, local.y);
   }
   Vec3 forward(Vec2 uv, bool& inside) const;
-  // (omega_x, omega_y) of (u, v), possibly outside the disc: M^-1(u) (`column`: the table column and
-  // a = (omega_x + 1) / 2), then C^-1(v | column).
+  // The point of the mapping's square [-1, 1]^2 at (u, v), possibly outside the disc: M^-1(u)
+  // (`column`: the table column and a = (x + 1) / 2), then C^-1(v | column). For the Nusselt and
+  // warped mappings the point is (omega_x, omega_y), for the paraboloid paraboloidPoint(omega).
   struct Column {
     int index;
     float a;
@@ -131,9 +151,10 @@ struct HemisphereMapping {
 };
 
 // Sets up the mapping (the table must outlive it) and evaluates every pixel: direction at the
-// jittered sample, solid angle, and weight f cos Omega (Nusselt) or f / (N p) (Warped, p the
-// table's density over the projected disc; with an exact table this is rho / N, the paper's sum
-// scaled by rho).
+// jittered sample, solid angle, and weight f cos Omega (Nusselt, Paraboloid: the pixel's solid angle
+// at its sample, its area times the mapping's Jacobian there) or f / (N p) (Warped, p the table's
+// density over the projected disc; with an exact table this is rho / N, the paper's sum scaled by
+// rho). Averaged over uniform jitters, the weights of every mapping sum to the directional albedo.
 void evaluatePixels(HemisphereMapping& mapping, MappingKind kind, int side, Vec2 jitter, const WarpTable* table,
                     const SurfaceBsdf& bsdf, Vec3 woLocal, const MappingTables& tables);
 
