@@ -346,6 +346,38 @@ TEST_CASE("Point sampling is proportional to area: chi-square over triangles", "
     INFO(u.summary());
     CHECK(u.passed(significance));
   }
+  SECTION("low-discrepancy points: every triangle gets its area's share to within two points") {
+    // The scrambled Sobol sequence's first coordinate is a (0, 1)-sequence: 2^14 points put one in
+    // each interval of 2^-14, so a triangle whose share of the area distribution is p gets p n,
+    // give or take a point at each end of its interval.
+    const Scene scene = scatteredTriangles(400, 5);
+    PointSamplingOptions ld;
+    ld.method = PointSampling::LowDiscrepancy;
+    const uint32_t n = 1u << 14;
+    const std::vector<PointSample> points = samplePoints(scene, n, ld);
+    std::vector<double> count(scene.triangleCount(), 0.0);
+    for (const PointSample& p : points) {
+      REQUIRE(p.b1 >= 0);
+      REQUIRE(p.b2 >= 0);
+      REQUIRE(p.b1 + p.b2 <= 1);
+      count[p.triangle] += 1;
+    }
+    const double area = totalArea(scene);
+    double worst = 0;
+    for (uint32_t t = 0; t < scene.triangleCount(); ++t)
+      worst = std::max(worst, std::abs(count[t] - n * scene.faceAreas[t] / area));
+    INFO("largest departure from a triangle's share: " << worst << " points");
+    CHECK(worst <= 2.0);
+    // Independent random points depart by their Poisson noise: tens of points here.
+    PointSamplingOptions uniform;
+    uniform.candidates = 1;
+    std::fill(count.begin(), count.end(), 0.0);
+    for (const PointSample& p : samplePoints(scene, n, uniform)) count[p.triangle] += 1;
+    double uniformWorst = 0;
+    for (uint32_t t = 0; t < scene.triangleCount(); ++t)
+      uniformWorst = std::max(uniformWorst, std::abs(count[t] - n * scene.faceAreas[t] / area));
+    CHECK(uniformWorst > 5.0);
+  }
   SECTION("negative control: points sampled by triangle count instead of area fail") {
     Scene wrong = scatteredTriangles(400, 5);
     const Scene right = wrong;

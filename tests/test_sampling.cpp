@@ -12,6 +12,7 @@
 #include "lucent/core/distribution.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
+#include "lucent/core/sobol.h"
 
 using namespace lucent;
 using chi2::DirectionSample;
@@ -545,4 +546,50 @@ TEST_CASE("stratifiedSample2D puts one sample in each cell of its grid", "[sampl
   // The last cell's upper edge stays below 1.
   const Vec2 s = stratifiedSample2D(3, 4, {0x1.fffffep-1f, 0x1.fffffep-1f});
   REQUIRE((s.x < 1 && s.y < 1));
+}
+
+TEST_CASE("Sobol points: every elementary interval of 2^-m holds its share, scrambled or not", "[sampling]") {
+  // The first three dimensions of Sobol's sequence are a (1, 3)-sequence in base 2: the first 2^m
+  // points put exactly two in every box of volume 2^(1 - m) whose sides are powers of two, and each
+  // dimension alone one in every interval of 2^-m. Owen scrambling keeps both, for any seed.
+  for (const uint32_t seed : {0u, 1u, 0xdeadbeefu}) {
+    const bool scrambled = seed != 0;
+    auto coordinate = [&](uint32_t i, int d) {
+      return scrambled ? owenScramble(sobolBits(i, d), seed * 7919u + uint32_t(d)) : sobolBits(i, d);
+    };
+    for (int m = 1; m <= 10; ++m) {
+      const uint32_t n = 1u << m;
+      for (int d = 0; d < kSobolDimensions; ++d) {
+        std::set<uint32_t> cells;
+        for (uint32_t i = 0; i < n; ++i) cells.insert(coordinate(i, d) >> (32 - m));
+        INFO("seed " << seed << ", m " << m << ", dimension " << d);
+        REQUIRE(cells.size() == n);
+      }
+      for (int a = 0; a < m; ++a)
+        for (int b = 0; a + b < m; ++b) {
+          const int c = m - 1 - a - b;
+          std::vector<int> count(size_t(1) << (m - 1), 0);
+          auto top = [](uint32_t v, int bits) { return bits == 0 ? 0u : v >> (32 - bits); };
+          for (uint32_t i = 0; i < n; ++i) {
+            const uint32_t box = top(coordinate(i, 0), a) << (b + c) | top(coordinate(i, 1), b) << c | top(coordinate(i, 2), c);
+            ++count[box];
+          }
+          INFO("seed " << seed << ", m " << m << ", box 2^-" << a << " x 2^-" << b << " x 2^-" << c);
+          REQUIRE(std::all_of(count.begin(), count.end(), [](int k) { return k == 2; }));
+        }
+    }
+  }
+  // Negative control: independent random points miss that (some box of 2^-5 x 2^-5 holds 3 or more
+  // of 1,024 points).
+  Rng rng(5);
+  std::vector<int> count(1024, 0);
+  for (int i = 0; i < 1024; ++i) ++count[size_t(uint32_t(rng.uniform() * 32) * 32 + uint32_t(rng.uniform() * 32))];
+  REQUIRE(*std::max_element(count.begin(), count.end()) >= 3);
+  // sobolSample: in [0, 1), and the same 24 bits as the scrambled integer.
+  for (uint32_t i = 0; i < 4096; ++i) {
+    const float u = sobolSample(i, 2, 99);
+    REQUIRE(u >= 0.0f);
+    REQUIRE(u < 1.0f);
+    REQUIRE(u == float(owenScramble(sobolBits(i, 2), 99) >> 8) * 0x1p-24f);
+  }
 }

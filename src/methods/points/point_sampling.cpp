@@ -37,6 +37,7 @@
 #include <string>
 
 #include "best_candidate_tiles.h"
+#include "lucent/core/sobol.h"
 #include "radix_sort.h"
 
 namespace lucent {
@@ -48,6 +49,27 @@ constexpr size_t kGrain = 4096;
 }  // namespace
 
 using namespace points;
+
+namespace {
+
+// Sobol points 0 .. count - 1 by area: each triangle gets its share of the sequence's first
+// coordinate, which a (0, m, 1)-net stratifies, so its count is its area's share to within one
+// point per interval of the area distribution.
+std::vector<PointSample> sampleLowDiscrepancy(const Distribution1D& areas, uint32_t count, uint64_t seed) {
+  std::vector<PointSample> points(count);
+  uint32_t scramble[3];
+  for (int d = 0; d < 3; ++d) scramble[d] = uint32_t(hashKey(seed, 0x50b01u, uint64_t(d)));
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, count, kGrain), [&](const auto& r) {
+    for (uint32_t i = r.begin(); i != r.end(); ++i) {
+      const uint32_t triangle = areas.pick(sobolSample(i, 0, scramble[0]));
+      const Vec2 b = sampleUniformTriangle({sobolSample(i, 1, scramble[1]), sobolSample(i, 2, scramble[2])});
+      points[i] = {triangle, b.x, b.y};
+    }
+  });
+  return points;
+}
+
+}  // namespace
 
 std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const PointSamplingOptions& options,
                                       RenderStats* stats) {
@@ -67,6 +89,14 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
     throw std::invalid_argument("point sampling: the scene's triangles have no area");
 
   Stopwatch clock;
+  if (options.method == PointSampling::LowDiscrepancy) {
+    std::vector<PointSample> points = sampleLowDiscrepancy(areas, count, options.seed);
+    if (stats) {
+      stats->addStage("point_sampling", clock.seconds());
+      stats->addCounter("points", count);
+    }
+    return points;
+  }
   Bounds3 bounds;
   for (const Vec3& p : scene.positions) bounds.extend(p);
 

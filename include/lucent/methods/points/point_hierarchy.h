@@ -30,7 +30,13 @@ inline Vec3 pointPosition(const Scene& scene, const PointSample& s) {
   return barycentric(scene.positions[v[0]], scene.positions[v[1]], scene.positions[v[2]], s.b1, s.b2);
 }
 
+enum class PointSampling : uint32_t {
+  BestCandidate = 0,   // Ritschel et al. 2009, 2.1: each point the farthest of its candidates
+  LowDiscrepancy = 1,  // the environment-lighting PBGI paper's: a scrambled Sobol sequence by area
+};
+
 struct PointSamplingOptions {
+  PointSampling method = PointSampling::BestCandidate;
   uint32_t candidates = 8;  // best-candidate candidates per point (1: plain uniform-by-area sampling)
   uint64_t seed = 0;
   // Tile edge in units of the mean point spacing of the level being added; tiles of one colour are
@@ -39,7 +45,10 @@ struct PointSamplingOptions {
 };
 
 // `count` points on the scene's triangles, uniform by area, spread by best-candidate sampling
-// (Mitchell 1991): each point is, of its candidates, the one farthest from the points already placed.
+// (Mitchell 1991): each point is, of its candidates, the one farthest from the points already placed;
+// or (options.method LowDiscrepancy) point i at the i-th point of an Owen-scrambled Sobol sequence:
+// the first coordinate picks the triangle by area, the other two its barycentrics (stage
+// "point_sampling", counter "points").
 // Every triangle is eligible, emitters and specular surfaces included; the per-triangle counts are
 // area-proportional in expectation. Any count works (a power of two for a hierarchy). Deterministic
 // for a seed whatever the thread count. Stage "point_sampling"; counters "points",
