@@ -47,6 +47,7 @@ with tempfile.TemporaryDirectory() as tmp:
     renders = {
         "purcell": ["scenes/glass-ball.json", "--method", "purcell", "--photons", "500", "--caustic-photons", "500"],
         "micro": ["scenes/cornell-box.json", "--method", "micro", "--points", "1024"],
+        "envpbgi": ["scenes/primitives.json", "--method", "envpbgi", "--points", "4096"],
     }
     for name, args in renders.items():
         directory = os.path.join(tmp, name)

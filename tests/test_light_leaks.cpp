@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "methods/envpbgi/env_pbgi.h"
 #include "methods/microrender/micro_renderer.h"
 #include "methods/pathtrace/path_tracer.h"
 #include "methods/photonmap/photon_mapping.h"
@@ -143,6 +144,30 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
       CHECK(largestDirect == 0.0);
       CHECK(mean <= 1e-3 * outsideLight);
       if (lighting == PointLighting::Direct || lighting == PointLighting::Photons) CHECK(lit <= 3);
+    }
+    // The environment-lighting PBGI method (no area lights): the sun's and the point light's direct
+    // light at the pixels by shadow rays, exactly nothing inside; the environment's through its
+    // micro-buffers' empty texels, where the walls' discs meet (as micro-rendering's); and light
+    // at interior nodes that hold points of both a wall's inside and the ground outside, whose
+    // surfel lies outside (envpbgi README, "Limits"). Bounded as micro-rendering's: the image's mean
+    // at most a thousandth of the outside's light (measured: sun 2.6e-5, point light 5e-9,
+    // environment 9.6e-4 of 2).
+    if (light != Outside::AreaLightFacingAway) {
+      EnvPbgiOptions env;
+      env.points = 1 << 16;
+      env.layers = true;
+      const Image image = renderEnvPbgi(scene, vis, env).image;
+      const int direct = image.channelIndex("direct.R");
+      double sum = 0, largestDirect = 0;
+      for (int y = 0; y < image.height(); ++y)
+        for (int x = 0; x < image.width(); ++x) {
+          sum += image.at(x, y, 0);
+          for (int c = 0; c < 3; ++c) largestDirect = std::max<double>(largestDirect, image.at(x, y, direct + c));
+        }
+      const double mean = sum / (image.width() * image.height());
+      INFO(name(light) << ", envpbgi: mean " << mean << ", the outside's light up to " << outsideLight);
+      CHECK(mean <= 1e-3 * outsideLight);
+      if (light != Outside::Environment) CHECK(largestDirect == 0.0);
     }
   }
 }

@@ -93,6 +93,7 @@ const std::vector<BadCase> kBadCases = {
     {"light-huge-direction", {"light-huge-direction/scene.json", "lights[0].direction: must be finite and at most 1e15"}},
     {"env-map-missing", {"env-map-missing/scene.json", "lights[0].map:", "sky.exr", "not found"}},
     {"env-map-not-image", {"env-map-not-image/scene.json", "lights[0].map:", "cannot read image"}},
+    {"env-map-negative", {"env-map-negative/scene.json", "lights[0].map:", "sky.exr", "negative texels (down to -1"}},
 };
 
 std::string badScene(const std::string& dir) { return kSource + "/tests/data/bad/" + dir + "/scene.json"; }
@@ -346,6 +347,20 @@ TEST_CASE("loader: zero-area triangles are dropped and counted", "[loader]") {
   for (uint32_t t = 0; t < scene.triangleCount(); ++t) CHECK(scene.triangleArea(t) > 0);
 }
 
+TEST_CASE("loader: an environment map's slightly negative texels are clamped to 0 and counted", "[loader]") {
+  // Poly Haven's courtyard (lossy DWAB compression): 1,188 texels with a channel below 0, down to
+  // -0.0032 (envmaps/SOURCE.txt).
+  const Scene scene = loadScene(kSource + "/scenes/primitives-courtyard.json", {true});
+  CHECK(scene.environment.clampedTexels == 1188);
+  CHECK(scene.environment.mostNegativeTexel == Approx(-0.0032).margin(1e-4));
+  for (const Rgb& t : scene.environment.texels) REQUIRE((t.r >= 0 && t.g >= 0 && t.b >= 0));
+  const test::TempDir dir("loader");
+  const test::CliRun r = runLucent("render " + kSource + "/scenes/primitives-courtyard.json --method pt --spp 1 "
+                                   "--resolution 8x8 -o " + test::quoted(dir / "x.exr"));
+  CHECK(r.status == 0);
+  CHECK_THAT(r.output, Catch::Contains("clamped 1188 slightly negative texels"));
+}
+
 TEST_CASE("loader: MTL entries are classified as in docs/scene-format.md, and scene overrides win", "[loader]") {
   const Scene scene = loadScene(goodScene("classify"), {true});
   const auto material = [&](const char* name) { return scene.materials[materialNamed(scene, name)]; };
@@ -371,7 +386,8 @@ TEST_CASE("loader: MTL entries are classified as in docs/scene-format.md, and sc
 }
 
 TEST_CASE("loader: the scenes shipped in scenes/ load", "[loader]") {
-  for (const char* name : {"cornell-box-spheres.json", "cornell-box-glossy.json"}) {
+  for (const char* name : {"cornell-box-spheres.json", "cornell-box-glossy.json", "primitives.json",
+                           "primitives-white.json", "primitives-courtyard.json"}) {
     CAPTURE(name);
     const Scene scene = loadScene(kSource + "/scenes/" + name, {true});
     CHECK(scene.triangleCount() > 0);

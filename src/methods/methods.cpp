@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "methods/envpbgi/env_pbgi.h"
 #include "methods/microrender/micro_renderer.h"
 #include "methods/pathtrace/path_tracer.h"
 #include "methods/photonmap/photon_mapping.h"
@@ -10,7 +11,7 @@ namespace lucent {
 
 const std::vector<const Method*>& renderingMethods() {
   static const std::vector<const Method*> methods = {&pathTraceMethod(), &purcellMethod(), &pmfgMethod(),
-                                                     &microMethod()};
+                                                     &microMethod(), &envPbgiMethod()};
   return methods;
 }
 

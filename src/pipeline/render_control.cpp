@@ -40,6 +40,19 @@ Film startFilm(const RenderControl& control, const Scene& scene, const RenderPar
   return film;
 }
 
+void shadeImage(RenderOutput& out, const RenderControl& control, const Scene& scene, const RenderPart& part,
+                const EyePaths& eye, const PointRadiance& light, FilmLayers layers) {
+  Stopwatch clock;
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, layers));
+  film->add(eye, light);
+  for (size_t i = 0; i < eye.pixels.size(); ++i)
+    film->setTaken(eye.imagePixel(i, scene.camera.width), uint32_t(part.samples()));
+  out.image = film->image();
+  out.film = film;
+  out.sppDone = part.samples();
+  out.stats.addStage("image", clock.seconds());
+}
+
 bool filmComplete(const Film& film, const RenderPart& part) {
   return std::all_of(film.samplesTaken().begin(), film.samplesTaken().end(),
                      [&](uint32_t taken) { return taken == uint32_t(part.samples()); });

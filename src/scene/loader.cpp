@@ -19,8 +19,10 @@ namespace {
 
 // Reads an RGB (or grey) image into texels, convert(channel values as stored, sRGB-encoded or not)
 // giving each; row 0 is the top row.
+// Negative values are refused unless allowNegative (the caller checks them).
 template <class Convert>
-auto readImageTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h, Convert convert) {
+auto readImageTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h, Convert convert,
+                     bool allowNegative = false) {
   Image image;
   ImageMetadata metadata;
   try {
@@ -40,7 +42,8 @@ auto readImageTexels(const std::string& path, const std::string& context, uint32
       for (int k = 0; k < 3; ++k) {
         const float v = stored[k] = image.at(int(x), int(y), nc >= 3 ? k : 0);
         // The linear value must be finite and not negative; for sRGB values in [0, 1] it is.
-        const bool valid = std::isfinite(v) && v >= 0 && (!srgb || v <= 1 || std::isfinite(srgbToLinear(v)));
+        const bool valid =
+            std::isfinite(v) && (v >= 0 || allowNegative) && (!srgb || v <= 1 || std::isfinite(srgbToLinear(v)));
         if (!valid) throw SceneError(context + ": image '" + path + "' has negative or non-finite texels");
       }
       texels[size_t(y) * w + x] = convert(stored, srgb);
@@ -48,13 +51,35 @@ auto readImageTexels(const std::string& path, const std::string& context, uint32
   return texels;
 }
 
-// Linear texels (environment maps).
-std::vector<Rgb> readTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h) {
-  return readImageTexels(path, context, w, h, [](const float* stored, bool srgb) {
-    Rgb c;
-    for (int k = 0; k < 3; ++k) c[k] = srgb ? srgbToLinear(stored[k]) : stored[k];
-    return c;
-  });
+// Linear texels (environment maps). Lossy compression leaves some texels of real HDR maps slightly
+// negative (Poly Haven's courtyard: 1,818 texels down to -0.0032, envmaps/SOURCE.txt): those within
+// 1% of the map's mean value below 0 are clamped to 0 and counted in `clamped`, with the most negative
+// in `mostNegative`; a map with any texel further below 0 is refused.
+std::vector<Rgb> readTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h,
+                            uint32_t& clamped, float& mostNegative) {
+  std::vector<Rgb> texels = readImageTexels(
+      path, context, w, h,
+      [](const float* stored, bool srgb) {
+        Rgb c;
+        for (int k = 0; k < 3; ++k) c[k] = srgb ? srgbToLinear(stored[k]) : stored[k];
+        return c;
+      },
+      true);
+  double sum = 0;
+  mostNegative = 0;
+  for (const Rgb& t : texels)
+    for (int k = 0; k < 3; ++k) sum += std::abs(t[k]), mostNegative = std::min(mostNegative, t[k]);
+  const double mean = sum / (3.0 * double(texels.size()));
+  if (mostNegative < 0 && !(double(-mostNegative) <= 0.01 * mean))
+    throw SceneError(context + ": image '" + path + "' has negative texels (down to " + std::to_string(mostNegative) +
+                     "; its mean value is " + std::to_string(mean) + ")");
+  clamped = 0;
+  for (Rgb& t : texels)
+    if (t.r < 0 || t.g < 0 || t.b < 0) {
+      ++clamped;
+      for (int k = 0; k < 3; ++k) t[k] = std::max(t[k], 0.0f);
+    }
+  return texels;
 }
 
 // 8-bit sRGB texels packed as R | G << 8 | B << 16 | 255 << 24 (diffuse albedo maps). An 8-bit
@@ -159,7 +184,8 @@ void loadLight(JsonFields light, Scene& scene, const fs::path& base) {
       scene.inputFiles.push_back(env.source);
       const float scale = light.number("scale", 1.0f);
       if (!(scale >= 0)) light.failKey("scale", "must not be negative");
-      env.texels = readTexels(env.source, light.file() + ": " + light.keyPath("map"), env.width, env.height);
+      env.texels = readTexels(env.source, light.file() + ": " + light.keyPath("map"), env.width, env.height,
+                              env.clampedTexels, env.mostNegativeTexel);
       for (Rgb& t : env.texels) {
         t *= scale;
         if (!isFinite(t)) light.failKey("scale", "makes the map's radiance overflow");
@@ -294,6 +320,9 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
   }
   if (scene.lights.empty())
     throw SceneError(jsonPath + ": the scene has no light (no emissive material, no entry in 'lights')");
+  if (scene.environment.clampedTexels > 0 && !options.quiet)
+    std::cerr << "lucent: warning: " << scene.environment.source << ": clamped " << scene.environment.clampedTexels
+              << " slightly negative texels (down to " << scene.environment.mostNegativeTexel << ") to 0\n";
   if (scene.droppedDegenerateTriangles > 0 && !options.quiet)
     std::cerr << "lucent: warning: " << jsonPath << ": dropped " << scene.droppedDegenerateTriangles
               << " degenerate (zero-area) triangles\n";

@@ -48,6 +48,27 @@ RenderPart resolvePart(const RenderControl& control, const Scene& scene, int spp
 Film startFilm(const RenderControl& control, const Scene& scene, const RenderPart& part, Film::Sums sums,
                FilmLayers layers);
 
+// The camera paths of a part, for a method whose options have spp, maxSpecularDepth, seed and
+// layers (render_options.h).
+template <class Options>
+EyePathSettings eyePathSettings(const Options& options, const RenderPart& part) {
+  EyePathSettings s;
+  s.spp = options.spp;
+  s.maxSpecularDepth = options.maxSpecularDepth;
+  s.seed = options.seed;
+  s.layers = options.layers;
+  s.region = part.region;
+  s.sampleBegin = part.sampleBegin;
+  s.sampleEnd = part.sampleEnd;
+  return s;
+}
+
+// The image of a method that shades every camera sample of its part at once: a film (PerPart sums)
+// started as startFilm does, the shading points' light added, every pixel's samples taken; sets
+// out's image, film and sppDone, and times stage "image".
+void shadeImage(RenderOutput& out, const RenderControl& control, const Scene& scene, const RenderPart& part,
+                const EyePaths& eye, const PointRadiance& light, FilmLayers layers);
+
 // Whether every pixel of the part has all its samples.
 bool filmComplete(const Film& film, const RenderPart& part);
 

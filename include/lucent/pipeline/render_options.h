@@ -29,16 +29,21 @@ void declareDumpDirectory(OptionTable<Options>& table) {
   table.rule("dump", [](const Options& o) { return dumpDirectoryProblem(o.dumpDirectory); });
 }
 
-// Camera paths through mirrors and glass to shading points, and direct light there by shadow rays
-// (pipeline/shading_points.h, pipeline/direct_light.h).
+// Camera paths through mirrors and glass to shading points (pipeline/shading_points.h).
 template <class Options>
-void declareShadingPointOptions(OptionTable<Options>& table) {
+void declareCameraPathOptions(OptionTable<Options>& table) {
   table.integer("spp", [](Options& o) -> auto& { return o.spp; }, 1, 1 << 24, "samples",
                 "camera rays per pixel: one through the pixel's centre, more stratified over it");
-  table.integer("light_samples", [](Options& o) -> auto& { return o.lightSamples; }, 0, 1 << 16, "rays",
-                "shadow rays per shading point for direct light");
   table.integer("max_specular_depth", [](Options& o) -> auto& { return o.maxSpecularDepth; }, 0, 64, "bounces",
                 "mirror and glass bounces followed from the camera");
+}
+
+// Camera paths, and direct light at their shading points by shadow rays (pipeline/direct_light.h).
+template <class Options>
+void declareShadingPointOptions(OptionTable<Options>& table) {
+  declareCameraPathOptions(table);
+  table.integer("light_samples", [](Options& o) -> auto& { return o.lightSamples; }, 0, 1 << 16, "rays",
+                "shadow rays per shading point for direct light");
 }
 
 }  // namespace lucent

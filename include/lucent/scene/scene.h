@@ -62,6 +62,10 @@ struct Environment {
   std::vector<Rgb> texels;  // lat-long map, empty for a constant environment
   Distribution2D distribution;
   std::string source;  // the map's path, for metadata
+  // Texels of the map slightly below 0 that were clamped to 0, and the most negative value (the
+  // loader's warning).
+  uint32_t clampedTexels = 0;
+  float mostNegativeTexel = 0;
 };
 
 // A scene file's "render" block: the method and options a batch job renders it with (the command

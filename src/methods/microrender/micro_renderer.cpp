@@ -165,11 +165,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
 
   // Camera paths and direct light, at every pixel.
   Stopwatch eyeClock;
-  EyePathSettings eyeSettings{o.spp, o.maxSpecularDepth, o.seed, o.layers};
-  eyeSettings.region = part.region;
-  eyeSettings.sampleBegin = part.sampleBegin;
-  eyeSettings.sampleEnd = part.sampleEnd;
-  const EyePaths eye = traceEyePaths(scene, vis, eyeSettings);
+  const EyePaths eye = traceEyePaths(scene, vis, eyePathSettings(o, part));
   const size_t n = eye.points.size();
   PointRadiance shading(n);
   uint64_t shadowRays = 0;
@@ -243,29 +239,15 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
 
   if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
 
-  Stopwatch imageClock;
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {o.layers, false}));
-  film->add(eye, shading);
-  for (size_t i = 0; i < eye.pixels.size(); ++i) film->setTaken(eye.imagePixel(i, width), uint32_t(part.samples()));
-  out.image = film->image();
-  out.film = film;
-  out.sppDone = part.samples();
-  stats.addStage("image", imageClock.seconds());
+  shadeImage(out, control, scene, part, eye, shading, {o.layers, false});
 
   const MicroCounters& c = totals.counters;
   stats.addCounter("eye_rays", eye.rays);
   stats.addCounter("shadow_rays", shadowRays);
   stats.addCounter("shading_points", n);
-  stats.addCounter("invalid_samples", eye.invalid + film->droppedPoints());
-  stats.addCounter("micro_buffers", c.buffers);
-  stats.addCounter("micro_buffers_ray_cast", c.buffersRayCast);
+  stats.addCounter("invalid_samples", eye.invalid + out.film->droppedPoints());
+  c.report(stats);
   stats.addCounter("upsampling_recomputed", recomputed);
-  stats.addCounter("nodes_visited", c.nodesVisited);
-  stats.addCounter("packet_nodes_visited", c.packetNodesVisited);
-  stats.addCounter("nodes_splatted", c.nodesSplatted);
-  stats.addCounter("leaves_ray_cast", c.leavesListed);
-  stats.addCounter("post_traversal_flushes", c.listFlushes);
-  stats.addCounter("ray_disc_tests", c.rayDiscTests);
   stats.addCounter("gather_samples", c.buffers * uint64_t(o.bufferSide) * uint64_t(o.bufferSide));
   return out;
 }

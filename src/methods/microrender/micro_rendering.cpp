@@ -642,6 +642,17 @@ void MicroBuffer::resize(int bufferSide) {
   for (auto* v : {&tileAxisX, &tileAxisY, &tileAxisZ, &tileCos, &tileSin}) v->resize(tiles);
 }
 
+void MicroCounters::report(RenderStats& stats) const {
+  stats.addCounter("micro_buffers", buffers);
+  stats.addCounter("micro_buffers_ray_cast", buffersRayCast);
+  stats.addCounter("nodes_visited", nodesVisited);
+  stats.addCounter("packet_nodes_visited", packetNodesVisited);
+  stats.addCounter("nodes_splatted", nodesSplatted);
+  stats.addCounter("leaves_ray_cast", leavesListed);
+  stats.addCounter("post_traversal_flushes", listFlushes);
+  stats.addCounter("ray_disc_tests", rayDiscTests);
+}
+
 MicroCounters& MicroCounters::operator+=(const MicroCounters& o) {
   buffers += o.buffers, buffersRayCast += o.buffersRayCast, nodesVisited += o.nodesVisited;
   packetNodesVisited += o.packetNodesVisited;

@@ -20,10 +20,8 @@ void addEstimateCounters(RenderStats& stats, const std::string& prefix, const Es
 
 BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                             const PixelRect& band, const RenderPart& part, uint64_t& shadowRays) {
-  EyePathSettings eyeSettings{options.spp, options.maxSpecularDepth, options.seed, options.layers};
+  EyePathSettings eyeSettings = eyePathSettings(options, part);
   eyeSettings.region = band;
-  eyeSettings.sampleBegin = part.sampleBegin;
-  eyeSettings.sampleEnd = part.sampleEnd;
   BandShadingPoints out{traceEyePaths(scene, vis, eyeSettings), PointRadiance(0)};
   out.radiance = PointRadiance(out.eye.points.size());
   if (options.lightSamples > 0)

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "lucent/core/math.h"
+#include "lucent/core/stats.h"
 #include "lucent/methods/microrender/hemisphere_mapping.h"
 #include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/methods/points/point_hierarchy.h"
@@ -57,6 +58,9 @@ struct MicroCounters {
   uint64_t rayDiscTests = 0;
   double rayCastSeconds = 0;        // time spent ray casting, within renderMicroBuffers
   MicroCounters& operator+=(const MicroCounters& o);
+  // The counters micro_buffers, micro_buffers_ray_cast, nodes_visited, packet_nodes_visited,
+  // nodes_splatted, leaves_ray_cast, post_traversal_flushes and ray_disc_tests.
+  void report(RenderStats& stats) const;
 };
 
 struct MicroRenderSettings {

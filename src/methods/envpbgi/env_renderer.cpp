@@ -1,0 +1,288 @@
+// --method envpbgi: the pipeline of the environment-lighting PBGI paper (Fig. 6's stages): the point
+// hierarchy, the camera's depth buffer, primary visible points, their micro-buffers and the
+// secondary visible points, the selection of direct-light points, direct light, propagation, the
+// radiance caches and their grid, and per pixel the caches' interpolation with the analytic lights'
+// direct light by shadow rays.
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+#include <stdexcept>
+
+#include "lucent/core/dump.h"
+#include "lucent/core/memory.h"
+#include "lucent/core/parallel.h"
+#include "lucent/methods/points/point_radiance.h"
+#include "lucent/pipeline/dumps.h"
+#include "lucent/pipeline/film.h"
+#include "lucent/pipeline/render_control.h"
+#include "lucent/pipeline/shading_points.h"
+#include "lucent/scene/bsdf.h"
+#include "methods/envpbgi/env_lighting.h"
+#include "methods/envpbgi/env_pbgi.h"
+#include "methods/envpbgi/radiance_cache.h"
+#include "methods/envpbgi/visible_points.h"
+
+namespace lucent {
+
+namespace {
+
+enum class EnvStream : uint64_t { Points = 31 };
+
+// A shading point's diffuse reflectance: the method shades every receiver as diffuse (the paper's
+// surfaces are), a glossy one by its diffuse part.
+Rgb diffusePart(const SurfaceBsdf& bsdf) { return bsdf.kd; }
+
+// Dumps (docs/dump-format.md) of the stages before the pixels.
+void dumpStages(const std::string& dir, const EnvHierarchy& h, std::span<const uint32_t> primary,
+                std::span<const uint32_t> primaryTexels, std::span<const Rgb> direct,
+                std::span<const RadianceCache> caches, const CacheGrid& grid) {
+  if (dir.empty()) return;
+  writeDump(dir, "envpbgi.nodes", "EnvPointNode", std::span(h.nodes));
+  writeDump(dir, "envpbgi.surfels", "Surfel", std::span(h.surfels));
+  writeDump(dir, "envpbgi.node_areas", "float", std::span(h.points.nodeAreas));
+  writeDump(dir, "envpbgi.primary", "uint32", primary);
+  writeDump(dir, "envpbgi.primary_buffers", "uint32", primaryTexels);
+  std::vector<uint32_t> secondary;
+  for (uint32_t i = kRootNode; i < uint32_t(h.nodes.size()); ++i)
+    if (h.nodes[i].selection & kSecondary) secondary.push_back(i);
+  writeDump(dir, "envpbgi.secondary", "uint32", std::span(secondary));
+  writeDump(dir, "envpbgi.direct_light", "Rgb", direct);
+  writeDump(dir, "envpbgi.caches", "RadianceCache", caches);
+  writeDump(dir, "envpbgi.grid_begin", "uint32", std::span(grid.begin));
+  writeDump(dir, "envpbgi.grid_caches", "uint32", std::span(grid.caches));
+}
+
+}  // namespace
+
+RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvPbgiOptions& o,
+                           const RenderControl& control) {
+  envPbgiOptionTable().validate(o);
+  requireEnvironmentLights(scene);
+  if (control.resume || control.checkpointSeconds > 0)
+    throw std::invalid_argument("--method envpbgi renders the image at once and cannot checkpoint or resume; "
+                                "render it in parts (--crop, --samples) to bound the work a kill loses");
+  const RenderPart part = resolvePart(control, scene, o.spp);
+  RenderOutput out;
+  RenderStats& stats = out.stats;
+  const ProgressFn& progress = control.progress;
+  auto report = [&](double fraction) {
+    if (progress) progress(fraction);
+  };
+
+  // Section 4 "Data structure": points by a low-discrepancy sequence, a binary tree over them, the
+  // paper's 48-byte nodes.
+  Stopwatch hierarchyClock;
+  PointHierarchyOptions ho;
+  ho.pointCount = o.points;
+  ho.encoding = NodeEncoding::Float;
+  ho.sampling.method = o.pointSampling;
+  ho.sampling.seed = hashKey(o.seed, uint64_t(EnvStream::Points));
+  const uint64_t nodeBytes = sizeof(FloatNode) + sizeof(EnvPointNode) + sizeof(Surfel) + sizeof(TraversalNode) +
+                             sizeof(Rgb) + 4 * sizeof(float);
+  requireMemory(uint64_t(o.points) * (2 * nodeBytes + sizeof(PointSample) + 32), "the point hierarchy", "lower --points");
+  RenderStats hierarchyStats;
+  EnvHierarchy h = makeEnvHierarchy(buildPointHierarchy(scene, ho, &hierarchyStats));
+  const MicroHierarchy micro = prepareMicroHierarchy(h.points);
+  stats.addStage("hierarchy", hierarchyClock.seconds());
+  stats.addCounter("points", h.leafCount());
+  report(0.05);
+
+  MicroRenderSettings settings;
+  settings.depth = DepthCoding::forExtent(length(scene.bounds.extent()));
+  settings.splatReach = o.splatReach;
+  const BufferQuadrature primaryQuadrature = makeQuadrature(o.mapping, o.primaryBufferSide);
+  const BufferQuadrature secondaryQuadrature = makeQuadrature(o.mapping, o.secondaryBufferSide);
+  const Environment& env = scene.environment;
+  MicroCounters counters;
+  uint64_t shadowRays = 0;
+  std::vector<Rgb> direct(h.nodes.size());
+
+  // 3.4, 4: primary visible points, from the camera's depth buffer.
+  Stopwatch primaryClock;
+  const CameraDepth depth = traceCameraDepth(scene, vis);
+  const float pixelAngle = PinholeCamera(scene.camera).pixelAngle();
+  PrimarySelection selection;
+  selection.maxSolidAngle = o.primaryPixels * pixelAngle * pixelAngle;
+  selection.maxConeAngle = o.primaryConeAngle * kPi / 180.0f;
+  selection.thickness = micro.thickness;
+  const std::vector<uint32_t> primary = selectPrimaryPoints(h, scene.camera, depth, selection);
+  stats.addStage("select_primary_points", primaryClock.seconds());
+
+  // 3.3, 4: their micro-buffers, and the nodes those show: the secondary visible points.
+  Stopwatch secondaryClock;
+  const uint32_t primaryTexelCount = primaryQuadrature.texels();
+  requireMemory(uint64_t(primary.size()) * (primaryTexelCount * sizeof(uint32_t) + sizeof(RadianceCache)),
+                "the primary points' micro-buffers and caches", "raise --primary-pixels or lower --resolution");
+  std::vector<uint32_t> primaryTexels(primary.size() * primaryTexelCount);
+  renderBuffers(micro, settings, primaryQuadrature, primary.size(),
+                [&](size_t k) { return BufferOrigin{h.surfels[primary[k]].position, h.surfels[primary[k]].normal}; },
+                primaryTexels, counters);
+  markSecondaryPoints(h, primaryTexels);
+  stats.addStage("select_secondary_points", secondaryClock.seconds());
+  report(0.3);
+
+  // 3.3, 3.4, Fig. 3: which points need a micro-buffer of their own, then their direct light.
+  Stopwatch selectClock;
+  const SelectionCounts counts = selectDirectLightPoints(h, primary, o.primarySources);
+  stats.addStage("select_direct_light_points", selectClock.seconds());
+
+  Stopwatch directClock;
+  std::vector<uint32_t> ownBuffer;
+  if (o.directLight == PointDirectLight::Selected) {
+    for (uint32_t i = kRootNode; i < uint32_t(h.nodes.size()); ++i)
+      if (h.nodes[i].selection & kOwnBuffer) ownBuffer.push_back(i);
+  } else {
+    for (uint32_t i = h.leafCount(); i < uint32_t(h.nodes.size()); ++i) ownBuffer.push_back(i);
+  }
+  const uint32_t secondaryTexelCount = secondaryQuadrature.texels();
+  std::vector<uint32_t> ownTexels(std::min<size_t>(ownBuffer.size(), 1u << 16) * secondaryTexelCount);
+  tbb::enumerable_thread_specific<uint64_t> rays(0);
+  // Direct light at a point from its buffer's empty texels and from the analytic lights.
+  auto directAt = [&](uint32_t node, std::span<const uint32_t> texels, const BufferQuadrature& q) {
+    const Surfel& s = h.surfels[node];
+    const BufferIrradiance e = bufferIrradiance(texels, q, s.normal, env, {});
+    const Rgb analytic = analyticLight(scene, vis, s.position, s.normal, s.normal, [](Vec3) { return Rgb(1.0f); },
+                                       rays.local());
+    return h.points.floatNodes[node].albedo * ((e.environment + analytic) * kInvPi);
+  };
+  // In chunks, so that the buffers held at once stay bounded (every leaf: 2^19 buffers).
+  const size_t chunk = ownTexels.size() / std::max<uint32_t>(secondaryTexelCount, 1);
+  for (size_t first = 0; first < ownBuffer.size(); first += chunk) {
+    const size_t count = std::min(chunk, ownBuffer.size() - first);
+    renderBuffers(micro, settings, secondaryQuadrature, count,
+                  [&](size_t k) { return BufferOrigin{h.surfels[ownBuffer[first + k]].position, h.surfels[ownBuffer[first + k]].normal}; },
+                  ownTexels, counters);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 64), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k != r.end(); ++k)
+        direct[ownBuffer[first + k]] =
+            directAt(ownBuffer[first + k], std::span(ownTexels).subspan(k * secondaryTexelCount, secondaryTexelCount),
+                     secondaryQuadrature);
+    });
+  }
+  ownTexels = {};
+  // The primary points reuse their buffers (3.5: "almost for free").
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, primary.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k)
+      if (o.directLight == PointDirectLight::Selected)
+        direct[primary[k]] = directAt(primary[k], std::span(primaryTexels).subspan(k * primaryTexelCount, primaryTexelCount),
+                                      primaryQuadrature);
+  });
+  for (uint64_t r : rays) shadowRays += r;
+  stats.addStage("direct_light", directClock.seconds());
+  report(0.55);
+
+  Stopwatch propagateClock;
+  uint64_t secondaryWithoutLight = 0;
+  if (o.directLight == PointDirectLight::Selected) {
+    propagateDirectLight(h, primary, direct);
+    for (const EnvPointNode& node : h.nodes)
+      secondaryWithoutLight += (node.selection & kSecondary) && !(node.selection & kHasDirect);
+  } else {
+    pullRadiance(h.points, direct);
+  }
+  stats.addStage("propagate_direct_light", propagateClock.seconds());
+
+  // 3.5, 4: the radiance caches and their screen-space grid.
+  Stopwatch cacheClock;
+  std::vector<RadianceCache> caches(primary.size());
+  CacheGrid grid;
+  if (o.pixelIrradiance == PixelIrradiance::Caches) {
+    const CacheConvolution convolution = makeCacheConvolution(primaryQuadrature);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, primary.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k != r.end(); ++k)
+        caches[k] = buildRadianceCache(std::span(primaryTexels).subspan(k * primaryTexelCount, primaryTexelCount),
+                                       primaryQuadrature, convolution, h.surfels[primary[k]],
+                                       o.cacheRadiusScale * h.nodes[primary[k]].radius, env, direct);
+    });
+    grid = buildCacheGrid(caches, scene.camera, o.tileSize);
+  }
+  stats.addStage("radiance_caches", cacheClock.seconds());
+  dumpStages(o.dumpDirectory, h, primary, primaryTexels, direct, caches, grid);
+  primaryTexels = {};
+  report(0.65);
+
+  // The pixels: camera paths to shading points, the analytic lights by shadow rays, the rest from
+  // the caches (Eq. 5) or, brute force, from a micro-buffer each.
+  Stopwatch pixelClock;
+  const EyePaths eye = traceEyePaths(scene, vis, eyePathSettings(o, part));
+  const size_t n = eye.points.size();
+  PointRadiance shading(n);
+  const PinholeCamera camera(scene.camera);
+  Interpolation interpolation;
+  interpolation.maxAngle = o.cacheMaxAngle * kPi / 180.0f;
+  std::atomic<uint64_t> fallbacks{0}, glossy{0};
+  tbb::enumerable_thread_specific<uint64_t> pixelRays(0);
+  auto shade = [&](size_t i, const BufferIrradiance& e) {
+    const ShadingPoint& p = eye.points[i];
+    const Rgb rho = diffusePart(p.bsdf) * kInvPi;
+    // The analytic lights with the full BSDF; the environment's and the nodes' light as diffuse.
+    const Frame frame(p.normal);
+    const Vec3 woLocal = frame.toLocal(p.wo);
+    const Rgb analytic = analyticLight(scene, vis, p.position, p.geometricNormal, p.normal,
+                                       [&](Vec3 wi) { return evalBsdf(p.bsdf, woLocal, frame.toLocal(wi)); },
+                                       pixelRays.local());
+    shading.direct[i] = analytic + rho * e.environment;
+    shading.indirect[i] = rho * e.nodes;
+    if (p.bsdf.type != MaterialType::Diffuse) ++glossy;
+  };
+  if (o.pixelIrradiance == PixelIrradiance::Caches) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        const ShadingPoint& p = eye.points[i];
+        // The tile the point appears in (through a mirror: where it would appear, or its pixel's).
+        const Vec3 s = camera.project(p.position);
+        const int width = scene.camera.width;
+        const bool onScreen = s.z > 0 && s.x >= 0 && s.y >= 0 && s.x < float(width) && s.y < float(scene.camera.height);
+        const int px = onScreen ? int(s.x) : int(p.pixel % uint32_t(width));
+        const int py = onScreen ? int(s.y) : int(p.pixel / uint32_t(width));
+        bool fallback = false;
+        const BufferIrradiance e = interpolateCaches(caches, grid, px / grid.tileSize, py / grid.tileSize, p.position,
+                                                     p.normal, interpolation, fallback);
+        fallbacks += fallback;
+        shade(i, e);
+      }
+    });
+  } else {
+    std::vector<uint32_t> texels(std::min<size_t>(n, 1u << 14) * primaryTexelCount);
+    const size_t pixelChunk = texels.size() / primaryTexelCount;
+    for (size_t first = 0; first < n; first += pixelChunk) {
+      const size_t count = std::min(pixelChunk, n - first);
+      renderBuffers(micro, settings, primaryQuadrature, count,
+                    [&](size_t k) { return BufferOrigin{eye.points[first + k].position, eye.points[first + k].normal}; },
+                    texels, counters);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 64), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k != r.end(); ++k)
+          shade(first + k, bufferIrradiance(std::span(texels).subspan(k * primaryTexelCount, primaryTexelCount),
+                                            primaryQuadrature, eye.points[first + k].normal, env, direct));
+      });
+      report(0.65 + 0.35 * double(first + count) / double(n));
+    }
+  }
+  for (uint64_t r : pixelRays) shadowRays += r;
+  stats.addStage("pixels", pixelClock.seconds());
+  if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
+
+  shadeImage(out, control, scene, part, eye, shading, {o.layers, false});
+  report(1.0);
+
+  stats.addCounter("primary_points", counts.primary);
+  stats.addCounter("secondary_points", counts.secondary);
+  stats.addCounter("secondary_after_upward", counts.afterUpward);
+  stats.addCounter("secondary_after_downward", counts.afterDownward);
+  stats.addCounter("secondary_own_buffers", counts.ownBuffers);
+  stats.addCounter("secondary_without_light", secondaryWithoutLight);
+  counters.report(stats);
+  stats.addCounter("shadow_rays", shadowRays);
+  stats.addCounter("eye_rays", eye.rays);
+  stats.addCounter("shading_points", n);
+  stats.addCounter("cache_fallbacks", fallbacks);
+  stats.addCounter("glossy_shaded_diffuse", glossy);
+  stats.addCounter("grid_references", grid.caches.size());
+  stats.addCounter("invalid_samples", eye.invalid + out.film->droppedPoints());
+  return out;
+}
+
+}  // namespace lucent

@@ -1,0 +1,175 @@
+#include "methods/envpbgi/radiance_cache.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "lucent/methods/microrender/micro_buffer.h"
+#include "lucent/scene/texture.h"
+
+namespace lucent {
+
+namespace {
+
+// The centre of cache texel i along an axis of [-1, 1].
+float cacheTexelCentre(int i) { return -1.0f + (2.0f * float(i) + 1.0f) / float(kCacheSide); }
+
+}  // namespace
+
+CacheConvolution makeCacheConvolution(const BufferQuadrature& q) {
+  CacheConvolution c;
+  c.normals.resize(kCacheTexels);
+  c.weights.assign(size_t(kCacheTexels) * q.texels(), 0.0f);
+  for (int y = 0; y < kCacheSide; ++y)
+    for (int x = 0; x < kCacheSide; ++x) {
+      Vec2 p{cacheTexelCentre(x), cacheTexelCentre(y)};
+      const float r = std::sqrt(p.x * p.x + p.y * p.y);
+      if (r > 1.0f) p = {p.x / r, p.y / r};
+      const Vec3 normal = paraboloidDirection(p);
+      const size_t o = size_t(y) * kCacheSide + size_t(x);
+      c.normals[o] = normal;
+      for (const uint16_t t : q.mapping.used) {
+        const Vec3 w = q.mapping.direction[t];
+        const float solidAngle = q.cosineWeight[t] / w.z;
+        c.weights[o * q.texels() + t] = std::max(0.0f, dot(normal, w)) * solidAngle;
+      }
+    }
+  return c;
+}
+
+RadianceCache buildRadianceCache(std::span<const uint32_t> texels, const BufferQuadrature& q,
+                                 const CacheConvolution& convolution, const Surfel& surfel, float radius,
+                                 const Environment& environment, std::span<const Rgb> nodeDirect) {
+  RadianceCache cache;
+  cache.position = surfel.position;
+  cache.normal = surfel.normal;
+  cache.radius = radius;
+  // Incoming radiance per texel, then the fixed linear map to the 25 normals.
+  const Frame frame(surfel.normal);
+  Rgb fromEnvironment[kMaxMicroBufferSide * kMaxMicroBufferSide], fromNodes[kMaxMicroBufferSide * kMaxMicroBufferSide];
+  for (const uint16_t t : q.mapping.used) {
+    const uint32_t texel = texels[t];
+    fromEnvironment[t] = texel == kEmptyMicroPixel ? environmentRadiance(environment, frame.toWorld(q.mapping.direction[t])) : Rgb();
+    fromNodes[t] = texel == kEmptyMicroPixel ? Rgb() : nodeDirect[microPixelNode(texel)];
+  }
+  for (int o = 0; o < kCacheTexels; ++o) {
+    const float* w = &convolution.weights[size_t(o) * q.texels()];
+    Rgb e, i;
+    for (const uint16_t t : q.mapping.used) e += fromEnvironment[t] * w[t], i += fromNodes[t] * w[t];
+    cache.environment[o] = e;
+    cache.indirect[o] = i;
+  }
+  return cache;
+}
+
+BufferIrradiance cacheIrradiance(const RadianceCache& cache, Vec3 normal) {
+  const Vec3 local = Frame(cache.normal).toLocal(normal);
+  // The paraboloid point, clamped to the disc (for normals at or below the horizon, the rim).
+  Vec2 p = local.z > -0.999f ? paraboloidPoint(local) : Vec2{local.x, local.y};
+  const float r = std::sqrt(p.x * p.x + p.y * p.y);
+  if (r > 1.0f) p = {p.x / r, p.y / r};
+  // Bilinear between the texel centres (clamped to the outer ones).
+  auto coordinate = [](float v, int& i0, float& f) {
+    const float s = std::clamp((v + 1.0f) * 0.5f * float(kCacheSide) - 0.5f, 0.0f, float(kCacheSide - 1));
+    i0 = std::min(int(s), kCacheSide - 2);
+    f = s - float(i0);
+  };
+  int x0, y0;
+  float fx, fy;
+  coordinate(p.x, x0, fx);
+  coordinate(p.y, y0, fy);
+  BufferIrradiance e;
+  const float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+  const int at[4] = {y0 * kCacheSide + x0, y0 * kCacheSide + x0 + 1, (y0 + 1) * kCacheSide + x0,
+                     (y0 + 1) * kCacheSide + x0 + 1};
+  for (int k = 0; k < 4; ++k) e.environment += cache.environment[at[k]] * w[k], e.nodes += cache.indirect[at[k]] * w[k];
+  return e;
+}
+
+CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& cameraSettings, int tileSize) {
+  const PinholeCamera camera(cameraSettings);
+  CacheGrid g;
+  g.tileSize = tileSize;
+  g.tilesX = (cameraSettings.width + tileSize - 1) / tileSize;
+  g.tilesY = (cameraSettings.height + tileSize - 1) / tileSize;
+  // Each cache's tile rectangle [x0, x1] x [y0, y1], or empty.
+  struct TileRect {
+    int x0 = 1, y0 = 1, x1 = 0, y1 = 0;
+  };
+  std::vector<TileRect> rects(caches.size());
+  for (size_t k = 0; k < caches.size(); ++k) {
+    const RadianceCache& c = caches[k];
+    const Vec3 p = camera.project(c.position);
+    TileRect& t = rects[k];
+    if (p.z <= c.radius) {
+      // The sphere reaches the eye's plane: it may cover any part of the screen (unless wholly behind).
+      if (p.z < -c.radius) continue;
+      t = {0, 0, g.tilesX - 1, g.tilesY - 1};
+      continue;
+    }
+    const float footprint = camera.sphereFootprint(c.position, c.radius);
+    const float x0 = p.x - footprint, x1 = p.x + footprint, y0 = p.y - footprint, y1 = p.y + footprint;
+    if (x1 < 0 || y1 < 0 || x0 >= float(cameraSettings.width) || y0 >= float(cameraSettings.height)) continue;
+    auto tile = [&](float v, int count) { return std::clamp(int(std::floor(v / float(tileSize))), 0, count - 1); };
+    t = {tile(x0, g.tilesX), tile(y0, g.tilesY), tile(x1, g.tilesX), tile(y1, g.tilesY)};
+  }
+  const size_t tiles = size_t(g.tilesX) * size_t(g.tilesY);
+  std::vector<uint32_t> counts(tiles + 1, 0);
+  for (const TileRect& t : rects)
+    for (int y = t.y0; y <= t.y1; ++y)
+      for (int x = t.x0; x <= t.x1; ++x) ++counts[size_t(y) * size_t(g.tilesX) + size_t(x)];
+  g.begin.assign(tiles + 1, 0);
+  for (size_t i = 0; i < tiles; ++i) g.begin[i + 1] = g.begin[i] + counts[i];
+  g.caches.resize(g.begin[tiles]);
+  std::vector<uint32_t> cursor(g.begin.begin(), g.begin.end() - 1);
+  for (size_t k = 0; k < caches.size(); ++k) {
+    const TileRect& t = rects[k];
+    for (int y = t.y0; y <= t.y1; ++y)
+      for (int x = t.x0; x <= t.x1; ++x) g.caches[cursor[size_t(y) * size_t(g.tilesX) + size_t(x)]++] = uint32_t(k);
+  }
+  return g;
+}
+
+BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const CacheGrid& grid, int tx, int ty,
+                                   Vec3 x, Vec3 n, const Interpolation& interpolation, bool& fallback) {
+  fallback = false;
+  const float cosMax = std::cos(interpolation.maxAngle);
+  auto wardError = [&](const RadianceCache& c) {
+    return length(x - c.position) / c.radius + std::sqrt(std::max(0.0f, 1.0f - dot(n, c.normal)));
+  };
+  const size_t tile = size_t(ty) * size_t(grid.tilesX) + size_t(tx);
+  BufferIrradiance sum;
+  double total = 0;
+  for (uint32_t j = grid.begin[tile]; j < grid.begin[tile + 1]; ++j) {
+    const RadianceCache& c = caches[grid.caches[j]];
+    if (!(length(x - c.position) < c.radius) || !(dot(n, c.normal) >= cosMax)) continue;
+    const float w = 1.0f / std::max(wardError(c), 1e-6f);
+    const BufferIrradiance e = cacheIrradiance(c, n);
+    sum.environment += e.environment * w, sum.nodes += e.nodes * w;
+    total += w;
+  }
+  if (total > 0) {
+    const float inv = float(1.0 / total);
+    return {sum.environment * inv, sum.nodes * inv};
+  }
+  // No cache qualifies: the least Ward error in the tile, else in rings of tiles around it.
+  fallback = true;
+  for (int ring = 0; ring < std::max(grid.tilesX, grid.tilesY); ++ring) {
+    float best = kInf;
+    uint32_t bestCache = 0;
+    for (int y = ty - ring; y <= ty + ring; ++y)
+      for (int xx = tx - ring; xx <= tx + ring; ++xx) {
+        if (std::max(std::abs(y - ty), std::abs(xx - tx)) != ring || xx < 0 || y < 0 || xx >= grid.tilesX ||
+            y >= grid.tilesY)
+          continue;
+        const size_t t = size_t(y) * size_t(grid.tilesX) + size_t(xx);
+        for (uint32_t j = grid.begin[t]; j < grid.begin[t + 1]; ++j) {
+          const float e = wardError(caches[grid.caches[j]]);
+          if (e < best || (e == best && grid.caches[j] < bestCache)) best = e, bestCache = grid.caches[j];
+        }
+      }
+    if (best < kInf) return cacheIrradiance(caches[bestCache], n);
+  }
+  return {};
+}
+
+}  // namespace lucent

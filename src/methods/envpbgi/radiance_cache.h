@@ -1,0 +1,71 @@
+// The radiance cache on the primary visible points and its interpolation at the pixels (the
+// environment-lighting PBGI paper, 3.5, Eq. 5, 4 "Build Radiance Cache", "Calculate Indirect
+// Illumination"): each primary point's micro-buffer turned into incoming radiance and pre-convolved
+// for the diffuse BRDF on a 5 x 5 map of normals (Scherzer et al. 2012); a screen-space grid of tiles
+// listing the caches whose effective sphere overlaps each tile (as Forward+, Harada et al. 2012);
+// per pixel the caches of its tile averaged with Ward et al. 1988's weights, clamped by a maximum
+// angle.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "lucent/scene/camera.h"
+#include "lucent/scene/scene.h"
+#include "methods/envpbgi/env_lighting.h"
+
+namespace lucent {
+
+inline constexpr int kCacheSide = 5;
+inline constexpr int kCacheTexels = kCacheSide * kCacheSide;
+
+// A primary point's cache: irradiance as a function of the receiver's normal, on a 5 x 5 paraboloid
+// map of normals in the point's frame (Frame(normal)), from the environment through the buffer's
+// empty texels and from the nodes it shows, apart (so that the indirect part can be shown alone).
+struct RadianceCache {
+  Vec3 position, normal;  // the primary point's surfel
+  float radius = 0;       // effective radius: the sphere within which the cache is used
+  Rgb environment[kCacheTexels], indirect[kCacheTexels];
+};
+static_assert(sizeof(RadianceCache) == 628, "RadianceCache is a fixed-size record");
+
+// The pre-convolution: per cache texel o its normal n_o (the paraboloid direction of its centre,
+// clamped to the rim outside the disc) and per buffer texel t the weight max(0, n_o . w_t) dOmega_t.
+struct CacheConvolution {
+  std::vector<Vec3> normals;    // kCacheTexels
+  std::vector<float> weights;   // kCacheTexels x buffer texels, row by cache texel
+};
+CacheConvolution makeCacheConvolution(const BufferQuadrature& q);
+
+// 4 "Build Radiance Cache": one cache per primary point from its buffer's texels: a texel showing a
+// node brings the node's direct light, an empty one the environment.
+RadianceCache buildRadianceCache(std::span<const uint32_t> texels, const BufferQuadrature& q,
+                                 const CacheConvolution& convolution, const Surfel& surfel, float radius,
+                                 const Environment& environment, std::span<const Rgb> nodeDirect);
+
+// The cache's irradiance towards a receiver normal (world): bilinear on the 5 x 5 map, the normal's
+// paraboloid point clamped to the disc (normals below the point's horizon read the rim).
+BufferIrradiance cacheIrradiance(const RadianceCache& cache, Vec3 normal);
+
+// The screen's tiles, and per tile the caches whose effective sphere's screen bounds overlap it
+// (count, scan, fill: a GPU's CSR arrays), each tile's list in cache order.
+struct CacheGrid {
+  int tileSize = 16, tilesX = 0, tilesY = 0;
+  std::vector<uint32_t> begin;   // tilesX * tilesY + 1
+  std::vector<uint32_t> caches;  // cache indices
+};
+CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& camera, int tileSize);
+
+struct Interpolation {
+  float maxAngle = 0;  // radians: caches whose normal is farther from the receiver's are not used
+};
+
+// Eq. 5 at a receiver (x, n) in tile (tx, ty): the caches of the tile within their radius and the
+// maximum angle, weighted by Ward's 1 / (|x - x_k| / R_k + sqrt(1 - n . n_k)), their irradiance
+// towards n averaged. Where none qualifies, the tile's cache of least Ward error regardless of radius
+// and angle, or failing that the nearest tiles' (rings of tiles outwards); `fallback` is set then. No
+// cache at all: zero, and `fallback` set.
+BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const CacheGrid& grid, int tx, int ty,
+                                   Vec3 x, Vec3 n, const Interpolation& interpolation, bool& fallback);
+
+}  // namespace lucent

@@ -1,0 +1,346 @@
+// Point-based GI under environment lighting (--method envpbgi): the primary points form a cut and
+// cover what the camera sees; the traversals give the sets of a plain recursion on random
+// hierarchies, with any thread count; propagation keeps area-weighted light exactly; a white
+// furnace and a closed box give their analytic answers; the paper's approximations against its
+// brute force, and the method against the path tracer at one indirect bounce.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <functional>
+#include <vector>
+
+#include "lucent/core/parallel.h"
+#include "lucent/core/rng.h"
+#include "lucent/image/metrics.h"
+#include "lucent/methods/microrender/micro_buffer.h"
+#include "lucent/methods/points/node_tree.h"
+#include "lucent/scene/loader.h"
+#include "methods/envpbgi/env_lighting.h"
+#include "methods/envpbgi/env_pbgi.h"
+#include "methods/envpbgi/radiance_cache.h"
+#include "methods/envpbgi/visible_points.h"
+#include "methods/pathtrace/path_tracer.h"
+#include "test_scenes.h"
+
+using namespace lucent;
+
+namespace {
+
+const std::string kPrimitives = LUCENT_SOURCE_DIR "/scenes/primitives.json";
+
+Scene loadAt(const std::string& path, int width, int height) {
+  Scene scene = loadScene(path, {.quiet = true});
+  scene.camera.width = width, scene.camera.height = height;
+  scene.contentHash = sceneContentHash(scene);
+  return scene;
+}
+
+// A hierarchy of n leaves with nothing but its tree and random areas, for the traversals.
+EnvHierarchy bareHierarchy(uint32_t n, Rng& rng) {
+  EnvHierarchy h;
+  h.points.leafCount = n;
+  h.nodes.assign(size_t(2) * n, EnvPointNode{});
+  h.points.nodeAreas.assign(size_t(2) * n, 0.0f);
+  for (uint32_t i = n; i < 2 * n; ++i) h.points.nodeAreas[i] = 0.1f + rng.uniform();
+  for (uint32_t i = n; i-- > kRootNode;) h.points.nodeAreas[i] = h.points.nodeAreas[2 * i] + h.points.nodeAreas[2 * i + 1];
+  return h;
+}
+
+// A random cut (each node on the path down ends it with probability `stop`, leaves always) as the
+// primary points, and random secondary points, denser below the cut's nodes.
+std::vector<uint32_t> randomSelection(EnvHierarchy& h, Rng& rng, float stop, float secondary) {
+  const uint32_t n = h.leafCount();
+  std::vector<uint32_t> primary;
+  std::function<void(uint32_t)> descend = [&](uint32_t i) {
+    if (isLeafNode(i, n) || rng.uniform() < stop) {
+      primary.push_back(i);
+      return;
+    }
+    descend(firstChild(i));
+    descend(secondChild(i));
+  };
+  descend(kRootNode);
+  std::sort(primary.begin(), primary.end());
+  for (uint32_t p : primary) h.nodes[p].selection |= kPrimary;
+  for (uint32_t i = kRootNode; i < 2 * n; ++i)
+    if (rng.uniform() < secondary) h.nodes[i].selection |= kSecondary;
+  return primary;
+}
+
+// The selection by plain recursion: covered and derivable bottom-up, under-primary top-down.
+std::vector<uint32_t> serialSelection(const EnvHierarchy& h, bool primarySources) {
+  const uint32_t n = h.leafCount();
+  std::vector<uint32_t> bits(size_t(2) * n, 0);
+  const uint32_t source = primarySources ? kSecondary | kPrimary : kSecondary;
+  std::function<bool(uint32_t)> covered = [&](uint32_t i) {
+    const uint32_t sel = h.nodes[i].selection;
+    bits[i] |= sel & (kPrimary | kSecondary);
+    bool children = false;
+    if (!isLeafNode(i, n)) {
+      const bool a = covered(firstChild(i)), b = covered(secondChild(i));
+      children = a && b;
+    }
+    const bool c = (sel & source) != 0 || children;
+    if (c) bits[i] |= kCovered;
+    if ((sel & kSecondary) && children) bits[i] |= kDerivable;
+    return c;
+  };
+  covered(kRootNode);
+  std::function<void(uint32_t, bool)> down = [&](uint32_t i, bool under) {
+    if (under && (h.nodes[i].selection & kSecondary)) bits[i] |= kUnderPrimary;
+    if (isLeafNode(i, n)) return;
+    const bool below = under || (h.nodes[i].selection & kPrimary);
+    down(firstChild(i), below);
+    down(secondChild(i), below);
+  };
+  down(kRootNode, false);
+  for (uint32_t i = kRootNode; i < 2 * n; ++i)
+    if ((bits[i] & kSecondary) && !(bits[i] & (kDerivable | kUnderPrimary | kPrimary))) bits[i] |= kOwnBuffer;
+  return bits;
+}
+
+float channelMean(const Image& image, const std::string& channel) {
+  const int c = image.channelIndex(channel);
+  double sum = 0;
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x) sum += image.at(x, y, c);
+  return float(sum / (double(image.width()) * image.height()));
+}
+
+}  // namespace
+
+TEST_CASE("envpbgi: the paper's node is 48 bytes and its links are the tree's", "[envpbgi]") {
+  const Scene scene = loadAt(kPrimitives, 64, 36);
+  PointHierarchyOptions ho;
+  ho.pointCount = 1u << 10;
+  ho.encoding = NodeEncoding::Float;
+  ho.sampling.method = PointSampling::LowDiscrepancy;
+  const EnvHierarchy h = makeEnvHierarchy(buildPointHierarchy(scene, ho));
+  const uint32_t n = h.leafCount();
+  for (uint32_t i = kRootNode; i < 2 * n; ++i) {
+    const EnvPointNode& node = h.nodes[i];
+    REQUIRE(node.skip == nextNodeSkippingSubtree(i));
+    if (isLeafNode(i, n)) {
+      REQUIRE(node.child[0] == 0);
+    } else {
+      REQUIRE(node.child[0] == firstChild(i));
+      REQUIRE(node.child[1] == secondChild(i));
+      // The surfel is its leaves' area-weighted mean.
+      double sum[3] = {0, 0, 0}, area = 0;
+      for (uint32_t j = 0; j < leavesBelow(i, n); ++j) {
+        const uint32_t leaf = n + firstLeafPoint(i, n) + j;
+        for (int c = 0; c < 3; ++c) sum[c] += double(h.surfels[leaf].position[c]) * h.points.nodeAreas[leaf];
+        area += h.points.nodeAreas[leaf];
+      }
+      for (int c = 0; c < 3; ++c) REQUIRE(h.surfels[i].position[c] == Approx(sum[c] / area).margin(1e-4));
+    }
+    REQUIRE(node.radius == h.points.floatNodes[i].sphere.radius);
+  }
+}
+
+TEST_CASE("envpbgi: the primary points are a cut and cover what the camera sees", "[envpbgi]") {
+  const Scene scene = loadAt(kPrimitives, 160, 90);
+  const Visibility vis(scene);
+  PointHierarchyOptions ho;
+  ho.pointCount = 1u << 14;
+  ho.encoding = NodeEncoding::Float;
+  ho.sampling.method = PointSampling::LowDiscrepancy;
+  EnvHierarchy h = makeEnvHierarchy(buildPointHierarchy(scene, ho));
+  const MicroHierarchy micro = prepareMicroHierarchy(h.points);
+  const uint32_t n = h.leafCount();
+  const CameraDepth depth = traceCameraDepth(scene, vis);
+  const float pixelAngle = PinholeCamera(scene.camera).pixelAngle();
+  for (const float pixels : {20.0f, 640.0f}) {
+    for (EnvPointNode& node : h.nodes) node.selection = 0;
+    PrimarySelection selection;
+    selection.maxSolidAngle = pixels * pixelAngle * pixelAngle;
+    selection.maxConeAngle = kPi / 6;
+    selection.thickness = micro.thickness;
+    const std::vector<uint32_t> primary = selectPrimaryPoints(h, scene.camera, depth, selection);
+    INFO(pixels << " pixels: " << primary.size() << " primary points");
+    REQUIRE(primary.size() > 20);
+    // A cut: no primary point above another.
+    for (uint32_t leaf = n; leaf < 2 * n; ++leaf) {
+      int above = 0;
+      for (uint32_t i = leaf; i != kTraversalEnd; i = parentNode(i)) above += (h.nodes[i].selection & kPrimary) != 0;
+      REQUIRE(above <= 1);
+    }
+    // Covering: the leaf nearest to what a pixel sees lies below a primary point, for all but a few
+    // pixels (a node's image is sampled by at most 8 x 8 pixels).
+    const PinholeCamera camera(scene.camera);
+    int seen = 0, covered = 0;
+    for (int y = 0; y < depth.height; y += 3)
+      for (int x = 0; x < depth.width; x += 3) {
+        const float t = depth.depth[size_t(y) * depth.width + x];
+        if (!(t < kInf)) continue;
+        const Ray ray = camera.generate(float(x) + 0.5f, float(y) + 0.5f);
+        const Vec3 hit = ray.origin + ray.direction * t;
+        uint32_t nearest = n;
+        float best = kInf;
+        for (uint32_t leaf = n; leaf < 2 * n; ++leaf) {
+          const float d = length(h.surfels[leaf].position - hit);
+          if (d < best) best = d, nearest = leaf;
+        }
+        ++seen;
+        bool below = false;
+        for (uint32_t i = nearest; i != kTraversalEnd; i = parentNode(i)) below |= (h.nodes[i].selection & kPrimary) != 0;
+        covered += below;
+      }
+    INFO(covered << " of " << seen << " pixels see a leaf below a primary point");
+    REQUIRE(seen > 1000);
+    CHECK(covered >= 0.995 * seen);
+  }
+}
+
+TEST_CASE("envpbgi: the upward and downward traversals give the plain recursion's sets", "[envpbgi]") {
+  Rng rng(13);
+  for (const uint32_t n : {2u, 64u, 4096u})
+    for (const bool primarySources : {false, true})
+      for (const int threads : {1, 2}) {
+        ParallelScope scope(threads);
+        EnvHierarchy h = bareHierarchy(n, rng);
+        const std::vector<uint32_t> primary = randomSelection(h, rng, 0.15f, 0.3f);
+        const std::vector<uint32_t> expected = serialSelection(h, primarySources);
+        const SelectionCounts counts = selectDirectLightPoints(h, primary, primarySources);
+        INFO(n << " leaves, primary sources " << primarySources << ", threads " << threads);
+        uint64_t own = 0;
+        for (uint32_t i = kRootNode; i < 2 * n; ++i) {
+          REQUIRE(h.nodes[i].selection == expected[i]);
+          own += (expected[i] & kOwnBuffer) != 0;
+        }
+        REQUIRE(counts.ownBuffers == own);
+        REQUIRE(counts.primary == primary.size());
+        REQUIRE(counts.secondary >= counts.afterUpward);
+        REQUIRE(counts.afterUpward >= counts.afterDownward);
+        REQUIRE(counts.afterDownward >= counts.ownBuffers);
+        // Propagation: every secondary point gets light; a derived node holds its children's
+        // area-weighted mean, a copied one its primary point's.
+        std::vector<Rgb> direct(size_t(2) * n);
+        for (uint32_t i = kRootNode; i < 2 * n; ++i)
+          if (h.nodes[i].selection & (kPrimary | kOwnBuffer)) direct[i] = Rgb(rng.uniform(), rng.uniform(), rng.uniform());
+        const std::vector<Rgb> given = direct;
+        propagateDirectLight(h, primary, direct);
+        for (uint32_t i = kRootNode; i < 2 * n; ++i) {
+          const uint32_t s = h.nodes[i].selection;
+          if (s & kSecondary) REQUIRE((s & kHasDirect));
+          if ((s & kCovered) && !isLeafNode(i, n) && !(s & kPrimary) && ((s & kDerivable) || !(s & kSecondary))) {
+            const float a = h.points.nodeAreas[2 * i], b = h.points.nodeAreas[2 * i + 1];
+            for (int c = 0; c < 3; ++c)
+              REQUIRE(direct[i][c] * (a + b) == Approx(direct[2 * i][c] * a + direct[2 * i + 1][c] * b).epsilon(1e-5));
+          } else if ((s & kSecondary) && !(s & kPrimary) && !(s & kOwnBuffer)) {
+            // Copied from its primary ancestor.
+            uint32_t p = parentNode(i);
+            while (!(h.nodes[p].selection & kPrimary)) p = parentNode(p);
+            REQUIRE(direct[i] == direct[p]);
+          } else if (s & (kPrimary | kOwnBuffer)) {
+            REQUIRE(direct[i] == given[i]);
+          }
+        }
+      }
+}
+
+TEST_CASE("envpbgi: a buffer's quadrature integrates a constant radiance exactly", "[envpbgi]") {
+  for (const MappingKind kind : {MappingKind::Paraboloid, MappingKind::Nusselt})
+    for (const int side : {8, 16, 24}) {
+      const BufferQuadrature q = makeQuadrature(kind, side);
+      double sum = 0;
+      for (float w : q.cosineWeight) sum += w;
+      REQUIRE(sum == Approx(kPi).epsilon(1e-6));
+      // The pre-convolution's zenith texel is the same sum.
+      const CacheConvolution c = makeCacheConvolution(q);
+      double zenith = 0;
+      for (uint32_t t = 0; t < q.texels(); ++t) zenith += c.weights[size_t(kCacheTexels / 2) * q.texels() + t];
+      REQUIRE(zenith == Approx(kPi).epsilon(1e-5));
+    }
+}
+
+TEST_CASE("envpbgi: a plane under a uniform environment is its albedo times the radiance (white furnace)", "[envpbgi]") {
+  Scene scene;
+  Material ground;
+  ground.kd = Rgb(0.6f, 0.4f, 0.2f);
+  test::addQuad(scene, {-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}, test::addMaterial(scene, ground, "ground"));
+  scene.environment.present = true;
+  scene.environment.radiance = Rgb(1.5f);
+  scene.camera = test::testCamera({0, 3, 0}, {0.2f, 0, -1}, 48, 32, 70);
+  finalizeScene(scene);
+  const Visibility vis(scene);
+  EnvPbgiOptions o;
+  o.points = 1u << 12;
+  o.layers = true;
+  for (const PointDirectLight directLight : {PointDirectLight::Selected, PointDirectLight::EveryLeaf}) {
+    o.directLight = directLight;
+    const RenderOutput out = renderEnvPbgi(scene, vis, o);
+    const Image& image = out.image;
+    INFO("direct light " << int(directLight));
+    for (int y = 0; y < image.height(); ++y)
+      for (int x = 0; x < image.width(); ++x) {
+        if (image.at(x, y, image.channelIndex("depth.Z")) == 0) continue;  // the sky
+        for (int c = 0; c < 3; ++c) REQUIRE(image.at(x, y, c) == Approx(1.5f * ground.kd[c]).epsilon(1e-4));
+        REQUIRE(image.at(x, y, image.channelIndex("indirect.R")) == 0.0f);
+      }
+  }
+}
+
+TEST_CASE("envpbgi: the same image with 1 and 2 threads, and a crop of it", "[envpbgi]") {
+  const Scene scene = loadAt(kPrimitives, 96, 54);
+  const Visibility vis(scene);
+  EnvPbgiOptions o;
+  o.points = 1u << 14;
+  Image images[2];
+  for (const int threads : {1, 2}) {
+    ParallelScope scope(threads);
+    images[threads - 1] = renderEnvPbgi(scene, vis, o).image;
+  }
+  REQUIRE(images[0].pixels() == images[1].pixels());
+  RenderControl crop;
+  crop.crop = {10, 7, 50, 40};
+  const Image part = renderEnvPbgi(scene, vis, o, crop).image;
+  for (int y = 7; y < 40; ++y)
+    for (int x = 10; x < 50; ++x)
+      for (int c = 0; c < 3; ++c) REQUIRE(part.at(x - 10, y - 7, c) == images[0].at(x, y, c));
+}
+
+TEST_CASE("envpbgi: the paper's approximations against its brute force, and both against the path tracer", "[envpbgi]") {
+  // Fig. 8: direct light by a micro-buffer at every leaf and a micro-buffer at every pixel. The
+  // paper calls the difference negligible; the issue's reading of that: relMSE at most 0.01. The
+  // path tracer at one indirect bounce (max depth 2) through the pixels' centres is the transport
+  // both approximate.
+  const Scene scene = loadAt(kPrimitives, 160, 90);
+  const Visibility vis(scene);
+  EnvPbgiOptions o;
+  o.points = 1u << 16;
+  const RenderOutput paper = renderEnvPbgi(scene, vis, o);
+  o.directLight = PointDirectLight::EveryLeaf;
+  o.pixelIrradiance = PixelIrradiance::EveryPixel;
+  const RenderOutput bruteForce = renderEnvPbgi(scene, vis, o);
+  PathTraceOptions pt;
+  pt.maxDepth = 2;
+  pt.spp = 512;
+  pt.pixelCentres = true;
+  const RenderOutput reference = renderPathTraced(scene, vis, pt);
+  auto relMse = [](const Image& a, const Image& b) { return compareImages(a, b).overall.relmse; };
+  const double approximations = relMse(paper.image, bruteForce.image);
+  const double paperError = relMse(paper.image, reference.image), bruteError = relMse(bruteForce.image, reference.image);
+  INFO("relMSE: paper against brute force " << approximations << ", against the path tracer " << paperError
+                                            << ", brute force against the path tracer " << bruteError);
+  CHECK(approximations <= 0.01);
+  CHECK(paperError <= 0.02);
+  CHECK(bruteError <= 0.02);
+  // Far fewer micro-buffers than the brute force's (every leaf and every pixel).
+  uint64_t paperBuffers = 0, bruteBuffers = 0;
+  for (const auto& [name, value] : paper.stats.counters)
+    if (name == "micro_buffers") paperBuffers = value;
+  for (const auto& [name, value] : bruteForce.stats.counters)
+    if (name == "micro_buffers") bruteBuffers = value;
+  CHECK(paperBuffers * 10 < bruteBuffers);
+}
+
+TEST_CASE("envpbgi refuses emitting triangles and a brute-force gather without light at every node", "[envpbgi]") {
+  Scene scene = test::furnaceBox(Rgb(0.5f), Rgb(1.0f), test::testCamera({0, 0, 0}, {0, 0, -1}, 8, 8));
+  const Visibility vis(scene);
+  EnvPbgiOptions o;
+  o.points = 1u << 10;
+  REQUIRE_THROWS_WITH(renderEnvPbgi(scene, vis, o), Catch::Contains("emitting triangles"));
+  o.pixelIrradiance = PixelIrradiance::EveryPixel;
+  REQUIRE_THROWS_WITH(envPbgiOptionTable().validate(o), Catch::Contains("every-leaf"));
+}
