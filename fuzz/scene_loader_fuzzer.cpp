@@ -15,6 +15,7 @@
 #include <string>
 #include <string_view>
 
+#include "lucent/core/memory.h"
 #include "lucent/scene/loader.h"
 
 namespace {
@@ -44,6 +45,15 @@ const fs::path& scratchDirectory() {
 }
 
 }  // namespace
+
+// The loader checks large allocations (an image's pixels) against the memory limit, as a render
+// does against its --memory-limit: 1 GiB beside what the fuzzer holds at its start (-malloc_limit_mb
+// is 1 GiB), so that a header that claims more is refused with a SceneError before anything is
+// allocated.
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  lucent::setMemoryLimit(lucent::memoryInUse() + (uint64_t(1) << 30));
+  return 0;
+}
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view input(reinterpret_cast<const char*>(data), size);

@@ -94,6 +94,8 @@ const std::vector<BadCase> kBadCases = {
     {"env-map-missing", {"env-map-missing/scene.json", "lights[0].map:", "sky.exr", "not found"}},
     {"env-map-not-image", {"env-map-not-image/scene.json", "lights[0].map:", "cannot read image"}},
     {"env-map-negative", {"env-map-negative/scene.json", "lights[0].map:", "sky.exr", "negative texels (down to -1"}},
+    // A Radiance header claiming 19,854,521 x 2 pixels, for which OpenImageIO would allocate 61 GB.
+    {"env-map-huge-header", {"env-map-huge-header/scene.json", "lights[0].map:", "sky.hdr", "would need", "--memory-limit"}},
 };
 
 std::string badScene(const std::string& dir) { return kSource + "/tests/data/bad/" + dir + "/scene.json"; }
@@ -387,7 +389,8 @@ TEST_CASE("loader: MTL entries are classified as in docs/scene-format.md, and sc
 
 TEST_CASE("loader: the scenes shipped in scenes/ load", "[loader]") {
   for (const char* name : {"cornell-box-spheres.json", "cornell-box-glossy.json", "primitives.json",
-                           "primitives-white.json", "primitives-courtyard.json"}) {
+                           "primitives-white.json", "primitives-courtyard.json", "sponza-courtyard.json",
+                           "sponza-white.json"}) {
     CAPTURE(name);
     const Scene scene = loadScene(kSource + "/scenes/" + name, {true});
     CHECK(scene.triangleCount() > 0);

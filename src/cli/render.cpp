@@ -255,6 +255,7 @@ int runRender(const RenderArgs& a) {
         throw std::invalid_argument("-o and --png name the same file");
     }
     Stopwatch loadClock;
+    setMemoryLimit(a.memoryLimit);  // the scene's images are checked against it too
     scene = loadScene(a.scene, {a.quiet});
     stats.addStage("load_scene", loadClock.seconds());
     if (!a.help) {

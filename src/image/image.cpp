@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "lucent/core/files.h"
+#include "lucent/core/memory.h"
 #include "lucent/core/srgb.h"
 #include "lucent/scene/scene.h"
 
@@ -119,6 +120,15 @@ Image readImage(const std::string& path, ImageMetadata* metadata) {
     throw std::runtime_error("cannot read image '" + path + "': its header claims " + std::to_string(spec.width) + " x " +
                              std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
                              " channels (at most 2^26 pixels and 1,024 channels)");
+  if (spec.depth > 1)
+    throw std::runtime_error("cannot read image '" + path + "': a volume of " + std::to_string(spec.depth) +
+                             " slices, not an image");
+  // The pixels as floats, and OpenImageIO's scanlines, which it decodes up to 256 at a time in
+  // their stored format (up to 8 bytes a channel): for a Radiance header claiming 19,854,521 x 2
+  // pixels it asked for 61 GB (found by fuzzing).
+  const uint64_t floats = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels);
+  requireMemory(floats * sizeof(float) + 256 * uint64_t(spec.width) * uint64_t(spec.nchannels) * 8,
+                "the image '" + path + "'", "raise --memory-limit if the machine has the memory");
   std::vector<std::string> names = spec.channelnames;
   for (int c = int(names.size()); c < spec.nchannels; ++c)
     names.push_back("channel" + std::to_string(c));
