@@ -16,15 +16,28 @@ using namespace lucent;
 
 namespace {
 
-// Every method with a lane loop or not, with light settings: the spheres box (mirror, glass,
-// diffuse walls) at 16 x 16.
-const std::vector<std::pair<std::string, OptionValues>> kRenders = {
+// Every method with a lane loop or not, with light settings, at 16 x 16: the spheres box (mirror,
+// glass, diffuse walls), and for the environment-lighting method the primitives under a sky and sun.
+struct IsaRender {
+  std::string method;
+  OptionValues values;
+  const char* scene = "cornell-box-spheres";
+};
+const std::vector<IsaRender> kRenders = {
     {"pt", {{"spp", "4"}}},
     {"purcell", {{"photons", "20000"}, {"caustic_photons", "20000"}, {"light_samples", "2"}, {"map", "sort"}}},
     {"purcell", {{"photons", "20000"}, {"caustic_photons", "20000"}, {"light_samples", "2"}, {"map", "stencil"}}},
     {"pmfg", {{"photons", "20000"}, {"caustic_photons", "20000"}, {"gather_rays", "8"}, {"light_samples", "2"}}},
     {"micro", {{"light_samples", "2"}, {"buffer_size", "8"}}},
+    {"envpbgi", {{"points", "4096"}}, "primitives"},
 };
+
+Scene sceneOf(const IsaRender& render) {
+  Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR "/scenes/") + render.scene + ".json", {true});
+  scene.camera.width = scene.camera.height = 16;
+  scene.contentHash = sceneContentHash(scene);
+  return scene;
+}
 
 // Restores the lane loops this CPU picks at the end of the scope.
 struct LaneIsaScope {
@@ -35,12 +48,11 @@ struct LaneIsaScope {
 }  // namespace
 
 TEST_CASE("Every version of the lane loops renders every method's image bit for bit", "[isa]") {
-  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true});
-  scene.camera.width = scene.camera.height = 16;
-  const Visibility vis(scene);
   LaneIsaScope restore;
   REQUIRE(supportedLaneIsas().size() >= 2);  // x86-64 machines run the baseline and, nearly all, AVX2
-  for (const auto& [method, values] : kRenders) {
+  for (const auto& [method, values, sceneName] : kRenders) {
+    const Scene scene = sceneOf({method, values, sceneName});
+    const Visibility vis(scene);
     std::vector<float> reference;
     for (const LaneIsa isa : supportedLaneIsas()) {
       setLaneIsa(isa);
@@ -57,12 +69,11 @@ TEST_CASE("Every instruction set's Embree kernels render every method's image al
   // kernels contract into FMAs) and may give a ray through an edge to either triangle, robust mode
   // or not. A path that then decides differently (Russian roulette, a lobe) takes other random
   // numbers after: images agree to a thousandth of the noise between two seeds, not bit for bit.
-  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true});
-  scene.camera.width = scene.camera.height = 16;
   const std::vector<std::string> isas = supportedEmbreeIsas();
   REQUIRE(isas.size() >= 2);
   for (const bool robust : {false, true})
-    for (auto [method, values] : kRenders) {
+    for (auto [method, values, sceneName] : kRenders) {
+      const Scene scene = sceneOf({method, values, sceneName});
       VisibilityOptions nativeOptions;
       nativeOptions.robust = robust;
       const Visibility native(scene, nativeOptions);

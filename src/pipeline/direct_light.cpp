@@ -72,6 +72,34 @@ Rgb directLight(const Scene& scene, const Visibility& vis, const ShadingPoint& p
   return sum * (1.0f / float(samples));
 }
 
+namespace {
+
+// Every point's shadow rays, queued by samples(i, add) as add(ray, contribution), traced in packets
+// shared across the points of blocks of 256 (neighbouring pixels' rays head for the same lights: a
+// point with 1 or 4 samples no longer traces packets of 1 or 4); direct[i] is the sum of point i's
+// unoccluded contributions times `scale`. Occlusion is a yes or no, so the grouping changes no
+// answer, and each point's sum keeps its sample order.
+template <class Samples>
+void shadowRaysInBlocks(const Visibility& vis, std::span<Rgb> direct, float scale, uint64_t& rays, Samples&& samples) {
+  constexpr size_t kBlock = 256;
+  const size_t blocks = (direct.size() + kBlock - 1) / kBlock;
+  std::vector<uint64_t> blockRays(blocks, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const tbb::blocked_range<size_t>& r) {
+    flushDenormals();
+    for (size_t b = r.begin(); b != r.end(); ++b) {
+      const size_t first = b * kBlock, last = std::min(direct.size(), first + kBlock);
+      for (size_t i = first; i < last; ++i) direct[i] = Rgb();
+      ShadowPackets packets(vis, blockRays[b]);
+      for (size_t i = first; i < last; ++i) samples(i, [&](const Ray& ray, Rgb c) { packets.add(ray, c, &direct[i]); });
+      packets.flush();
+      for (size_t i = first; i < last; ++i) direct[i] = direct[i] * scale;
+    }
+  });
+  for (uint64_t n : blockRays) rays += n;
+}
+
+}  // namespace
+
 void estimateDirectLight(const Scene& scene, const Visibility& vis, std::span<const ShadingPoint> points,
                          int samples, uint64_t seed, std::span<Rgb> direct, uint64_t& rays) {
   const uint64_t stream = streamSeed(seed, RenderStream::Direct);
@@ -79,25 +107,27 @@ void estimateDirectLight(const Scene& scene, const Visibility& vis, std::span<co
   // (the paper's RING: "only shoots one shadow ray per pixel").
   if (scene.lights.size() == 1 && (scene.lights[0].type == LightType::Point || scene.lights[0].type == LightType::Directional))
     samples = std::min(samples, 1);
-  // The points' shadow rays share packets across points (neighbouring pixels' rays head for the
-  // same lights): a point with 1 or 4 samples no longer traces packets of 1 or 4. Occlusion is a
-  // yes or no, so the grouping changes no answer, and each point's sum keeps its sample order.
-  constexpr size_t kBlock = 256;
-  const size_t blocks = (points.size() + kBlock - 1) / kBlock;
-  std::vector<uint64_t> blockRays(blocks, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const tbb::blocked_range<size_t>& r) {
-    flushDenormals();
-    for (size_t b = r.begin(); b != r.end(); ++b) {
-      const size_t first = b * kBlock, last = std::min(points.size(), first + kBlock);
-      for (size_t i = first; i < last; ++i) direct[i] = Rgb();
-      ShadowPackets packets(vis, blockRays[b]);
-      for (size_t i = first; i < last; ++i)
-        shadowSamples(scene, points[i], samples, stream, [&](const Ray& ray, Rgb c) { packets.add(ray, c, &direct[i]); });
-      packets.flush();
-      for (size_t i = first; i < last; ++i) direct[i] = direct[i] * (1.0f / float(samples));
+  shadowRaysInBlocks(vis, direct.first(points.size()), 1.0f / float(samples), rays, [&](size_t i, auto add) {
+    shadowSamples(scene, points[i], samples, stream, add);
+  });
+}
+
+void analyticDirectLight(const Scene& scene, const Visibility& vis, std::span<const ShadingPoint> points,
+                         std::span<Rgb> direct, uint64_t& rays) {
+  shadowRaysInBlocks(vis, direct.first(points.size()), 1.0f, rays, [&](size_t i, auto add) {
+    const ShadingPoint& p = points[i];
+    const Frame frame(p.normal);
+    const Vec3 woLocal = frame.toLocal(p.wo);
+    const float side = dot(p.normal, p.geometricNormal);
+    for (const Light& light : scene.lights) {
+      if (light.type != LightType::Point && light.type != LightType::Directional) continue;
+      const LightSample ls = deltaLightSample(light, p.position);
+      const Vec3 wiLocal = frame.toLocal(ls.wi);
+      if (ls.radiance.isBlack() || wiLocal.z <= 0 || dot(ls.wi, p.geometricNormal) * side <= 0) continue;
+      const Rgb f = evalBsdf(p.bsdf, woLocal, wiLocal);
+      if (!f.isBlack()) add(shadowRay(p.position, p.geometricNormal, ls), f * ls.radiance * wiLocal.z);
     }
   });
-  for (uint64_t n : blockRays) rays += n;
 }
 
 }  // namespace lucent

@@ -1,11 +1,19 @@
 #include "lucent/pipeline/film.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <stdexcept>
 
 #include "lucent/core/memory.h"
 
 namespace lucent {
+
+namespace {
+constexpr size_t kPointChunk = 8192;  // shading points per task when they are added
+}  // namespace
 
 Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers)
     : width_(width), height_(height), region_(region), wholeImage_(region == PixelRect{0, 0, width, height}),
@@ -42,25 +50,42 @@ void Film::addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 
 }
 
 void Film::add(const EyePaths& band, const PointRadiance& light) {
-  for (size_t i = 0; i < band.pixels.size(); ++i) {
-    const EyePixel& px = band.pixels[i];
-    const uint64_t p = band.imagePixel(i, width_);
-    ExactSum* sum = at(p);
-    samples_[local(p)] += px.validSamples;
-    for (int c = 0; c < 3; ++c) sum[direct_ + c].add(px.emitted[c]);
-    if (!layers_.features) continue;
-    for (int c = 0; c < 7; ++c) sum[features_ + c].add(px.features[c]);
-  }
-  for (size_t i = 0; i < band.points.size(); ++i) {
-    const ShadingPoint& sp = band.points[i];
-    const Rgb d = sp.weight * light.direct[i], ind = sp.weight * light.indirect[i], ca = sp.weight * light.caustic[i];
-    if (!summable(d) || !summable(ind) || !summable(ca)) {
-      ++dropped_;
-      continue;
+  // Pixels are independent, and a pixel's points are consecutive (by tile, then pixel): both loops
+  // run in parallel, the points' in chunks cut where the pixel changes.
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, band.pixels.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const EyePixel& px = band.pixels[i];
+      const uint64_t p = band.imagePixel(i, width_);
+      ExactSum* sum = at(p);
+      samples_[local(p)] += px.validSamples;
+      for (int c = 0; c < 3; ++c) sum[direct_ + c].add(px.emitted[c]);
+      if (!layers_.features) continue;
+      for (int c = 0; c < 7; ++c) sum[features_ + c].add(px.features[c]);
     }
-    ExactSum* sum = at(sp.pixel);
-    for (int c = 0; c < 3; ++c) sum[direct_ + c].add(d[c]), sum[indirect_ + c].add(ind[c]), sum[caustic_ + c].add(ca[c]);
-  }
+  });
+  const size_t n = band.points.size();
+  auto chunkStart = [&](size_t k) {  // the first point of chunk k whose pixel differs from the one before
+    size_t i = std::min(n, k * kPointChunk);
+    while (i > 0 && i < n && band.points[i].pixel == band.points[i - 1].pixel) ++i;
+    return i;
+  };
+  const size_t chunks = (n + kPointChunk - 1) / kPointChunk;
+  std::atomic<uint64_t> dropped{0};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& r) {
+    uint64_t droppedHere = 0;
+    for (size_t i = chunkStart(r.begin()), end = chunkStart(r.end()); i < end; ++i) {
+      const ShadingPoint& sp = band.points[i];
+      const Rgb d = sp.weight * light.direct[i], ind = sp.weight * light.indirect[i], ca = sp.weight * light.caustic[i];
+      if (!summable(d) || !summable(ind) || !summable(ca)) {
+        ++droppedHere;
+        continue;
+      }
+      ExactSum* sum = at(sp.pixel);
+      for (int c = 0; c < 3; ++c) sum[direct_ + c].add(d[c]), sum[indirect_ + c].add(ind[c]), sum[caustic_ + c].add(ca[c]);
+    }
+    dropped += droppedHere;
+  });
+  dropped_ += dropped;
 }
 
 void Film::add(const Film& part) {
@@ -90,22 +115,24 @@ Image Film::image() const {
   const size_t nc = channels.size(), pixels = region_.pixelCount();
   Image image(region_.width(), region_.height(), channels);
   float* out = image.pixels().data();
-  for (size_t p = 0; p < pixels; ++p) {
-    const ExactSum* sum = &sums_[p * size_t(stride_)];
-    const double n = std::max<uint32_t>(1, samples_[p]);
-    float* o = out + p * nc;
-    for (int c = 0; c < 3; ++c) {
-      ExactSum total = sum[mode_ == Sums::PerSample ? total_ + c : direct_ + c];
-      if (mode_ == Sums::PerPart) total.add(sum[indirect_ + c]), total.add(sum[caustic_ + c]);
-      o[c] = float(total.value() / n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t p = r.begin(); p != r.end(); ++p) {
+      const ExactSum* sum = &sums_[p * size_t(stride_)];
+      const double n = std::max<uint32_t>(1, samples_[p]);
+      float* o = out + p * nc;
+      for (int c = 0; c < 3; ++c) {
+        ExactSum total = sum[mode_ == Sums::PerSample ? total_ + c : direct_ + c];
+        if (mode_ == Sums::PerPart) total.add(sum[indirect_ + c]), total.add(sum[caustic_ + c]);
+        o[c] = float(total.value() / n);
+      }
+      if (!layers_.features) continue;
+      for (int c = 0; c < 7; ++c) o[3 + c] = float(sum[features_ + c].value() / n);
+      for (int c = 0; c < 3; ++c)
+        o[10 + c] = float(sum[direct_ + c].value() / n), o[13 + c] = float(sum[indirect_ + c].value() / n);
+      if (layers_.caustic)
+        for (int c = 0; c < 3; ++c) o[16 + c] = float(sum[caustic_ + c].value() / n);
     }
-    if (!layers_.features) continue;
-    for (int c = 0; c < 7; ++c) o[3 + c] = float(sum[features_ + c].value() / n);
-    for (int c = 0; c < 3; ++c)
-      o[10 + c] = float(sum[direct_ + c].value() / n), o[13 + c] = float(sum[indirect_ + c].value() / n);
-    if (layers_.caustic)
-      for (int c = 0; c < 3; ++c) o[16 + c] = float(sum[caustic_ + c].value() / n);
-  }
+  });
   return image;
 }
 

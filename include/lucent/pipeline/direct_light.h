@@ -15,6 +15,12 @@ namespace lucent {
 void estimateDirectLight(const Scene& scene, const Visibility& visibility, std::span<const ShadingPoint> points,
                          int samples, uint64_t seed, std::span<Rgb> direct, uint64_t& rays);
 
+// The direct light of the scene's point and directional lights at every point, one shadow ray to
+// each (no sampling: exact but for its visibility), in packets across points. The other lights
+// are left out (for methods that take them another way). Adds the rays traced to `rays`.
+void analyticDirectLight(const Scene& scene, const Visibility& visibility, std::span<const ShadingPoint> points,
+                         std::span<Rgb> direct, uint64_t& rays);
+
 // One point's direct light, its shadow rays in packets of its own samples (estimateDirectLight
 // packs rays across points instead).
 Rgb directLight(const Scene& scene, const Visibility& visibility, const ShadingPoint& point, int samples,

@@ -17,6 +17,27 @@ struct LightSample {
   bool delta = false;   // point and directional lights cannot be hit by BSDF sampling
 };
 
+// A point or directional light as seen from a receiver: the one direction it arrives from, its
+// radiance there, pdf 1 (before the light's selection probability).
+inline LightSample deltaLightSample(const Light& light, Vec3 receiver) {
+  LightSample s;
+  s.delta = true;
+  s.pdf = 1;
+  if (light.type == LightType::Directional) {
+    s.wi = -light.vector;
+    s.distance = kInf;
+    s.radiance = light.value;
+    return s;
+  }
+  const Vec3 d = light.vector - receiver;
+  const float dist2 = dot(d, d);
+  s.point = light.vector;
+  s.distance = std::sqrt(dist2);
+  s.wi = d / s.distance;
+  s.radiance = light.value / dist2;
+  return s;
+}
+
 inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, Vec2 u) {
   LightSample s;
   if (scene.lights.empty()) return s;
@@ -39,23 +60,10 @@ inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, 
       s.pdf = pmf * dist2 / (cosLight * scene.triangleArea(t));
       return s;
     }
-    case LightType::Point: {
-      const Vec3 d = light.vector - receiver;
-      const float dist2 = dot(d, d);
-      s.point = light.vector;
-      s.distance = std::sqrt(dist2);
-      s.wi = d / s.distance;
-      s.radiance = light.value / dist2;
-      s.pdf = pmf;
-      s.delta = true;
-      return s;
-    }
+    case LightType::Point:
     case LightType::Directional:
-      s.wi = -light.vector;
-      s.distance = kInf;
-      s.radiance = light.value;
+      s = deltaLightSample(light, receiver);
       s.pdf = pmf;
-      s.delta = true;
       return s;
     case LightType::Environment: {
       const Environment& env = scene.environment;

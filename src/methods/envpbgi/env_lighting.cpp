@@ -84,30 +84,15 @@ BufferIrradiance bufferIrradiance(std::span<const uint32_t> texels, const Buffer
   return e;
 }
 
-Rgb analyticLight(const Scene& scene, const Visibility& vis, Vec3 p, Vec3 ng, Vec3 n,
-                  const std::function<Rgb(Vec3 wi)>& reflectance, uint64_t& rays) {
-  const float side = dot(ng, n);
+Rgb analyticIrradiance(const Scene& scene, const Visibility& vis, Vec3 p, Vec3 n, uint64_t& rays) {
   Rgb sum;
   for (const Light& light : scene.lights) {
-    LightSample ls;
-    if (light.type == LightType::Directional) {
-      ls.wi = -light.vector;
-      ls.distance = kInf;
-      ls.radiance = light.value;
-    } else if (light.type == LightType::Point) {
-      const Vec3 d = light.vector - p;
-      ls.distance = length(d);
-      if (!(ls.distance > 0)) continue;
-      ls.wi = d / ls.distance;
-      ls.point = light.vector;
-      ls.radiance = light.value / (ls.distance * ls.distance);
-    } else {
-      continue;
-    }
+    if (light.type != LightType::Directional && light.type != LightType::Point) continue;
+    const LightSample ls = deltaLightSample(light, p);
     const float cosine = dot(n, ls.wi);
-    if (!(cosine > 0) || dot(ng, ls.wi) * side <= 0) continue;
+    if (!(cosine > 0)) continue;  // also a point at the light itself (NaN)
     ++rays;
-    if (!vis.occluded(shadowRay(p, ng, ls))) sum += reflectance(ls.wi) * ls.radiance * cosine;
+    if (!vis.occluded(shadowRay(p, n, ls))) sum += ls.radiance * cosine;
   }
   return sum;
 }

@@ -49,12 +49,9 @@ struct BufferIrradiance {
 BufferIrradiance bufferIrradiance(std::span<const uint32_t> texels, const BufferQuadrature& q, Vec3 normal,
                                   const Environment& environment, std::span<const Rgb> nodeDirect);
 
-// The light of the directional and point lights at p, each by one shadow ray (the paper's shadow
-// map): the sum of reflectance(wi) times their irradiance n . wi L where they lie above the shading
-// normal n and on its side of the geometric normal ng (which offsets the rays). Adds the rays to
-// `rays`.
-Rgb analyticLight(const Scene& scene, const Visibility& visibility, Vec3 p, Vec3 ng, Vec3 n,
-                  const std::function<Rgb(Vec3 wi)>& reflectance, uint64_t& rays);
+// The irradiance of the directional and point lights at p (normal n), each by one shadow ray (the
+// paper's shadow map). Adds the rays to `rays`.
+Rgb analyticIrradiance(const Scene& scene, const Visibility& visibility, Vec3 p, Vec3 n, uint64_t& rays);
 
 // The scene's lights are ones the method handles: the environment, directional and point lights,
 // not emitting triangles; throws std::invalid_argument otherwise.

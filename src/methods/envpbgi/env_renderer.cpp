@@ -15,6 +15,7 @@
 #include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
 #include "lucent/methods/points/point_radiance.h"
+#include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 #include "lucent/pipeline/film.h"
 #include "lucent/pipeline/render_control.h"
@@ -144,8 +145,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   auto directAt = [&](uint32_t node, std::span<const uint32_t> texels, const BufferQuadrature& q) {
     const Surfel& s = h.surfels[node];
     const BufferIrradiance e = bufferIrradiance(texels, q, s.normal, env, {});
-    const Rgb analytic = analyticLight(scene, vis, s.position, s.normal, s.normal, [](Vec3) { return Rgb(1.0f); },
-                                       rays.local());
+    const Rgb analytic = analyticIrradiance(scene, vis, s.position, s.normal, rays.local());
     return h.points.floatNodes[node].albedo * ((e.environment + analytic) * kInvPi);
   };
   // In chunks, so that the buffers held at once stay bounded (every leaf: 2^19 buffers).
@@ -214,17 +214,13 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   Interpolation interpolation;
   interpolation.maxAngle = o.cacheMaxAngle * kPi / 180.0f;
   std::atomic<uint64_t> fallbacks{0}, glossy{0};
-  tbb::enumerable_thread_specific<uint64_t> pixelRays(0);
+  // The analytic lights by shadow rays with the full BSDF; the environment's and the nodes' light
+  // as diffuse.
+  analyticDirectLight(scene, vis, eye.points, shading.direct, shadowRays);
   auto shade = [&](size_t i, const BufferIrradiance& e) {
     const ShadingPoint& p = eye.points[i];
     const Rgb rho = diffusePart(p.bsdf) * kInvPi;
-    // The analytic lights with the full BSDF; the environment's and the nodes' light as diffuse.
-    const Frame frame(p.normal);
-    const Vec3 woLocal = frame.toLocal(p.wo);
-    const Rgb analytic = analyticLight(scene, vis, p.position, p.geometricNormal, p.normal,
-                                       [&](Vec3 wi) { return evalBsdf(p.bsdf, woLocal, frame.toLocal(wi)); },
-                                       pixelRays.local());
-    shading.direct[i] = analytic + rho * e.environment;
+    shading.direct[i] += rho * e.environment;
     shading.indirect[i] = rho * e.nodes;
     if (p.bsdf.type != MaterialType::Diffuse) ++glossy;
   };
@@ -261,7 +257,6 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
       report(0.65 + 0.35 * double(first + count) / double(n));
     }
   }
-  for (uint64_t r : pixelRays) shadowRays += r;
   stats.addStage("pixels", pixelClock.seconds());
   if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
 
