@@ -47,9 +47,27 @@ def buffers(*sides):
 
 
 def scene(resolution, light_samples, rays, purcell, sides):
-    return {"resolution": resolution, "light_samples": light_samples,
+    return {"resolution": resolution, "light_samples": light_samples, "max_depth": None,
             "methods": {"pt": pt_samples(), "pmfg": gather_rays(*rays), "purcell": purcell,
                         "micro (vpl)": buffers(*sides)}}
+
+
+def environment_scene(resolution):
+    """A scene of the environment-lighting PBGI paper: one indirect bounce (the paper's transport), so
+    the references, the path tracer's curve and micro-rendering's (its points lit directly) stop at
+    --max-depth 2. envpbgi's knobs: the point count, the primary points' solid-angle threshold, and
+    the primary and secondary buffer sizes."""
+    depth = ["--max-depth", "2"]
+    return {"resolution": resolution, "light_samples": 1024, "max_depth": 2,
+            "methods": {"pt (depth 2)": [(label, options + depth) for label, options in pt_samples()],
+                        "envpbgi (points)": [(f"2^{k} points", ["--points", str(1 << k)]) for k in (15, 17, 19, 21)],
+                        "envpbgi (primary pixels)": [(f"{p} px", ["--primary-pixels", str(p)])
+                                                     for p in (80, 320, 1280, 5120)],
+                        "envpbgi (buffers)": [(f"{a}x{a}, {b}x{b}", ["--primary-buffer-size", str(a),
+                                                                     "--secondary-buffer-size", str(b)])
+                                              for a, b in ((8, 4), (16, 8), (24, 12), (32, 16))],
+                        "micro (direct)": [(f"{n}x{n} buffers", ["--lighting", "direct", "--buffer-size", str(n)])
+                                           for n in (8, 16, 24)]}}
 
 
 # Per scene: the resolution, the shadow rays per shading point of purcell, pmfg and micro (many, so
@@ -69,6 +87,8 @@ SCENES = {
                        photons(["--caustic-photons"], "caustic photons", *MILLION), (8, 16, 24)),
     "sponza": scene("160x100", 1024, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
                     (8, 16, 24)),
+    "primitives": environment_scene("320x180"),
+    "sponza-courtyard": environment_scene("160x100"),
 }
 REFERENCE_SPP = 16384
 
@@ -84,13 +104,15 @@ def scene_path(name):
     return os.path.join(ROOT, "scenes", name + ".json")
 
 
-def reference(scene, resolution, centres):
+def reference(scene, resolution, centres, max_depth):
     kind = "centres" if centres else "box"
-    path = os.path.join(CACHE, f"{scene}-{resolution}-pt-{REFERENCE_SPP}spp-{kind}.exr")
+    depth = f"-depth{max_depth}" if max_depth else ""
+    path = os.path.join(CACHE, f"{scene}-{resolution}-pt{depth}-{REFERENCE_SPP}spp-{kind}.exr")
     if not os.path.exists(path):
         print(f"  (path-tracing the reference {os.path.basename(path)})", flush=True)
         run(["render", scene_path(scene), "--method", "pt", "--spp", str(REFERENCE_SPP), "--seed", "1",
-             "--resolution", resolution, "--quiet", "-o", path] + (["--pixel-centres"] if centres else []))
+             "--resolution", resolution, "--quiet", "-o", path] + (["--pixel-centres"] if centres else []) +
+            (["--max-depth", str(max_depth)] if max_depth else []))
     return path
 
 
@@ -118,7 +140,9 @@ def chart(scene, results, out):
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("render time, seconds (2 threads)")
-    ax.set_ylabel(f"relMSE against the path tracer at {REFERENCE_SPP} spp\n(pt: pixel averages; others: pixel centres)")
+    depth = SCENES[scene]["max_depth"]
+    transport = f", max depth {depth}" if depth else ""
+    ax.set_ylabel(f"relMSE against the path tracer at {REFERENCE_SPP} spp{transport}\n(pt: pixel averages; others: pixel centres)")
     ax.set_title(f"{scene}: speed against accuracy")
     ax.grid(True, which="both", linewidth=0.3)
     ax.legend(fontsize=8)
@@ -150,12 +174,14 @@ def main():
     for scene in args.scenes:
         setup = SCENES[scene]
         print(f"== {scene}, {setup['resolution']}, {args.threads} threads", flush=True)
-        box, centres = reference(scene, setup["resolution"], False), reference(scene, setup["resolution"], True)
+        depth = setup["max_depth"]
+        box, centres = reference(scene, setup["resolution"], False, depth), reference(scene, setup["resolution"], True, depth)
         results = {}
         for method, settings in setup["methods"].items():
             results[method] = []
-            ref = box if method == "pt" else centres
-            common = [] if method == "pt" else ["--light-samples", str(setup["light_samples"])]
+            ref = box if method.startswith("pt") else centres
+            # Many shadow rays where the method samples its direct light (envpbgi traces one per light).
+            common = ["--light-samples", str(setup["light_samples"])] if method.split(" ")[0] in ("pmfg", "purcell", "micro") else []
             for label, options in settings:
                 options = options + common
                 seconds, error = measure(scene, setup["resolution"], method, options, args.threads, ref)
