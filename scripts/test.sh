@@ -2,7 +2,8 @@
 # Install, build and run the whole test suite.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-# For the Slurm test (tests/slurm_test.sh), which starts daemons of its own: Debian's Slurm and munge.
-scripts/setup.sh slurmctld slurmd slurm-client munge
+# For the Slurm test (tests/slurm_test.sh), which starts daemons of its own: Debian's Slurm and munge;
+# for the older-CPU test (tests/older_cpu_test.sh): QEMU's user-mode emulator.
+scripts/setup.sh slurmctld slurmd slurm-client munge qemu-user
 scripts/build.sh
 ctest --test-dir build --output-on-failure -j "$(nproc)" --timeout 900
