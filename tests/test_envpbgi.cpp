@@ -99,14 +99,6 @@ std::vector<uint32_t> serialSelection(const EnvHierarchy& h, bool primarySources
   return bits;
 }
 
-float channelMean(const Image& image, const std::string& channel) {
-  const int c = image.channelIndex(channel);
-  double sum = 0;
-  for (int y = 0; y < image.height(); ++y)
-    for (int x = 0; x < image.width(); ++x) sum += image.at(x, y, c);
-  return float(sum / (double(image.width()) * image.height()));
-}
-
 }  // namespace
 
 TEST_CASE("envpbgi: the paper's node is 48 bytes and its links are the tree's", "[envpbgi]") {

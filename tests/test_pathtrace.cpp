@@ -16,12 +16,16 @@ TEST_CASE("Closed diffuse furnace: radiance converges to Le / (1 - rho)", "[path
   const Rgb rho(0.5f, 0.7f, 0.3f), le(1.0f, 2.0f, 0.5f);
   const Scene scene = test::furnaceBox(rho, le, test::testCamera({0.1f, 0.2f, 0.3f}, {0.5f, 0.1f, -1}, 32, 32, 90));
   const Visibility vis(scene);
-  PathTraceOptions opt;
-  opt.spp = 64;
-  opt.maxDepth = 100000;
-  opt.seed = 7;
-  const RenderOutput out = renderPathTraced(scene, vis, opt);
-  test::requireImageMean(out.image, Rgb(le.r / (1 - rho.r), le.g / (1 - rho.g), le.b / (1 - rho.b)));
+  for (const SamplerKind sampler : {SamplerKind::Independent, SamplerKind::Sobol}) {
+    PathTraceOptions opt;
+    opt.spp = 64;
+    opt.maxDepth = 100000;
+    opt.seed = 7;
+    opt.sampler = sampler;
+    const RenderOutput out = renderPathTraced(scene, vis, opt);
+    INFO("sampler " << int(sampler));
+    test::requireImageMean(out.image, Rgb(le.r / (1 - rho.r), le.g / (1 - rho.g), le.b / (1 - rho.b)));
+  }
 }
 
 TEST_CASE("Closed diffuse furnace with max depth: geometric series truncated", "[pathtrace][furnace]") {
@@ -29,17 +33,19 @@ TEST_CASE("Closed diffuse furnace with max depth: geometric series truncated", "
   const float rho = 0.6f;
   const Scene scene = test::furnaceBox(Rgb(rho), Rgb(1.0f), test::testCamera({0, 0, 0}, {0, 0, -1}, 32, 32, 90));
   const Visibility vis(scene);
-  for (int depth : {1, 2, 4}) {
-    PathTraceOptions opt;
-    opt.spp = 32;
-    opt.maxDepth = depth;
-    opt.seed = 3;
-    const RenderOutput out = renderPathTraced(scene, vis, opt);
-    float expected = 0, term = 1;
-    for (int d = 0; d <= depth; ++d, term *= rho) expected += term;
-    INFO("max depth " << depth);
-    test::requireImageMean(out.image, Rgb(expected));
-  }
+  for (const SamplerKind sampler : {SamplerKind::Independent, SamplerKind::Sobol})
+    for (int depth : {1, 2, 4}) {
+      PathTraceOptions opt;
+      opt.spp = 32;
+      opt.maxDepth = depth;
+      opt.seed = 3;
+      opt.sampler = sampler;
+      const RenderOutput out = renderPathTraced(scene, vis, opt);
+      float expected = 0, term = 1;
+      for (int d = 0; d <= depth; ++d, term *= rho) expected += term;
+      INFO("sampler " << int(sampler) << ", max depth " << depth);
+      test::requireImageMean(out.image, Rgb(expected));
+    }
 }
 
 TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "[pathtrace][determinism]") {
@@ -51,17 +57,20 @@ TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "
   opt.spp = 8;
   opt.layers = true;
   opt.seed = 5;
-  std::vector<float> reference;
-  for (const auto& [threads, tile] : {std::pair{1, 16}, std::pair{2, 16}, std::pair{2, 7}, std::pair{1, 5}}) {
-    ParallelScope scope(threads);
-    const Visibility vis(small);
-    opt.tileSize = tile;
-    const RenderOutput out = renderPathTraced(small, vis, opt);
-    if (reference.empty()) {
-      reference = out.image.pixels();
-    } else {
-      INFO(threads << " threads, tile size " << tile);
-      REQUIRE(out.image.pixels() == reference);
+  for (const SamplerKind sampler : {SamplerKind::Independent, SamplerKind::Sobol}) {
+    opt.sampler = sampler;
+    std::vector<float> reference;
+    for (const auto& [threads, tile] : {std::pair{1, 16}, std::pair{2, 16}, std::pair{2, 7}, std::pair{1, 5}}) {
+      ParallelScope scope(threads);
+      const Visibility vis(small);
+      opt.tileSize = tile;
+      const RenderOutput out = renderPathTraced(small, vis, opt);
+      if (reference.empty()) {
+        reference = out.image.pixels();
+      } else {
+        INFO("sampler " << int(sampler) << ", " << threads << " threads, tile size " << tile);
+        REQUIRE(out.image.pixels() == reference);
+      }
     }
   }
 }
@@ -97,10 +106,12 @@ TEST_CASE("Camera rays and Lambertian hits in a wave's lanes give the image of o
       opt.seed = 9;
       opt.maxDepth = maxDepth;
       opt.strategy = strategy;
+      // The Sobol sampler with MIS (its numbers are asked for by purpose, in lanes and one by one).
+      if (strategy == PathStrategy::Mis && maxDepth == 2) opt.sampler = SamplerKind::Sobol;
       const RenderOutput lanes = renderPathTraced(scene, vis, opt);
       opt.laneShading = false;
       const RenderOutput scalar = renderPathTraced(scene, vis, opt);
-      INFO("strategy " << int(strategy) << ", max depth " << maxDepth);
+      INFO("strategy " << int(strategy) << ", max depth " << maxDepth << ", sampler " << int(opt.sampler));
       REQUIRE(lanes.image.pixels() == scalar.image.pixels());
       // Not a vacuous comparison: light arrives, and most hits were Lambertian (shaded in a wave's
       // lanes, or one path at a time, each in a lane of its own).
@@ -200,7 +211,12 @@ TEST_CASE("MIS, light sampling alone and BSDF sampling alone converge to the sam
       opt.seed = images.size() + 1;  // independent images
       images.push_back(renderPathTraced(scene, vis, opt).image);
     }
-    for (const auto& [a, b] : {std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}})
+    // And MIS by the Sobol sampler, whose pixels are independent of one another as well.
+    opt.strategy = PathStrategy::Mis;
+    opt.sampler = SamplerKind::Sobol;
+    opt.seed = 4;
+    images.push_back(renderPathTraced(scene, vis, opt).image);
+    for (const auto& [a, b] : {std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}, std::pair{0, 3}, std::pair{1, 3}})
       for (int c = 0; c < 3; ++c) {
         const double z = test::agreementZ(images[a], images[b], c);
         INFO(file << ": strategy " << a << " against " << b << ", channel " << c << ": z = " << std::to_string(z));

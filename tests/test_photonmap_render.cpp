@@ -506,7 +506,8 @@ TEST_CASE("Direct light with shadow rays packed across points equals each point'
     Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + file, {true});
     scene.camera.width = 48, scene.camera.height = 40;
     const Visibility vis(scene);
-    EyePathSettings settings{2, 8, 5, false};
+    EyePathSettings settings;
+    settings.spp = 2, settings.maxSpecularDepth = 8, settings.seed = 5;
     const EyePaths eye = traceEyePaths(scene, vis, settings);
     REQUIRE(eye.points.size() > 2000);
     for (int samples : {1, 3, 16}) {

@@ -87,6 +87,7 @@ TEST_CASE("A render split by crops and sample ranges merges into the single rend
   // Crops off the 16-pixel tile grid, sample ranges of unequal length, layers on.
   for (const Case& c : std::vector<Case>{{kCornell, "pt --spp 5 --layers"},
                                          {kGlass, "pt --spp 5"},
+                                         {kGlass, "pt --spp 5 --sampler sobol"},
                                          {kGlass, "purcell --spp 5 --photons 20000 --caustic-photons 20000 --layers"},
                                          {kCornell, "pmfg --spp 5 --gather-rays 16 --photons 5000"},
                                          {kGlass, "micro --spp 5 --points 4096"}}) {

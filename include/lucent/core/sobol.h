@@ -16,8 +16,7 @@ constexpr uint32_t reverseBits(uint32_t v) {
   v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
   v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
   v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
-  v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
-  return (v >> 16) | (v << 16);
+  return __builtin_bswap32(v);
 }
 
 // Direction numbers v_k = m_k 2^(32 - k), k = 1 .. 32, of a dimension with primitive polynomial of
@@ -57,16 +56,55 @@ constexpr uint32_t sobolBits(uint32_t index, int dimension) {
   return x;
 }
 
-// Owen's nested uniform scramble of 32 bits keyed by `seed`: each bit flipped by a hash of the bits
-// above it.
-constexpr uint32_t owenScramble(uint32_t v, uint32_t seed) {
-  v = sobol_detail::reverseBits(v);
+namespace sobol_detail {
+
+// Laine and Karras's permutation of bit-reversed values: each bit flipped by a hash of the bits
+// below it (the bits above it in the unreversed value).
+constexpr uint32_t laineKarras(uint32_t v, uint32_t seed) {
   v ^= v * 0x3d20adeau;
   v += seed;
   v *= (seed >> 16) | 1u;
   v ^= v * 0x05526c56u;
   v ^= v * 0x53a22864u;
-  return sobol_detail::reverseBits(v);
+  return v;
+}
+
+// Per byte of the index, the XOR of the bit-reversed direction numbers its set bits select:
+// reverseBits(sobolBits(i, d)) is four lookups.
+constexpr std::array<std::array<uint32_t, 256>, 4> reversedByteTable(int dimension) {
+  std::array<std::array<uint32_t, 256>, 4> t{};
+  for (int b = 0; b < 4; ++b)
+    for (uint32_t v = 0; v < 256; ++v) {
+      uint32_t x = 0;
+      for (int k = 0; k < 8; ++k)
+        if ((v >> k) & 1u) x ^= reverseBits(kDirections[size_t(dimension)][size_t(8 * b + k)]);
+      t[size_t(b)][v] = x;
+    }
+  return t;
+}
+inline constexpr std::array<std::array<uint32_t, 256>, 4> kReversedSecondDimension = reversedByteTable(1);
+
+}  // namespace sobol_detail
+
+// Owen's nested uniform scramble of 32 bits keyed by `seed`: each bit flipped by a hash of the bits
+// above it.
+constexpr uint32_t owenScramble(uint32_t v, uint32_t seed) {
+  return sobol_detail::reverseBits(sobol_detail::laineKarras(sobol_detail::reverseBits(v), seed));
+}
+
+// The first two dimensions' scrambled coordinates of the point whose index is shuffled by Owen's
+// scramble keyed by `shuffleSeed` (Burley 2020): owenScramble(sobolBits(owenScramble(index,
+// shuffleSeed), d), seeds[d]) for d = 0, 1, with half the bit reversals.
+constexpr std::array<uint32_t, 2> shuffledSobolPair(uint32_t index, uint32_t shuffleSeed, uint32_t seedX,
+                                                    uint32_t seedY) {
+  using namespace sobol_detail;
+  const uint32_t shuffled = reverseBits(laineKarras(reverseBits(index), shuffleSeed));
+  // The first dimension is the bit reversal of the index: reversed, the index itself.
+  const uint32_t reversedY = kReversedSecondDimension[0][shuffled & 0xffu] ^
+                             kReversedSecondDimension[1][(shuffled >> 8) & 0xffu] ^
+                             kReversedSecondDimension[2][(shuffled >> 16) & 0xffu] ^
+                             kReversedSecondDimension[3][shuffled >> 24];
+  return {reverseBits(laineKarras(shuffled, seedX)), reverseBits(laineKarras(reversedY, seedY))};
 }
 
 // The scrambled coordinate in [0, 1) (24 bits, so never 1).

@@ -14,19 +14,20 @@ Vec3 select(bool c, Vec3 a, Vec3 b) { return {c ? a.x : b.x, c ? a.y : b.y, c ? 
 bool notBlack(Rgb c) { return (c.r != 0 ? 1.0f : 0.0f) + (c.g != 0 ? 1.0f : 0.0f) + (c.b != 0 ? 1.0f : 0.0f) > 0; }
 }  // namespace
 
-LUCENT_LANE_LOOP(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32_t last, uint64_t seed, const PinholeCamera& camera,
-                  bool pixelCentres)) {
+LUCENT_LANE_LOOP(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32_t last, SamplerKind sampler,
+                  uint64_t seed, const PinholeCamera& camera, bool pixelCentres)) {
   for (uint32_t k = first; k < last; ++k) {
-    Rng rng(seed, l.pixel[k], l.sample[k]);
-    const Vec2 uniform = rng.uniform2();  // drawn either way: the path's later numbers do not move
+    PathSampler s(sampler, seed, l.pixel[k], l.sample[k]);
+    const Vec2 uniform = s.camera();  // drawn either way: the path's later numbers do not move
     const Vec2 jitter = pixelCentres ? Vec2{0.5f, 0.5f} : uniform;
     const Vec3 direction = camera.generate(l.x[k] + jitter.x, l.y[k] + jitter.y).direction;
-    l.rng[k] = rng;
+    l.sampler[k] = s;
     l.dirX[k] = direction.x, l.dirY[k] = direction.y, l.dirZ[k] = direction.z;
   }
 }
-LUCENT_LANE_VERSIONS(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32_t last, uint64_t seed, const PinholeCamera& camera,
-                  bool pixelCentres), (l, first, last, seed, camera, pixelCentres))
+LUCENT_LANE_VERSIONS(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32_t last, SamplerKind sampler,
+                  uint64_t seed, const PinholeCamera& camera, bool pixelCentres),
+                     (l, first, last, sampler, seed, camera, pixelCentres))
 
 // The rest of surfaceAt (the shading normal), the start of PathTracer::shade for a two-sided
 // material, then next-event estimation as PathTracer::sampleDirect (the emitting triangle's sample

@@ -7,7 +7,7 @@
 #pragma once
 #include <cstdint>
 
-#include "lucent/core/rng.h"
+#include "lucent/core/path_sampler.h"
 #include "lucent/scene/camera.h"
 #include "methods/pathtrace/path_tracer.h"
 
@@ -63,19 +63,19 @@ struct DiffuseLanes {
       nextDy[kLaneSlots], nextDz[kLaneSlots];
 };
 
-// The camera samples of a wave: pixel, sample index and pixel corner in; each path's seeded
-// generator (after the two jitter numbers) and camera ray direction out. The same numbers as
-// seeding an Rng and calling PinholeCamera::generate one sample at a time.
+// The camera samples of a wave: pixel, sample index and pixel corner in; each path's keyed
+// sampler (after the two jitter numbers) and camera ray direction out. The same numbers as
+// keying a PathSampler and calling PinholeCamera::generate one sample at a time.
 struct CameraLanes {
   uint32_t count = 0;
   alignas(64) uint64_t pixel[kLaneSlots], sample[kLaneSlots];
   alignas(64) float x[kLaneSlots], y[kLaneSlots];
-  alignas(64) Rng rng[kLaneSlots];
+  alignas(64) PathSampler sampler[kLaneSlots];
   alignas(64) float dirX[kLaneSlots], dirY[kLaneSlots], dirZ[kLaneSlots];
 };
 // Lanes [first, last).
-void startCameraPaths(CameraLanes& lanes, uint32_t first, uint32_t last, uint64_t seed, const PinholeCamera& camera,
-                      bool pixelCentres);
+void startCameraPaths(CameraLanes& lanes, uint32_t first, uint32_t last, SamplerKind sampler, uint64_t seed,
+                      const PinholeCamera& camera, bool pixelCentres);
 
 // Every lane's shading normal and frame, its light sample's shadow ray and what it brings, and the
 // cosine-distributed next direction.

@@ -24,6 +24,10 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
              std::vector<std::pair<std::string, PathStrategy>>{
                  {"mis", PathStrategy::Mis}, {"light", PathStrategy::LightSampling}, {"bsdf", PathStrategy::BsdfSampling}},
              "mis combines light and BSDF sampling; light or bsdf alone, for validating the other two");
+    t.choice("sampler", [](O& o) -> auto& { return o.sampler; },
+             std::vector<std::pair<std::string, SamplerKind>>{{"independent", SamplerKind::Independent},
+                                                              {"sobol", SamplerKind::Sobol}},
+             "random numbers: independent, or an Owen-scrambled Sobol sequence padded per bounce and purpose");
     t.flag("pixel_centres", [](O& o) -> auto& { return o.pixelCentres; },
            "every camera ray through its pixel's centre (the reference for methods at one sample per pixel)");
     return t;

@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 
+#include "lucent/core/path_sampler.h"
 #include "lucent/pipeline/method.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
@@ -33,6 +34,9 @@ struct PathTraceOptions {
   // (CameraLanes, DiffuseLanes), other hits one by one. False does everything one path at a time
   // (a Lambertian hit in a lane of its own), for tests that the batches change nothing.
   bool laneShading = true;
+  // A padded Owen-scrambled Sobol sequence (lower error at equal samples), or independent random
+  // numbers for validation (include/lucent/core/path_sampler.h).
+  SamplerKind sampler = SamplerKind::Sobol;
 };
 
 const OptionTable<PathTraceOptions>& pathTraceOptionTable();

@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "lucent/core/parallel.h"
-#include "lucent/core/rng.h"
+#include "lucent/core/path_sampler.h"
 #include "methods/pathtrace/path_tracer.h"
 #include "lucent/pipeline/film.h"
 #include "lucent/pipeline/render_control.h"
@@ -41,7 +41,7 @@ struct Counters {
 struct Path {
   uint64_t pixel = 0;
   Ray ray;
-  Rng rng;
+  PathSampler sampler;
   Rgb beta{1.0f};
   bool lastDelta = true;  // the camera ray counts as specular: emission seen directly is not MIS'ed
   float lastPdf = 0;
@@ -145,13 +145,13 @@ class PathTracer {
     const Vec3 woLocal = frame.toLocal(wo);
 
     if (!bsdf.isDelta()) {
-      queued = sampleDirect(sp, bsdf, frame, woLocal, path.rng, shadow);
+      queued = sampleDirect(sp, bsdf, frame, woLocal, path.sampler, path.bounce, shadow);
       shadow.contribution *= path.beta;
       shadow.verticesBefore = ++path.gatheringVertices;
     }
 
-    const float uLobe = path.rng.uniform();
-    const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, path.rng.uniform2());
+    const float uLobe = path.sampler.uniform(path.bounce, SampleUse::Lobe);
+    const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, path.sampler.uniform2(path.bounce, SampleUse::BsdfDirection));
     if (!bs.valid) return false;
     const Vec3 wi = frame.toWorld(bs.wi);
     // Reject directions on the wrong side of the real surface (shading-normal light leaks).
@@ -319,12 +319,12 @@ class PathTracer {
       for (const uint32_t* texel : {f.row0 + f.x0, f.row0 + f.x1, f.row1 + f.x0, f.row1 + f.x1}) __builtin_prefetch(texel);
       textured.push_back({k, f, m.kd});
     }
-    l.uLight[k] = path.rng.uniform();
-    l.uLightX[k] = path.rng.uniform();
-    l.uLightY[k] = path.rng.uniform();
-    path.rng.uniform();  // shade's lobe choice, which a Lambertian surface does not use
-    l.uBsdfX[k] = path.rng.uniform();
-    l.uBsdfY[k] = path.rng.uniform();
+    l.uLight[k] = path.sampler.uniform(path.bounce, SampleUse::LightChoice);
+    const Vec2 uLightPoint = path.sampler.uniform2(path.bounce, SampleUse::LightPoint);
+    l.uLightX[k] = uLightPoint.x, l.uLightY[k] = uLightPoint.y;
+    path.sampler.uniform(path.bounce, SampleUse::Lobe);  // shade's lobe choice, which a Lambertian surface does not use
+    const Vec2 uBsdf = path.sampler.uniform2(path.bounce, SampleUse::BsdfDirection);
+    l.uBsdfX[k] = uBsdf.x, l.uBsdfY[k] = uBsdf.y;
 
     // The light: an emitting triangle's data for the lanes' own sampling; any other light is
     // sampled whole once the lane's surface point is known (sampleOtherLights), as is the no light
@@ -412,7 +412,7 @@ class PathTracer {
   // minus its throughput's largest component, and scales the survivors up by as much.
   bool survivesRoulette(Path& path) const {
     ++path.bounce;
-    return path.bounce < opt_.rouletteDepth || survivesRussianRoulette(path.beta, path.rng.uniform());
+    return path.bounce < opt_.rouletteDepth || survivesRussianRoulette(path.beta, path.sampler.uniform(path.bounce, SampleUse::Roulette));
   }
 
   // Weight of emission found by BSDF sampling, against light sampling of the same light.
@@ -429,10 +429,11 @@ class PathTracer {
   // One light sample, weighted against BSDF sampling (lights that BSDF sampling cannot hit, point
   // and directional, always have weight 1): its shadow ray and what it brings if unoccluded. False
   // when the sample brings nothing whatever the shadow ray finds.
-  bool sampleDirect(const SurfacePoint& sp, const SurfaceBsdf& bsdf, const Frame& frame, Vec3 woLocal, Rng& rng,
+  bool sampleDirect(const SurfacePoint& sp, const SurfaceBsdf& bsdf, const Frame& frame, Vec3 woLocal,
+                    PathSampler& sampler, int bounce,
                     ShadowQuery& shadow) const {
-    const float uLight = rng.uniform();
-    const LightSample ls = sampleLight(scene_, sp.position, uLight, rng.uniform2());
+    const float uLight = sampler.uniform(bounce, SampleUse::LightChoice);
+    const LightSample ls = sampleLight(scene_, sp.position, uLight, sampler.uniform2(bounce, SampleUse::LightPoint));
     if (!(ls.pdf > 0) || ls.radiance.isBlack()) return false;
     if (opt_.strategy == PathStrategy::BsdfSampling && !ls.delta) return false;
     const Vec3 wiLocal = frame.toLocal(ls.wi);
@@ -485,15 +486,15 @@ void PathTracer::renderTile(const PixelRect& tile, int sampleBegin, int sampleEn
       ++sample;
     }
     // The camera rays, all lanes at once, or one path at a time.
-    if (opt_.laneShading) startCameraPaths(start, 0, start.count, opt_.seed, camera_, opt_.pixelCentres);
+    if (opt_.laneShading) startCameraPaths(start, 0, start.count, opt_.sampler, opt_.seed, camera_, opt_.pixelCentres);
     else
-      for (uint32_t k = 0; k < start.count; ++k) startCameraPaths(start, k, k + 1, opt_.seed, camera_, opt_.pixelCentres);
+      for (uint32_t k = 0; k < start.count; ++k) startCameraPaths(start, k, k + 1, opt_.sampler, opt_.seed, camera_, opt_.pixelCentres);
     wave.paths.resize(start.count);
     for (uint32_t k = 0; k < start.count; ++k) {
       Path& path = wave.paths[k];
       path = Path{};
       path.pixel = start.pixel[k];
-      path.rng = start.rng[k];
+      path.sampler = start.sampler[k];
       path.ray = {camera_.eye(), {start.dirX[k], start.dirY[k], start.dirZ[k]}};
       path.lastPosition = path.ray.origin;
     }

@@ -1,0 +1,80 @@
+// The random numbers of one camera sample's path, drawn by purpose and bounce: independent
+// (PCG32, keyed by seed, pixel and sample) or a padded Owen-scrambled Sobol sequence (Burley 2020,
+// "Practical Hash-based Owen Scrambling", as pbrt-v4's PaddedSobolSampler): each pixel's samples
+// are the points of a 2D Sobol sequence per pair of dimensions, each pair with its own shuffle of
+// the sample index and each dimension its own Owen scramble, all keyed by (seed, pixel). Every pair
+// of a pixel's first 2^k samples is then stratified in every elementary interval of area 2^-k;
+// different pairs, pixels and seeds are independent; and a sample's numbers depend on its index
+// only, so an image does not change with the thread count, the tiles or a split of the samples.
+#pragma once
+#include <cstdint>
+
+#include "lucent/core/rng.h"
+#include "lucent/core/sobol.h"
+
+namespace lucent {
+
+enum class SamplerKind { Independent, Sobol };
+
+// What a number is for, at one bounce. Two-dimensional purposes take a pair of dimensions.
+enum class SampleUse : uint32_t {
+  LightChoice = 0,    // which light (1D)
+  Lobe = 1,           // which BSDF lobe (1D)
+  LightPoint = 2,     // the point on the light (2D)
+  BsdfDirection = 4,  // the scattered direction (2D)
+  Roulette = 6,       // Russian roulette (1D)
+};
+inline constexpr uint32_t kCameraDimensions = 2;   // the position in the pixel (2D)
+inline constexpr uint32_t kBounceDimensions = 8;
+
+class PathSampler {
+ public:
+  PathSampler() = default;  // a placeholder until a keyed sampler is assigned
+  PathSampler(SamplerKind kind, uint64_t seed, uint64_t pixel, uint64_t sample)
+      : index_(uint32_t(sample)), kind_(kind) {
+    if (kind == SamplerKind::Sobol) pixelKey_ = hashKey(seed, pixel, 0x50b01ull);
+    else rng_ = Rng(seed, pixel, sample);
+  }
+
+  // The position in the pixel.
+  Vec2 camera() { return pair(0); }
+  float uniform(int bounce, SampleUse use) {
+    if (kind_ == SamplerKind::Independent) return rng_.uniform();
+    const uint32_t d = dimension(bounce, use);
+    const Vec2 p = pair(d & ~1u);
+    return d & 1u ? p.y : p.x;
+  }
+  Vec2 uniform2(int bounce, SampleUse use) {
+    if (kind_ == SamplerKind::Independent) return rng_.uniform2();
+    return pair(dimension(bounce, use));
+  }
+
+  // The dimension of `use` at `bounce` (the camera's are 0 and 1).
+  static constexpr uint32_t dimension(int bounce, SampleUse use) {
+    return kCameraDimensions + uint32_t(bounce) * kBounceDimensions + uint32_t(use);
+  }
+
+ private:
+
+  // Dimensions d and d + 1 (d even). The last pair is kept: a bounce's light choice and lobe share one.
+  Vec2 pair(uint32_t d) {
+    if (kind_ == SamplerKind::Independent) return rng_.uniform2();
+    if (d != lastPair_) {
+      // The pair's three seeds: the index's shuffle and each dimension's scramble.
+      const uint64_t a = mix64(pixelKey_ + d), b = mix64(a);
+      const std::array<uint32_t, 2> v = shuffledSobolPair(index_, uint32_t(a), uint32_t(a >> 32), uint32_t(b));
+      lastValues_ = {float(v[0] >> 8) * 0x1p-24f, float(v[1] >> 8) * 0x1p-24f};
+      lastPair_ = d;
+    }
+    return lastValues_;
+  }
+
+  Rng rng_;
+  uint32_t index_ = 0;
+  uint64_t pixelKey_ = 0;
+  uint32_t lastPair_ = ~0u;
+  Vec2 lastValues_;
+  SamplerKind kind_ = SamplerKind::Independent;
+};
+
+}  // namespace lucent
