@@ -21,6 +21,7 @@
 #include "methods/envpbgi/visible_points.h"
 #include "methods/pathtrace/path_tracer.h"
 #include "test_scenes.h"
+#include "test_support.h"
 
 using namespace lucent;
 
@@ -325,6 +326,38 @@ TEST_CASE("envpbgi: the paper's approximations against its brute force, and both
   for (const auto& [name, value] : bruteForce.stats.counters)
     if (name == "micro_buffers") bruteBuffers = value;
   CHECK(paperBuffers * 10 < bruteBuffers);
+}
+
+TEST_CASE("envpbgi: glossy receivers are shaded by their diffuse part, counted, and lose light gracefully", "[envpbgi]") {
+  // The paper's receivers are diffuse. On the primitives scene with a glossy ground and glossy
+  // white objects (scenes/primitives-glossy.json), every glossy shading point is counted, the image
+  // stays finite, and the error against the path tracer (max depth 2) grows from the diffuse
+  // scene's by the lobes' light, which is lost, never added: each channel's mean is below the path
+  // tracer's. Measured at this size: relMSE 0.027 against the diffuse scene's 0.0047.
+  auto errorOf = [](const std::string& path, RenderOutput& out, RenderOutput& reference) {
+    const Scene scene = loadAt(path, 160, 90);
+    const Visibility vis(scene);
+    EnvPbgiOptions o;
+    o.points = 1u << 16;
+    out = renderEnvPbgi(scene, vis, o);
+    PathTraceOptions pt;
+    pt.maxDepth = 2;
+    pt.spp = 512;
+    pt.pixelCentres = true;
+    reference = renderPathTraced(scene, vis, pt);
+    return compareImages(out.image, reference.image).overall.relmse;
+  };
+  RenderOutput diffuse, diffuseReference, glossy, glossyReference;
+  const double diffuseError = errorOf(kPrimitives, diffuse, diffuseReference);
+  const double glossyError = errorOf(LUCENT_SOURCE_DIR "/scenes/primitives-glossy.json", glossy, glossyReference);
+  INFO("relMSE against the path tracer: diffuse " << diffuseError << ", glossy " << glossyError);
+  CHECK(diffuse.stats.counter("glossy_shaded_diffuse") == 0);
+  CHECK(glossy.stats.counter("glossy_shaded_diffuse") > glossy.stats.counter("shading_points") / 2);
+  CHECK(glossy.stats.counter("invalid_samples") == 0);
+  for (const float v : glossy.image.pixels()) REQUIRE(std::isfinite(v));
+  CHECK(glossyError > 2 * diffuseError);
+  CHECK(glossyError < 0.1);
+  for (int c = 0; c < 3; ++c) CHECK(test::channelMean(glossy.image, c).mean < test::channelMean(glossyReference.image, c).mean);
 }
 
 TEST_CASE("envpbgi refuses emitting triangles and a brute-force gather without light at every node", "[envpbgi]") {

@@ -389,7 +389,7 @@ TEST_CASE("loader: MTL entries are classified as in docs/scene-format.md, and sc
 
 TEST_CASE("loader: the scenes shipped in scenes/ load", "[loader]") {
   for (const char* name : {"cornell-box-spheres.json", "cornell-box-glossy.json", "primitives.json",
-                           "primitives-white.json", "primitives-courtyard.json", "sponza-courtyard.json",
+                           "primitives-white.json", "primitives-glossy.json", "primitives-courtyard.json", "sponza-courtyard.json",
                            "sponza-white.json"}) {
     CAPTURE(name);
     const Scene scene = loadScene(kSource + "/scenes/" + name, {true});
