@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -338,4 +339,92 @@ TEST_CASE("lucent compare reports metrics and exits by threshold") {
     CHECK(r.status == 2);
     CHECK_THAT(r.output, Catch::Contains("3x1") && Catch::Contains("2x1"));
   }
+}
+
+namespace {
+// An image with R, G, B and variance.R, .G, .B: `mean` plus Gaussian noise of the given variance.
+Image noisyImage(int w, int h, const std::function<float(int, int, int)>& mean, float variance, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<float> noise(0.0f, std::sqrt(variance));
+  Image image(w, h, {"R", "G", "B", "variance.R", "variance.G", "variance.B"});
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) image.at(x, y, c) = mean(x, y, c) + noise(rng), image.at(x, y, 3 + c) = variance;
+  return image;
+}
+}  // namespace
+
+TEST_CASE("testWithinNoise: the reference plus noise passes, a bias below a pixel's noise fails", "[compare]") {
+  // Gaussian noise of a known variance: under no difference each pixel's smallest-of-three p-value,
+  // times 3, falls below alpha for at most alpha of the pixels (Bonferroni; about 0.01 x 16,384 =
+  // 164, binomial standard deviation 13); a bias of 3% of the mean with noise of 10% per pixel is
+  // invisible in one pixel (z 0.2) and plain in the whole image's sum (z about 27).
+  const int w = 128, h = 128;
+  auto mean = [](int x, int y, int c) { return 1.0f + 0.5f * std::sin(0.1f * float(x + 2 * y + c)); };
+  const Image reference = noisyImage(w, h, mean, 0.005f, 1);
+  const Image candidate = noisyImage(w, h, mean, 0.005f, 2);
+  const NoiseTest same = testWithinNoise(candidate, reference, 0.01);
+  INFO("rejected at alpha: " << same.pixelsRejectedAtAlpha << ", whole image z " << same.regions[0].z);
+  CHECK(same.passed);
+  CHECK(same.pixelsRejected == 0);
+  CHECK(same.pixelsRejectedAtAlpha > 164 - 4 * 13);
+  CHECK(same.pixelsRejectedAtAlpha < 164 + 4 * 13);
+  REQUIRE(same.regions.size() == 17);
+  CHECK(same.regions[0].x1 == w);
+  CHECK(same.regions[16].x0 == 96);
+  CHECK(std::abs(same.regions[0].relativeDifference) < 0.001);
+  const Image biased = noisyImage(w, h, [&](int x, int y, int c) { return 1.03f * mean(x, y, c); }, 0.005f, 2);
+  const NoiseTest off = testWithinNoise(biased, reference, 0.01);
+  CHECK_FALSE(off.passed);
+  CHECK(off.pixelsRejected == 0);  // no single pixel shows it
+  CHECK(off.regions[0].rejected);
+  CHECK(off.regions[0].relativeDifference == Approx(0.03).margin(0.003));
+  // The candidate's own variance counts: without it the same candidate's z grow by sqrt(2).
+  CHECK_THROWS_WITH(testWithinNoise(candidate, rgbChannels(reference), 0.01), Catch::Contains("--variance"));
+  const NoiseTest withoutVariance = testWithinNoise(rgbChannels(candidate), reference, 0.01);
+  CHECK_FALSE(withoutVariance.candidateHasVariance);
+  CHECK(withoutVariance.pixelsRejectedAtAlpha > same.pixelsRejectedAtAlpha);
+}
+
+TEST_CASE("lucent compare --test: a path-traced candidate passes its reference, scaled by 1.01 it fails", "[compare][cli]") {
+  // The Cornell box at 1,024 samples per pixel, independent samples (the variance of a pixel's mean
+  // from its samples' spread), two seeds; then the candidate with every value 1% higher.
+  const test::TempDir dir("compare-test");
+  auto render = [&](int seed, const std::string& out) {
+    const test::CliRun r = runLucent("render " + quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json") +
+                                     " --spp 1024 --resolution 64x64 --variance --sampler independent --seed " +
+                                     std::to_string(seed) + " --quiet -o " + quoted(out));
+    INFO(r.output);
+    REQUIRE(r.status == 0);
+  };
+  render(1, dir / "reference.exr");
+  render(2, dir / "candidate.exr");
+  Image scaled = readImage(dir / "candidate.exr");
+  for (int y = 0; y < scaled.height(); ++y)
+    for (int x = 0; x < scaled.width(); ++x)
+      for (int c = 0; c < 3; ++c)
+        scaled.at(x, y, scaled.channelIndex(std::string(1, "RGB"[c]))) *= 1.01f,
+            scaled.at(x, y, scaled.channelIndex("variance." + std::string(1, "RGB"[c]))) *= 1.0201f;
+  writeExr(scaled, dir / "scaled.exr");
+  const test::CliRun pass = runLucent("compare " + quoted(dir / "candidate.exr") + " " + quoted(dir / "reference.exr") +
+                                      " --test --heatmap " + quoted(dir / "z.png"));
+  INFO(pass.output);
+  CHECK(pass.status == 0);
+  const auto passed = nlohmann::json::parse(pass.output);
+  CHECK(passed["test"]["passed"] == true);
+  CHECK(passed["test"]["fraction_rejected_at_alpha"].get<double>() < 0.03);
+  CHECK(std::filesystem::exists(dir / "z.png"));
+  const test::CliRun fail = runLucent("compare " + quoted(dir / "scaled.exr") + " " + quoted(dir / "reference.exr") + " --test");
+  INFO(fail.output);
+  CHECK(fail.status == 1);
+  const auto failed = nlohmann::json::parse(fail.output);
+  CHECK(failed["test"]["passed"] == false);
+  CHECK(failed["test"]["regions"][0]["rejected"] == true);
+  CHECK(failed["test"]["regions"][0]["relative_difference"].get<double>() == Approx(0.01).margin(0.004));
+  // A reference without variance layers is bad input (exit 2); --alpha needs --test.
+  CHECK(runLucent("compare " + quoted(dir / "candidate.exr") + " " + quoted(dir / "z.png") + " --test").status == 2);
+  CHECK(runLucent("compare " + quoted(dir / "candidate.exr") + " " + quoted(dir / "reference.exr") + " --alpha 0.05").status != 0);
+  // --variance asks for independent samples.
+  CHECK(runLucent("render " + quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json") + " --spp 4 --variance -o " +
+                  quoted(dir / "x.exr")).status == 1);
 }

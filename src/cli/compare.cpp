@@ -1,7 +1,8 @@
 // lucent compare IMAGE REFERENCE [--metric rmse|relmse|smape|mae] [--max-error X]
-//                [--heatmap OUT.png]
-// Exit status: 0 passed (or no threshold), 1 the chosen metric exceeds --max-error or the image
-// has NaN or infinite values, 2 error (the reference's NaN or infinite values among them).
+//                [--test [--alpha A]] [--heatmap OUT.png]
+// Exit status: 0 passed (or no threshold), 1 the chosen metric exceeds --max-error, the image
+// has NaN or infinite values, or --test finds it differs from the reference by more than their
+// noise; 2 error (the reference's NaN or infinite values among them).
 // 8-bit images (PNG, JPEG) are decoded from sRGB to linear before they are compared.
 #include <filesystem>
 #include <iostream>
@@ -19,7 +20,28 @@ namespace {
 struct CompareOptions {
   std::string image, reference, metric = "relmse", heatmap;
   std::optional<double> maxError;
+  bool test = false;
+  double alpha = 0.01;
 };
+
+nlohmann::ordered_json testJson(const NoiseTest& t) {
+  nlohmann::ordered_json out;
+  out["alpha"] = t.alpha;
+  out["passed"] = t.passed;
+  out["candidate_variance"] = t.candidateHasVariance;
+  out["pixels"] = t.pixels;
+  out["fraction_rejected_at_alpha"] = double(t.pixelsRejectedAtAlpha) / double(t.pixels);
+  out["pixels_rejected"] = t.pixelsRejected;
+  out["min_pixel_p_value"] = t.minPixelPValue;
+  out["regions"] = nlohmann::ordered_json::array();
+  for (const RegionTest& r : t.regions)
+    out["regions"].push_back({{"region", {r.x0, r.y0, r.x1, r.y1}},
+                              {"relative_difference", r.relativeDifference},
+                              {"z", r.z},
+                              {"p_value", r.pValue},
+                              {"rejected", r.rejected}});
+  return out;
+}
 
 nlohmann::ordered_json metricsJson(const ChannelError& e) {
   return {{"rmse", e.rmse}, {"mae", e.mae}, {"relmse", e.relmse}, {"smape", e.smape}};
@@ -34,8 +56,19 @@ int runCompare(const CompareOptions& opt) {
       if (heatmap == std::filesystem::weakly_canonical(input, ec))
         throw std::invalid_argument("--heatmap '" + opt.heatmap + "' is one of the images compared");
   }
-  const Image image = readLinearImage(opt.image);
-  const Image reference = readLinearImage(opt.reference);
+  const Image candidateFile = readLinearImage(opt.image);
+  const Image referenceFile = readLinearImage(opt.reference);
+  // The test reads the variance layers; the metrics compare the colours.
+  std::optional<NoiseTest> test;
+  if (opt.test) {
+    try {
+      test = testWithinNoise(candidateFile, referenceFile, opt.alpha);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("'" + opt.image + "' vs '" + opt.reference + "': " + e.what());
+    }
+  }
+  const Image image = opt.test ? rgbChannels(candidateFile) : candidateFile;
+  const Image reference = opt.test ? rgbChannels(referenceFile) : referenceFile;
   ImageError error;
   try {
     error = compareImages(image, reference);
@@ -56,11 +89,12 @@ int runCompare(const CompareOptions& opt) {
   for (const ChannelError& c : error.perChannel) out["channels"][c.channel] = metricsJson(c);
   out["non_finite"] = error.nonFinite;
   // A NaN error must fail, hence "<=" rather than "not >".
-  const bool passed = error.nonFinite == 0 && (!opt.maxError || value <= *opt.maxError);
+  const bool passed = error.nonFinite == 0 && (!opt.maxError || value <= *opt.maxError) && (!test || test->passed);
   if (opt.maxError) out["max_error"] = *opt.maxError;
+  if (test) out["test"] = testJson(*test);
   out["passed"] = passed;
   if (!opt.heatmap.empty()) {
-    writePng(errorHeatmap(image, reference, metric), opt.heatmap);
+    writePng(test ? statisticHeatmap(test->statistic) : errorHeatmap(image, reference, metric), opt.heatmap);
     out["heatmap"] = opt.heatmap;
   }
   std::cout << out.dump() << std::endl;
@@ -78,7 +112,12 @@ void addCompareCommand(CLI::App& app, int& exitCode) {
       ->check(CLI::IsMember({"rmse", "relmse", "smape", "mae"}));
   cmd->add_option("--max-error", opt->maxError, "Fail (exit 1) when the metric exceeds this")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--heatmap", opt->heatmap, "Write a false-colour PNG of the per-pixel error");
+  cmd->add_option("--heatmap", opt->heatmap,
+                  "Write a false-colour PNG of the per-pixel error (with --test: of |z|, 0 to 5)");
+  CLI::Option* testFlag = cmd->add_flag("--test", opt->test,
+                "Test whether the image differs from the reference by more than both images' noise "
+                "(the reference needs variance layers: render it with --variance)");
+  cmd->add_option("--alpha", opt->alpha, "Significance of --test (default 0.01)")->check(CLI::Range(1e-12, 0.5))->needs(testFlag);
   cmd->callback([opt, &exitCode] {
     // Errors exit 2 so that scripts can tell them from a comparison that failed the threshold.
     try {

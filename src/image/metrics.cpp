@@ -172,4 +172,111 @@ Image errorHeatmap(const Image& image, const Image& reference, ErrorMetric metri
   return heatmap;
 }
 
+Image rgbChannels(const Image& image) {
+  int at[3];
+  for (int c = 0; c < 3; ++c) {
+    at[c] = image.channelIndex(std::string(1, "RGB"[c]));
+    if (at[c] < 0) throw std::invalid_argument("the image has no " + std::string(1, "RGB"[c]) + " channel");
+  }
+  Image rgb(image.width(), image.height(), {"R", "G", "B"});
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x)
+      for (int c = 0; c < 3; ++c) rgb.at(x, y, c) = image.at(x, y, at[c]);
+  return rgb;
+}
+
+NoiseTest testWithinNoise(const Image& candidate, const Image& reference, double alpha, int grid) {
+  if (!(alpha > 0 && alpha < 1)) throw std::invalid_argument("the significance must be in (0, 1)");
+  if (candidate.width() != reference.width() || candidate.height() != reference.height())
+    throw std::invalid_argument("image sizes differ: " + std::to_string(candidate.width()) + "x" +
+                                std::to_string(candidate.height()) + " vs reference " +
+                                std::to_string(reference.width()) + "x" + std::to_string(reference.height()));
+  auto channels = [](const Image& image, const std::string& prefix, bool required) {
+    std::array<int, 3> at{};
+    for (int c = 0; c < 3; ++c) {
+      at[size_t(c)] = image.channelIndex(prefix + std::string(1, "RGB"[c]));
+      if (at[size_t(c)] < 0 && required)
+        throw std::invalid_argument("the reference has no " + prefix + std::string(1, "RGB"[c]) +
+                                    " channel (render it with --variance)");
+    }
+    return at;
+  };
+  const auto cv = channels(candidate, "", true), rv = channels(reference, "", true);
+  const auto rVar = channels(reference, "variance.", true), cVar = channels(candidate, "variance.", false);
+  NoiseTest t;
+  t.alpha = alpha;
+  t.candidateHasVariance = cVar[0] >= 0 && cVar[1] >= 0 && cVar[2] >= 0;
+  const int w = candidate.width(), h = candidate.height();
+  t.pixels = uint64_t(w) * uint64_t(h);
+  t.statistic = Image(w, h, {"z"});
+  auto pValue = [](double z) { return std::isfinite(z) ? std::erfc(std::abs(z) / std::sqrt(2.0)) : 0.0; };
+  auto statistic = [](double difference, double variance) {
+    if (variance > 0) return difference / std::sqrt(variance);
+    return difference == 0 ? 0.0 : std::copysign(double(kInf), difference);
+  };
+  // Region sums per channel: difference, variance, reference.
+  struct Sums {
+    std::array<double, 3> difference{}, variance{}, reference{};
+  };
+  const int tiles = std::max(1, grid);
+  std::vector<Sums> regionSums(size_t(1 + tiles * tiles));
+  const double pixelThreshold = alpha / (2.0 * 3.0 * double(t.pixels));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      double largest = 0, minP = 1;
+      Sums& tile = regionSums[size_t(1 + (y * tiles / h) * tiles + (x * tiles / w))];
+      for (int c = 0; c < 3; ++c) {
+        const double d = double(candidate.at(x, y, cv[size_t(c)])) - reference.at(x, y, rv[size_t(c)]);
+        const double v = double(reference.at(x, y, rVar[size_t(c)])) +
+                         (t.candidateHasVariance ? double(candidate.at(x, y, cVar[size_t(c)])) : 0.0);
+        const double z = statistic(d, v);
+        largest = std::max(largest, std::abs(z));
+        minP = std::min(minP, pValue(z));
+        for (Sums* s : {&regionSums[0], &tile}) {
+          s->difference[size_t(c)] += d, s->variance[size_t(c)] += v;
+          s->reference[size_t(c)] += reference.at(x, y, rv[size_t(c)]);
+        }
+      }
+      t.statistic.at(x, y, 0) = float(largest);
+      t.minPixelPValue = std::min(t.minPixelPValue, minP);
+      t.pixelsRejectedAtAlpha += std::min(1.0, 3.0 * minP) < alpha;
+      t.pixelsRejected += minP < pixelThreshold;
+    }
+  const double regionThreshold = alpha / (2.0 * 3.0 * double(regionSums.size()));
+  bool regionsPass = true;
+  for (size_t k = 0; k < regionSums.size(); ++k) {
+    RegionTest r;
+    if (k == 0) {
+      r.x1 = w, r.y1 = h;
+    } else {
+      const int tx = int(k - 1) % tiles, ty = int(k - 1) / tiles;
+      r = {tx * w / tiles, ty * h / tiles, (tx + 1) * w / tiles, (ty + 1) * h / tiles};
+    }
+    const Sums& s = regionSums[k];
+    double difference = 0, total = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double z = statistic(s.difference[size_t(c)], s.variance[size_t(c)]);
+      if (pValue(z) <= r.pValue) r.pValue = pValue(z), r.z = z;
+      difference += s.difference[size_t(c)], total += s.reference[size_t(c)];
+    }
+    r.relativeDifference = total != 0 ? difference / total : 0;
+    r.rejected = r.pValue < regionThreshold;
+    regionsPass = regionsPass && !r.rejected;
+    t.regions.push_back(r);
+  }
+  t.passed = t.pixelsRejected == 0 && regionsPass;
+  return t;
+}
+
+Image statisticHeatmap(const Image& statistic) {
+  Image heatmap(statistic.width(), statistic.height(), {"R", "G", "B"});
+  for (int y = 0; y < statistic.height(); ++y)
+    for (int x = 0; x < statistic.width(); ++x) {
+      const double z = statistic.at(x, y, 0);
+      const std::array<float, 3> rgb = std::isfinite(z) ? viridis(z / 5.0) : std::array<float, 3>{1, 0, 1};
+      for (int c = 0; c < 3; ++c) heatmap.at(x, y, c) = rgb[size_t(c)];
+    }
+  return heatmap;
+}
+
 }  // namespace lucent

@@ -23,7 +23,10 @@ Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers
   layers_.caustic = layers.features && layers.caustic;
   // The parts are kept wherever the image needs them: for the layers, or (PerPart) for the total.
   auto reserve = [&](int& offset, int channels) { offset = stride_, stride_ += channels; };
+  if (layers.variance && sums != Sums::PerSample)
+    throw std::invalid_argument("film: a variance layer needs each camera sample's total (Sums::PerSample)");
   if (sums == Sums::PerSample) reserve(total_, 3);
+  if (layers.variance) reserve(squares_, 3);
   if (sums == Sums::PerPart || layers.features) reserve(direct_, 3), reserve(indirect_, 3);
   if (sums == Sums::PerPart) reserve(caustic_, 3);
   if (layers.features) reserve(features_, 7);
@@ -43,6 +46,8 @@ void Film::addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 
   // The total is summed apart from its parts: (direct + indirect) rounded once per sample.
   const Rgb total = direct + indirect;
   for (int c = 0; c < 3; ++c) sum[total_ + c].add(total[c]);
+  if (layers_.variance)
+    for (int c = 0; c < 3; ++c) sum[squares_ + c].add(std::min(total[c] * total[c], ExactSum::kMaxTerm));
   if (!layers_.features) return;
   const float features[7] = {albedo.r, albedo.g, albedo.b, normal.x, normal.y, normal.z, depth};
   for (int c = 0; c < 7; ++c) sum[features_ + c].add(features[c]);
@@ -112,6 +117,9 @@ Image Film::image() const {
       channels.push_back(name);
   if (layers_.caustic)
     for (const char* name : {"caustic.R", "caustic.G", "caustic.B"}) channels.push_back(name);
+  const size_t varianceAt = channels.size();
+  if (layers_.variance)
+    for (const char* name : {"variance.R", "variance.G", "variance.B"}) channels.push_back(name);
   const size_t nc = channels.size(), pixels = region_.pixelCount();
   Image image(region_.width(), region_.height(), channels);
   float* out = image.pixels().data();
@@ -125,6 +133,13 @@ Image Film::image() const {
         if (mode_ == Sums::PerPart) total.add(sum[indirect_ + c]), total.add(sum[caustic_ + c]);
         o[c] = float(total.value() / n);
       }
+      // The sample variance over n, the variance of the pixel's mean (infinite below two samples).
+      if (layers_.variance)
+        for (int c = 0; c < 3; ++c) {
+          const double mean = sum[total_ + c].value() / n;
+          const double variance = (sum[squares_ + c].value() / n - mean * mean) * n / (n - 1);
+          o[varianceAt + size_t(c)] = samples_[p] < 2 ? kInf : float(std::max(0.0, variance) / n);
+        }
       if (!layers_.features) continue;
       for (int c = 0; c < 7; ++c) o[3 + c] = float(sum[features_ + c].value() / n);
       for (int c = 0; c < 3; ++c)

@@ -71,7 +71,8 @@ FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileIn
   header["sample_count"] = info.sampleCount;
   header["complete"] = info.complete;
   header["sums"] = film.sums() == Film::Sums::PerSample ? "per_sample" : "per_part";
-  header["layers"] = {{"features", film.layers().features}, {"caustic", film.layers().caustic}};
+  header["layers"] = {{"features", film.layers().features}, {"caustic", film.layers().caustic},
+                      {"variance", film.layers().variance}};
   header["sums_per_pixel"] = film.sumsPerPixel();
   header["counters"] = nlohmann::ordered_json::object();
   for (const auto& [name, value] : info.counters) header["counters"][name] = value;
@@ -154,6 +155,8 @@ FilmFile readFilmFile(const std::string& path) {
     sums = sumsName == "per_sample" ? Film::Sums::PerSample : Film::Sums::PerPart;
     layers.features = header.at("layers").at("features").get<bool>();
     layers.caustic = header.at("layers").at("caustic").get<bool>();
+    layers.variance = header.at("layers").value("variance", false);
+    if (layers.variance && sums != Film::Sums::PerSample) throw fail("a 'variance' layer needs 'per_sample' sums");
     sumsPerPixel = header.at("sums_per_pixel").get<int>();
     dataHash = header.at("data_hash").get<std::string>();
   } catch (const nlohmann::json::exception& e) {

@@ -38,4 +38,36 @@ double errorValue(const ChannelError& error, ErrorMetric metric);
 Image errorHeatmap(const Image& image, const Image& reference, ErrorMetric metric,
                    double maxValue = 0);
 
+// A candidate against a reference within both images' noise (lucent compare --test): per pixel and
+// channel the Welch statistic z = (c - r) / sqrt(var_c + var_r), from the variance of each pixel's
+// mean (the channels variance.R, .G, .B that --variance writes; the reference must have them, a
+// candidate without them counts as exact), its two-sided p-value from the normal distribution (the
+// samples behind a pixel are many); and per region (the whole image, then a grid x grid of tiles)
+// the same statistic of the sums over the region's pixels, which finds a bias far below one
+// pixel's noise. The image passes at significance alpha when no pixel's p-value is below
+// alpha / (2 * 3 * pixels) and no region's below alpha / (2 * 3 * regions) (Bonferroni over the
+// channels, the pixels and the regions, alpha split between the two families).
+struct RegionTest {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  double relativeDifference = 0;  // sum(c - r) / sum(r) over the region's R, G, B: its bias
+  double z = 0, pValue = 1;       // of the channel with the least p-value
+  bool rejected = false;
+};
+struct NoiseTest {
+  double alpha = 0.01;
+  bool candidateHasVariance = false;
+  uint64_t pixels = 0;
+  uint64_t pixelsRejectedAtAlpha = 0;  // p-value (Bonferroni over the channels) below alpha: about alpha of them by chance
+  uint64_t pixelsRejected = 0;         // below the corrected threshold
+  double minPixelPValue = 1;
+  std::vector<RegionTest> regions;     // the whole image, then the grid row by row
+  bool passed = false;
+  Image statistic;                     // one channel "z": per pixel the largest |z| of its channels
+};
+NoiseTest testWithinNoise(const Image& candidate, const Image& reference, double alpha, int grid = 4);
+// The R, G, B channels of an image.
+Image rgbChannels(const Image& image);
+// False colour of testWithinNoise's statistic: |z| from 0 to 5 (viridis), magenta where infinite.
+Image statisticHeatmap(const Image& statistic);
+
 }  // namespace lucent

@@ -23,6 +23,7 @@ namespace lucent {
 struct FilmLayers {
   bool features = false;  // albedo, normal, depth, direct, indirect
   bool caustic = false;   // and caustic (only with features)
+  bool variance = false;  // Sums::PerSample: the variance of each pixel's mean, from its samples' squares
   bool operator==(const FilmLayers&) const = default;
 };
 
@@ -90,7 +91,7 @@ class Film {
   Sums mode_;
   FilmLayers layers_;
   // Offsets into a pixel's sums: the total (PerSample), the parts, the features; -1 where absent.
-  int total_ = -1, direct_ = -1, indirect_ = -1, caustic_ = -1, features_ = -1, stride_ = 0;
+  int total_ = -1, squares_ = -1, direct_ = -1, indirect_ = -1, caustic_ = -1, features_ = -1, stride_ = 0;
   std::vector<ExactSum> sums_;
   std::vector<uint32_t> samples_;  // valid camera samples per pixel
   std::vector<uint32_t> taken_;    // camera samples taken per pixel

@@ -28,6 +28,16 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
              std::vector<std::pair<std::string, SamplerKind>>{{"independent", SamplerKind::Independent},
                                                               {"sobol", SamplerKind::Sobol}},
              "random numbers: independent, or an Owen-scrambled Sobol sequence padded per bounce and purpose");
+    t.flag("variance", [](O& o) -> auto& { return o.variance; },
+           "add the variance of each pixel's mean (variance.R, .G, .B), for lucent compare --test");
+    t.rule("variance", [](const O& o) {
+      // The spread of a pixel's samples says how its mean varies only for independent samples:
+      // the Sobol sampler's mean varies less.
+      return !o.variance                                  ? ""
+             : o.spp < 2                                  ? "needs at least 2 samples per pixel (--spp)"
+             : o.sampler != SamplerKind::Independent      ? "needs --sampler independent (a Sobol pixel's samples are not independent)"
+                                                          : "";
+    });
     t.flag("pixel_centres", [](O& o) -> auto& { return o.pixelCentres; },
            "every camera ray through its pixel's centre (the reference for methods at one sample per pixel)");
     return t;

@@ -542,7 +542,7 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
                       "be split (--crop, --samples), checkpointed or resumed");
   const RenderPart part = resolvePart(control, scene, options.spp);
   // Every pixel is owned by one tile, and its samples are added in sample order.
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, {options.layers, false}));
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, {options.layers, false, options.variance}));
   const PathTracer tracer(scene, visibility, options);
   // Tiles of the image's grid, cut to the part's region.
   const PixelRect& region = part.region;
