@@ -1,0 +1,86 @@
+// references/: a converged path-traced reference of every scene in scenes/ (scripts/make-references.py),
+// and each scene's render agreeing with its reference within both images' noise.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "lucent/image/image.h"
+#include "test_support.h"
+
+using namespace lucent;
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kSource = LUCENT_SOURCE_DIR;
+
+std::vector<std::string> sceneNames() {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(kSource / "scenes"))
+    if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+nlohmann::json sidecar(const std::string& scene) {
+  std::ifstream in(kSource / "references" / (scene + ".json"));
+  REQUIRE(in);
+  return nlohmann::json::parse(in);
+}
+
+}  // namespace
+
+TEST_CASE("references/ holds a reference of every scene, with its variance and how it was made", "[references]") {
+  uint64_t bytes = 0;
+  for (const std::string& scene : sceneNames()) {
+    CAPTURE(scene);
+    const fs::path exr = kSource / "references" / (scene + ".exr");
+    REQUIRE(fs::exists(exr));
+    bytes += fs::file_size(exr) + fs::file_size(kSource / "references" / (scene + ".json"));
+    const nlohmann::json made = sidecar(scene);
+    for (const char* key : {"scene", "command", "method", "sampler", "spp", "seed", "resolution", "version",
+                            "scene_hash", "seconds", "date"})
+      CHECK(made.contains(key));
+    CHECK(made["scene"] == "scenes/" + scene + ".json");
+    CHECK(made["spp"].get<int>() >= 4096);
+    const Image image = readImage(exr.string());
+    CHECK(made["resolution"] == std::to_string(image.width()) + "x" + std::to_string(image.height()));
+    for (const char* channel : {"R", "G", "B", "variance.R", "variance.G", "variance.B"})
+      CHECK(image.channelIndex(channel) >= 0);
+  }
+  CHECK(bytes < 20u << 20);
+}
+
+TEST_CASE("Each scene's render agrees with its reference within both images' noise, region by region", "[references][cli]") {
+  // The path tracer at 256 samples per pixel, another seed, independent samples with their
+  // variance, against the reference by lucent compare --test: no region (the whole image, a 4 x 4
+  // grid) rejected at alpha 0.01, and the whole image's relative difference within 1%. Pixel by
+  // pixel the normal approximation does not hold at this sample count where a pixel's light comes
+  // by rare paths (shadows lit indirectly, caustics): its 256 samples' spread understates its
+  // mean's (the Cornell box: 2 pixels of 16,384 below the corrected threshold at 512 spp), so the
+  // pixels' verdict is not asserted. Left out: the scenes whose caustics from an area light through
+  // glass make even regions' sums skewed at 256 spp (glass-ball, cornell-box-spheres, ring-area).
+  const test::TempDir dir("references");
+  for (const std::string& scene : sceneNames()) {
+    if (scene == "glass-ball" || scene == "cornell-box-spheres" || scene == "ring-area") continue;
+    CAPTURE(scene);
+    const std::string out = dir / (scene + ".exr");
+    const test::CliRun render = test::runLucent(
+        "render " + test::quoted((kSource / "scenes" / (scene + ".json")).string()) +
+        " --spp 256 --seed 2 --sampler independent --variance --quiet --resolution " +
+        sidecar(scene)["resolution"].get<std::string>() + " -o " + test::quoted(out));
+    INFO(render.output);
+    REQUIRE(render.status == 0);
+    const test::CliRun compare = test::runLucent(
+        "compare " + test::quoted(out) + " " + test::quoted((kSource / "references" / (scene + ".exr")).string()) + " --test");
+    INFO(compare.output);
+    REQUIRE(compare.status != 2);
+    const nlohmann::json test = nlohmann::json::parse(compare.output)["test"];
+    for (const auto& region : test["regions"]) CHECK(region["rejected"] == false);
+    CHECK(std::abs(test["regions"][0]["relative_difference"].get<double>()) < 0.01);
+  }
+}
