@@ -88,6 +88,7 @@ TEST_CASE("A render split by crops and sample ranges merges into the single rend
   for (const Case& c : std::vector<Case>{{kCornell, "pt --spp 5 --layers"},
                                          {kGlass, "pt --spp 5"},
                                          {kGlass, "pt --spp 5 --sampler sobol"},
+                                         {kCornell, "pt --spp 5 --sampler independent --variance"},
                                          {kGlass, "purcell --spp 5 --photons 20000 --caustic-photons 20000 --layers"},
                                          {kCornell, "pmfg --spp 5 --gather-rays 16 --photons 5000"},
                                          {kGlass, "micro --spp 5 --points 4096"}}) {
