@@ -29,8 +29,8 @@ LUCENT = os.path.join(ROOT, "build", "lucent")
 CACHE = os.path.join(ROOT, "out", "charts")
 
 # Each method's knob swept: (label, options) per setting.
-def pt_samples():
-    return [(f"{n} spp", ["--spp", str(n)]) for n in (4, 16, 64, 256, 1024)]
+def pt_samples(extra=()):
+    return [(f"{n} spp", ["--spp", str(n)] + list(extra)) for n in (4, 16, 64, 256, 1024)]
 
 
 def gather_rays(*counts):
@@ -48,7 +48,8 @@ def buffers(*sides):
 
 def scene(resolution, light_samples, rays, purcell, sides):
     return {"resolution": resolution, "light_samples": light_samples, "max_depth": None,
-            "methods": {"pt": pt_samples(), "pmfg": gather_rays(*rays), "purcell": purcell,
+            "methods": {"pt": pt_samples(), "pt (independent)": pt_samples(["--sampler", "independent"]),
+                        "pmfg": gather_rays(*rays), "purcell": purcell,
                         "micro (vpl)": buffers(*sides)}}
 
 
@@ -60,6 +61,8 @@ def environment_scene(resolution):
     depth = ["--max-depth", "2"]
     return {"resolution": resolution, "light_samples": 1024, "max_depth": 2,
             "methods": {"pt (depth 2)": [(label, options + depth) for label, options in pt_samples()],
+                        "pt (depth 2, independent)": [(label, options + depth)
+                                                      for label, options in pt_samples(["--sampler", "independent"])],
                         "envpbgi (points)": [(f"2^{k} points", ["--points", str(1 << k)]) for k in (15, 17, 19, 21)],
                         "envpbgi (primary pixels)": [(f"{p} px", ["--primary-pixels", str(p)])
                                                      for p in (80, 320, 1280, 5120)],
