@@ -2,6 +2,7 @@
 // and each scene's render agreeing with its reference within both images' noise.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>

@@ -17,13 +17,31 @@ std::string joinNames(const std::vector<std::string>& names) {
   return s + "]";
 }
 
-// For each channel of `image`, the index of the same-named channel of `reference`.
-std::vector<int> matchChannels(const Image& image, const Image& reference) {
+void requireSameSize(const Image& image, const Image& reference) {
   if (image.width() != reference.width() || image.height() != reference.height())
     throw std::invalid_argument(
         "image sizes differ: " + std::to_string(image.width()) + "x" +
         std::to_string(image.height()) + " vs reference " + std::to_string(reference.width()) +
         "x" + std::to_string(reference.height()));
+}
+
+// The indices of the channels prefix + "R", "G", "B"; -1 where absent, or, when `role` names the
+// image ("the reference"), an error naming the missing channel.
+std::array<int, 3> rgbIndices(const Image& image, const std::string& prefix, const std::string& role,
+                              const std::string& remedy = "") {
+  std::array<int, 3> at{};
+  for (int c = 0; c < 3; ++c) {
+    const std::string name = prefix + std::string(1, "RGB"[c]);
+    at[size_t(c)] = image.channelIndex(name);
+    if (at[size_t(c)] < 0 && !role.empty())
+      throw std::invalid_argument(role + " has no " + name + " channel" + remedy);
+  }
+  return at;
+}
+
+// For each channel of `image`, the index of the same-named channel of `reference`.
+std::vector<int> matchChannels(const Image& image, const Image& reference) {
+  requireSameSize(image, reference);
   auto a = image.channels(), b = reference.channels();
   std::sort(a.begin(), a.end());
   std::sort(b.begin(), b.end());
@@ -173,36 +191,20 @@ Image errorHeatmap(const Image& image, const Image& reference, ErrorMetric metri
 }
 
 Image rgbChannels(const Image& image) {
-  int at[3];
-  for (int c = 0; c < 3; ++c) {
-    at[c] = image.channelIndex(std::string(1, "RGB"[c]));
-    if (at[c] < 0) throw std::invalid_argument("the image has no " + std::string(1, "RGB"[c]) + " channel");
-  }
+  const std::array<int, 3> at = rgbIndices(image, "", "the image");
   Image rgb(image.width(), image.height(), {"R", "G", "B"});
   for (int y = 0; y < image.height(); ++y)
     for (int x = 0; x < image.width(); ++x)
-      for (int c = 0; c < 3; ++c) rgb.at(x, y, c) = image.at(x, y, at[c]);
+      for (int c = 0; c < 3; ++c) rgb.at(x, y, c) = image.at(x, y, at[size_t(c)]);
   return rgb;
 }
 
 NoiseTest testWithinNoise(const Image& candidate, const Image& reference, double alpha, int grid) {
   if (!(alpha > 0 && alpha < 1)) throw std::invalid_argument("the significance must be in (0, 1)");
-  if (candidate.width() != reference.width() || candidate.height() != reference.height())
-    throw std::invalid_argument("image sizes differ: " + std::to_string(candidate.width()) + "x" +
-                                std::to_string(candidate.height()) + " vs reference " +
-                                std::to_string(reference.width()) + "x" + std::to_string(reference.height()));
-  auto channels = [](const Image& image, const std::string& prefix, bool required) {
-    std::array<int, 3> at{};
-    for (int c = 0; c < 3; ++c) {
-      at[size_t(c)] = image.channelIndex(prefix + std::string(1, "RGB"[c]));
-      if (at[size_t(c)] < 0 && required)
-        throw std::invalid_argument("the reference has no " + prefix + std::string(1, "RGB"[c]) +
-                                    " channel (render it with --variance)");
-    }
-    return at;
-  };
-  const auto cv = channels(candidate, "", true), rv = channels(reference, "", true);
-  const auto rVar = channels(reference, "variance.", true), cVar = channels(candidate, "variance.", false);
+  requireSameSize(candidate, reference);
+  const auto cv = rgbIndices(candidate, "", "the image"), rv = rgbIndices(reference, "", "the reference");
+  const auto rVar = rgbIndices(reference, "variance.", "the reference", " (render it with --variance)");
+  const auto cVar = rgbIndices(candidate, "variance.", "");
   NoiseTest t;
   t.alpha = alpha;
   t.candidateHasVariance = cVar[0] >= 0 && cVar[1] >= 0 && cVar[2] >= 0;

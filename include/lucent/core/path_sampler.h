@@ -55,7 +55,6 @@ class PathSampler {
   }
 
  private:
-
   // Dimensions d and d + 1 (d even). The last pair is kept: a bounce's light choice and lobe share one.
   Vec2 pair(uint32_t d) {
     if (kind_ == SamplerKind::Independent) return rng_.uniform2();
