@@ -220,6 +220,22 @@ TEST_CASE("Metrics reject different sizes and channel sets") {
                   std::invalid_argument);
 }
 
+TEST_CASE("Metrics leave out a reference's variance channels, so any render compares with a reference") {
+  const Image image = makeImage(2, 1, {"R", "G", "B"}, {1, 1, 1, 2, 2, 2});
+  const Image reference = makeImage(2, 1, {"R", "G", "B", "variance.R", "variance.G", "variance.B"},
+                                    {1, 1, 1, 9, 9, 9, 1, 1, 1, 9, 9, 9});
+  const ImageError e = compareImages(image, reference);
+  CHECK(e.perChannel.size() == 3);
+  CHECK(e.overall.mae == Approx(0.5));  // the variances (9) are not compared with anything
+  const ImageError back = compareImages(reference, image);
+  CHECK(back.perChannel.size() == 3);
+  CHECK(back.overall.mae == Approx(0.5));
+  const Image heat = errorHeatmap(image, reference, ErrorMetric::Mae);
+  CHECK(heat.width() == 2);
+  // Channels other than the variances must still match.
+  CHECK_THROWS_AS(compareImages(makeImage(2, 1, {"R", "G"}, {0, 0, 0, 0}), reference), std::invalid_argument);
+}
+
 TEST_CASE("Metric names parse") {
   for (const char* name : {"rmse", "mae", "relmse", "smape"})
     CHECK(std::string(errorMetricName(parseErrorMetric(name))) == name);

@@ -39,17 +39,27 @@ std::array<int, 3> rgbIndices(const Image& image, const std::string& prefix, con
   return at;
 }
 
-// For each channel of `image`, the index of the same-named channel of `reference`.
+// Whether a channel is the variance of another (render --variance): a statistic of the pixel's
+// estimate, not part of the image, so that an image compares with a reference that has them.
+bool isVarianceChannel(const std::string& name) { return name.rfind("variance.", 0) == 0; }
+
+// For each channel of `image`, the index of the same-named channel of `reference`; -1 for the
+// variance channels, which are not compared.
 std::vector<int> matchChannels(const Image& image, const Image& reference) {
   requireSameSize(image, reference);
-  auto a = image.channels(), b = reference.channels();
-  std::sort(a.begin(), a.end());
-  std::sort(b.begin(), b.end());
-  if (a != b)
+  auto compared = [](const Image& i) {
+    std::vector<std::string> names;
+    for (const std::string& name : i.channels())
+      if (!isVarianceChannel(name)) names.push_back(name);
+    std::sort(names.begin(), names.end());
+    return names;
+  };
+  if (compared(image) != compared(reference))
     throw std::invalid_argument("image channels differ: " + joinNames(image.channels()) +
                                 " vs reference " + joinNames(reference.channels()));
   std::vector<int> map;
-  for (const std::string& name : image.channels()) map.push_back(reference.channelIndex(name));
+  for (const std::string& name : image.channels())
+    map.push_back(isVarianceChannel(name) ? -1 : reference.channelIndex(name));
   return map;
 }
 
@@ -105,6 +115,7 @@ ImageError compareImages(const Image& image, const Image& reference) {
   for (int y = 0; y < image.height(); ++y)
     for (int x = 0; x < image.width(); ++x)
       for (int c = 0; c < channels; ++c) {
+        if (map[c] < 0) continue;
         const float v = image.at(x, y, c);
         if (!std::isfinite(v)) {
           ++result.nonFinite;
@@ -116,6 +127,7 @@ ImageError compareImages(const Image& image, const Image& reference) {
   ErrorSums total;
   double all = 0;
   for (int c = 0; c < channels; ++c) {
+    if (map[c] < 0) continue;
     result.perChannel.push_back(sums[c].mean(image.channels()[c], counted[c]));
     total.add(sums[c]);
     all += counted[c];
@@ -159,9 +171,10 @@ Image errorHeatmap(const Image& image, const Image& reference, ErrorMetric metri
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       ErrorSums sums;
+      int compared = 0;
       for (int c = 0; c < image.channelCount(); ++c)
-        sums.add(image.at(x, y, c), reference.at(x, y, map[c]));
-      error[size_t(y) * w + x] = errorValue(sums.mean("", image.channelCount()), metric);
+        if (map[c] >= 0) sums.add(image.at(x, y, c), reference.at(x, y, map[c])), ++compared;
+      error[size_t(y) * w + x] = errorValue(sums.mean("", compared), metric);
     }
 
   double scale = maxValue;
