@@ -38,7 +38,10 @@ DTYPES = {
                                ("environment", "<f4", (25, 3)), ("indirect", "<f4", (25, 3))]),
     "ShadingPoint": np.dtype([("position",) + F3, ("geometric_normal",) + F3, ("normal",) + F3, ("wo",) + F3,
                               ("weight",) + F3, ("material", "<u4"), ("kd",) + F3, ("ks",) + F3, ("ns", "<f4"),
-                              ("ni", "<f4"), ("pixel", "<u4"), ("sample", "<u4"), ("branch", "<u4")]),
+                              ("ni", "<f4"), ("pixel", "<u4"), ("sample", "<u4"), ("branch", "<u4"), ("triangle", "<u4")]),
+    "AreaParticle": np.dtype([("position",) + F3, ("normal",) + F3, ("area", "<f4"), ("reflectance",) + F3,
+                              ("triangle", "<u4")]),
+    "TriangleTessellation": np.dtype([("first", "<u4"), ("segments", "<u4")]),
 }
 
 

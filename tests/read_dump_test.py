@@ -48,6 +48,8 @@ with tempfile.TemporaryDirectory() as tmp:
         "purcell": ["scenes/glass-ball.json", "--method", "purcell", "--photons", "500", "--caustic-photons", "500"],
         "micro": ["scenes/cornell-box.json", "--method", "micro", "--points", "1024"],
         "envpbgi": ["scenes/primitives.json", "--method", "envpbgi", "--points", "4096"],
+        "particles": ["scenes/cornell-box.json", "--method", "particles", "--area-particles", "2000",
+                      "--gather-links", "4"],
     }
     for name, args in renders.items():
         directory = os.path.join(tmp, name)

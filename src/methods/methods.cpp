@@ -4,6 +4,7 @@
 
 #include "methods/envpbgi/env_pbgi.h"
 #include "methods/microrender/micro_renderer.h"
+#include "methods/particles/particles.h"
 #include "methods/pathtrace/path_tracer.h"
 #include "methods/photonmap/photon_mapping.h"
 
@@ -11,7 +12,8 @@ namespace lucent {
 
 const std::vector<const Method*>& renderingMethods() {
   static const std::vector<const Method*> methods = {&pathTraceMethod(), &purcellMethod(), &pmfgMethod(),
-                                                     &microMethod(), &envPbgiMethod()};
+                                                     &microMethod(), &envPbgiMethod(),
+                                                     &particlesMethod()};
   return methods;
 }
 

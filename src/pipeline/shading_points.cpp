@@ -81,7 +81,7 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
 
     if (!bsdf.isDelta()) {
       if (!(bsdf.kd + bsdf.ks).isBlack())
-        points.push_back({sp.position, sp.geometricNormal, n, wo, b.weight, bsdf, pixel, sample, branch++});
+        points.push_back({sp.position, sp.geometricNormal, n, wo, b.weight, bsdf, pixel, sample, branch++, sp.triangle});
       continue;
     }
     if (b.depth >= settings.maxSpecularDepth) continue;

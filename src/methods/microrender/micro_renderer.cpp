@@ -15,6 +15,7 @@
 #include <string>
 
 #include "gathering.h"
+#include "lucent/core/morton.h"
 #include "lucent/core/dump.h"
 #include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
@@ -32,24 +33,6 @@ namespace lucent {
 namespace {
 
 enum class MicroStream : uint64_t { Points = 21, Gather = 22 };
-
-// 30-bit 3-D Morton code of a point in the scene's bounds (10 bits per axis).
-uint32_t mortonCode(Vec3 p, const Bounds3& bounds) {
-  auto spread = [](uint32_t v) {
-    v = (v | (v << 16)) & 0x030000ffu;
-    v = (v | (v << 8)) & 0x0300f00fu;
-    v = (v | (v << 4)) & 0x030c30c3u;
-    v = (v | (v << 2)) & 0x09249249u;
-    return v;
-  };
-  const Vec3 e = bounds.extent();
-  uint32_t code = 0;
-  for (int a = 0; a < 3; ++a) {
-    const float t = e[a] > 0 ? (p[a] - bounds.lo[a]) / e[a] : 0.0f;
-    code |= spread(uint32_t(std::clamp(t, 0.0f, 1.0f) * 1023.0f)) << a;
-  }
-  return code;
-}
 
 // Where a gather point goes in the order of work: first the axis and side its normal faces most (six
 // classes), then the 3-D Morton code of its position. Neighbours facing alike share more of their

@@ -1,0 +1,109 @@
+// Area particles (Chang, Park and Ihm, 3.1 and 4.2.1): small pieces of the surfaces, one per side
+// of a surface that light can reach, where light arrives and from where it leaves; and the uniform
+// grid that finds the particle nearest to a point.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <type_traits>
+#include <vector>
+
+#include "lucent/core/stats.h"
+#include "lucent/methods/points/point_hierarchy.h"
+#include "lucent/scene/scene.h"
+
+namespace lucent {
+
+inline constexpr uint32_t kNoParticle = 0xffffffffu;
+
+// 4.2.1's descriptor, less the light it carries (flux and radiance change with the lights and live
+// in arrays of their own).
+struct AreaParticle {
+  Vec3 position;
+  Vec3 normal;      // geometric normal of the side it stands for
+  float area;       // Delta A: the surface area it stands for
+  Rgb reflectance;  // rho_d: its surface's diffuse reflectance (0 on mirrors and glass)
+  uint32_t triangle;
+};
+static_assert(sizeof(AreaParticle) == 44 && std::is_trivially_copyable_v<AreaParticle>, "dumped as records");
+
+// The paper's surfaces have one side that matters; Lucent's surfaces reflect on both (as the path
+// tracer's do), so a position carries a particle for each side by default.
+enum class ParticleSides : uint32_t { Both = 0, Front = 1 };
+
+struct AreaParticleOptions {
+  uint32_t positions = 50000;  // places on the surfaces (the paper: 50,000 for CBOX, 150,000 for SPONZA)
+  ParticleSides sides = ParticleSides::Both;
+  PointSamplingOptions sampling;
+};
+
+struct AreaParticles {
+  std::vector<AreaParticle> particles;  // by position, the front side's first
+  float spacing = 0;                    // sqrt(area per position): the mean distance between neighbours
+  int sides = 2;
+};
+
+// Stage "area_particles" (G1): positions uniform by area (samplePoints), each particle standing
+// for the same area (5.2: "distributed uniformly", hence 4.3.1's constant Delta A = A / N).
+// Throws std::invalid_argument for a scene without area.
+AreaParticles distributeAreaParticles(const Scene& scene, const AreaParticleOptions& options, RenderStats* stats);
+
+// How a particle's Delta A is set: the area per position (4.3.1: "constant area Delta A"), or the
+// area of the surface nearest to it, which is what links and lookups hand it.
+enum class ParticleArea : uint32_t { Catchment = 0, Uniform = 1 };
+
+struct CatchmentCounters {
+  uint64_t samples = 0;    // surface points looked up (per side)
+  uint64_t unmatched = 0;  // of those, points with no particle within the radius
+  uint64_t empty = 0;      // particles no point reached (given half a point's area)
+};
+
+struct ParticleGrid;
+
+// Stage "particle_areas": each particle's Delta A as its catchment, the share of its side of the
+// surface for which it is nearestFacingParticle, measured with samplesPerPosition low-discrepancy
+// surface points per position (samplePoints, LowDiscrepancy). With equal areas, the particles
+// that hold the most surface would both collect more flux (links land on them more often) and be
+// gathered more often, and the estimate would be too bright by the squared coefficient of
+// variation of the areas (README, "Departures").
+void measureCatchments(const Scene& scene, AreaParticles& area, const ParticleGrid& grid, float radius,
+                       uint32_t samplesPerPosition, uint64_t seed, CatchmentCounters& counters);
+
+// A uniform grid over the particles' positions: the particles of cell c are
+// ids[cellStart[c] .. cellStart[c + 1]), in index order.
+struct ParticleGrid {
+  Vec3 origin;
+  float cellSize = 1;
+  int nx = 1, ny = 1, nz = 1;
+  std::vector<uint32_t> cellStart;
+  std::vector<uint32_t> ids;
+  // visit(id) for every particle in the cells that overlap the cube of half-side `radius` about p.
+  template <class Visit>
+  void forEachNear(Vec3 p, float radius, Visit visit) const {
+    const int x0 = cellCoord(p.x - radius, origin.x, nx), x1 = cellCoord(p.x + radius, origin.x, nx);
+    const int y0 = cellCoord(p.y - radius, origin.y, ny), y1 = cellCoord(p.y + radius, origin.y, ny);
+    const int z0 = cellCoord(p.z - radius, origin.z, nz), z1 = cellCoord(p.z + radius, origin.z, nz);
+    for (int z = z0; z <= z1; ++z)
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const size_t c = (size_t(z) * size_t(ny) + size_t(y)) * size_t(nx) + size_t(x);
+          for (uint32_t k = cellStart[c]; k < cellStart[c + 1]; ++k) visit(ids[k]);
+        }
+  }
+  int cellCoord(float v, float o, int n) const {
+    const float c = (v - o) / cellSize;
+    return c <= 0 ? 0 : c >= float(n - 1) ? n - 1 : int(c);
+  }
+};
+
+// A grid of cells about `cellSize` wide (wider where the scene would need more than 2^24 cells).
+ParticleGrid buildParticleGrid(std::span<const AreaParticle> particles, float cellSize);
+
+// The particle nearest to `point` of those that face the way `side` does (normal . side > 0),
+// within `radius`; kNoParticle if there is none. Of equally near ones, the lowest index. With
+// `side` the normal of a hit's surface on the side a ray arrived from, the particle lies on that
+// side: not behind a zero-thickness wall, whose other side's particles face the other way, nor on
+// the far side of a neighbouring surface at a corner.
+uint32_t nearestFacingParticle(const ParticleGrid& grid, std::span<const AreaParticle> particles, Vec3 point,
+                               Vec3 side, float radius);
+
+}  // namespace lucent
