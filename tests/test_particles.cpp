@@ -198,7 +198,7 @@ TEST_CASE("particles: estimation lists hold exactly the particles within the rad
   const Tessellation tess = tessellate(scene, 4 * area.spacing, 2);
   std::vector<uint32_t> ids(tess.count);
   std::iota(ids.begin(), ids.end(), 0u);
-  const EstimationLists lists = buildEstimationLists(scene, tess, area.particles, grid, radius, minCosine, ids);
+  const EstimationLists lists = buildEstimationLists(scene, tess, grid, radius, minCosine, ids);
   REQUIRE(lists.offsets.size() == tess.count + 1);
   uint64_t entries = 0;
   for (uint32_t tri = 0; tri < scene.triangleCount(); ++tri) {

@@ -60,23 +60,32 @@ struct CatchmentCounters {
 struct ParticleGrid;
 
 // Stage "particle_areas": each particle's Delta A as its catchment, the share of its side of the
-// surface for which it is nearestFacingParticle, measured with samplesPerPosition low-discrepancy
-// surface points per position (samplePoints, LowDiscrepancy). With equal areas, the particles
+// surface for which it is nearestFacingParticle, measured with about samplesPerPosition
+// low-discrepancy surface points per position (each triangle's share, at least one). With equal areas, the particles
 // that hold the most surface would both collect more flux (links land on them more often) and be
 // gathered more often, and the estimate would be too bright by the squared coefficient of
 // variation of the areas (README, "Departures").
 void measureCatchments(const Scene& scene, AreaParticles& area, const ParticleGrid& grid, float radius,
                        uint32_t samplesPerPosition, uint64_t seed, CatchmentCounters& counters);
 
+// A particle as the grid holds it: a cell's particles lie next to each other in memory (a lookup
+// touches a few cache lines per cell, not one per particle).
+struct GridSlot {
+  Vec3 position;
+  Vec3 normal;
+  uint32_t id;
+};
+static_assert(sizeof(GridSlot) == 28 && std::is_trivially_copyable_v<GridSlot>);
+
 // A uniform grid over the particles' positions: the particles of cell c are
-// ids[cellStart[c] .. cellStart[c + 1]), in index order.
+// slots[cellStart[c] .. cellStart[c + 1]), in index order.
 struct ParticleGrid {
   Vec3 origin;
   float cellSize = 1;
   int nx = 1, ny = 1, nz = 1;
   std::vector<uint32_t> cellStart;
-  std::vector<uint32_t> ids;
-  // visit(id) for every particle in the cells that overlap the cube of half-side `radius` about p.
+  std::vector<GridSlot> slots;
+  // visit(const GridSlot&) for every particle in the cells that overlap the cube of half-side `radius` about p.
   template <class Visit>
   void forEachNear(Vec3 p, float radius, Visit visit) const {
     const int x0 = cellCoord(p.x - radius, origin.x, nx), x1 = cellCoord(p.x + radius, origin.x, nx);
@@ -86,7 +95,7 @@ struct ParticleGrid {
       for (int y = y0; y <= y1; ++y)
         for (int x = x0; x <= x1; ++x) {
           const size_t c = (size_t(z) * size_t(ny) + size_t(y)) * size_t(nx) + size_t(x);
-          for (uint32_t k = cellStart[c]; k < cellStart[c + 1]; ++k) visit(ids[k]);
+          for (uint32_t k = cellStart[c]; k < cellStart[c + 1]; ++k) visit(slots[k]);
         }
   }
   int cellCoord(float v, float o, int n) const {
@@ -103,7 +112,6 @@ ParticleGrid buildParticleGrid(std::span<const AreaParticle> particles, float ce
 // `side` the normal of a hit's surface on the side a ray arrived from, the particle lies on that
 // side: not behind a zero-thickness wall, whose other side's particles face the other way, nor on
 // the far side of a neighbouring surface at a corner.
-uint32_t nearestFacingParticle(const ParticleGrid& grid, std::span<const AreaParticle> particles, Vec3 point,
-                               Vec3 side, float radius);
+uint32_t nearestFacingParticle(const ParticleGrid& grid, Vec3 point, Vec3 side, float radius);
 
 }  // namespace lucent

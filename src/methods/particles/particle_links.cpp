@@ -54,7 +54,7 @@ ParticleLinks buildParticleLinks(const Scene& scene, const Visibility& vis, std:
           } else {
             const Ray ray = rayOf(j);
             const Vec3 n = scene.geometricNormal(hits[j].triangle);
-            target = nearestFacingParticle(grid, particles, ray.origin + d * hits[j].t, dot(n, d) < 0 ? n : -n,
+            target = nearestFacingParticle(grid, ray.origin + d * hits[j].t, dot(n, d) < 0 ? n : -n,
                                            searchRadius);
             c.unmatched += target == kNoParticle;
           }

@@ -133,7 +133,7 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
     Stopwatch listClock;
     std::vector<uint32_t> all(tess.count);
     std::iota(all.begin(), all.end(), 0u);
-    lists = buildEstimationLists(scene, tess, particles, listGrid, listRadius, listCosine, all);
+    lists = buildEstimationLists(scene, tess, listGrid, listRadius, listCosine, all);
     stats.addStage("estimation_lists", listClock.seconds());
   }
   report(0.5);
@@ -174,7 +174,7 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   // The k-th found radiance particle's list.
   if (!everything) {
     Stopwatch listClock;
-    lists = buildEstimationLists(scene, tess, particles, listGrid, listRadius, listCosine, found);
+    lists = buildEstimationLists(scene, tess, listGrid, listRadius, listCosine, found);
     stats.addStage("estimation_lists", listClock.seconds());
   }
   auto listOf = [&](size_t k) { return lists.list(everything ? found[k] : k); };

@@ -77,8 +77,8 @@ RadianceParticleAt Tessellation::locate(uint32_t id) const {
   return at;
 }
 
-EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, std::span<const AreaParticle> particles,
-                                     const ParticleGrid& grid, float radius, float minCosine,
+EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, const ParticleGrid& grid, float radius,
+                                     float minCosine,
                                      std::span<const uint32_t> ids) {
   EstimationLists lists;
   requireMemory((ids.size() + 1) * sizeof(uint64_t), "the estimation lists' offsets", "raise --tessellation");
@@ -90,9 +90,9 @@ EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, 
     const Vec3 q = t.position(scene, at.triangle, at.i, at.j);
     const Vec3 normal = at.side == 0 ? scene.geometricNormal(at.triangle) : -scene.geometricNormal(at.triangle);
     scratch.clear();
-    grid.forEachNear(q, radius, [&](uint32_t p) {
-      const Vec3 d = particles[p].position - q;
-      if (dot(d, d) <= r2 && dot(particles[p].normal, normal) >= minCosine) scratch.push_back(p);
+    grid.forEachNear(q, radius, [&](const GridSlot& p) {
+      const Vec3 d = p.position - q;
+      if (dot(d, d) <= r2 && dot(p.normal, normal) >= minCosine) scratch.push_back(p.id);
     });
     std::sort(scratch.begin(), scratch.end());
   };

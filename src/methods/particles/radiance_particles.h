@@ -70,8 +70,8 @@ struct EstimationLists {
 // Stage G5: for each radiance particle of `ids`, the area particles within `radius` of it whose
 // normal n satisfies n . n_r >= minCosine, n_r the normal of the radiance particle's side. `grid`
 // should have cells about `radius` wide. Throws MemoryLimitError when the lists would not fit.
-EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, std::span<const AreaParticle> particles,
-                                     const ParticleGrid& grid, float radius, float minCosine,
+EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, const ParticleGrid& grid, float radius,
+                                     float minCosine,
                                      std::span<const uint32_t> ids);
 
 }  // namespace lucent
