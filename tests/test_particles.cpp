@@ -369,3 +369,46 @@ TEST_CASE("particles: building links and lists for the frame only gives the imag
   CHECK(all.stats.counter("gather_link_rays") == all.stats.counter("area_particles") * 256);
   CHECK(frame.stats.counter("used_area_particles") < all.stats.counter("area_particles"));
 }
+
+TEST_CASE("particles: adaptive supersampling replaces the flagged pixels by their n x n samples", "[particles]") {
+  // A flagged pixel's supersamples are the camera samples an --spp 9 render takes there, shaded by
+  // the same particles: the pixel equals that render's, bit for bit; every other pixel keeps its
+  // single sample. Flagged are the pixels at the box's edges and the figure's silhouette.
+  Scene scene = roomWithBox(0.6f, {0.1f, 0.45f, -0.2f});
+  scene.camera.width = scene.camera.height = 48;
+  const Visibility vis(scene);
+  ParticleOptions o;
+  o.areaParticles = 3000;
+  o.lightSamples = 2;
+  const Image single = renderParticles(scene, vis, o).image;
+  ParticleOptions nine = o;
+  nine.spp = 9;
+  const Image dense = renderParticles(scene, vis, nine).image;
+  o.supersample = 3;
+  const RenderOutput adaptive = renderParticles(scene, vis, o);
+  const uint64_t flagged = adaptive.stats.counter("aliased_pixels");
+  const uint64_t pixels = uint64_t(single.width()) * uint64_t(single.height());
+  CHECK(flagged > pixels / 20);
+  CHECK(flagged < pixels / 2);
+  uint64_t fromSingle = 0, fromDense = 0;
+  for (int y = 0; y < single.height(); ++y)
+    for (int x = 0; x < single.width(); ++x) {
+      bool same = true, sameDense = true;
+      for (int c = 0; c < 3; ++c) {
+        same &= adaptive.image.at(x, y, c) == single.at(x, y, c);
+        sameDense &= adaptive.image.at(x, y, c) == dense.at(x, y, c);
+      }
+      INFO("pixel " << x << ", " << y);
+      REQUIRE((same || sameDense));
+      fromSingle += same && !sameDense;
+      fromDense += sameDense && !same;
+    }
+  CHECK(fromDense <= flagged);
+  CHECK(fromDense >= flagged * 9 / 10);  // (a flagged pixel whose samples all agree equals both)
+  CHECK(fromSingle + flagged >= pixels * 99 / 100);
+  CHECK(adaptive.stats.counter("shading_points") > flagged * 9);
+  // A part has no neighbours to decide by.
+  RenderControl crop;
+  crop.crop = {0, 0, 8, 8};
+  CHECK_THROWS_AS(renderParticles(scene, vis, o, crop), std::invalid_argument);
+}

@@ -184,10 +184,12 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
         }
         queued = 0;
       };
+      const bool masked = !settings.pixelMask.empty();
       for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
           const uint32_t pixel = uint32_t(y) * uint32_t(width) + uint32_t(x);
-          for (int s = sampleBegin; s < sampleEnd; ++s) {
+          const bool traced = !masked || settings.pixelMask[pixelIndex(x, y)];
+          for (int s = sampleBegin; traced && s < sampleEnd; ++s) {
             CameraSample& cs = batch[queued];
             cs.rng = Rng(seed, pixel, uint64_t(s));
             const Vec2 offset = settings.spp == 1 ? Vec2{0.5f, 0.5f}

@@ -46,6 +46,9 @@ struct EyePathSettings {
   PixelRect region;  // the pixels traced (a band of rows, of a crop); empty: the whole image
   int sampleBegin = 0, sampleEnd = 0;  // the camera samples [sampleBegin, sampleEnd) of spp; end 0: spp
   int tileSize = 16;
+  // Per pixel of the region (row by row), whether to trace it; empty: every pixel. A pixel left out
+  // has no samples.
+  std::span<const uint8_t> pixelMask;
 };
 
 // Light the film can sum: finite, and within ExactSum's range (a value beyond 10^21 is as

@@ -49,6 +49,14 @@ const OptionTable<ParticleOptions>& particleOptionTable() {
                                                                    {"all", ParticleGeometry::All}},
              "build gathering links and estimation lists where the frame needs them, or everywhere (the paper's "
              "geometry stage, for any view); the image is the same");
+    t.integer("supersample", [](O& o) -> auto& { return o.supersample; }, 0, 16, "per side",
+              "adaptive supersampling (4.3.3): pixels that differ from a neighbour get n x n samples; 0: off (the "
+              "paper's rate is 9 to 16: 3 or 4)");
+    t.rule("supersample", [](const O& o) {
+      return o.supersample > 0 && o.spp != 1 ? "needs --spp 1 (it supersamples a single-sample frame)" : "";
+    });
+    t.real("alias_contrast", [](O& o) -> auto& { return o.aliasContrast; }, 0, 1, "",
+           "adaptive supersampling flags a pixel whose luminance differs from a neighbour's by this contrast");
     t.integer("emission_samples", [](O& o) -> auto& { return o.emissionSamples; }, 1, 1 << 16, "rays",
               "shadow rays per particle for area lights and the environment (point and directional lights: one)");
     return t;

@@ -20,6 +20,7 @@
 #include "lucent/pipeline/film.h"
 #include "lucent/pipeline/render_control.h"
 #include "lucent/pipeline/shading_points.h"
+#include "methods/particles/indirect_field.h"
 #include "methods/particles/particle_lighting.h"
 #include "methods/particles/particle_links.h"
 #include "methods/particles/particles.h"
@@ -32,25 +33,60 @@ namespace {
 enum class ParticleStream : uint64_t { Positions = 41, ScatterLinks = 42, GatherLinks = 43, Emission = 44, Scattering = 45, Areas = 46 };
 uint64_t particleSeed(uint64_t seed, ParticleStream s) { return hashKey(seed, uint64_t(s)); }
 
-// The barycentrics (b1, b2) of p in a triangle (p on it, as a hit's position is).
-Vec2 barycentricsOf(const Scene& scene, uint32_t tri, Vec3 p) {
-  const Vec3 v0 = scene.vertex(tri, 0), e1 = scene.vertex(tri, 1) - v0, e2 = scene.vertex(tri, 2) - v0, d = p - v0;
-  const float d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2), d20 = dot(d, e1), d21 = dot(d, e2);
-  const float den = d00 * d11 - d01 * d01;
-  if (!(den > 0)) return {0, 0};
-  return {(d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den};
-}
-
-// Which side's radiance particles a shading point reads.
-uint32_t sideOf(const ShadingPoint& p, uint32_t sides) {
-  return sides == 2 && dot(p.wo, p.geometricNormal) < 0 ? 1u : 0u;
-}
-
-std::vector<uint32_t> markedIndices(const std::vector<uint8_t>& marks) {
-  std::vector<uint32_t> out;
-  for (size_t i = 0; i < marks.size(); ++i)
-    if (marks[i]) out.push_back(uint32_t(i));
-  return out;
+// 4.3.3's alias detection, from the single-sample pass (notes A12; the criteria of Jin et al. 2009
+// are not in the paper): a pixel is flagged when a 4-neighbour inside the region differs from it in
+// the material or the normal (more than 25 degrees) or the distance (by 10%) of the first surface
+// its sample shades, in whether it reaches one, or in luminance by a contrast |a - b| / (a + b)
+// above `contrast`.
+std::vector<uint8_t> detectAliases(const Scene& scene, const EyePaths& eye, const PointRadiance& light, float contrast) {
+  const int w = eye.region.width(), h = eye.region.height();
+  const size_t n = eye.pixels.size();
+  struct PixelKey {
+    uint32_t material = kNoParticle;
+    Vec3 normal;
+    float distance = 0;
+    float luminance = 0;
+  };
+  std::vector<PixelKey> keys(n);
+  for (size_t i = 0; i < n; ++i) {
+    Rgb emitted;
+    for (int c = 0; c < 3; ++c) emitted[c] = float(eye.pixels[i].emitted[c].value());
+    keys[i].luminance = emitted.luminance();
+  }
+  for (size_t k = 0; k < eye.points.size(); ++k) {
+    const ShadingPoint& p = eye.points[k];
+    const size_t i = size_t(p.pixel / uint32_t(scene.camera.width) - uint32_t(eye.region.y0)) * size_t(w) +
+                     size_t(p.pixel % uint32_t(scene.camera.width) - uint32_t(eye.region.x0));
+    keys[i].luminance += (p.weight * (light.direct[k] + light.indirect[k])).luminance();
+    if (p.branch == 0) {
+      keys[i].material = scene.materialIds[p.triangle];
+      keys[i].normal = p.normal;
+      keys[i].distance = length(p.position - scene.camera.eye);
+    }
+  }
+  const float minCosine = std::cos(25.0f * kPi / 180.0f);
+  auto differ = [&](const PixelKey& a, const PixelKey& b) {
+    if (a.material != b.material) return true;
+    if (a.material != kNoParticle &&
+        (dot(a.normal, b.normal) < minCosine || std::max(a.distance, b.distance) > 1.1f * std::min(a.distance, b.distance)))
+      return true;
+    const float sum = a.luminance + b.luminance;
+    return sum > 0 && std::abs(a.luminance - b.luminance) > contrast * sum;
+  };
+  std::vector<uint8_t> flagged(n, 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& r) {
+    for (int y = r.begin(); y != r.end(); ++y)
+      for (int x = 0; x < w; ++x) {
+        const PixelKey& k = keys[size_t(y) * size_t(w) + size_t(x)];
+        bool f = false;
+        if (x > 0) f |= differ(k, keys[size_t(y) * size_t(w) + size_t(x - 1)]);
+        if (x + 1 < w) f |= differ(k, keys[size_t(y) * size_t(w) + size_t(x + 1)]);
+        if (y > 0) f |= differ(k, keys[size_t(y - 1) * size_t(w) + size_t(x)]);
+        if (y + 1 < h) f |= differ(k, keys[size_t(y + 1) * size_t(w) + size_t(x)]);
+        flagged[size_t(y) * size_t(w) + size_t(x)] = f;
+      }
+  });
+  return flagged;
 }
 
 }  // namespace
@@ -61,6 +97,9 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   if (control.resume || control.checkpointSeconds > 0)
     throw std::invalid_argument("--method particles renders the image at once and cannot checkpoint or resume; "
                                 "render it in parts (--crop, --samples) to bound the work a kill loses");
+  if (o.supersample > 0 && control.isPart())
+    throw std::invalid_argument("--supersample decides each pixel from its neighbours, which a part (--crop, "
+                                "--samples) does not have: render the whole image");
   const RenderPart part = resolvePart(control, scene, o.spp);
   RenderOutput out;
   RenderStats& stats = out.stats;
@@ -155,119 +194,120 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   stats.addStage("scattering", scatteringClock.seconds());
   report(0.55);
 
-  // Ray tracing stage (4.3). R1: the camera paths' shading points, and the subtriangles they hit.
+  // Ray tracing stage (4.3): the camera paths (the preliminary ray tracing, whose shading points
+  // the final ray tracing reuses), then R1 to R4 for the particles they need.
+  IndirectFieldSetup fs;
+  fs.scene = &scene;
+  fs.vis = &vis;
+  fs.tessellation = &tess;
+  fs.particles = particles;
+  fs.radiance = radiance;
+  fs.linkGrid = &linkGrid;
+  fs.listGrid = &listGrid;
+  fs.gatherDirections = gatherDirections;
+  fs.linkRadius = linkRadius;
+  fs.listRadius = listRadius;
+  fs.listCosine = listCosine;
+  fs.allLists = everything ? &lists : nullptr;
+  fs.allGatherLinks = everything ? &gatherLinks : nullptr;
+  IndirectField field(fs);
   Stopwatch preliminaryClock;
-  const EyePaths eye = traceEyePaths(scene, vis, eyePathSettings(o, part));
-  const size_t n = eye.points.size();
-  std::vector<SubtriangleWeights> around(n);
-  std::vector<uint8_t> foundMarks(tess.count, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      const ShadingPoint& p = eye.points[i];
-      const Vec2 b = barycentricsOf(scene, p.triangle, p.position);
-      around[i] = subtriangleAt(tess, p.triangle, sideOf(p, sides), b.x, b.y);
-      for (uint32_t id : around[i].ids) std::atomic_ref<uint8_t>(foundMarks[id]).store(1, std::memory_order_relaxed);
-    }
-  });
-  const std::vector<uint32_t> found = markedIndices(foundMarks);
+  EyePaths eye = traceEyePaths(scene, vis, eyePathSettings(o, part));
   stats.addStage("preliminary_ray_tracing", preliminaryClock.seconds());
-  // The k-th found radiance particle's list.
-  if (!everything) {
-    Stopwatch listClock;
-    lists = buildEstimationLists(scene, tess, listGrid, listRadius, listCosine, found);
-    stats.addStage("estimation_lists", listClock.seconds());
-  }
-  auto listOf = [&](size_t k) { return lists.list(everything ? found[k] : k); };
-  // R2: the area particles of their lists.
-  std::vector<uint8_t> usedMarks(particles.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, found.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k != r.end(); ++k)
-      for (uint32_t m : listOf(k)) std::atomic_ref<uint8_t>(usedMarks[m]).store(1, std::memory_order_relaxed);
-  });
-  const std::vector<uint32_t> used = markedIndices(usedMarks);
-  report(0.7);
-
-  // R3: gathering at the used area particles (4.3.1): their irradiance from indirect light.
-  if (!everything) {
-    Stopwatch gatherLinkClock;
-    gatherLinks = buildParticleLinks(scene, vis, particles, linkGrid, gatherDirections, linkRadius, gatherCounters, used);
-    stats.addStage("gather_links", gatherLinkClock.seconds());
-  }
-  Stopwatch gatheringClock;
-  std::vector<Rgb> gathered(particles.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, used.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k != r.end(); ++k)
-      gathered[used[k]] = gatherIrradiance(everything ? gatherLinks.of(used[k]) : gatherLinks.row(k), radiance);
-  });
-  stats.addStage("gathering", gatheringClock.seconds());
-
-  // R4: radiance estimation at the found radiance particles (4.3.2), as irradiance: the list's
-  // gathered flux over the list's area. A radiance particle with an empty list takes the nearest
-  // area particle facing its side's way within the list radius (or nothing), and is counted.
-  Stopwatch estimationClock;
-  std::vector<Rgb> irradiance(tess.count > 0 ? found.size() : 0);
-  std::vector<uint32_t> foundSlot(tess.count, kNoParticle);
-  for (size_t k = 0; k < found.size(); ++k) foundSlot[found[k]] = uint32_t(k);
-  std::atomic<uint64_t> emptyLists{0};
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, found.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k != r.end(); ++k) {
-      Rgb sum;
-      double areaSum = 0;
-      for (uint32_t m : listOf(k)) {
-        sum += gathered[m] * particles[m].area;
-        areaSum += particles[m].area;
-      }
-      if (areaSum > 0) {
-        irradiance[k] = sum / float(areaSum);
-      } else {
-        ++emptyLists;
-        irradiance[k] = Rgb(0.0f);
-      }
-    }
-  });
-  stats.addStage("radiance_estimation", estimationClock.seconds());
+  std::vector<SubtriangleWeights> around(eye.points.size());
+  const FieldUpdate first = field.add(eye.points, around, stats);
   report(0.75);
 
   // R5: the final ray tracing at the shading points: direct light by shadow rays, indirect light
   // interpolated from the three radiance particles around the hit (times the hit's own diffuse
   // reflectance, so that textures stay sharp: README, "Departures").
-  Stopwatch tracingClock;
-  PointRadiance shading(n);
-  estimateDirectLight(scene, vis, eye.points, o.lightSamples, streamSeed(o.seed, RenderStream::Direct), shading.direct,
-                      shadowRays);
   std::atomic<uint64_t> glossy{0};
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      const SubtriangleWeights& w = around[i];
-      Rgb e;
-      for (int v = 0; v < 3; ++v) e += irradiance[foundSlot[w.ids[v]]] * w.weights[v];
-      shading.indirect[i] = eye.points[i].bsdf.kd * e * kInvPi;
-      if (eye.points[i].bsdf.type != MaterialType::Diffuse) ++glossy;
+  auto shade = [&](const EyePaths& paths, std::span<const SubtriangleWeights> weights, const std::string& suffix) {
+    Stopwatch tracingClock;
+    PointRadiance shading(paths.points.size());
+    estimateDirectLight(scene, vis, paths.points, o.lightSamples, streamSeed(o.seed, RenderStream::Direct),
+                        shading.direct, shadowRays);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, paths.points.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        shading.indirect[i] = paths.points[i].bsdf.kd * field.irradiance(weights[i]) * kInvPi;
+        if (paths.points[i].bsdf.type != MaterialType::Diffuse) ++glossy;
+      }
+    });
+    stats.addStage("ray_tracing" + suffix, tracingClock.seconds());
+    return shading;
+  };
+  PointRadiance shading = shade(eye, around, "");
+
+  // 4.3.3, Table 2(b): adaptive supersampling. Pixels whose neighbours differ from them (alias
+  // detection) are traced again with supersample x supersample stratified samples, whose new
+  // radiance and area particles are found and gathered, and which replace the pixel's one sample.
+  EyePaths extra;
+  PointRadiance extraShading(0);
+  FieldUpdate added;
+  uint64_t aliased = 0;
+  if (o.supersample > 0) {
+    Stopwatch detectClock;
+    std::vector<uint8_t> flagged = detectAliases(scene, eye, shading, o.aliasContrast);
+    for (uint8_t f : flagged) aliased += f;
+    stats.addStage("alias_detection", detectClock.seconds());
+    Stopwatch adaptiveClock;
+    EyePathSettings es = eyePathSettings(o, part);
+    es.spp = o.supersample * o.supersample;
+    es.sampleBegin = 0;
+    es.sampleEnd = es.spp;
+    es.pixelMask = flagged;
+    extra = traceEyePaths(scene, vis, es);
+    stats.addStage("preliminary_ray_tracing_adaptive", adaptiveClock.seconds());
+    std::vector<SubtriangleWeights> extraAround(extra.points.size());
+    added = field.add(extra.points, extraAround, stats, "_adaptive");
+    extraShading = shade(extra, extraAround, "_adaptive");
+    // The flagged pixels' first samples give way to their supersamples.
+    for (size_t i = 0; i < eye.pixels.size(); ++i)
+      if (flagged[i]) eye.pixels[i] = EyePixel{};
+    for (size_t i = 0; i < eye.points.size(); ++i) {
+      const size_t local = size_t(eye.points[i].pixel % uint32_t(scene.camera.width) - uint32_t(part.region.x0)) +
+                           size_t(eye.points[i].pixel / uint32_t(scene.camera.width) - uint32_t(part.region.y0)) *
+                               size_t(part.region.width());
+      if (flagged[local]) shading.direct[i] = shading.indirect[i] = Rgb(0.0f);
     }
-  });
-  stats.addStage("ray_tracing", tracingClock.seconds());
+  }
 
   if (!dump.empty()) {
     writeDump(dump, "particles.area_particles", "AreaParticle", particles);
     writeDump(dump, "particles.scatter_links", "uint32", std::span(scatterLinks.targets));
-    writeDump(dump, "particles.gather_links", "uint32", std::span(gatherLinks.targets));
-    writeDump(dump, "particles.gather_link_particles", "uint32", std::span(gatherLinks.rowParticles));
+    const ParticleLinks& gl = everything ? gatherLinks : field.frameGatherLinks();
+    writeDump(dump, "particles.gather_links", "uint32", std::span(gl.targets));
+    writeDump(dump, "particles.gather_link_particles", "uint32", std::span(gl.rowParticles));
     writeDump(dump, "particles.tessellation", "TriangleTessellation", std::span(tess.triangles));
-    writeDump(dump, "particles.list_offsets", "uint64", std::span(lists.offsets));
-    writeDump(dump, "particles.list_particles", "uint32", std::span(lists.particles));
+    const EstimationLists& ls = everything ? lists : field.frameLists();
+    writeDump(dump, "particles.list_offsets", "uint64", std::span(ls.offsets));
+    writeDump(dump, "particles.list_particles", "uint32", std::span(ls.particles));
     writeDump(dump, "particles.direct_flux", "Rgb", std::span(directFlux));
     writeDump(dump, "particles.flux", "Rgb", std::span(flux));
     writeDump(dump, "particles.radiance", "Rgb", std::span(radiance));
-    writeDump(dump, "particles.found_radiance_particles", "uint32", std::span(found));
-    writeDump(dump, "particles.used_area_particles", "uint32", std::span(used));
-    writeDump(dump, "particles.gathered_irradiance", "Rgb", std::span(gathered));
-    writeDump(dump, "particles.radiance_particle_irradiance", "Rgb", std::span(irradiance));
+    writeDump(dump, "particles.found_radiance_particles", "uint32", std::span(field.found()));
+    writeDump(dump, "particles.used_area_particles", "uint32", std::span(field.used()));
+    writeDump(dump, "particles.gathered_irradiance", "Rgb", std::span(field.gathered()));
+    writeDump(dump, "particles.radiance_particle_irradiance", "Rgb", std::span(field.foundIrradiance()));
     dumpShadingPoints(dump, "", eye, shading, false);
   }
 
-  shadeImage(out, control, scene, part, eye, shading, {o.layers, false});
+  Stopwatch imageClock;
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {o.layers, false}));
+  film->add(eye, shading);
+  if (o.supersample > 0) film->add(extra, extraShading);
+  for (size_t i = 0; i < eye.pixels.size(); ++i)
+    film->setTaken(eye.imagePixel(i, scene.camera.width), uint32_t(part.samples()));
+  out.image = film->image();
+  out.film = film;
+  out.sppDone = part.samples();
+  stats.addStage("image", imageClock.seconds());
   report(1.0);
 
+  const LinkCounters& frameLinks = field.gatherCounters();
+  gatherCounters.rays += frameLinks.rays;
+  gatherCounters.misses += frameLinks.misses;
+  gatherCounters.unmatched += frameLinks.unmatched;
   stats.addCounter("area_particle_positions", o.areaParticles);
   stats.addCounter("area_samples", catchments.samples);
   stats.addCounter("area_samples_unmatched", catchments.unmatched);
@@ -279,21 +319,27 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   stats.addCounter("gather_link_rays", gatherCounters.rays);
   stats.addCounter("gather_link_misses", gatherCounters.misses);
   stats.addCounter("gather_links_unmatched", gatherCounters.unmatched);
-  stats.addCounter("gather_link_bytes", gatherLinks.targets.size() * sizeof(uint32_t));
+  stats.addCounter("gather_link_bytes",
+                   (everything ? gatherLinks : field.frameGatherLinks()).targets.size() * sizeof(uint32_t));
   stats.addCounter("radiance_particles", tess.count);
-  stats.addCounter("estimation_list_entries", lists.particles.size());
-  stats.addCounter("estimation_list_bytes", lists.particles.size() * sizeof(uint32_t) + lists.offsets.size() * sizeof(uint64_t));
+  const EstimationLists& listsBuilt = everything ? lists : field.frameLists();
+  stats.addCounter("estimation_list_entries", listsBuilt.particles.size());
+  stats.addCounter("estimation_list_bytes",
+                   listsBuilt.particles.size() * sizeof(uint32_t) + listsBuilt.offsets.size() * sizeof(uint64_t));
   stats.addCounter("lit_particles", scattered.litParticles);
   stats.addCounter("scatter_deposits", scattered.deposits);
   stats.addCounter("scatter_packets_lost", scattered.lost);
-  stats.addCounter("found_radiance_particles", found.size());
-  stats.addCounter("used_area_particles", used.size());
-  stats.addCounter("empty_estimation_lists", emptyLists);
+  stats.addCounter("found_radiance_particles", first.foundRadianceParticles);
+  stats.addCounter("used_area_particles", first.usedAreaParticles);
+  stats.addCounter("aliased_pixels", aliased);
+  stats.addCounter("additional_radiance_particles", added.foundRadianceParticles);
+  stats.addCounter("additional_area_particles", added.usedAreaParticles);
+  stats.addCounter("empty_estimation_lists", field.emptyLists());
   stats.addCounter("shadow_rays", shadowRays);
-  stats.addCounter("eye_rays", eye.rays);
-  stats.addCounter("shading_points", n);
+  stats.addCounter("eye_rays", eye.rays + extra.rays);
+  stats.addCounter("shading_points", eye.points.size() + extra.points.size());
   stats.addCounter("glossy_shaded_diffuse", glossy);
-  stats.addCounter("invalid_samples", eye.invalid + out.film->droppedPoints());
+  stats.addCounter("invalid_samples", eye.invalid + extra.invalid + out.film->droppedPoints());
   return out;
 }
 

@@ -36,6 +36,8 @@ struct ParticleOptions {
   float listAngle = 37;     // degrees: a list's particles' normals are at most this far from its own
   int emissionSamples = 16; // shadow rays per particle for area lights and the environment
   ParticleGeometry geometry = ParticleGeometry::Frame;
+  int supersample = 0;        // adaptive supersampling: flagged pixels get n x n samples (0: off)
+  float aliasContrast = 0.1f; // luminance contrast that flags a pixel
   int spp = 1;
   int maxSpecularDepth = 10;
   int lightSamples = 32;
