@@ -9,20 +9,16 @@ the paper's. Every face is wound counter-clockwise seen from the open side. Proc
 scene needs no third-party data; rerun to regenerate (the output is the same every time)."""
 import math
 import pathlib
+
+from procedural_mesh import Mesh
 import random
 
 CELLS, CELL, THICK, HEIGHT = 12, 2.0, 0.2, 2.5
 TARGET = 241080
 out = pathlib.Path(__file__).resolve().parent.parent / "scenes" / "maze"
-vertices, normals, faces = [], [], []  # faces: (material, [(v, vn or None), ...])
-
-
-def vertex(p, n=None):
-    vertices.append(p)
-    if n is None:
-        return (len(vertices), None)
-    normals.append(n)
-    return (len(vertices), len(normals))
+mesh = Mesh()
+vertices, normals, faces = mesh.vertices, mesh.normals, mesh.faces
+vertex, quad, sphere = mesh.vertex, mesh.quad, mesh.sphere
 
 
 def grid_face(material, origin, u, v, nu, nv):
@@ -78,26 +74,6 @@ def cylinder(material, base, radius, height, segments, rings, cap_top):
                        bz + radius * math.sin(2 * math.pi * s / segments))) for s in range(segments)]
         for s in range(segments):
             faces.append((material, [centre, top[(s + 1) % segments], top[s]]))
-
-
-def sphere(material, centre, radius, rings, segments):
-    grid = []
-    for i in range(rings + 1):
-        theta = math.pi * i / rings
-        row = []
-        for j in range(segments):
-            phi = 2 * math.pi * j / segments
-            n = (math.sin(theta) * math.cos(phi), math.cos(theta), math.sin(theta) * math.sin(phi))
-            row.append(vertex(tuple(c + radius * d for c, d in zip(centre, n)), n))
-        grid.append(row)
-    for i in range(rings):
-        for j in range(segments):
-            a, b = grid[i][j], grid[i][(j + 1) % segments]
-            c, d = grid[i + 1][(j + 1) % segments], grid[i + 1][j]
-            if i > 0:
-                faces.append((material, [a, b, c]))
-            if i < rings - 1:
-                faces.append((material, [a, c, d]))
 
 
 def figure(material, x, z):

@@ -7,22 +7,13 @@ rerun to regenerate."""
 import math
 import pathlib
 
+from procedural_mesh import Mesh
+
 out = pathlib.Path(__file__).resolve().parent.parent / "scenes" / "primitives"
 out.mkdir(parents=True, exist_ok=True)
-vertices, normals, faces = [], [], []  # faces: (material, [(v, vn or None), ...])
-
-
-def vertex(p, n=None):
-    vertices.append(p)
-    if n is None:
-        return (len(vertices), None)
-    normals.append(n)
-    return (len(vertices), len(normals))
-
-
-def quad(material, a, b, c, d):
-    faces.append((material, [a, b, c]))
-    faces.append((material, [a, c, d]))
+mesh = Mesh()
+vertices, normals, faces = mesh.vertices, mesh.normals, mesh.faces
+vertex, quad, sphere = mesh.vertex, mesh.quad, mesh.sphere
 
 
 def box(material, lo, hi):
@@ -39,26 +30,6 @@ def box(material, lo, hi):
     quad(material, c[0, 1, 0], c[0, 1, 1], c[1, 1, 1], c[1, 1, 0])  # +y
     quad(material, c[0, 0, 0], c[0, 1, 0], c[1, 1, 0], c[1, 0, 0])  # -z
     quad(material, c[0, 0, 1], c[1, 0, 1], c[1, 1, 1], c[0, 1, 1])  # +z
-
-
-def sphere(material, centre, radius, rings, segments):
-    grid = []
-    for i in range(rings + 1):
-        theta = math.pi * i / rings
-        row = []
-        for j in range(segments):
-            phi = 2 * math.pi * j / segments
-            n = (math.sin(theta) * math.cos(phi), math.cos(theta), math.sin(theta) * math.sin(phi))
-            row.append(vertex(tuple(c + radius * d for c, d in zip(centre, n)), n))
-        grid.append(row)
-    for i in range(rings):
-        for j in range(segments):
-            a, b = grid[i][j], grid[i][(j + 1) % segments]
-            c, d = grid[i + 1][(j + 1) % segments], grid[i + 1][j]
-            if i > 0:
-                faces.append((material, [a, b, c]))
-            if i < rings - 1:
-                faces.append((material, [a, c, d]))
 
 
 def revolve(material, base, profile, segments):

@@ -77,6 +77,22 @@ float largestLight(const Image& image) {
   return largest;
 }
 
+// An image's mean red light, and the largest value of its direct layer.
+struct LightInside {
+  double mean = 0, largestDirect = 0;
+};
+LightInside lightInside(const Image& image) {
+  const int direct = image.channelIndex("direct.R");
+  LightInside inside;
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x) {
+      inside.mean += image.at(x, y, 0);
+      for (int c = 0; c < 3; ++c) inside.largestDirect = std::max<double>(inside.largestDirect, image.at(x, y, direct + c));
+    }
+  inside.mean /= double(image.width()) * image.height();
+  return inside;
+}
+
 }  // namespace
 
 TEST_CASE("A closed box lit only from outside is black inside, with every method", "[leaks]") {
@@ -160,17 +176,10 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
       particles.emissionSamples = 4;
       particles.layers = true;
       const Image image = renderParticles(scene, vis, particles).image;
-      const int direct = image.channelIndex("direct.R");
-      double sum = 0, largestDirect = 0;
-      for (int y = 0; y < image.height(); ++y)
-        for (int x = 0; x < image.width(); ++x) {
-          sum += image.at(x, y, 0);
-          for (int c = 0; c < 3; ++c) largestDirect = std::max<double>(largestDirect, image.at(x, y, direct + c));
-        }
-      const double mean = sum / (image.width() * image.height());
-      INFO(name(light) << ", particles: mean " << mean << ", the outside's light up to " << outsideLight);
-      CHECK(largestDirect == 0.0);
-      CHECK(mean <= 1e-3 * outsideLight);
+      const LightInside inside = lightInside(image);
+      INFO(name(light) << ", particles: mean " << inside.mean << ", the outside's light up to " << outsideLight);
+      CHECK(inside.largestDirect == 0.0);
+      CHECK(inside.mean <= 1e-3 * outsideLight);
       if (light != Outside::AreaLightFacingAway) CHECK(largestLight(image) == 0.0f);
     }
     // The environment-lighting PBGI method (no area lights): the sun's and the point light's direct
@@ -184,18 +193,10 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
       EnvPbgiOptions env;
       env.points = 1 << 16;
       env.layers = true;
-      const Image image = renderEnvPbgi(scene, vis, env).image;
-      const int direct = image.channelIndex("direct.R");
-      double sum = 0, largestDirect = 0;
-      for (int y = 0; y < image.height(); ++y)
-        for (int x = 0; x < image.width(); ++x) {
-          sum += image.at(x, y, 0);
-          for (int c = 0; c < 3; ++c) largestDirect = std::max<double>(largestDirect, image.at(x, y, direct + c));
-        }
-      const double mean = sum / (image.width() * image.height());
-      INFO(name(light) << ", envpbgi: mean " << mean << ", the outside's light up to " << outsideLight);
-      CHECK(mean <= 1e-3 * outsideLight);
-      if (light != Outside::Environment) CHECK(largestDirect == 0.0);
+      const LightInside inside = lightInside(renderEnvPbgi(scene, vis, env).image);
+      INFO(name(light) << ", envpbgi: mean " << inside.mean << ", the outside's light up to " << outsideLight);
+      CHECK(inside.mean <= 1e-3 * outsideLight);
+      if (light != Outside::Environment) CHECK(inside.largestDirect == 0.0);
     }
   }
 }
