@@ -212,7 +212,9 @@ TEST_CASE("particles: estimation lists hold exactly the particles within the rad
           std::vector<uint32_t> expected;
           for (uint32_t p = 0; p < area.particles.size(); ++p) {
             const Vec3 d = area.particles[p].position - q;
-            if (dot(d, d) <= radius * radius && dot(area.particles[p].normal, n) >= minCosine) expected.push_back(p);
+            if (dot(d, d) <= radius * radius && dot(area.particles[p].normal, n) >= minCosine &&
+                onSameSurface(d, n, area.particles[p].normal, onSurfaceSlope(minCosine)))
+              expected.push_back(p);
           }
           const uint32_t r = tess.triangles[tri].first + side * tessellationVertices(m) + tessellationIndex(i, j, m);
           const RadianceParticleAt at = tess.locate(r);
@@ -484,4 +486,39 @@ TEST_CASE("particles: features under the particle spacing and glossy receivers d
       CHECK(errors[2] <= 1.1 * errors[0]);
     }
   }
+}
+
+TEST_CASE("particles: lists leave out the particles of a thick wall's far face", "[particles]") {
+  // The back sides of a 0.1-thick slab's two large faces face the same way as the opposite face's
+  // front and lie 0.1 behind it, inside the slab, in the dark: within a list's radius and its
+  // normal bound, they would pull the estimate towards nothing (a maze's walls lost a third of
+  // their indirect light so). No list holds a particle more than a hair off its surface's plane.
+  Scene scene = roomWithBox(0.6f, {0.1f, 0.45f, -0.2f});
+  Material slab;
+  slab.kd = Rgb(0.5f);
+  const uint32_t first = scene.triangleCount();
+  test::addBox(scene, {-0.9f, -1, 0.5f}, {0.9f, 0.5f, 0.6f}, test::addMaterial(scene, slab, "slab"), false);
+  finalizeScene(scene);
+  const AreaParticles area = particlesOf(scene, 8000);
+  const float radius = 4 * area.spacing;
+  REQUIRE(radius > 0.2f);  // the slab is well within a list's reach
+  const ParticleGrid grid = buildParticleGrid(area.particles, radius);
+  const Tessellation tess = tessellate(scene, 3 * area.spacing, 2);
+  std::vector<uint32_t> ids;
+  for (uint32_t tri = first; tri < scene.triangleCount(); ++tri)
+    for (uint32_t k = 0; k < 2 * tessellationVertices(tess.triangles[tri].segments); ++k)
+      ids.push_back(tess.triangles[tri].first + k);
+  const EstimationLists lists = buildEstimationLists(scene, tess, grid, radius, 0.8f, ids);
+  uint64_t checked = 0;
+  for (size_t k = 0; k < ids.size(); ++k) {
+    const RadianceParticleAt at = tess.locate(ids[k]);
+    const Vec3 q = tess.position(scene, at.triangle, at.i, at.j);
+    const Vec3 n = at.side == 0 ? scene.geometricNormal(at.triangle) : -scene.geometricNormal(at.triangle);
+    for (uint32_t m : lists.list(k)) {
+      INFO("radiance particle " << ids[k] << ", area particle " << m);
+      REQUIRE(std::abs(dot(area.particles[m].position - q, n)) < 0.02f);
+      ++checked;
+    }
+  }
+  CHECK(checked > 1000);
 }

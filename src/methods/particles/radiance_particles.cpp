@@ -85,6 +85,7 @@ EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, 
   lists.offsets.assign(ids.size() + 1, 0);
   const float r2 = radius * radius;
   // visit(particle) for each area particle of radiance particle id's list, in index order.
+  const float slope = onSurfaceSlope(minCosine);
   auto listOf = [&](uint32_t id, std::vector<uint32_t>& scratch) {
     const RadianceParticleAt at = t.locate(id);
     const Vec3 q = t.position(scene, at.triangle, at.i, at.j);
@@ -92,7 +93,8 @@ EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, 
     scratch.clear();
     grid.forEachNear(q, radius, [&](const GridSlot& p) {
       const Vec3 d = p.position - q;
-      if (dot(d, d) <= r2 && dot(p.normal, normal) >= minCosine) scratch.push_back(p.id);
+      if (dot(d, d) <= r2 && dot(p.normal, normal) >= minCosine && onSameSurface(d, normal, p.normal, slope))
+        scratch.push_back(p.id);
     });
     std::sort(scratch.begin(), scratch.end());
   };

@@ -5,6 +5,8 @@
 // subtriangle's three particles and their interpolation weights. Each radiance particle has the
 // list of area particles within a radius whose normals are close to its own.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <type_traits>
@@ -57,6 +59,19 @@ struct SubtriangleWeights {
 };
 SubtriangleWeights subtriangleAt(const Tessellation& t, uint32_t triangle, uint32_t side, float b1, float b2);
 
+// Whether a particle at offset d from a radiance particle, both with these normals (at most
+// acos(minCosine) apart), can lie on one smooth surface with it: on any smooth surface the chord
+// between two points is perpendicular to the mean of their normals (exactly on a sphere), and
+// across a fold between facets it leans from that plane by at most the sine of half the fold. A
+// particle further off that plane lies on another surface that faces the same way: the far face
+// of a thick wall seen from inside the wall, a panel just in front of a wall.
+inline float onSurfaceSlope(float minCosine) { return std::sqrt(std::max(0.0f, (1.0f - minCosine) * 0.5f)); }
+inline bool onSameSurface(Vec3 d, Vec3 normal, Vec3 otherNormal, float slope) {
+  const Vec3 mean = normal + otherNormal;
+  const float off = dot(d, mean);
+  return off * off <= slope * slope * dot(d, d) * dot(mean, mean);
+}
+
 // Lists in CSR form, one per radiance particle asked for: the k-th one's area particles are
 // particles[offsets[k] .. offsets[k+1]), in index order.
 struct EstimationLists {
@@ -68,7 +83,8 @@ struct EstimationLists {
 };
 
 // Stage G5: for each radiance particle of `ids`, the area particles within `radius` of it whose
-// normal n satisfies n . n_r >= minCosine, n_r the normal of the radiance particle's side. `grid`
+// normal n satisfies n . n_r >= minCosine, n_r the normal of the radiance particle's side, and
+// which lie on the same surface (onSameSurface). `grid`
 // should have cells about `radius` wide. Throws MemoryLimitError when the lists would not fit.
 EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, const ParticleGrid& grid, float radius,
                                      float minCosine,
