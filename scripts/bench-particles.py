@@ -26,7 +26,8 @@ LUCENT = os.path.join(ROOT, "build", "lucent")
 PAPER = {"cornell-box": ("CBOX", 50000, 8), "sponza": ("SPONZA", 150000, 8), "maze": ("MAZE", 150000, 13)}
 GEOMETRY = ("area_particles", "particle_grid", "particle_areas", "scatter_links", "gather_links", "tessellation",
             "list_grid", "estimation_lists")
-FRAME = ("light_emission", "scattering", "preliminary_ray_tracing", "gathering", "radiance_estimation",
+FRAME = ("light_emission", "scattering", "preliminary_ray_tracing", "mark_radiance_particles", "collect_area_particles",
+         "gathering", "radiance_estimation",
          "ray_tracing", "image")
 COUNTS = ("area_particles", "scatter_link_bytes", "gather_link_bytes", "radiance_particles", "estimation_list_bytes",
           "lit_particles", "found_radiance_particles", "used_area_particles", "empty_estimation_lists")

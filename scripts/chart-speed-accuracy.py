@@ -6,12 +6,12 @@ that flattens has met its bias, and the height of the flat part is the method's 
 scene. Writes docs/charts/<scene>.png (or --out DIR) and prints every point.
 
 The path tracer averages its pixels (box filter) and is compared with a reference that does too;
-purcell, pmfg and micro take one camera ray through each pixel's centre and are compared with a
+purcell, pmfg, micro and particles take one camera ray through each pixel's centre and are compared with a
 reference traced through the centres (`--pixel-centres`), so that their curves measure the
 method, not the aliasing of point samples at edges.
 
   /usr/bin/python3 scripts/chart-speed-accuracy.py [--scenes cornell-box ... sponza]
-                                                   [--threads 2] [--out DIR]
+                                                   [--methods pt pmfg ...] [--threads 2] [--out DIR]
 
 The references (path tracer, 16,384 samples per pixel, box-filtered and through the pixel centres)
 are rendered once and kept in out/charts/.
@@ -46,11 +46,22 @@ def buffers(*sides):
     return [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in sides]
 
 
-def scene(resolution, light_samples, rays, purcell, sides):
-    return {"resolution": resolution, "light_samples": light_samples, "max_depth": None,
-            "methods": {"pt": pt_samples(), "pt (independent)": pt_samples(["--sampler", "independent"]),
-                        "pmfg": gather_rays(*rays), "purcell": purcell,
-                        "micro (vpl)": buffers(*sides)}}
+def particle_knobs(particles, counts):
+    """The particle-space method's knobs, each swept about the default (`particles` positions, 8
+    bounces, 16 x 16 gathering links, subtriangles 3 spacings wide)."""
+    base = ["--area-particles", str(particles)]
+    return {"particles (area particles)": [(f"{n // 1000}k particles", ["--area-particles", str(n)]) for n in counts],
+            "particles (bounces)": [(f"n_b {b}", base + ["--bounces", str(b)]) for b in (1, 2, 4, 8, 16)],
+            "particles (gather links)": [(f"{n}x{n} links", base + ["--gather-links", str(n)]) for n in (4, 8, 16, 24)],
+            "particles (tessellation)": [(f"{t} spacings", base + ["--tessellation", str(t)]) for t in (1, 2, 3, 6)]}
+
+
+def scene(resolution, light_samples, rays, purcell, sides, particles=None):
+    methods = {"pt": pt_samples(), "pt (independent)": pt_samples(["--sampler", "independent"]),
+               "pmfg": gather_rays(*rays), "purcell": purcell, "micro (vpl)": buffers(*sides)}
+    if particles:
+        methods.update(particle_knobs(*particles))
+    return {"resolution": resolution, "light_samples": light_samples, "max_depth": None, "methods": methods}
 
 
 def environment_scene(resolution):
@@ -79,7 +90,7 @@ def environment_scene(resolution):
 MILLION = (16000, 65000, 260000, 1040000)
 SCENES = {
     "cornell-box": scene("128x128", 256, (16, 64, 256, 1024), photons(["--photons"], "photons", *MILLION),
-                         (8, 16, 24, 32)),
+                         (8, 16, 24, 32), (50000, (12500, 25000, 50000, 100000))),
     "glass-ball": scene("128x96", 256, (16, 64, 256, 1024),
                         photons(["--caustic-photons"], "caustic photons", 5000, 20000, 80000, 320000), (8, 16, 24)),
     "cornell-box-spheres": scene("128x128", 256, (16, 64, 256, 1024),
@@ -89,7 +100,9 @@ SCENES = {
     "ring-area": scene("128x96", 256, (16, 64, 256),
                        photons(["--caustic-photons"], "caustic photons", *MILLION), (8, 16, 24)),
     "sponza": scene("160x100", 1024, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
-                    (8, 16, 24)),
+                    (8, 16, 24), (150000, (37500, 75000, 150000, 300000))),
+    "maze": scene("128x128", 64, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
+                  (8, 16), (150000, (37500, 75000, 150000, 300000))),
     "primitives": environment_scene("320x180"),
     "sponza-courtyard": environment_scene("160x100"),
 }
@@ -161,6 +174,9 @@ def main():
     parser.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--out", default=os.path.join(ROOT, "docs", "charts"))
+    parser.add_argument("--methods", nargs="+", metavar="NAME",
+                        help="measure only these methods (pt, pmfg, particles, ...: every curve of the method); "
+                             "the others keep the points of the last run")
     args = parser.parse_args()
     try:
         import matplotlib  # noqa: F401 (checked before anything is rendered)
@@ -181,10 +197,15 @@ def main():
         box, centres = reference(scene, setup["resolution"], False, depth), reference(scene, setup["resolution"], True, depth)
         results = {}
         for method, settings in setup["methods"].items():
+            if args.methods and method.split(" ")[0] not in args.methods:
+                if method in everything.get(scene, {}):
+                    results[method] = everything[scene][method]
+                continue
             results[method] = []
             ref = box if method.startswith("pt") else centres
             # Many shadow rays where the method samples its direct light (envpbgi traces one per light).
-            common = ["--light-samples", str(setup["light_samples"])] if method.split(" ")[0] in ("pmfg", "purcell", "micro") else []
+            common = (["--light-samples", str(setup["light_samples"])]
+                      if method.split(" ")[0] in ("pmfg", "purcell", "micro", "particles") else [])
             for label, options in settings:
                 options = options + common
                 seconds, error = measure(scene, setup["resolution"], method, options, args.threads, ref)
