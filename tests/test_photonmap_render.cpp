@@ -250,6 +250,40 @@ TEST_CASE("pmfg at its default settings ends below relMSE 0.005 against the path
   CHECK(relmse < 0.005);
 }
 
+TEST_CASE("pmfg's precomputed irradiance stands in for the photon estimate within the estimate's own noise",
+          "[photonmap-render]") {
+  // Christensen 1999: a gather ray's diffuse hit reads the irradiance precomputed at the nearest
+  // photon on its side instead of estimating from 50 photons. The two images differ by less than
+  // the brute force differs from itself with another photon map (another seed), and both are as
+  // far from the path tracer; the precomputed one in a fraction of the estimate stage's time.
+  const Scene scene = smallCornellBox(24);
+  const Visibility vis(scene);
+  PathTraceOptions pt;
+  pt.spp = 4096;
+  pt.seed = 1;
+  pt.pixelCentres = true;
+  const Image reference = renderPathTraced(scene, vis, pt).image;
+  PhotonMapOptions opt;
+  opt.map = PhotonMapKind::KdTree;
+  opt.gatherRays = 256;
+  const RenderOutput irradiance = renderPhotonMapFinalGather(scene, vis, opt);
+  opt.gatherEstimate = GatherEstimate::Photons;
+  const RenderOutput photons = renderPhotonMapFinalGather(scene, vis, opt);
+  opt.seed = 7;
+  const Image otherSeed = renderPhotonMapFinalGather(scene, vis, opt).image;
+  const double apart = compareImages(irradiance.image, photons.image).overall.relmse;
+  const double seeds = compareImages(otherSeed, photons.image).overall.relmse;
+  const double errorIrradiance = compareImages(irradiance.image, reference).overall.relmse;
+  const double errorPhotons = compareImages(photons.image, reference).overall.relmse;
+  INFO("precomputed vs photons " << apart << ", photons vs another seed " << seeds << "; against the path tracer "
+                                 << errorIrradiance << " and " << errorPhotons);
+  CHECK(apart < seeds);
+  CHECK(errorIrradiance < 1.25 * errorPhotons);
+  CHECK(irradiance.stats.counter("irradiance_samples") == irradiance.stats.counter("global_photons"));
+  CHECK(irradiance.stats.counter("irradiance_fallbacks") < irradiance.stats.counter("gather_rays") / 100);
+  CHECK(irradiance.stats.counter("global_estimates") < photons.stats.counter("global_estimates") / 10);
+}
+
 // The caustic region's mean green radiance in two path-traced images and in two pmfg images (other
 // seeds); each pair's per-pixel differences give the variance of its mean (pixels are independent:
 // the caustic kernel is narrower than a pixel's footprint). Requires |pmfg - pt| <= 4.5 sigma, that

@@ -33,12 +33,16 @@ struct GatherHit {
   Rgb weight;
 };
 
+// The precomputed irradiance samples examined per gather hit for the nearest on its side.
+constexpr uint32_t kIrradianceCandidates = 4;
+
 // Per-thread scratch and clocks of the gathering stage.
 struct GatherScratch {
   std::vector<GatherHit> hits;
   std::vector<PhotonDistance> heap;
   double traceSeconds = 0, estimateSeconds = 0;
   uint64_t rays = 0;
+  uint64_t fallbacks = 0;  // diffuse hits with no precomputed irradiance on their side within reach
   EstimateCounters counters;
 };
 
@@ -93,6 +97,58 @@ size_t traceGatherRays(const Scene& scene, const Visibility& vis, const ShadingP
   return found;
 }
 
+// Christensen 1999 ("Faster photon map global illumination"; Jensen 2001, 9.3): the irradiance
+// at every stride-th photon of the global map, estimated from the map at the photon's side of its
+// surface, kept as a photon whose power is the irradiance and whose direction is that side's
+// normal, in a kd-tree. A gather ray's diffuse hit then reads the nearest one that lies on its
+// surface's side (photonLights) instead of estimating from k photons.
+template <class Map>
+PhotonKdTree precomputeIrradiance(const Map& map, std::span<const Photon> photons, const EstimateSettings& settings,
+                                  uint32_t stride, EstimateCounters& counters) {
+  const size_t n = (photons.size() + stride - 1) / stride;
+  std::vector<Photon> samples(n);
+  tbb::enumerable_thread_specific<std::vector<PhotonDistance>> heaps([&] { return std::vector<PhotonDistance>(settings.k); });
+  tbb::enumerable_thread_specific<EstimateCounters> local;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<PhotonDistance>& heap = heaps.local();
+    EstimateCounters& c = local.local();
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const Photon& p = photons[i * stride];
+      const Vec3 facing = photonFacing(p);
+      EstimatePoint q;
+      q.position = p.position;
+      q.frame = Frame(facing);
+      q.woLocal = {0, 0, 1};
+      q.bsdf = {MaterialType::Diffuse, Rgb(1.0f), Rgb(0.0f), 1.0f, 1.0f};
+      q.facingNormal = facing;
+      // A white Lambertian surface reflects E / pi.
+      const Rgb irradiance = estimateRadiance(map, q, settings, heap.data(), c) * kPi;
+      samples[i] = {p.position, irradiance, encodeOctahedral(facing), photonFacingBits(facing)};
+    }
+  });
+  for (const EstimateCounters& c : local) counters += c;
+  return buildPhotonKdTree(samples);
+}
+
+// The radiance a diffuse point reflects from the precomputed irradiance nearest to it on its side
+// of its surface, among the `k` nearest within the search radius; false if none is.
+bool irradianceAt(const PhotonKdTree& irradiance, const EstimatePoint& q, float maxRadius, uint32_t k,
+                  PhotonDistance* heap, Rgb& radiance) {
+  const KdTreeResult r = kdTreeNearest(irradiance, q.position, k, maxRadius, heap);
+  const SurfaceSide side = q.side();
+  float best = kInf;
+  const Photon* nearest = nullptr;
+  for (uint32_t i = 0; i < r.found; ++i) {
+    const Photon& s = irradiance.photons[heap[i].index];
+    if (heap[i].d2 < best && photonLights(octahedralDirection(s.direction), photonFacing(s), s.position - q.position,
+                                          heap[i].d2, side))
+      best = heap[i].d2, nearest = &s;
+  }
+  if (!nearest) return false;
+  radiance = nearest->power * q.bsdf.kd * kInvPi;
+  return true;
+}
+
 }  // namespace
 
 RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
@@ -108,9 +164,23 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   tbb::enumerable_thread_specific<GatherScratch> scratch([&] {
     GatherScratch s;
     s.hits.resize(size_t(options.gatherRays));
-    s.heap.resize(heapSize);
+    s.heap.resize(std::max(heapSize, kIrradianceCandidates));
     return s;
   });
+  // Christensen 1999: the irradiance at every irradianceStride-th global photon, once.
+  PhotonKdTree irradiance;
+  EstimateCounters irradianceCounters;
+  uint64_t irradianceFallbacks = 0;
+  const bool precomputed = options.gatherEstimate == GatherEstimate::Irradiance && options.gatherRays > 0;
+  if (precomputed) {
+    Stopwatch clock;
+    withPhotonMaps(maps, options.map, [&](const auto* global, const auto*) {
+      if (global)
+        irradiance = precomputeIrradiance(*global, std::span<const Photon>(global->photons), maps.globalSettings,
+                                          options.irradianceStride, irradianceCounters);
+    });
+    out.stats.addStage("precompute_irradiance", clock.seconds());
+  }
   tbb::enumerable_thread_specific<EstimateCounters> causticCounters;
   const uint64_t gatherSeed = streamSeed(options.seed, RenderStream::Gather);
   RenderTotals totals;
@@ -143,8 +213,14 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
           Stopwatch estimateClock;
           double sum[3] = {0, 0, 0};
           for (size_t h = 0; h < hits; ++h) {
-            const Rgb L = s.hits[h].weight * estimateRadiance(*global, s.hits[h].point, maps.globalSettings,
-                                                              s.heap.data(), s.counters);
+            const EstimatePoint& q = s.hits[h].point;
+            Rgb L;
+            if (!precomputed || q.bsdf.type != MaterialType::Diffuse ||
+                !irradianceAt(irradiance, q, maps.globalSettings.maxRadius, kIrradianceCandidates, s.heap.data(), L)) {
+              L = estimateRadiance(*global, q, maps.globalSettings, s.heap.data(), s.counters);
+              s.fallbacks += precomputed && q.bsdf.type == MaterialType::Diffuse;
+            }
+            L = s.hits[h].weight * L;
             for (int c = 0; c < 3; ++c) sum[c] += L[c];
           }
           const double inv = 1.0 / options.gatherRays;
@@ -169,10 +245,15 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   totals.invalid += film->droppedPoints();
   EstimateCounters gc, cc;
   uint64_t gatherRays = 0;
-  for (const GatherScratch& s : scratch) gc += s.counters, gatherRays += s.rays;
+  for (const GatherScratch& s : scratch) gc += s.counters, gatherRays += s.rays, irradianceFallbacks += s.fallbacks;
   for (const auto& c : causticCounters) cc += c;
   totals.report(out.stats, gc, cc);
   out.stats.addCounter("gather_rays", gatherRays);
+  if (precomputed) {
+    out.stats.addCounter("irradiance_samples", irradiance.photons.size());
+    out.stats.addCounter("irradiance_sample_estimates", irradianceCounters.queries);
+    out.stats.addCounter("irradiance_fallbacks", irradianceFallbacks);
+  }
   return out;
 }
 

@@ -52,9 +52,17 @@ OptionTable<PhotonMapOptions> rendererTable(PhotonMapOptions defaults, bool fina
   declareLayers(t);
   declareDumpDirectory(t);
   declarePhotonMapOptions(t);
-  if (finalGathering)
+  if (finalGathering) {
     t.integer("gather_rays", [](PhotonMapOptions& o) -> auto& { return o.gatherRays; }, 0, 1 << 20, "rays",
               "final-gather rays per shading point");
+    t.choice("gather_estimate", [](PhotonMapOptions& o) -> auto& { return o.gatherEstimate; },
+             std::vector<std::pair<std::string, GatherEstimate>>{{"irradiance", GatherEstimate::Irradiance},
+                                                                 {"photons", GatherEstimate::Photons}},
+             "a gather ray's diffuse hit reads the irradiance precomputed at photons nearest to it (Christensen "
+             "1999), or estimates from the photons (k nearest)");
+    t.integer("irradiance_stride", [](PhotonMapOptions& o) -> auto& { return o.irradianceStride; }, 1, 1 << 20,
+              "photons", "the irradiance is precomputed at every n-th photon of the global map");
+  }
   return t;
 }
 

@@ -18,6 +18,12 @@ namespace lucent {
 // (2.2.2), the hashed grid (4.4), all three searched by the kNN-grid (2.3), or Jensen's kd-tree.
 enum class PhotonMapKind { Sort, Stencil, Hash, KdTree };
 
+// What a final-gather ray's hit on a diffuse surface reads (pmfg).
+enum class GatherEstimate : uint32_t {
+  Irradiance = 0,  // the precomputed irradiance nearest to it (Christensen 1999; Jensen 2001, 9.3)
+  Photons = 1,     // a k-nearest-photon radiance estimate (the brute force)
+};
+
 struct PhotonMapOptions {
   uint32_t photons = 65000;         // photon paths emitted for the global map (the paper counts the
                                     // photons stored: CORNELL BOX 65,000)
@@ -32,6 +38,10 @@ struct PhotonMapOptions {
                                     // of section 3.4); 0: run every search to the end
   int lightSamples = 32;            // shadow rays per shading point for direct light (paper: 4, 32)
   int gatherRays = 4096;            // pmfg: final-gather rays per shading point
+  // pmfg: what a gather ray's diffuse hit reads: the irradiance precomputed at every
+  // irradianceStride-th photon (Christensen 1999), or an estimate from the photons themselves.
+  GatherEstimate gatherEstimate = GatherEstimate::Irradiance;
+  uint32_t irradianceStride = 1;
   int spp = 1;                      // camera rays per pixel: 1 through the pixel centre (the paper);
                                     // more are stratified over the pixel (a box filter)
   int maxSpecularDepth = 10;        // mirror and glass bounces followed from the camera (and by gather rays)
