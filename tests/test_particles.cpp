@@ -70,7 +70,7 @@ TEST_CASE("particles: every link points at the particle nearest to its traced hi
   const Visibility vis(scene);
   const AreaParticles area = particlesOf(scene, 3000);
   const float radius = 2 * area.spacing;
-  const ParticleGrid grid = buildParticleGrid(area.particles, radius);
+  const OrientedPointGrid grid = buildParticleGrid(area.particles, radius);
   const LinkDirections directions{77, 4};
   LinkCounters counters;
   const ParticleLinks links = buildParticleLinks(scene, vis, area.particles, grid, directions, radius, counters);
@@ -140,7 +140,7 @@ TEST_CASE("particles: scattering in a closed room carries the geometric series o
   const Visibility vis(scene);
   const AreaParticles area = particlesOf(scene, 8000);
   const float radius = 2 * area.spacing;
-  const ParticleGrid grid = buildParticleGrid(area.particles, radius);
+  const OrientedPointGrid grid = buildParticleGrid(area.particles, radius);
   LinkCounters lc;
   const ParticleLinks links = buildParticleLinks(scene, vis, area.particles, grid, {3, 4}, radius, lc);
   uint64_t rays = 0;
@@ -170,7 +170,7 @@ TEST_CASE("particles: gathering equal radiance returns pi times it exactly", "[p
   const Visibility vis(scene);
   const AreaParticles area = particlesOf(scene, 2000);
   const float radius = 2 * area.spacing;
-  const ParticleGrid grid = buildParticleGrid(area.particles, radius);
+  const OrientedPointGrid grid = buildParticleGrid(area.particles, radius);
   LinkCounters lc;
   const ParticleLinks links = buildParticleLinks(scene, vis, area.particles, grid, {4, 16}, radius, lc);
   const std::vector<Rgb> radiance(area.particles.size(), Rgb(0.5f, 0.25f, 2.0f));
@@ -195,7 +195,7 @@ TEST_CASE("particles: estimation lists hold exactly the particles within the rad
   const Scene scene = roomWithBox(0.5f, {0, 0.5f, 0});
   const AreaParticles area = particlesOf(scene, 3000);
   const float radius = 3 * area.spacing, minCosine = 0.8f;
-  const ParticleGrid grid = buildParticleGrid(area.particles, radius);
+  const OrientedPointGrid grid = buildParticleGrid(area.particles, radius);
   const Tessellation tess = tessellate(scene, 4 * area.spacing, 2);
   std::vector<uint32_t> ids(tess.count);
   std::iota(ids.begin(), ids.end(), 0u);
@@ -502,7 +502,7 @@ TEST_CASE("particles: lists leave out the particles of a thick wall's far face",
   const AreaParticles area = particlesOf(scene, 8000);
   const float radius = 4 * area.spacing;
   REQUIRE(radius > 0.2f);  // the slab is well within a list's reach
-  const ParticleGrid grid = buildParticleGrid(area.particles, radius);
+  const OrientedPointGrid grid = buildParticleGrid(area.particles, radius);
   const Tessellation tess = tessellate(scene, 3 * area.spacing, 2);
   std::vector<uint32_t> ids;
   for (uint32_t tri = first; tri < scene.triangleCount(); ++tri)

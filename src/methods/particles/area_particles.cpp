@@ -67,81 +67,13 @@ AreaParticles distributeAreaParticles(const Scene& scene, const AreaParticleOpti
   return out;
 }
 
-ParticleGrid buildParticleGrid(std::span<const AreaParticle> particles, float cellSize) {
-  ParticleGrid g;
-  Bounds3 b;
-  for (const AreaParticle& p : particles) b.extend(p.position);
-  if (b.empty()) b.extend({0, 0, 0});
-  const Vec3 e = b.extent();
-  constexpr double kMaxCells = double(1 << 24);
-  double cell = std::max<double>(cellSize, 1e-30);
-  auto cells = [&](double c) {
-    return (std::floor(e.x / c) + 1) * (std::floor(e.y / c) + 1) * (std::floor(e.z / c) + 1);
-  };
-  while (cells(cell) > kMaxCells) cell *= 1.25;
-  g.origin = b.lo;
-  g.cellSize = float(cell);
-  g.nx = int(std::floor(e.x / cell)) + 1;
-  g.ny = int(std::floor(e.y / cell)) + 1;
-  g.nz = int(std::floor(e.z / cell)) + 1;
-  const size_t n = size_t(g.nx) * size_t(g.ny) * size_t(g.nz);
-  auto cellOf = [&](Vec3 p) {
-    return (size_t(g.cellCoord(p.z, g.origin.z, g.nz)) * size_t(g.ny) + size_t(g.cellCoord(p.y, g.origin.y, g.ny))) *
-               size_t(g.nx) +
-           size_t(g.cellCoord(p.x, g.origin.x, g.nx));
-  };
-  // A counting sort: stable, so each cell lists its particles in index order.
-  g.cellStart.assign(n + 1, 0);
-  for (const AreaParticle& p : particles) ++g.cellStart[cellOf(p.position) + 1];
-  for (size_t c = 0; c < n; ++c) g.cellStart[c + 1] += g.cellStart[c];
-  g.slots.resize(particles.size());
-  std::vector<uint32_t> next(g.cellStart.begin(), g.cellStart.end() - 1);
-  for (uint32_t i = 0; i < uint32_t(particles.size()); ++i)
-    g.slots[next[cellOf(particles[i].position)]++] = {particles[i].position, particles[i].normal, i};
-  return g;
+OrientedPointGrid buildParticleGrid(std::span<const AreaParticle> particles, float cellSize) {
+  std::vector<OrientedPoint> points(particles.size());
+  for (uint32_t i = 0; i < uint32_t(particles.size()); ++i) points[i] = {particles[i].position, particles[i].normal, i};
+  return buildOrientedPointGrid(points, cellSize);
 }
 
-uint32_t nearestFacingParticle(const ParticleGrid& g, Vec3 point, Vec3 side, float radius) {
-  uint32_t best = kNoParticle;
-  float bestD2 = radius * radius;
-  const int cx = g.cellCoord(point.x, g.origin.x, g.nx), cy = g.cellCoord(point.y, g.origin.y, g.ny),
-            cz = g.cellCoord(point.z, g.origin.z, g.nz);
-  auto visitCell = [&](int x, int y, int z) {
-    const size_t c = (size_t(z) * size_t(g.ny) + size_t(y)) * size_t(g.nx) + size_t(x);
-    for (uint32_t k = g.cellStart[c]; k < g.cellStart[c + 1]; ++k) {
-      const GridSlot& p = g.slots[k];
-      const Vec3 d = p.position - point;
-      const float d2 = dot(d, d);
-      if (dot(p.normal, side) > 0 && (d2 < bestD2 || (d2 == bestD2 && p.id < best))) bestD2 = d2, best = p.id;
-    }
-  };
-  // The point's own cell first; then the cells of the cube about the point out to the best
-  // distance found so far, each skipped when all of it is farther than the best.
-  visitCell(cx, cy, cz);
-  const float reach = std::sqrt(bestD2);
-  const int x0 = g.cellCoord(point.x - reach, g.origin.x, g.nx), x1 = g.cellCoord(point.x + reach, g.origin.x, g.nx);
-  const int y0 = g.cellCoord(point.y - reach, g.origin.y, g.ny), y1 = g.cellCoord(point.y + reach, g.origin.y, g.ny);
-  const int z0 = g.cellCoord(point.z - reach, g.origin.z, g.nz), z1 = g.cellCoord(point.z + reach, g.origin.z, g.nz);
-  auto gap = [&](int i, float v, float o) {  // distance along an axis from v to cell i
-    const float lo = o + float(i) * g.cellSize, hi = lo + g.cellSize;
-    return v < lo ? lo - v : v > hi ? v - hi : 0.0f;
-  };
-  for (int z = z0; z <= z1; ++z) {
-    const float dz = gap(z, point.z, g.origin.z);
-    for (int y = y0; y <= y1; ++y) {
-      const float dy = gap(y, point.y, g.origin.y);
-      for (int x = x0; x <= x1; ++x) {
-        if (x == cx && y == cy && z == cz) continue;
-        const float dx = gap(x, point.x, g.origin.x);
-        if (dx * dx + dy * dy + dz * dz > bestD2) continue;
-        visitCell(x, y, z);
-      }
-    }
-  }
-  return best;
-}
-
-void measureCatchments(const Scene& scene, AreaParticles& area, const ParticleGrid& grid, float radius,
+void measureCatchments(const Scene& scene, AreaParticles& area, const OrientedPointGrid& grid, float radius,
                        uint32_t samplesPerPosition, uint64_t seed, CatchmentCounters& counters) {
   const uint64_t positions = area.particles.size() / size_t(area.sides);
   const uint32_t triangles = scene.triangleCount();

@@ -7,13 +7,14 @@
 #include <type_traits>
 #include <vector>
 
+#include "lucent/core/oriented_point_grid.h"
 #include "lucent/core/stats.h"
 #include "lucent/methods/points/point_hierarchy.h"
 #include "lucent/scene/scene.h"
 
 namespace lucent {
 
-inline constexpr uint32_t kNoParticle = 0xffffffffu;
+inline constexpr uint32_t kNoParticle = kNoPoint;
 
 // 4.2.1's descriptor, less the light it carries (flux and radiance change with the lights and live
 // in arrays of their own).
@@ -57,61 +58,25 @@ struct CatchmentCounters {
   uint64_t empty = 0;      // particles no point reached (given half a point's area)
 };
 
-struct ParticleGrid;
-
 // Stage "particle_areas": each particle's Delta A as its catchment, the share of its side of the
 // surface for which it is nearestFacingParticle, measured with about samplesPerPosition
 // low-discrepancy surface points per position (each triangle's share, at least one). With equal areas, the particles
 // that hold the most surface would both collect more flux (links land on them more often) and be
 // gathered more often, and the estimate would be too bright by the squared coefficient of
 // variation of the areas (README, "Departures").
-void measureCatchments(const Scene& scene, AreaParticles& area, const ParticleGrid& grid, float radius,
+void measureCatchments(const Scene& scene, AreaParticles& area, const OrientedPointGrid& grid, float radius,
                        uint32_t samplesPerPosition, uint64_t seed, CatchmentCounters& counters);
 
-// A particle as the grid holds it: a cell's particles lie next to each other in memory (a lookup
-// touches a few cache lines per cell, not one per particle).
-struct GridSlot {
-  Vec3 position;
-  Vec3 normal;
-  uint32_t id;
-};
-static_assert(sizeof(GridSlot) == 28 && std::is_trivially_copyable_v<GridSlot>);
-
-// A uniform grid over the particles' positions: the particles of cell c are
-// slots[cellStart[c] .. cellStart[c + 1]), in index order.
-struct ParticleGrid {
-  Vec3 origin;
-  float cellSize = 1;
-  int nx = 1, ny = 1, nz = 1;
-  std::vector<uint32_t> cellStart;
-  std::vector<GridSlot> slots;
-  // visit(const GridSlot&) for every particle in the cells that overlap the cube of half-side `radius` about p.
-  template <class Visit>
-  void forEachNear(Vec3 p, float radius, Visit visit) const {
-    const int x0 = cellCoord(p.x - radius, origin.x, nx), x1 = cellCoord(p.x + radius, origin.x, nx);
-    const int y0 = cellCoord(p.y - radius, origin.y, ny), y1 = cellCoord(p.y + radius, origin.y, ny);
-    const int z0 = cellCoord(p.z - radius, origin.z, nz), z1 = cellCoord(p.z + radius, origin.z, nz);
-    for (int z = z0; z <= z1; ++z)
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-          const size_t c = (size_t(z) * size_t(ny) + size_t(y)) * size_t(nx) + size_t(x);
-          for (uint32_t k = cellStart[c]; k < cellStart[c + 1]; ++k) visit(slots[k]);
-        }
-  }
-  int cellCoord(float v, float o, int n) const {
-    const float c = (v - o) / cellSize;
-    return c <= 0 ? 0 : c >= float(n - 1) ? n - 1 : int(c);
-  }
-};
-
-// A grid of cells about `cellSize` wide (wider where the scene would need more than 2^24 cells).
-ParticleGrid buildParticleGrid(std::span<const AreaParticle> particles, float cellSize);
+// The particles' positions and normals in a grid of cells about `cellSize` wide.
+OrientedPointGrid buildParticleGrid(std::span<const AreaParticle> particles, float cellSize);
 
 // The particle nearest to `point` of those that face the way `side` does (normal . side > 0),
 // within `radius`; kNoParticle if there is none. Of equally near ones, the lowest index. With
 // `side` the normal of a hit's surface on the side a ray arrived from, the particle lies on that
 // side: not behind a zero-thickness wall, whose other side's particles face the other way, nor on
 // the far side of a neighbouring surface at a corner.
-uint32_t nearestFacingParticle(const ParticleGrid& grid, Vec3 point, Vec3 side, float radius);
+inline uint32_t nearestFacingParticle(const OrientedPointGrid& grid, Vec3 point, Vec3 side, float radius) {
+  return grid.nearest(point, radius, [&](const OrientedPoint& p, float) { return dot(p.normal, side) > 0; });
+}
 
 }  // namespace lucent

@@ -20,8 +20,8 @@ struct IndirectFieldSetup {
   const Tessellation* tessellation = nullptr;
   std::span<const AreaParticle> particles;
   std::span<const Rgb> radiance;  // the area particles' after scattering (4.2.2)
-  const ParticleGrid* linkGrid = nullptr;
-  const ParticleGrid* listGrid = nullptr;
+  const OrientedPointGrid* linkGrid = nullptr;
+  const OrientedPointGrid* listGrid = nullptr;
   LinkDirections gatherDirections;
   float linkRadius = 0, listRadius = 0, listCosine = 0;
   // --geometry all: every radiance particle's list and every particle's gathering links, built

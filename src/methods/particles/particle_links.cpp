@@ -20,7 +20,7 @@ void LinkDirections::of(const AreaParticle& p, uint32_t index, Vec3* out) const 
 }
 
 ParticleLinks buildParticleLinks(const Scene& scene, const Visibility& vis, std::span<const AreaParticle> particles,
-                                 const ParticleGrid& grid, const LinkDirections& directions, float searchRadius,
+                                 const OrientedPointGrid& grid, const LinkDirections& directions, float searchRadius,
                                  LinkCounters& counters, std::span<const uint32_t> only) {
   ParticleLinks links;
   links.strata = directions.strata;

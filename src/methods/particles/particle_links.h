@@ -45,7 +45,7 @@ struct LinkDirections {
 // arrived on (notes A2). Rays are traced in
 // packets of 16 that share their particle's origin.
 ParticleLinks buildParticleLinks(const Scene& scene, const Visibility& vis, std::span<const AreaParticle> particles,
-                                 const ParticleGrid& grid, const LinkDirections& directions, float searchRadius,
+                                 const OrientedPointGrid& grid, const LinkDirections& directions, float searchRadius,
                                  LinkCounters& counters, std::span<const uint32_t> only = {});
 
 }  // namespace lucent

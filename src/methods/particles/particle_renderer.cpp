@@ -126,7 +126,7 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   stats.addDerived("particle_spacing", spacing);
   Stopwatch linkGridClock;
   const float linkRadius = o.linkRadius * spacing;
-  const ParticleGrid linkGrid = buildParticleGrid(area.particles, linkRadius);
+  const OrientedPointGrid linkGrid = buildParticleGrid(area.particles, linkRadius);
   stats.addStage("particle_grid", linkGridClock.seconds());
   CatchmentCounters catchments;
   if (o.particleArea == ParticleArea::Catchment) {
@@ -165,7 +165,7 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   const float listRadius = o.listRadius * spacing;
   const float listCosine = std::cos(o.listAngle * kPi / 180.0f);
   Stopwatch listGridClock;
-  const ParticleGrid listGrid = buildParticleGrid(particles, listRadius);
+  const OrientedPointGrid listGrid = buildParticleGrid(particles, listRadius);
   stats.addStage("list_grid", listGridClock.seconds());
   EstimationLists lists;
   if (everything) {

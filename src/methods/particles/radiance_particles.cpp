@@ -77,7 +77,7 @@ RadianceParticleAt Tessellation::locate(uint32_t id) const {
   return at;
 }
 
-EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, const ParticleGrid& grid, float radius,
+EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, const OrientedPointGrid& grid, float radius,
                                      float minCosine,
                                      std::span<const uint32_t> ids) {
   EstimationLists lists;
@@ -91,7 +91,7 @@ EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, 
     const Vec3 q = t.position(scene, at.triangle, at.i, at.j);
     const Vec3 normal = at.side == 0 ? scene.geometricNormal(at.triangle) : -scene.geometricNormal(at.triangle);
     scratch.clear();
-    grid.forEachNear(q, radius, [&](const GridSlot& p) {
+    grid.forEachNear(q, radius, [&](const OrientedPoint& p) {
       const Vec3 d = p.position - q;
       if (dot(d, d) <= r2 && dot(p.normal, normal) >= minCosine && onSameSurface(d, normal, p.normal, slope))
         scratch.push_back(p.id);

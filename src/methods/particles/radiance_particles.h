@@ -86,7 +86,7 @@ struct EstimationLists {
 // normal n satisfies n . n_r >= minCosine, n_r the normal of the radiance particle's side, and
 // which lie on the same surface (onSameSurface). `grid`
 // should have cells about `radius` wide. Throws MemoryLimitError when the lists would not fit.
-EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, const ParticleGrid& grid, float radius,
+EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, const OrientedPointGrid& grid, float radius,
                                      float minCosine,
                                      std::span<const uint32_t> ids);
 

@@ -16,6 +16,7 @@
 
 #include <atomic>
 
+#include "lucent/core/oriented_point_grid.h"
 #include "lucent/core/parallel.h"
 #include "lucent/core/sampling.h"
 #include "lucent/scene/surface.h"
@@ -32,9 +33,6 @@ struct GatherHit {
   EstimatePoint point;
   Rgb weight;
 };
-
-// The precomputed irradiance samples examined per gather hit for the nearest on its side.
-constexpr uint32_t kIrradianceCandidates = 4;
 
 // Per-thread scratch and clocks of the gathering stage.
 struct GatherScratch {
@@ -99,14 +97,23 @@ size_t traceGatherRays(const Scene& scene, const Visibility& vis, const ShadingP
 
 // Christensen 1999 ("Faster photon map global illumination"; Jensen 2001, 9.3): the irradiance
 // at every stride-th photon of the global map, estimated from the map at the photon's side of its
-// surface, kept as a photon whose power is the irradiance and whose direction is that side's
-// normal, in a kd-tree. A gather ray's diffuse hit then reads the nearest one that lies on its
-// surface's side (photonLights) instead of estimating from k photons.
+// surface, in a grid of the photons' positions and facing normals. A gather ray's diffuse hit then
+// reads the nearest one that lies on its surface's side (photonLights) instead of estimating from
+// k photons.
+struct PrecomputedIrradiance {
+  std::vector<Rgb> irradiance;  // by sample
+  OrientedPointGrid grid;       // the samples' positions and facing normals
+  float reach = 0;              // how far a hit looks for one
+};
+
 template <class Map>
-PhotonKdTree precomputeIrradiance(const Map& map, std::span<const Photon> photons, const EstimateSettings& settings,
-                                  uint32_t stride, EstimateCounters& counters) {
+PrecomputedIrradiance precomputeIrradiance(const Scene& scene, const Map& map, std::span<const Photon> photons,
+                                           const EstimateSettings& settings, uint32_t stride,
+                                           EstimateCounters& counters) {
   const size_t n = (photons.size() + stride - 1) / stride;
-  std::vector<Photon> samples(n);
+  PrecomputedIrradiance out;
+  out.irradiance.resize(n);
+  std::vector<OrientedPoint> points(n);
   tbb::enumerable_thread_specific<std::vector<PhotonDistance>> heaps([&] { return std::vector<PhotonDistance>(settings.k); });
   tbb::enumerable_thread_specific<EstimateCounters> local;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
@@ -122,30 +129,30 @@ PhotonKdTree precomputeIrradiance(const Map& map, std::span<const Photon> photon
       q.bsdf = {MaterialType::Diffuse, Rgb(1.0f), Rgb(0.0f), 1.0f, 1.0f};
       q.facingNormal = facing;
       // A white Lambertian surface reflects E / pi.
-      const Rgb irradiance = estimateRadiance(map, q, settings, heap.data(), c) * kPi;
-      samples[i] = {p.position, irradiance, encodeOctahedral(facing), photonFacingBits(facing)};
+      out.irradiance[i] = estimateRadiance(map, q, settings, heap.data(), c) * kPi;
+      points[i] = {p.position, facing, uint32_t(i)};
     }
   });
   for (const EstimateCounters& c : local) counters += c;
-  return buildPhotonKdTree(samples);
+  // Cells about twice the samples' mean spacing over the scene's surfaces; a hit looks four
+  // spacings (two cells) far.
+  double area = 0;
+  for (uint32_t t = 0; t < scene.triangleCount(); ++t) area += scene.triangleArea(t);
+  const float spacing = float(std::sqrt(area / double(std::max<size_t>(n, 1))));
+  out.grid = buildOrientedPointGrid(points, 2 * spacing);
+  out.reach = 4 * spacing;
+  return out;
 }
 
 // The radiance a diffuse point reflects from the precomputed irradiance nearest to it on its side
-// of its surface, among the `k` nearest within the search radius; false if none is.
-bool irradianceAt(const PhotonKdTree& irradiance, const EstimatePoint& q, float maxRadius, uint32_t k,
-                  PhotonDistance* heap, Rgb& radiance) {
-  const KdTreeResult r = kdTreeNearest(irradiance, q.position, k, maxRadius, heap);
+// of its surface; false if none is within reach.
+bool irradianceAt(const PrecomputedIrradiance& samples, const EstimatePoint& q, Rgb& radiance) {
   const SurfaceSide side = q.side();
-  float best = kInf;
-  const Photon* nearest = nullptr;
-  for (uint32_t i = 0; i < r.found; ++i) {
-    const Photon& s = irradiance.photons[heap[i].index];
-    if (heap[i].d2 < best && photonLights(octahedralDirection(s.direction), photonFacing(s), s.position - q.position,
-                                          heap[i].d2, side))
-      best = heap[i].d2, nearest = &s;
-  }
-  if (!nearest) return false;
-  radiance = nearest->power * q.bsdf.kd * kInvPi;
+  const uint32_t nearest = samples.grid.nearest(q.position, samples.reach, [&](const OrientedPoint& s, float d2) {
+    return photonLights(s.normal, s.normal, s.position - q.position, d2, side);
+  });
+  if (nearest == kNoPoint) return false;
+  radiance = samples.irradiance[nearest] * q.bsdf.kd * kInvPi;
   return true;
 }
 
@@ -164,11 +171,11 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   tbb::enumerable_thread_specific<GatherScratch> scratch([&] {
     GatherScratch s;
     s.hits.resize(size_t(options.gatherRays));
-    s.heap.resize(std::max(heapSize, kIrradianceCandidates));
+    s.heap.resize(heapSize);
     return s;
   });
   // Christensen 1999: the irradiance at every irradianceStride-th global photon, once.
-  PhotonKdTree irradiance;
+  PrecomputedIrradiance irradiance;
   EstimateCounters irradianceCounters;
   uint64_t irradianceFallbacks = 0;
   const bool precomputed = options.gatherEstimate == GatherEstimate::Irradiance && options.gatherRays > 0;
@@ -176,8 +183,8 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
     Stopwatch clock;
     withPhotonMaps(maps, options.map, [&](const auto* global, const auto*) {
       if (global)
-        irradiance = precomputeIrradiance(*global, std::span<const Photon>(global->photons), maps.globalSettings,
-                                          options.irradianceStride, irradianceCounters);
+        irradiance = precomputeIrradiance(scene, *global, std::span<const Photon>(global->photons),
+                                          maps.globalSettings, options.irradianceStride, irradianceCounters);
     });
     out.stats.addStage("precompute_irradiance", clock.seconds());
   }
@@ -216,7 +223,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
             const EstimatePoint& q = s.hits[h].point;
             Rgb L;
             if (!precomputed || q.bsdf.type != MaterialType::Diffuse ||
-                !irradianceAt(irradiance, q, maps.globalSettings.maxRadius, kIrradianceCandidates, s.heap.data(), L)) {
+                !irradianceAt(irradiance, q, L)) {
               L = estimateRadiance(*global, q, maps.globalSettings, s.heap.data(), s.counters);
               s.fallbacks += precomputed && q.bsdf.type == MaterialType::Diffuse;
             }
@@ -250,7 +257,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   totals.report(out.stats, gc, cc);
   out.stats.addCounter("gather_rays", gatherRays);
   if (precomputed) {
-    out.stats.addCounter("irradiance_samples", irradiance.photons.size());
+    out.stats.addCounter("irradiance_samples", irradiance.irradiance.size());
     out.stats.addCounter("irradiance_sample_estimates", irradianceCounters.queries);
     out.stats.addCounter("irradiance_fallbacks", irradianceFallbacks);
   }
