@@ -63,17 +63,29 @@ uint32_t nearestByScan(std::span<const AreaParticle> particles, Vec3 point, Vec3
   return best;
 }
 
+// A scene's particles' links, searched within two spacings.
+struct LinkedParticles {
+  AreaParticles area;
+  float radius;
+  OrientedPointGrid grid;
+  LinkCounters counters;
+  ParticleLinks links;
+  LinkedParticles(const Scene& scene, const Visibility& vis, uint32_t positions, LinkDirections directions)
+      : area(particlesOf(scene, positions)), radius(2 * area.spacing), grid(buildParticleGrid(area.particles, radius)),
+        links(buildParticleLinks(scene, vis, area.particles, grid, directions, radius, counters)) {}
+};
+
 }  // namespace
 
 TEST_CASE("particles: every link points at the particle nearest to its traced hit, on the hit's side", "[particles]") {
   const Scene scene = roomWithBox(0.5f, {0, 0.5f, 0});
   const Visibility vis(scene);
-  const AreaParticles area = particlesOf(scene, 3000);
-  const float radius = 2 * area.spacing;
-  const OrientedPointGrid grid = buildParticleGrid(area.particles, radius);
   const LinkDirections directions{77, 4};
-  LinkCounters counters;
-  const ParticleLinks links = buildParticleLinks(scene, vis, area.particles, grid, directions, radius, counters);
+  const LinkedParticles linked(scene, vis, 3000, directions);
+  const AreaParticles& area = linked.area;
+  const float radius = linked.radius;
+  const LinkCounters& counters = linked.counters;
+  const ParticleLinks& links = linked.links;
   REQUIRE(links.targets.size() == area.particles.size() * 16);
   CHECK(counters.rays == links.targets.size());
   uint64_t checked = 0, unmatched = 0, misses = 0;
@@ -138,11 +150,10 @@ TEST_CASE("particles: scattering in a closed room carries the geometric series o
   // exactly but for the fixed-point rounding; the bounces only choose where it lands.
   const Scene scene = roomWithBox(0.6f, {0.1f, 0.45f, -0.2f});
   const Visibility vis(scene);
-  const AreaParticles area = particlesOf(scene, 8000);
-  const float radius = 2 * area.spacing;
-  const OrientedPointGrid grid = buildParticleGrid(area.particles, radius);
-  LinkCounters lc;
-  const ParticleLinks links = buildParticleLinks(scene, vis, area.particles, grid, {3, 4}, radius, lc);
+  const LinkedParticles linked(scene, vis, 8000, {3, 4});
+  const AreaParticles& area = linked.area;
+  const LinkCounters& lc = linked.counters;
+  const ParticleLinks& links = linked.links;
   uint64_t rays = 0;
   const std::vector<Rgb> direct = emitLight(scene, vis, area.particles, 1, 1, rays);
   double directSum = 0;
@@ -168,11 +179,9 @@ TEST_CASE("particles: scattering in a closed room carries the geometric series o
 TEST_CASE("particles: gathering equal radiance returns pi times it exactly", "[particles]") {
   const Scene scene = roomWithBox(0.5f, {0, 0.5f, 0});
   const Visibility vis(scene);
-  const AreaParticles area = particlesOf(scene, 2000);
-  const float radius = 2 * area.spacing;
-  const OrientedPointGrid grid = buildParticleGrid(area.particles, radius);
-  LinkCounters lc;
-  const ParticleLinks links = buildParticleLinks(scene, vis, area.particles, grid, {4, 16}, radius, lc);
+  const LinkedParticles linked(scene, vis, 2000, {4, 16});
+  const AreaParticles& area = linked.area;
+  const ParticleLinks& links = linked.links;
   const std::vector<Rgb> radiance(area.particles.size(), Rgb(0.5f, 0.25f, 2.0f));
   // The particles on the room's inner side: their links hit (a few find no particle near the hit,
   // and give nothing).

@@ -230,6 +230,16 @@ TEST_CASE("pmfg converges to the path tracer on the Cornell box", "[photonmap-re
   }
 }
 
+// The path tracer at 4,096 spp through the pixel centres: the reference for one camera ray through
+// each pixel's centre, so that edges are point-sampled alike.
+Image pixelCentreReference(const Scene& scene, const Visibility& vis) {
+  PathTraceOptions pt;
+  pt.spp = 4096;
+  pt.seed = 1;
+  pt.pixelCentres = true;
+  return renderPathTraced(scene, vis, pt).image;
+}
+
 TEST_CASE("pmfg at its default settings ends below relMSE 0.005 against the path tracer on the Cornell box",
           "[photonmap-render]") {
   // The issue's bar, at the defaults (65,000 photons, k 50, 4,096 gather rays, 32 shadow rays, the
@@ -238,11 +248,7 @@ TEST_CASE("pmfg at its default settings ends below relMSE 0.005 against the path
   // measured error.
   const Scene scene = smallCornellBox(24);
   const Visibility vis(scene);
-  PathTraceOptions pt;
-  pt.spp = 4096;
-  pt.seed = 1;
-  pt.pixelCentres = true;
-  const Image reference = renderPathTraced(scene, vis, pt).image;
+  const Image reference = pixelCentreReference(scene, vis);
   PhotonMapOptions opt;
   opt.map = PhotonMapKind::KdTree;
   const double relmse = compareImages(renderPhotonMapFinalGather(scene, vis, opt).image, reference).overall.relmse;
@@ -258,11 +264,7 @@ TEST_CASE("pmfg's precomputed irradiance stands in for the photon estimate withi
   // far from the path tracer; the precomputed one in a fraction of the estimate stage's time.
   const Scene scene = smallCornellBox(24);
   const Visibility vis(scene);
-  PathTraceOptions pt;
-  pt.spp = 4096;
-  pt.seed = 1;
-  pt.pixelCentres = true;
-  const Image reference = renderPathTraced(scene, vis, pt).image;
+  const Image reference = pixelCentreReference(scene, vis);
   PhotonMapOptions opt;
   opt.map = PhotonMapKind::KdTree;
   opt.gatherRays = 256;
