@@ -17,9 +17,12 @@ struct TwoByTwo {
   TwoByTwo() {
     eye.region = {0, 0, 2, 2};
     eye.pixels.resize(4);
-    for (EyePixel& p : eye.pixels) {
-      p = EyePixel{};
-      p.addSample(Rgb(0.25f), FirstHit{Rgb(0.5f), Vec3(0, 1, 0), 2}, true);
+    eye.features.resize(4);
+    for (size_t i = 0; i < 4; ++i) {
+      eye.pixels[i] = EyePixel{};
+      eye.pixels[i].addSample(Rgb(0.25f));
+      eye.features[i] = EyeFeatures{};
+      eye.features[i].add(FirstHit{Rgb(0.5f), Vec3(0, 1, 0), 2});
     }
     eye.points.resize(3);
     for (uint32_t i = 0; i < 3; ++i) {

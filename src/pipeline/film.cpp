@@ -55,6 +55,8 @@ void Film::addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 
 }
 
 void Film::add(const EyePaths& band, const PointRadiance& light) {
+  if (layers_.features && band.features.size() != band.pixels.size())
+    throw std::logic_error("a film with layers takes camera paths traced with layers");
   // Pixels are independent, and a pixel's points are consecutive (by tile, then pixel): both loops
   // run in parallel, the points' in chunks cut where the pixel changes.
   tbb::parallel_for(tbb::blocked_range<size_t>(0, band.pixels.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
@@ -65,7 +67,7 @@ void Film::add(const EyePaths& band, const PointRadiance& light) {
       samples_[local(p)] += px.validSamples;
       for (int c = 0; c < 3; ++c) sum[direct_ + c].add(px.emitted[c]);
       if (!layers_.features) continue;
-      for (int c = 0; c < 7; ++c) sum[features_ + c].add(px.features[c]);
+      for (int c = 0; c < 7; ++c) sum[features_ + c].add(band.features[i].sums[c]);
     }
   });
   const size_t n = band.points.size();

@@ -141,11 +141,13 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
 
   // Most camera samples end in one shading point, held per tile, then in the band's array, with the
   // radiance the method computes at it (direct and indirect).
-  requireMemory(region.pixelCount() * (sizeof(EyePixel) + uint64_t(samples) * (2 * sizeof(ShadingPoint) + 2 * sizeof(Rgb))),
+  requireMemory(region.pixelCount() * (sizeof(EyePixel) + (settings.layers ? sizeof(EyeFeatures) : 0) +
+                                       uint64_t(samples) * (2 * sizeof(ShadingPoint) + 2 * sizeof(Rgb))),
                 "the camera paths' shading points", "lower --spp or --resolution, or render in parts (--crop)");
   EyePaths out;
   out.region = region;
   out.pixels.resize(size_t(region.pixelCount()));  // constructed by the tiles
+  if (settings.layers) out.features.resize(size_t(region.pixelCount()));
   std::vector<std::vector<ShadingPoint>> tilePoints(tiles);
   std::vector<uint64_t> tileRays(tiles, 0), tileInvalid(tiles, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
@@ -155,7 +157,10 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
       const int x1 = std::min(region.x1, (tileX0 + t % tilesX + 1) * tile), y1 = std::min(region.y1, (tileY0 + t / tilesX + 1) * tile);
       auto pixelIndex = [&](int x, int y) { return size_t(y - region.y0) * size_t(region.width()) + size_t(x - region.x0); };
       for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x) ::new (&out.pixels[pixelIndex(x, y)]) EyePixel{};
+        for (int x = x0; x < x1; ++x) {
+          ::new (&out.pixels[pixelIndex(x, y)]) EyePixel{};
+          if (settings.layers) ::new (&out.features[pixelIndex(x, y)]) EyeFeatures{};
+        }
       std::vector<ShadingPoint>& points = tilePoints[t];
       points.reserve(size_t(x1 - x0) * size_t(y1 - y0) * size_t(samples));  // most samples end in one point
       // The tile's camera samples in order (row, pixel, sample), their rays traced sixteen at a
@@ -170,7 +175,7 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
         for (int j = 0; j < queued; ++j) {
           CameraSample& cs = batch[j];
           const Hit& hit = hits[j];
-          EyePixel& px = out.pixels[pixelIndex(int(cs.pixel % uint32_t(width)), int(cs.pixel / uint32_t(width)))];
+          const size_t index = pixelIndex(int(cs.pixel % uint32_t(width)), int(cs.pixel / uint32_t(width)));
           const size_t before = points.size();
           FirstHit first;
           const SampleResult res = traceCameraSample(scene, vis, settings, cs.ray, hit, cs.pixel, cs.sample, cs.rng,
@@ -180,7 +185,8 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
             ++tileInvalid[t];
             continue;
           }
-          px.addSample(res.emitted, first, settings.layers);
+          out.pixels[index].addSample(res.emitted);
+          if (settings.layers) out.features[index].add(first);
         }
         queued = 0;
       };

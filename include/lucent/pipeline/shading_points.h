@@ -65,16 +65,23 @@ struct FirstHit {
 // Per pixel, summed over its camera samples (exactly, as the film sums).
 struct EyePixel {
   ExactSum emitted[3];   // emission seen directly or through mirrors and glass (and the environment)
-  ExactSum features[7];  // first hit: reflectance (1 for glass), shading normal, depth; layers only
   uint32_t validSamples = 0;  // camera samples kept (those with non-finite values are dropped)
-  void addSample(Rgb light, const FirstHit& first, bool layers) {
+  void addSample(Rgb light) {
     ++validSamples;
     for (int c = 0; c < 3; ++c) emitted[c].add(light[c]);
-    if (!layers) return;
+  }
+};
+
+// Per pixel, the first hits' reflectance (1 for glass), shading normal and depth, summed over its
+// kept camera samples: for the layers only, so held apart (without layers a pixel's sums are a
+// third of the memory, which a frame of a million pixels touches for the first time).
+struct EyeFeatures {
+  ExactSum sums[7];
+  void add(const FirstHit& first) {
     const Rgb a = first.albedo;
     const Vec3 n = first.normal;
     const float values[7] = {a.r, a.g, a.b, n.x, n.y, n.z, first.depth};
-    for (int c = 0; c < 7; ++c) features[c].add(values[c]);
+    for (int c = 0; c < 7; ++c) sums[c].add(values[c]);
   }
 };
 
@@ -82,6 +89,7 @@ struct EyePixel {
 struct EyePaths {
   UninitializedVector<ShadingPoint> points;  // by tile, then pixel, then sample, then branch
   UninitializedVector<EyePixel> pixels;      // the region's, row by row
+  UninitializedVector<EyeFeatures> features; // as pixels, with layers; empty without
   PixelRect region;
   // The index in the whole image of the region's i-th pixel.
   uint64_t imagePixel(size_t i, int imageWidth) const {

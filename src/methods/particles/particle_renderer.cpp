@@ -263,7 +263,10 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
     extraShading = shade(extra, extraAround, "_adaptive");
     // The flagged pixels' first samples give way to their supersamples.
     for (size_t i = 0; i < eye.pixels.size(); ++i)
-      if (flagged[i]) eye.pixels[i] = EyePixel{};
+      if (flagged[i]) {
+        eye.pixels[i] = EyePixel{};
+        if (o.layers) eye.features[i] = EyeFeatures{};
+      }
     for (size_t i = 0; i < eye.points.size(); ++i) {
       const size_t local = size_t(eye.points[i].pixel % uint32_t(scene.camera.width) - uint32_t(part.region.x0)) +
                            size_t(eye.points[i].pixel / uint32_t(scene.camera.width) - uint32_t(part.region.y0)) *
