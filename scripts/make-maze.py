@@ -6,7 +6,8 @@ whose corridors only light reaches after many diffuse bounces). scenes/maze.json
 lights in it. The maze is a depth-first spanning tree of the cells from a fixed seed; walls are
 0.2 m thick boxes between posts, their visible faces cut into a grid so that the triangle count is
 the paper's. Every face is wound counter-clockwise seen from the open side. Procedural, so the
-scene needs no third-party data; rerun to regenerate (the output is the same every time)."""
+scene needs no third-party data; the output is the same every time, so the repository keeps only
+the MTL and scripts/build.sh writes the OBJ when it is missing."""
 import math
 import pathlib
 
