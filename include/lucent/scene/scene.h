@@ -107,6 +107,12 @@ struct Scene {
   uint32_t triangleCount() const { return static_cast<uint32_t>(materialIds.size()); }
   Vec3 vertex(uint32_t tri, int k) const { return positions[indices[3 * tri + k]]; }
   float triangleArea(uint32_t tri) const { return faceAreas[tri]; }
+  // The triangles' area in all (one side of each).
+  double surfaceArea() const {
+    double area = 0;
+    for (float a : faceAreas) area += a;
+    return area;
+  }
   Vec3 geometricNormal(uint32_t tri) const { return faceNormals[tri]; }
   // Bounding sphere of the scene, used to place directional and environment emission.
   Vec3 boundingCenter() const { return bounds.center(); }

@@ -84,8 +84,7 @@ void dumpPointRadiance(const std::string& dir, const NodeRadiance& radiance) {
 }  // namespace
 
 uint32_t defaultPointCount(const Scene& scene, float spacing) {
-  double area = 0;
-  for (float a : scene.faceAreas) area += a;
+  const double area = scene.surfaceArea();
   const Camera& c = scene.camera;
   const double distance = std::max(1e-30, double(length(scene.boundingCenter() - c.eye)));
   const double footprint = 2.0 * distance * std::tan(double(c.fovY) * kPi / 360.0) / double(c.height);

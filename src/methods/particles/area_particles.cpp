@@ -40,8 +40,7 @@ AreaParticles distributeAreaParticles(const Scene& scene, const AreaParticleOpti
   // and the particle grid in cache (rays from a mesh's points in random order: 2.3x slower,
   // TOOLCHAIN.md).
   sortByMortonCode(scene, samples);
-  double totalArea = 0;
-  for (uint32_t t = 0; t < scene.triangleCount(); ++t) totalArea += scene.triangleArea(t);
+  const double totalArea = scene.surfaceArea();
   AreaParticles out;
   out.sides = options.sides == ParticleSides::Both ? 2 : 1;
   const float area = float(totalArea / double(samples.size()));
@@ -77,8 +76,7 @@ void measureCatchments(const Scene& scene, AreaParticles& area, const OrientedPo
                        uint32_t samplesPerPosition, uint64_t seed, CatchmentCounters& counters) {
   const uint64_t positions = area.particles.size() / size_t(area.sides);
   const uint32_t triangles = scene.triangleCount();
-  double totalArea = 0;
-  for (uint32_t t = 0; t < triangles; ++t) totalArea += scene.triangleArea(t);
+  const double totalArea = scene.surfaceArea();
   const double perArea = double(positions) * double(samplesPerPosition) / totalArea;
   // Areas summed in 64-bit fixed point (units of 2^-k of the scene's area): the same sums
   // whichever thread adds first.

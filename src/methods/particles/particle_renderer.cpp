@@ -113,8 +113,7 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   const uint64_t scatterPer = uint64_t(o.scatterLinks) * uint64_t(o.scatterLinks);
   const uint64_t gatherPer = uint64_t(o.gatherLinks) * uint64_t(o.gatherLinks);
   const uint64_t particleCount = uint64_t(o.areaParticles) * sides;
-  requireMemory(particleCount * (sizeof(AreaParticle) + 4 * (scatterPer + gatherPer) + 6 * sizeof(Rgb) + 16) +
-                    uint64_t(o.areaParticles) * o.areaSamples * sizeof(PointSample),
+  requireMemory(particleCount * (sizeof(AreaParticle) + 4 * (scatterPer + gatherPer) + 6 * sizeof(Rgb) + 16),
                 "the area particles and their links", "lower --area-particles, --gather-links or --scatter-links");
   AreaParticleOptions ao;
   ao.positions = o.areaParticles;

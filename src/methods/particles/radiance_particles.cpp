@@ -84,7 +84,7 @@ EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, 
   requireMemory((ids.size() + 1) * sizeof(uint64_t), "the estimation lists' offsets", "raise --tessellation");
   lists.offsets.assign(ids.size() + 1, 0);
   const float r2 = radius * radius;
-  // visit(particle) for each area particle of radiance particle id's list, in index order.
+  // Radiance particle id's list into scratch, in index order.
   const float slope = onSurfaceSlope(minCosine);
   auto listOf = [&](uint32_t id, std::vector<uint32_t>& scratch) {
     const RadianceParticleAt at = t.locate(id);
@@ -98,6 +98,8 @@ EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, 
     });
     std::sort(scratch.begin(), scratch.end());
   };
+  // Searched twice, to count and then to fill: the lists can take hundreds of megabytes (Table 1:
+  // 366 MB for MAZE), so their size is checked against the memory limit before they are made.
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
     std::vector<uint32_t> scratch;
     for (size_t k = r.begin(); k != r.end(); ++k) {

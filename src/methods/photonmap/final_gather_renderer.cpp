@@ -136,9 +136,7 @@ PrecomputedIrradiance precomputeIrradiance(const Scene& scene, const Map& map, s
   for (const EstimateCounters& c : local) counters += c;
   // Cells about twice the samples' mean spacing over the scene's surfaces; a hit looks four
   // spacings (two cells) far.
-  double area = 0;
-  for (uint32_t t = 0; t < scene.triangleCount(); ++t) area += scene.triangleArea(t);
-  const float spacing = float(std::sqrt(area / double(std::max<size_t>(n, 1))));
+  const float spacing = float(std::sqrt(scene.surfaceArea() / double(std::max<size_t>(n, 1))));
   out.grid = buildOrientedPointGrid(points, 2 * spacing);
   out.reach = 4 * spacing;
   return out;
