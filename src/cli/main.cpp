@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   lucent::cli::addCompareCommand(app, exitCode);
   lucent::cli::addMethodsCommand(app, exitCode);
   lucent::cli::addMergeCommand(app, exitCode);
+  lucent::cli::addReportCommand(app, exitCode);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

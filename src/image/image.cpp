@@ -1,10 +1,14 @@
 #include "lucent/image/image.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 #include "lucent/core/files.h"
@@ -70,26 +74,41 @@ FileToWrite exrFile(const Image& image, const std::string& path, const ImageMeta
 
 FileToWrite pngFile(const Image& image, const std::string& path) {
   checkPixelCount(image, path);
-  const int rgb[3] = {image.channelIndex("R"), image.channelIndex("G"), image.channelIndex("B")};
-  if (rgb[0] < 0 || rgb[1] < 0 || rgb[2] < 0)
+  if (image.channelIndex("R") < 0 || image.channelIndex("G") < 0 || image.channelIndex("B") < 0)
     throw std::runtime_error("cannot write image '" + path + "': it needs R, G and B channels");
-  return {path, "image", [&image, rgb](const fs::path& tmp) {
-            std::vector<unsigned char> bytes(size_t(image.width()) * image.height() * 3);
-            size_t i = 0;
-            for (int y = 0; y < image.height(); ++y)
-              for (int x = 0; x < image.width(); ++x)
-                for (int c : rgb) {
-                  float v = image.at(x, y, c);
-                  v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-                  bytes[i++] = linearToSrgb8(v);
-                }
-            OIIO::ImageSpec spec(image.width(), image.height(), 3, OIIO::TypeDesc::UINT8);
-            spec.attribute("oiio:ColorSpace", "sRGB");
-            writeImageFile(tmp, spec, OIIO::TypeDesc::UINT8, bytes.data());
+  return {path, "image", [&image](const fs::path& tmp) {
+            const std::vector<unsigned char> png = encodePng(image);
+            std::ofstream out(tmp, std::ios::binary);
+            out.write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+            out.close();
+            if (!out) throw WriteFailure(std::strerror(errno));
           }};
 }
 
 }  // namespace
+
+std::vector<unsigned char> encodePng(const Image& image) {
+  const int rgb[3] = {image.channelIndex("R"), image.channelIndex("G"), image.channelIndex("B")};
+  if (rgb[0] < 0 || rgb[1] < 0 || rgb[2] < 0) throw std::runtime_error("a PNG needs the image's R, G and B channels");
+  std::vector<unsigned char> bytes(size_t(image.width()) * image.height() * 3);
+  size_t i = 0;
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x)
+      for (int c : rgb) {
+        float v = image.at(x, y, c);
+        v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
+        bytes[i++] = linearToSrgb8(v);
+      }
+  OIIO::ImageSpec spec(image.width(), image.height(), 3, OIIO::TypeDesc::UINT8);
+  spec.attribute("oiio:ColorSpace", "sRGB");
+  std::vector<unsigned char> png;
+  OIIO::Filesystem::IOVecOutput memory(png);
+  auto out = OIIO::ImageOutput::create("png");
+  if (!out || !out->set_ioproxy(&memory) || !out->open("memory.png", spec) ||
+      !out->write_image(OIIO::TypeDesc::UINT8, bytes.data()) || !out->close())
+    throw std::runtime_error("cannot encode a PNG: " + (out ? out->geterror() : OIIO::geterror()));
+  return png;
+}
 
 void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata) {
   writeFilesAtomically({exrFile(image, path, metadata)});
@@ -157,9 +176,10 @@ bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata) {
   return ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".bmp" || ext == ".tga";
 }
 
-Image readLinearImage(const std::string& path) {
+Image readLinearImage(const std::string& path, ImageMetadata* metadataOut) {
   ImageMetadata metadata;
   Image image = readImage(path, &metadata);
+  if (metadataOut) *metadataOut = metadata;
   if (!isSrgbEncoded(path, metadata)) return image;
   for (int c = 0; c < image.channelCount(); ++c) {
     if (image.channels()[size_t(c)] == "A") continue;  // alpha is stored linear

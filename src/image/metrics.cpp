@@ -164,7 +164,7 @@ double errorValue(const ChannelError& error, ErrorMetric metric) {
 }
 
 Image errorHeatmap(const Image& image, const Image& reference, ErrorMetric metric,
-                   double maxValue) {
+                   double maxValue, double* scaleUsed) {
   const std::vector<int> map = matchChannels(image, reference);
   const int w = image.width(), h = image.height();
   std::vector<double> error(size_t(w) * h);
@@ -191,6 +191,7 @@ Image errorHeatmap(const Image& image, const Image& reference, ErrorMetric metri
     }
     if (!(scale > 0)) scale = 1;
   }
+  if (scaleUsed) *scaleUsed = scale;
 
   Image heatmap(w, h, {"R", "G", "B"});
   for (int y = 0; y < h; ++y)
@@ -281,6 +282,16 @@ NoiseTest testWithinNoise(const Image& candidate, const Image& reference, double
   }
   t.passed = t.pixelsRejected == 0 && regionsPass;
   return t;
+}
+
+Image heatmapColourBar(int width, int height) {
+  Image bar(width, height, {"R", "G", "B"});
+  for (int x = 0; x < width; ++x) {
+    const std::array<float, 3> rgb = viridis(width > 1 ? double(x) / double(width - 1) : 0.0);
+    for (int y = 0; y < height; ++y)
+      for (int c = 0; c < 3; ++c) bar.at(x, y, c) = rgb[size_t(c)];
+  }
+  return bar;
 }
 
 Image statisticHeatmap(const Image& statistic) {

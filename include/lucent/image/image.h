@@ -43,6 +43,8 @@ using ImageMetadata = std::vector<std::pair<std::string, std::string>>;
 void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata = {});
 // Writes the R, G, B channels as 8-bit sRGB-encoded PNG, clamped to [0,1]; atomically, as writeExr.
 void writePng(const Image& image, const std::string& path);
+// The R, G, B channels as writePng writes them, encoded in memory (for pages that embed images).
+std::vector<unsigned char> encodePng(const Image& image);
 // The EXR and, when pngPath is not empty, the PNG, and any other files given (a render's film file),
 // written as one: if any cannot be written, none exists afterwards.
 void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageMetadata& metadata,
@@ -54,6 +56,6 @@ Image readImage(const std::string& path, ImageMetadata* metadata = nullptr);
 // for 8-bit JPEG, PNG, TIFF...; linear for EXR and HDR), or, where it reports none, the extension.
 bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata);
 // readImage with sRGB-encoded values decoded to linear (every channel but alpha).
-Image readLinearImage(const std::string& path);
+Image readLinearImage(const std::string& path, ImageMetadata* metadata = nullptr);
 
 }  // namespace lucent

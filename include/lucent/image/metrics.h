@@ -34,9 +34,12 @@ double errorValue(const ChannelError& error, ErrorMetric metric);
 
 // False-colour (viridis) R,G,B image of the per-pixel error: the metric over the pixel's channels,
 // divided by maxValue, or by the 99th percentile of the per-pixel errors when maxValue <= 0.
-// Non-finite errors are magenta. Same size and channel checks as compareImages.
+// Non-finite errors are magenta. Same size and channel checks as compareImages. The error shown
+// as the colour map's top is stored in *scaleUsed when given.
 Image errorHeatmap(const Image& image, const Image& reference, ErrorMetric metric,
-                   double maxValue = 0);
+                   double maxValue = 0, double* scaleUsed = nullptr);
+// The heatmaps' colour map from 0 (left) to its top (right), for a colour bar.
+Image heatmapColourBar(int width, int height);
 
 // A candidate against a reference within both images' noise (lucent compare --test): per pixel and
 // channel the Welch statistic z = (c - r) / sqrt(var_c + var_r), from the variance of each pixel's

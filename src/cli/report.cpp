@@ -1,0 +1,483 @@
+// lucent report REFERENCE CANDIDATE... -o REPORT.html [--label NAME]... [--seconds S]...
+//               [--alpha A] [--exposure STOPS]
+// Writes one self-contained HTML page (images embedded as PNG data, no outside resources)
+// comparing each candidate with the reference: the images side by side and as an A/B flip at
+// pixel zoom, the relMSE heatmap and the noise test's |z| heatmap with colour bars, the numbers of
+// `lucent compare --test` (of `lucent compare` on the colours where the reference has no variance
+// layers), the bias per region, and relMSE against seconds where the candidates' times are known
+// (--seconds, or the lucent:render_seconds a Lucent render stores). Prints one JSON line; exits 0
+// when the page is written, 1 on bad input (no page is written then).
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+
+#include "cli/commands.h"
+#include "lucent/core/files.h"
+#include "lucent/image/metrics.h"
+
+namespace lucent::cli {
+
+namespace {
+
+struct ReportOptions {
+  std::string reference, output;
+  std::vector<std::string> candidates, labels;
+  std::vector<double> seconds;
+  double alpha = 0.01, exposure = 0;
+};
+
+std::string escapeHtml(const std::string& text) {
+  std::string out;
+  for (const char c : text) switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&#39;"; break;
+      default: out += c;
+    }
+  return out;
+}
+
+std::string base64(const std::vector<unsigned char>& bytes) {
+  static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    const uint32_t n = uint32_t(bytes[i]) << 16 | (i + 1 < bytes.size() ? uint32_t(bytes[i + 1]) << 8 : 0u) |
+                       (i + 2 < bytes.size() ? uint32_t(bytes[i + 2]) : 0u);
+    out += kDigits[n >> 18 & 63];
+    out += kDigits[n >> 12 & 63];
+    out += i + 1 < bytes.size() ? kDigits[n >> 6 & 63] : '=';
+    out += i + 2 < bytes.size() ? kDigits[n & 63] : '=';
+  }
+  return out;
+}
+
+std::string pngDataUri(const Image& image) { return "data:image/png;base64," + base64(encodePng(image)); }
+
+// Four significant digits, as printf's %.4g (the page's test formats compare's numbers alike).
+std::string number(double value) {
+  if (std::isnan(value)) return "NaN";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", value);
+  return text;
+}
+
+std::string metadataValue(const ImageMetadata& metadata, const std::string& key) {
+  for (const auto& [k, v] : metadata)
+    if (k == key) return v;
+  return "";
+}
+
+std::optional<double> renderSeconds(const ImageMetadata& metadata) {
+  const std::string text = metadataValue(metadata, "lucent:render_seconds");
+  if (text.empty()) return std::nullopt;
+  try {
+    const double seconds = std::stod(text);
+    if (std::isfinite(seconds) && seconds > 0) return seconds;
+  } catch (const std::exception&) {
+  }
+  return std::nullopt;
+}
+
+// What a Lucent render stored about itself, as HTML for the page's captions: the method, spp,
+// seed, time and version, and the options folded away.
+std::string provenance(const ImageMetadata& metadata) {
+  std::string out;
+  for (const char* key : {"lucent:method", "lucent:spp", "lucent:seed", "lucent:render_seconds", "lucent:version"}) {
+    const std::string value = metadataValue(metadata, key);
+    if (value.empty()) continue;
+    if (!out.empty()) out += " · ";
+    out += escapeHtml(std::string(key).substr(7) + " " + value);
+  }
+  if (out.empty()) return "no Lucent metadata";
+  const std::string options = metadataValue(metadata, "lucent:options");
+  if (!options.empty()) out += " <details><summary>options</summary><code>" + escapeHtml(options) + "</code></details>";
+  return out;
+}
+
+Image exposed(Image image, double stops) {
+  const float scale = float(std::exp2(stops));
+  for (float& v : image.pixels()) v *= scale;
+  return image;
+}
+
+struct Candidate {
+  std::string path, label;
+  std::optional<double> seconds;
+  ImageMetadata metadata;
+  ImageError error;
+  std::optional<NoiseTest> test;
+  double errorScale = 0;
+  std::string imageUri, errorUri, statisticUri;
+};
+
+bool hasVarianceLayers(const Image& image) {
+  for (const char* c : {"variance.R", "variance.G", "variance.B"})
+    if (image.channelIndex(c) < 0) return false;
+  return true;
+}
+
+// An <img> the page's self-check expects to decode to width x height.
+std::string imageTag(const std::string& uri, int width, int height, const std::string& alt,
+                     const std::string& attributes = "") {
+  return "<img src=\"" + uri + "\" alt=\"" + escapeHtml(alt) + "\" data-width=\"" + std::to_string(width) +
+         "\" data-height=\"" + std::to_string(height) + "\"" + attributes + ">";
+}
+
+std::string cell(const std::string& key, const std::string& text) {
+  return "<td data-key=\"" + key + "\">" + escapeHtml(text) + "</td>";
+}
+
+// relMSE against seconds on log-log axes, one labelled point per timed candidate.
+std::string speedAccuracyChart(const std::vector<Candidate>& candidates) {
+  struct Point {
+    double seconds, relmse;
+    std::string label;
+  };
+  std::vector<Point> points;
+  for (const Candidate& c : candidates)
+    if (c.seconds && c.error.overall.relmse > 0 && std::isfinite(c.error.overall.relmse))
+      points.push_back({*c.seconds, c.error.overall.relmse, c.label});
+  if (points.empty()) return "";
+  double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+  for (const Point& p : points) {
+    x0 = std::min(x0, std::log10(p.seconds)), x1 = std::max(x1, std::log10(p.seconds));
+    y0 = std::min(y0, std::log10(p.relmse)), y1 = std::max(y1, std::log10(p.relmse));
+  }
+  x0 = std::floor(x0), y0 = std::floor(y0);
+  x1 = std::max(std::ceil(x1), x0 + 1), y1 = std::max(std::ceil(y1), y0 + 1);
+  const double width = 640, height = 380, left = 70, right = 160, top = 20, bottom = 50;
+  auto sx = [&](double s) { return left + (std::log10(s) - x0) / (x1 - x0) * (width - left - right); };
+  auto sy = [&](double e) { return top + (y1 - std::log10(e)) / (y1 - y0) * (height - top - bottom); };
+  std::ostringstream svg;
+  svg << "<svg id=\"chart\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+      << "\" role=\"img\" aria-label=\"relMSE against seconds\">";
+  svg << "<rect x=\"" << left << "\" y=\"" << top << "\" width=\"" << width - left - right << "\" height=\""
+      << height - top - bottom << "\" fill=\"none\" stroke=\"#888\"/>";
+  for (double k = x0; k <= x1; ++k) {
+    const double x = sx(std::pow(10.0, k));
+    svg << "<line x1=\"" << x << "\" x2=\"" << x << "\" y1=\"" << top << "\" y2=\"" << height - bottom
+        << "\" stroke=\"#ddd\"/><text x=\"" << x << "\" y=\"" << height - bottom + 18
+        << "\" text-anchor=\"middle\">" << number(std::pow(10.0, k)) << "</text>";
+  }
+  for (double k = y0; k <= y1; ++k) {
+    const double y = sy(std::pow(10.0, k));
+    svg << "<line x1=\"" << left << "\" x2=\"" << width - right << "\" y1=\"" << y << "\" y2=\"" << y
+        << "\" stroke=\"#ddd\"/><text x=\"" << left - 6 << "\" y=\"" << y + 4 << "\" text-anchor=\"end\">"
+        << number(std::pow(10.0, k)) << "</text>";
+  }
+  svg << "<text x=\"" << (left + width - right) / 2 << "\" y=\"" << height - 8
+      << "\" text-anchor=\"middle\">seconds</text><text transform=\"translate(16," << (top + height - bottom) / 2
+      << ") rotate(-90)\" text-anchor=\"middle\">relMSE</text>";
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Point& p = points[i];
+    svg << "<g class=\"point\" data-label=\"" << escapeHtml(p.label) << "\"><circle cx=\"" << sx(p.seconds)
+        << "\" cy=\"" << sy(p.relmse) << "\" r=\"5\" fill=\"hsl(" << (i * 137) % 360
+        << ",65%,45%)\"/><text x=\"" << sx(p.seconds) + 8 << "\" y=\"" << sy(p.relmse) + 4 << "\">"
+        << escapeHtml(p.label) << "</text></g>";
+  }
+  svg << "</svg>";
+  return svg.str();
+}
+
+std::string colourBar(const std::string& uri, const std::string& top, const std::string& what) {
+  return "<div class=\"colour-bar\">" + imageTag(uri, 256, 12, "colour bar") + "<div><span>0</span><span>" +
+         escapeHtml(what) + "</span><span>" + escapeHtml(top) + "</span></div></div>";
+}
+
+const char* kStyle = R"(
+body { font: 14px/1.4 system-ui, sans-serif; margin: 24px; color: #222; background: #fafafa; }
+h1 { font-size: 22px; } h2 { font-size: 18px; margin-top: 32px; border-top: 1px solid #ccc; padding-top: 16px; }
+table { border-collapse: collapse; margin: 8px 0; } td, th { border: 1px solid #ccc; padding: 3px 8px; text-align: right; }
+th { background: #eee; } td:first-child { text-align: left; }
+.passed { color: #176b1b; font-weight: bold; } .failed { color: #b3261e; font-weight: bold; }
+.images { display: flex; flex-wrap: wrap; gap: 16px; align-items: flex-start; }
+figure { margin: 0; } figcaption { font-size: 12px; color: #555; max-width: 512px; }
+.pixelated { image-rendering: pixelated; width: calc(var(--zoom) * var(--w)); max-width: 100%; }
+figure { max-width: calc(50% - 16px); }
+.viewer { position: relative; overflow: auto; max-width: 100%; max-height: 640px; border: 1px solid #aaa;
+          display: inline-block; cursor: crosshair; background: #000; }
+.viewer img { display: block; image-rendering: pixelated; }
+.viewer img.b { position: absolute; left: 0; top: 0; visibility: hidden; }
+.viewer.showing-reference img.b { visibility: visible; }
+.viewer.showing-reference img.a { visibility: hidden; }
+.controls button { margin-right: 4px; } .controls .state { font-weight: bold; margin-left: 8px; }
+.colour-bar img { width: 256px; height: 12px; display: block; }
+.colour-bar div { display: flex; justify-content: space-between; width: 256px; font-size: 12px; }
+table.regions td { text-align: center; min-width: 84px; } table.regions td.rejected { background: #f6c9c5; }
+.note { color: #555; } details { display: inline; } details code { display: block; word-break: break-all; }
+)";
+
+// Flip and zoom; the self-check records on <body> whether every image decoded to its size and
+// whether flipping shows the other image (a headless browser's test reads them).
+const char* kScript = R"(
+const referenceUri = document.getElementById('reference-image').src;
+for (const img of document.querySelectorAll('img[data-reference]')) img.src = referenceUri;
+function setZoom(viewer, zoom) {
+  viewer.dataset.zoom = zoom;
+  for (const img of viewer.querySelectorAll('img')) img.style.width = (img.dataset.width * zoom) + 'px';
+  viewer.parentElement.querySelector('.zoom').textContent = zoom + 'x';
+}
+function flip(viewer) {
+  viewer.classList.toggle('showing-reference');
+  viewer.parentElement.querySelector('.state').textContent =
+      viewer.classList.contains('showing-reference') ? 'reference' : viewer.dataset.label;
+}
+let current = null;
+for (const viewer of document.querySelectorAll('.viewer')) {
+  const box = viewer.parentElement;
+  setZoom(viewer, +viewer.dataset.zoom);
+  viewer.addEventListener('click', () => flip(viewer));
+  viewer.addEventListener('mouseenter', () => { current = viewer; });
+  viewer.addEventListener('mousemove', (e) => {
+    const img = viewer.querySelector('img.a'), r = img.getBoundingClientRect(), zoom = +viewer.dataset.zoom;
+    const x = Math.floor((e.clientX - r.left) / zoom), y = Math.floor((e.clientY - r.top) / zoom);
+    box.querySelector('.pixel').textContent = 'pixel ' + x + ', ' + y;
+  });
+  for (const button of box.querySelectorAll('button[data-zoom]'))
+    button.addEventListener('click', () => setZoom(viewer, +button.dataset.zoom));
+  box.querySelector('button.flip').addEventListener('click', () => flip(viewer));
+  let timer = null;
+  box.querySelector('input.auto').addEventListener('change', (e) => {
+    clearInterval(timer);
+    if (e.target.checked) timer = setInterval(() => flip(viewer), 600);
+  });
+}
+document.addEventListener('keydown', (e) => {
+  if (current && (e.key === 'f' || e.key === ' ')) { e.preventDefault(); flip(current); }
+});
+async function selfCheck() {
+  const images = [...document.images];
+  const results = await Promise.allSettled(images.map((img) => img.decode()));
+  const failed = [];
+  results.forEach((r, k) => {
+    const img = images[k];
+    if (r.status !== 'fulfilled' || img.naturalWidth !== +img.dataset.width || img.naturalHeight !== +img.dataset.height)
+      failed.push(img.alt);
+  });
+  let flips = 0;
+  for (const viewer of document.querySelectorAll('.viewer')) {
+    const a = viewer.querySelector('img.a');
+    const before = getComputedStyle(a).visibility;
+    flip(viewer);
+    const after = getComputedStyle(a).visibility;
+    flip(viewer);
+    if (before === 'visible' && after === 'hidden' && getComputedStyle(a).visibility === 'visible') ++flips;
+  }
+  Object.assign(document.body.dataset, {imagesExpected: images.length, imagesDecoded: images.length - failed.length,
+                                        imagesFailed: failed.join('; '), viewersFlipped: flips, checked: 'yes'});
+}
+selfCheck();
+)";
+
+std::string reportPage(const ReportOptions& opt, const Image& reference, const ImageMetadata& referenceMetadata,
+                       const std::vector<Candidate>& candidates, bool tested) {
+  const int w = reference.width(), h = reference.height();
+  // Small images are shown enlarged by a whole factor, so that their pixels stay square.
+  const int zoom = std::max(1, 384 / std::max(w, h));
+  const std::string bar = pngDataUri(heatmapColourBar(256, 12));
+  std::ostringstream html;
+  html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Lucent report: "
+       << escapeHtml(opt.reference) << "</title><style>" << kStyle << "</style></head><body style=\"--zoom: "
+       << zoom << "; --w: " << w << "px\">\n";
+  html << "<h1>Lucent comparison report</h1>\n<p>Reference <code>" << escapeHtml(opt.reference) << "</code>, " << w
+       << " × " << h << ": " << provenance(referenceMetadata) << "</p>\n<p>Images shown at exposure "
+       << number(opt.exposure) << " stops, sRGB, " << zoom << "x.</p>\n";
+  if (tested)
+    html << "<p>Noise test (<code>lucent compare --test</code>): per pixel and channel Welch's z = (c − r) / "
+            "√(var<sub>c</sub> + var<sub>r</sub>), and the same for the whole image and a 4 × 4 grid of regions; "
+            "an image passes when no pixel and no region is rejected at α = "
+         << number(opt.alpha) << " with a Bonferroni correction.</p>\n";
+  else
+    html << "<p class=\"note\" id=\"untested\">The reference has no variance layers (render it with "
+            "<code>--method pt --variance</code>): the noise test was not run; the numbers are "
+            "<code>lucent compare</code>'s on the colours.</p>\n";
+
+  html << "<h2>Summary</h2>\n<table id=\"summary\"><tr><th>Candidate</th><th>Seconds</th><th>relMSE</th><th>RMSE</th>"
+          "<th>MAE</th><th>SMAPE</th><th>Non-finite</th>";
+  if (tested)
+    html << "<th>Within noise</th><th>Pixels rejected</th><th>Fraction at α</th><th>Bias (whole image)</th>"
+            "<th>z (whole image)</th>";
+  html << "</tr>\n";
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const Candidate& c = candidates[i];
+    html << "<tr data-candidate=\"" << i << "\"><td><a href=\"#candidate-" << i << "\">" << escapeHtml(c.label)
+         << "</a></td>" << cell("seconds", c.seconds ? number(*c.seconds) : "–") << cell("relmse", number(c.error.overall.relmse))
+         << cell("rmse", number(c.error.overall.rmse)) << cell("mae", number(c.error.overall.mae))
+         << cell("smape", number(c.error.overall.smape)) << cell("non_finite", std::to_string(c.error.nonFinite));
+    if (c.test) {
+      const NoiseTest& t = *c.test;
+      html << "<td data-key=\"passed\" class=\"" << (t.passed ? "passed\">passed" : "failed\">failed") << "</td>"
+           << cell("pixels_rejected", std::to_string(t.pixelsRejected))
+           << cell("fraction_rejected_at_alpha", number(double(t.pixelsRejectedAtAlpha) / double(t.pixels)))
+           << cell("relative_difference", number(t.regions[0].relativeDifference))
+           << cell("z", number(t.regions[0].z));
+    }
+    html << "</tr>\n";
+  }
+  html << "</table>\n";
+  const std::string chart = speedAccuracyChart(candidates);
+  if (!chart.empty())
+    html << "<h2>Speed and accuracy</h2>\n<p class=\"note\">relMSE against the reference and seconds to render "
+            "(given with --seconds or stored by the render).</p>\n"
+         << chart << "\n";
+
+  html << "<h2>Reference</h2>\n<figure>"
+       << imageTag(pngDataUri(exposed(rgbChannels(reference), opt.exposure)), w, h, "reference",
+                   " id=\"reference-image\" class=\"pixelated\"")
+       << "<figcaption>" << escapeHtml(opt.reference) << "</figcaption></figure>\n";
+
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const Candidate& c = candidates[i];
+    html << "<section id=\"candidate-" << i << "\"><h2>" << escapeHtml(c.label) << "</h2>\n<p class=\"note\"><code>"
+         << escapeHtml(c.path) << "</code>: " << provenance(c.metadata) << "</p>\n";
+    html << "<div class=\"flip-box\"><div class=\"controls\">Zoom <button data-zoom=\"1\">1x</button><button "
+            "data-zoom=\"2\">2x</button><button data-zoom=\"4\">4x</button><button data-zoom=\"8\">8x</button>"
+            "<button data-zoom=\"16\">16x</button> <span class=\"zoom\">1x</span> · <button class=\"flip\">Flip "
+            "(click, f or space)</button><label><input type=\"checkbox\" class=\"auto\"> flip every 0.6 s</label>"
+            "<span class=\"state\">"
+         << escapeHtml(c.label) << "</span> <span class=\"pixel\"></span></div>\n<div class=\"viewer\" data-zoom=\""
+         << zoom << "\" data-label=\"" << escapeHtml(c.label) << "\">" << imageTag(c.imageUri, w, h, c.label, " class=\"a\"")
+         << imageTag("", w, h, "reference (flip of " + c.label + ")", " class=\"b\" data-reference") << "</div></div>\n";
+    html << "<div class=\"images\"><figure>" << imageTag(c.imageUri, w, h, c.label + " (side by side)", " class=\"pixelated\"")
+         << "<figcaption>" << escapeHtml(c.label) << "</figcaption></figure><figure>"
+         << imageTag("", w, h, "reference (side by side with " + c.label + ")", " class=\"pixelated\" data-reference")
+         << "<figcaption>reference</figcaption></figure><figure>"
+         << imageTag(c.errorUri, w, h, "relMSE heatmap of " + c.label, " class=\"pixelated\"")
+         << colourBar(bar, number(c.errorScale), "per-pixel relMSE")
+         << "<figcaption>Per-pixel relMSE, (c − r)² / (r + 0.01)², over R, G, B; magenta: NaN or infinite."
+            "</figcaption></figure>";
+    if (c.test)
+      html << "<figure>" << imageTag(c.statisticUri, w, h, "test statistic heatmap of " + c.label, " class=\"pixelated\"")
+           << colourBar(bar, "5", "per-pixel |z|")
+           << "<figcaption>Per-pixel |z| of the noise test (largest over R, G, B); magenta: infinite.</figcaption>"
+              "</figure>";
+    html << "</div>\n";
+    if (c.test) {
+      const NoiseTest& t = *c.test;
+      html << "<p>Relative difference Σ(c − r) / Σr (bias) and z per region; rejected regions in red. Pixels "
+              "rejected: "
+           << t.pixelsRejected << " of " << t.pixels << "; least pixel p-value " << number(t.minPixelPValue)
+           << ".</p>\n<table class=\"regions\">";
+      const int grid = int(std::lround(std::sqrt(double(t.regions.size() - 1))));
+      for (int row = 0; row < grid; ++row) {
+        html << "<tr>";
+        for (int col = 0; col < grid; ++col) {
+          const size_t k = size_t(1 + row * grid + col);
+          const RegionTest& r = t.regions[k];
+          html << "<td" << (r.rejected ? " class=\"rejected\"" : "") << " data-key=\"region-" << k << "\">"
+               << "<span data-key=\"region-" << k << "-relative_difference\">" << number(r.relativeDifference)
+               << "</span><br>z <span data-key=\"region-" << k << "-z\">" << number(r.z) << "</span></td>";
+        }
+        html << "</tr>";
+      }
+      html << "</table>\n";
+    }
+    html << "</section>\n";
+  }
+  html << "<script>" << kScript << "</script>\n</body></html>\n";
+  return html.str();
+}
+
+int runReport(const ReportOptions& opt) {
+  if (!opt.labels.empty() && opt.labels.size() != opt.candidates.size())
+    throw std::invalid_argument("--label is given " + std::to_string(opt.labels.size()) + " times for " +
+                                std::to_string(opt.candidates.size()) + " candidates");
+  if (!opt.seconds.empty() && opt.seconds.size() != opt.candidates.size())
+    throw std::invalid_argument("--seconds is given " + std::to_string(opt.seconds.size()) + " times for " +
+                                std::to_string(opt.candidates.size()) + " candidates");
+  {
+    std::error_code ec;
+    const auto output = std::filesystem::weakly_canonical(opt.output, ec);
+    for (const std::string& input : opt.candidates)
+      if (output == std::filesystem::weakly_canonical(input, ec))
+        throw std::invalid_argument("the report '" + opt.output + "' is one of the images compared");
+    if (output == std::filesystem::weakly_canonical(opt.reference, ec))
+      throw std::invalid_argument("the report '" + opt.output + "' is the reference");
+  }
+  ImageMetadata referenceMetadata;
+  const Image referenceFile = readLinearImage(opt.reference, &referenceMetadata);
+  const bool tested = hasVarianceLayers(referenceFile);
+  const Image reference = rgbChannels(referenceFile);
+  std::vector<Candidate> candidates;
+  for (size_t i = 0; i < opt.candidates.size(); ++i) {
+    Candidate c;
+    c.path = opt.candidates[i];
+    c.label = opt.labels.empty() ? std::filesystem::path(c.path).filename().string() : opt.labels[i];
+    const Image file = readLinearImage(c.path, &c.metadata);
+    c.seconds = opt.seconds.empty() ? renderSeconds(c.metadata) : std::optional<double>(opt.seconds[i]);
+    const Image image = rgbChannels(file);
+    try {
+      if (tested) c.test = testWithinNoise(file, referenceFile, opt.alpha);
+      c.error = compareImages(image, reference);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("'" + c.path + "' vs '" + opt.reference + "': " + e.what());
+    }
+    c.imageUri = pngDataUri(exposed(image, opt.exposure));
+    c.errorUri = pngDataUri(errorHeatmap(image, reference, ErrorMetric::RelMse, 0, &c.errorScale));
+    if (c.test) c.statisticUri = pngDataUri(statisticHeatmap(c.test->statistic));
+    candidates.push_back(std::move(c));
+  }
+  const std::string page = reportPage(opt, referenceFile, referenceMetadata, candidates, tested);
+  writeFileAtomically(opt.output, "report", [&page](const std::filesystem::path& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    out << page;
+    out.close();
+    if (!out) throw WriteFailure("write failed");
+  });
+
+  nlohmann::ordered_json line;
+  line["report"] = opt.output;
+  line["reference"] = opt.reference;
+  line["tested"] = tested;
+  line["candidates"] = nlohmann::ordered_json::array();
+  for (const Candidate& c : candidates) {
+    nlohmann::ordered_json entry = {{"label", c.label}, {"image", c.path}, {"relmse", c.error.overall.relmse}};
+    if (c.seconds) entry["seconds"] = *c.seconds;
+    if (c.test) entry["passed"] = c.test->passed;
+    line["candidates"].push_back(entry);
+  }
+  std::cout << line.dump() << std::endl;
+  return 0;
+}
+
+}  // namespace
+
+void addReportCommand(CLI::App& app, int& exitCode) {
+  auto opt = std::make_shared<ReportOptions>();
+  CLI::App* cmd = app.add_subcommand("report", "Write an HTML page comparing images with a reference");
+  cmd->add_option("reference", opt->reference,
+                  "Reference image (with variance layers, from --method pt --variance, for the noise test)")
+      ->required();
+  cmd->add_option("candidates", opt->candidates, "Images to compare with the reference")->required();
+  cmd->add_option("-o,--output", opt->output, "The HTML page to write")->required();
+  cmd->add_option("--label", opt->labels, "A name per candidate, in order (default: the file name)")
+      ->allow_extra_args(false);
+  cmd->add_option("--seconds", opt->seconds,
+                  "Seconds per candidate, in order, for the speed-accuracy chart (default: the "
+                  "lucent:render_seconds a Lucent render stores)")
+      ->allow_extra_args(false)
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--alpha", opt->alpha, "Significance of the noise test (default 0.01)")->check(CLI::Range(1e-12, 0.5));
+  cmd->add_option("--exposure", opt->exposure, "Exposure of the shown images, in stops (default 0)")
+      ->check(CLI::Range(-30.0, 30.0));
+  cmd->callback([opt, &exitCode] {
+    try {
+      exitCode = runReport(*opt);
+    } catch (const std::exception& e) {
+      std::cerr << "lucent report: error: " << e.what() << "\n";
+      exitCode = 1;
+    }
+  });
+}
+
+}  // namespace lucent::cli
