@@ -79,3 +79,26 @@ TEST_CASE("The film's layers: features and parts, and a caustic part only where 
   CHECK(image.at(1, 1, image.channelIndex("depth.Z")) == 3.0f);
   CHECK(image.at(0, 0, 0) == 0.0f);  // no sample
 }
+
+TEST_CASE("Without layers a film keeps one total per channel, and its image is the parts' to the bit", "[film]") {
+  // Parts whose float sum rounds differently from their exact sum: 1 + 2^-24 + 2^-24 is 1 in float
+  // arithmetic, 1 + 2^-23 exactly.
+  TwoByTwo band;
+  for (uint32_t i = 0; i < 3; ++i)
+    band.light.direct[i] = Rgb(1.0f), band.light.indirect[i] = Rgb(0x1p-24f * float(i + 1)),
+    band.light.caustic[i] = Rgb(0x1p-24f);
+  Film total(2, 2, Film::Sums::PerPart, {});
+  Film parts(2, 2, Film::Sums::PerPart, {true, true});
+  CHECK(total.sumsPerPixel() == 3);
+  CHECK(parts.sumsPerPixel() == 3 + 3 + 3 + 7);
+  total.add(band.eye, band.light);
+  parts.add(band.eye, band.light);
+  const Image a = total.image(), b = parts.image();
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 2; ++x)
+      for (int c = 0; c < 3; ++c) {
+        INFO("pixel " << x << ", " << y << ", channel " << c);
+        CHECK(a.at(x, y, c) == b.at(x, y, b.channelIndex(std::string(1, "RGB"[c]))));
+      }
+  CHECK(a.at(0, 0, 0) == float(1.25 + 0x1p-23));  // the pixel's parts, summed exactly
+}

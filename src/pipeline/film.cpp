@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <memory>
 #include <stdexcept>
 
 #include "lucent/core/memory.h"
@@ -14,6 +15,15 @@ namespace lucent {
 namespace {
 constexpr size_t kPointChunk = 8192;  // shading points per task when they are added
 }  // namespace
+
+PointRadiance::PointRadiance(size_t n) {
+  for (UninitializedVector<Rgb>* part : {&direct, &indirect, &caustic}) {
+    part->resize(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, size_t(1) << 16), [&](const tbb::blocked_range<size_t>& r) {
+      std::uninitialized_value_construct(part->data() + r.begin(), part->data() + r.end());
+    });
+  }
+}
 
 Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers)
     : width_(width), height_(height), region_(region), wholeImage_(region == PixelRect{0, 0, width, height}),
@@ -25,16 +35,21 @@ Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers
   auto reserve = [&](int& offset, int channels) { offset = stride_, stride_ += channels; };
   if (layers.variance && sums != Sums::PerSample)
     throw std::invalid_argument("film: a variance layer needs each camera sample's total (Sums::PerSample)");
-  if (sums == Sums::PerSample) reserve(total_, 3);
+  // Without layers the parts need not be kept apart: the exact sum of every part's terms in one
+  // total is the sum of the parts' exact sums, bit for bit, in a third of the memory.
+  if (sums == Sums::PerSample || !layers.features) reserve(total_, 3);
   if (layers.variance) reserve(squares_, 3);
-  if (sums == Sums::PerPart || layers.features) reserve(direct_, 3), reserve(indirect_, 3);
-  if (sums == Sums::PerPart) reserve(caustic_, 3);
+  if (layers.features) reserve(direct_, 3), reserve(indirect_, 3);
+  if (sums == Sums::PerPart && layers.features) reserve(caustic_, 3);
   if (layers.features) reserve(features_, 7);
   const uint64_t pixels = region.pixelCount();
   // The sums and sample counts, and the image made of them (about as many channels, in floats).
   requireMemory(pixels * (uint64_t(stride_) * (sizeof(ExactSum) + sizeof(float)) + 2 * sizeof(uint32_t)), "the film",
                 "lower --resolution or render it in parts (--crop)");
   sums_.resize(pixels * size_t(stride_));
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, sums_.size(), size_t(1) << 16), [&](const tbb::blocked_range<size_t>& r) {
+    std::uninitialized_value_construct(sums_.data() + r.begin(), sums_.data() + r.end());
+  });
   samples_.assign(pixels, 0);
   taken_.assign(pixels, 0);
 }
@@ -65,7 +80,8 @@ void Film::add(const EyePaths& band, const PointRadiance& light) {
       const uint64_t p = band.imagePixel(i, width_);
       ExactSum* sum = at(p);
       samples_[local(p)] += px.validSamples;
-      for (int c = 0; c < 3; ++c) sum[direct_ + c].add(px.emitted[c]);
+      const int emitted = layers_.features ? direct_ : total_;
+      for (int c = 0; c < 3; ++c) sum[emitted + c].add(px.emitted[c]);
       if (!layers_.features) continue;
       for (int c = 0; c < 7; ++c) sum[features_ + c].add(band.features[i].sums[c]);
     }
@@ -88,7 +104,10 @@ void Film::add(const EyePaths& band, const PointRadiance& light) {
         continue;
       }
       ExactSum* sum = at(sp.pixel);
-      for (int c = 0; c < 3; ++c) sum[direct_ + c].add(d[c]), sum[indirect_ + c].add(ind[c]), sum[caustic_ + c].add(ca[c]);
+      if (layers_.features)
+        for (int c = 0; c < 3; ++c) sum[direct_ + c].add(d[c]), sum[indirect_ + c].add(ind[c]), sum[caustic_ + c].add(ca[c]);
+      else
+        for (int c = 0; c < 3; ++c) sum[total_ + c].add(d[c]), sum[total_ + c].add(ind[c]), sum[total_ + c].add(ca[c]);
     }
     dropped += droppedHere;
   });
@@ -131,8 +150,8 @@ Image Film::image() const {
       const double n = std::max<uint32_t>(1, samples_[p]);
       float* o = out + p * nc;
       for (int c = 0; c < 3; ++c) {
-        ExactSum total = sum[mode_ == Sums::PerSample ? total_ + c : direct_ + c];
-        if (mode_ == Sums::PerPart) total.add(sum[indirect_ + c]), total.add(sum[caustic_ + c]);
+        ExactSum total = sum[total_ >= 0 ? total_ + c : direct_ + c];
+        if (total_ < 0) total.add(sum[indirect_ + c]), total.add(sum[caustic_ + c]);
         o[c] = float(total.value() / n);
       }
       // The sample variance over n, the variance of the pixel's mean (infinite below two samples).

@@ -16,7 +16,7 @@ namespace lucent {
 namespace {
 
 constexpr char kMagic[8] = {'L', 'C', 'N', 'T', 'F', 'I', 'L', 'M'};
-constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kFormatVersion = 2;
 constexpr uint32_t kMaxHeaderBytes = 1 << 20;
 
 // FNV-1a over the arrays as stored (padding included), as 64-bit little-endian words: the format's

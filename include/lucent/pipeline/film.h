@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "lucent/core/exact_sum.h"
+#include "lucent/core/uninitialized.h"
 #include "lucent/image/image.h"
 #include "lucent/pipeline/pixel_rect.h"
 #include "lucent/pipeline/shading_points.h"
@@ -30,8 +31,8 @@ struct FilmLayers {
 // Per shading point, the light each part of the estimate sends towards the camera (before the
 // point's camera-path weight).
 struct PointRadiance {
-  std::vector<Rgb> direct, indirect, caustic;
-  explicit PointRadiance(size_t n) : direct(n), indirect(n), caustic(n) {}
+  UninitializedVector<Rgb> direct, indirect, caustic;
+  explicit PointRadiance(size_t n);  // all zero, written in parallel
 };
 
 class Film {
@@ -92,7 +93,7 @@ class Film {
   FilmLayers layers_;
   // Offsets into a pixel's sums: the total (PerSample), the parts, the features; -1 where absent.
   int total_ = -1, squares_ = -1, direct_ = -1, indirect_ = -1, caustic_ = -1, features_ = -1, stride_ = 0;
-  std::vector<ExactSum> sums_;
+  UninitializedVector<ExactSum> sums_;  // zeroed in parallel: a film can be hundreds of megabytes
   std::vector<uint32_t> samples_;  // valid camera samples per pixel
   std::vector<uint32_t> taken_;    // camera samples taken per pixel
   uint64_t dropped_ = 0;
