@@ -32,6 +32,10 @@ namespace {
 
 enum class EnvStream : uint64_t { Points = 31 };
 
+// Camera samples per band of the pixel stage: its shading points (112 bytes each) stay below
+// glibc's mmap threshold (32 MiB), so that each band's arrays reuse the heap pages of the last.
+constexpr uint64_t kBandSamples = uint64_t(1) << 17;
+
 // A shading point's diffuse reflectance: the method shades every receiver as diffuse (the paper's
 // surfaces are), a glossy one by its diffuse part.
 Rgb diffusePart(const SurfaceBsdf& bsdf) { return bsdf.kd; }
@@ -204,63 +208,86 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   primaryTexels = {};
   report(0.65);
 
-  // The pixels: camera paths to shading points, the analytic lights by shadow rays, the rest from
-  // the caches (Eq. 5) or, brute force, from a micro-buffer each.
+  // The pixels, band by band of rows: camera paths to shading points, the analytic lights by shadow
+  // rays, the rest from the caches (Eq. 5) or, brute force, from a micro-buffer each. A band's
+  // arrays reuse the memory of the one before (fresh pages are slow to touch); a dump holds the
+  // whole image's shading points, in one band.
   Stopwatch pixelClock;
-  const EyePaths eye = traceEyePaths(scene, vis, eyePathSettings(o, part));
-  const size_t n = eye.points.size();
-  PointRadiance shading(n);
+  double imageSeconds = 0;
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {o.layers, false}));
+  RowBands bands(part, o.dumpDirectory.empty() ? kBandSamples : ~uint64_t(0), 0.0);
   const PinholeCamera camera(scene.camera);
   Interpolation interpolation;
   interpolation.maxAngle = o.cacheMaxAngle * kPi / 180.0f;
   std::atomic<uint64_t> fallbacks{0}, glossy{0};
-  // The analytic lights by shadow rays with the full BSDF; the environment's and the nodes' light
-  // as diffuse.
-  analyticDirectLight(scene, vis, eye.points, shading.direct, shadowRays);
-  auto shade = [&](size_t i, const BufferIrradiance& e) {
-    const ShadingPoint& p = eye.points[i];
-    const Rgb rho = diffusePart(p.bsdf) * kInvPi;
-    shading.direct[i] += rho * e.environment;
-    shading.indirect[i] = rho * e.nodes;
-    if (p.bsdf.type != MaterialType::Diffuse) ++glossy;
-  };
-  if (o.pixelIrradiance == PixelIrradiance::Caches) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i) {
-        const ShadingPoint& p = eye.points[i];
-        // The tile the point appears in (through a mirror: where it would appear, or its pixel's).
-        const Vec3 s = camera.project(p.position);
-        const int width = scene.camera.width;
-        const bool onScreen = s.z > 0 && s.x >= 0 && s.y >= 0 && s.x < float(width) && s.y < float(scene.camera.height);
-        const int px = onScreen ? int(s.x) : int(p.pixel % uint32_t(width));
-        const int py = onScreen ? int(s.y) : int(p.pixel / uint32_t(width));
-        bool fallback = false;
-        const BufferIrradiance e = interpolateCaches(caches, grid, px / grid.tileSize, py / grid.tileSize, p.position,
-                                                     p.normal, interpolation, fallback);
-        fallbacks += fallback;
-        shade(i, e);
-      }
-    });
-  } else {
-    std::vector<uint32_t> texels(std::min<size_t>(n, 1u << 14) * primaryTexelCount);
-    const size_t pixelChunk = texels.size() / primaryTexelCount;
-    for (size_t first = 0; first < n; first += pixelChunk) {
-      const size_t count = std::min(pixelChunk, n - first);
-      renderBuffers(micro, settings, primaryQuadrature, count,
-                    [&](size_t k) { return BufferOrigin{eye.points[first + k].position, eye.points[first + k].normal}; },
-                    texels, counters);
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 64), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t k = r.begin(); k != r.end(); ++k)
-          shade(first + k, bufferIrradiance(std::span(texels).subspan(k * primaryTexelCount, primaryTexelCount),
-                                            primaryQuadrature, eye.points[first + k].normal, env, direct));
+  uint64_t eyeRays = 0, shadingPoints = 0, invalidSamples = 0;
+  std::vector<uint32_t> texels;
+  for (int row = part.region.y0; row < part.region.y1;) {
+    const std::pair<int, int> rows = bands.next(row);
+    EyePathSettings settingsOfBand = eyePathSettings(o, part);
+    settingsOfBand.region = {part.region.x0, rows.first, part.region.x1, rows.second};
+    const EyePaths eye = traceEyePaths(scene, vis, settingsOfBand);
+    const size_t n = eye.points.size();
+    PointRadiance shading(n);
+    // The analytic lights by shadow rays with the full BSDF; the environment's and the nodes' light
+    // as diffuse.
+    analyticDirectLight(scene, vis, eye.points, shading.direct, shadowRays);
+    auto shade = [&](size_t i, const BufferIrradiance& e) {
+      const ShadingPoint& p = eye.points[i];
+      const Rgb rho = diffusePart(p.bsdf) * kInvPi;
+      shading.direct[i] += rho * e.environment;
+      shading.indirect[i] = rho * e.nodes;
+      if (p.bsdf.type != MaterialType::Diffuse) ++glossy;
+    };
+    if (o.pixelIrradiance == PixelIrradiance::Caches) {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+          const ShadingPoint& p = eye.points[i];
+          // The tile the point appears in (through a mirror: where it would appear, or its pixel's).
+          const Vec3 s = camera.project(p.position);
+          const int width = scene.camera.width;
+          const bool onScreen = s.z > 0 && s.x >= 0 && s.y >= 0 && s.x < float(width) && s.y < float(scene.camera.height);
+          const int px = onScreen ? int(s.x) : int(p.pixel % uint32_t(width));
+          const int py = onScreen ? int(s.y) : int(p.pixel / uint32_t(width));
+          bool fallback = false;
+          const BufferIrradiance e = interpolateCaches(caches, grid, px / grid.tileSize, py / grid.tileSize, p.position,
+                                                       p.normal, interpolation, fallback);
+          fallbacks += fallback;
+          shade(i, e);
+        }
       });
-      report(0.65 + 0.35 * double(first + count) / double(n));
+    } else {
+      texels.resize(std::min<size_t>(std::max<size_t>(n, 1), 1u << 14) * primaryTexelCount);
+      const size_t pixelChunk = texels.size() / primaryTexelCount;
+      for (size_t first = 0; first < n; first += pixelChunk) {
+        const size_t count = std::min(pixelChunk, n - first);
+        renderBuffers(micro, settings, primaryQuadrature, count,
+                      [&](size_t k) { return BufferOrigin{eye.points[first + k].position, eye.points[first + k].normal}; },
+                      texels, counters);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 64), [&](const tbb::blocked_range<size_t>& r) {
+          for (size_t k = r.begin(); k != r.end(); ++k)
+            shade(first + k, bufferIrradiance(std::span(texels).subspan(k * primaryTexelCount, primaryTexelCount),
+                                              primaryQuadrature, eye.points[first + k].normal, env, direct));
+        });
+      }
     }
+    if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
+    Stopwatch filmClock;
+    film->add(eye, shading);
+    for (int y = rows.first; y < rows.second; ++y)
+      for (int x = part.region.x0; x < part.region.x1; ++x)
+        film->setTaken(uint64_t(y) * uint64_t(scene.camera.width) + uint64_t(x), uint32_t(part.samples()));
+    imageSeconds += filmClock.seconds();
+    eyeRays += eye.rays, shadingPoints += n, invalidSamples += eye.invalid;
+    row = rows.second;
+    report(0.65 + 0.35 * double(row - part.region.y0) / double(part.region.height()));
   }
-  stats.addStage("pixels", pixelClock.seconds());
-  if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
-
-  shadeImage(out, control, scene, part, eye, shading, {o.layers, false});
+  stats.addStage("pixels", pixelClock.seconds() - imageSeconds);
+  Stopwatch imageClock;
+  out.image = film->image();
+  out.film = film;
+  out.sppDone = part.samples();
+  stats.addStage("image", imageSeconds + imageClock.seconds());
   report(1.0);
 
   stats.addCounter("primary_points", counts.primary);
@@ -271,12 +298,12 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   stats.addCounter("secondary_without_light", secondaryWithoutLight);
   counters.report(stats);
   stats.addCounter("shadow_rays", shadowRays);
-  stats.addCounter("eye_rays", eye.rays);
-  stats.addCounter("shading_points", n);
+  stats.addCounter("eye_rays", eyeRays);
+  stats.addCounter("shading_points", shadingPoints);
   stats.addCounter("cache_fallbacks", fallbacks);
   stats.addCounter("glossy_shaded_diffuse", glossy);
   stats.addCounter("grid_references", grid.caches.size());
-  stats.addCounter("invalid_samples", eye.invalid + out.film->droppedPoints());
+  stats.addCounter("invalid_samples", invalidSamples + out.film->droppedPoints());
   return out;
 }
 

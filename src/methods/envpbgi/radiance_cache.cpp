@@ -126,6 +126,12 @@ CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& ca
     for (int y = t.y0; y <= t.y1; ++y)
       for (int x = t.x0; x <= t.x1; ++x) g.caches[cursor[size_t(y) * size_t(g.tilesX) + size_t(x)]++] = uint32_t(k);
   }
+  for (std::vector<float>* v : {&g.x, &g.y, &g.z, &g.radius, &g.nx, &g.ny, &g.nz}) v->resize(g.caches.size());
+  for (size_t j = 0; j < g.caches.size(); ++j) {
+    const RadianceCache& c = caches[g.caches[j]];
+    g.x[j] = c.position.x, g.y[j] = c.position.y, g.z[j] = c.position.z, g.radius[j] = c.radius;
+    g.nx[j] = c.normal.x, g.ny[j] = c.normal.y, g.nz[j] = c.normal.z;
+  }
   return g;
 }
 
@@ -139,13 +145,32 @@ BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const 
   const size_t tile = size_t(ty) * size_t(grid.tilesX) + size_t(tx);
   BufferIrradiance sum;
   double total = 0;
-  for (uint32_t j = grid.begin[tile]; j < grid.begin[tile + 1]; ++j) {
-    const RadianceCache& c = caches[grid.caches[j]];
-    if (!(length(x - c.position) < c.radius) || !(dot(n, c.normal) >= cosMax)) continue;
-    const float w = 1.0f / std::max(wardError(c), 1e-6f);
-    const BufferIrradiance e = cacheIrradiance(c, n);
-    sum.environment += e.environment * w, sum.nodes += e.nodes * w;
-    total += w;
+  constexpr uint32_t kBlock = 64;
+  for (uint32_t block = grid.begin[tile]; block < grid.begin[tile + 1]; block += kBlock) {
+    const uint32_t count = std::min(kBlock, grid.begin[tile + 1] - block);
+    // The test of every cache in the block, in lanes (the same arithmetic as length() and dot()).
+    bool qualifies[kBlock];
+    const float* cx = &grid.x[block];
+    const float* cy = &grid.y[block];
+    const float* cz = &grid.z[block];
+    const float* cr = &grid.radius[block];
+    const float* cnx = &grid.nx[block];
+    const float* cny = &grid.ny[block];
+    const float* cnz = &grid.nz[block];
+    for (uint32_t k = 0; k < count; ++k) {
+      const float dx = x.x - cx[k], dy = x.y - cy[k], dz = x.z - cz[k];
+      const float distance = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const float cosine = n.x * cnx[k] + n.y * cny[k] + n.z * cnz[k];
+      qualifies[k] = (distance < cr[k]) & (cosine >= cosMax);
+    }
+    for (uint32_t k = 0; k < count; ++k) {
+      if (!qualifies[k]) continue;
+      const RadianceCache& c = caches[grid.caches[block + k]];
+      const float w = 1.0f / std::max(wardError(c), 1e-6f);
+      const BufferIrradiance e = cacheIrradiance(c, n);
+      sum.environment += e.environment * w, sum.nodes += e.nodes * w;
+      total += w;
+    }
   }
   if (total > 0) {
     const float inv = float(1.0 / total);

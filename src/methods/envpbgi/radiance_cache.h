@@ -53,6 +53,9 @@ struct CacheGrid {
   int tileSize = 16, tilesX = 0, tilesY = 0;
   std::vector<uint32_t> begin;   // tilesX * tilesY + 1
   std::vector<uint32_t> caches;  // cache indices
+  // Per entry of `caches`, its cache's surfel, apart by coordinate: a receiver tests a tile's
+  // hundred-odd caches against radius and angle in SIMD lanes before it reads any whole cache.
+  std::vector<float> x, y, z, radius, nx, ny, nz;
 };
 CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& camera, int tileSize);
 
