@@ -34,7 +34,8 @@ def pt_samples(extra=()):
 
 
 def gather_rays(*counts):
-    return [(f"{n} gather rays", ["--gather-rays", str(n)]) for n in counts]
+    """pmfg's gather rays, with Purcell's 65,000 photons (pmfg's default before it rose to 130,000)."""
+    return [(f"{n} gather rays", ["--gather-rays", str(n), "--photons", "65000"]) for n in counts]
 
 
 def photons(flags, label, *counts):

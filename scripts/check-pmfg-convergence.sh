@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 3's bar: pmfg at its default settings (65,000 photons, 4,096 gather rays at every pixel,
+# Issue 3's bar: pmfg at its default settings (130,000 photons, 4,096 gather rays at every pixel,
 # k = 50, kd-tree, one camera ray per pixel) on the Cornell box at 512x512, against a converged
 # path-traced reference (references/cornell-box-pt.exr, made by scripts/make-reference.sh if
 # missing), must have relMSE below 0.005. Takes of the order of 10-20 minutes on 2 cores.

@@ -77,6 +77,9 @@ const OptionTable<PhotonMapOptions>& pmfgOptionTable() {
   static const OptionTable<PhotonMapOptions> table = [] {
     PhotonMapOptions defaults;
     defaults.map = PhotonMapKind::KdTree;
+    // Twice Purcell's count: at 4,096 gather rays the global map's error dominates (Cornell box 128 x
+    // 128: relMSE 0.00067 -> 0.00035-0.00040 with 256 shadow rays) for a few seconds more.
+    defaults.photons = 130000;
     return rendererTable(defaults, true);
   }();
   return table;
