@@ -564,6 +564,48 @@ TEST_CASE("Direct light with shadow rays packed across points equals each point'
   }
 }
 
+TEST_CASE("Direct light: one exact shadow ray per point light, samples for the area light alone", "[photonmap-render]") {
+  // The Cornell box with two point lights added under its ceiling. The point lights' part has no
+  // noise (any seed, any sample count gives it to the bit) and takes at most one ray per light; with
+  // the area light too, each point's light is the area light's alone (its samples no longer shared
+  // with the point lights) plus the point lights'.
+  const Scene areaOnly = [] {
+    Scene s = loadScene(std::string(LUCENT_SOURCE_DIR) + "/scenes/cornell-box.json", {true});
+    s.camera.width = 40, s.camera.height = 32;
+    return s;
+  }();
+  Scene mixed = areaOnly, pointsOnly = areaOnly;
+  const Light a{LightType::Point, 0, Vec3(-0.4f, 1.6f, 0.1f), Rgb(0.3f)}, b{LightType::Point, 0, Vec3(0.3f, 1.2f, 0.4f), Rgb(0.2f, 0.25f, 0.3f)};
+  for (Scene* s : {&mixed, &pointsOnly}) s->lights.insert(s->lights.end(), {a, b}), finalizeScene(*s);
+  for (size_t m = 0; m < pointsOnly.materials.size(); ++m) pointsOnly.materials[m].ke = Rgb();
+  finalizeScene(pointsOnly);
+  REQUIRE(pointsOnly.lights.size() == 2);
+  const Visibility vis(mixed);  // the same geometry in all three
+  EyePathSettings settings;
+  settings.seed = 5;
+  const EyePaths eye = traceEyePaths(mixed, vis, settings);
+  const size_t n = eye.points.size();
+  auto direct = [&](const Scene& scene, int samples, uint64_t seed, uint64_t& rays) {
+    std::vector<Rgb> out(n);
+    estimateDirectLight(scene, vis, eye.points, samples, seed, out, rays);
+    return out;
+  };
+  uint64_t rays1 = 0, rays2 = 0, ignored = 0;
+  const std::vector<Rgb> points1 = direct(pointsOnly, 1, 3, rays1), points2 = direct(pointsOnly, 16, 4, rays2);
+  CHECK(points1 == points2);
+  CHECK(rays1 == rays2);
+  CHECK(rays1 <= 2 * n);
+  CHECK(rays1 > n);  // both lights above most points
+  const std::vector<Rgb> area = direct(areaOnly, 8, 3, ignored), both = direct(mixed, 8, 3, ignored);
+  size_t lit = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const Rgb sum = area[i] + points1[i];
+    for (int c = 0; c < 3; ++c) REQUIRE(both[i][c] == Approx(sum[c]).epsilon(1e-5).margin(1e-7));
+    lit += !points1[i].isBlack();
+  }
+  CHECK(lit > n / 2);
+}
+
 TEST_CASE("A flat mirror's caustic equals the mirrored light's illumination", "[photonmap-render][caustic]") {
   // A floor (y = 0, Kd 0.5) under a mirror (y = 4, 3 x 3, facing down, Ks 0.8) and between them
   // a small emitter (y = 1, 0.4 x 0.4) facing the mirror, outside the mirror's bounding sphere, so

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "lucent/core/distribution.h"
 #include "lucent/core/parallel.h"
 #include "lucent/core/sampling.h"
 #include "lucent/scene/light_sampling.h"
@@ -14,29 +15,71 @@ namespace lucent {
 
 namespace {
 
-// The light samples of one point that need a shadow ray, in sample order: emit(ray, contribution),
-// the contribution counting if the ray is unoccluded (before the 1 / samples).
+// The lights that light samples choose among: all but the point and directional lights, whose light
+// arrives from one direction (one shadow ray each gives it exactly), by the scene's light
+// distribution restricted to them; the scene's own where it has no such lights (the same choices).
+struct SampledLights {
+  bool all = true;
+  std::vector<uint32_t> index;  // without `all`: the sampled lights' indices in the scene
+  Distribution1D choice;        // without `all`: over `index`
+  bool any = false;
+};
+
+SampledLights sampledLights(const Scene& scene) {
+  SampledLights s;
+  std::vector<float> weights;
+  for (uint32_t i = 0; i < uint32_t(scene.lights.size()); ++i) {
+    if (isDeltaLight(scene.lights[i])) s.all = false;
+    else s.index.push_back(i), weights.push_back(scene.lightDistribution.pmf(i));
+  }
+  s.any = !s.index.empty();
+  if (!s.all && s.any) s.choice = Distribution1D(weights);
+  return s;
+}
+
+// A receiver's light sample: the contribution its shadow ray brings if unoccluded.
 template <class Emit>
-void shadowSamples(const Scene& scene, const ShadingPoint& point, int samples, uint64_t seed, Emit&& emit) {
-  Rng rng(seed, point.pixel, uint64_t(point.sample) << 32 | point.branch);
+void emitLightSample(const ShadingPoint& point, const Frame& frame, Vec3 woLocal, float side, const LightSample& ls,
+                     Emit&& emit) {
+  if (!(ls.pdf > 0) || ls.radiance.isBlack()) return;
+  const Vec3 wiLocal = frame.toLocal(ls.wi);
+  if (wiLocal.z <= 0 || dot(ls.wi, point.geometricNormal) * side <= 0) return;
+  const Rgb f = evalBsdf(point.bsdf, woLocal, wiLocal);
+  if (f.isBlack()) return;
+  emit(shadowRay(point.position, point.geometricNormal, ls), f * ls.radiance * (wiLocal.z / ls.pdf));
+}
+
+// The shadow rays of one point, in order: emit(ray, contribution, exact). First one to each point and
+// directional light (exact: counted once), then `samples` samples of the other lights (each to be
+// divided by `samples`), stratified over the light's area.
+template <class Emit>
+void shadowSamples(const Scene& scene, const SampledLights& lights, const ShadingPoint& point, int samples,
+                   uint64_t seed, Emit&& emit) {
   const Frame frame(point.normal);
   const Vec3 woLocal = frame.toLocal(point.wo);
   const float side = dot(point.normal, point.geometricNormal);
+  for (const Light& light : scene.lights)
+    if (isDeltaLight(light))
+      emitLightSample(point, frame, woLocal, side, deltaLightSample(light, point.position),
+                      [&](const Ray& ray, Rgb c) { emit(ray, c, true); });
+  if (!lights.any || samples <= 0) return;
+  Rng rng(seed, point.pixel, uint64_t(point.sample) << 32 | point.branch);
   for (int i = 0; i < samples; ++i) {
     const float uLight = rng.uniform();
     const Vec2 u = stratifiedSample2D(uint32_t(i), uint32_t(samples), rng.uniform2());
-    const LightSample ls = sampleLight(scene, point.position, uLight, u);
-    if (!(ls.pdf > 0) || ls.radiance.isBlack()) continue;
-    const Vec3 wiLocal = frame.toLocal(ls.wi);
-    if (wiLocal.z <= 0 || dot(ls.wi, point.geometricNormal) * side <= 0) continue;
-    const Rgb f = evalBsdf(point.bsdf, woLocal, wiLocal);
-    if (f.isBlack()) continue;
-    emit(shadowRay(point.position, point.geometricNormal, ls), f * ls.radiance * (wiLocal.z / ls.pdf));
+    LightSample ls;
+    if (lights.all) {
+      ls = sampleLight(scene, point.position, uLight, u);
+    } else {
+      const uint32_t k = lights.choice.pick(uLight);
+      ls = sampleChosenLight(scene, lights.index[k], lights.choice.pmf(k), point.position, u);
+    }
+    emitLightSample(point, frame, woLocal, side, ls, [&](const Ray& ray, Rgb c) { emit(ray, c, false); });
   }
 }
 
 // Shadow rays queued and traced as packets of up to kWidestPacket (a lone ray alone); each
-// unoccluded ray's contribution is added to its point's sum, in queue order.
+// unoccluded ray's contribution is added to its sum, in queue order.
 struct ShadowPackets {
   static constexpr int kPacket = kWidestPacket;
   ShadowPackets(const Visibility& visibility, uint64_t& rayCount) : vis(visibility), rays(rayCount) {}
@@ -65,20 +108,21 @@ struct ShadowPackets {
 
 Rgb directLight(const Scene& scene, const Visibility& vis, const ShadingPoint& point, int samples, uint64_t seed,
                 uint64_t& rays) {
-  Rgb sum;
+  Rgb sampled, exact;
   ShadowPackets packets(vis, rays);
-  shadowSamples(scene, point, samples, seed, [&](const Ray& ray, Rgb c) { packets.add(ray, c, &sum); });
+  shadowSamples(scene, sampledLights(scene), point, samples, seed,
+                [&](const Ray& ray, Rgb c, bool isExact) { packets.add(ray, c, isExact ? &exact : &sampled); });
   packets.flush();
-  return sum * (1.0f / float(samples));
+  return samples > 0 ? sampled * (1.0f / float(samples)) + exact : exact;
 }
 
 namespace {
 
-// Every point's shadow rays, queued by samples(i, add) as add(ray, contribution), traced in packets
-// shared across the points of blocks of 256 (neighbouring pixels' rays head for the same lights: a
-// point with 1 or 4 samples no longer traces packets of 1 or 4); direct[i] is the sum of point i's
-// unoccluded contributions times `scale`. Occlusion is a yes or no, so the grouping changes no
-// answer, and each point's sum keeps its sample order.
+// Every point's shadow rays, queued by samples(i, add) as add(ray, contribution, exact), traced in
+// packets shared across the points of blocks of 256 (neighbouring pixels' rays head for the same
+// lights: a point with 1 or 4 samples no longer traces packets of 1 or 4); direct[i] is the sum of
+// point i's unoccluded sampled contributions times `scale`, plus its exact ones. Occlusion is a yes
+// or no, so the grouping changes no answer, and each point's sums keep their sample order.
 template <class Samples>
 void shadowRaysInBlocks(const Visibility& vis, std::span<Rgb> direct, float scale, uint64_t& rays, Samples&& samples) {
   constexpr size_t kBlock = 256;
@@ -86,13 +130,15 @@ void shadowRaysInBlocks(const Visibility& vis, std::span<Rgb> direct, float scal
   std::vector<uint64_t> blockRays(blocks, 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const tbb::blocked_range<size_t>& r) {
     flushDenormals();
+    Rgb exact[kBlock];
     for (size_t b = r.begin(); b != r.end(); ++b) {
       const size_t first = b * kBlock, last = std::min(direct.size(), first + kBlock);
-      for (size_t i = first; i < last; ++i) direct[i] = Rgb();
+      for (size_t i = first; i < last; ++i) direct[i] = Rgb(), exact[i - first] = Rgb();
       ShadowPackets packets(vis, blockRays[b]);
-      for (size_t i = first; i < last; ++i) samples(i, [&](const Ray& ray, Rgb c) { packets.add(ray, c, &direct[i]); });
+      for (size_t i = first; i < last; ++i)
+        samples(i, [&](const Ray& ray, Rgb c, bool isExact) { packets.add(ray, c, isExact ? &exact[i - first] : &direct[i]); });
       packets.flush();
-      for (size_t i = first; i < last; ++i) direct[i] = direct[i] * scale;
+      for (size_t i = first; i < last; ++i) direct[i] = direct[i] * scale + exact[i - first];
     }
   });
   for (uint64_t n : blockRays) rays += n;
@@ -103,31 +149,16 @@ void shadowRaysInBlocks(const Visibility& vis, std::span<Rgb> direct, float scal
 void estimateDirectLight(const Scene& scene, const Visibility& vis, std::span<const ShadingPoint> points,
                          int samples, uint64_t seed, std::span<Rgb> direct, uint64_t& rays) {
   const uint64_t stream = streamSeed(seed, RenderStream::Direct);
-  // A single point or directional light gives every sample the same shadow ray: one is enough
-  // (the paper's RING: "only shoots one shadow ray per pixel").
-  if (scene.lights.size() == 1 && (scene.lights[0].type == LightType::Point || scene.lights[0].type == LightType::Directional))
-    samples = std::min(samples, 1);
-  shadowRaysInBlocks(vis, direct.first(points.size()), 1.0f / float(samples), rays, [&](size_t i, auto add) {
-    shadowSamples(scene, points[i], samples, stream, add);
-  });
+  const SampledLights lights = sampledLights(scene);
+  shadowRaysInBlocks(vis, direct.first(points.size()), samples > 0 ? 1.0f / float(samples) : 0.0f, rays,
+                     [&](size_t i, auto add) { shadowSamples(scene, lights, points[i], samples, stream, add); });
 }
 
 void analyticDirectLight(const Scene& scene, const Visibility& vis, std::span<const ShadingPoint> points,
                          std::span<Rgb> direct, uint64_t& rays) {
-  shadowRaysInBlocks(vis, direct.first(points.size()), 1.0f, rays, [&](size_t i, auto add) {
-    const ShadingPoint& p = points[i];
-    const Frame frame(p.normal);
-    const Vec3 woLocal = frame.toLocal(p.wo);
-    const float side = dot(p.normal, p.geometricNormal);
-    for (const Light& light : scene.lights) {
-      if (light.type != LightType::Point && light.type != LightType::Directional) continue;
-      const LightSample ls = deltaLightSample(light, p.position);
-      const Vec3 wiLocal = frame.toLocal(ls.wi);
-      if (ls.radiance.isBlack() || wiLocal.z <= 0 || dot(ls.wi, p.geometricNormal) * side <= 0) continue;
-      const Rgb f = evalBsdf(p.bsdf, woLocal, wiLocal);
-      if (!f.isBlack()) add(shadowRay(p.position, p.geometricNormal, ls), f * ls.radiance * wiLocal.z);
-    }
-  });
+  const SampledLights none;  // `any` false: the point and directional lights alone
+  shadowRaysInBlocks(vis, direct.first(points.size()), 0.0f, rays,
+                     [&](size_t i, auto add) { shadowSamples(scene, none, points[i], 0, 0, add); });
 }
 
 }  // namespace lucent

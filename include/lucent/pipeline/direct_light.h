@@ -9,9 +9,10 @@
 
 namespace lucent {
 
-// Stage "trace_rays" (shadow rays): direct light reflected towards the viewer at every point, by
-// `samples` light samples (stratified over the light's area, lights chosen by power), each tested
-// by one shadow ray. Adds the shadow rays traced to `rays`.
+// Stage "trace_rays" (shadow rays): direct light reflected towards the viewer at every point: one
+// shadow ray to each point and directional light (exact but for its visibility), and `samples`
+// samples of the other lights (stratified over the light's area, lights chosen by power among
+// them), each tested by one shadow ray. Adds the shadow rays traced to `rays`.
 void estimateDirectLight(const Scene& scene, const Visibility& visibility, std::span<const ShadingPoint> points,
                          int samples, uint64_t seed, std::span<Rgb> direct, uint64_t& rays);
 
@@ -21,8 +22,8 @@ void estimateDirectLight(const Scene& scene, const Visibility& visibility, std::
 void analyticDirectLight(const Scene& scene, const Visibility& visibility, std::span<const ShadingPoint> points,
                          std::span<Rgb> direct, uint64_t& rays);
 
-// One point's direct light, its shadow rays in packets of its own samples (estimateDirectLight
-// packs rays across points instead).
+// One point's direct light as estimateDirectLight's, its shadow rays in packets of its own samples
+// (estimateDirectLight packs rays across points instead).
 Rgb directLight(const Scene& scene, const Visibility& visibility, const ShadingPoint& point, int samples,
                 uint64_t seed, uint64_t& rays);
 

@@ -38,11 +38,13 @@ inline LightSample deltaLightSample(const Light& light, Vec3 receiver) {
   return s;
 }
 
-inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, Vec2 u) {
+inline bool isDeltaLight(const Light& light) {
+  return light.type == LightType::Point || light.type == LightType::Directional;
+}
+
+// A sample of light `li`, chosen with probability `pmf` (its pdf includes it).
+inline LightSample sampleChosenLight(const Scene& scene, uint32_t li, float pmf, Vec3 receiver, Vec2 u) {
   LightSample s;
-  if (scene.lights.empty()) return s;
-  const uint32_t li = scene.lightDistribution.pick(uLight);
-  const float pmf = scene.lightDistribution.pmf(li);
   const Light& light = scene.lights[li];
   switch (light.type) {
     case LightType::Triangle: {
@@ -84,6 +86,13 @@ inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, 
     }
   }
   return s;
+}
+
+// A light chosen by the scene's light distribution (by power), and a sample of it.
+inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, Vec2 u) {
+  if (scene.lights.empty()) return {};
+  const uint32_t li = scene.lightDistribution.pick(uLight);
+  return sampleChosenLight(scene, li, scene.lightDistribution.pmf(li), receiver, u);
 }
 
 // A shadow ray from receiver p (geometric normal ng) towards a light sample. Towards a point on a
