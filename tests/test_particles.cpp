@@ -382,6 +382,23 @@ TEST_CASE("particles: building links and lists for the frame only gives the imag
   CHECK(frame.stats.counter("used_area_particles") < all.stats.counter("area_particles"));
 }
 
+TEST_CASE("particles: a frame shaded band by band gives the image and counts of one band", "[particles]") {
+  // 480 x 300 is more camera samples than a band holds; with a dump the frame is one band.
+  Scene scene = roomWithBox(0.6f, {0.1f, 0.45f, -0.2f});
+  scene.camera.width = 480, scene.camera.height = 300;
+  const Visibility vis(scene);
+  ParticleOptions o;
+  o.areaParticles = 3000;
+  o.lightSamples = 2;
+  const RenderOutput bands = renderParticles(scene, vis, o);
+  const test::TempDir dir("particles-bands");
+  o.dumpDirectory = dir.path.string();
+  const RenderOutput whole = renderParticles(scene, vis, o);
+  CHECK(bands.image.pixels() == whole.image.pixels());
+  for (const char* counter : {"found_radiance_particles", "used_area_particles", "gather_link_rays", "shading_points"})
+    CHECK(bands.stats.counter(counter) == whole.stats.counter(counter));
+}
+
 TEST_CASE("particles: adaptive supersampling replaces the flagged pixels by their n x n samples", "[particles]") {
   // A flagged pixel's supersamples are the camera samples an --spp 9 render takes there, shaded by
   // the same particles: the pixel equals that render's, bit for bit; every other pixel keeps its

@@ -17,6 +17,20 @@ struct RenderStats {
   void addStage(const std::string& name, double seconds) { stageSeconds.emplace_back(name, seconds); }
   void addCounter(const std::string& name, uint64_t value) { counters.emplace_back(name, value); }
   void addDerived(const std::string& name, double value) { derived.emplace_back(name, value); }
+  // The stages of `parts` (a stage timed once per band of a frame, say), each name once, with the
+  // seconds of its entries summed, in the order the names first appear.
+  void addStagesSummed(const RenderStats& parts) {
+    for (size_t i = 0; i < parts.stageSeconds.size(); ++i) {
+      const std::string& name = parts.stageSeconds[i].first;
+      bool seen = false;
+      for (size_t j = 0; j < i && !seen; ++j) seen = parts.stageSeconds[j].first == name;
+      if (seen) continue;
+      double sum = 0;
+      for (size_t j = i; j < parts.stageSeconds.size(); ++j)
+        if (parts.stageSeconds[j].first == name) sum += parts.stageSeconds[j].second;
+      addStage(name, sum);
+    }
+  }
   // A counter's value, 0 if there is none of that name.
   uint64_t counter(const std::string& name) const {
     for (const auto& [key, value] : counters)

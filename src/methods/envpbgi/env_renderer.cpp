@@ -32,10 +32,6 @@ namespace {
 
 enum class EnvStream : uint64_t { Points = 31 };
 
-// Camera samples per band of the pixel stage: its shading points (112 bytes each) stay below
-// glibc's mmap threshold (32 MiB), so that each band's arrays reuse the heap pages of the last.
-constexpr uint64_t kBandSamples = uint64_t(1) << 17;
-
 // A shading point's diffuse reflectance: the method shades every receiver as diffuse (the paper's
 // surfaces are), a glossy one by its diffuse part.
 Rgb diffusePart(const SurfaceBsdf& bsdf) { return bsdf.kd; }
@@ -209,13 +205,12 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   report(0.65);
 
   // The pixels, band by band of rows: camera paths to shading points, the analytic lights by shadow
-  // rays, the rest from the caches (Eq. 5) or, brute force, from a micro-buffer each. A band's
-  // arrays reuse the memory of the one before (fresh pages are slow to touch); a dump holds the
-  // whole image's shading points, in one band.
+  // rays, the rest from the caches (Eq. 5) or, brute force, from a micro-buffer each (bands of
+  // kReusableBandSamples); a dump holds the whole image's shading points, in one band.
   Stopwatch pixelClock;
   double imageSeconds = 0;
   auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {o.layers, false}));
-  RowBands bands(part, o.dumpDirectory.empty() ? kBandSamples : ~uint64_t(0), 0.0);
+  RowBands bands(part, o.dumpDirectory.empty() ? kReusableBandSamples : ~uint64_t(0), 0.0);
   const PinholeCamera camera(scene.camera);
   Interpolation interpolation;
   interpolation.maxAngle = o.cacheMaxAngle * kPi / 180.0f;

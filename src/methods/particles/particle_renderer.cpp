@@ -210,18 +210,13 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   fs.allLists = everything ? &lists : nullptr;
   fs.allGatherLinks = everything ? &gatherLinks : nullptr;
   IndirectField field(fs);
-  Stopwatch preliminaryClock;
-  EyePaths eye = traceEyePaths(scene, vis, eyePathSettings(o, part));
-  stats.addStage("preliminary_ray_tracing", preliminaryClock.seconds());
-  std::vector<SubtriangleWeights> around(eye.points.size());
-  const FieldUpdate first = field.add(eye.points, around, stats);
-  report(0.75);
 
   // R5: the final ray tracing at the shading points: direct light by shadow rays, indirect light
   // interpolated from the three radiance particles around the hit (times the hit's own diffuse
   // reflectance, so that textures stay sharp: README, "Departures").
   std::atomic<uint64_t> glossy{0};
-  auto shade = [&](const EyePaths& paths, std::span<const SubtriangleWeights> weights, const std::string& suffix) {
+  auto shade = [&](const EyePaths& paths, std::span<const SubtriangleWeights> weights, const std::string& suffix,
+                   RenderStats& timing) {
     Stopwatch tracingClock;
     PointRadiance shading(paths.points.size());
     estimateDirectLight(scene, vis, paths.points, o.lightSamples, streamSeed(o.seed, RenderStream::Direct),
@@ -232,10 +227,48 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
         if (paths.points[i].bsdf.type != MaterialType::Diffuse) ++glossy;
       }
     });
-    stats.addStage("ray_tracing" + suffix, tracingClock.seconds());
+    timing.addStage("ray_tracing" + suffix, tracingClock.seconds());
     return shading;
   };
-  PointRadiance shading = shade(eye, around, "");
+
+  // The frame band by band of rows: the camera paths (the preliminary ray tracing, whose shading
+  // points the final ray tracing reuses), R1 to R4 for the particles they newly need (a particle's
+  // light does not depend on which band found it), R5, and the band's light into the film (bands of
+  // kReusableBandSamples). Alias detection and dumps need the whole image: one band then.
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {o.layers, false}));
+  auto addToFilm = [&](const EyePaths& paths, const PointRadiance& light) {
+    Stopwatch filmClock;
+    film->add(paths, light);
+    for (size_t i = 0; i < paths.pixels.size(); ++i)
+      film->setTaken(paths.imagePixel(i, scene.camera.width), uint32_t(part.samples()));
+    return filmClock.seconds();
+  };
+  const bool wholeImage = o.supersample > 0 || !dump.empty();
+  RowBands bands(part, wholeImage ? ~uint64_t(0) : kReusableBandSamples, 0.0);
+  RenderStats frameStages;
+  FieldUpdate first;
+  EyePaths eye;  // with wholeImage, the whole image's after the loop
+  PointRadiance shading(0);
+  double imageSeconds = 0;
+  uint64_t eyeRays = 0, shadingPoints = 0, invalidSamples = 0;
+  for (int row = part.region.y0; row < part.region.y1;) {
+    const std::pair<int, int> rows = bands.next(row);
+    EyePathSettings settingsOfBand = eyePathSettings(o, part);
+    settingsOfBand.region = {part.region.x0, rows.first, part.region.x1, rows.second};
+    Stopwatch preliminaryClock;
+    eye = traceEyePaths(scene, vis, settingsOfBand);
+    frameStages.addStage("preliminary_ray_tracing", preliminaryClock.seconds());
+    std::vector<SubtriangleWeights> around(eye.points.size());
+    const FieldUpdate update = field.add(eye.points, around, frameStages);
+    first.foundRadianceParticles += update.foundRadianceParticles;
+    first.usedAreaParticles += update.usedAreaParticles;
+    shading = shade(eye, around, "", frameStages);
+    eyeRays += eye.rays, shadingPoints += eye.points.size(), invalidSamples += eye.invalid;
+    if (!wholeImage) imageSeconds += addToFilm(eye, shading);
+    row = rows.second;
+    report(0.6 + 0.35 * double(row - part.region.y0) / double(part.region.height()));
+  }
+  stats.addStagesSummed(frameStages);
 
   // 4.3.3, Table 2(b): adaptive supersampling. Pixels whose neighbours differ from them (alias
   // detection) are traced again with supersample x supersample stratified samples, whose new
@@ -259,7 +292,8 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
     stats.addStage("preliminary_ray_tracing_adaptive", adaptiveClock.seconds());
     std::vector<SubtriangleWeights> extraAround(extra.points.size());
     added = field.add(extra.points, extraAround, stats, "_adaptive");
-    extraShading = shade(extra, extraAround, "_adaptive");
+    extraShading = shade(extra, extraAround, "_adaptive", stats);
+    eyeRays += extra.rays, shadingPoints += extra.points.size(), invalidSamples += extra.invalid;
     // The flagged pixels' first samples give way to their supersamples.
     for (size_t i = 0; i < eye.pixels.size(); ++i)
       if (flagged[i]) {
@@ -294,16 +328,15 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
     dumpShadingPoints(dump, "", eye, shading, false);
   }
 
+  if (wholeImage) {
+    imageSeconds += addToFilm(eye, shading);
+    if (o.supersample > 0) imageSeconds += addToFilm(extra, extraShading);
+  }
   Stopwatch imageClock;
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {o.layers, false}));
-  film->add(eye, shading);
-  if (o.supersample > 0) film->add(extra, extraShading);
-  for (size_t i = 0; i < eye.pixels.size(); ++i)
-    film->setTaken(eye.imagePixel(i, scene.camera.width), uint32_t(part.samples()));
   out.image = film->image();
   out.film = film;
   out.sppDone = part.samples();
-  stats.addStage("image", imageClock.seconds());
+  stats.addStage("image", imageSeconds + imageClock.seconds());
   report(1.0);
 
   const LinkCounters& frameLinks = field.gatherCounters();
@@ -338,10 +371,10 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   stats.addCounter("additional_area_particles", added.usedAreaParticles);
   stats.addCounter("empty_estimation_lists", field.emptyLists());
   stats.addCounter("shadow_rays", shadowRays);
-  stats.addCounter("eye_rays", eye.rays + extra.rays);
-  stats.addCounter("shading_points", eye.points.size() + extra.points.size());
+  stats.addCounter("eye_rays", eyeRays);
+  stats.addCounter("shading_points", shadingPoints);
   stats.addCounter("glossy_shaded_diffuse", glossy);
-  stats.addCounter("invalid_samples", eye.invalid + extra.invalid + out.film->droppedPoints());
+  stats.addCounter("invalid_samples", invalidSamples + out.film->droppedPoints());
   return out;
 }
 
