@@ -8,6 +8,7 @@
 #include <string>
 
 #include "lucent/pipeline/method.h"
+#include "lucent/pipeline/render_control.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
@@ -48,8 +49,8 @@ struct PhotonMapOptions {
   uint32_t maxPhotonBounces = 64;   // interactions followed per photon path
   uint64_t seed = 0;
   bool layers = false;              // add albedo, normal, depth, direct, indirect, caustic layers
-  uint64_t bandSamples = uint64_t(1) << 19;  // the image renders in bands of rows of at most this many
-                                             // camera samples (memory); does not change the image
+  uint64_t bandSamples = kReusableBandSamples;  // the image renders in bands of rows of at most this
+                                                // many camera samples (memory); does not change the image
   // The grids (0: chosen from the photons, see GridOptions in src/methods/photonmap/uniform_grid.h).
   std::array<uint32_t, 3> gridResolution{0, 0, 0};  // cells per axis (paper: 250x1x250, 25x25x50)
   float cellSize = 0;                                // cubic cells of this side
