@@ -62,7 +62,11 @@ RadianceCache buildRadianceCache(std::span<const uint32_t> texels, const BufferQ
 }
 
 BufferIrradiance cacheIrradiance(const RadianceCache& cache, Vec3 normal) {
-  const Vec3 local = Frame(cache.normal).toLocal(normal);
+  return cacheIrradiance(cache, Frame(cache.normal), normal);
+}
+
+BufferIrradiance cacheIrradiance(const RadianceCache& cache, const Frame& frame, Vec3 normal) {
+  const Vec3 local = frame.toLocal(normal);
   // The paraboloid point, clamped to the disc (for normals at or below the horizon, the rim).
   Vec2 p = local.z > -0.999f ? paraboloidPoint(local) : Vec2{local.x, local.y};
   const float r = std::sqrt(p.x * p.x + p.y * p.y);
@@ -132,6 +136,8 @@ CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& ca
     g.x[j] = c.position.x, g.y[j] = c.position.y, g.z[j] = c.position.z, g.radius[j] = c.radius;
     g.nx[j] = c.normal.x, g.ny[j] = c.normal.y, g.nz[j] = c.normal.z;
   }
+  g.frames.resize(caches.size());
+  for (size_t k = 0; k < caches.size(); ++k) g.frames[k] = Frame(caches[k].normal);
   return g;
 }
 
@@ -148,8 +154,10 @@ BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const 
   constexpr uint32_t kBlock = 64;
   for (uint32_t block = grid.begin[tile]; block < grid.begin[tile + 1]; block += kBlock) {
     const uint32_t count = std::min(kBlock, grid.begin[tile + 1] - block);
-    // The test of every cache in the block, in lanes (the same arithmetic as length() and dot()).
+    // The test of every cache in the block, and its Ward error, in lanes (the same arithmetic as
+    // length(), dot() and wardError()).
     bool qualifies[kBlock];
+    float ward[kBlock];
     const float* cx = &grid.x[block];
     const float* cy = &grid.y[block];
     const float* cz = &grid.z[block];
@@ -162,12 +170,13 @@ BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const 
       const float distance = std::sqrt(dx * dx + dy * dy + dz * dz);
       const float cosine = n.x * cnx[k] + n.y * cny[k] + n.z * cnz[k];
       qualifies[k] = (distance < cr[k]) & (cosine >= cosMax);
+      ward[k] = distance / cr[k] + std::sqrt(std::max(0.0f, 1.0f - cosine));
     }
     for (uint32_t k = 0; k < count; ++k) {
       if (!qualifies[k]) continue;
-      const RadianceCache& c = caches[grid.caches[block + k]];
-      const float w = 1.0f / std::max(wardError(c), 1e-6f);
-      const BufferIrradiance e = cacheIrradiance(c, n);
+      const uint32_t cache = grid.caches[block + k];
+      const float w = 1.0f / std::max(ward[k], 1e-6f);
+      const BufferIrradiance e = cacheIrradiance(caches[cache], grid.frames[cache], n);
       sum.environment += e.environment * w, sum.nodes += e.nodes * w;
       total += w;
     }

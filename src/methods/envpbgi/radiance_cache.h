@@ -46,6 +46,8 @@ RadianceCache buildRadianceCache(std::span<const uint32_t> texels, const BufferQ
 // The cache's irradiance towards a receiver normal (world): bilinear on the 5 x 5 map, the normal's
 // paraboloid point clamped to the disc (normals below the point's horizon read the rim).
 BufferIrradiance cacheIrradiance(const RadianceCache& cache, Vec3 normal);
+// The same with the cache's Frame(cache.normal) computed beforehand.
+BufferIrradiance cacheIrradiance(const RadianceCache& cache, const Frame& frame, Vec3 normal);
 
 // The screen's tiles, and per tile the caches whose effective sphere's screen bounds overlap it
 // (count, scan, fill: a GPU's CSR arrays), each tile's list in cache order.
@@ -56,6 +58,7 @@ struct CacheGrid {
   // Per entry of `caches`, its cache's surfel, apart by coordinate: a receiver tests a tile's
   // hundred-odd caches against radius and angle in SIMD lanes before it reads any whole cache.
   std::vector<float> x, y, z, radius, nx, ny, nz;
+  std::vector<Frame> frames;  // per cache (not per entry): Frame(normal), for cacheIrradiance
 };
 CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& camera, int tileSize);
 
