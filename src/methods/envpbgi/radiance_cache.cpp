@@ -1,5 +1,8 @@
 #include "methods/envpbgi/radiance_cache.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -43,20 +46,35 @@ RadianceCache buildRadianceCache(std::span<const uint32_t> texels, const BufferQ
   cache.position = surfel.position;
   cache.normal = surfel.normal;
   cache.radius = radius;
-  // Incoming radiance per texel, then the fixed linear map to the 25 normals.
+  // Incoming radiance per texel and channel (environment R, G, B, then the nodes'; 0 at unused
+  // texels), then the fixed linear map to the 25 normals: over every texel in eight interleaved
+  // partial sums, which vectorize and add up in a fixed order.
   const Frame frame(surfel.normal);
-  Rgb fromEnvironment[kMaxMicroBufferSide * kMaxMicroBufferSide], fromNodes[kMaxMicroBufferSide * kMaxMicroBufferSide];
+  const uint32_t n = q.texels();
+  alignas(64) float incoming[6][kMaxMicroBufferSide * kMaxMicroBufferSide];
+  for (auto& channel : incoming) std::fill_n(channel, n, 0.0f);
   for (const uint16_t t : q.mapping.used) {
     const uint32_t texel = texels[t];
-    fromEnvironment[t] = texel == kEmptyMicroPixel ? environmentRadiance(environment, frame.toWorld(q.mapping.direction[t])) : Rgb();
-    fromNodes[t] = texel == kEmptyMicroPixel ? Rgb() : nodeDirect[microPixelNode(texel)];
+    const Rgb e = texel == kEmptyMicroPixel ? environmentRadiance(environment, frame.toWorld(q.mapping.direction[t])) : Rgb();
+    const Rgb d = texel == kEmptyMicroPixel ? Rgb() : nodeDirect[microPixelNode(texel)];
+    for (int c = 0; c < 3; ++c) incoming[c][t] = e[c], incoming[3 + c][t] = d[c];
   }
+  constexpr uint32_t kLanes = 8;
+  const uint32_t whole = n / kLanes * kLanes;
   for (int o = 0; o < kCacheTexels; ++o) {
-    const float* w = &convolution.weights[size_t(o) * q.texels()];
-    Rgb e, i;
-    for (const uint16_t t : q.mapping.used) e += fromEnvironment[t] * w[t], i += fromNodes[t] * w[t];
-    cache.environment[o] = e;
-    cache.indirect[o] = i;
+    const float* w = &convolution.weights[size_t(o) * n];
+    float sums[6];
+    for (int c = 0; c < 6; ++c) {
+      float partial[kLanes] = {};
+      for (uint32_t t = 0; t < whole; t += kLanes)
+        for (uint32_t k = 0; k < kLanes; ++k) partial[k] += incoming[c][t + k] * w[t + k];
+      float sum = 0;
+      for (uint32_t t = whole; t < n; ++t) sum += incoming[c][t] * w[t];
+      for (const float p : partial) sum += p;
+      sums[c] = sum;
+    }
+    cache.environment[o] = {sums[0], sums[1], sums[2]};
+    cache.indirect[o] = {sums[3], sums[4], sums[5]};
   }
   return cache;
 }
@@ -131,11 +149,13 @@ CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& ca
       for (int x = t.x0; x <= t.x1; ++x) g.caches[cursor[size_t(y) * size_t(g.tilesX) + size_t(x)]++] = uint32_t(k);
   }
   for (std::vector<float>* v : {&g.x, &g.y, &g.z, &g.radius, &g.nx, &g.ny, &g.nz}) v->resize(g.caches.size());
-  for (size_t j = 0; j < g.caches.size(); ++j) {
-    const RadianceCache& c = caches[g.caches[j]];
-    g.x[j] = c.position.x, g.y[j] = c.position.y, g.z[j] = c.position.z, g.radius[j] = c.radius;
-    g.nx[j] = c.normal.x, g.ny[j] = c.normal.y, g.nz[j] = c.normal.z;
-  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, g.caches.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t j = r.begin(); j != r.end(); ++j) {
+      const RadianceCache& c = caches[g.caches[j]];
+      g.x[j] = c.position.x, g.y[j] = c.position.y, g.z[j] = c.position.z, g.radius[j] = c.radius;
+      g.nx[j] = c.normal.x, g.ny[j] = c.normal.y, g.nz[j] = c.normal.z;
+    }
+  });
   g.frames.resize(caches.size());
   for (size_t k = 0; k < caches.size(); ++k) g.frames[k] = Frame(caches[k].normal);
   return g;
