@@ -3,7 +3,7 @@
 resource, every embedded image decodes to the image's size, flipping a viewer shows the other image,
 the numbers shown equal `lucent compare --test`'s, and the chart has a point for each timed candidate.
 Controls: a page with a damaged image, and a page with a number changed, are caught by the same checks.
-Bad input (labels not matching the candidates, images of different sizes) writes no page.
+Bad input (labels not matching the candidates, NaN options, images of different sizes) writes no page.
 
   report_test.py LUCENT_BINARY SOURCE_DIR CHROMIUM
 """
@@ -181,7 +181,9 @@ try:
 
     # Bad input: no page.
     for args, words in ((candidates + ["--label", "one", "-o", p("bad.html")], "--label is given 1 times"),
-                        ([p("pt.exr"), "-o", p("reference.exr")], "is the reference")):
+                        ([p("pt.exr"), "-o", p("reference.exr")], "is the reference"),
+                        ([p("pt.exr"), "--seconds", "nan", "-o", p("bad.html")], "--seconds must be positive"),
+                        ([p("pt.exr"), "--alpha", "nan", "-o", p("bad.html")], "--alpha must lie")):
         r = run([lucent, "report", p("reference.exr")] + args)
         check(r.returncode == 1 and words in r.stderr, "bad input %r: status %d, %r" % (args, r.returncode, r.stderr))
     render(p("small.exr"), ["--method", "pt", "--spp", "1"], resolution="16x16")

@@ -546,6 +546,7 @@ TEST_CASE("Direct light with shadow rays packed across points equals each point'
     settings.spp = 2, settings.maxSpecularDepth = 8, settings.seed = 5;
     const EyePaths eye = traceEyePaths(scene, vis, settings);
     REQUIRE(eye.points.size() > 2000);
+    const DirectLights lights(scene);
     for (int samples : {1, 3, 16}) {
       INFO(file << ", " << samples << " light samples");
       std::vector<Rgb> packed(eye.points.size());
@@ -553,7 +554,7 @@ TEST_CASE("Direct light with shadow rays packed across points equals each point'
       estimateDirectLight(scene, vis, eye.points, samples, 17, packed, packedRays);
       size_t lit = 0, shadowed = 0;
       for (size_t i = 0; i < eye.points.size(); ++i) {
-        const Rgb own = directLight(scene, vis, eye.points[i], samples, streamSeed(17, RenderStream::Direct), ownRays);
+        const Rgb own = directLight(scene, lights, vis, eye.points[i], samples, streamSeed(17, RenderStream::Direct), ownRays);
         REQUIRE((packed[i] == own));
         lit += !own.isBlack(), shadowed += own.isBlack();
       }

@@ -389,6 +389,11 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
 }
 
 int runReport(const ReportOptions& opt) {
+  // CLI11's range checks let NaN through.
+  if (!(opt.alpha > 0 && opt.alpha < 1)) throw std::invalid_argument("--alpha must lie in (0, 1)");
+  if (!std::isfinite(opt.exposure)) throw std::invalid_argument("--exposure must be finite");
+  for (const double s : opt.seconds)
+    if (!(std::isfinite(s) && s > 0)) throw std::invalid_argument("--seconds must be positive and finite");
   if (!opt.labels.empty() && opt.labels.size() != opt.candidates.size())
     throw std::invalid_argument("--label is given " + std::to_string(opt.labels.size()) + " times for " +
                                 std::to_string(opt.candidates.size()) + " candidates");
@@ -446,7 +451,7 @@ int runReport(const ReportOptions& opt) {
     if (c.test) entry["passed"] = c.test->passed;
     line["candidates"].push_back(entry);
   }
-  std::cout << line.dump() << std::endl;
+  std::cout << line.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << std::endl;
   return 0;
 }
 

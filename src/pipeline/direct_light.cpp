@@ -13,29 +13,18 @@
 
 namespace lucent {
 
-namespace {
-
-// The lights that light samples choose among: all but the point and directional lights, whose light
-// arrives from one direction (one shadow ray each gives it exactly), by the scene's light
-// distribution restricted to them; the scene's own where it has no such lights (the same choices).
-struct SampledLights {
-  bool all = true;
-  std::vector<uint32_t> index;  // without `all`: the sampled lights' indices in the scene
-  Distribution1D choice;        // without `all`: over `index`
-  bool any = false;
-};
-
-SampledLights sampledLights(const Scene& scene) {
-  SampledLights s;
+DirectLights::DirectLights(const Scene& scene) {
+  for (uint32_t i = 0; i < uint32_t(scene.lights.size()); ++i)
+    if (isDeltaLight(scene.lights[i])) delta.push_back(i);
+  anySampled = delta.size() < scene.lights.size();
+  if (delta.empty()) return;  // the scene's own distribution, untouched
   std::vector<float> weights;
-  for (uint32_t i = 0; i < uint32_t(scene.lights.size()); ++i) {
-    if (isDeltaLight(scene.lights[i])) s.all = false;
-    else s.index.push_back(i), weights.push_back(scene.lightDistribution.pmf(i));
-  }
-  s.any = !s.index.empty();
-  if (!s.all && s.any) s.choice = Distribution1D(weights);
-  return s;
+  for (uint32_t i = 0; i < uint32_t(scene.lights.size()); ++i)
+    if (!isDeltaLight(scene.lights[i])) sampled.push_back(i), weights.push_back(scene.lightDistribution.pmf(i));
+  if (anySampled) choice = Distribution1D(weights);
 }
+
+namespace {
 
 // A receiver's light sample: the contribution its shadow ray brings if unoccluded.
 template <class Emit>
@@ -53,26 +42,25 @@ void emitLightSample(const ShadingPoint& point, const Frame& frame, Vec3 woLocal
 // directional light (exact: counted once), then `samples` samples of the other lights (each to be
 // divided by `samples`), stratified over the light's area.
 template <class Emit>
-void shadowSamples(const Scene& scene, const SampledLights& lights, const ShadingPoint& point, int samples,
+void shadowSamples(const Scene& scene, const DirectLights& lights, const ShadingPoint& point, int samples,
                    uint64_t seed, Emit&& emit) {
   const Frame frame(point.normal);
   const Vec3 woLocal = frame.toLocal(point.wo);
   const float side = dot(point.normal, point.geometricNormal);
-  for (const Light& light : scene.lights)
-    if (isDeltaLight(light))
-      emitLightSample(point, frame, woLocal, side, deltaLightSample(light, point.position),
-                      [&](const Ray& ray, Rgb c) { emit(ray, c, true); });
-  if (!lights.any || samples <= 0) return;
+  for (const uint32_t i : lights.delta)
+    emitLightSample(point, frame, woLocal, side, deltaLightSample(scene.lights[i], point.position),
+                    [&](const Ray& ray, Rgb c) { emit(ray, c, true); });
+  if (!lights.anySampled || samples <= 0) return;
   Rng rng(seed, point.pixel, uint64_t(point.sample) << 32 | point.branch);
   for (int i = 0; i < samples; ++i) {
     const float uLight = rng.uniform();
     const Vec2 u = stratifiedSample2D(uint32_t(i), uint32_t(samples), rng.uniform2());
     LightSample ls;
-    if (lights.all) {
+    if (lights.delta.empty()) {
       ls = sampleLight(scene, point.position, uLight, u);
     } else {
       const uint32_t k = lights.choice.pick(uLight);
-      ls = sampleChosenLight(scene, lights.index[k], lights.choice.pmf(k), point.position, u);
+      ls = sampleChosenLight(scene, lights.sampled[k], lights.choice.pmf(k), point.position, u);
     }
     emitLightSample(point, frame, woLocal, side, ls, [&](const Ray& ray, Rgb c) { emit(ray, c, false); });
   }
@@ -106,14 +94,15 @@ struct ShadowPackets {
 
 }  // namespace
 
-Rgb directLight(const Scene& scene, const Visibility& vis, const ShadingPoint& point, int samples, uint64_t seed,
-                uint64_t& rays) {
+Rgb directLight(const Scene& scene, const DirectLights& lights, const Visibility& vis, const ShadingPoint& point,
+                int samples, uint64_t seed, uint64_t& rays) {
+  if (samples <= 0) return {};
   Rgb sampled, exact;
   ShadowPackets packets(vis, rays);
-  shadowSamples(scene, sampledLights(scene), point, samples, seed,
+  shadowSamples(scene, lights, point, samples, seed,
                 [&](const Ray& ray, Rgb c, bool isExact) { packets.add(ray, c, isExact ? &exact : &sampled); });
   packets.flush();
-  return samples > 0 ? sampled * (1.0f / float(samples)) + exact : exact;
+  return sampled * (1.0f / float(samples)) + exact;
 }
 
 namespace {
@@ -148,17 +137,21 @@ void shadowRaysInBlocks(const Visibility& vis, std::span<Rgb> direct, float scal
 
 void estimateDirectLight(const Scene& scene, const Visibility& vis, std::span<const ShadingPoint> points,
                          int samples, uint64_t seed, std::span<Rgb> direct, uint64_t& rays) {
+  if (samples <= 0) {
+    std::fill_n(direct.begin(), points.size(), Rgb());
+    return;
+  }
   const uint64_t stream = streamSeed(seed, RenderStream::Direct);
-  const SampledLights lights = sampledLights(scene);
-  shadowRaysInBlocks(vis, direct.first(points.size()), samples > 0 ? 1.0f / float(samples) : 0.0f, rays,
+  const DirectLights lights(scene);
+  shadowRaysInBlocks(vis, direct.first(points.size()), 1.0f / float(samples), rays,
                      [&](size_t i, auto add) { shadowSamples(scene, lights, points[i], samples, stream, add); });
 }
 
 void analyticDirectLight(const Scene& scene, const Visibility& vis, std::span<const ShadingPoint> points,
                          std::span<Rgb> direct, uint64_t& rays) {
-  const SampledLights none;  // `any` false: the point and directional lights alone
+  const DirectLights lights(scene);  // with no samples: the point and directional lights alone
   shadowRaysInBlocks(vis, direct.first(points.size()), 0.0f, rays,
-                     [&](size_t i, auto add) { shadowSamples(scene, none, points[i], 0, 0, add); });
+                     [&](size_t i, auto add) { shadowSamples(scene, lights, points[i], 0, 0, add); });
 }
 
 }  // namespace lucent

@@ -30,8 +30,9 @@ Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers
       mode_(sums), layers_(layers) {
   if (region.empty() || !PixelRect{0, 0, width, height}.contains(region))
     throw std::invalid_argument("film: the region is not a non-empty part of the image");
-  layers_.caustic = layers.features && layers.caustic;
-  // The parts are kept wherever the image needs them: for the layers, or (PerPart) for the total.
+  // A caustic part only where shading points' light comes in parts (a film file may claim one for
+  // per-sample sums: it has none).
+  layers_.caustic = layers.features && layers.caustic && sums == Sums::PerPart;
   auto reserve = [&](int& offset, int channels) { offset = stride_, stride_ += channels; };
   if (layers.variance && sums != Sums::PerSample)
     throw std::invalid_argument("film: a variance layer needs each camera sample's total (Sums::PerSample)");

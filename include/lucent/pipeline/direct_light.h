@@ -4,15 +4,29 @@
 #pragma once
 #include <cstdint>
 #include <span>
+#include <vector>
+
+#include "lucent/core/distribution.h"
 
 #include "lucent/pipeline/shading_points.h"
 
 namespace lucent {
 
+// The scene's lights as the direct-light estimates take them: one shadow ray to each point and
+// directional light (exact but for its visibility), light samples among the others, chosen by the
+// scene's light distribution restricted to them (by the scene's own where it has no delta light).
+struct DirectLights {
+  explicit DirectLights(const Scene& scene);
+  std::vector<uint32_t> delta;    // the point and directional lights
+  bool anySampled = false;        // whether there are other lights
+  std::vector<uint32_t> sampled;  // with delta lights: the others
+  Distribution1D choice;          // with delta lights: over `sampled`
+};
+
 // Stage "trace_rays" (shadow rays): direct light reflected towards the viewer at every point: one
-// shadow ray to each point and directional light (exact but for its visibility), and `samples`
-// samples of the other lights (stratified over the light's area, lights chosen by power among
-// them), each tested by one shadow ray. Adds the shadow rays traced to `rays`.
+// shadow ray to each point and directional light, and `samples` samples of the other lights
+// (stratified over the light's area), each tested by one shadow ray; samples 0: none at all (zero).
+// Adds the shadow rays traced to `rays`.
 void estimateDirectLight(const Scene& scene, const Visibility& visibility, std::span<const ShadingPoint> points,
                          int samples, uint64_t seed, std::span<Rgb> direct, uint64_t& rays);
 
@@ -24,7 +38,7 @@ void analyticDirectLight(const Scene& scene, const Visibility& visibility, std::
 
 // One point's direct light as estimateDirectLight's, its shadow rays in packets of its own samples
 // (estimateDirectLight packs rays across points instead).
-Rgb directLight(const Scene& scene, const Visibility& visibility, const ShadingPoint& point, int samples,
-                uint64_t seed, uint64_t& rays);
+Rgb directLight(const Scene& scene, const DirectLights& lights, const Visibility& visibility, const ShadingPoint& point,
+                int samples, uint64_t seed, uint64_t& rays);
 
 }  // namespace lucent

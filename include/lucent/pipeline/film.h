@@ -38,8 +38,9 @@ struct PointRadiance {
 class Film {
  public:
   // How the image's total light is summed, each way for the methods that add light that way:
-  // PerSample, each camera sample's total (the path tracer); PerPart, each part apart (emission
-  // and direct light, indirect, caustic: the methods that shade points), added at the end.
+  // PerSample, each camera sample's total (the path tracer); PerPart, the light of shading points
+  // by part (emission and direct light, indirect, caustic: the methods that shade points), kept
+  // apart for the layers and summed into one total without them.
   enum class Sums { PerSample, PerPart };
   // A film of the pixels of `region` in a width x height image.
   Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers);
@@ -91,7 +92,8 @@ class Film {
   bool wholeImage_;
   Sums mode_;
   FilmLayers layers_;
-  // Offsets into a pixel's sums: the total (PerSample), the parts, the features; -1 where absent.
+  // Offsets into a pixel's sums: the total (PerSample, or PerPart without layers), the parts, the
+  // features; -1 where absent.
   int total_ = -1, squares_ = -1, direct_ = -1, indirect_ = -1, caustic_ = -1, features_ = -1, stride_ = 0;
   UninitializedVector<ExactSum> sums_;  // zeroed in parallel: a film can be hundreds of megabytes
   std::vector<uint32_t> samples_;  // valid camera samples per pixel

@@ -85,8 +85,9 @@ class CheckpointClock {
 };
 
 // Camera samples per band for methods that shade a band's points at once: the band's shading points
-// (112 bytes each) stay below glibc's mmap threshold (32 MiB), so that each band's arrays reuse the
-// heap pages of the band before instead of touching fresh ones (slow on virtual machines).
+// (112 bytes each) stay below glibc's mmap threshold (32 MiB, as retainFreedMemory sets it), so that
+// each band's arrays reuse the heap pages of the band before instead of touching fresh ones (slow on
+// virtual machines).
 inline constexpr uint64_t kReusableBandSamples = uint64_t(1) << 17;
 
 // Bands of rows of a region for the methods that render band by band, sized by the work: at most

@@ -43,7 +43,8 @@ template <class Options>
 void declareShadingPointOptions(OptionTable<Options>& table) {
   declareCameraPathOptions(table);
   table.integer("light_samples", [](Options& o) -> auto& { return o.lightSamples; }, 0, 1 << 16, "rays",
-                "shadow rays per shading point for direct light");
+                "shadow rays per shading point to the area lights and the environment, besides one to each "
+                "point or directional light (0: no direct light)");
 }
 
 }  // namespace lucent

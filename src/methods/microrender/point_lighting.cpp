@@ -39,6 +39,7 @@ std::vector<Rgb> directAtLeaves(const Scene& scene, const Visibility& vis, const
                                 uint64_t seed, uint64_t& rays) {
   std::vector<Rgb> e(h.leafCount);
   const uint64_t stream = lightingSeed(seed, LightingStream::Direct);
+  const DirectLights lights(scene);
   tbb::enumerable_thread_specific<uint64_t> threadRays(0);
   points::parallelFor(0, h.leafCount, [&](uint32_t j) {
     const LeafSurface leaf = leafSurface(scene, h, j);
@@ -51,7 +52,7 @@ std::vector<Rgb> directAtLeaves(const Scene& scene, const Visibility& vis, const
     sp.bsdf.type = MaterialType::Diffuse;
     sp.bsdf.kd = Rgb(1.0f);
     sp.pixel = j;
-    e[j] = directLight(scene, vis, sp, samples, stream, threadRays.local());
+    e[j] = directLight(scene, lights, vis, sp, samples, stream, threadRays.local());
   });
   for (uint64_t r : threadRays) rays += r;
   return e;
