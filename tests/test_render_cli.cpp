@@ -289,6 +289,9 @@ TEST_CASE("Every command's bad arguments exit 1, compare's 2, and help 0", "[cli
   CHECK(runLucent("compare a.exr").status == 2);
   CHECK(runLucent("compare a.exr b.exr --metric psnr").status == 2);
   CHECK(runLucent("compare a.exr b.exr --max-error -1").status == 2);
+  const test::CliRun nan = runLucent("compare a.exr b.exr --max-error nan");
+  CHECK(nan.status == 2);
+  CHECK_THAT(nan.output, Catch::Contains("--max-error must be a finite number"));
   CHECK(runLucent("render " + kScene + " --spp x -o x.exr").status == 1);
   const test::CliRun threads = runLucent("render " + kScene + " --threads -2 -o x.exr");
   CHECK(threads.status == 1);

@@ -4,6 +4,7 @@
 // has NaN or infinite values, or --test finds it differs from the reference by more than their
 // noise; 2 error (the reference's NaN or infinite values among them).
 // 8-bit images (PNG, JPEG) are decoded from sRGB to linear before they are compared.
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -48,6 +49,8 @@ nlohmann::ordered_json metricsJson(const ChannelError& e) {
 }
 
 int runCompare(const CompareOptions& opt) {
+  // CLI11's range check lets NaN through, and no error would ever exceed it.
+  if (opt.maxError && !std::isfinite(*opt.maxError)) throw std::invalid_argument("--max-error must be a finite number");
   const ErrorMetric metric = parseErrorMetric(opt.metric);
   if (!opt.heatmap.empty()) {
     std::error_code ec;
