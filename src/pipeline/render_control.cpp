@@ -40,13 +40,16 @@ Film startFilm(const RenderControl& control, const Scene& scene, const RenderPar
   return film;
 }
 
+void addBand(Film& film, const EyePaths& band, const PointRadiance& light, int imageWidth, const RenderPart& part) {
+  film.add(band, light);
+  for (size_t i = 0; i < band.pixels.size(); ++i) film.setTaken(band.imagePixel(i, imageWidth), uint32_t(part.samples()));
+}
+
 void shadeImage(RenderOutput& out, const RenderControl& control, const Scene& scene, const RenderPart& part,
                 const EyePaths& eye, const PointRadiance& light, FilmLayers layers) {
   Stopwatch clock;
   auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, layers));
-  film->add(eye, light);
-  for (size_t i = 0; i < eye.pixels.size(); ++i)
-    film->setTaken(eye.imagePixel(i, scene.camera.width), uint32_t(part.samples()));
+  addBand(*film, eye, light, scene.camera.width, part);
   out.image = film->image();
   out.film = film;
   out.sppDone = part.samples();

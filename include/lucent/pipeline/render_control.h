@@ -63,6 +63,10 @@ EyePathSettings eyePathSettings(const Options& options, const RenderPart& part) 
   return s;
 }
 
+// A band of the part's camera samples into the film: its shading points' light, and its pixels
+// marked as having taken all the part's samples.
+void addBand(Film& film, const EyePaths& band, const PointRadiance& light, int imageWidth, const RenderPart& part);
+
 // The image of a method that shades every camera sample of its part at once: a film (PerPart sums)
 // started as startFilm does, the shading points' light added, every pixel's samples taken; sets
 // out's image, film and sppDone, and times stage "image".

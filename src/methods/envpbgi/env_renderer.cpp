@@ -268,10 +268,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
     }
     if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
     Stopwatch filmClock;
-    film->add(eye, shading);
-    for (int y = rows.first; y < rows.second; ++y)
-      for (int x = part.region.x0; x < part.region.x1; ++x)
-        film->setTaken(uint64_t(y) * uint64_t(scene.camera.width) + uint64_t(x), uint32_t(part.samples()));
+    addBand(*film, eye, shading, scene.camera.width, part);
     imageSeconds += filmClock.seconds();
     eyeRays += eye.rays, shadingPoints += n, invalidSamples += eye.invalid;
     row = rows.second;

@@ -238,9 +238,7 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {o.layers, false}));
   auto addToFilm = [&](const EyePaths& paths, const PointRadiance& light) {
     Stopwatch filmClock;
-    film->add(paths, light);
-    for (size_t i = 0; i < paths.pixels.size(); ++i)
-      film->setTaken(paths.imagePixel(i, scene.camera.width), uint32_t(part.samples()));
+    addBand(*film, paths, light, scene.camera.width, part);
     return filmClock.seconds();
   };
   const bool wholeImage = o.supersample > 0 || !dump.empty();

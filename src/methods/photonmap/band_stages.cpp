@@ -59,9 +59,7 @@ bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptio
       if (control.progress) control.progress((double(first - region.y0) + fraction * (end - first)) / rows);
     });
     dumpBand(options, index, traced.eye, traced.radiance);
-    film.add(traced.eye, traced.radiance);
-    for (int y = first; y < end; ++y)
-      for (int x = region.x0; x < region.x1; ++x) film.setTaken(uint64_t(y) * uint64_t(width) + uint64_t(x), uint32_t(part.samples()));
+    addBand(film, traced.eye, traced.radiance, width, part);
     totals.addBand(traced.eye);
     bands.finished(end - first, bandClock.seconds());
     row = end;
