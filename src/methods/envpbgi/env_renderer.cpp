@@ -236,6 +236,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
     };
     if (o.pixelIrradiance == PixelIrradiance::Caches) {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+        uint64_t fallbacksHere = 0;
         for (size_t i = r.begin(); i != r.end(); ++i) {
           const ShadingPoint& p = eye.points[i];
           // The tile the point appears in (through a mirror: where it would appear, or its pixel's).
@@ -247,9 +248,10 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
           bool fallback = false;
           const BufferIrradiance e = interpolateCaches(caches, grid, px / grid.tileSize, py / grid.tileSize, p.position,
                                                        p.normal, interpolation, fallback);
-          fallbacks += fallback;
+          fallbacksHere += fallback;
           shade(i, e);
         }
+        fallbacks += fallbacksHere;
       });
     } else {
       texels.resize(std::min<size_t>(std::max<size_t>(n, 1), 1u << 14) * primaryTexelCount);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lucent/core/lane_clones.h"
 #include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/scene/texture.h"
 
@@ -118,48 +119,113 @@ CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& ca
     int x0 = 1, y0 = 1, x1 = 0, y1 = 0;
   };
   std::vector<TileRect> rects(caches.size());
-  for (size_t k = 0; k < caches.size(); ++k) {
-    const RadianceCache& c = caches[k];
-    const Vec3 p = camera.project(c.position);
-    TileRect& t = rects[k];
-    if (p.z <= c.radius) {
-      // The sphere reaches the eye's plane: it may cover any part of the screen (unless wholly behind).
-      if (p.z < -c.radius) continue;
-      t = {0, 0, g.tilesX - 1, g.tilesY - 1};
-      continue;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, caches.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) {
+      const RadianceCache& c = caches[k];
+      const Vec3 p = camera.project(c.position);
+      TileRect& t = rects[k];
+      if (p.z <= c.radius) {
+        // The sphere reaches the eye's plane: it may cover any part of the screen (unless wholly behind).
+        if (p.z >= -c.radius) t = {0, 0, g.tilesX - 1, g.tilesY - 1};
+        continue;
+      }
+      const float footprint = camera.sphereFootprint(c.position, c.radius);
+      const float x0 = p.x - footprint, x1 = p.x + footprint, y0 = p.y - footprint, y1 = p.y + footprint;
+      if (x1 < 0 || y1 < 0 || x0 >= float(cameraSettings.width) || y0 >= float(cameraSettings.height)) continue;
+      auto tile = [&](float v, int count) { return std::clamp(int(std::floor(v / float(tileSize))), 0, count - 1); };
+      t = {tile(x0, g.tilesX), tile(y0, g.tilesY), tile(x1, g.tilesX), tile(y1, g.tilesY)};
     }
-    const float footprint = camera.sphereFootprint(c.position, c.radius);
-    const float x0 = p.x - footprint, x1 = p.x + footprint, y0 = p.y - footprint, y1 = p.y + footprint;
-    if (x1 < 0 || y1 < 0 || x0 >= float(cameraSettings.width) || y0 >= float(cameraSettings.height)) continue;
-    auto tile = [&](float v, int count) { return std::clamp(int(std::floor(v / float(tileSize))), 0, count - 1); };
-    t = {tile(x0, g.tilesX), tile(y0, g.tilesY), tile(x1, g.tilesX), tile(y1, g.tilesY)};
-  }
+  });
+  // Count, scan, fill; a row of tiles per work item, each tile's list in cache order.
   const size_t tiles = size_t(g.tilesX) * size_t(g.tilesY);
-  std::vector<uint32_t> counts(tiles + 1, 0);
-  for (const TileRect& t : rects)
-    for (int y = t.y0; y <= t.y1; ++y)
-      for (int x = t.x0; x <= t.x1; ++x) ++counts[size_t(y) * size_t(g.tilesX) + size_t(x)];
+  std::vector<uint32_t> counts(tiles, 0);
+  auto eachRowOfTiles = [&](auto&& visit) {
+    tbb::parallel_for(0, g.tilesY, [&](int y) {
+      for (size_t k = 0; k < caches.size(); ++k)
+        if (rects[k].y0 <= y && y <= rects[k].y1)
+          for (int x = rects[k].x0; x <= rects[k].x1; ++x) visit(size_t(y) * size_t(g.tilesX) + size_t(x), k);
+    });
+  };
+  eachRowOfTiles([&](size_t tile, size_t) { ++counts[tile]; });
   g.begin.assign(tiles + 1, 0);
   for (size_t i = 0; i < tiles; ++i) g.begin[i + 1] = g.begin[i] + counts[i];
   g.caches.resize(g.begin[tiles]);
   std::vector<uint32_t> cursor(g.begin.begin(), g.begin.end() - 1);
-  for (size_t k = 0; k < caches.size(); ++k) {
-    const TileRect& t = rects[k];
-    for (int y = t.y0; y <= t.y1; ++y)
-      for (int x = t.x0; x <= t.x1; ++x) g.caches[cursor[size_t(y) * size_t(g.tilesX) + size_t(x)]++] = uint32_t(k);
-  }
-  for (std::vector<float>* v : {&g.x, &g.y, &g.z, &g.radius, &g.nx, &g.ny, &g.nz}) v->resize(g.caches.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, g.caches.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t j = r.begin(); j != r.end(); ++j) {
-      const RadianceCache& c = caches[g.caches[j]];
-      g.x[j] = c.position.x, g.y[j] = c.position.y, g.z[j] = c.position.z, g.radius[j] = c.radius;
-      g.nx[j] = c.normal.x, g.ny[j] = c.normal.y, g.nz[j] = c.normal.z;
+  eachRowOfTiles([&](size_t tile, size_t k) { g.caches[cursor[tile]++] = uint32_t(k); });
+  for (std::vector<float>* v : {&g.x, &g.y, &g.z, &g.radius}) v->resize(caches.size());
+  for (std::vector<float>& v : g.frame) v.resize(caches.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, caches.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) {
+      const RadianceCache& c = caches[k];
+      g.x[k] = c.position.x, g.y[k] = c.position.y, g.z[k] = c.position.z, g.radius[k] = c.radius;
+      const Frame f(c.normal);
+      const float axes[9] = {f.s.x, f.s.y, f.s.z, f.t.x, f.t.y, f.t.z, f.n.x, f.n.y, f.n.z};
+      for (int a = 0; a < 9; ++a) g.frame[a][k] = axes[a];
     }
   });
-  g.frames.resize(caches.size());
-  for (size_t k = 0; k < caches.size(); ++k) g.frames[k] = Frame(caches[k].normal);
   return g;
 }
+
+namespace {
+
+// Eq. 5's test of a block of a tile's caches at a receiver (x, n), in lanes: weight[k] is Ward's
+// 1 / (|x - x_k| / R_k + sqrt(1 - n . n_k)) where cache k is within its radius and the maximum
+// angle, else 0 (a qualifying cache's weight is at least 1 / (1 + sqrt 2)). The same arithmetic
+// as length(), dot() and wardError().
+LUCENT_LANE_LOOP(void, wardWeights, (const CacheGrid& __restrict g, const uint32_t* __restrict cache, uint32_t count,
+                                     Vec3 x, Vec3 n, float cosMax, float* __restrict weight)) {
+  const float *cx = g.x.data(), *cy = g.y.data(), *cz = g.z.data(), *cr = g.radius.data();
+  const float *nx = g.frame[6].data(), *ny = g.frame[7].data(), *nz = g.frame[8].data();
+  for (uint32_t k = 0; k < count; ++k) {
+    const uint32_t c = cache[k];
+    const float dx = x.x - cx[c], dy = x.y - cy[c], dz = x.z - cz[c];
+    const float distance = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const float cosine = n.x * nx[c] + n.y * ny[c] + n.z * nz[c];
+    const bool qualifies = (distance < cr[c]) & (cosine >= cosMax);
+    const float ward = distance / cr[c] + std::sqrt(std::max(0.0f, 1.0f - cosine));
+    weight[k] = qualifies ? 1.0f / std::max(ward, 1e-6f) : 0.0f;
+  }
+}
+LUCENT_LANE_VERSIONS(void, wardWeights,
+                     (const CacheGrid& __restrict g, const uint32_t* __restrict cache, uint32_t count, Vec3 x, Vec3 n,
+                      float cosMax, float* __restrict weight),
+                     (g, cache, count, x, n, cosMax, weight))
+
+// Where a receiver's normal falls on each qualifying cache's 5 x 5 map: cacheIrradiance's
+// arithmetic in lanes.
+constexpr uint32_t kCacheBlock = 64;
+struct MapLookups {
+  uint32_t count = 0;
+  uint32_t cache[kCacheBlock];
+  float weight[kCacheBlock];
+  int32_t x0[kCacheBlock], y0[kCacheBlock];
+  float fx[kCacheBlock], fy[kCacheBlock];
+};
+LUCENT_LANE_LOOP(void, locateOnMaps, (MapLookups& __restrict m, const CacheGrid& __restrict g, Vec3 n)) {
+  const float* f[9];
+  for (int a = 0; a < 9; ++a) f[a] = g.frame[a].data();
+  for (uint32_t k = 0; k < m.count; ++k) {
+    const uint32_t c = m.cache[k];
+    const float lx = n.x * f[0][c] + n.y * f[1][c] + n.z * f[2][c];
+    const float ly = n.x * f[3][c] + n.y * f[4][c] + n.z * f[5][c];
+    const float lz = n.x * f[6][c] + n.y * f[7][c] + n.z * f[8][c];
+    // The paraboloid point, clamped to the disc (for normals at or below the horizon, the rim).
+    const bool above = lz > -0.999f;
+    float px = above ? lx / (1.0f + lz) : lx, py = above ? ly / (1.0f + lz) : ly;
+    const float r = std::sqrt(px * px + py * py);
+    px = r > 1.0f ? px / r : px, py = r > 1.0f ? py / r : py;
+    // Bilinear between the texel centres (clamped to the outer ones).
+    const float sx = std::clamp((px + 1.0f) * 0.5f * float(kCacheSide) - 0.5f, 0.0f, float(kCacheSide - 1));
+    const float sy = std::clamp((py + 1.0f) * 0.5f * float(kCacheSide) - 0.5f, 0.0f, float(kCacheSide - 1));
+    m.x0[k] = std::min(int32_t(sx), int32_t(kCacheSide - 2));
+    m.y0[k] = std::min(int32_t(sy), int32_t(kCacheSide - 2));
+    m.fx[k] = sx - float(m.x0[k]);
+    m.fy[k] = sy - float(m.y0[k]);
+  }
+}
+LUCENT_LANE_VERSIONS(void, locateOnMaps, (MapLookups& __restrict m, const CacheGrid& __restrict g, Vec3 n), (m, g, n))
+
+}  // namespace
 
 BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const CacheGrid& grid, int tx, int ty,
                                    Vec3 x, Vec3 n, const Interpolation& interpolation, bool& fallback) {
@@ -171,34 +237,26 @@ BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const 
   const size_t tile = size_t(ty) * size_t(grid.tilesX) + size_t(tx);
   BufferIrradiance sum;
   double total = 0;
-  constexpr uint32_t kBlock = 64;
-  for (uint32_t block = grid.begin[tile]; block < grid.begin[tile + 1]; block += kBlock) {
-    const uint32_t count = std::min(kBlock, grid.begin[tile + 1] - block);
-    // The test of every cache in the block, and its Ward error, in lanes (the same arithmetic as
-    // length(), dot() and wardError()).
-    bool qualifies[kBlock];
-    float ward[kBlock];
-    const float* cx = &grid.x[block];
-    const float* cy = &grid.y[block];
-    const float* cz = &grid.z[block];
-    const float* cr = &grid.radius[block];
-    const float* cnx = &grid.nx[block];
-    const float* cny = &grid.ny[block];
-    const float* cnz = &grid.nz[block];
-    for (uint32_t k = 0; k < count; ++k) {
-      const float dx = x.x - cx[k], dy = x.y - cy[k], dz = x.z - cz[k];
-      const float distance = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const float cosine = n.x * cnx[k] + n.y * cny[k] + n.z * cnz[k];
-      qualifies[k] = (distance < cr[k]) & (cosine >= cosMax);
-      ward[k] = distance / cr[k] + std::sqrt(std::max(0.0f, 1.0f - cosine));
-    }
-    for (uint32_t k = 0; k < count; ++k) {
-      if (!qualifies[k]) continue;
-      const uint32_t cache = grid.caches[block + k];
-      const float w = 1.0f / std::max(ward[k], 1e-6f);
-      const BufferIrradiance e = cacheIrradiance(caches[cache], grid.frames[cache], n);
-      sum.environment += e.environment * w, sum.nodes += e.nodes * w;
-      total += w;
+  MapLookups m;
+  for (uint32_t block = grid.begin[tile]; block < grid.begin[tile + 1]; block += kCacheBlock) {
+    const uint32_t count = std::min(kCacheBlock, grid.begin[tile + 1] - block);
+    float weight[kCacheBlock];
+    wardWeights(grid, &grid.caches[block], count, x, n, cosMax, weight);
+    // The qualifying ones, without a branch per cache (about one in ten qualifies).
+    m.count = 0;
+    for (uint32_t k = 0; k < count; ++k)
+      m.cache[m.count] = grid.caches[block + k], m.weight[m.count] = weight[k], m.count += weight[k] > 0;
+    locateOnMaps(m, grid, n);
+    for (uint32_t k = 0; k < m.count; ++k) {
+      const RadianceCache& c = caches[m.cache[k]];
+      const float fx = m.fx[k], fy = m.fy[k];
+      const float w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+      const int at = m.y0[k] * kCacheSide + m.x0[k];
+      const int texel[4] = {at, at + 1, at + kCacheSide, at + kCacheSide + 1};
+      BufferIrradiance e;
+      for (int j = 0; j < 4; ++j) e.environment += c.environment[texel[j]] * w[j], e.nodes += c.indirect[texel[j]] * w[j];
+      sum.environment += e.environment * m.weight[k], sum.nodes += e.nodes * m.weight[k];
+      total += m.weight[k];
     }
   }
   if (total > 0) {

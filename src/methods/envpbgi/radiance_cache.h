@@ -55,10 +55,11 @@ struct CacheGrid {
   int tileSize = 16, tilesX = 0, tilesY = 0;
   std::vector<uint32_t> begin;   // tilesX * tilesY + 1
   std::vector<uint32_t> caches;  // cache indices
-  // Per entry of `caches`, its cache's surfel, apart by coordinate: a receiver tests a tile's
-  // hundred-odd caches against radius and angle in SIMD lanes before it reads any whole cache.
-  std::vector<float> x, y, z, radius, nx, ny, nz;
-  std::vector<Frame> frames;  // per cache (not per entry): Frame(normal), for cacheIrradiance
+  // Per cache, its position, radius and Frame(normal) (s, t, n) apart by coordinate: a receiver
+  // tests a tile's hundred-odd caches against radius and angle in SIMD lanes (gathering by the
+  // tile's indices) before it reads any whole cache.
+  std::vector<float> x, y, z, radius;
+  std::vector<float> frame[9];
 };
 CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& camera, int tileSize);
 
