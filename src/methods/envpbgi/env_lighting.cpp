@@ -4,10 +4,12 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <stdexcept>
 
+#include "lucent/core/morton.h"
 #include "lucent/core/parallel.h"
 #include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/methods/points/bottom_up.h"
@@ -44,6 +46,23 @@ void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& s
     MicroCounters counters;
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
+  // A packet's lanes traverse the hierarchy together, visiting the nodes any of them needs: origins
+  // near each other and facing alike share them. The origins are taken by the axis their normal is
+  // nearest, then in Morton order of their positions.
+  std::vector<BufferOrigin> origins(count);
+  Bounds3 bounds;
+  for (size_t k = 0; k < count; ++k) origins[k] = origin(k), bounds.extend(origins[k].position);
+  std::vector<uint64_t> order(count);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) {
+      const Vec3 n = origins[k].normal;
+      const Vec3 a{std::abs(n.x), std::abs(n.y), std::abs(n.z)};
+      const int axis = a.x >= a.y && a.x >= a.z ? 0 : a.y >= a.z ? 1 : 2;
+      const uint64_t facing = uint64_t(2 * axis + (n[axis] < 0));
+      order[k] = (facing << 30 | mortonCode(origins[k].position, bounds)) << 32 | uint64_t(k);
+    }
+  });
+  std::sort(order.begin(), order.end());
   const size_t packets = (count + kGatherPacket - 1) / kGatherPacket;
   const size_t side2 = q.texels();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, packets, 1), [&](const tbb::blocked_range<size_t>& r) {
@@ -53,17 +72,17 @@ void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& s
       const size_t begin = packet * kGatherPacket, end = std::min(count, begin + kGatherPacket);
       GatherPoint points[kGatherPacket];
       MicroLane lanes[kGatherPacket];
-      for (size_t k = begin; k < end; ++k) {
-        const BufferOrigin o = origin(k);
-        GatherPoint& g = points[k - begin];
+      for (size_t j = begin; j < end; ++j) {
+        const BufferOrigin& o = origins[uint32_t(order[j])];
+        GatherPoint& g = points[j - begin];
         g.position = o.position;
         g.frame = Frame(o.normal);
         g.selfDistance = selfIntersectionScale(o.position);
-        lanes[k - begin] = {&g, &q.mapping, &s.buffers[k - begin]};
+        lanes[j - begin] = {&g, &q.mapping, &s.buffers[j - begin]};
       }
       renderMicroBuffers(hierarchy, std::span(lanes, end - begin), settings, s.counters);
-      for (size_t k = begin; k < end; ++k)
-        std::copy_n(s.buffers[k - begin].pixels.begin(), side2, texels.begin() + ptrdiff_t(k * side2));
+      for (size_t j = begin; j < end; ++j)
+        std::copy_n(s.buffers[j - begin].pixels.begin(), side2, texels.begin() + ptrdiff_t(uint32_t(order[j]) * side2));
     }
   });
   for (const Scratch& s : scratch) counters += s.counters;

@@ -34,8 +34,9 @@ struct BufferOrigin {
 };
 
 // Renders the micro-buffers of origins 0 .. count - 1 (origin(k)), in packets of kGatherPacket
-// consecutive ones, in parallel; buffer k's texels (packed depth | node words) go to
-// texels[k * q.texels() ...]. Adds the traversal's counters to `counters`.
+// origins that face alike and lie near each other (sorted by facing, then Morton code), in
+// parallel; buffer k's texels (packed depth | node words) go to texels[k * q.texels() ...]. Adds the
+// traversal's counters to `counters`.
 void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& settings, const BufferQuadrature& q,
                    size_t count, const std::function<BufferOrigin(size_t)>& origin, std::span<uint32_t> texels,
                    MicroCounters& counters);

@@ -101,15 +101,19 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   uint64_t shadowRays = 0;
   std::vector<Rgb> direct(h.nodes.size());
 
-  // 3.4, 4: primary visible points, from the camera's depth buffer.
+  // 3.4, 4: primary visible points, from the camera's depth buffer. The brute force, with a
+  // micro-buffer at every pixel and direct light at every leaf, has no use for them.
   Stopwatch primaryClock;
-  const CameraDepth depth = traceCameraDepth(scene, vis);
-  const float pixelAngle = PinholeCamera(scene.camera).pixelAngle();
-  PrimarySelection selection;
-  selection.maxSolidAngle = o.primaryPixels * pixelAngle * pixelAngle;
-  selection.maxConeAngle = o.primaryConeAngle * kPi / 180.0f;
-  selection.thickness = micro.thickness;
-  const std::vector<uint32_t> primary = selectPrimaryPoints(h, scene.camera, depth, selection);
+  std::vector<uint32_t> primary;
+  if (o.pixelIrradiance == PixelIrradiance::Caches) {
+    const CameraDepth depth = traceCameraDepth(scene, vis);
+    const float pixelAngle = PinholeCamera(scene.camera).pixelAngle();
+    PrimarySelection selection;
+    selection.maxSolidAngle = o.primaryPixels * pixelAngle * pixelAngle;
+    selection.maxConeAngle = o.primaryConeAngle * kPi / 180.0f;
+    selection.thickness = micro.thickness;
+    primary = selectPrimaryPoints(h, scene.camera, depth, selection);
+  }
   stats.addStage("select_primary_points", primaryClock.seconds());
 
   // 3.3, 4: their micro-buffers, and the nodes those show: the secondary visible points.
@@ -214,9 +218,11 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   const PinholeCamera camera(scene.camera);
   Interpolation interpolation;
   interpolation.maxAngle = o.cacheMaxAngle * kPi / 180.0f;
-  std::atomic<uint64_t> fallbacks{0}, glossy{0};
+  std::atomic<uint64_t> fallbacks{0}, glossy{0}, cacheCandidates{0};
   uint64_t eyeRays = 0, shadingPoints = 0, invalidSamples = 0;
-  std::vector<uint32_t> texels;
+  std::vector<uint32_t> texels, tileOfPoint;
+  std::vector<float> depthOfPoint;
+  TileLists tileLists;
   for (int row = part.region.y0; row < part.region.y1;) {
     const std::pair<int, int> rows = bands.next(row);
     EyePathSettings settingsOfBand = eyePathSettings(o, part);
@@ -235,23 +241,28 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
       if (p.bsdf.type != MaterialType::Diffuse) ++glossy;
     };
     if (o.pixelIrradiance == PixelIrradiance::Caches) {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
-        uint64_t fallbacksHere = 0;
+      // Each receiver's tile and view depth, then the band's tile lists cut to its depths.
+      tileOfPoint.resize(n), depthOfPoint.resize(n);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
           const ShadingPoint& p = eye.points[i];
-          // The tile the point appears in (through a mirror: where it would appear, or its pixel's).
-          const Vec3 s = camera.project(p.position);
-          const int width = scene.camera.width;
-          const bool onScreen = s.z > 0 && s.x >= 0 && s.y >= 0 && s.x < float(width) && s.y < float(scene.camera.height);
-          const int px = onScreen ? int(s.x) : int(p.pixel % uint32_t(width));
-          const int py = onScreen ? int(s.y) : int(p.pixel / uint32_t(width));
+          tileOfPoint[i] = grid.tileOf(camera, p.position, p.pixel, scene.camera.width, scene.camera.height);
+          depthOfPoint[i] = camera.project(p.position).z;
+        }
+      });
+      cutTileLists(grid, tileOfPoint, depthOfPoint, tileLists);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+        uint64_t fallbacksHere = 0, candidatesHere = 0;
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+          const ShadingPoint& p = eye.points[i];
+          const std::span<const uint32_t> candidates = tileLists.of(grid, tileOfPoint[i]);
           bool fallback = false;
-          const BufferIrradiance e = interpolateCaches(caches, grid, px / grid.tileSize, py / grid.tileSize, p.position,
-                                                       p.normal, interpolation, fallback);
-          fallbacksHere += fallback;
+          const BufferIrradiance e =
+              interpolateCaches(caches, grid, tileOfPoint[i], candidates, p.position, p.normal, interpolation, fallback);
+          fallbacksHere += fallback, candidatesHere += candidates.size();
           shade(i, e);
         }
-        fallbacks += fallbacksHere;
+        fallbacks += fallbacksHere, cacheCandidates += candidatesHere;
       });
     } else {
       texels.resize(std::min<size_t>(std::max<size_t>(n, 1), 1u << 14) * primaryTexelCount);
@@ -297,6 +308,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   stats.addCounter("cache_fallbacks", fallbacks);
   stats.addCounter("glossy_shaded_diffuse", glossy);
   stats.addCounter("grid_references", grid.caches.size());
+  stats.addCounter("cache_candidates", cacheCandidates);
   stats.addCounter("invalid_samples", invalidSamples + out.film->droppedPoints());
   return out;
 }

@@ -152,18 +152,58 @@ CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& ca
   g.caches.resize(g.begin[tiles]);
   std::vector<uint32_t> cursor(g.begin.begin(), g.begin.end() - 1);
   eachRowOfTiles([&](size_t tile, size_t k) { g.caches[cursor[tile]++] = uint32_t(k); });
-  for (std::vector<float>* v : {&g.x, &g.y, &g.z, &g.radius}) v->resize(caches.size());
+  for (std::vector<float>* v : {&g.x, &g.y, &g.z, &g.radius, &g.depth}) v->resize(caches.size());
   for (std::vector<float>& v : g.frame) v.resize(caches.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, caches.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k != r.end(); ++k) {
       const RadianceCache& c = caches[k];
       g.x[k] = c.position.x, g.y[k] = c.position.y, g.z[k] = c.position.z, g.radius[k] = c.radius;
+      g.depth[k] = camera.project(c.position).z;
       const Frame f(c.normal);
       const float axes[9] = {f.s.x, f.s.y, f.s.z, f.t.x, f.t.y, f.t.z, f.n.x, f.n.y, f.n.z};
       for (int a = 0; a < 9; ++a) g.frame[a][k] = axes[a];
     }
   });
   return g;
+}
+
+uint32_t CacheGrid::tileOf(const PinholeCamera& camera, Vec3 x, uint32_t pixel, int width, int height) const {
+  const Vec3 s = camera.project(x);
+  const bool onScreen = s.z > 0 && s.x >= 0 && s.y >= 0 && s.x < float(width) && s.y < float(height);
+  const int px = onScreen ? int(s.x) : int(pixel % uint32_t(width));
+  const int py = onScreen ? int(s.y) : int(pixel / uint32_t(width));
+  return uint32_t(py / tileSize) * uint32_t(tilesX) + uint32_t(px / tileSize);
+}
+
+void cutTileLists(const CacheGrid& grid, std::span<const uint32_t> tileOf, std::span<const float> depthOf,
+                  TileLists& lists) {
+  const size_t tiles = size_t(grid.tilesX) * size_t(grid.tilesY);
+  lists.nearest.assign(tiles, kInf);
+  lists.farthest.assign(tiles, -kInf);
+  lists.count.assign(tiles, 0);
+  lists.caches.resize(grid.caches.size());
+  bool any = false;
+  for (size_t i = 0; i < tileOf.size(); ++i) {
+    const uint32_t t = tileOf[i];
+    // A NaN depth widens nothing (its receiver qualifies for no cache).
+    lists.nearest[t] = std::min(lists.nearest[t], depthOf[i]), lists.farthest[t] = std::max(lists.farthest[t], depthOf[i]);
+    any = true;
+  }
+  if (!any) return;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles, 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t) {
+      if (!(lists.nearest[t] <= lists.farthest[t])) continue;
+      uint32_t kept = 0;
+      for (uint32_t j = grid.begin[t]; j < grid.begin[t + 1]; ++j) {
+        const uint32_t c = grid.caches[j];
+        // Widened by a thousandth of the radius and of the depth, for the rounding of both depths.
+        const float reach = grid.radius[c] * 1.001f + 1e-3f * std::max(1.0f, std::abs(grid.depth[c]));
+        lists.caches[grid.begin[t] + kept] = c;
+        kept += grid.depth[c] - reach <= lists.farthest[t] && grid.depth[c] + reach >= lists.nearest[t];
+      }
+      lists.count[t] = kept;
+    }
+  });
 }
 
 namespace {
@@ -227,25 +267,25 @@ LUCENT_LANE_VERSIONS(void, locateOnMaps, (MapLookups& __restrict m, const CacheG
 
 }  // namespace
 
-BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const CacheGrid& grid, int tx, int ty,
-                                   Vec3 x, Vec3 n, const Interpolation& interpolation, bool& fallback) {
+BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const CacheGrid& grid, uint32_t tile,
+                                   std::span<const uint32_t> candidates, Vec3 x, Vec3 n,
+                                   const Interpolation& interpolation, bool& fallback) {
   fallback = false;
   const float cosMax = std::cos(interpolation.maxAngle);
   auto wardError = [&](const RadianceCache& c) {
     return length(x - c.position) / c.radius + std::sqrt(std::max(0.0f, 1.0f - dot(n, c.normal)));
   };
-  const size_t tile = size_t(ty) * size_t(grid.tilesX) + size_t(tx);
   BufferIrradiance sum;
   double total = 0;
   MapLookups m;
-  for (uint32_t block = grid.begin[tile]; block < grid.begin[tile + 1]; block += kCacheBlock) {
-    const uint32_t count = std::min(kCacheBlock, grid.begin[tile + 1] - block);
+  for (uint32_t block = 0; block < candidates.size(); block += kCacheBlock) {
+    const uint32_t count = std::min(kCacheBlock, uint32_t(candidates.size()) - block);
     float weight[kCacheBlock];
-    wardWeights(grid, &grid.caches[block], count, x, n, cosMax, weight);
-    // The qualifying ones, without a branch per cache (about one in ten qualifies).
+    wardWeights(grid, &candidates[block], count, x, n, cosMax, weight);
+    // The qualifying ones, without a branch per cache.
     m.count = 0;
     for (uint32_t k = 0; k < count; ++k)
-      m.cache[m.count] = grid.caches[block + k], m.weight[m.count] = weight[k], m.count += weight[k] > 0;
+      m.cache[m.count] = candidates[block + k], m.weight[m.count] = weight[k], m.count += weight[k] > 0;
     locateOnMaps(m, grid, n);
     for (uint32_t k = 0; k < m.count; ++k) {
       const RadianceCache& c = caches[m.cache[k]];
@@ -265,6 +305,7 @@ BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const 
   }
   // No cache qualifies: the least Ward error in the tile, else in rings of tiles around it.
   fallback = true;
+  const int tx = int(tile % uint32_t(grid.tilesX)), ty = int(tile / uint32_t(grid.tilesX));
   for (int ring = 0; ring < std::max(grid.tilesX, grid.tilesY); ++ring) {
     float best = kInf;
     uint32_t bestCache = 0;

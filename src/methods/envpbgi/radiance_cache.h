@@ -60,19 +60,41 @@ struct CacheGrid {
   // tile's indices) before it reads any whole cache.
   std::vector<float> x, y, z, radius;
   std::vector<float> frame[9];
+  std::vector<float> depth;  // per cache, its centre's view depth (PinholeCamera::project's z)
+  // The tile a receiver at x is shaded in: where x appears, or, where it does not (seen through a
+  // mirror, off screen), its pixel's.
+  uint32_t tileOf(const PinholeCamera& camera, Vec3 x, uint32_t pixel, int width, int height) const;
 };
 CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& camera, int tileSize);
+
+// Forward+'s depth bounds (Harada et al. 2012), per band of receivers: each tile's list cut to the
+// caches whose sphere's view-depth range [depth - R, depth + R] meets the depths of the tile's
+// receivers in the band. A cache left out has no receiver within its radius (|z_x - z_c| <= |x - c|),
+// so Eq. 5 gives the same sums, in the same order, from a fraction of the caches.
+struct TileLists {
+  std::vector<float> nearest, farthest;  // per tile, its receivers' view depths
+  std::vector<uint32_t> count;           // per tile, the cut list's length
+  std::vector<uint32_t> caches;          // the cut lists, each at its tile's grid.begin
+  std::span<const uint32_t> of(const CacheGrid& grid, uint32_t tile) const {
+    return {caches.data() + grid.begin[tile], count[tile]};
+  }
+};
+// The band's receivers are in tiles tileOf[i] at view depths depthOf[i].
+void cutTileLists(const CacheGrid& grid, std::span<const uint32_t> tileOf, std::span<const float> depthOf,
+                  TileLists& lists);
 
 struct Interpolation {
   float maxAngle = 0;  // radians: caches whose normal is farther from the receiver's are not used
 };
 
-// Eq. 5 at a receiver (x, n) in tile (tx, ty): the caches of the tile within their radius and the
-// maximum angle, weighted by Ward's 1 / (|x - x_k| / R_k + sqrt(1 - n . n_k)), their irradiance
-// towards n averaged. Where none qualifies, the tile's cache of least Ward error regardless of radius
-// and angle, or failing that the nearest tiles' (rings of tiles outwards); `fallback` is set then. No
-// cache at all: zero, and `fallback` set.
-BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const CacheGrid& grid, int tx, int ty,
-                                   Vec3 x, Vec3 n, const Interpolation& interpolation, bool& fallback);
+// Eq. 5 at a receiver (x, n) in tile `tile`: of the caches `candidates` (the tile's, or those of
+// them cutTileLists kept), those within their radius and the maximum angle, weighted by Ward's
+// 1 / (|x - x_k| / R_k + sqrt(1 - n . n_k)), their irradiance towards n averaged. Where none
+// qualifies, the tile's cache of least Ward error regardless of radius and angle, or failing that
+// the nearest tiles' (rings of tiles outwards); `fallback` is set then. No cache at all: zero, and
+// `fallback` set.
+BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const CacheGrid& grid, uint32_t tile,
+                                   std::span<const uint32_t> candidates, Vec3 x, Vec3 n,
+                                   const Interpolation& interpolation, bool& fallback);
 
 }  // namespace lucent
