@@ -248,12 +248,12 @@ TEST_CASE("envpbgi: a buffer's quadrature integrates a constant radiance exactly
 }
 
 TEST_CASE("envpbgi: tile lists cut to the receivers' depths interpolate as the whole lists", "[envpbgi]") {
-  // Caches in front of a camera, receivers near them (most within a cache's radius, some nowhere
-  // near one: fallbacks); every receiver's interpolation from its tile's cut list must be the one
-  // from the tile's whole list, bit for bit, with the receivers cut in one band and in two.
+  // Caches in front of a camera, or around one inside their cloud (spheres through the eye's plane,
+  // receivers behind it); receivers near the caches (most within one's radius), some nowhere near
+  // one (fallbacks), one at NaN. Every receiver's interpolation from its tile's cut list must be
+  // the one from the tile's whole list and Eq. 5 summed one cache at a time with cacheIrradiance,
+  // bit for bit, with the receivers cut in one band and in two.
   Rng rng(7, 1);
-  Camera camera;
-  camera.fovY = 60, camera.width = 256, camera.height = 192;
   std::vector<RadianceCache> caches(400);
   for (RadianceCache& c : caches) {
     c.position = {6 * rng.uniform() - 3, 6 * rng.uniform() - 3, -2 - 10 * rng.uniform()};
@@ -261,54 +261,88 @@ TEST_CASE("envpbgi: tile lists cut to the receivers' depths interpolate as the w
     c.radius = 0.2f + 0.8f * rng.uniform();
     for (int t = 0; t < kCacheTexels; ++t) c.environment[t] = Rgb(rng.uniform()), c.indirect[t] = Rgb(rng.uniform());
   }
-  const CacheGrid grid = buildCacheGrid(caches, camera, 8);
-  const PinholeCamera pinhole(camera);
-  struct Receiver {
-    Vec3 x, n;
-    uint32_t tile = 0;
-    float depth = 0;
-  };
-  std::vector<Receiver> receivers(3000);
-  for (Receiver& r : receivers) {
-    const RadianceCache& c = caches[size_t(rng.uniform() * float(caches.size()))];
-    const bool near = rng.uniform() < 0.9f;
-    r.x = near ? c.position + sampleUniformSphere(rng.uniform2()) * (c.radius * rng.uniform())
-               : Vec3{6 * rng.uniform() - 3, 6 * rng.uniform() - 3, -2 - 30 * rng.uniform()};
-    r.n = normalize(c.normal + sampleUniformSphere(rng.uniform2()) * 0.3f);
-    const uint32_t pixel = uint32_t(rng.uniform() * float(camera.width * camera.height));
-    r.tile = grid.tileOf(pinhole, r.x, pixel, camera.width, camera.height);
-    r.depth = pinhole.project(r.x).z;
-  }
   Interpolation interpolation;
   interpolation.maxAngle = 20 * kPi / 180;
-  for (const size_t bands : {1, 2}) {
-    size_t whole = 0, cut = 0, qualified = 0;
-    for (size_t band = 0; band < bands; ++band) {
-      const size_t first = band * receivers.size() / bands, last = (band + 1) * receivers.size() / bands;
-      std::vector<uint32_t> tileOf;
-      std::vector<float> depthOf;
-      for (size_t i = first; i < last; ++i) tileOf.push_back(receivers[i].tile), depthOf.push_back(receivers[i].depth);
-      TileLists lists;
-      cutTileLists(grid, tileOf, depthOf, lists);
-      for (size_t i = first; i < last; ++i) {
-        const Receiver& r = receivers[i];
-        const std::span<const uint32_t> all(grid.caches.data() + grid.begin[r.tile], grid.begin[r.tile + 1] - grid.begin[r.tile]);
-        bool fallbackAll = false, fallbackCut = false;
-        const BufferIrradiance a = interpolateCaches(caches, grid, r.tile, all, r.x, r.n, interpolation, fallbackAll);
-        const BufferIrradiance b =
-            interpolateCaches(caches, grid, r.tile, lists.of(grid, r.tile), r.x, r.n, interpolation, fallbackCut);
-        CAPTURE(bands, i);
-        REQUIRE(fallbackAll == fallbackCut);
-        for (int ch = 0; ch < 3; ++ch) {
-          REQUIRE(a.environment[ch] == b.environment[ch]);
-          REQUIRE(a.nodes[ch] == b.nodes[ch]);
-        }
-        whole += all.size(), cut += lists.of(grid, r.tile).size(), qualified += !fallbackAll;
-      }
+  const float cosMax = std::cos(interpolation.maxAngle);
+  for (const Vec3 eye : {Vec3{0, 0, 0}, Vec3{0, 0, -6}}) {
+    Camera camera;
+    camera.eye = eye, camera.lookAt = eye + Vec3{0, 0, -1};
+    camera.fovY = 60, camera.width = 256, camera.height = 192;
+    const CacheGrid grid = buildCacheGrid(caches, camera, 8);
+    const PinholeCamera pinhole(camera);
+    struct Receiver {
+      Vec3 x, n;
+      uint32_t tile = 0;
+      float depth = 0;
+    };
+    std::vector<Receiver> receivers(3000);
+    for (Receiver& r : receivers) {
+      const RadianceCache& c = caches[size_t(rng.uniform() * float(caches.size()))];
+      const bool near = rng.uniform() < 0.9f;
+      r.x = near ? c.position + sampleUniformSphere(rng.uniform2()) * (c.radius * rng.uniform())
+                 : Vec3{6 * rng.uniform() - 3, 6 * rng.uniform() - 3, -2 - 30 * rng.uniform()};
+      r.n = normalize(c.normal + sampleUniformSphere(rng.uniform2()) * 0.3f);
     }
-    // The cut matters, and most receivers have caches to average.
-    CHECK(cut < whole * 3 / 4);
-    CHECK(qualified > receivers.size() * 3 / 4);
+    receivers[1234].x = Vec3{std::nanf(""), 0, -5};
+    for (Receiver& r : receivers) {
+      const uint32_t pixel = uint32_t(rng.uniform() * float(camera.width * camera.height));
+      r.tile = grid.tileOf(pinhole, r.x, pixel, camera.width, camera.height);
+      r.depth = pinhole.project(r.x).z;
+    }
+    // Eq. 5 over the tile's whole list, one cache at a time.
+    auto reference = [&](const Receiver& r, bool& fallback) {
+      BufferIrradiance sum;
+      double total = 0;
+      for (uint32_t j = grid.begin[r.tile]; j < grid.begin[r.tile + 1]; ++j) {
+        const RadianceCache& c = caches[grid.caches[j]];
+        const float distance = length(r.x - c.position), cosine = dot(r.n, c.normal);
+        if (!(distance < c.radius && cosine >= cosMax)) continue;
+        const float w = 1.0f / std::max(distance / c.radius + std::sqrt(std::max(0.0f, 1.0f - cosine)), 1e-6f);
+        const BufferIrradiance e = cacheIrradiance(c, r.n);
+        sum.environment += e.environment * w, sum.nodes += e.nodes * w;
+        total += w;
+      }
+      fallback = !(total > 0);
+      return fallback ? BufferIrradiance{} : BufferIrradiance{sum.environment * float(1.0 / total), sum.nodes * float(1.0 / total)};
+    };
+    auto same = [](const BufferIrradiance& a, const BufferIrradiance& b) {
+      for (int ch = 0; ch < 3; ++ch)
+        if (!(a.environment[ch] == b.environment[ch] && a.nodes[ch] == b.nodes[ch])) return false;
+      return true;
+    };
+    size_t behind = 0;
+    for (const Receiver& r : receivers) behind += r.depth < 0;
+    if (eye.z < 0) CHECK(behind > 100);
+    for (const size_t bands : {1, 2}) {
+      size_t whole = 0, cut = 0, qualified = 0;
+      for (size_t band = 0; band < bands; ++band) {
+        const size_t first = band * receivers.size() / bands, last = (band + 1) * receivers.size() / bands;
+        std::vector<uint32_t> tileOf;
+        std::vector<float> depthOf;
+        for (size_t i = first; i < last; ++i) tileOf.push_back(receivers[i].tile), depthOf.push_back(receivers[i].depth);
+        TileLists lists;
+        cutTileLists(grid, tileOf, depthOf, lists);
+        for (size_t i = first; i < last; ++i) {
+          const Receiver& r = receivers[i];
+          const std::span<const uint32_t> all(grid.caches.data() + grid.begin[r.tile],
+                                              grid.begin[r.tile + 1] - grid.begin[r.tile]);
+          bool fallbackAll = false, fallbackCut = false, fallbackReference = false;
+          const BufferIrradiance a = interpolateCaches(caches, grid, r.tile, all, r.x, r.n, interpolation, fallbackAll);
+          const BufferIrradiance b =
+              interpolateCaches(caches, grid, r.tile, lists.of(grid, r.tile), r.x, r.n, interpolation, fallbackCut);
+          const BufferIrradiance expected = reference(r, fallbackReference);
+          CAPTURE(eye.z, bands, i);
+          REQUIRE(fallbackAll == fallbackReference);
+          REQUIRE(fallbackCut == fallbackReference);
+          REQUIRE(same(a, b));
+          if (!fallbackReference) REQUIRE(same(a, expected));
+          whole += all.size(), cut += lists.of(grid, r.tile).size(), qualified += !fallbackAll;
+        }
+      }
+      // The cut matters, and most receivers have caches to average.
+      CHECK(cut < whole * 9 / 10);
+      CHECK(qualified > receivers.size() / 3);
+    }
   }
 }
 

@@ -21,7 +21,8 @@ inline uint32_t mortonCode(Vec3 p, const Bounds3& bounds) {
   uint32_t code = 0;
   for (int a = 0; a < 3; ++a) {
     const float t = e[a] > 0 ? (p[a] - bounds.lo[a]) / e[a] : 0.0f;
-    code |= spread(uint32_t(std::clamp(t, 0.0f, 1.0f) * 1023.0f)) << a;
+    // Outside the bounds, the nearest face; a NaN coordinate, the lowest.
+    code |= spread(uint32_t((t >= 0.0f ? std::min(t, 1.0f) : 0.0f) * 1023.0f)) << a;
   }
   return code;
 }

@@ -49,6 +49,7 @@ void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& s
   // A packet's lanes traverse the hierarchy together, visiting the nodes any of them needs: origins
   // near each other and facing alike share them. The origins are taken by the axis their normal is
   // nearest, then in Morton order of their positions.
+  if (count >= (size_t(1) << 31)) throw std::logic_error("renderBuffers: at most 2^31 - 1 buffers at once");
   std::vector<BufferOrigin> origins(count);
   Bounds3 bounds;
   for (size_t k = 0; k < count; ++k) origins[k] = origin(k), bounds.extend(origins[k].position);
@@ -59,10 +60,11 @@ void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& s
       const Vec3 a{std::abs(n.x), std::abs(n.y), std::abs(n.z)};
       const int axis = a.x >= a.y && a.x >= a.z ? 0 : a.y >= a.z ? 1 : 2;
       const uint64_t facing = uint64_t(2 * axis + (n[axis] < 0));
-      order[k] = (facing << 30 | mortonCode(origins[k].position, bounds)) << 32 | uint64_t(k);
+      order[k] = facing << 61 | uint64_t(mortonCode(origins[k].position, bounds)) << 31 | uint64_t(k);
     }
   });
   std::sort(order.begin(), order.end());
+  constexpr uint64_t kIndexBits = (uint64_t(1) << 31) - 1;
   const size_t packets = (count + kGatherPacket - 1) / kGatherPacket;
   const size_t side2 = q.texels();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, packets, 1), [&](const tbb::blocked_range<size_t>& r) {
@@ -73,7 +75,7 @@ void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& s
       GatherPoint points[kGatherPacket];
       MicroLane lanes[kGatherPacket];
       for (size_t j = begin; j < end; ++j) {
-        const BufferOrigin& o = origins[uint32_t(order[j])];
+        const BufferOrigin& o = origins[order[j] & kIndexBits];
         GatherPoint& g = points[j - begin];
         g.position = o.position;
         g.frame = Frame(o.normal);
@@ -82,7 +84,7 @@ void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& s
       }
       renderMicroBuffers(hierarchy, std::span(lanes, end - begin), settings, s.counters);
       for (size_t j = begin; j < end; ++j)
-        std::copy_n(s.buffers[j - begin].pixels.begin(), side2, texels.begin() + ptrdiff_t(uint32_t(order[j]) * side2));
+        std::copy_n(s.buffers[j - begin].pixels.begin(), side2, texels.begin() + ptrdiff_t((order[j] & kIndexBits) * side2));
     }
   });
   for (const Scratch& s : scratch) counters += s.counters;

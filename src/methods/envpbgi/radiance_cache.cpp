@@ -81,11 +81,7 @@ RadianceCache buildRadianceCache(std::span<const uint32_t> texels, const BufferQ
 }
 
 BufferIrradiance cacheIrradiance(const RadianceCache& cache, Vec3 normal) {
-  return cacheIrradiance(cache, Frame(cache.normal), normal);
-}
-
-BufferIrradiance cacheIrradiance(const RadianceCache& cache, const Frame& frame, Vec3 normal) {
-  const Vec3 local = frame.toLocal(normal);
+  const Vec3 local = Frame(cache.normal).toLocal(normal);
   // The paraboloid point, clamped to the disc (for normals at or below the horizon, the rim).
   Vec2 p = local.z > -0.999f ? paraboloidPoint(local) : Vec2{local.x, local.y};
   const float r = std::sqrt(p.x * p.x + p.y * p.y);
@@ -152,13 +148,16 @@ CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& ca
   g.caches.resize(g.begin[tiles]);
   std::vector<uint32_t> cursor(g.begin.begin(), g.begin.end() - 1);
   eachRowOfTiles([&](size_t tile, size_t k) { g.caches[cursor[tile]++] = uint32_t(k); });
-  for (std::vector<float>* v : {&g.x, &g.y, &g.z, &g.radius, &g.depth}) v->resize(caches.size());
+  for (std::vector<float>* v : {&g.x, &g.y, &g.z, &g.radius, &g.depth, &g.depthReach}) v->resize(caches.size());
   for (std::vector<float>& v : g.frame) v.resize(caches.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, caches.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k != r.end(); ++k) {
       const RadianceCache& c = caches[k];
       g.x[k] = c.position.x, g.y[k] = c.position.y, g.z[k] = c.position.z, g.radius[k] = c.radius;
       g.depth[k] = camera.project(c.position).z;
+      // A thousandth of the radius and of the distance from the eye (a receiver within the radius
+      // is no farther from the eye than that distance plus the radius).
+      g.depthReach[k] = c.radius * 1.001f + 1e-3f * std::max(1.0f, length(c.position - cameraSettings.eye) + c.radius);
       const Frame f(c.normal);
       const float axes[9] = {f.s.x, f.s.y, f.s.z, f.t.x, f.t.y, f.t.z, f.n.x, f.n.y, f.n.z};
       for (int a = 0; a < 9; ++a) g.frame[a][k] = axes[a];
@@ -196,10 +195,9 @@ void cutTileLists(const CacheGrid& grid, std::span<const uint32_t> tileOf, std::
       uint32_t kept = 0;
       for (uint32_t j = grid.begin[t]; j < grid.begin[t + 1]; ++j) {
         const uint32_t c = grid.caches[j];
-        // Widened by a thousandth of the radius and of the depth, for the rounding of both depths.
-        const float reach = grid.radius[c] * 1.001f + 1e-3f * std::max(1.0f, std::abs(grid.depth[c]));
         lists.caches[grid.begin[t] + kept] = c;
-        kept += grid.depth[c] - reach <= lists.farthest[t] && grid.depth[c] + reach >= lists.nearest[t];
+        kept += grid.depth[c] - grid.depthReach[c] <= lists.farthest[t] &&
+                grid.depth[c] + grid.depthReach[c] >= lists.nearest[t];
       }
       lists.count[t] = kept;
     }

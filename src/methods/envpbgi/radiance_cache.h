@@ -45,9 +45,8 @@ RadianceCache buildRadianceCache(std::span<const uint32_t> texels, const BufferQ
 
 // The cache's irradiance towards a receiver normal (world): bilinear on the 5 x 5 map, the normal's
 // paraboloid point clamped to the disc (normals below the point's horizon read the rim).
+// interpolateCaches does the same arithmetic in lanes.
 BufferIrradiance cacheIrradiance(const RadianceCache& cache, Vec3 normal);
-// The same with the cache's Frame(cache.normal) computed beforehand.
-BufferIrradiance cacheIrradiance(const RadianceCache& cache, const Frame& frame, Vec3 normal);
 
 // The screen's tiles, and per tile the caches whose effective sphere's screen bounds overlap it
 // (count, scan, fill: a GPU's CSR arrays), each tile's list in cache order.
@@ -56,11 +55,14 @@ struct CacheGrid {
   std::vector<uint32_t> begin;   // tilesX * tilesY + 1
   std::vector<uint32_t> caches;  // cache indices
   // Per cache, its position, radius and Frame(normal) (s, t, n) apart by coordinate: a receiver
-  // tests a tile's hundred-odd caches against radius and angle in SIMD lanes (gathering by the
+  // tests its tile's tens of caches against radius and angle in SIMD lanes (gathering by the
   // tile's indices) before it reads any whole cache.
   std::vector<float> x, y, z, radius;
   std::vector<float> frame[9];
-  std::vector<float> depth;  // per cache, its centre's view depth (PinholeCamera::project's z)
+  // Per cache, its centre's view depth (PinholeCamera::project's z) and how far from it in depth a
+  // receiver within its radius can be: the radius, widened for the rounding of both depths, which
+  // grows with the distance from the eye.
+  std::vector<float> depth, depthReach;
   // The tile a receiver at x is shaded in: where x appears, or, where it does not (seen through a
   // mirror, off screen), its pixel's.
   uint32_t tileOf(const PinholeCamera& camera, Vec3 x, uint32_t pixel, int width, int height) const;
