@@ -11,6 +11,7 @@
 
 #include "chi2.h"
 #include "lucent/core/distribution.h"
+#include "lucent/core/lane_clones.h"
 #include "lucent/core/path_sampler.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
@@ -734,4 +735,35 @@ TEST_CASE("PathSampler (independent): the keyed Rng's numbers, in the order aske
     REQUIRE((a.x == b.x && a.y == b.y));
     REQUIRE(s.uniform(k, SampleUse::Roulette) == rng.uniform());
   }
+}
+
+TEST_CASE("PathSampler (Sobol): pairs drawn in lanes are the sampler's, with every instruction set", "[sampling][sobol][isa]") {
+  // Samplers of several pixels and samples, the pairs of many purposes and bounces, in one call of
+  // each lane version; each must equal what the sampler itself gives.
+  const LaneIsa saved = laneIsa();
+  std::vector<PathSampler> samplers;
+  std::vector<uint64_t> keys;
+  std::vector<uint32_t> index, dimension;
+  for (uint64_t pixel = 0; pixel < 7; ++pixel)
+    for (uint64_t sample : {0ull, 1ull, 5ull, 1000ull, 123456789ull})
+      for (int bounce = 0; bounce < 12; ++bounce)
+        for (const SampleUse use : {SampleUse::LightChoice, SampleUse::LightPoint, SampleUse::BsdfDirection, SampleUse::Roulette}) {
+          samplers.emplace_back(SamplerKind::Sobol, 11, pixel, sample);
+          keys.push_back(samplers.back().pixelKey()), index.push_back(samplers.back().index());
+          dimension.push_back(PathSampler::dimension(bounce, use));
+        }
+  for (const LaneIsa isa : supportedLaneIsas()) {
+    setLaneIsa(isa);
+    std::vector<float> x(keys.size(), -1), y(keys.size(), -1);
+    sobolPairs(keys.data(), index.data(), dimension.data(), uint32_t(keys.size()), x.data(), y.data());
+    for (size_t k = 0; k < keys.size(); ++k) {
+      const uint32_t d = dimension[k];
+      const int bounce = int((d - kCameraDimensions) / kBounceDimensions);
+      const SampleUse use = SampleUse((d - kCameraDimensions) % kBounceDimensions);
+      const Vec2 expected = samplers[k].uniform2(bounce, use);
+      CAPTURE(laneIsaName(isa), k);
+      REQUIRE((x[k] == expected.x && y[k] == expected.y));
+    }
+  }
+  setLaneIsa(saved);
 }

@@ -16,6 +16,20 @@ bool notBlack(Rgb c) { return (c.r != 0 ? 1.0f : 0.0f) + (c.g != 0 ? 1.0f : 0.0f
 
 LUCENT_LANE_LOOP(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32_t last, SamplerKind sampler,
                   uint64_t seed, const PinholeCamera& camera, bool pixelCentres)) {
+  if (sampler == SamplerKind::Sobol) {
+    // The pixels' keys and the camera's pair in lanes (PathSampler's arithmetic), the rays, then
+    // the samplers.
+    alignas(64) float jitterX[kLaneSlots], jitterY[kLaneSlots];
+    sobolCameraPairs(seed, l.pixel + first, l.sample + first, last - first, l.pixelKey + first, jitterX + first,
+                     jitterY + first);
+    for (uint32_t k = first; k < last; ++k) {
+      const float jx = pixelCentres ? 0.5f : jitterX[k], jy = pixelCentres ? 0.5f : jitterY[k];
+      const Vec3 direction = camera.generate(l.x[k] + jx, l.y[k] + jy).direction;
+      l.dirX[k] = direction.x, l.dirY[k] = direction.y, l.dirZ[k] = direction.z;
+    }
+    for (uint32_t k = first; k < last; ++k) l.sampler[k] = PathSampler::sobol(l.pixelKey[k], l.sample[k]);
+    return;
+  }
   for (uint32_t k = first; k < last; ++k) {
     PathSampler s(sampler, seed, l.pixel[k], l.sample[k]);
     const Vec2 uniform = s.camera();  // drawn either way: the path's later numbers do not move

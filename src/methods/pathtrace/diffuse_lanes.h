@@ -70,6 +70,7 @@ struct CameraLanes {
   uint32_t count = 0;
   alignas(64) uint64_t pixel[kLaneSlots], sample[kLaneSlots];
   alignas(64) float x[kLaneSlots], y[kLaneSlots];
+  alignas(64) uint64_t pixelKey[kLaneSlots];  // the Sobol sampler's (PathSampler::sobolPixelKey)
   alignas(64) PathSampler sampler[kLaneSlots];
   alignas(64) float dirX[kLaneSlots], dirY[kLaneSlots], dirZ[kLaneSlots];
 };

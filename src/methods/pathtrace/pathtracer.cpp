@@ -171,6 +171,13 @@ class PathTracer {
     std::unique_ptr<CameraLanes> camera = std::make_unique<CameraLanes>();
     std::vector<TexturedLane> textured;
     std::vector<uint32_t> otherLights;  // lanes whose light is not a triangle
+    // The Sobol sampler's numbers of a bounce's Lambertian hits, drawn together in lanes before the
+    // hits are fetched: per hit, its light choice's, light point's and BSDF direction's pairs.
+    struct SobolRequests {
+      std::vector<uint64_t> pixelKey;
+      std::vector<uint32_t> index, dimension;
+      std::vector<float> x, y;
+    } sobol;
   };
 
   // The samples [sampleBegin, sampleEnd) of the tile's pixels, in pixel order, then sample order,
@@ -215,9 +222,12 @@ class PathTracer {
       lanes.strategy = opt_.strategy;
       w.textured.clear();
       w.otherLights.clear();
+      const bool drawnInLanes = drawDiffuseLaneNumbers(w);
+      uint32_t diffuseHits = 0;
       for (const uint32_t i : w.active) {
         if (inDiffuseLane(w.paths[i], w.hits[i])) {
-          fetchDiffuseLane(w.paths[i], w.hits[i], i, lanes, w.textured, w.otherLights);
+          fetchDiffuseLane(w.paths[i], w.hits[i], i, lanes, w.textured, w.otherLights,
+                           drawnInLanes ? 3 * diffuseHits++ : kNotDrawn, w.sobol);
           // One path at a time: its lane is shaded at once, alone.
           if (!opt_.laneShading) shadeLanes(w, counters);
           continue;
@@ -283,15 +293,40 @@ class PathTracer {
     w.otherLights.clear();
   }
 
+  // With the Sobol sampler, the numbers fetchDiffuseLane takes for every Lambertian hit of the
+  // bounce, drawn in lanes (in the order of the hits; their pairs one after the other). False with
+  // the independent sampler, whose numbers come in sequence from each path's generator.
+  static constexpr uint32_t kNotDrawn = ~0u;
+  bool drawDiffuseLaneNumbers(Wave& w) const {
+    if (opt_.sampler != SamplerKind::Sobol) return false;
+    Wave::SobolRequests& r = w.sobol;
+    r.pixelKey.clear(), r.index.clear(), r.dimension.clear();
+    for (const uint32_t i : w.active) {
+      const Path& path = w.paths[i];
+      if (!inDiffuseLane(path, w.hits[i])) continue;
+      for (const SampleUse use : {SampleUse::LightChoice, SampleUse::LightPoint, SampleUse::BsdfDirection}) {
+        r.pixelKey.push_back(path.sampler.pixelKey());
+        r.index.push_back(path.sampler.index());
+        r.dimension.push_back(PathSampler::dimension(path.bounce, use));
+      }
+    }
+    r.x.resize(r.index.size()), r.y.resize(r.index.size());
+    sobolPairs(r.pixelKey.data(), r.index.data(), r.dimension.data(), uint32_t(r.index.size()), r.x.data(), r.y.data());
+    return true;
+  }
+
   // Hits that DiffuseLanes shades: Lambertian surfaces below the depth limit (every one: shade()
   // takes the other materials).
   bool inDiffuseLane(const Path& path, const Hit& hit) const {
     return hit.found() && path.bounce < opt_.maxDepth && material(hit.triangle).type == MaterialType::Diffuse;
   }
 
-  // The lane's surface data and the random numbers shade would draw, in its order.
+  // The lane's surface data and the random numbers shade would draw, in its order: the
+  // independent sampler's from the path's generator, the Sobol sampler's drawn beforehand (its
+  // three pairs at `drawn` in `sobol`).
   void fetchDiffuseLane(Path& path, const Hit& hit, uint32_t pathIndex, DiffuseLanes& l,
-                        std::vector<TexturedLane>& textured, std::vector<uint32_t>& otherLights) const {
+                        std::vector<TexturedLane>& textured, std::vector<uint32_t>& otherLights, uint32_t drawn,
+                        const Wave::SobolRequests& sobol) const {
     const uint32_t k = l.count++;
     const Scene& s = scene_;
     const uint32_t* v = &s.indices[3 * size_t(hit.triangle)];
@@ -319,12 +354,19 @@ class PathTracer {
       for (const uint32_t* texel : {f.row0 + f.x0, f.row0 + f.x1, f.row1 + f.x0, f.row1 + f.x1}) __builtin_prefetch(texel);
       textured.push_back({k, f, m.kd});
     }
-    l.uLight[k] = path.sampler.uniform(path.bounce, SampleUse::LightChoice);
-    const Vec2 uLightPoint = path.sampler.uniform2(path.bounce, SampleUse::LightPoint);
-    l.uLightX[k] = uLightPoint.x, l.uLightY[k] = uLightPoint.y;
-    path.sampler.uniform(path.bounce, SampleUse::Lobe);  // shade's lobe choice, which a Lambertian surface does not use
-    const Vec2 uBsdf = path.sampler.uniform2(path.bounce, SampleUse::BsdfDirection);
-    l.uBsdfX[k] = uBsdf.x, l.uBsdfY[k] = uBsdf.y;
+    if (drawn != kNotDrawn) {
+      // The light choice's pair holds the lobe choice too, which a Lambertian surface does not use.
+      l.uLight[k] = sobol.x[drawn];
+      l.uLightX[k] = sobol.x[drawn + 1], l.uLightY[k] = sobol.y[drawn + 1];
+      l.uBsdfX[k] = sobol.x[drawn + 2], l.uBsdfY[k] = sobol.y[drawn + 2];
+    } else {
+      l.uLight[k] = path.sampler.uniform(path.bounce, SampleUse::LightChoice);
+      const Vec2 uLightPoint = path.sampler.uniform2(path.bounce, SampleUse::LightPoint);
+      l.uLightX[k] = uLightPoint.x, l.uLightY[k] = uLightPoint.y;
+      path.sampler.uniform(path.bounce, SampleUse::Lobe);  // shade's lobe choice, which a Lambertian surface does not use
+      const Vec2 uBsdf = path.sampler.uniform2(path.bounce, SampleUse::BsdfDirection);
+      l.uBsdfX[k] = uBsdf.x, l.uBsdfY[k] = uBsdf.y;
+    }
 
     // The light: an emitting triangle's data for the lanes' own sampling; any other light is
     // sampled whole once the lane's surface point is known (sampleOtherLights), as is the no light
