@@ -610,7 +610,7 @@ TEST_CASE("shuffledSobolPair is the Owen-scrambled pair of the Owen-shuffled ind
 
 namespace {
 // The numbers of one (bounce, use) for a pixel's samples [0, n).
-std::vector<Vec2> sobolPairs(uint64_t seed, uint64_t pixel, int bounce, SampleUse use, uint32_t n) {
+std::vector<Vec2> pixelPairs(uint64_t seed, uint64_t pixel, int bounce, SampleUse use, uint32_t n) {
   std::vector<Vec2> points;
   for (uint32_t i = 0; i < n; ++i) {
     PathSampler s(SamplerKind::Sobol, seed, pixel, i);
@@ -639,7 +639,7 @@ TEST_CASE("PathSampler (Sobol): a pixel's first 2^m samples are stratified in ev
   for (const uint64_t pixel : {0ull, 17ull, 123456ull})
     for (const int bounce : {0, 1, 7})
       for (const SampleUse use : {SampleUse::LightChoice, SampleUse::LightPoint, SampleUse::BsdfDirection, SampleUse::Roulette}) {
-        const std::vector<Vec2> points = sobolPairs(3, pixel, bounce, use, 1024);
+        const std::vector<Vec2> points = pixelPairs(3, pixel, bounce, use, 1024);
         for (int m = 0; m <= 10; ++m) {
           INFO("pixel " << pixel << ", bounce " << bounce << ", use " << uint32_t(use) << ", 2^" << m << " samples");
           REQUIRE(stratified(points, m));
@@ -709,7 +709,7 @@ TEST_CASE("PathSampler (Sobol): unbiased, and a smooth integrand's variance far 
     std::vector<double> estimates;
     for (uint64_t pixel = 0; pixel < 4096; ++pixel) {
       double sum = 0;
-      for (const Vec2 p : sobolPairs(11, pixel, 1, use, 64)) sum += f(p);
+      for (const Vec2 p : pixelPairs(11, pixel, 1, use, 64)) sum += f(p);
       estimates.push_back(sum / 64);
     }
     double mean = 0, var = 0;
@@ -737,7 +737,7 @@ TEST_CASE("PathSampler (independent): the keyed Rng's numbers, in the order aske
   }
 }
 
-TEST_CASE("PathSampler (Sobol): pairs drawn in lanes are the sampler's, with every instruction set", "[sampling][sobol][isa]") {
+TEST_CASE("PathSampler (Sobol): pairs and camera pairs drawn in lanes are the sampler's, with every instruction set", "[sampling][sobol][isa]") {
   // Samplers of several pixels and samples, the pairs of many purposes and bounces, in one call of
   // each lane version; each must equal what the sampler itself gives.
   const LaneIsa saved = laneIsa();
@@ -763,6 +763,18 @@ TEST_CASE("PathSampler (Sobol): pairs drawn in lanes are the sampler's, with eve
       const Vec2 expected = samplers[k].uniform2(bounce, use);
       CAPTURE(laneIsaName(isa), k);
       REQUIRE((x[k] == expected.x && y[k] == expected.y));
+    }
+    // The camera's pairs with the pixels' keys, 37 samples (a vector's tail).
+    std::vector<uint64_t> pixel, sample, cameraKey(37);
+    for (uint64_t k = 0; k < 37; ++k) pixel.push_back(mix64(k) % 100000), sample.push_back(k * 977 % 4099);
+    std::vector<float> cx(37), cy(37);
+    sobolCameraPairs(23, pixel.data(), sample.data(), 37, cameraKey.data(), cx.data(), cy.data());
+    for (size_t k = 0; k < 37; ++k) {
+      PathSampler s(SamplerKind::Sobol, 23, pixel[k], sample[k]);
+      const Vec2 expected = s.camera();
+      CAPTURE(laneIsaName(isa), k);
+      REQUIRE(cameraKey[k] == s.pixelKey());
+      REQUIRE((cx[k] == expected.x && cy[k] == expected.y));
     }
   }
   setLaneIsa(saved);

@@ -64,7 +64,7 @@ struct DiffuseLanes {
 };
 
 // The camera samples of a wave: pixel, sample index and pixel corner in; each path's keyed
-// sampler (after the two jitter numbers) and camera ray direction out. The same numbers as
+// sampler (the independent one after the two jitter numbers) and camera ray direction out. The same numbers as
 // keying a PathSampler and calling PinholeCamera::generate one sample at a time.
 struct CameraLanes {
   uint32_t count = 0;

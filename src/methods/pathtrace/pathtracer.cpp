@@ -295,10 +295,11 @@ class PathTracer {
 
   // With the Sobol sampler, the numbers fetchDiffuseLane takes for every Lambertian hit of the
   // bounce, drawn in lanes (in the order of the hits; their pairs one after the other). False with
-  // the independent sampler, whose numbers come in sequence from each path's generator.
+  // the independent sampler, whose numbers come in sequence from each path's generator, and one
+  // path at a time (laneShading off: the reference the lanes are tested against).
   static constexpr uint32_t kNotDrawn = ~0u;
   bool drawDiffuseLaneNumbers(Wave& w) const {
-    if (opt_.sampler != SamplerKind::Sobol) return false;
+    if (opt_.sampler != SamplerKind::Sobol || !opt_.laneShading) return false;
     Wave::SobolRequests& r = w.sobol;
     r.pixelKey.clear(), r.index.clear(), r.dimension.clear();
     for (const uint32_t i : w.active) {
