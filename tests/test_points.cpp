@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "chi2.h"
+#include "lucent/core/morton.h"
 #include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
@@ -800,4 +801,26 @@ TEST_CASE("Half floats: exact round trip and round-to-nearest-even", "[points]")
       REQUIRE(err <= std::abs(double(halfToFloat(other)) - f));
     }
   }
+}
+
+TEST_CASE("facingMortonKey orders work by the side a normal faces, then by Morton code", "[points][morton]") {
+  // Six classes of facing, each above every Morton code of the classes before it (a z-facing
+  // point must not sort among x-facing ones), and Morton order within a class.
+  Bounds3 bounds;
+  bounds.extend({0, 0, 0}), bounds.extend({1, 1, 1});
+  const Vec3 normals[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (int facing = 0; facing < 6; ++facing) {
+    const uint64_t lowest = facingMortonKey({0, 0, 0}, normals[facing], bounds);
+    const uint64_t highest = facingMortonKey({1, 1, 1}, normals[facing], bounds);
+    CAPTURE(facing);
+    REQUIRE(lowest >> 30 == uint64_t(facing));
+    REQUIRE(highest >> 30 == uint64_t(facing));
+    REQUIRE(highest - lowest == mortonCode({1, 1, 1}, bounds));
+    if (facing > 0) REQUIRE(lowest > facingMortonKey({1, 1, 1}, normals[facing - 1], bounds));
+  }
+  // The largest component decides; ties go to the first axis.
+  REQUIRE(facingMortonKey({0, 0, 0}, normalize(Vec3{0.3f, -0.9f, 0.2f}), bounds) >> 30 == 3);
+  REQUIRE(facingMortonKey({0, 0, 0}, Vec3{0.5f, 0.5f, 0.5f}, bounds) >> 30 == 0);
+  // A NaN position takes the lowest code.
+  REQUIRE(facingMortonKey({std::nanf(""), 0, 0}, normals[2], bounds) == uint64_t(2) << 30);
 }

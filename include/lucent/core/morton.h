@@ -2,6 +2,7 @@
 // them touches memory and the scene's BVH coherently.
 #pragma once
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "lucent/core/math.h"
@@ -25,6 +26,17 @@ inline uint32_t mortonCode(Vec3 p, const Bounds3& bounds) {
     code |= spread(uint32_t((t >= 0.0f ? std::min(t, 1.0f) : 0.0f) * 1023.0f)) << a;
   }
   return code;
+}
+
+// Where a point facing `normal` goes in an order of work: first the axis and side its normal faces
+// most (six classes), then the Morton code of its position (33 bits). Neighbours facing alike share
+// more of the scene they see than neighbours across an edge (a column's side and the floor in
+// front of it).
+inline uint64_t facingMortonKey(Vec3 position, Vec3 normal, const Bounds3& bounds) {
+  const Vec3 a{std::abs(normal.x), std::abs(normal.y), std::abs(normal.z)};
+  const int axis = a.x >= a.y && a.x >= a.z ? 0 : a.y >= a.z ? 1 : 2;
+  const uint64_t facing = uint64_t(2 * axis + (normal[axis] < 0 ? 1 : 0));
+  return facing << 30 | mortonCode(position, bounds);
 }
 
 }  // namespace lucent

@@ -55,13 +55,8 @@ void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& s
   for (size_t k = 0; k < count; ++k) origins[k] = origin(k), bounds.extend(origins[k].position);
   std::vector<uint64_t> order(count);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k != r.end(); ++k) {
-      const Vec3 n = origins[k].normal;
-      const Vec3 a{std::abs(n.x), std::abs(n.y), std::abs(n.z)};
-      const int axis = a.x >= a.y && a.x >= a.z ? 0 : a.y >= a.z ? 1 : 2;
-      const uint64_t facing = uint64_t(2 * axis + (n[axis] < 0));
-      order[k] = facing << 61 | uint64_t(mortonCode(origins[k].position, bounds)) << 31 | uint64_t(k);
-    }
+    for (size_t k = r.begin(); k != r.end(); ++k)
+      order[k] = facingMortonKey(origins[k].position, origins[k].normal, bounds) << 31 | uint64_t(k);
   });
   std::sort(order.begin(), order.end());
   constexpr uint64_t kIndexBits = (uint64_t(1) << 31) - 1;
