@@ -59,8 +59,11 @@ def main():
         parser.error("--runs must be at least 1")
     with tempfile.TemporaryDirectory() as tmp:
         for scene in args.scenes:
-            runs = sorted((frameSeconds(run), i, run) for i, run in
-                          enumerate(render(scene, os.path.join(tmp, "paper.exr"), args, []) for _ in range(args.runs)))
+            runs = []
+            for i in range(args.runs):
+                summary = render(scene, os.path.join(tmp, "paper.exr"), args, [])
+                runs.append((frameSeconds(summary), i, summary))
+            runs.sort()
             frame, _, paper = runs[(len(runs) - 1) // 2]
             brute = render(scene, os.path.join(tmp, "brute.exr"), args,
                            ["--direct-light", "every-leaf", "--pixel-irradiance", "every-pixel"])

@@ -5,6 +5,7 @@
 // brute force, and the method against the path tracer at one indirect bounce.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <vector>
@@ -232,6 +233,34 @@ TEST_CASE("envpbgi: the upward and downward traversals give the plain recursion'
       }
 }
 
+TEST_CASE("envpbgi: buffers rendered together in packets of their own order are each one's alone", "[envpbgi]") {
+  // renderBuffers packs its origins by facing and Morton code, not in the order given: every buffer
+  // must still be the one its origin gets rendered alone, in its own slot.
+  const Scene scene = loadAt(kPrimitives, 64, 36);
+  PointHierarchyOptions ho;
+  ho.pointCount = 1u << 12;
+  ho.encoding = NodeEncoding::Float;
+  const EnvHierarchy h = makeEnvHierarchy(buildPointHierarchy(scene, ho));
+  const MicroHierarchy micro = prepareMicroHierarchy(h.points);
+  MicroRenderSettings settings;
+  settings.depth = DepthCoding::forExtent(length(scene.bounds.extent()));
+  settings.splatReach = 2;
+  const BufferQuadrature q = makeQuadrature(MappingKind::Paraboloid, 8);
+  // Nodes of every level, in an order unlike the packing's.
+  std::vector<uint32_t> nodes;
+  for (uint32_t i = kRootNode + 3; i < uint32_t(h.nodes.size()); i += 97) nodes.push_back(i);
+  std::reverse(nodes.begin(), nodes.end());
+  auto origin = [&](size_t k) { return BufferOrigin{h.surfels[nodes[k]].position, h.surfels[nodes[k]].normal}; };
+  MicroCounters counters;
+  std::vector<uint32_t> together(nodes.size() * q.texels()), alone(q.texels());
+  renderBuffers(micro, settings, q, nodes.size(), origin, together, counters);
+  for (size_t k = 0; k < nodes.size(); ++k) {
+    renderBuffers(micro, settings, q, 1, [&](size_t) { return origin(k); }, alone, counters);
+    CAPTURE(k, nodes[k]);
+    REQUIRE(std::equal(alone.begin(), alone.end(), together.begin() + ptrdiff_t(k * q.texels())));
+  }
+}
+
 TEST_CASE("envpbgi: a buffer's quadrature integrates a constant radiance exactly", "[envpbgi]") {
   for (const MappingKind kind : {MappingKind::Paraboloid, MappingKind::Nusselt})
     for (const int side : {8, 16, 24}) {
@@ -286,8 +315,8 @@ TEST_CASE("envpbgi: tile lists cut to the receivers' depths interpolate as the w
     receivers[1234].x = Vec3{std::nanf(""), 0, -5};
     for (Receiver& r : receivers) {
       const uint32_t pixel = uint32_t(rng.uniform() * float(camera.width * camera.height));
-      r.tile = grid.tileOf(pinhole, r.x, pixel, camera.width, camera.height);
-      r.depth = pinhole.project(r.x).z;
+      const CacheGrid::Placement at = grid.place(pinhole, r.x, pixel, camera.width, camera.height);
+      r.tile = at.tile, r.depth = at.depth;
     }
     // Eq. 5 over the tile's whole list, one cache at a time.
     auto reference = [&](const Receiver& r, bool& fallback) {

@@ -246,8 +246,8 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
           const ShadingPoint& p = eye.points[i];
-          tileOfPoint[i] = grid.tileOf(camera, p.position, p.pixel, scene.camera.width, scene.camera.height);
-          depthOfPoint[i] = camera.project(p.position).z;
+          const CacheGrid::Placement at = grid.place(camera, p.position, p.pixel, scene.camera.width, scene.camera.height);
+          tileOfPoint[i] = at.tile, depthOfPoint[i] = at.depth;
         }
       });
       cutTileLists(grid, tileOfPoint, depthOfPoint, tileLists);

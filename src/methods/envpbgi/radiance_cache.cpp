@@ -166,12 +166,13 @@ CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& ca
   return g;
 }
 
-uint32_t CacheGrid::tileOf(const PinholeCamera& camera, Vec3 x, uint32_t pixel, int width, int height) const {
+CacheGrid::Placement CacheGrid::place(const PinholeCamera& camera, Vec3 x, uint32_t pixel, int width,
+                                     int height) const {
   const Vec3 s = camera.project(x);
   const bool onScreen = s.z > 0 && s.x >= 0 && s.y >= 0 && s.x < float(width) && s.y < float(height);
   const int px = onScreen ? int(s.x) : int(pixel % uint32_t(width));
   const int py = onScreen ? int(s.y) : int(pixel / uint32_t(width));
-  return uint32_t(py / tileSize) * uint32_t(tilesX) + uint32_t(px / tileSize);
+  return {uint32_t(py / tileSize) * uint32_t(tilesX) + uint32_t(px / tileSize), s.z};
 }
 
 void cutTileLists(const CacheGrid& grid, std::span<const uint32_t> tileOf, std::span<const float> depthOf,

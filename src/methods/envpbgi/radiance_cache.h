@@ -64,8 +64,13 @@ struct CacheGrid {
   // grows with the distance from the eye.
   std::vector<float> depth, depthReach;
   // The tile a receiver at x is shaded in: where x appears, or, where it does not (seen through a
-  // mirror, off screen), its pixel's.
-  uint32_t tileOf(const PinholeCamera& camera, Vec3 x, uint32_t pixel, int width, int height) const;
+  // mirror, off screen), its pixel's; and x's view depth (PinholeCamera::project's z), from the same
+  // projection.
+  struct Placement {
+    uint32_t tile = 0;
+    float depth = 0;
+  };
+  Placement place(const PinholeCamera& camera, Vec3 x, uint32_t pixel, int width, int height) const;
 };
 CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& camera, int tileSize);
 
