@@ -181,7 +181,7 @@ try:
 
     # Bad input: no page.
     for args, words in ((candidates + ["--label", "one", "-o", p("bad.html")], "--label is given 1 times"),
-                        ([p("pt.exr"), "-o", p("reference.exr")], "is the reference"),
+                        ([p("pt.exr"), "-o", p("reference.exr")], "must end in .html"),
                         ([p("pt.exr"), "--seconds", "nan", "-o", p("bad.html")], "--seconds must be positive"),
                         ([p("pt.exr"), "--alpha", "nan", "-o", p("bad.html")], "--alpha must lie")):
         r = run([lucent, "report", p("reference.exr")] + args)

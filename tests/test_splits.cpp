@@ -251,7 +251,7 @@ TEST_CASE("SIGINT and SIGTERM stop a render with a checkpoint and an image marke
     CHECK(metadata(out, "lucent:partial") == "true");
     CHECK(readImage(out).width() == 96);
     CHECK_FALSE(readFilmFile(film).info.complete);
-    for (const std::string& name : dir.entries()) CHECK(name.find(".tmp-") == std::string::npos);
+    for (const std::string& name : dir.entries()) CHECK(name.find(".lucent-tmp.") == std::string::npos);
     if (signal == SIGINT) {
       const test::CliRun resumed = runLucent("render " + args + " --resume -o " + quoted(out));
       REQUIRE(resumed.status == 0);

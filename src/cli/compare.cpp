@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "cli/commands.h"
+#include "cli/output_paths.h"
 #include "lucent/image/metrics.h"
 
 namespace lucent::cli {
@@ -52,13 +53,7 @@ int runCompare(const CompareOptions& opt) {
   // CLI11's range check lets NaN through, and no error would ever exceed it.
   if (opt.maxError && !std::isfinite(*opt.maxError)) throw std::invalid_argument("--max-error must be a finite number");
   const ErrorMetric metric = parseErrorMetric(opt.metric);
-  if (!opt.heatmap.empty()) {
-    std::error_code ec;
-    const auto heatmap = std::filesystem::weakly_canonical(opt.heatmap, ec);
-    for (const std::string& input : {opt.image, opt.reference})
-      if (heatmap == std::filesystem::weakly_canonical(input, ec))
-        throw std::invalid_argument("--heatmap '" + opt.heatmap + "' is one of the images compared");
-  }
+  if (!opt.heatmap.empty()) checkOutputFile(opt.heatmap, ".png", "--heatmap", {opt.image, opt.reference});
   const Image candidateFile = readLinearImage(opt.image);
   const Image referenceFile = readLinearImage(opt.reference);
   // The test reads the variance layers; the metrics compare the colours.

@@ -14,6 +14,7 @@
 
 #include "cli/commands.h"
 #include "cli/film_outputs.h"
+#include "cli/output_paths.h"
 #include "lucent/core/memory.h"
 
 namespace lucent::cli {
@@ -73,16 +74,13 @@ std::pair<int, int> commonSamples(const std::vector<std::string>& paths, const s
 }
 
 int runMerge(const MergeArgs& a) {
-  if (a.output.size() < 4 || a.output.substr(a.output.size() - 4) != ".exr")
-    throw std::invalid_argument("-o '" + a.output + "' must end in .exr");
-  if (!a.png.empty() && (a.png.size() < 4 || a.png.substr(a.png.size() - 4) != ".png"))
-    throw std::invalid_argument("--png '" + a.png + "' must end in .png");
   const std::string filmPath = filmPathFor(a.output);
-  std::error_code ec;
+  std::vector<std::string> inputs = a.parts;
   for (const std::string& part : a.parts)
-    for (const std::string& out : {a.output, a.png, filmPath})
-      if (!out.empty() && std::filesystem::weakly_canonical(part, ec) == std::filesystem::weakly_canonical(out, ec))
-        throw std::invalid_argument("'" + out + "' is one of the parts merged; choose another output");
+    if (std::filesystem::path(part).extension() == ".exr") inputs.push_back(filmPathFor(part));
+  checkOutputFile(a.output, ".exr", "-o", inputs);
+  if (!a.png.empty()) checkOutputFile(a.png, ".png", "--png", inputs);
+  checkOutputFile(filmPath, ".film", "-o (its film file)", inputs);
 
   std::vector<FilmFile> films;
   for (const std::string& path : a.parts) {

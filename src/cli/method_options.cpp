@@ -47,11 +47,14 @@ std::string flagOf(const std::string& option) {
 }
 
 std::pair<std::string, std::string> methodOptionArg(const std::string& key, const std::optional<std::string>& inlineValue,
-                                                    const std::function<std::string()>& nextValue) {
+                                                    const std::optional<std::string>& next,
+                                                    const std::function<std::string()>& takeNext) {
   const std::string name = optionName(key);
   if (const OptionSpec* spec = anySpec(name)) {
-    if (spec->kind == OptionKind::Flag) return {name, inlineValue ? *inlineValue : "true"};
-    return {name, inlineValue ? *inlineValue : nextValue()};
+    if (inlineValue) return {name, *inlineValue};
+    if (spec->kind != OptionKind::Flag) return {name, takeNext()};
+    if (next && (*next == "true" || *next == "false")) return {name, takeNext()};
+    return {name, "true"};
   }
   if (name.rfind("no_", 0) == 0 && !inlineValue)
     if (const OptionSpec* spec = anySpec(name.substr(3)); spec && spec->kind == OptionKind::Flag)

@@ -14,11 +14,13 @@ namespace lucent::cli {
 // "--gather-rays" for "gather_rays".
 std::string flagOf(const std::string& option);
 
-// A method option as given: `--name VALUE`, `--name=VALUE`, and for flags `--name` (true) or
-// `--no-name` (false). Whether the option takes a value is known from any method that declares
-// it; a name no method declares is an error.
+// A method option as given: `--name VALUE`, `--name=VALUE`, and for flags `--name` (true),
+// `--name true|false` and `--no-name` (false). Whether the option takes a value is known from any
+// method that declares it; a name no method declares is an error. `next` is the argument after the
+// key, if any; `takeNext` consumes it.
 std::pair<std::string, std::string> methodOptionArg(const std::string& key, const std::optional<std::string>& inlineValue,
-                                                    const std::function<std::string()>& nextValue);
+                                                    const std::optional<std::string>& next,
+                                                    const std::function<std::string()>& takeNext);
 
 // Throws std::invalid_argument, `where` first, if `method` has no option `name` (naming the method
 // that has it, if one does).

@@ -16,6 +16,7 @@
 #include "cli/commands.h"
 #include "cli/film_outputs.h"
 #include "cli/method_options.h"
+#include "cli/output_paths.h"
 #include "cli/progress.h"
 #include "lucent/core/lane_clones.h"
 #include "lucent/core/memory.h"
@@ -166,6 +167,7 @@ RenderArgs parseArgs(const std::vector<std::string>& args) {
       a.threads = int(flagged([&] { return parseOptionInteger("threads", text, 0, 4096); }));
     } else if (key.rfind("--", 0) == 0) {
       a.methodOptions.push_back(methodOptionArg(key, inlineValue ? std::optional(arg.substr(eq + 1)) : std::nullopt,
+                                                i + 1 < args.size() ? std::optional(args[i + 1]) : std::nullopt,
                                                 [&] { return value(); }));
     } else if (key.rfind("-", 0) == 0 && key.size() > 1) {
       throw std::invalid_argument("unknown option " + key);
@@ -182,21 +184,6 @@ std::string hex(uint64_t v) {
   std::ostringstream s;
   s << std::hex << v;
   return s.str();
-}
-
-void checkOutputPath(const std::string& path, const std::string& extension, const std::string& flag) {
-  if (fs::path(path).extension() != extension) throw std::invalid_argument(flag + " '" + path + "' must end in " + extension);
-  const fs::path dir = fs::absolute(path).parent_path();
-  if (!fs::is_directory(dir)) throw std::invalid_argument(flag + ": directory '" + dir.string() + "' does not exist");
-}
-
-// An output must not be one of the scene's inputs (an environment map, a texture).
-void refuseToOverwrite(const std::vector<std::string>& inputs, const std::string& output, const std::string& flag) {
-  std::error_code ec;
-  const fs::path out = fs::weakly_canonical(output, ec);
-  for (const std::string& input : inputs)
-    if (out == fs::weakly_canonical(input, ec))
-      throw std::invalid_argument(flag + " '" + output + "' is a file the scene is read from; choose another output");
 }
 
 // While alive: SIGINT and SIGTERM ask the render to stop; a second one ends the process as usual.
@@ -248,8 +235,6 @@ int runRender(const RenderArgs& a) {
     if (a.scene.empty()) throw std::invalid_argument("no scene file given (lucent render SCENE.json -o OUT.exr)");
     if (a.output.empty() && !a.help) throw std::invalid_argument("no output file given (-o OUT.exr)");
     if (!a.help) {
-      checkOutputPath(a.output, ".exr", "-o");
-      if (!a.png.empty()) checkOutputPath(a.png, ".png", "--png");
       std::error_code ec;
       if (!a.png.empty() && fs::weakly_canonical(a.output, ec) == fs::weakly_canonical(a.png, ec))
         throw std::invalid_argument("-o and --png name the same file");
@@ -259,8 +244,9 @@ int runRender(const RenderArgs& a) {
     scene = loadScene(a.scene, {a.quiet});
     stats.addStage("load_scene", loadClock.seconds());
     if (!a.help) {
-      refuseToOverwrite(scene.inputFiles, a.output, "-o");
-      if (!a.png.empty()) refuseToOverwrite(scene.inputFiles, a.png, "--png");
+      checkOutputFile(a.output, ".exr", "-o", scene.inputFiles);
+      if (!a.png.empty()) checkOutputFile(a.png, ".png", "--png", scene.inputFiles);
+      checkOutputFile(filmPathFor(a.output), ".film", "-o (its film file)", scene.inputFiles);
     }
   }
   const std::string methodName = !a.method.empty()       ? a.method
@@ -278,6 +264,11 @@ int runRender(const RenderArgs& a) {
     for (const auto& [name, text] : scene.render.options) {
       origins.push_back(a.scene + ": render." + name);
       checkMethodOption(*method, name, origins.back());
+      // A scene file is data, perhaps downloaded: where Lucent writes comes from the command line.
+      for (const OptionSpec& spec : method->options())
+        if (spec.name == name && spec.kind == OptionKind::Text)
+          throw std::invalid_argument(origins.back() + ": a scene file cannot choose where Lucent writes; give " +
+                                      spec.flag() + " on the command line");
       values.emplace_back(name, text);
     }
   for (const auto& [name, text] : a.methodOptions) {
@@ -345,7 +336,6 @@ int runRender(const RenderArgs& a) {
   info.firstSample = part.sampleBegin;
   info.sampleCount = part.samples();
   const std::string filmPath = filmPathFor(a.output);
-  refuseToOverwrite(scene.inputFiles, filmPath, "-o (its film file)");
   if ((control.checkpointSeconds = a.checkpointSeconds) > 0 || a.resume) {
     if (!method->interruptible())
       throw std::invalid_argument(std::string(a.resume ? "--resume" : "--checkpoint") + ": --method " + method->name() +

@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "cli/commands.h"
+#include "cli/output_paths.h"
 #include "lucent/core/files.h"
 #include "lucent/image/metrics.h"
 
@@ -400,15 +401,9 @@ int runReport(const ReportOptions& opt) {
   if (!opt.seconds.empty() && opt.seconds.size() != opt.candidates.size())
     throw std::invalid_argument("--seconds is given " + std::to_string(opt.seconds.size()) + " times for " +
                                 std::to_string(opt.candidates.size()) + " candidates");
-  {
-    std::error_code ec;
-    const auto output = std::filesystem::weakly_canonical(opt.output, ec);
-    for (const std::string& input : opt.candidates)
-      if (output == std::filesystem::weakly_canonical(input, ec))
-        throw std::invalid_argument("the report '" + opt.output + "' is one of the images compared");
-    if (output == std::filesystem::weakly_canonical(opt.reference, ec))
-      throw std::invalid_argument("the report '" + opt.output + "' is the reference");
-  }
+  std::vector<std::string> inputs = opt.candidates;
+  inputs.push_back(opt.reference);
+  checkOutputFile(opt.output, ".html", "-o", inputs);
   ImageMetadata referenceMetadata;
   const Image referenceFile = readLinearImage(opt.reference, &referenceMetadata);
   const bool tested = hasVarianceLayers(referenceFile);

@@ -1,23 +1,95 @@
 #include "lucent/core/files.h"
 
-#include <signal.h>
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cctype>
 #include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <cstdio>
+#include <fstream>
+#include <optional>
 #include <regex>
+#include <sstream>
 
 namespace lucent {
 
 namespace {
 
-// ".<stem>.tmp-<pid>-<n><extension>", beside the target.
-std::filesystem::path temporaryPathFor(const std::filesystem::path& path) {
-  static std::atomic<unsigned> counter{0};
-  std::string name = ".";
-  name += path.stem().string() + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) +
-          path.extension().string();
-  return path.parent_path() / name;
+// Who writes a temporary file: the machine's boot (the kernel's random boot id, which differs
+// between machines and between boots of one), the process-id namespace (containers on one kernel
+// number their processes apart) and the process id with the process's start time (ids are reused).
+// A field that cannot be read is 0, and a name with a 0 field is never proven abandoned.
+struct Writer {
+  uint64_t boot = 0, pidNamespace = 0, pid = 0, startTicks = 0;
+};
+
+// Field 22 of /proc/PID/stat: the process's start time in clock ticks after boot; nullopt when the
+// process does not exist, 0 when its state cannot be read.
+std::optional<uint64_t> processStartTicks(uint64_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  if (!in) {
+    struct stat s {};
+    if (::stat(("/proc/" + std::to_string(pid)).c_str(), &s) != 0 && errno == ENOENT) return std::nullopt;
+    return 0;
+  }
+  std::string line;
+  std::getline(in, line);
+  // The command name (field 2) is in parentheses and may hold spaces and parentheses itself.
+  const size_t end = line.rfind(')');
+  if (end == std::string::npos) return 0;
+  std::istringstream fields(line.substr(end + 1));
+  std::string field;
+  for (int i = 3; i <= 22 && (fields >> field); ++i)
+    if (i == 22) {
+      uint64_t ticks = 0;
+      const auto [p, ec] = std::from_chars(field.data(), field.data() + field.size(), ticks);
+      return ec == std::errc() && p == field.data() + field.size() ? ticks : 0;
+    }
+  return 0;
+}
+
+Writer readThisWriter() {
+  Writer w;
+  std::ifstream bootId("/proc/sys/kernel/random/boot_id");
+  std::string id;
+  if (bootId >> id) {
+    std::string hex;
+    for (char c : id)
+      if (std::isxdigit(static_cast<unsigned char>(c))) hex += char(std::tolower(static_cast<unsigned char>(c)));
+    if (hex.size() >= 16) std::from_chars(hex.data(), hex.data() + 16, w.boot, 16);
+  }
+  struct stat ns {};
+  if (::stat("/proc/self/ns/pid", &ns) == 0) w.pidNamespace = uint64_t(ns.st_ino);
+  w.pid = uint64_t(::getpid());
+  w.startTicks = processStartTicks(w.pid).value_or(0);
+  return w;
+}
+
+// Read again after a fork (a child has a pid and start time of its own).
+const Writer& thisWriter() {
+  static Writer cached;
+  static uint64_t cachedFor = 0;
+  if (cachedFor != uint64_t(::getpid())) {
+    cached = readThisWriter();
+    cachedFor = cached.pid;
+  }
+  return cached;
+}
+
+constexpr const char* kMarker = ".lucent-tmp.";
+
+// A stem cut to `bytes` at most, at a character boundary of UTF-8, so that the temporary name stays
+// below the 255 bytes a file name may have.
+std::string shortened(std::string stem, size_t bytes) {
+  if (stem.size() <= bytes) return stem;
+  stem.resize(bytes);
+  while (!stem.empty() && (static_cast<unsigned char>(stem.back()) & 0xC0) == 0x80) stem.pop_back();
+  if (!stem.empty() && (static_cast<unsigned char>(stem.back()) & 0x80)) stem.pop_back();
+  return stem;
 }
 
 void removeQuietly(const std::filesystem::path& path) {
@@ -25,19 +97,74 @@ void removeQuietly(const std::filesystem::path& path) {
   std::filesystem::remove(path, ignored);
 }
 
+// The writer a temporary name of Lucent's names, or nullopt when `name` is not one.
+std::optional<Writer> writerOf(const std::string& name) {
+  static const std::regex temporary(
+      R"(\..*\.lucent-tmp\.([0-9a-f]{16})\.([0-9]{1,20})\.([0-9]{1,20})\.([0-9]{1,20})\.[0-9]{1,10}(\.[^.]*)?)");
+  std::smatch m;
+  if (!std::regex_match(name, m, temporary)) return std::nullopt;
+  Writer w;
+  auto number = [&](int group, uint64_t& value, int base) {
+    const std::string text = m[group].str();
+    const auto [p, ec] = std::from_chars(text.data(), text.data() + text.size(), value, base);
+    return ec == std::errc() && p == text.data() + text.size();
+  };
+  if (!number(1, w.boot, 16) || !number(2, w.pidNamespace, 10) || !number(3, w.pid, 10) || !number(4, w.startTicks, 10))
+    return std::nullopt;
+  return w;
+}
+
 }  // namespace
 
+std::filesystem::path temporaryPathFor(const std::filesystem::path& path) {
+  static std::atomic<unsigned> counter{0};
+  const Writer& w = thisWriter();
+  char id[96];
+  std::snprintf(id, sizeof id, "%s%016llx.%llu.%llu.%llu.%u", kMarker, static_cast<unsigned long long>(w.boot),
+                static_cast<unsigned long long>(w.pidNamespace), static_cast<unsigned long long>(w.pid),
+                static_cast<unsigned long long>(w.startTicks), counter++);
+  const std::string extension = path.extension().string();
+  const size_t room = 255 - std::min<size_t>(255, 1 + std::string(id).size() + extension.size());
+  return path.parent_path() / ("." + shortened(path.stem().string(), room) + id + extension);
+}
+
+bool isAbandonedTemporaryFile(const std::string& name) {
+  const std::optional<Writer> writer = writerOf(name);
+  if (!writer) return false;
+  const Writer& self = thisWriter();
+  // Only a process of this boot of this machine, in this process-id namespace, can be looked up.
+  if (writer->boot == 0 || writer->pidNamespace == 0 || writer->startTicks == 0 || self.boot == 0 ||
+      self.pidNamespace == 0 || writer->boot != self.boot || writer->pidNamespace != self.pidNamespace)
+    return false;
+  if (writer->pid == self.pid && writer->startTicks == self.startTicks) return false;  // this process: alive
+  const std::optional<uint64_t> started = processStartTicks(writer->pid);
+  if (!started) return true;  // no such process
+  // The id now belongs to a process that started at another time; 0: its state could not be read.
+  return *started != 0 && *started != writer->startTicks;
+}
+
 void removeStaleTemporaryFiles(const std::filesystem::path& directory) {
-  static const std::regex temporary(R"(\..*\.tmp-([0-9]+)-[0-9]+(\.[A-Za-z0-9]+)?)");
   std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(directory.empty() ? "." : directory, ec)) {
-    std::smatch m;
-    const std::string name = entry.path().filename().string();
-    if (!std::regex_match(name, m, temporary)) continue;
-    const long pid = std::stol(m[1].str());
-    // Gone: no such process (a process of another user answers EPERM, and is left alone).
-    if (pid != ::getpid() && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH) removeQuietly(entry.path());
+  for (std::filesystem::directory_iterator it(directory.empty() ? "." : directory, ec), end; !ec && it != end;
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    std::error_code typeError;
+    if (it->is_regular_file(typeError) && isAbandonedTemporaryFile(name)) removeQuietly(it->path());
   }
+}
+
+void checkWritable(const std::filesystem::path& path, const std::string& what) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw std::runtime_error("cannot write " + what + " '" + path.string() + "': it is a directory");
+  const std::filesystem::path probe = temporaryPathFor(path);
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    const std::string why = std::strerror(errno);
+    throw std::runtime_error("cannot write " + what + " '" + path.string() + "': " + why);
+  }
+  ::close(fd);
+  removeQuietly(probe);
 }
 
 void writeFilesAtomically(const std::vector<FileToWrite>& files) {

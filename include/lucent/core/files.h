@@ -35,8 +35,24 @@ void writeFilesAtomically(const std::vector<FileToWrite>& files);
 // throws.
 std::string regularFileProblem(const std::filesystem::path& path);
 
-// Removes the temporary files that writes into `directory` by processes no longer running (killed
-// while writing) left behind. Writes call it for their target's directory.
+// The temporary name a write of `path` uses: ".<stem>.lucent-tmp.<boot>.<pid namespace>.<pid>.<start
+// time>.<n><extension>", beside `path`, naming the process that writes it (the kernel's boot id,
+// the process-id namespace, the process id and its start time in clock ticks after boot).
+std::filesystem::path temporaryPathFor(const std::filesystem::path& path);
+
+// Whether `name` is a temporary name of Lucent's whose writer is proven gone: written on this boot of
+// this machine, in this process-id namespace, by a process that no longer runs (no process has its
+// id, or the one that has it started at another time). Anything else, another program's file or one
+// written on another machine included, is not.
+bool isAbandonedTemporaryFile(const std::string& name);
+
+// Removes the temporary files in `directory` that isAbandonedTemporaryFile proves abandoned (a
+// process killed while writing). Writes call it for their target's directory. Never throws.
 void removeStaleTemporaryFiles(const std::filesystem::path& directory);
+
+// Throws std::runtime_error("cannot write <what> '<path>': <why>") unless a file can be created
+// beside `path` and `path` is not a directory: what would fail a write at the end of a render,
+// checked before it starts.
+void checkWritable(const std::filesystem::path& path, const std::string& what);
 
 }  // namespace lucent

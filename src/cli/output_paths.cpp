@@ -1,0 +1,30 @@
+#include "cli/output_paths.h"
+
+#include <filesystem>
+#include <stdexcept>
+
+#include "lucent/core/files.h"
+
+namespace lucent::cli {
+namespace fs = std::filesystem;
+
+void checkOutputFile(const std::string& path, const std::string& extension, const std::string& flag,
+                     const std::vector<std::string>& inputs) {
+  if (fs::path(path).extension() != extension)
+    throw std::invalid_argument(flag + " '" + path + "' must end in " + extension);
+  const fs::path dir = fs::absolute(path).parent_path();
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw std::invalid_argument(flag + ": directory '" + dir.string() + "' does not exist");
+  const fs::path out = fs::weakly_canonical(path, ec);
+  for (const std::string& input : inputs)
+    if (out == fs::weakly_canonical(input, ec))
+      throw std::invalid_argument(flag + " '" + path + "' is a file this command reads; choose another output");
+  try {
+    checkWritable(path, flag);
+  } catch (const std::runtime_error& e) {
+    throw std::invalid_argument(e.what());
+  }
+}
+
+}  // namespace lucent::cli
