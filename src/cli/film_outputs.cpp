@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/method_options.h"
+#include "lucent/methods/methods.h"
 #include "lucent/trace/visibility.h"
 
 namespace lucent::cli {
@@ -23,8 +24,14 @@ std::string renderDifference(const FilmFileInfo& film, const FilmFileInfo& other
   if (film.sceneHash != other.sceneHash)
     return "it is of another scene or resolution (scene hash " + film.sceneHash + ", this render's " + other.sceneHash + ")";
   const auto a = nlohmann::json::parse(film.options), b = nlohmann::json::parse(other.options);
+  const auto& specs = renderingMethod(other.method).options();
+  auto changesImage = [&](const std::string& name) {
+    for (const OptionSpec& spec : specs)
+      if (spec.name == name) return spec.changesImage;
+    return true;
+  };
   for (const auto& [name, value] : b.items())
-    if (!a.contains(name) || a[name] != value)
+    if (changesImage(name) && (!a.contains(name) || a[name] != value))
       return "its " + flagOf(name) + " is " + (a.contains(name) ? a[name].dump() : "not set") + ", this render's " +
              value.dump();
   if (film.version != other.version) return "it was rendered by Lucent " + film.version + ", this render by " + other.version;

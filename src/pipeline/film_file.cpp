@@ -16,11 +16,12 @@ namespace lucent {
 namespace {
 
 constexpr char kMagic[8] = {'L', 'C', 'N', 'T', 'F', 'I', 'L', 'M'};
-constexpr uint32_t kFormatVersion = 2;
+constexpr uint32_t kFormatVersion = 3;
+constexpr uint32_t kPreambleBytes = 24;  // magic, version, header size, hash
 constexpr uint32_t kMaxHeaderBytes = 1 << 20;
 
-// FNV-1a over the arrays as stored (padding included), as 64-bit little-endian words: the format's
-// data hash.
+// FNV-1a over the header and the arrays as 64-bit little-endian words, each array's last word
+// zero-filled: the format's hash.
 struct DataHash {
   uint64_t value = 0xcbf29ce484222325ull;
   void add(const void* data, size_t bytes) {
@@ -33,12 +34,6 @@ struct DataHash {
   }
 };
 
-std::string hex(uint64_t v) {
-  char text[17];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(v));
-  return text;
-}
-
 // The count arrays (32-bit words) are padded to 8 bytes: every array starts 8-byte aligned.
 size_t padded(size_t bytes) { return (bytes + 7) / 8 * 8; }
 
@@ -48,10 +43,6 @@ FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileIn
   const auto sums = film.pixelSums();
   const auto valid = film.validSamples(), taken = film.samplesTaken();
   const size_t countBytes = padded(valid.size_bytes());
-  DataHash hash;
-  hash.add(sums.data(), sums.size_bytes());
-  hash.add(valid.data(), valid.size_bytes());
-  hash.add(taken.data(), taken.size_bytes());
 
   nlohmann::ordered_json header;
   header["method"] = info.method;
@@ -76,11 +67,15 @@ FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileIn
   header["sums_per_pixel"] = film.sumsPerPixel();
   header["counters"] = nlohmann::ordered_json::object();
   for (const auto& [name, value] : info.counters) header["counters"][name] = value;
-  header["data_hash"] = hex(hash.value);
   std::string text = header.dump();
   text.resize(padded(text.size()), ' ');
+  DataHash hash;
+  hash.add(text.data(), text.size());
+  hash.add(sums.data(), sums.size_bytes());
+  hash.add(valid.data(), valid.size_bytes());
+  hash.add(taken.data(), taken.size_bytes());
 
-  return {path, "film", [&film, text, countBytes](const std::filesystem::path& tmp) {
+  return {path, "film", [&film, text, countBytes, fileHash = hash.value](const std::filesystem::path& tmp) {
             const auto sums = film.pixelSums();
             const auto valid = film.validSamples(), taken = film.samplesTaken();
             const uint64_t zeros = 0;
@@ -89,6 +84,7 @@ FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileIn
             out.write(kMagic, 8);
             out.write(reinterpret_cast<const char*>(&version), 4);
             out.write(reinterpret_cast<const char*>(&headerBytes), 4);
+            out.write(reinterpret_cast<const char*>(&fileHash), 8);
             out.write(text.data(), std::streamsize(text.size()));
             out.write(reinterpret_cast<const char*>(sums.data()), std::streamsize(sums.size_bytes()));
             for (const auto& counts : {valid, taken}) {
@@ -111,13 +107,20 @@ FilmFile readFilmFile(const std::string& path) {
   if (!in) throw fail("cannot be opened");
   char magic[8];
   uint32_t version = 0, headerBytes = 0;
+  uint64_t fileHash = 0;
   in.read(magic, 8);
   in.read(reinterpret_cast<char*>(&version), 4);
-  in.read(reinterpret_cast<char*>(&headerBytes), 4);
   if (!in || std::memcmp(magic, kMagic, 8) != 0) throw fail("not a Lucent film file");
   if (version != kFormatVersion)
     throw fail("format version " + std::to_string(version) + "; this Lucent reads version " + std::to_string(kFormatVersion));
-  if (headerBytes > kMaxHeaderBytes) throw fail("header of " + std::to_string(headerBytes) + " bytes");
+  in.read(reinterpret_cast<char*>(&headerBytes), 4);
+  in.read(reinterpret_cast<char*>(&fileHash), 8);
+  if (!in) throw fail("truncated header");
+  if (headerBytes > kMaxHeaderBytes || headerBytes % 8 != 0)
+    throw fail("header of " + std::to_string(headerBytes) + " bytes (at most 2^20, a multiple of 8)");
+  std::error_code ec;
+  const uintmax_t fileBytes = std::filesystem::file_size(path, ec);
+  if (ec || fileBytes < uintmax_t(kPreambleBytes) + headerBytes) throw fail("truncated header");
   std::string text(headerBytes, ' ');
   in.read(text.data(), headerBytes);
   if (!in) throw fail("truncated header");
@@ -129,10 +132,22 @@ FilmFile readFilmFile(const std::string& path) {
   PixelRect region;
   Film::Sums sums;
   FilmLayers layers;
-  std::string dataHash;
   try {
     header = nlohmann::json::parse(text);
+    if (!header.is_object()) throw fail("header: not a JSON object");
+    // Whole numbers checked against their range before they are narrowed: a header's numbers are
+    // read as written, never wrapped.
+    auto integer = [&](const nlohmann::json& value, const std::string& key, int64_t min, int64_t max) {
+      if (!value.is_number_integer() || (value.is_number_unsigned() && value.get<uint64_t>() > uint64_t(max)) ||
+          (!value.is_number_unsigned() && (value.get<int64_t>() < min || value.get<int64_t>() > max)))
+        throw fail("header: '" + key + "' is not a whole number in [" + std::to_string(min) + ", " +
+                   std::to_string(max) + "]");
+      return int(value.get<int64_t>());
+    };
+    constexpr int64_t kMaxSamples = int64_t(1) << 24;  // render's --spp bound
     info.method = header.at("method").get<std::string>();
+    for (const char* key : {"options", "derived", "counters", "layers"})
+      if (!header.at(key).is_object()) throw fail(std::string("header: '") + key + "' is not a JSON object");
     info.options = header.at("options").dump();
     info.derived = header.at("derived").dump();
     info.scene = header.at("scene").get<std::string>();
@@ -140,36 +155,45 @@ FilmFile readFilmFile(const std::string& path) {
     info.version = header.at("version").get<std::string>();
     info.embreeIsa = header.at("embree_isa").get<std::string>();
     info.laneIsa = header.at("lane_isa").get<std::string>();
-    info.spp = header.at("spp").get<int>();
-    info.firstSample = header.at("first_sample").get<int>();
-    info.sampleCount = header.at("sample_count").get<int>();
+    info.spp = integer(header.at("spp"), "spp", 1, kMaxSamples);
+    info.firstSample = integer(header.at("first_sample"), "first_sample", 0, kMaxSamples - 1);
+    info.sampleCount = integer(header.at("sample_count"), "sample_count", 1, kMaxSamples);
     info.complete = header.at("complete").get<bool>();
-    for (const auto& [name, value] : header.at("counters").items()) info.counters.emplace_back(name, value.get<uint64_t>());
-    width = header.at("width").get<int>();
-    height = header.at("height").get<int>();
-    const auto crop = header.at("crop").get<std::vector<int>>();
-    if (crop.size() != 4) throw fail("'crop' is not [x0, y0, x1, y1]");
-    region = {crop[0], crop[1], crop[2], crop[3]};
+    for (const auto& [name, value] : header.at("counters").items()) {
+      if (!value.is_number_unsigned() && !(value.is_number_integer() && value.get<int64_t>() >= 0))
+        throw fail("header: counter '" + name + "' is not a whole number of at least 0");
+      info.counters.emplace_back(name, value.get<uint64_t>());
+    }
+    width = integer(header.at("width"), "width", 1, 65536);
+    height = integer(header.at("height"), "height", 1, 65536);
+    const nlohmann::json& crop = header.at("crop");
+    if (!crop.is_array() || crop.size() != 4) throw fail("'crop' is not [x0, y0, x1, y1]");
+    region = {integer(crop[0], "crop", 0, 65536), integer(crop[1], "crop", 0, 65536), integer(crop[2], "crop", 0, 65536),
+              integer(crop[3], "crop", 0, 65536)};
     const std::string sumsName = header.at("sums").get<std::string>();
     if (sumsName != "per_sample" && sumsName != "per_part") throw fail("unknown 'sums' '" + sumsName + "'");
     sums = sumsName == "per_sample" ? Film::Sums::PerSample : Film::Sums::PerPart;
     layers.features = header.at("layers").at("features").get<bool>();
     layers.caustic = header.at("layers").at("caustic").get<bool>();
-    layers.variance = header.at("layers").value("variance", false);
+    layers.variance = header.at("layers").at("variance").get<bool>();
     if (layers.variance && sums != Film::Sums::PerSample) throw fail("a 'variance' layer needs 'per_sample' sums");
-    sumsPerPixel = header.at("sums_per_pixel").get<int>();
-    dataHash = header.at("data_hash").get<std::string>();
+    sumsPerPixel = integer(header.at("sums_per_pixel"), "sums_per_pixel", 1, 64);
   } catch (const nlohmann::json::exception& e) {
     throw fail(std::string("header: ") + e.what());
   }
-  if (!(width > 0 && height > 0 && uint64_t(width) * uint64_t(height) <= (uint64_t(1) << 26)))
+  if (uint64_t(width) * uint64_t(height) > (uint64_t(1) << 26))
     throw fail("image of " + std::to_string(width) + " x " + std::to_string(height) + " pixels");
   if (region.empty() || !PixelRect{0, 0, width, height}.contains(region)) throw fail("'crop' is not inside the image");
-  if (!(info.spp > 0 && info.firstSample >= 0 && info.sampleCount > 0 && info.firstSample + info.sampleCount <= info.spp))
+  if (int64_t(info.firstSample) + int64_t(info.sampleCount) > int64_t(info.spp))
     throw fail("samples " + std::to_string(info.firstSample) + ":" + std::to_string(info.sampleCount) + " of " +
                std::to_string(info.spp));
 
+  // The file's size bounds what is allocated: a header cannot ask for more than the file holds.
   const uint64_t pixels = region.pixelCount();
+  const uint64_t sumBytes = pixels * uint64_t(sumsPerPixel) * sizeof(ExactSum), countBytes = padded(pixels * 4);
+  const uint64_t expected = kPreambleBytes + uint64_t(headerBytes) + sumBytes + 2 * countBytes;
+  if (fileBytes != expected)
+    throw fail("its size is not the " + std::to_string(expected) + " bytes its header makes (truncated or damaged)");
   requireMemory(pixels * (uint64_t(sumsPerPixel) * sizeof(ExactSum) + 8), "the film of '" + path + "'",
                 "raise --memory-limit if the machine has the memory");
   file.film = std::make_unique<Film>(width, height, region, sums, layers);
@@ -177,11 +201,6 @@ FilmFile readFilmFile(const std::string& path) {
   if (film.sumsPerPixel() != sumsPerPixel) throw fail("'sums_per_pixel' does not match its sums and layers");
   const auto sumsData = film.pixelSums();
   const auto valid = film.validSamples(), taken = film.samplesTaken();
-  const size_t countBytes = padded(valid.size_bytes());
-  const uint64_t expected = 16 + uint64_t(headerBytes) + sumsData.size_bytes() + 2 * countBytes;
-  std::error_code ec;
-  if (std::filesystem::file_size(path, ec) != expected)
-    throw fail("its size is not the " + std::to_string(expected) + " bytes its header makes (truncated or damaged)");
   in.read(reinterpret_cast<char*>(sumsData.data()), std::streamsize(sumsData.size_bytes()));
   std::vector<char> padding(8);
   for (const auto& counts : {valid, taken}) {
@@ -190,12 +209,16 @@ FilmFile readFilmFile(const std::string& path) {
   }
   if (!in) throw fail("truncated data");
   DataHash hash;
+  hash.add(text.data(), text.size());
   hash.add(sumsData.data(), sumsData.size_bytes());
   hash.add(valid.data(), valid.size_bytes());
   hash.add(taken.data(), taken.size_bytes());
-  if (hex(hash.value) != dataHash) throw fail("its data does not match its hash (damaged)");
-  for (uint32_t t : taken)
+  if (hash.value != fileHash) throw fail("its header or data does not match its hash (damaged)");
+  for (uint32_t t : taken) {
     if (t > uint32_t(info.sampleCount)) throw fail("a pixel has taken more samples than the part has");
+    if (info.complete && t != uint32_t(info.sampleCount))
+      throw fail("it says it is complete, but a pixel has taken fewer samples than the part has");
+  }
   for (size_t i = 0; i < valid.size(); ++i)
     if (valid[i] > taken[i]) throw fail("a pixel has more valid samples than it took");
   return file;

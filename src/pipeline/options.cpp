@@ -55,7 +55,7 @@ int64_t parseOptionInteger(const std::string& option, std::string_view text, dou
   return value;
 }
 
-double parseOptionReal(const std::string& option, std::string_view text, double min, double max) {
+double parseOptionReal(const std::string& option, std::string_view text, double min, double max, bool asFloat) {
   double value = 0;
   const char* first = text.data() + (text.size() > 1 && text[0] == '+' ? 1 : 0);
   const auto [end, ec] = std::from_chars(first, text.data() + text.size(), value);
@@ -64,7 +64,7 @@ double parseOptionReal(const std::string& option, std::string_view text, double 
       throw OptionError(option, "'" + std::string(text) + "' " + rangeText(min, max, OptionKind::Real));
     throw OptionError(option, "'" + std::string(text) + "' is not a finite number");
   }
-  if (!(value >= min && value <= max))
+  if (!(asFloat ? realInRange<float>(value, min, max) : realInRange<double>(value, min, max)))
     throw OptionError(option, "'" + std::string(text) + "' " + rangeText(min, max, OptionKind::Real));
   return value;
 }

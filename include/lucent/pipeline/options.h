@@ -44,6 +44,7 @@ struct OptionSpec {
   std::string unit;                  // "" for none
   std::string help;                  // one line
   std::string defaultText;           // the default as text
+  bool changesImage = true;          // false: renders that differ in it alone give the same image
   std::string flag() const;          // "--gather-rays"
 };
 
@@ -51,7 +52,13 @@ struct OptionSpec {
 std::string optionText(double value, OptionKind kind);
 // The parsers behind OptionTable: the text's value, or an OptionError naming `option`.
 int64_t parseOptionInteger(const std::string& option, std::string_view text, double min, double max);
-double parseOptionReal(const std::string& option, std::string_view text, double min, double max);
+// A real option stored as a float is compared with its range as floats: the bound 0.01 is the float
+// nearest 0.01, below the double 0.01, and a value written as the bound is in range.
+double parseOptionReal(const std::string& option, std::string_view text, double min, double max, bool asFloat = false);
+template <class T>
+bool realInRange(double value, double min, double max) {
+  return T(value) >= T(min) && T(value) <= T(max);  // NaN: false
+}
 bool parseOptionFlag(const std::string& option, std::string_view text);
 std::array<uint32_t, 3> parseOptionTriple(const std::string& option, std::string_view text, double min, double max);
 std::string tripleText(const std::array<uint32_t, 3>& value);
@@ -90,11 +97,13 @@ class OptionTable {
     static_assert(std::is_floating_point_v<T>);
     OptionSpec spec{std::move(name), OptionKind::Real, min, max, {}, std::move(unit), std::move(help), {}};
     const std::string n = spec.name;
-    return add(std::move(spec), [=](Options& o, std::string_view text) { access(o) = T(parseOptionReal(n, text, min, max)); },
+    constexpr bool asFloat = std::is_same_v<T, float>;
+    return add(std::move(spec),
+               [=](Options& o, std::string_view text) { access(o) = T(parseOptionReal(n, text, min, max, asFloat)); },
                [=](const Options& o) { return optionText(double(access(const_cast<Options&>(o))), OptionKind::Real); },
                [=](const Options& o) {
                  const double v = double(access(const_cast<Options&>(o)));
-                 return v >= min && v <= max ? std::string() : rangeText(min, max, OptionKind::Real);  // NaN too
+                 return realInRange<T>(v, min, max) ? std::string() : rangeText(min, max, OptionKind::Real);
                });
   }
   template <class Access>
@@ -154,6 +163,16 @@ class OptionTable {
                    if (c < min || c > max) return "each of three " + rangeText(min, max, OptionKind::Integer) + ", or 0x0x0";
                  return std::string();
                });
+  }
+  // Marks an option whose value never changes the image (a tile size, a dump directory): parts and
+  // checkpoints of renders that differ in it alone belong to the same render.
+  OptionTable& imageNeutral(std::string_view name) {
+    for (OptionSpec& spec : specs_)
+      if (spec.name == name) {
+        spec.changesImage = false;
+        return *this;
+      }
+    throw std::logic_error("no option '" + std::string(name) + "' to mark");
   }
   // A condition beyond the option's range (a power of two, a pairing with another option):
   // check(options) returns why the options break it, or "".

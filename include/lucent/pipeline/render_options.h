@@ -26,6 +26,7 @@ template <class Options>
 void declareDumpDirectory(OptionTable<Options>& table) {
   table.text("dump", [](Options& o) -> auto& { return o.dumpDirectory; }, "directory",
              "write every stage's arrays into this existing directory (docs/dump-format.md)");
+  table.imageNeutral("dump");
   table.rule("dump", [](const Options& o) { return dumpDirectoryProblem(o.dumpDirectory); });
 }
 

@@ -20,6 +20,7 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
            "stop sampling within this many seconds (at least one sample per pixel); 0: no budget");
     t.integer("tile_size", [](O& o) -> auto& { return o.tileSize; }, 1, 4096, "pixels",
               "side of the tiles the image is rendered in (does not change the image)");
+    t.imageNeutral("tile_size");
     t.choice("strategy", [](O& o) -> auto& { return o.strategy; },
              std::vector<std::pair<std::string, PathStrategy>>{
                  {"mis", PathStrategy::Mis}, {"light", PathStrategy::LightSampling}, {"bsdf", PathStrategy::BsdfSampling}},
