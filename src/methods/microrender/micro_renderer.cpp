@@ -82,6 +82,27 @@ uint32_t defaultPointCount(const Scene& scene, float spacing) {
   return uint32_t(1) << int(log2n);
 }
 
+// The lattice pixels beyond a part's crop that bilateral upsampling reads for the crop's pixels
+// (those up to a lattice step beyond each edge), traced as the crop's are; none without upsampling.
+EyePaths latticeMargin(const Scene& scene, const Visibility& vis, const MicroRenderOptions& o, const RenderPart& part,
+                       int step) {
+  const PixelRect& crop = part.region;
+  const int width = scene.camera.width, height = scene.camera.height;
+  const PixelRect wide{crop.x0 / step * step, crop.y0 / step * step,
+                       std::min(width, (crop.x1 - 1) / step * step + step + 1),
+                       std::min(height, (crop.y1 - 1) / step * step + step + 1)};
+  if (step == 1 || wide == crop) return {};
+  std::vector<uint8_t> mask(wide.pixelCount(), 0);
+  for (int y = wide.y0; y < wide.y1; ++y)
+    for (int x = wide.x0; x < wide.x1; ++x)
+      mask[size_t(y - wide.y0) * size_t(wide.width()) + size_t(x - wide.x0)] =
+          x % step == 0 && y % step == 0 && !crop.contains(x, y);
+  EyePathSettings settings = eyePathSettings(o, part);
+  settings.region = wide;
+  settings.pixelMask = mask;
+  return traceEyePaths(scene, vis, settings);
+}
+
 RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroRenderOptions& o,
                          const RenderControl& control) {
   microOptionTable().validate(o);
@@ -148,9 +169,20 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   // Sponza at 512 x 512, 1/16 of the pixels, a packet visit tests 6.17 active lanes instead of 5.89.
   const int step = o.upsampling == 16 ? 4 : o.upsampling == 4 ? 2 : 1;
   const int width = scene.camera.width;
+  // A crop's pixels near its edges interpolate from lattice pixels beyond it: those are traced and
+  // gathered too (after the crop's own points), so that a crop's pixels are the whole image's.
+  const EyePaths margin = latticeMargin(scene, vis, o, part, step);
+  std::vector<ShadingPoint> withMargin;
+  if (!margin.points.empty()) {
+    withMargin.assign(eye.points.begin(), eye.points.end());
+    withMargin.insert(withMargin.end(), margin.points.begin(), margin.points.end());
+  }
+  const std::span<const ShadingPoint> points =
+      withMargin.empty() ? std::span<const ShadingPoint>(eye.points) : std::span<const ShadingPoint>(withMargin);
+  UninitializedVector<Rgb> indirect(points.size());
   std::vector<uint32_t> gatherOrder;
-  for (uint32_t i = 0; i < n; ++i)
-    if (onGatherLattice(eye.points[i].pixel, width, step)) gatherOrder.push_back(i);
+  for (uint32_t i = 0; i < points.size(); ++i)
+    if (onGatherLattice(points[i].pixel, width, step)) gatherOrder.push_back(i);
   tbb::enumerable_thread_specific<GatherScratch> scratch;
   const uint64_t gatherSeed = hashKey(o.seed, uint64_t(MicroStream::Gather));
   std::atomic<size_t> done{0};
@@ -160,7 +192,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     std::vector<uint64_t> keys(order.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4096), [&](const auto& r) {
       for (size_t k = r.begin(); k != r.end(); ++k) {
-        const ShadingPoint& p = eye.points[order[k]];
+        const ShadingPoint& p = points[order[k]];
         keys[k] = facingMortonKey(p.position, p.normal, scene.bounds) << 31 | order[k];
       }
     });
@@ -172,11 +204,11 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     gatherInPackets(
         ctx, order.size(), radiance, scratch,
         [&](size_t k, Rng& rng) {
-          const ShadingPoint& p = eye.points[order[k]];
+          const ShadingPoint& p = points[order[k]];
           rng = Rng(gatherSeed, p.pixel, uint64_t(p.sample) << 32 | p.branch);
           return GatherRequest{p.position, p.normal, p.wo, &p.bsdf, &rng};
         },
-        [&](size_t k, Rgb result) { shading.indirect[order[k]] = result; },
+        [&](size_t k, Rgb result) { indirect[order[k]] = result; },
         [&](size_t gathered) {
           if (progress) progress(progressBase + progressShare * double(done += gathered) / double(order.size()));
         });
@@ -193,11 +225,12 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     us.step = step;
     us.eye = scene.camera.eye;
     us.pixelAngle = float(2.0 * std::tan(double(scene.camera.fovY) * kPi / 360.0) / scene.camera.height);
-    std::vector<uint32_t> left = upsampleIndirect(eye.points, us, shading.indirect);
+    std::vector<uint32_t> left = upsampleIndirect(points, us, indirect);
     upsampleSeconds = upClock.seconds();
     recomputed = left.size();
     gatherSeconds += gather(left, 0.1, 0.9);
   }
+  std::copy(indirect.begin(), indirect.begin() + ptrdiff_t(n), shading.indirect.begin());
 
   // Gathering's parts are timed per thread; the stage's wall time is split in proportion.
   GatherTotals totals;

@@ -55,6 +55,7 @@ std::vector<uint32_t> upsampleIndirect(std::span<const ShadingPoint> points, con
         const uint32_t lp = uint32_t(ly) * uint32_t(s.width) + uint32_t(lx);
         for (uint32_t k = first[lp]; k < first[lp + 1]; ++k) {
           const ShadingPoint& n = points[byPixel[k]];
+          if (n.sample != q.sample) continue;
           const float c = std::max(0.0f, dot(q.normal, n.normal));
           const float plane = dot(q.normal, n.position - q.position) / std::max(footprint, 1e-30f);
           const float w = bilinear * std::pow(c, kNormalPower) * std::exp(-plane * plane);

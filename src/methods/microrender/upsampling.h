@@ -24,7 +24,8 @@ struct UpsamplingSettings {
 };
 
 // For each point not on the lattice, its indirect light interpolated from the lattice points of the
-// four lattice pixels around it, demodulated by reflectance (so textures stay sharp) and modulated
+// same camera sample at the four lattice pixels around it (so that a part of a render's samples
+// interpolates as the whole render does), demodulated by reflectance (so textures stay sharp) and modulated
 // by its own; returns the points whose weights summed to nearly zero, left for gathering.
 std::vector<uint32_t> upsampleIndirect(std::span<const ShadingPoint> points, const UpsamplingSettings& settings,
                                        std::span<Rgb> indirect);
