@@ -21,17 +21,23 @@ using namespace lucent;
 namespace {
 
 enum class Outside { Sun, PointLight, AreaLightFacingAway, Environment };
+// The walls' faces: towards the inside (front faces seen from inside), towards the outside (back
+// faces seen from inside: one-sided surfaces from behind), or both, as two boxes 0.02 apart (a wall
+// with two sides).
+enum class Walls { Inward, Outward, TwoSided };
 
 // The box [-1, 1]^3 above a ground plane, the camera inside; the light outside. The area light lies
 // just above the box's lid, facing away from it, under a ceiling that sends its light back down
 // onto the box's outside; the ground does the same for the other lights. (An emitter in the lid's
 // own plane would be a second surface in the same place, which rays hit either way.)
-Scene closedBox(Outside light) {
+Scene closedBox(Outside light, Walls faces) {
   Scene scene;
   Material wall;
   wall.kd = Rgb(0.7f);
   const uint32_t walls = test::addMaterial(scene, wall, "walls");
-  test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, walls, true);
+  if (faces != Walls::Outward) test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, walls, true);
+  if (faces == Walls::Outward) test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, walls, false);
+  if (faces == Walls::TwoSided) test::addBox(scene, {-1.1f, -1.1f, -1.1f}, {1.1f, 1.1f, 1.1f}, walls, false);
   test::addQuad(scene, {-3, -3, -3}, {-3, -3, 3}, {3, -3, 3}, {3, -3, -3}, walls);  // the ground
   switch (light) {
     case Outside::Sun: scene.lights.push_back({LightType::Directional, 0, normalize(Vec3{0.3f, -1, 0.2f}), Rgb(5.0f)}); break;
@@ -39,7 +45,8 @@ Scene closedBox(Outside light) {
     case Outside::AreaLightFacingAway: {
       Material emitter;
       emitter.ke = Rgb(10.0f);
-      test::addQuad(scene, {-0.5f, 1.01f, -0.5f}, {-0.5f, 1.01f, 0.5f}, {0.5f, 1.01f, 0.5f}, {0.5f, 1.01f, -0.5f},
+      const float y = faces == Walls::TwoSided ? 1.11f : 1.01f;  // just above the outermost lid
+      test::addQuad(scene, {-0.5f, y, -0.5f}, {-0.5f, y, 0.5f}, {0.5f, y, 0.5f}, {0.5f, y, -0.5f},
                     test::addMaterial(scene, emitter, "light"));  // just above the lid, facing up
       test::addQuad(scene, {-3, 3, -3}, {3, 3, -3}, {3, 3, 3}, {-3, 3, 3}, walls);  // facing down
       break;
@@ -52,6 +59,15 @@ Scene closedBox(Outside light) {
   scene.camera = test::testCamera({0.1f, 0.2f, 0.3f}, {0.5f, -0.4f, -1}, 12, 12, 100);
   finalizeScene(scene);
   return scene;
+}
+
+const char* name(Walls faces) {
+  switch (faces) {
+    case Walls::Inward: return "inward walls";
+    case Walls::Outward: return "outward walls";
+    case Walls::TwoSided: return "two-sided walls";
+  }
+  return "";
 }
 
 const char* name(Outside light) {
@@ -96,9 +112,11 @@ LightInside lightInside(const Image& image) {
 }  // namespace
 
 TEST_CASE("A closed box lit only from outside is black inside, with every method", "[leaks]") {
+  for (Walls faces : {Walls::Inward, Walls::Outward, Walls::TwoSided})
   for (Outside light : {Outside::Sun, Outside::PointLight, Outside::AreaLightFacingAway, Outside::Environment}) {
-    const Scene scene = closedBox(light);
+    const Scene scene = closedBox(light, faces);
     const Visibility vis(scene);
+    INFO(name(faces));
     // The same lights do reach the outside: a camera above the box sees them.
     Scene outside = scene;
     outside.camera = test::testCamera({0.3f, 2.5f, 2.5f}, {0, 0, 0}, 12, 12, 60);
@@ -133,9 +151,14 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
     // outside; radiosity hands what one leaf of a node gathered to the node's other leaves, so one
     // gather through a junction lights a patch inside (micro README, "Limits"). Virtual point
     // lights on a wall's outside and leaves on its inside lie in one plane, their cosines rounding.
-    // Bounded here: direct light by shadow rays exactly nothing; the image's mean at most a
-    // thousandth of the outside's light (measured: radiosity 5e-4 to 9e-4, virtual point lights
-    // 1e-12, direct and photons 0); the gathering's leaks in at most 3 of the 144 pixels.
+    // Gather points on walls seen from behind (outward walls) gather with back faces occluding.
+    // With two-sided walls, interior nodes hold points of both sides, and one splatted into an
+    // inside buffer sends the light of its leaves that face its centre's direction, some of them
+    // outside (micro README, "Limits"). Bounded here: direct light by shadow rays exactly nothing;
+    // the image's mean at most a thousandth of the outside's light with one-sided walls (measured:
+    // inward, radiosity 5e-4, virtual point lights 1e-12, direct and photons 0; outward, at most
+    // 8.1e-5), with two-sided walls a hundredth, radiosity a tenth (measured 4.9e-3 and 5.6e-2);
+    // the gathering's leaks, one-sided, in at most 3 of the 144 pixels.
     for (PointLighting lighting : {PointLighting::Direct, PointLighting::Vpl, PointLighting::Radiosity, PointLighting::Photons}) {
       MicroRenderOptions micro;
       micro.lighting = lighting;
@@ -159,43 +182,53 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
       INFO(name(light) << ", micro, lighting " << int(lighting) << ": " << lit << " pixels lit, mean " << mean
                        << ", the outside's light up to " << outsideLight);
       CHECK(largestDirect == 0.0);
-      CHECK(mean <= 1e-3 * outsideLight);
-      if (lighting == PointLighting::Direct || lighting == PointLighting::Photons) CHECK(lit <= 3);
+      const double bound = faces != Walls::TwoSided ? 1e-3 : lighting == PointLighting::Radiosity ? 0.1 : 1e-2;
+      CHECK(mean <= bound * outsideLight);
+      if (faces != Walls::TwoSided && (lighting == PointLighting::Direct || lighting == PointLighting::Photons))
+        CHECK(lit <= 3);
     }
     // Particle spaces: a link's particle and a list's particles face the way of the surface they
-    // stand for, so the two sides of a wall never mix. What does leak is a surface just beyond a
-    // wall that faces the same way within a link's or a list's radius: the emitter's underside
-    // 0.01 above the lid, lit by the lid's top, gives its light to links that hit the lid's inside
-    // (README, "Limits"). Bounded as micro-rendering's: direct light exactly nothing, the image's
-    // mean at most a thousandth of the outside's light (measured: 3.6e-4 of it for the area light,
-    // exactly 0 for the sun, the point light and the environment).
-    {
+    // stand for, so the two sides of a wall never mix; one-sided particles (--sides front) give a
+    // point seen from behind no light. What does leak is a surface just beyond a wall that faces the
+    // same way within a link's or a list's radius: the emitter's underside 0.01 above the lid, lit
+    // by the lid's top, gives its light to links that hit the lid's inside, and two-sided walls
+    // 0.1 apart, about one particle spacing, mix their gap's faces with the inside (README,
+    // "Limits"). Bounded: direct light exactly nothing, the image's mean at most a thousandth of
+    // the outside's light with one-sided walls (measured: 4.2e-4 for the area light, exactly 0 for
+    // the others), two hundredths with two-sided walls and particles on both sides (measured
+    // 1.3e-2 under the environment).
+    for (ParticleSides sides : {ParticleSides::Both, ParticleSides::Front}) {
       ParticleOptions particles;
+      particles.sides = sides;
       particles.areaParticles = 4000;
       particles.lightSamples = 4;
       particles.emissionSamples = 4;
       particles.layers = true;
       const Image image = renderParticles(scene, vis, particles).image;
       const LightInside inside = lightInside(image);
-      INFO(name(light) << ", particles: mean " << inside.mean << ", the outside's light up to " << outsideLight);
+      INFO(name(light) << ", particles, sides " << int(sides) << ": mean " << inside.mean << ", the outside's light up to "
+                       << outsideLight);
       CHECK(inside.largestDirect == 0.0);
-      CHECK(inside.mean <= 1e-3 * outsideLight);
-      if (light != Outside::AreaLightFacingAway) CHECK(largestLight(image) == 0.0f);
+      const bool mixing = faces == Walls::TwoSided && sides == ParticleSides::Both;
+      CHECK(inside.mean <= (mixing ? 2e-2 : 1e-3) * outsideLight);
+      if (light != Outside::AreaLightFacingAway && !mixing) CHECK(largestLight(image) == 0.0f);
     }
     // The environment-lighting PBGI method (no area lights): the sun's and the point light's direct
     // light at the pixels by shadow rays, exactly nothing inside; the environment's through its
     // micro-buffers' empty texels, where the walls' discs meet (as micro-rendering's); and light
-    // at interior nodes that hold points of both a wall's inside and the ground outside, whose
-    // surfel lies outside (envpbgi README, "Limits"). Bounded as micro-rendering's: the image's mean
-    // at most a thousandth of the outside's light (measured: sun 2.6e-5, point light 5e-9,
-    // environment 9.6e-4 of 2).
+    // at interior nodes that hold points of both a wall's inside and the ground or the wall's
+    // outside, whose direct light is their points' mean (envpbgi README, "Limits"). A receiver
+    // that no cache reaches (a wall seen from behind) renders its own buffer with back faces
+    // occluding. Bounded: the image's mean at most a thousandth of the outside's light (measured:
+    // inward walls, sun 2.4e-5, point light 5e-9, environment 4.8e-4; outward at most 2.1e-4), but
+    // a tenth under the environment with two-sided walls (measured 9.0e-2: a known limit).
     if (light != Outside::AreaLightFacingAway) {
       EnvPbgiOptions env;
       env.points = 1 << 16;
       env.layers = true;
       const LightInside inside = lightInside(renderEnvPbgi(scene, vis, env).image);
       INFO(name(light) << ", envpbgi: mean " << inside.mean << ", the outside's light up to " << outsideLight);
-      CHECK(inside.mean <= 1e-3 * outsideLight);
+      CHECK(inside.mean <= (faces == Walls::TwoSided && light == Outside::Environment ? 0.1 : 1e-3) * outsideLight);
       if (light != Outside::Environment) CHECK(inside.largestDirect == 0.0);
     }
   }

@@ -93,7 +93,7 @@ BufferIrradiance bufferIrradiance(std::span<const uint32_t> texels, const Buffer
     const uint32_t texel = texels[t];
     if (texel == kEmptyMicroPixel) {
       e.environment += environmentRadiance(environment, frame.toWorld(q.mapping.direction[t])) * q.cosineWeight[t];
-    } else if (!nodeDirect.empty()) {
+    } else if (!nodeDirect.empty() && microPixelShowsNode(texel)) {
       e.nodes += nodeDirect[microPixelNode(texel)] * q.cosineWeight[t];
     }
   }

@@ -9,6 +9,8 @@
 
 #include <atomic>
 #include <cmath>
+#include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include "lucent/core/dump.h"
@@ -221,6 +223,9 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   std::atomic<uint64_t> fallbacks{0}, glossy{0}, cacheCandidates{0};
   uint64_t eyeRays = 0, shadingPoints = 0, invalidSamples = 0;
   std::vector<uint32_t> texels, tileOfPoint;
+  std::vector<uint8_t> unreached;
+  MicroRenderSettings backSettings = settings;
+  backSettings.backFacesOcclude = true;
   std::vector<float> depthOfPoint;
   TileLists tileLists;
   for (int row = part.region.y0; row < part.region.y1;) {
@@ -240,6 +245,37 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
       shading.indirect[i] = rho * e.nodes;
       if (p.bsdf.type != MaterialType::Diffuse) ++glossy;
     };
+    // The receivers `which` (indices into the band's points), each from a micro-buffer of its own,
+    // in chunks of at most 2^14 buffers. A receiver on a surface seen from behind (a wall of
+    // outward faces seen from inside) renders with back faces occluding: culled, they would show
+    // what lies beyond (micro-rendering does the same).
+    auto shadeFromOwnBuffers = [&](std::span<const uint32_t> which) {
+      std::vector<uint32_t> sorted(which.begin(), which.end());
+      const size_t front = size_t(std::stable_partition(sorted.begin(), sorted.end(), [&](uint32_t i) {
+                                    return dot(eye.points[i].normal, eye.points[i].geometricNormal) >= 0;
+                                  }) - sorted.begin());
+      texels.resize(std::min<size_t>(std::max<size_t>(sorted.size(), 1), 1u << 14) * primaryTexelCount);
+      const size_t chunk = texels.size() / primaryTexelCount;
+      for (const bool back : {false, true}) {
+        const std::span<const uint32_t> group =
+            back ? std::span(sorted).subspan(front) : std::span(sorted).subspan(0, front);
+        for (size_t first = 0; first < group.size(); first += chunk) {
+          const size_t count = std::min(chunk, group.size() - first);
+          renderBuffers(micro, back ? backSettings : settings, primaryQuadrature, count,
+                        [&](size_t k) {
+                          const ShadingPoint& p = eye.points[group[first + k]];
+                          return BufferOrigin{p.position, p.normal};
+                        },
+                        texels, counters);
+          tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 64), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t k = r.begin(); k != r.end(); ++k)
+              shade(group[first + k],
+                    bufferIrradiance(std::span(texels).subspan(k * primaryTexelCount, primaryTexelCount),
+                                     primaryQuadrature, eye.points[group[first + k]].normal, env, direct));
+          });
+        }
+      }
+    };
     if (o.pixelIrradiance == PixelIrradiance::Caches) {
       // Each receiver's tile and view depth, then the band's tile lists cut to its depths.
       tileOfPoint.resize(n), depthOfPoint.resize(n);
@@ -251,33 +287,29 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
         }
       });
       cutTileLists(grid, tileOfPoint, depthOfPoint, tileLists);
+      unreached.assign(n, 0);
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
-        uint64_t fallbacksHere = 0, candidatesHere = 0;
+        uint64_t candidatesHere = 0;
         for (size_t i = r.begin(); i != r.end(); ++i) {
           const ShadingPoint& p = eye.points[i];
           const std::span<const uint32_t> candidates = tileLists.of(grid, tileOfPoint[i]);
-          bool fallback = false;
-          const BufferIrradiance e =
-              interpolateCaches(caches, grid, tileOfPoint[i], candidates, p.position, p.normal, interpolation, fallback);
-          fallbacksHere += fallback, candidatesHere += candidates.size();
-          shade(i, e);
+          const std::optional<BufferIrradiance> e =
+              interpolateCaches(caches, grid, candidates, p.position, p.normal, interpolation);
+          candidatesHere += candidates.size();
+          if (e) shade(i, *e);
+          else unreached[i] = 1;
         }
-        fallbacks += fallbacksHere, cacheCandidates += candidatesHere;
+        cacheCandidates += candidatesHere;
       });
+      std::vector<uint32_t> own;
+      for (uint32_t i = 0; i < n; ++i)
+        if (unreached[i]) own.push_back(i);
+      fallbacks += own.size();
+      shadeFromOwnBuffers(own);
     } else {
-      texels.resize(std::min<size_t>(std::max<size_t>(n, 1), 1u << 14) * primaryTexelCount);
-      const size_t pixelChunk = texels.size() / primaryTexelCount;
-      for (size_t first = 0; first < n; first += pixelChunk) {
-        const size_t count = std::min(pixelChunk, n - first);
-        renderBuffers(micro, settings, primaryQuadrature, count,
-                      [&](size_t k) { return BufferOrigin{eye.points[first + k].position, eye.points[first + k].normal}; },
-                      texels, counters);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 64), [&](const tbb::blocked_range<size_t>& r) {
-          for (size_t k = r.begin(); k != r.end(); ++k)
-            shade(first + k, bufferIrradiance(std::span(texels).subspan(k * primaryTexelCount, primaryTexelCount),
-                                              primaryQuadrature, eye.points[first + k].normal, env, direct));
-        });
-      }
+      std::vector<uint32_t> all(n);
+      std::iota(all.begin(), all.end(), 0u);
+      shadeFromOwnBuffers(all);
     }
     if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
     Stopwatch filmClock;

@@ -57,7 +57,7 @@ RadianceCache buildRadianceCache(std::span<const uint32_t> texels, const BufferQ
   for (const uint16_t t : q.mapping.used) {
     const uint32_t texel = texels[t];
     const Rgb e = texel == kEmptyMicroPixel ? environmentRadiance(environment, frame.toWorld(q.mapping.direction[t])) : Rgb();
-    const Rgb d = texel == kEmptyMicroPixel ? Rgb() : nodeDirect[microPixelNode(texel)];
+    const Rgb d = microPixelShowsNode(texel) ? nodeDirect[microPixelNode(texel)] : Rgb();
     for (int c = 0; c < 3; ++c) incoming[c][t] = e[c], incoming[3 + c][t] = d[c];
   }
   constexpr uint32_t kLanes = 8;
@@ -266,14 +266,10 @@ LUCENT_LANE_VERSIONS(void, locateOnMaps, (MapLookups& __restrict m, const CacheG
 
 }  // namespace
 
-BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const CacheGrid& grid, uint32_t tile,
-                                   std::span<const uint32_t> candidates, Vec3 x, Vec3 n,
-                                   const Interpolation& interpolation, bool& fallback) {
-  fallback = false;
+std::optional<BufferIrradiance> interpolateCaches(std::span<const RadianceCache> caches, const CacheGrid& grid,
+                                                  std::span<const uint32_t> candidates, Vec3 x, Vec3 n,
+                                                  const Interpolation& interpolation) {
   const float cosMax = std::cos(interpolation.maxAngle);
-  auto wardError = [&](const RadianceCache& c) {
-    return length(x - c.position) / c.radius + std::sqrt(std::max(0.0f, 1.0f - dot(n, c.normal)));
-  };
   BufferIrradiance sum;
   double total = 0;
   MapLookups m;
@@ -300,28 +296,9 @@ BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const 
   }
   if (total > 0) {
     const float inv = float(1.0 / total);
-    return {sum.environment * inv, sum.nodes * inv};
+    return BufferIrradiance{sum.environment * inv, sum.nodes * inv};
   }
-  // No cache qualifies: the least Ward error in the tile, else in rings of tiles around it.
-  fallback = true;
-  const int tx = int(tile % uint32_t(grid.tilesX)), ty = int(tile / uint32_t(grid.tilesX));
-  for (int ring = 0; ring < std::max(grid.tilesX, grid.tilesY); ++ring) {
-    float best = kInf;
-    uint32_t bestCache = 0;
-    for (int y = ty - ring; y <= ty + ring; ++y)
-      for (int xx = tx - ring; xx <= tx + ring; ++xx) {
-        if (std::max(std::abs(y - ty), std::abs(xx - tx)) != ring || xx < 0 || y < 0 || xx >= grid.tilesX ||
-            y >= grid.tilesY)
-          continue;
-        const size_t t = size_t(y) * size_t(grid.tilesX) + size_t(xx);
-        for (uint32_t j = grid.begin[t]; j < grid.begin[t + 1]; ++j) {
-          const float e = wardError(caches[grid.caches[j]]);
-          if (e < best || (e == best && grid.caches[j] < bestCache)) best = e, bestCache = grid.caches[j];
-        }
-      }
-    if (best < kInf) return cacheIrradiance(caches[bestCache], n);
-  }
-  return {};
+  return std::nullopt;  // no cache qualifies
 }
 
 }  // namespace lucent

@@ -7,6 +7,7 @@
 // angle.
 #pragma once
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -94,14 +95,13 @@ struct Interpolation {
   float maxAngle = 0;  // radians: caches whose normal is farther from the receiver's are not used
 };
 
-// Eq. 5 at a receiver (x, n) in tile `tile`: of the caches `candidates` (the tile's, or those of
-// them cutTileLists kept), those within their radius and the maximum angle, weighted by Ward's
-// 1 / (|x - x_k| / R_k + sqrt(1 - n . n_k)), their irradiance towards n averaged. Where none
-// qualifies, the tile's cache of least Ward error regardless of radius and angle, or failing that
-// the nearest tiles' (rings of tiles outwards); `fallback` is set then. No cache at all: zero, and
-// `fallback` set.
-BufferIrradiance interpolateCaches(std::span<const RadianceCache> caches, const CacheGrid& grid, uint32_t tile,
-                                   std::span<const uint32_t> candidates, Vec3 x, Vec3 n,
-                                   const Interpolation& interpolation, bool& fallback);
+// Eq. 5 at a receiver (x, n): of the caches `candidates` (its tile's, or those of them
+// cutTileLists kept), those within their radius and the maximum angle, weighted by Ward's
+// 1 / (|x - x_k| / R_k + sqrt(1 - n . n_k)), their irradiance towards n averaged; nullopt where none
+// qualifies (the receiver then renders a micro-buffer of its own: a cache facing another way, the
+// outside of a wall seen from inside, must not lend its light).
+std::optional<BufferIrradiance> interpolateCaches(std::span<const RadianceCache> caches, const CacheGrid& grid,
+                                                  std::span<const uint32_t> candidates, Vec3 x, Vec3 n,
+                                                  const Interpolation& interpolation);
 
 }  // namespace lucent

@@ -106,7 +106,7 @@ std::vector<uint32_t> selectPrimaryPoints(EnvHierarchy& h, const Camera& cameraS
 void markSecondaryPoints(EnvHierarchy& h, std::span<const uint32_t> texels) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t t = r.begin(); t != r.end(); ++t)
-      if (texels[t] != kEmptyMicroPixel)
+      if (microPixelShowsNode(texels[t]))
         std::atomic_ref<uint32_t>(selectionOf(h, microPixelNode(texels[t]))).fetch_or(kSecondary, std::memory_order_relaxed);
   });
 }

@@ -148,6 +148,8 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   settings.depth = DepthCoding::forExtent(length(scene.bounds.extent()));
   const MappingTables tables = makeMappingTables(o.bufferSide, o.tableSize);
   const GatherContext ctx{&micro, &tables, o.mapping, settings};
+  GatherContext backCtx = ctx;
+  backCtx.settings.backFacesOcclude = true;
 
   // Section 4: the radiance of the points.
   Stopwatch lightingClock;
@@ -198,20 +200,28 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     });
     tbb::parallel_sort(keys.begin(), keys.end());
     for (size_t k = 0; k < keys.size(); ++k) order[k] = uint32_t(keys[k] & ((uint64_t(1) << 31) - 1));
+    // Points on a surface seen from behind (one-sided walls seen from inside) gather with back
+    // faces occluding: culled, they would show what lies beyond the walls.
+    const size_t front = size_t(std::stable_partition(order.begin(), order.end(), [&](uint32_t i) {
+                                  return dot(points[i].normal, points[i].geometricNormal) >= 0;
+                                }) - order.begin());
     // Packets of consecutive gather points in that order (one SIMD lane each, as the threads of
     // a warp in the paper).
     done = 0;
-    gatherInPackets(
-        ctx, order.size(), radiance, scratch,
-        [&](size_t k, Rng& rng) {
-          const ShadingPoint& p = points[order[k]];
-          rng = Rng(gatherSeed, p.pixel, uint64_t(p.sample) << 32 | p.branch);
-          return GatherRequest{p.position, p.normal, p.wo, &p.bsdf, &rng};
-        },
-        [&](size_t k, Rgb result) { indirect[order[k]] = result; },
-        [&](size_t gathered) {
-          if (progress) progress(progressBase + progressShare * double(done += gathered) / double(order.size()));
-        });
+    for (const bool back : {false, true}) {
+      const size_t first = back ? front : 0, count = back ? order.size() - front : front;
+      gatherInPackets(
+          back ? backCtx : ctx, count, radiance, scratch,
+          [&](size_t k, Rng& rng) {
+            const ShadingPoint& p = points[order[first + k]];
+            rng = Rng(gatherSeed, p.pixel, uint64_t(p.sample) << 32 | p.branch);
+            return GatherRequest{p.position, p.normal, p.wo, &p.bsdf, &rng};
+          },
+          [&](size_t k, Rgb result) { indirect[order[first + k]] = result; },
+          [&](size_t gathered) {
+            if (progress) progress(progressBase + progressShare * double(done += gathered) / double(order.size()));
+          });
+    }
     return sortClock.seconds();
   };
   double gatherSeconds = gather(gatherOrder, step == 1 ? 1.0 : 0.9, 0.0);

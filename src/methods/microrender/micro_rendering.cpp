@@ -91,6 +91,7 @@ struct PacketLanes {
   const float* spacing = nullptr;
   int32_t side = 0, tableSize = 0;
   float splatReach = 1;  // MicroRenderSettings::splatReach
+  bool backFacesOcclude = false;  // MicroRenderSettings::backFacesOcclude
   // The paraboloid mapping's identity table reads a direction's paraboloid point (x, y) / (1 + z),
   // the others' tables read (x, y): the node tests come in a version for each.
   bool paraboloid = false;
@@ -111,6 +112,7 @@ struct LaneResults {
   alignas(64) float d[kGatherPacket];
   alignas(64) float cosRadius[kGatherPacket];  // of the cone the node's sphere subtends
   alignas(64) int32_t wide[kGatherPacket];     // wider than its pixel's spacing: a 5 x 5 splat
+  alignas(64) int32_t back[kGatherPacket];     // seen from its back: an occluder (kBackFaceMicroNode)
 };
 
 // A direction's pixel in lane l's mapping: HemisphereMapping::pixelOf over the lanes' tables.
@@ -192,14 +194,23 @@ struct PixelTables {
 // selects, not selects on combined conditions). One lane's tests are inlined into the loops over
 // every lane (classifyLeaf, classifyInterior) and into the loop over a few active lanes
 // (classifyActiveLanes): the same IEEE operations either way.
-template <bool Paraboloid>
+// Where back faces occlude (MicroRenderSettings::backFacesOcclude, the Occlude versions), a node
+// seen from behind is tested as the node facing the other way and marked in LaneResults::back: its
+// splats and hits hold kBackFaceMicroNode. A disc is seen from behind when the gather point lies
+// behind its plane; an interior node when no normal of its cone faces any point of its sphere (the
+// axis more than 90 degrees + alpha + beta away).
+template <bool Paraboloid, bool Occlude>
 [[gnu::always_inline]] inline void classifyLeafLane(const PacketLanes& __restrict L, const PixelTables& t,
                                                     const LaneNode& __restrict n, int l, LaneResults& r) {
   const float discArea = kPi * n.radius * n.radius;
   const LaneGeometry g = laneGeometry<Paraboloid>(L, t.cdfs, n, l, r);
   const float d = g.d;
   const int32_t at = g.at;
-  const float facing = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz);
+  float facing = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz);
+  if constexpr (Occlude) {
+    r.back[l] = facing < 0;
+    facing = std::abs(facing);
+  }
   const float solidAngle = discArea * facing / (g.d2 * d);
   int32_t outcome = g.lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
   outcome = solidAngle > t.solidAngle[at] ? kListLeaf : outcome;
@@ -210,15 +221,20 @@ template <bool Paraboloid>
   r.outcome[l] = g.height <= -n.radius ? kSkipSubtree : outcome;
 }
 
-template <bool Paraboloid>
+template <bool Paraboloid, bool Occlude>
 [[gnu::always_inline]] inline void classifyInteriorLane(const PacketLanes& __restrict L, const PixelTables& t,
                                                         const LaneNode& __restrict n, int l, LaneResults& r) {
   const float twoPi = 2.0f * kPi;
   const LaneGeometry g = laneGeometry<Paraboloid>(L, t.cdfs, n, l, r);
   const float d = g.d, invD = g.invD, height = g.height;
   const int32_t at = g.at;
-  const float cosToAxis = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz) * invD;
+  float cosToAxis = -(n.ax * g.vx + n.ay * g.vy + n.az * g.vz) * invD;
   const float sinA = g.sinRadius, cosA = g.cosRadius;
+  const bool coneBelowPi = cosA * n.coneCos - sinA * n.coneSin > 0;  // alpha + beta < 90 degrees
+  if constexpr (Occlude) {
+    r.back[l] = coneBelowPi && cosToAxis < -(sinA * n.coneCos + cosA * n.coneSin);
+    cosToAxis = r.back[l] ? -cosToAxis : cosToAxis;
+  }
   const float horizon = L.selfDistance[l] + kHorizonSlope * (d - n.radius);
   const float cosTilt = std::abs(n.ax * L.nx[l] + n.ay * L.ny[l] + n.az * L.nz[l]);
   const float sinTilt = std::sqrt(std::max(0.0f, 1.0f - cosTilt * cosTilt));
@@ -227,14 +243,25 @@ template <bool Paraboloid>
   const float bestFacing = laneBestFacing(cosToAxis, n.coneSin, n.coneCos);
   const float solidAngle = std::min(twoPi * (1.0f - cosA), n.area * bestFacing * invD * invD);
   int32_t outcome = g.lz * d > L.selfDistance[l] ? kSplat : kSkipSubtree;
-  outcome = bestFacing > 0 ? outcome : kSkipSubtree;
+  // No normal of the cone faces the centre's direction: culled; where back faces occlude, the node
+  // is not back-facing from all of its sphere either (a wall's edge or corner), and is refined until
+  // its parts are one or the other, so that no gap lets the background through.
+  outcome = bestFacing > 0 ? outcome : Occlude ? kDescend : kSkipSubtree;
   outcome = solidAngle > t.solidAngle[at] ? kDescend : outcome;
   const float spacing = d * t.spacing[at];
   outcome = n.radius > L.splatReach * spacing ? kDescend : outcome;
   const int32_t coplanar = std::abs(height) + n.radius * sinAll <= horizon ? kSkipSubtree : outcome;
   outcome = std::abs(height) <= horizon ? coplanar : outcome;
-  const int32_t backFacing = cosToAxis < -(sinA * n.coneCos + cosA * n.coneSin) ? kSkipSubtree : outcome;
-  outcome = cosA * n.coneCos - sinA * n.coneSin > 0 ? backFacing : outcome;
+  if constexpr (Occlude) {
+    // A node that faces the gather point from part of its sphere only (a wall's edge, both sides of
+    // a thin wall) is refined rather than splatted: its radiance would stand for leaves that face
+    // away, and its splat for back faces that hide the leaves behind them.
+    const bool frontFromAll = coneBelowPi && cosToAxis > sinA * n.coneCos + cosA * n.coneSin;
+    outcome = frontFromAll || r.back[l] || outcome != kSplat ? outcome : kDescend;
+  } else {
+    const int32_t backFacing = cosToAxis < -(sinA * n.coneCos + cosA * n.coneSin) ? kSkipSubtree : outcome;
+    outcome = coneBelowPi ? backFacing : outcome;
+  }
   outcome = d <= n.radius ? kDescend : outcome;
   r.wide[l] = n.radius > spacing;
   r.outcome[l] = height <= -n.radius ? kSkipSubtree : outcome;
@@ -245,7 +272,7 @@ template <bool Paraboloid>
 LUCENT_LANE_LOOP(LaneResults, classifyLeaf, (const PacketLanes& __restrict L, const LaneNode& __restrict n)) {
   LaneResults r;
   const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
-  for (int l = 0; l < kGatherPacket; ++l) classifyLeafLane<false>(L, t, n, l, r);
+  for (int l = 0; l < kGatherPacket; ++l) classifyLeafLane<false, false>(L, t, n, l, r);
   return r;
 }
 LUCENT_LANE_VERSIONS(LaneResults, classifyLeaf, (const PacketLanes& __restrict L, const LaneNode& __restrict n), (L, n))
@@ -253,7 +280,7 @@ LUCENT_LANE_VERSIONS(LaneResults, classifyLeaf, (const PacketLanes& __restrict L
 LUCENT_LANE_LOOP(LaneResults, classifyInterior, (const PacketLanes& __restrict L, const LaneNode& __restrict n)) {
   LaneResults r;
   const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
-  for (int l = 0; l < kGatherPacket; ++l) classifyInteriorLane<false>(L, t, n, l, r);
+  for (int l = 0; l < kGatherPacket; ++l) classifyInteriorLane<false, false>(L, t, n, l, r);
   return r;
 }
 LUCENT_LANE_VERSIONS(LaneResults, classifyInterior, (const PacketLanes& __restrict L, const LaneNode& __restrict n), (L, n))
@@ -261,7 +288,7 @@ LUCENT_LANE_VERSIONS(LaneResults, classifyInterior, (const PacketLanes& __restri
 LUCENT_LANE_LOOP(LaneResults, classifyLeafParaboloid, (const PacketLanes& __restrict L, const LaneNode& __restrict n)) {
   LaneResults r;
   const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
-  for (int l = 0; l < kGatherPacket; ++l) classifyLeafLane<true>(L, t, n, l, r);
+  for (int l = 0; l < kGatherPacket; ++l) classifyLeafLane<true, false>(L, t, n, l, r);
   return r;
 }
 LUCENT_LANE_VERSIONS(LaneResults, classifyLeafParaboloid, (const PacketLanes& __restrict L, const LaneNode& __restrict n),
@@ -270,7 +297,7 @@ LUCENT_LANE_VERSIONS(LaneResults, classifyLeafParaboloid, (const PacketLanes& __
 LUCENT_LANE_LOOP(LaneResults, classifyInteriorParaboloid, (const PacketLanes& __restrict L, const LaneNode& __restrict n)) {
   LaneResults r;
   const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
-  for (int l = 0; l < kGatherPacket; ++l) classifyInteriorLane<true>(L, t, n, l, r);
+  for (int l = 0; l < kGatherPacket; ++l) classifyInteriorLane<true, false>(L, t, n, l, r);
   return r;
 }
 LUCENT_LANE_VERSIONS(LaneResults, classifyInteriorParaboloid,
@@ -285,19 +312,24 @@ inline LaneResults classifyAllLanes(const PacketLanes& L, const LaneNode& n, boo
 // The active lanes alone, one after the other: a packet's lanes part ways near their own gather
 // points, where a quarter of the nodes are visited by one lane, and testing all sixteen costs more
 // than testing the few.
-void classifyActiveLanes(const PacketLanes& __restrict L, const LaneNode& __restrict n, bool leaf, uint32_t active,
-                         LaneResults& r) {
+template <bool Occlude>
+void classifyLanes(const PacketLanes& __restrict L, const LaneNode& __restrict n, bool leaf, uint32_t active,
+                   LaneResults& r) {
   const PixelTables t{L.cdfs, L.solidAngle, L.spacing};
   for (uint32_t m = active; m != 0; m &= m - 1) {
     const int l = std::countr_zero(m);
     if (L.paraboloid) {
-      if (leaf) classifyLeafLane<true>(L, t, n, l, r);
-      else classifyInteriorLane<true>(L, t, n, l, r);
+      if (leaf) classifyLeafLane<true, Occlude>(L, t, n, l, r);
+      else classifyInteriorLane<true, Occlude>(L, t, n, l, r);
     } else {
-      if (leaf) classifyLeafLane<false>(L, t, n, l, r);
-      else classifyInteriorLane<false>(L, t, n, l, r);
+      if (leaf) classifyLeafLane<false, Occlude>(L, t, n, l, r);
+      else classifyInteriorLane<false, Occlude>(L, t, n, l, r);
     }
   }
+}
+void classifyActiveLanes(const PacketLanes& __restrict L, const LaneNode& __restrict n, bool leaf, uint32_t active,
+                         LaneResults& r) {
+  classifyLanes<false>(L, n, leaf, active, r);
 }
 
 // Pixel (x, y) of a buffer `width` pixels wide in its padded arrays (MicroBuffer::worldX, worldY,
@@ -346,21 +378,25 @@ class LaneRasterizer {
   // no wider than its pixel's spacing reaches its 3 x 3 pixels, a wider one its 5 x 5.
   // (x, y) is the node's pixel, cosRadius the cosine of the half-angle its sphere subtends, wide
   // whether it is wider than the pixel's spacing (an interior node: classifyInteriorLane).
-  void splat(int x, int y, float cosRadius, bool wide, const TraversalNode& node, Vec3 toCentre, float distance,
+  // A node seen from behind (back) is splatted as the node facing the other way, as an occluder.
+  void splat(int x, int y, float cosRadius, bool wide, bool back, TraversalNode node, Vec3 toCentre, float distance,
              uint32_t index) {
     ++c_->nodesSplatted;
+    c_->backNodesSplatted += back;
+    if (back) node.axis = -node.axis;
+    const uint32_t packed = back ? backFacePixel(distance) : packMicroPixel(s_->depth.code(distance), index);
     if (wide)
-      splatWithin<2>(x, y, cosRadius, node, toCentre, distance, index);
+      splatWithin<2>(x, y, cosRadius, node, toCentre, distance, index, packed);
     else
-      splatWithin<1>(x, y, cosRadius, node, toCentre, distance, index);
+      splatWithin<1>(x, y, cosRadius, node, toCentre, distance, index, packed);
   }
 
-  void listLeaf(uint32_t node) {
+  void listLeaf(uint32_t node, bool back) {
     if (b_->listed == b_->postTraversal.size()) {
       ++c_->listFlushes;
       castRays();
     }
-    b_->postTraversal[b_->listed++] = node;
+    b_->postTraversal[b_->listed++] = node | (back ? kListedBack : 0u);
     ++c_->leavesListed;
     listedAny_ = true;
   }
@@ -391,14 +427,22 @@ class LaneRasterizer {
 #endif
   }
 
+  // A listed leaf seen from behind (postTraversal's top bit).
+  static constexpr uint32_t kListedBack = 1u << 31;
+
+  // An occluder's word: its depth one code further than its own, so that a front face at the same
+  // place (the other side of a wall modelled as two faces) wins the depth test.
+  uint32_t backFacePixel(float distance) const {
+    return packMicroPixel(std::min(s_->depth.code(distance) + 1, kMaxDepthCode), kBackFaceMicroNode);
+  }
+
   template <int Reach>
   void splatWithin(int x, int y, float cosRadius, const TraversalNode& node, Vec3 toCentre, float distance,
-                   uint32_t index) {
+                   uint32_t index, uint32_t packed) {
     // First the bounding sphere's cone (the pixels' directions against the one to the node's centre,
     // a row at a time), then the exact test; both read the same rows of world directions.
     const uint64_t withinSphereCone = withinCone<Reach>(x, y, toCentre * (1.0f / distance), cosRadius);
     if (withinSphereCone == 0) return;
-    const uint32_t packed = packMicroPixel(s_->depth.code(distance), index);
     const Vec3 pc = -toCentre;  // gather point minus node centre
     const float height = dot(pc, node.axis), r2 = node.radius * node.radius, pc2 = dot(pc, pc);
     const bool leaf = index >= leafCount_;
@@ -550,8 +594,11 @@ class LaneRasterizer {
     for (size_t k = 0; k < used; ++k) nearestT[k] = kInf, nearestNode[k] = 0;
     const float tMin = g_->selfDistance;
     for (uint32_t j = 0; j < b_->listed; ++j) {
-      const uint32_t index = b_->postTraversal[j];
-      const TraversalNode disc = nodes_(index);
+      const bool back = (b_->postTraversal[j] & kListedBack) != 0;
+      const uint32_t node = b_->postTraversal[j] & ~kListedBack;
+      const uint32_t index = back ? kBackFaceMicroNode : node;
+      TraversalNode disc = nodes_(node);
+      if (back) disc.axis = -disc.axis;
       const Vec3 pc = g_->position - disc.center;
       const float ax = disc.axis.x, ay = disc.axis.y, az = disc.axis.z;
       const float height = dot(pc, disc.axis);  // > 0: p in front of the disc
@@ -582,7 +629,8 @@ class LaneRasterizer {
     for (size_t k = 0; k < used; ++k)
       if (nearestT[k] < kInf) {
         uint32_t& px = b_->grid[b_->rayGridIndex[k]];
-        px = std::min(px, packMicroPixel(s_->depth.code(nearestT[k]), nearestNode[k]));
+        px = std::min(px, nearestNode[k] == kBackFaceMicroNode ? backFacePixel(nearestT[k])
+                                                                : packMicroPixel(s_->depth.code(nearestT[k]), nearestNode[k]));
       }
     b_->listed = 0;
     c_->rayCastSeconds += clock.seconds();
@@ -614,8 +662,8 @@ Rgb convolve(const MicroBuffer& b, const HemisphereMapping& m, Radiance radiance
   for (const uint16_t k : m.used) {
     while (k >= rowEnd) ++row, rowEnd += m.width;
     const uint32_t px = b.pixels[k];
-    if (px == kEmptyMicroPixel) continue;
     const uint32_t node = microPixelNode(px);
+    if (px == kEmptyMicroPixel || node == kBackFaceMicroNode) continue;
     if (node < directionalNodes) {
       const size_t q = paddedIndex(m.width, k - (rowEnd - m.width), row);
       sum += radianceTowards(directional[node], {-b.worldX[q], -b.worldY[q], -b.worldZ[q]}, Rgb()) * m.weight[k];
@@ -648,6 +696,7 @@ void MicroCounters::report(RenderStats& stats) const {
   stats.addCounter("nodes_visited", nodesVisited);
   stats.addCounter("packet_nodes_visited", packetNodesVisited);
   stats.addCounter("nodes_splatted", nodesSplatted);
+  stats.addCounter("back_nodes_splatted", backNodesSplatted);
   stats.addCounter("leaves_ray_cast", leavesListed);
   stats.addCounter("post_traversal_flushes", listFlushes);
   stats.addCounter("ray_disc_tests", rayDiscTests);
@@ -656,7 +705,7 @@ void MicroCounters::report(RenderStats& stats) const {
 MicroCounters& MicroCounters::operator+=(const MicroCounters& o) {
   buffers += o.buffers, buffersRayCast += o.buffersRayCast, nodesVisited += o.nodesVisited;
   packetNodesVisited += o.packetNodesVisited;
-  nodesSplatted += o.nodesSplatted, leavesListed += o.leavesListed, listFlushes += o.listFlushes;
+  nodesSplatted += o.nodesSplatted, backNodesSplatted += o.backNodesSplatted, leavesListed += o.leavesListed, listFlushes += o.listFlushes;
   rayDiscTests += o.rayDiscTests, rayCastSeconds += o.rayCastSeconds;
   return *this;
 }
@@ -739,7 +788,10 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
                         node.axis.y,   node.axis.z,   node.coneSin,  node.coneCos, areas[i]};
     const bool leaf = isLeafNode(i, leafCount);
     LaneResults r;
-    if (std::popcount(active) <= kFewLanes) classifyActiveLanes(lanes, lane, leaf, active, r);
+    // Buffers where back faces occlude are few (envpbgi's receivers that no cache reaches): their
+    // tests run lane by lane, and the common ones keep their vectorized loops.
+    if (lanes.backFacesOcclude) classifyLanes<true>(lanes, lane, leaf, active, r);
+    else if (std::popcount(active) <= kFewLanes) classifyActiveLanes(lanes, lane, leaf, active, r);
     else r = classifyAllLanes(lanes, lane, leaf);
     ++packetVisits;
     uint32_t descend = 0;
@@ -751,9 +803,10 @@ void traversePacket(const Nodes& nodes, const float* areas, uint32_t leafCount, 
       if (outcome == kDescend) {
         descend |= 1u << l;
       } else if (outcome == kListLeaf && rayCasting) {
-        rasterizers[size_t(l)].listLeaf(i);
+        rasterizers[size_t(l)].listLeaf(i, lanes.backFacesOcclude && r.back[l] != 0);
       } else {  // splat, or without ray casting a leaf larger than its pixel (Fig. 11's holes)
-        rasterizers[size_t(l)].splat(r.column[l], r.row[l], r.cosRadius[l], r.wide[l] != 0, node,
+        rasterizers[size_t(l)].splat(r.column[l], r.row[l], r.cosRadius[l], r.wide[l] != 0,
+                                     lanes.backFacesOcclude && r.back[l] != 0, node,
                                      {r.vx[l], r.vy[l], r.vz[l]}, r.d[l], i);
       }
     }
@@ -781,6 +834,7 @@ void preparePacketLanes(std::span<const MicroLane> lanes, const MicroRenderSetti
   const WarpTable* firstTable = first.kind == MappingKind::Warped ? first.table : nullptr;
   L.side = side;
   L.splatReach = float(settings.splatReach);
+  L.backFacesOcclude = settings.backFacesOcclude;
   L.paraboloid = first.kind == MappingKind::Paraboloid;
   L.tableSize = firstTable ? firstTable->size : 1;
   a.solidAngle.resize(size_t(pixels) * lanes.size());

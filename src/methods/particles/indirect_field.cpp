@@ -53,8 +53,14 @@ FieldUpdate IndirectField::add(std::span<const ShadingPoint> points, std::span<S
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const ShadingPoint& p = points[i];
       const Vec2 b = barycentricsOf(scene, p.triangle, p.position);
-      const uint32_t side = tess.sides == 2 && dot(p.wo, p.geometricNormal) < 0 ? 1u : 0u;
-      around[i] = subtriangleAt(tess, p.triangle, side, b.x, b.y);
+      const bool back = dot(p.wo, p.geometricNormal) < 0;
+      around[i] = subtriangleAt(tess, p.triangle, tess.sides == 2 && back ? 1u : 0u, b.x, b.y);
+      // One-sided particles (--sides front) stand for the front alone: a point seen from behind (a
+      // wall's inside whose faces point out) has none of its own, and the front's light is not its.
+      if (tess.sides == 1 && back) {
+        for (float& w : around[i].weights) w = 0;
+        continue;
+      }
       for (uint32_t id : around[i].ids)
         if (std::atomic_ref<uint32_t>(slot_[id]).load(std::memory_order_relaxed) == kNoParticle)
           std::atomic_ref<uint32_t>(slot_[id]).store(kNewlyFound, std::memory_order_relaxed);

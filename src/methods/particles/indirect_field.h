@@ -46,10 +46,12 @@ class IndirectField {
   FieldUpdate add(std::span<const ShadingPoint> points, std::span<SubtriangleWeights> around, RenderStats& stats,
                   const std::string& suffix = "");
 
-  // The interpolated irradiance at a point whose subtriangle `add` found.
+  // The interpolated irradiance at a point whose subtriangle `add` found (zero weights: none, and
+  // their particles need not have been found).
   Rgb irradiance(const SubtriangleWeights& w) const {
     Rgb e;
-    for (int v = 0; v < 3; ++v) e += irradiance_[slot_[w.ids[v]]] * w.weights[v];
+    for (int v = 0; v < 3; ++v)
+      if (w.weights[v] != 0) e += irradiance_[slot_[w.ids[v]]] * w.weights[v];
     return e;
   }
 

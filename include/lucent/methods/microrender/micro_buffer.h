@@ -48,8 +48,17 @@ struct DepthCoding {
   }
 };
 
+// The node of a pixel that sees a surface from its back side (any node seen from behind: node 0 is
+// no node, the root being 1): it hides what lies beyond and sends no light, as the back of a
+// one-sided surface does in the path tracer's closed rooms.
+inline constexpr uint32_t kBackFaceMicroNode = 0;
+
 constexpr uint32_t packMicroPixel(uint32_t depthCode, uint32_t node) { return depthCode << kMicroIndexBits | node; }
 constexpr uint32_t microPixelNode(uint32_t pixel) { return pixel & kMicroIndexMask; }
 constexpr uint32_t microPixelDepth(uint32_t pixel) { return pixel >> kMicroIndexBits; }
+// Whether a pixel shows a node's front, whose light it then receives (not empty, not a back face).
+constexpr bool microPixelShowsNode(uint32_t pixel) {
+  return pixel != kEmptyMicroPixel && microPixelNode(pixel) != kBackFaceMicroNode;
+}
 
 }  // namespace lucent

@@ -53,13 +53,14 @@ struct MicroCounters {
   uint64_t nodesVisited = 0;        // by each lane: its cut and the nodes it skipped
   uint64_t packetNodesVisited = 0;  // by packets: nodes tested for all their lanes at once
   uint64_t nodesSplatted = 0;       // nodes rasterized into one pixel
+  uint64_t backNodesSplatted = 0;   // of them, nodes seen from behind (occluders)
   uint64_t leavesListed = 0;        // leaves put on post-traversal lists
   uint64_t listFlushes = 0;         // lists ray-cast early because they were full
   uint64_t rayDiscTests = 0;
   double rayCastSeconds = 0;        // time spent ray casting, within renderMicroBuffers
   MicroCounters& operator+=(const MicroCounters& o);
   // The counters micro_buffers, micro_buffers_ray_cast, nodes_visited, packet_nodes_visited,
-  // nodes_splatted, leaves_ray_cast, post_traversal_flushes and ray_disc_tests.
+  // nodes_splatted, back_nodes_splatted, leaves_ray_cast, post_traversal_flushes and ray_disc_tests.
   void report(RenderStats& stats) const;
 };
 
@@ -69,6 +70,9 @@ struct MicroRenderSettings {
   // 1 to kMaxSplatReach (micro_buffer.h); 1 here, as the kernel's tests build it, while the
   // renderer's default is MicroRenderOptions::splatReach.
   int splatReach = 1;
+  // Nodes seen from behind: culled (the paper's one-sided points), or true: rasterized as the node
+  // facing the other way, holding kBackFaceMicroNode (they hide what lies beyond and send nothing).
+  bool backFacesOcclude = false;
 };
 
 // Nodes as the traversal reads them: sphere, cone axis, and the sine and cosine of the cone angle.
