@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <atomic>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -39,7 +40,7 @@ struct RenderArgs {
   double checkpointSeconds = 0;
   bool resume = false;
   uint64_t memoryLimit = 0;  // 0: the available memory
-  bool quiet = false, robust = false, help = false;
+  bool quiet = false, robust = false, help = false, logStages = false;
   OptionValues methodOptions;  // as given, in order
 };
 
@@ -70,6 +71,7 @@ const RenderFlag kRenderFlags[] = {
     {"--isa", "ISA", "run as a CPU of sse4.2, avx, avx2 or avx512 would: Embree's kernels and the lane loops "
                      "(default: this CPU's best)"},
     {"-q, --quiet", "", "no progress bar or warnings"},
+    {"--log-stages", "", "print each stage's name on stderr as it starts, with the seconds since the start"},
     {"-h, --help", "", "this help, with the options of --method NAME"},
 };
 
@@ -140,6 +142,7 @@ RenderArgs parseArgs(const std::vector<std::string>& args) {
     if (key == "-h" || key == "--help") a.help = true;
     else if (key == "-q" || key == "--quiet") a.quiet = true;
     else if (key == "--robust") a.robust = true;
+    else if (key == "--log-stages") a.logStages = true;
     else if (key == "--resume") a.resume = true;
     else if (key == "--crop") a.crop = parseCrop(value());
     else if (key == "--samples") a.samples = parseSamples(value());
@@ -231,6 +234,11 @@ int runRender(const RenderArgs& a) {
   Scene scene;
   Stopwatch total;
   RenderStats stats;
+  if (a.logStages)
+    setStageObserver([&total](const std::string& stage) {
+      std::fprintf(stderr, "lucent: stage %s at %.3f s\n", stage.c_str(), total.seconds());
+      std::fflush(stderr);
+    });
   if (!a.help || !a.scene.empty()) {
     if (a.scene.empty()) throw std::invalid_argument("no scene file given (lucent render SCENE.json -o OUT.exr)");
     if (a.output.empty() && !a.help) throw std::invalid_argument("no output file given (-o OUT.exr)");
@@ -364,13 +372,19 @@ int runRender(const RenderArgs& a) {
   {
     ProgressBar bar(!a.quiet);
     control.progress = [&](double f) { bar.update(f); };
-    std::optional<StopOnSignals> signals;
-    if (method->interruptible()) {
-      signals.emplace();
-      control.stop = &signals->requested();
+    StopOnSignals signals;
+    control.stop = &signals.requested();
+    try {
+      out = method->render(scene, visibility, resolved, control);
+    } catch (const RenderStopped&) {
+      // Before any sample (or a method that cannot keep a part of its image): nothing is written,
+      // and a checkpoint resumed from stays as it was.
+      const int signal = signals.signal() > 0 ? signals.signal() : SIGTERM;
+      std::cerr << "lucent: stopped by " << (signal == SIGINT ? "SIGINT" : "SIGTERM")
+                << " before the image had any sample to keep; nothing written\n";
+      return 128 + signal;
     }
-    out = method->render(scene, visibility, resolved, control);
-    if (signals) stopSignal = signals->signal();
+    stopSignal = signals.signal();
   }
   for (const auto& s : out.stats.stageSeconds) stats.addStage(s.first, s.second);
   stats.counters = out.stats.counters;

@@ -10,6 +10,7 @@
 #include "lucent/core/parallel.h"
 #include "lucent/core/sampling.h"
 #include "lucent/scene/light_sampling.h"
+#include "lucent/core/stop.h"
 
 namespace lucent {
 
@@ -118,6 +119,7 @@ void shadowRaysInBlocks(const Visibility& vis, std::span<Rgb> direct, float scal
   const size_t blocks = (direct.size() + kBlock - 1) / kBlock;
   std::vector<uint64_t> blockRays(blocks, 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     flushDenormals();
     Rgb exact[kBlock];
     for (size_t b = r.begin(); b != r.end(); ++b) {

@@ -11,6 +11,7 @@
 #include "lucent/core/sampling.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/surface.h"
+#include "lucent/core/stop.h"
 
 namespace lucent {
 namespace {
@@ -151,6 +152,7 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
   std::vector<std::vector<ShadingPoint>> tilePoints(tiles);
   std::vector<uint64_t> tileRays(tiles, 0), tileInvalid(tiles, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
+    stopPoint();
     flushDenormals();
     for (int t = r.begin(); t != r.end(); ++t) {
       const int x0 = std::max(region.x0, (tileX0 + t % tilesX) * tile), y0 = std::max(region.y0, (tileY0 + t / tilesX) * tile);
@@ -217,6 +219,7 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
   }
   out.points.resize(first[tiles]);
   tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& r) {
+    stopPoint();
     for (int t = r.begin(); t != r.end(); ++t) {
       std::uninitialized_copy(tilePoints[t].begin(), tilePoints[t].end(), out.points.begin() + ptrdiff_t(first[t]));
       std::vector<ShadingPoint>().swap(tilePoints[t]);

@@ -2,6 +2,7 @@
 #pragma once
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -53,6 +54,27 @@ class Stopwatch {
 
  private:
   std::chrono::steady_clock::time_point start_;
+};
+
+// Told of each stage as it starts (lucent render --log-stages), from the thread that starts it.
+// Set once, before a render; null: nobody.
+void setStageObserver(std::function<void(const std::string& stage)> observer);
+// A stage starts: a point where the render may stop (stopPoint, core/stop.h), then announced.
+void beginStage(const std::string& stage);
+
+// A stage of a render from construction to destruction: begun (beginStage), and its seconds added
+// to `stats` as `name` at the end (also when a stop unwinds it).
+class StageTimer {
+ public:
+  StageTimer(RenderStats& stats, std::string name);
+  ~StageTimer() { stats_.addStage(name_, clock_.seconds()); }
+  StageTimer(const StageTimer&) = delete;
+  StageTimer& operator=(const StageTimer&) = delete;
+
+ private:
+  RenderStats& stats_;
+  std::string name_;
+  Stopwatch clock_;
 };
 
 }  // namespace lucent

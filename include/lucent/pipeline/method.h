@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "lucent/core/stop.h"
 #include "lucent/pipeline/options.h"
 #include "lucent/pipeline/render_control.h"
 #include "lucent/pipeline/render_output.h"
@@ -23,11 +24,14 @@ class Method {
   // Every option's value once `values` are set over the defaults, in declaration order, as text.
   // Throws OptionError for an unknown option or a value the option does not take.
   virtual OptionValues resolve(const OptionValues& values) const = 0;
-  // Renders with `values` set over the defaults; throws OptionError as resolve does.
+  // Renders with `values` set over the defaults; throws OptionError as resolve does. A stop request
+  // (control.stop) ends an interruptible method's sampling with what it has (complete false); one
+  // before its sampling starts, or in any other method, throws RenderStopped (core/stop.h).
   virtual RenderOutput render(const Scene& scene, const Visibility& visibility, const OptionValues& values,
                               const RenderControl& control = {}) const = 0;
-  // Whether the method honours RenderControl's stop requests, checkpoints and resume (a method that
-  // does not refuses a control that asks for checkpoints or a resume, and ignores stop requests).
+  // Whether the method honours RenderControl's checkpoints and resume, and returns the samples it
+  // has when stopped (a method that does not refuses a control that asks for checkpoints or a
+  // resume).
   virtual bool interruptible() const = 0;
 };
 
@@ -46,6 +50,7 @@ class DeclaredMethod final : public Method {
   OptionValues resolve(const OptionValues& values) const override { return table_.values(parse(values)); }
   RenderOutput render(const Scene& scene, const Visibility& visibility, const OptionValues& values,
                       const RenderControl& control) const override {
+    const StopScope stops(control.stop);
     return render_(scene, visibility, parse(values), control);
   }
   bool interruptible() const override { return interruptible_; }

@@ -26,8 +26,10 @@ struct RenderControl {
   // whole pixels, with that film (the state a resumed run needs).
   double checkpointSeconds = 0;
   std::function<void(const Film&)> checkpoint;
-  // Set from outside (a signal handler): the method finishes the work in flight and returns what it
-  // has, with RenderOutput::complete false.
+  // Set from outside (a signal handler): every stage stops within a fraction of a second
+  // (core/stop.h). An interruptible method's sampling returns the whole samples it has, with
+  // RenderOutput::complete false; a stop before its sampling, or in another method, throws
+  // RenderStopped.
   const std::atomic<bool>* stop = nullptr;
 
   bool stopRequested() const { return stop && stop->load(std::memory_order_relaxed); }

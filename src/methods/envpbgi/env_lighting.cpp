@@ -11,6 +11,7 @@
 
 #include "lucent/core/morton.h"
 #include "lucent/core/parallel.h"
+#include "lucent/core/stop.h"
 #include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/methods/points/bottom_up.h"
 #include "lucent/methods/points/node_tree.h"
@@ -55,6 +56,7 @@ void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& s
   for (size_t k = 0; k < count; ++k) origins[k] = origin(k), bounds.extend(origins[k].position);
   std::vector<uint64_t> order(count);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t k = r.begin(); k != r.end(); ++k)
       order[k] = facingMortonKey(origins[k].position, origins[k].normal, bounds) << 31 | uint64_t(k);
   });
@@ -63,6 +65,7 @@ void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& s
   const size_t packets = (count + kGatherPacket - 1) / kGatherPacket;
   const size_t side2 = q.texels();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, packets, 1), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     flushDenormals();
     Scratch& s = scratch.local();
     for (size_t packet = r.begin(); packet != r.end(); ++packet) {
@@ -130,6 +133,7 @@ void propagateDirectLight(EnvHierarchy& h, std::span<const uint32_t> primary, st
   });
   // Downward: a primary point's light to the secondary points below it (3.4's approximation).
   tbb::parallel_for(tbb::blocked_range<size_t>(0, primary.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t k = r.begin(); k != r.end(); ++k) {
       const uint32_t p = primary[k];
       for (uint32_t first = firstChild(p), end = first + 2; first < 2 * n; first <<= 1, end <<= 1)

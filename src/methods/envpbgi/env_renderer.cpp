@@ -16,6 +16,7 @@
 #include "lucent/core/dump.h"
 #include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
+#include "lucent/core/stop.h"
 #include "lucent/methods/points/point_radiance.h"
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
@@ -77,6 +78,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
 
   // Section 4 "Data structure": points by a low-discrepancy sequence, a binary tree over them, the
   // paper's 48-byte nodes.
+  beginStage("hierarchy");
   Stopwatch hierarchyClock;
   PointHierarchyOptions ho;
   ho.pointCount = o.points;
@@ -105,6 +107,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
 
   // 3.4, 4: primary visible points, from the camera's depth buffer. The brute force, with a
   // micro-buffer at every pixel and direct light at every leaf, has no use for them.
+  beginStage("select_primary_points");
   Stopwatch primaryClock;
   std::vector<uint32_t> primary;
   if (o.pixelIrradiance == PixelIrradiance::Caches) {
@@ -119,6 +122,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   stats.addStage("select_primary_points", primaryClock.seconds());
 
   // 3.3, 4: their micro-buffers, and the nodes those show: the secondary visible points.
+  beginStage("select_secondary_points");
   Stopwatch secondaryClock;
   const uint32_t primaryTexelCount = primaryQuadrature.texels();
   requireMemory(uint64_t(primary.size()) * (primaryTexelCount * sizeof(uint32_t) + sizeof(RadianceCache)),
@@ -132,10 +136,12 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   report(0.3);
 
   // 3.3, 3.4, Fig. 3: which points need a micro-buffer of their own, then their direct light.
+  beginStage("select_direct_light_points");
   Stopwatch selectClock;
   const SelectionCounts counts = selectDirectLightPoints(h, primary, o.primarySources);
   stats.addStage("select_direct_light_points", selectClock.seconds());
 
+  beginStage("direct_light");
   Stopwatch directClock;
   std::vector<uint32_t> ownBuffer;
   if (o.directLight == PointDirectLight::Selected) {
@@ -162,6 +168,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
                   [&](size_t k) { return BufferOrigin{h.surfels[ownBuffer[first + k]].position, h.surfels[ownBuffer[first + k]].normal}; },
                   ownTexels, counters);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 64), [&](const tbb::blocked_range<size_t>& r) {
+      stopPoint();
       for (size_t k = r.begin(); k != r.end(); ++k)
         direct[ownBuffer[first + k]] =
             directAt(ownBuffer[first + k], std::span(ownTexels).subspan(k * secondaryTexelCount, secondaryTexelCount),
@@ -171,6 +178,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   ownTexels = {};
   // The primary points reuse their buffers (3.5: "almost for free").
   tbb::parallel_for(tbb::blocked_range<size_t>(0, primary.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t k = r.begin(); k != r.end(); ++k)
       if (o.directLight == PointDirectLight::Selected)
         direct[primary[k]] = directAt(primary[k], std::span(primaryTexels).subspan(k * primaryTexelCount, primaryTexelCount),
@@ -180,6 +188,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   stats.addStage("direct_light", directClock.seconds());
   report(0.55);
 
+  beginStage("propagate_direct_light");
   Stopwatch propagateClock;
   uint64_t secondaryWithoutLight = 0;
   if (o.directLight == PointDirectLight::Selected) {
@@ -192,12 +201,14 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   stats.addStage("propagate_direct_light", propagateClock.seconds());
 
   // 3.5, 4: the radiance caches and their screen-space grid.
+  beginStage("radiance_caches");
   Stopwatch cacheClock;
   std::vector<RadianceCache> caches(primary.size());
   CacheGrid grid;
   if (o.pixelIrradiance == PixelIrradiance::Caches) {
     const CacheConvolution convolution = makeCacheConvolution(primaryQuadrature);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, primary.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+      stopPoint();
       for (size_t k = r.begin(); k != r.end(); ++k)
         caches[k] = buildRadianceCache(std::span(primaryTexels).subspan(k * primaryTexelCount, primaryTexelCount),
                                        primaryQuadrature, convolution, h.surfels[primary[k]],
@@ -213,6 +224,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   // The pixels, band by band of rows: camera paths to shading points, the analytic lights by shadow
   // rays, the rest from the caches (Eq. 5) or, brute force, from a micro-buffer each (bands of
   // kReusableBandSamples); a dump holds the whole image's shading points, in one band.
+  beginStage("pixels");
   Stopwatch pixelClock;
   double imageSeconds = 0;
   auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {o.layers, false}));
@@ -268,6 +280,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
                         },
                         texels, counters);
           tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 64), [&](const tbb::blocked_range<size_t>& r) {
+            stopPoint();
             for (size_t k = r.begin(); k != r.end(); ++k)
               shade(group[first + k],
                     bufferIrradiance(std::span(texels).subspan(k * primaryTexelCount, primaryTexelCount),
@@ -280,6 +293,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
       // Each receiver's tile and view depth, then the band's tile lists cut to its depths.
       tileOfPoint.resize(n), depthOfPoint.resize(n);
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        stopPoint();
         for (size_t i = r.begin(); i != r.end(); ++i) {
           const ShadingPoint& p = eye.points[i];
           const CacheGrid::Placement at = grid.place(camera, p.position, p.pixel, scene.camera.width, scene.camera.height);
@@ -289,6 +303,7 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
       cutTileLists(grid, tileOfPoint, depthOfPoint, tileLists);
       unreached.assign(n, 0);
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+        stopPoint();
         uint64_t candidatesHere = 0;
         for (size_t i = r.begin(); i != r.end(); ++i) {
           const ShadingPoint& p = eye.points[i];

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "lucent/core/lane_clones.h"
+#include "lucent/core/stop.h"
 #include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/scene/texture.h"
 
@@ -116,6 +117,7 @@ CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& ca
   };
   std::vector<TileRect> rects(caches.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, caches.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t k = r.begin(); k != r.end(); ++k) {
       const RadianceCache& c = caches[k];
       const Vec3 p = camera.project(c.position);
@@ -137,6 +139,7 @@ CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& ca
   std::vector<uint32_t> counts(tiles, 0);
   auto eachRowOfTiles = [&](auto&& visit) {
     tbb::parallel_for(0, g.tilesY, [&](int y) {
+      stopPoint();
       for (size_t k = 0; k < caches.size(); ++k)
         if (rects[k].y0 <= y && y <= rects[k].y1)
           for (int x = rects[k].x0; x <= rects[k].x1; ++x) visit(size_t(y) * size_t(g.tilesX) + size_t(x), k);
@@ -151,6 +154,7 @@ CacheGrid buildCacheGrid(std::span<const RadianceCache> caches, const Camera& ca
   for (std::vector<float>* v : {&g.x, &g.y, &g.z, &g.radius, &g.depth, &g.depthReach}) v->resize(caches.size());
   for (std::vector<float>& v : g.frame) v.resize(caches.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, caches.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t k = r.begin(); k != r.end(); ++k) {
       const RadianceCache& c = caches[k];
       g.x[k] = c.position.x, g.y[k] = c.position.y, g.z[k] = c.position.z, g.radius[k] = c.radius;
@@ -191,6 +195,7 @@ void cutTileLists(const CacheGrid& grid, std::span<const uint32_t> tileOf, std::
   }
   if (!any) return;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles, 16), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t t = r.begin(); t != r.end(); ++t) {
       if (!(lists.nearest[t] <= lists.farthest[t])) continue;
       uint32_t kept = 0;

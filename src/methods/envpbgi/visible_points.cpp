@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "lucent/core/parallel.h"
+#include "lucent/core/stop.h"
 #include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/methods/points/bottom_up.h"
 #include "lucent/methods/points/node_tree.h"
@@ -30,6 +31,7 @@ CameraDepth traceCameraDepth(const Scene& scene, const Visibility& vis) {
   // Rows in packets of 16 pixels.
   const int packetsPerRow = (d.width + kWidestPacket - 1) / kWidestPacket;
   tbb::parallel_for(tbb::blocked_range<int>(0, d.height * packetsPerRow, 16), [&](const tbb::blocked_range<int>& r) {
+    stopPoint();
     for (int p = r.begin(); p != r.end(); ++p) {
       const int y = p / packetsPerRow, x0 = (p % packetsPerRow) * kWidestPacket;
       const int count = std::min(kWidestPacket, d.width - x0);
@@ -105,6 +107,7 @@ std::vector<uint32_t> selectPrimaryPoints(EnvHierarchy& h, const Camera& cameraS
 
 void markSecondaryPoints(EnvHierarchy& h, std::span<const uint32_t> texels) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t t = r.begin(); t != r.end(); ++t)
       if (microPixelShowsNode(texels[t]))
         std::atomic_ref<uint32_t>(selectionOf(h, microPixelNode(texels[t]))).fetch_or(kSecondary, std::memory_order_relaxed);
@@ -133,6 +136,7 @@ SelectionCounts selectDirectLightPoints(EnvHierarchy& h, std::span<const uint32_
   });
   // Downward: the primary points' subtrees are disjoint (they form a cut), one work item each.
   tbb::parallel_for(tbb::blocked_range<size_t>(0, primary.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t k = r.begin(); k != r.end(); ++k)
       for (uint32_t first = firstChild(primary[k]), end = first + 2; first < 2 * n; first <<= 1, end <<= 1)
         for (uint32_t i = first; i < end; ++i)

@@ -15,6 +15,7 @@
 #include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/stats.h"
+#include "lucent/core/stop.h"
 #include "lucent/methods/microrender/hemisphere_mapping.h"
 #include "lucent/methods/microrender/micro_rendering.h"
 
@@ -140,6 +141,7 @@ void gatherInPackets(const GatherContext& ctx, size_t count, const NodeRadiance&
                      Finished&& finished) {
   const size_t packets = (count + kGatherPacket - 1) / kGatherPacket;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, packets, 2), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     flushDenormals();  // every thread computes alike, whoever created it
     GatherScratch& s = scratch.local();
     size_t gathered = 0;

@@ -20,6 +20,7 @@
 #include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
 #include "methods/microrender/micro_renderer.h"
+#include "lucent/core/stop.h"
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 #include "lucent/pipeline/film.h"
@@ -128,6 +129,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   requireMemory(uint64_t(ho.pointCount) * (2 * nodeBytes + sizeof(PointSample) + 32), "the point hierarchy",
                 "lower --points or raise --point-spacing");
   RenderStats hierarchyStats;
+  beginStage("hierarchy");
   Stopwatch hierarchyClock;
   const PointHierarchy hierarchy = buildPointHierarchy(scene, ho, &hierarchyStats);
   MicroHierarchy micro = prepareMicroHierarchy(hierarchy);
@@ -152,12 +154,14 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   backCtx.settings.backFacesOcclude = true;
 
   // Section 4: the radiance of the points.
+  beginStage("point_lighting");
   Stopwatch lightingClock;
   const NodeRadiance radiance = lightPoints(scene, vis, hierarchy, ctx, o, stats);
   stats.addStage("point_lighting", lightingClock.seconds());
   if (!o.dumpDirectory.empty()) dumpPointRadiance(o.dumpDirectory, radiance);
 
   // Camera paths and direct light, at every pixel.
+  beginStage("eye_rays_and_direct_light");
   Stopwatch eyeClock;
   const EyePaths eye = traceEyePaths(scene, vis, eyePathSettings(o, part));
   const size_t n = eye.points.size();
@@ -193,6 +197,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     if (order.size() >= (size_t(1) << 31)) throw std::logic_error("micro: at most 2^31 - 1 gather points at once");
     std::vector<uint64_t> keys(order.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4096), [&](const auto& r) {
+      stopPoint();
       for (size_t k = r.begin(); k != r.end(); ++k) {
         const ShadingPoint& p = points[order[k]];
         keys[k] = facingMortonKey(p.position, p.normal, scene.bounds) << 31 | order[k];
@@ -224,10 +229,12 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     }
     return sortClock.seconds();
   };
+  beginStage("final_gathering");
   double gatherSeconds = gather(gatherOrder, step == 1 ? 1.0 : 0.9, 0.0);
   uint64_t recomputed = 0;
   double upsampleSeconds = 0;
   if (step > 1) {
+    beginStage("upsampling");
     Stopwatch upClock;
     UpsamplingSettings us;
     us.width = width;

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lucent/core/stop.h"
+
 namespace lucent {
 
 namespace {
@@ -38,6 +40,7 @@ std::vector<uint32_t> upsampleIndirect(std::span<const ShadingPoint> points, con
   }
   std::vector<uint8_t> vanished(points.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const ShadingPoint& q = points[i];
       if (onGatherLattice(q.pixel, s.width, s.step)) continue;

@@ -12,6 +12,7 @@
 #include "lucent/core/morton.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
+#include "lucent/core/stop.h"
 #include "lucent/scene/surface.h"
 
 namespace lucent {
@@ -22,6 +23,7 @@ namespace {
 void sortByMortonCode(const Scene& scene, std::vector<PointSample>& samples) {
   std::vector<std::pair<uint32_t, uint32_t>> order(samples.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i)
       order[i] = {mortonCode(pointPosition(scene, samples[i]), scene.bounds), uint32_t(i)};
   });
@@ -34,6 +36,7 @@ void sortByMortonCode(const Scene& scene, std::vector<PointSample>& samples) {
 }  // namespace
 
 AreaParticles distributeAreaParticles(const Scene& scene, const AreaParticleOptions& options, RenderStats* stats) {
+  beginStage("area_particles");
   Stopwatch clock;
   std::vector<PointSample> samples = samplePoints(scene, options.positions, options.sampling, stats);
   // In 3-D Morton order: neighbouring particles' links start near each other, which keeps the BVH
@@ -47,6 +50,7 @@ AreaParticles distributeAreaParticles(const Scene& scene, const AreaParticleOpti
   out.spacing = std::sqrt(area);
   out.particles.resize(samples.size() * size_t(out.sides));
   tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const PointSample& s = samples[i];
       const SurfacePoint sp = surfaceAt(scene, s.triangle, s.b1, s.b2);
@@ -89,6 +93,7 @@ void measureCatchments(const Scene& scene, AreaParticles& area, const OrientedPo
   constexpr double kPlastic = 1.32471795724474602596;
   const double a1 = 1.0 / kPlastic, a2 = 1.0 / (kPlastic * kPlastic);
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, triangles, 64), [&](const tbb::blocked_range<uint32_t>& r) {
+    stopPoint();
     uint64_t lookups = 0, lost = 0;
     for (uint32_t t = r.begin(); t != r.end(); ++t) {
       const double triangleArea = scene.triangleArea(t);
@@ -100,6 +105,7 @@ void measureCatchments(const Scene& scene, AreaParticles& area, const OrientedPo
       Rng rng(seed, t);
       const double s1 = rng.uniform(), s2 = rng.uniform();
       for (uint64_t j = 0; j < n; ++j) {
+        if (j % 4096 == 0) stopPoint();  // a large triangle holds many points
         const double u1 = s1 + double(j) * a1, u2 = s2 + double(j) * a2;
         const Vec2 b = sampleUniformTriangle({float(u1 - std::floor(u1)), float(u2 - std::floor(u2))});
         const Vec3 p = barycentric(v0, v1, v2, b.x, b.y);

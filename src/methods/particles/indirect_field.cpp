@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <atomic>
 
+#include "lucent/core/stop.h"
+
 #include "methods/particles/particle_lighting.h"
 
 namespace lucent {
@@ -50,6 +52,7 @@ FieldUpdate IndirectField::add(std::span<const ShadingPoint> points, std::span<S
   constexpr uint32_t kNewlyFound = kNoParticle - 1;
   Stopwatch markClock;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const ShadingPoint& p = points[i];
       const Vec2 b = barycentricsOf(scene, p.triangle, p.position);
@@ -88,6 +91,7 @@ FieldUpdate IndirectField::add(std::span<const ShadingPoint> points, std::span<S
   // R2: the area particles of the new lists not used before.
   Stopwatch usedClock;
   tbb::parallel_for(tbb::blocked_range<size_t>(firstNew, found_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t k = r.begin(); k != r.end(); ++k)
       for (uint32_t m : listOf(k))
         if (std::atomic_ref<uint8_t>(usedMark_[m]).load(std::memory_order_relaxed) == 0)
@@ -109,6 +113,7 @@ FieldUpdate IndirectField::add(std::span<const ShadingPoint> points, std::span<S
   }
   Stopwatch gatherClock;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, newlyUsed.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t k = r.begin(); k != r.end(); ++k) {
       const uint32_t m = newlyUsed[k];
       gathered_[m] = gatherIrradiance(setup_.allGatherLinks ? setup_.allGatherLinks->of(m) : links_.row(firstRow + k),
@@ -124,6 +129,7 @@ FieldUpdate IndirectField::add(std::span<const ShadingPoint> points, std::span<S
   irradiance_.resize(found_.size());
   std::atomic<uint64_t> empty{0};
   tbb::parallel_for(tbb::blocked_range<size_t>(firstNew, found_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t k = r.begin(); k != r.end(); ++k) {
       Rgb sum;
       double areaSum = 0;

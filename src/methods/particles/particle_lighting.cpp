@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "lucent/core/rng.h"
+#include "lucent/core/stop.h"
 #include "lucent/pipeline/direct_light.h"
 
 namespace lucent {
@@ -19,6 +20,7 @@ std::vector<Rgb> emitLight(const Scene& scene, const Visibility& vis, std::span<
   // its irradiance over pi.
   std::vector<ShadingPoint> points(particles.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const AreaParticle& p = particles[i];
       ShadingPoint& s = points[i];
@@ -41,6 +43,7 @@ std::vector<Rgb> emitLight(const Scene& scene, const Visibility& vis, std::span<
     analyticDirectLight(scene, vis, points, reflected, rays);
   std::vector<Rgb> flux(particles.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) flux[i] = reflected[i] * (kPi * particles[i].area);
   });
   return flux;
@@ -83,6 +86,7 @@ std::vector<Rgb> scatterLight(std::span<const AreaParticle> particles, std::span
   tbb::combinable<ScatterCounters> local;
   if (bounces < 1) lit.clear();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, lit.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     ScatterCounters& c = local.local();
     auto deposit = [&](uint32_t target, Rgb e) {
       for (int ch = 0; ch < 3; ++ch)

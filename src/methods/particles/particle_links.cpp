@@ -6,6 +6,7 @@
 
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
+#include "lucent/core/stop.h"
 
 namespace lucent {
 
@@ -30,6 +31,7 @@ ParticleLinks buildParticleLinks(const Scene& scene, const Visibility& vis, std:
   links.targets.resize(rows * per);
   tbb::combinable<LinkCounters> local;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rows, 16), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     LinkCounters& c = local.local();
     std::vector<Vec3> dirs(per);
     for (size_t row = r.begin(); row != r.end(); ++row) {

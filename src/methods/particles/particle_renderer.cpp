@@ -15,6 +15,7 @@
 
 #include "lucent/core/dump.h"
 #include "lucent/core/memory.h"
+#include "lucent/core/stop.h"
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 #include "lucent/pipeline/film.h"
@@ -75,6 +76,7 @@ std::vector<uint8_t> detectAliases(const Scene& scene, const EyePaths& eye, cons
   };
   std::vector<uint8_t> flagged(n, 0);
   tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& r) {
+    stopPoint();
     for (int y = r.begin(); y != r.end(); ++y)
       for (int x = 0; x < w; ++x) {
         const PixelKey& k = keys[size_t(y) * size_t(w) + size_t(x)];
@@ -123,12 +125,14 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   AreaParticles area = distributeAreaParticles(scene, ao, &stats);
   const float spacing = area.spacing;
   stats.addDerived("particle_spacing", spacing);
+  beginStage("particle_grid");
   Stopwatch linkGridClock;
   const float linkRadius = o.linkRadius * spacing;
   const OrientedPointGrid linkGrid = buildParticleGrid(area.particles, linkRadius);
   stats.addStage("particle_grid", linkGridClock.seconds());
   CatchmentCounters catchments;
   if (o.particleArea == ParticleArea::Catchment) {
+    beginStage("particle_areas");
     Stopwatch areaClock;
     measureCatchments(scene, area, linkGrid, linkRadius, uint32_t(o.areaSamples),
                       particleSeed(o.seed, ParticleStream::Areas), catchments);
@@ -138,6 +142,7 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
 
   // G2, G3: the links.
   LinkCounters scatterCounters, gatherCounters;
+  beginStage("scatter_links");
   Stopwatch scatterClock;
   const ParticleLinks scatterLinks =
       buildParticleLinks(scene, vis, particles, linkGrid,
@@ -150,6 +155,7 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   const LinkDirections gatherDirections{particleSeed(o.seed, ParticleStream::GatherLinks), uint32_t(o.gatherLinks)};
   ParticleLinks gatherLinks;
   if (everything) {
+    beginStage("gather_links");
     Stopwatch gatherLinkClock;
     gatherLinks = buildParticleLinks(scene, vis, particles, linkGrid, gatherDirections, linkRadius, gatherCounters);
     stats.addStage("gather_links", gatherLinkClock.seconds());
@@ -158,16 +164,19 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
 
   // G4, G5: radiance particles and their estimation lists (those of the found radiance particles
   // only in R2, with --geometry frame).
+  beginStage("tessellation");
   Stopwatch tessellationClock;
   const Tessellation tess = tessellate(scene, o.tessellation * spacing, sides);
   stats.addStage("tessellation", tessellationClock.seconds());
   const float listRadius = o.listRadius * spacing;
   const float listCosine = std::cos(o.listAngle * kPi / 180.0f);
+  beginStage("list_grid");
   Stopwatch listGridClock;
   const OrientedPointGrid listGrid = buildParticleGrid(particles, listRadius);
   stats.addStage("list_grid", listGridClock.seconds());
   EstimationLists lists;
   if (everything) {
+    beginStage("estimation_lists");
     Stopwatch listClock;
     std::vector<uint32_t> all(tess.count);
     std::iota(all.begin(), all.end(), 0u);
@@ -177,17 +186,20 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   report(0.5);
 
   // Lighting stage (4.2): emission, then scattering.
+  beginStage("light_emission");
   Stopwatch emissionClock;
   uint64_t shadowRays = 0;
   const std::vector<Rgb> directFlux =
       emitLight(scene, vis, particles, o.emissionSamples, particleSeed(o.seed, ParticleStream::Emission), shadowRays);
   stats.addStage("light_emission", emissionClock.seconds());
+  beginStage("scattering");
   Stopwatch scatteringClock;
   ScatterCounters scattered;
   const std::vector<Rgb> flux = scatterLight(particles, directFlux, scatterLinks, o.bounces,
                                              particleSeed(o.seed, ParticleStream::Scattering), scattered);
   std::vector<Rgb> radiance(particles.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) radiance[i] = particleRadiance(particles[i], flux[i]);
   });
   stats.addStage("scattering", scatteringClock.seconds());
@@ -222,6 +234,7 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
     estimateDirectLight(scene, vis, paths.points, o.lightSamples, streamSeed(o.seed, RenderStream::Direct),
                         shading.direct, shadowRays);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, paths.points.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+      stopPoint();
       for (size_t i = r.begin(); i != r.end(); ++i) {
         shading.indirect[i] = paths.points[i].bsdf.kd * field.irradiance(weights[i]) * kInvPi;
         if (paths.points[i].bsdf.type != MaterialType::Diffuse) ++glossy;
@@ -253,6 +266,7 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
     const std::pair<int, int> rows = bands.next(row);
     EyePathSettings settingsOfBand = eyePathSettings(o, part);
     settingsOfBand.region = {part.region.x0, rows.first, part.region.x1, rows.second};
+    beginStage("preliminary_ray_tracing");
     Stopwatch preliminaryClock;
     eye = traceEyePaths(scene, vis, settingsOfBand);
     frameStages.addStage("preliminary_ray_tracing", preliminaryClock.seconds());
@@ -276,10 +290,12 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
   FieldUpdate added;
   uint64_t aliased = 0;
   if (o.supersample > 0) {
+    beginStage("alias_detection");
     Stopwatch detectClock;
     std::vector<uint8_t> flagged = detectAliases(scene, eye, shading, o.aliasContrast);
     for (uint8_t f : flagged) aliased += f;
     stats.addStage("alias_detection", detectClock.seconds());
+    beginStage("preliminary_ray_tracing_adaptive");
     Stopwatch adaptiveClock;
     EyePathSettings es = eyePathSettings(o, part);
     es.spp = o.supersample * o.supersample;

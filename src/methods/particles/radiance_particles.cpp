@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "lucent/core/memory.h"
+#include "lucent/core/stop.h"
 
 namespace lucent {
 
@@ -101,6 +102,7 @@ EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, 
   // Searched twice, to count and then to fill: the lists can take hundreds of megabytes (Table 1:
   // 366 MB for MAZE), so their size is checked against the memory limit before they are made.
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     std::vector<uint32_t> scratch;
     for (size_t k = r.begin(); k != r.end(); ++k) {
       listOf(ids[k], scratch);
@@ -112,6 +114,7 @@ EstimationLists buildEstimationLists(const Scene& scene, const Tessellation& t, 
                 "lower --list-radius or raise --tessellation");
   lists.particles.resize(lists.offsets.back());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     std::vector<uint32_t> scratch;
     for (size_t k = r.begin(); k != r.end(); ++k) {
       listOf(ids[k], scratch);

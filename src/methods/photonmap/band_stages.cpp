@@ -1,5 +1,8 @@
 #include "methods/photonmap/band_stages.h"
 
+#include <optional>
+
+#include "lucent/core/stop.h"
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 
@@ -45,6 +48,7 @@ bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptio
   RowBands bands(part, options.bandSamples, options.dumpDirectory.empty() ? 2.0 : 0.0);
   CheckpointClock checkpoints(control);
   const double rows = region.height();
+  beginStage("bands");
   for (size_t index = 0; row < region.y1; ++index) {
     if (control.stopRequested()) return false;
     Stopwatch bandClock;
@@ -53,14 +57,20 @@ bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptio
     const int first = next.first, end = next.second;
     const PixelRect band{region.x0, first, region.x1, end};
     Stopwatch rayClock;
-    BandShadingPoints traced = traceBand(scene, vis, options, band, part, totals.shadowRays);
-    totals.traceSeconds += rayClock.seconds();
-    estimate(traced, [&](double fraction) {
-      if (control.progress) control.progress((double(first - region.y0) + fraction * (end - first)) / rows);
-    });
-    dumpBand(options, index, traced.eye, traced.radiance);
-    addBand(film, traced.eye, traced.radiance, width, part);
-    totals.addBand(traced.eye);
+    // A stop in the middle of a band drops the band: the film keeps the bands before it whole.
+    std::optional<BandShadingPoints> traced;
+    try {
+      traced.emplace(traceBand(scene, vis, options, band, part, totals.shadowRays));
+      totals.traceSeconds += rayClock.seconds();
+      estimate(*traced, [&](double fraction) {
+        if (control.progress) control.progress((double(first - region.y0) + fraction * (end - first)) / rows);
+      });
+    } catch (const RenderStopped&) {
+      return false;
+    }
+    dumpBand(options, index, traced->eye, traced->radiance);
+    addBand(film, traced->eye, traced->radiance, width, part);
+    totals.addBand(traced->eye);
     bands.finished(end - first, bandClock.seconds());
     row = end;
     if (row < region.y1) checkpoints.reached(film);

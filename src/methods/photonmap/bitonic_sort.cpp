@@ -14,6 +14,8 @@
 #include <algorithm>
 #include <bit>
 
+#include "lucent/core/stop.h"
+
 namespace lucent {
 namespace {
 
@@ -54,6 +56,7 @@ void compareExchangePairs(uint64_t* v, uint64_t k, uint64_t j, uint64_t p0, uint
 // j < block.
 void localStages(uint64_t* v, uint64_t n, uint64_t block, uint64_t kFirst, uint64_t kLast) {
   tbb::parallel_for(uint64_t(0), n / block, [&](uint64_t b) {
+    stopPoint();
     const uint64_t p0 = b * block / 2, p1 = p0 + block / 2;
     for (uint64_t k = kFirst; k <= kLast; k *= 2)
       for (uint64_t j = std::min(k, block) / 2; j >= 1; j /= 2) compareExchangePairs(v, k, j, p0, p1);
@@ -76,7 +79,10 @@ void bitonicSort(std::vector<uint64_t>& values, uint32_t localBlock) {
   for (uint64_t k = 2 * block; k <= padded; k *= 2) {
     for (uint64_t j = k / 2; j >= block; j /= 2)  // one pass over all pairs per stage
       tbb::parallel_for(tbb::blocked_range<uint64_t>(0, padded / 2, kPairsPerItem),
-                        [&](const auto& r) { compareExchangePairs(v, k, j, r.begin(), r.end()); });
+                        [&](const auto& r) {
+                          stopPoint();
+                          compareExchangePairs(v, k, j, r.begin(), r.end());
+                        });
     localStages(v, padded, block, k, k);
   }
   values.resize(n);

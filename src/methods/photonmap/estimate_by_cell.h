@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "bitonic_sort.h"
+#include "lucent/core/stop.h"
 #include "lucent/pipeline/shading_points.h"
 #include "lucent/core/parallel.h"
 #include "radiance_estimate.h"
@@ -186,6 +187,7 @@ inline void pointsByCell(const UniformGrid& g, std::span<const ShadingPoint> poi
   const size_t n = points.size();
   std::vector<uint32_t> cellOfPoint(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) cellOfPoint[i] = g.cellIndex(g.cellOf(points[i].position));
   });
   order.resize(n);
@@ -251,6 +253,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
   if constexpr (!(knn_grid_detail::kReadsRuns<Map> && knn_grid_detail::kHasCellCounts<Map>)) byCell = false;
   if (!byCell) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+      stopPoint();
       flushDenormals();
       Scratch& s = scratch.local();
       EstimateCounters& c = counters.local();
@@ -271,6 +274,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
     pointsByCell(g, points, order, groupStart);
     UninitializedVector<CellQuery> queries(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+      stopPoint();
       for (size_t j = r.begin(); j != r.end(); ++j) {
         const ShadingPoint& p = points[order[j]];
         queries[j] = {p.position, estimatePoint(p).side(), p.bsdf.kd, order[j], p.bsdf.type == MaterialType::Diffuse};
@@ -278,6 +282,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
     });
 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, groupStart.size() - 1, 16), [&](const tbb::blocked_range<size_t>& r) {
+      stopPoint();
       flushDenormals();
       Scratch& s = scratch.local();
       EstimateCounters& c = counters.local();

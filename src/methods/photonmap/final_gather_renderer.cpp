@@ -19,6 +19,7 @@
 #include "lucent/core/oriented_point_grid.h"
 #include "lucent/core/parallel.h"
 #include "lucent/core/sampling.h"
+#include "lucent/core/stop.h"
 #include "lucent/scene/surface.h"
 #include "estimate_by_cell.h"
 #include "band_stages.h"
@@ -117,6 +118,7 @@ PrecomputedIrradiance precomputeIrradiance(const Scene& scene, const Map& map, s
   tbb::enumerable_thread_specific<std::vector<PhotonDistance>> heaps([&] { return std::vector<PhotonDistance>(settings.k); });
   tbb::enumerable_thread_specific<EstimateCounters> local;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
     std::vector<PhotonDistance>& heap = heaps.local();
     EstimateCounters& c = local.local();
     for (size_t i = r.begin(); i != r.end(); ++i) {
@@ -178,6 +180,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   uint64_t irradianceFallbacks = 0;
   const bool precomputed = options.gatherEstimate == GatherEstimate::Irradiance && options.gatherRays > 0;
   if (precomputed) {
+    beginStage("precompute_irradiance");
     Stopwatch clock;
     withPhotonMaps(maps, options.map, [&](const auto* global, const auto*) {
       if (global)
@@ -207,6 +210,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
       for (GatherScratch& s : scratch) s.traceSeconds = s.estimateSeconds = 0;
       std::atomic<size_t> done{0};
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
+        stopPoint();
         flushDenormals();
         GatherScratch& s = scratch.local();
         for (size_t i = r.begin(); i != r.end(); ++i) {

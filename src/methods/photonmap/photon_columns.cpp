@@ -9,6 +9,7 @@
 #include "knn_grid.h"
 #include "lucent/core/lane_clones.h"
 #include "lucent/core/octahedral.h"
+#include "lucent/core/stop.h"
 
 namespace lucent {
 
@@ -17,6 +18,7 @@ PhotonColumns photonColumns(std::span<const Photon> listed) {
   // Every entry is written once: the photons by the parallel fill, the padding by resizeColumns.
   resizeColumns(c, uint32_t(listed.size()));
   tbb::parallel_for(tbb::blocked_range<size_t>(0, listed.size(), 4096), [&](const auto& range) {
+    stopPoint();
     for (size_t i = range.begin(); i != range.end(); ++i) {
       const Photon& p = listed[i];
       const Vec3 incoming = octahedralDirection(p.direction), facing = photonFacing(p);

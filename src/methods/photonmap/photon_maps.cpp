@@ -49,24 +49,37 @@ BuiltPhotonMap buildMap(std::vector<Photon> photons, PhotonMapKind kind, const G
 // within its maximum radius. The grids chosen from the photons stay far below (the Cornell box's:
 // a few thousand; GLASS BALL's paper grid, 250 x 1 x 250: 16,641); cells the options make tiny
 // (--cell-size 0.001, --grid-resolution 2000000x...) would take hours per search, and are refused.
+// The dense grids skip empty cells by their counts (a few lookups per empty run); the hashed grid
+// has no counts and probes every cell in reach, so its searches may read no more cells than 2^16 or
+// 16 per photon it holds, and at most 2^20: beyond that the cells are too small for the photons
+// (GLASS BALL's paper grid, 250 x 1 x 250, passes with any photon count).
 constexpr double kMaxCellsInReach = double(1 << 24);
+constexpr double kMaxHashedCellsInReach = double(1 << 20);
+constexpr double kHashedCellsPerPhoton = 16;
 
 void checkSearchReach(const PhotonMapOptions& options, const BuiltPhotonMap& built, const EstimateSettings& settings) {
   if (options.cellSize <= 0 && options.gridResolution[0] == 0) return;  // chosen from the photons
   const UniformGrid* grid = nullptr;
   if (const auto* m = std::get_if<SortedGrid>(&built.map)) grid = &m->grid;
   if (const auto* m = std::get_if<StencilGrid>(&built.map)) grid = &m->grid;
+  const bool hashed = std::holds_alternative<HashedGrid>(built.map);
   if (const auto* m = std::get_if<HashedGrid>(&built.map)) grid = &m->grid;
   if (!grid) return;
   double cells = 1;
   for (int a = 0; a < 3; ++a)
     cells *= std::min(double(grid->res[a]), 2 * std::ceil(double(settings.maxRadius) * grid->invCellSize[a]) + 1);
-  if (!(cells <= kMaxCellsInReach))
-    throw std::invalid_argument(std::string(options.cellSize > 0 ? "--cell-size" : "--grid-resolution") +
-                                ": cells this small make a search within the maximum radius (" +
-                                optionText(settings.maxRadius, OptionKind::Real) + ") read up to " +
-                                optionText(cells, OptionKind::Real) +
-                                " cells (at most 2^24): use larger cells or a smaller --max-radius");
+  const double limit = hashed ? std::min(kMaxHashedCellsInReach,
+                                         std::max(65536.0, kHashedCellsPerPhoton * double(built.photons)))
+                              : kMaxCellsInReach;
+  if (!(cells <= limit))
+    throw std::invalid_argument(
+        std::string(options.cellSize > 0 ? "--cell-size" : "--grid-resolution") +
+        ": cells this small make a search within the maximum radius (" + optionText(settings.maxRadius, OptionKind::Real) +
+        ") read up to " + optionText(cells, OptionKind::Real) + " cells, more than " + optionText(limit, OptionKind::Real) +
+        (hashed ? " (the hashed grid probes every cell in reach: at most 2^20, and 2^16 or 16 per photon of its " +
+                      std::to_string(built.photons) + ")"
+                : " (2^24)") +
+        ": use larger cells, a smaller --max-radius" + (hashed ? ", or --map sort" : ""));
 }
 
 }  // namespace
@@ -88,6 +101,7 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
 
   // Two passes: the global map's photons, and the caustic map's from paths that end at their
   // first non-specular surface (so causticPhotons can be many at little cost).
+  beginStage("trace_photons");
   Stopwatch traceClock;
   PhotonTracingOptions tracing;
   tracing.photons = options.photons;
@@ -111,6 +125,7 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
     std::erase_if(globalPhotons, [](const Photon& p) { return photonBounce(p) == 0 || photonIsCaustic(p); });
   stats.addStage("trace_photons", traceClock.seconds());
 
+  beginStage("build_map");
   Stopwatch buildClock;
   RenderStats globalSub, causticSub;
   maps.global = buildMap(std::move(globalPhotons), options.map, gridOptionsFor(options, maps.globalSettings.k), globalSub,

@@ -7,6 +7,8 @@
 #include <bit>
 #include <stdexcept>
 
+#include "lucent/core/stop.h"
+
 #include "bitonic_sort.h"
 
 namespace lucent {
@@ -20,22 +22,27 @@ void sortAndIndex(const std::vector<uint32_t>& keys, uint32_t keyCount, std::vec
                   std::vector<uint32_t>& firstPhoton, RenderStats* stats) {
   const size_t n = keys.size();
   if (n >= UINT32_MAX) throw std::length_error("photon maps hold fewer than 2^32 - 1 photons");
+  beginStage("bitonic_sort");
   Stopwatch sortClock;
   std::vector<uint64_t> sorted(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const auto& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) sorted[i] = packSortKey(keys[i], uint32_t(i));
   });
   bitonicSort(sorted);
   photonList.resize(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const auto& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) photonList[i] = sortIndexOf(sorted[i]);
   });
   if (stats) stats->addStage("bitonic_sort", sortClock.seconds());
 
   // The first entry whose key is >= the cell's: for an empty cell, the next cell's first photon.
+  beginStage("binary_search");
   Stopwatch searchClock;
   firstPhoton.resize(size_t(keyCount) + 1);
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, keyCount + 1, kGrain), [&](const auto& r) {
+    stopPoint();
     for (uint32_t c = r.begin(); c != r.end(); ++c) {
       if (c == keyCount) {
         firstPhoton[c] = uint32_t(n);
@@ -59,17 +66,21 @@ void sortAndIndex(const std::vector<uint32_t>& keys, uint32_t keyCount, std::vec
 SortedGrid buildSortedGrid(std::vector<Photon> photons, const GridOptions& options, RenderStats* stats) {
   SortedGrid map;
   map.photons = std::move(photons);
+  beginStage("grid_keys");
   Stopwatch keyClock;
   map.grid = makeUniformGrid(map.photons, options, std::min<uint64_t>(options.maxCells, UINT32_MAX - 1));
   std::vector<uint32_t> keys(map.photons.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, keys.size(), kGrain), [&](const auto& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) keys[i] = map.grid.cellIndex(map.grid.cellOf(map.photons[i].position));
   });
   if (stats) stats->addStage("grid_keys", keyClock.seconds());
   sortAndIndex(keys, uint32_t(map.grid.cellCount()), map.photonList, map.firstPhoton, stats);
+  beginStage("cell_counts");
   Stopwatch countClock;
   map.cellCounts = buildCellCountTable(map.grid, [&](uint32_t c) { return map.firstPhoton[c + 1] - map.firstPhoton[c]; });
   if (stats) stats->addStage("cell_counts", countClock.seconds());
+  beginStage("gather_photons");
   Stopwatch gatherClock;
   map.listedPhotons = gatherPhotons(map.photons, map.photonList);
   map.columns = photonColumns(map.listedPhotons);
@@ -81,6 +92,7 @@ HashedGrid buildHashedGrid(std::vector<Photon> photons, const GridOptions& optio
   HashedGrid map;
   map.photons = std::move(photons);
   const size_t n = map.photons.size();
+  beginStage("grid_keys");
   Stopwatch keyClock;
   map.grid = makeUniformGrid(map.photons, options, 0);
   const double cellsFilled = std::max(1.0, double(n) / options.photonsPerCell);
@@ -90,6 +102,7 @@ HashedGrid buildHashedGrid(std::vector<Photon> photons, const GridOptions& optio
   std::vector<uint32_t> keys(n);
   std::vector<uint64_t> cellKeys(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const auto& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) {
       cellKeys[i] = UniformGrid::cellKey(map.grid.cellOf(map.photons[i].position));
       keys[i] = map.bucketOf(cellKeys[i]);
@@ -99,8 +112,10 @@ HashedGrid buildHashedGrid(std::vector<Photon> photons, const GridOptions& optio
   sortAndIndex(keys, uint32_t(buckets), map.photonList, map.firstPhoton, stats);
   map.cellKeys.resize(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const auto& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) map.cellKeys[i] = cellKeys[map.photonList[i]];
   });
+  beginStage("gather_photons");
   Stopwatch gatherClock;
   map.listedPhotons = gatherPhotons(map.photons, map.photonList);
   if (stats) stats->addStage("gather_photons", gatherClock.seconds());

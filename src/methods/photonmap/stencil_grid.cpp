@@ -18,6 +18,8 @@
 #include <atomic>
 #include <stdexcept>
 
+#include "lucent/core/stop.h"
+
 namespace lucent {
 namespace {
 
@@ -49,34 +51,41 @@ StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& opt
   map.side = std::max(1u, options.stencilSide);
   const uint32_t capacity = map.capacity();
 
+  beginStage("grid_keys");
   Stopwatch keyClock;
   const uint64_t maxCells = std::max<uint64_t>(1, std::min<uint64_t>(options.maxCells, options.maxStencilSlots / capacity));
   map.grid = makeUniformGrid(map.photons, options, std::min<uint64_t>(maxCells, UINT32_MAX - 1));
   const uint32_t cells = uint32_t(map.grid.cellCount());
   std::vector<uint32_t> cellOfPhoton(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const auto& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) cellOfPhoton[i] = map.grid.cellIndex(map.grid.cellOf(map.photons[i].position));
   });
   if (stats) stats->addStage("grid_keys", keyClock.seconds());
 
+  beginStage("stencil_count");
   Stopwatch countClock;
   map.arrived.assign(cells, 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const auto& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i)
       std::atomic_ref<uint32_t>(map.arrived[cellOfPhoton[i]]).fetch_add(1, std::memory_order_relaxed);
   });
   if (stats) stats->addStage("stencil_count", countClock.seconds());
 
+  beginStage("stencil_route");
   Stopwatch routeClock;
   std::vector<uint32_t> offset(size_t(cells) + 1, 0);
   for (uint32_t c = 0; c < cells; ++c) offset[c + 1] = offset[c] + map.arrived[c];
   std::vector<uint32_t> cursor(offset.begin(), offset.end() - 1), arrivals(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const auto& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i)
       arrivals[std::atomic_ref<uint32_t>(cursor[cellOfPhoton[i]]).fetch_add(1, std::memory_order_relaxed)] = uint32_t(i);
   });
   map.slots.resize(size_t(cells) * capacity);
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, cells, 64), [&](const auto& r) {
+    stopPoint();
     for (uint32_t c = r.begin(); c != r.end(); ++c) {
       uint32_t* ids = arrivals.data() + offset[c];
       const uint32_t arrived = map.arrived[c], stored = std::min(arrived, capacity);
@@ -91,20 +100,24 @@ StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& opt
     }
   });
   if (stats) stats->addStage("stencil_route", routeClock.seconds());
+  beginStage("cell_counts");
   Stopwatch cellCountClock;
   map.cellCounts = buildCellCountTable(map.grid, [&](uint32_t c) { return map.stored(c); });
   if (stats) stats->addStage("cell_counts", cellCountClock.seconds());
+  beginStage("gather_photons");
   Stopwatch gatherClock;
   map.firstStored.assign(size_t(cells) + 1, 0);
   for (uint32_t c = 0; c < cells; ++c) map.firstStored[c + 1] = map.firstStored[c] + map.stored(c);
   map.storedList.resize(map.firstStored[cells]);
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, cells, 256), [&](const auto& r) {
+    stopPoint();
     for (uint32_t c = r.begin(); c != r.end(); ++c)
       std::copy_n(map.slots.data() + size_t(c) * capacity, map.stored(c), map.storedList.data() + map.firstStored[c]);
   });
   map.listedPhotons = gatherPhotons(map.photons, map.storedList);
   map.columns = photonColumns(map.listedPhotons);
   if (stats) stats->addStage("gather_photons", gatherClock.seconds());
+  beginStage("sum_grid");
   Stopwatch sumGridClock;
   GridOptions sumOptions = options;
   sumOptions.resolution = {uint32_t(map.grid.res[0]) * StencilGrid::kSumGridSplit, uint32_t(map.grid.res[1]),

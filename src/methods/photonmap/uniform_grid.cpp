@@ -6,6 +6,8 @@
 
 #include <cmath>
 
+#include "lucent/core/stop.h"
+
 namespace lucent {
 namespace {
 
@@ -101,6 +103,7 @@ CellCountTable buildCellCountTable(const UniformGrid& grid, const std::function<
   uint32_t* p = t.prefix.data();
   // Along x, one work item per row of cells; then y per (x, z) column; then z per (x, y) column.
   tbb::parallel_for(tbb::blocked_range<size_t>(1, ny * nz, 64), [&](const auto& r) {
+    stopPoint();
     for (size_t row = r.begin(); row != r.end(); ++row) {
       const size_t y = row % ny, z = row / ny;
       if (y == 0 || z == 0) continue;
@@ -110,11 +113,13 @@ CellCountTable buildCellCountTable(const UniformGrid& grid, const std::function<
     }
   });
   tbb::parallel_for(tbb::blocked_range<size_t>(0, nz, 1), [&](const auto& r) {
+    stopPoint();
     for (size_t z = r.begin(); z != r.end(); ++z)
       for (size_t y = 1; y < ny; ++y)
         for (size_t x = 0; x < nx; ++x) p[(z * ny + y) * nx + x] += p[(z * ny + y - 1) * nx + x];
   });
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ny, 1), [&](const auto& r) {
+    stopPoint();
     for (size_t y = r.begin(); y != r.end(); ++y)
       for (size_t z = 1; z < nz; ++z)
         for (size_t x = 0; x < nx; ++x) p[(z * ny + y) * nx + x] += p[((z - 1) * ny + y) * nx + x];
@@ -125,6 +130,7 @@ CellCountTable buildCellCountTable(const UniformGrid& grid, const std::function<
 std::vector<Photon> gatherPhotons(const std::vector<Photon>& photons, const std::vector<uint32_t>& ids) {
   std::vector<Photon> gathered(ids.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 4096), [&](const auto& r) {
+    stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) gathered[i] = photons[ids[i]];
   });
   return gathered;

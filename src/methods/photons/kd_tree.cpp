@@ -1,6 +1,7 @@
 #include "lucent/methods/photons/kd_tree.h"
 
 #include "lucent/core/dump.h"
+#include "lucent/core/stop.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -97,6 +98,7 @@ struct Query {
 
 PhotonKdTree buildPhotonKdTree(std::span<const Photon> photons, RenderStats* stats) {
   if (photons.size() >= UINT32_MAX) throw std::length_error("photon maps hold fewer than 2^32 - 1 photons");
+  beginStage("kdtree_build");
   Stopwatch clock;
   const uint32_t n = uint32_t(photons.size());
   std::vector<uint32_t> order(n);
@@ -107,7 +109,10 @@ PhotonKdTree buildPhotonKdTree(std::span<const Photon> photons, RenderStats* sta
   std::vector<Range> level, next, small;
   if (n >= 2) level.push_back({0, n});
   while (!level.empty()) {
-    tbb::parallel_for(size_t(0), level.size(), [&](size_t i) { splitRange(photons, order, axis, level[i]); });
+    tbb::parallel_for(size_t(0), level.size(), [&](size_t i) {
+      stopPoint();
+      splitRange(photons, order, axis, level[i]);
+    });
     next.clear();
     for (const Range& r : level) {
       const uint32_t mid = r.lo + (r.hi - r.lo) / 2;
@@ -116,12 +121,16 @@ PhotonKdTree buildPhotonKdTree(std::span<const Photon> photons, RenderStats* sta
     }
     std::swap(level, next);
   }
-  tbb::parallel_for(size_t(0), small.size(), [&](size_t i) { buildSubtree(photons, order, axis, small[i]); });
+  tbb::parallel_for(size_t(0), small.size(), [&](size_t i) {
+    stopPoint();
+    buildSubtree(photons, order, axis, small[i]);
+  });
 
   PhotonKdTree tree;
   tree.photons.resize(n);
   tree.sourceIndex = std::move(order);
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 4096), [&](const auto& r) {
+    stopPoint();
     for (uint32_t i = r.begin(); i != r.end(); ++i) {
       Photon p = photons[tree.sourceIndex[i]];
       p.flags = (p.flags & ~kPhotonAxisMask) | uint32_t(axis[i]) << kPhotonAxisShift;

@@ -10,6 +10,7 @@
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/particle_scattering.h"
 #include "lucent/scene/surface.h"
+#include "lucent/core/stop.h"
 
 namespace lucent {
 namespace {
@@ -40,6 +41,7 @@ void closestHits(const Visibility& vis, const std::vector<PhotonPath>& paths, Un
   constexpr size_t kPacket = kWidestPacket;
   const size_t packets = (paths.size() + kPacket - 1) / kPacket;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, packets, 16), [&](const auto& r) {
+    stopPoint();
     for (size_t p = r.begin(); p != r.end(); ++p) {
       const size_t first = p * kPacket;
       const int n = int(std::min(kPacket, paths.size() - first));
@@ -167,6 +169,7 @@ PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonT
 
   const EmissionTarget* target = options.target ? &*options.target : nullptr;
   // Stage 0: emission, one work item per photon.
+  beginStage("emit_photons");
   Stopwatch emitClock;
   // The paths, and the hits and results of the first bounce (later bounces have fewer paths).
   requireMemory(uint64_t(options.photons) * (sizeof(PhotonPath) + 1 + sizeof(Hit) + sizeof(BounceResult)),
@@ -174,6 +177,7 @@ PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonT
   std::vector<PhotonPath> paths(options.photons);
   std::vector<uint8_t> emitted(options.photons);
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, options.photons, 1024), [&](const auto& r) {
+    stopPoint();
     for (uint32_t i = r.begin(); i != r.end(); ++i) {
       Rng rng(options.seed, i, 0);
       const float uLight = rng.uniform();
@@ -192,6 +196,7 @@ PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonT
 
   // One stage per bounce; the compaction keeps photon-index order, so the maps do not depend on
   // the thread count (a GPU would compact with a prefix sum over the same flags).
+  beginStage("trace_photons");
   Stopwatch traceClock;
   UninitializedVector<Hit> hits;  // every entry written by its packet
   std::vector<BounceResult> results;
@@ -200,6 +205,7 @@ PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonT
     closestHits(vis, paths, hits);
     results.resize(paths.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, paths.size(), 256), [&](const auto& r) {
+      stopPoint();
       for (size_t i = r.begin(); i != r.end(); ++i)
         results[i] = bounce(scene, paths[i], hits[i], depth, options.seed, options.causticOnly);
     });

@@ -11,6 +11,7 @@
 
 #include "lucent/methods/points/bottom_up.h"
 #include "lucent/scene/surface.h"
+#include "lucent/core/stop.h"
 
 namespace lucent {
 
@@ -117,6 +118,7 @@ void computePacked(PointHierarchy& h) {
   // Leaves of one triangle have the same cone, so the same normal and cone bits: neighbours in tree
   // order mostly share a triangle and reuse them (identical input, identical bits).
   tbb::parallel_for(tbb::blocked_range<uint32_t>(n, 2 * n, points::kNodeGrain), [&](const auto& r) {
+    stopPoint();
     NormalCone lastCone{Vec3(kInf), kInf};
     PackedNode lastBits;
     for (uint32_t i = r.begin(); i != r.end(); ++i) {
@@ -169,6 +171,7 @@ PointHierarchy buildPointHierarchy(const Scene& scene, std::vector<PointSample> 
   h.encoding = options.encoding;
   h.discAreaScale = options.discAreaScale;
 
+  beginStage("median_split");
   Stopwatch splitClock;
   std::vector<Vec3> positions(points.size());
   points::parallelFor(0, h.leafCount, [&](uint32_t j) { positions[j] = pointPosition(scene, points[j]); });
@@ -200,15 +203,18 @@ PointHierarchy buildPointHierarchy(const Scene& scene, std::vector<PointSample> 
 void refitPointHierarchy(PointHierarchy& h, const Scene& scene, RenderStats* stats) {
   if (h.restTriangleAreas.size() != scene.triangleCount())
     throw std::invalid_argument("point hierarchy refit: the scene's triangles are not the hierarchy's");
+  beginStage("leaf_nodes");
   Stopwatch leafClock;
   h.floatNodes.resize(h.nodeCount());
   h.nodeAreas.resize(h.nodeCount());
   computeLeaves(h, scene);
   if (stats) stats->addStage("leaf_nodes", leafClock.seconds());
+  beginStage("interior_nodes");
   Stopwatch interiorClock;
   computeInterior(h);
   if (stats) stats->addStage("interior_nodes", interiorClock.seconds());
   if (h.encoding == NodeEncoding::Packed) {
+    beginStage("packed_nodes");
     Stopwatch packClock;
     computePacked(h);
     if (stats) stats->addStage("packed_nodes", packClock.seconds());

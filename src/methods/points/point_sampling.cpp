@@ -38,6 +38,7 @@
 
 #include "best_candidate_tiles.h"
 #include "lucent/core/sobol.h"
+#include "lucent/core/stop.h"
 #include "radix_sort.h"
 
 namespace lucent {
@@ -60,6 +61,7 @@ std::vector<PointSample> sampleLowDiscrepancy(const Distribution1D& areas, uint3
   uint32_t scramble[3];
   for (int d = 0; d < 3; ++d) scramble[d] = uint32_t(hashKey(seed, 0x50b01u, uint64_t(d)));
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, count, kGrain), [&](const auto& r) {
+    stopPoint();
     for (uint32_t i = r.begin(); i != r.end(); ++i) {
       const uint32_t triangle = areas.pick(sobolSample(i, 0, scramble[0]));
       const Vec2 b = sampleUniformTriangle({sobolSample(i, 1, scramble[1]), sobolSample(i, 2, scramble[2])});
@@ -88,6 +90,7 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
   if (!(totalArea > 0) || !std::isfinite(totalArea))
     throw std::invalid_argument("point sampling: the scene's triangles have no area");
 
+  beginStage("point_sampling");
   Stopwatch clock;
   if (options.method == PointSampling::LowDiscrepancy) {
     std::vector<PointSample> points = sampleLowDiscrepancy(areas, count, options.seed);
@@ -140,16 +143,19 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
     placedKeys.resize(placed);
     placedIndices.resize(placed);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, placed, kGrain), [&](const auto& r) {
+      stopPoint();
       for (uint32_t i = r.begin(); i != r.end(); ++i) placedKeys[i] = grid.keyOf(positions[i]), placedIndices[i] = i;
     });
     radixSortByKey(placedKeys, placedIndices, grid.keyBits(), keyScratch, indexScratch);
     placedByTile.resize(placed);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, placed, kGrain), [&](const auto& r) {
+      stopPoint();
       for (uint32_t i = r.begin(); i != r.end(); ++i) placedByTile[i] = positions[placedIndices[i]];
     });
     candKeys.resize(candCount);
     candIndices.resize(candCount);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, candCount, kGrain), [&](const auto& r) {
+      stopPoint();
       for (uint32_t i = r.begin(); i != r.end(); ++i) {
         const PointSample s = candidateAt(areas, options.seed, level, i);
         candKeys[i] = grid.keyOf(pointPosition(scene, s)) << triangleBits | s.triangle;
@@ -194,6 +200,7 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
     for (uint32_t colour = 0; colour < 8; ++colour) {
       const std::vector<uint32_t>& list = byColour[colour];
       tbb::parallel_for(tbb::blocked_range<size_t>(0, list.size(), 16), [&](const auto& r) {
+        stopPoint();
         NeighbourList& nb = scratch.local();
         NeighbourRows rows(tiles, view.grid);
         uint64_t few = 0;

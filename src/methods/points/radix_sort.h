@@ -10,6 +10,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "lucent/core/stop.h"
+
+
 namespace lucent::points {
 
 template <class Value>
@@ -26,6 +29,7 @@ void radixSortByKey(std::vector<uint64_t>& keys, std::vector<Value>& values, uin
   for (uint32_t shift = 0; shift < keyBits; shift += kDigitBits) {
     // Per block, the count of each digit.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& r) {
+      stopPoint();
       for (size_t b = r.begin(); b != r.end(); ++b) {
         uint32_t* count = &offsets[b * kBuckets];
         std::fill(count, count + kBuckets, 0u);
@@ -41,6 +45,7 @@ void radixSortByKey(std::vector<uint64_t>& keys, std::vector<Value>& values, uin
         sum += c;
       }
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& r) {
+      stopPoint();
       for (size_t b = r.begin(); b != r.end(); ++b) {
         uint32_t* next = &offsets[b * kBuckets];
         for (size_t i = b * kBlock, e = std::min(n, i + kBlock); i < e; ++i) {

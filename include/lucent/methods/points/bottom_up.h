@@ -7,6 +7,7 @@
 
 #include <cstdint>
 
+#include "lucent/core/stop.h"
 #include "lucent/methods/points/node_tree.h"
 
 namespace lucent::points {
@@ -23,6 +24,7 @@ void forEachInteriorBottomUp(uint32_t leafCount, F&& f) {
       continue;
     }
     tbb::parallel_for(tbb::blocked_range<uint32_t>(first, end, kNodeGrain), [&](const auto& r) {
+      stopPoint();
       for (uint32_t i = r.begin(); i != r.end(); ++i) f(i);
     });
   }
@@ -32,6 +34,7 @@ void forEachInteriorBottomUp(uint32_t leafCount, F&& f) {
 template <class F>
 void parallelFor(uint32_t begin, uint32_t end, F&& f) {
   tbb::parallel_for(tbb::blocked_range<uint32_t>(begin, end, kNodeGrain), [&](const auto& r) {
+    stopPoint();
     for (uint32_t i = r.begin(); i != r.end(); ++i) f(i);
   });
 }
