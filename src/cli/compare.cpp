@@ -54,6 +54,15 @@ int runCompare(const CompareOptions& opt) {
   if (opt.maxError && !std::isfinite(*opt.maxError)) throw std::invalid_argument("--max-error must be a finite number");
   const ErrorMetric metric = parseErrorMetric(opt.metric);
   if (!opt.heatmap.empty()) checkOutputFile(opt.heatmap, ".png", "--heatmap", {opt.image, opt.reference});
+  // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
+  {
+    const ImageHeader image = readImageHeader(opt.image), reference = readImageHeader(opt.reference);
+    try {
+      checkComparable(image, reference, opt.test);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("'" + opt.image + "' vs '" + opt.reference + "': " + e.what());
+    }
+  }
   const Image candidateFile = readLinearImage(opt.image);
   const Image referenceFile = readLinearImage(opt.reference);
   // The test reads the variance layers; the metrics compare the colours.

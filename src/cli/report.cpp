@@ -404,6 +404,15 @@ int runReport(const ReportOptions& opt) {
   std::vector<std::string> inputs = opt.candidates;
   inputs.push_back(opt.reference);
   checkOutputFile(opt.output, ".html", "-o", inputs);
+  // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
+  const ImageHeader referenceHeader = readImageHeader(opt.reference);
+  for (const std::string& path : opt.candidates) {
+    try {
+      checkComparable(readImageHeader(path), referenceHeader, true);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("'" + path + "' vs '" + opt.reference + "': " + e.what());
+    }
+  }
   ImageMetadata referenceMetadata;
   const Image referenceFile = readLinearImage(opt.reference, &referenceMetadata);
   const bool tested = hasVarianceLayers(referenceFile);

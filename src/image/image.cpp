@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <stdexcept>
 
 #include "lucent/core/files.h"
@@ -124,7 +125,14 @@ void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageM
   writeFilesAtomically(files);
 }
 
-Image readImage(const std::string& path, ImageMetadata* metadata) {
+namespace {
+
+// The most bytes of pixel data that a byte of a compressed file decodes to: deflate's limit is
+// 1,032 (EXR's zip and pxr24, PNG, TIFF's deflate); run-length and block codecs stay below 2,048.
+constexpr uint64_t kMostDecodedPerByte = 2048;
+
+// The opened file, its header checked (see readImageHeader).
+std::unique_ptr<OIIO::ImageInput> openChecked(const std::string& path) {
   // A device or pipe (/dev/zero) would be read for ever.
   const std::string problem = regularFileProblem(path);
   if (problem == "not found") throw std::runtime_error("image file not found: '" + path + "'");
@@ -142,17 +150,51 @@ Image readImage(const std::string& path, ImageMetadata* metadata) {
   if (spec.depth > 1)
     throw std::runtime_error("cannot read image '" + path + "': a volume of " + std::to_string(spec.depth) +
                              " slices, not an image");
+  // And against the file's size: a 4.6 KB EXR claiming 8192 x 8192 pixels of 10 float channels
+  // would have 2.7 GB allocated and filled before its missing data failed the read.
+  uint64_t pixelBytes = 0;
+  for (int c = 0; c < spec.nchannels; ++c) pixelBytes += spec.channelformat(c).size();
+  const uint64_t stored = uint64_t(spec.width) * uint64_t(spec.height) * pixelBytes;
+  std::error_code ec;
+  const uint64_t fileBytes = std::filesystem::file_size(path, ec);
+  const std::string compression = spec.get_string_attribute("compression", "");
+  const uint64_t most = compression == "none" ? fileBytes : fileBytes * kMostDecodedPerByte;
+  if (!ec && stored > most)
+    throw std::runtime_error("cannot read image '" + path + "': its header claims " + std::to_string(spec.width) +
+                             " x " + std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
+                             " channels (" + std::to_string(stored) + " bytes), more than its " +
+                             std::to_string(fileBytes) + " bytes can hold" +
+                             (compression.empty() ? "" : " compressed as " + compression));
+  return in;
+}
+
+std::vector<std::string> channelNames(const OIIO::ImageSpec& spec) {
+  std::vector<std::string> names = spec.channelnames;
+  for (int c = int(names.size()); c < spec.nchannels; ++c) names.push_back("channel" + std::to_string(c));
+  names.resize(size_t(spec.nchannels));
+  return names;
+}
+
+}  // namespace
+
+ImageHeader readImageHeader(const std::string& path) {
+  const auto in = openChecked(path);
+  const OIIO::ImageSpec& spec = in->spec();
+  ImageHeader header{spec.width, spec.height, channelNames(spec)};
+  in->close();
+  return header;
+}
+
+Image readImage(const std::string& path, ImageMetadata* metadata) {
+  auto in = openChecked(path);
+  const OIIO::ImageSpec& spec = in->spec();
   // The pixels as floats, and OpenImageIO's scanlines, which it decodes up to 256 at a time in
   // their stored format (up to 8 bytes a channel): for a Radiance header claiming 19,854,521 x 2
   // pixels it asked for 61 GB (found by fuzzing).
   const uint64_t floats = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels);
   requireMemory(floats * sizeof(float) + 256 * uint64_t(spec.width) * uint64_t(spec.nchannels) * 8,
                 "the image '" + path + "'", "raise --memory-limit if the machine has the memory");
-  std::vector<std::string> names = spec.channelnames;
-  for (int c = int(names.size()); c < spec.nchannels; ++c)
-    names.push_back("channel" + std::to_string(c));
-  names.resize(spec.nchannels);
-  Image image(spec.width, spec.height, names);
+  Image image(spec.width, spec.height, channelNames(spec));
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels().data()))
     throw std::runtime_error("cannot read image '" + path + "': " + in->geterror());
   if (metadata) {

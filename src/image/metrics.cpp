@@ -17,12 +17,14 @@ std::string joinNames(const std::vector<std::string>& names) {
   return s + "]";
 }
 
+void requireSameSize(int width, int height, int referenceWidth, int referenceHeight) {
+  if (width != referenceWidth || height != referenceHeight)
+    throw std::invalid_argument("image sizes differ: " + std::to_string(width) + "x" + std::to_string(height) +
+                                " vs reference " + std::to_string(referenceWidth) + "x" +
+                                std::to_string(referenceHeight));
+}
 void requireSameSize(const Image& image, const Image& reference) {
-  if (image.width() != reference.width() || image.height() != reference.height())
-    throw std::invalid_argument(
-        "image sizes differ: " + std::to_string(image.width()) + "x" +
-        std::to_string(image.height()) + " vs reference " + std::to_string(reference.width()) +
-        "x" + std::to_string(reference.height()));
+  requireSameSize(image.width(), image.height(), reference.width(), reference.height());
 }
 
 // The indices of the channels prefix + "R", "G", "B"; -1 where absent, or, when `role` names the
@@ -45,18 +47,23 @@ bool isVarianceChannel(const std::string& name) { return name.rfind("variance.",
 
 // For each channel of `image`, the index of the same-named channel of `reference`; -1 for the
 // variance channels, which are not compared.
+// The channels that are compared (all but the variance channels), sorted; an error where two
+// images' differ.
+std::vector<std::string> comparedChannels(const std::vector<std::string>& channels) {
+  std::vector<std::string> names;
+  for (const std::string& name : channels)
+    if (!isVarianceChannel(name)) names.push_back(name);
+  std::sort(names.begin(), names.end());
+  return names;
+}
+void requireSameChannels(const std::vector<std::string>& image, const std::vector<std::string>& reference) {
+  if (comparedChannels(image) != comparedChannels(reference))
+    throw std::invalid_argument("image channels differ: " + joinNames(image) + " vs reference " + joinNames(reference));
+}
+
 std::vector<int> matchChannels(const Image& image, const Image& reference) {
   requireSameSize(image, reference);
-  auto compared = [](const Image& i) {
-    std::vector<std::string> names;
-    for (const std::string& name : i.channels())
-      if (!isVarianceChannel(name)) names.push_back(name);
-    std::sort(names.begin(), names.end());
-    return names;
-  };
-  if (compared(image) != compared(reference))
-    throw std::invalid_argument("image channels differ: " + joinNames(image.channels()) +
-                                " vs reference " + joinNames(reference.channels()));
+  requireSameChannels(image.channels(), reference.channels());
   std::vector<int> map;
   for (const std::string& name : image.channels())
     map.push_back(isVarianceChannel(name) ? -1 : reference.channelIndex(name));
@@ -303,6 +310,15 @@ Image statisticHeatmap(const Image& statistic) {
       for (int c = 0; c < 3; ++c) heatmap.at(x, y, c) = rgb[size_t(c)];
     }
   return heatmap;
+}
+
+void checkComparable(const ImageHeader& image, const ImageHeader& reference, bool rgbOnly) {
+  requireSameSize(image.width, image.height, reference.width, reference.height);
+  if (!rgbOnly) return requireSameChannels(image.channels, reference.channels);
+  for (const auto& [channels, role] : {std::pair(&image.channels, "the image"), std::pair(&reference.channels, "the reference")})
+    for (const char* name : {"R", "G", "B"})
+      if (std::find(channels->begin(), channels->end(), name) == channels->end())
+        throw std::invalid_argument(std::string(role) + " has no " + name + " channel");
 }
 
 }  // namespace lucent

@@ -49,8 +49,17 @@ std::vector<unsigned char> encodePng(const Image& image);
 // written as one: if any cannot be written, none exists afterwards.
 void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageMetadata& metadata,
                     const std::string& pngPath, std::vector<FileToWrite> alsoWrite = {});
+// What an image file's header says, read without its pixels.
+struct ImageHeader {
+  int width = 0, height = 0;
+  std::vector<std::string> channels;
+};
+// The header of any image OpenImageIO reads, checked as readImage checks it (a regular file, at most
+// 2^26 pixels and 1,024 channels, no more pixel data than the file's bytes could hold however they
+// are compressed). Throws std::runtime_error naming the file.
+ImageHeader readImageHeader(const std::string& path);
 // Reads any image OpenImageIO reads, as float, with its channel names and string metadata: the
-// values as stored. Refuses anything but a regular file, and headers of more than 2^26 pixels.
+// values as stored. Refuses what readImageHeader refuses before any pixel is allocated.
 Image readImage(const std::string& path, ImageMetadata* metadata = nullptr);
 // Whether stored values are sRGB-encoded: the colour space OpenImageIO reports for the file (sRGB
 // for 8-bit JPEG, PNG, TIFF...; linear for EXR and HDR), or, where it reports none, the extension.

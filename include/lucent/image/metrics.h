@@ -25,6 +25,10 @@ struct ImageError {
 // std::invalid_argument with a clear message for different sizes or channel sets, or for a
 // reference with a non-finite value.
 ImageError compareImages(const Image& image, const Image& reference);
+// What compareImages (rgbOnly false) or the R, G, B comparisons of testWithinNoise and a report
+// (rgbOnly true) would refuse of two images' sizes and channels, from their headers alone: throws
+// std::invalid_argument as they do, before any pixel is read.
+void checkComparable(const ImageHeader& image, const ImageHeader& reference, bool rgbOnly);
 
 enum class ErrorMetric { Rmse, Mae, RelMse, Smape };
 // "rmse", "mae", "relmse", "smape"; parseErrorMetric throws std::invalid_argument for other names.
