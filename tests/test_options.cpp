@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "lucent/image/image.h"
@@ -90,6 +91,36 @@ TEST_CASE("An option table parses, prints, checks ranges and rules, and names th
   CHECK_THROWS_WITH(t.validate(wrong), "must be in [0, 10]");
   OptionTable<Example> twice = exampleTable();
   CHECK_THROWS_AS(twice.flag("on", [](Example& x) -> auto& { return x.on; }, "again"), std::logic_error);
+}
+
+TEST_CASE("Every method takes each option's bounds exactly as its range is written", "[options]") {
+  // A float field's bound written as 0.01 was compared as a double with the float nearest 0.01,
+  // which lies below it, and refused.
+  struct Real {
+    float value = 1;
+  };
+  OptionTable<Real> table;
+  table.real("value", [](Real& r) -> auto& { return r.value; }, 0.01, 0.3, "", "");
+  for (const char* text : {"0.01", "0.3"}) {
+    Real r;
+    CHECK_NOTHROW(table.set(r, "value", text));
+    CHECK_NOTHROW(table.validate(r));
+  }
+  CHECK_THROWS(table.set(*std::make_unique<Real>(), "value", "0.0099999"));
+  for (const Method* method : renderingMethods())
+    for (const OptionSpec& spec : method->options()) {
+      if (spec.kind != OptionKind::Integer && spec.kind != OptionKind::Real) continue;
+      for (const double bound : {spec.min, spec.max}) {
+        const std::string text = optionText(bound, spec.kind);
+        CAPTURE(method->name(), spec.name, text);
+        try {
+          method->resolve({{spec.name, text}});
+        } catch (const OptionError& e) {
+          // A rule pairing it with another option may refuse it; its range may not.
+          CHECK_THAT(e.what(), !Catch::Contains("must be in") && !Catch::Contains("must be finite"));
+        }
+      }
+    }
 }
 
 TEST_CASE("Every method's options reach the command line, the help, the JSON line and the EXR", "[options][cli]") {

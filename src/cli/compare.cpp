@@ -13,6 +13,7 @@
 
 #include "cli/commands.h"
 #include "cli/output_paths.h"
+#include "lucent/core/text.h"
 #include "lucent/image/metrics.h"
 
 namespace lucent::cli {
@@ -50,8 +51,11 @@ nlohmann::ordered_json metricsJson(const ChannelError& e) {
 }
 
 int runCompare(const CompareOptions& opt) {
-  // CLI11's range check lets NaN through, and no error would ever exceed it.
-  if (opt.maxError && !std::isfinite(*opt.maxError)) throw std::invalid_argument("--max-error must be a finite number");
+  // Ranges checked here (CLI11's range checks print their bounds with 309 digits and let NaN
+  // through, which no error would ever exceed).
+  if (opt.maxError && !(std::isfinite(*opt.maxError) && *opt.maxError >= 0))
+    throw std::invalid_argument("--max-error must be a finite number of at least 0");
+  if (!(opt.alpha >= 1e-12 && opt.alpha <= 0.5)) throw std::invalid_argument("--alpha must lie in [1e-12, 0.5]");
   const ErrorMetric metric = parseErrorMetric(opt.metric);
   if (!opt.heatmap.empty()) checkOutputFile(opt.heatmap, ".png", "--heatmap", {opt.image, opt.reference});
   // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
@@ -118,19 +122,19 @@ void addCompareCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("--metric", opt->metric, "Metric tested against --max-error (default relmse)")
       ->check(CLI::IsMember({"rmse", "relmse", "smape", "mae"}));
   cmd->add_option("--max-error", opt->maxError, "Fail (exit 1) when the metric exceeds this")
-      ->check(CLI::NonNegativeNumber);
+;
   cmd->add_option("--heatmap", opt->heatmap,
                   "Write a false-colour PNG of the per-pixel error (with --test: of |z|, 0 to 5)");
   CLI::Option* testFlag = cmd->add_flag("--test", opt->test,
                 "Test whether the image differs from the reference by more than both images' noise "
                 "(the reference needs variance layers: render it with --variance)");
-  cmd->add_option("--alpha", opt->alpha, "Significance of --test (default 0.01)")->check(CLI::Range(1e-12, 0.5))->needs(testFlag);
+  cmd->add_option("--alpha", opt->alpha, "Significance of --test, in [1e-12, 0.5] (default 0.01)")->needs(testFlag);
   cmd->callback([opt, &exitCode] {
     // Errors exit 2 so that scripts can tell them from a comparison that failed the threshold.
     try {
       exitCode = runCompare(*opt);
     } catch (const std::exception& e) {
-      std::cerr << "lucent compare: error: " << e.what() << "\n";
+      std::cerr << "lucent compare: error: " << printable(e.what()) << "\n";
       exitCode = 2;
     }
   });

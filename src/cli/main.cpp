@@ -4,6 +4,7 @@
 
 #include "cli/commands.h"
 #include "lucent/core/parallel.h"
+#include "lucent/core/text.h"
 
 int main(int argc, char** argv) {
   lucent::retainFreedMemory();
@@ -15,16 +16,31 @@ int main(int argc, char** argv) {
   lucent::cli::addMethodsCommand(app, exitCode);
   lucent::cli::addMergeCommand(app, exitCode);
   lucent::cli::addReportCommand(app, exitCode);
+  // An unknown command word, named (CLI11 would say only that a subcommand is required).
+  if (argc > 1 && argv[1][0] != '-') {
+    const std::string command = argv[1];
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->get_name() == command;
+    if (!known) {
+      std::cerr << "lucent: error: unknown command '" << lucent::printable(command)
+                << "' (commands: render, compare, methods, merge, report; lucent --help)\n";
+      return 1;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    // CLI11 prints the message (or the help); the status is Lucent's: 0 for help, 2 for a
-    // compare's bad input, 1 for any other command's.
-    const int status = app.exit(e);
-    if (status == 0) return 0;
+    // Help (exit code 0) goes to stdout as CLI11 writes it; an error is printed escaped, as it may
+    // quote arguments. The status is Lucent's: 2 for compare's bad input, 1 for any other command's.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::cerr << "lucent: error: " << lucent::printable(e.what()) << " (lucent --help)\n";
     return argc > 1 && std::string(argv[1]) == "compare" ? 2 : 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "lucent: error: out of memory: an allocation failed (lower the options that size the render, "
+                 "or --memory-limit)\n";
+    return 1;
   } catch (const std::exception& e) {
-    std::cerr << "lucent: error: " << e.what() << "\n";
+    std::cerr << "lucent: error: " << lucent::printable(e.what()) << "\n";
     return 1;
   }
   return exitCode;

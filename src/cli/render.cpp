@@ -164,6 +164,9 @@ RenderArgs parseArgs(const std::vector<std::string>& args) {
         throw std::invalid_argument("--memory-limit " + std::string(e.what()));
       }
       if (a.memoryLimit == 0) throw std::invalid_argument("--memory-limit must be more than 0 bytes");
+      if (a.memoryLimit > addressSpaceLimit())
+        throw std::invalid_argument("--memory-limit " + text + ": more than this process may address (ulimit -v: " +
+                                    memoryText(addressSpaceLimit()) + ")");
     }
     else if (key == "--threads") {
       const std::string text = value();

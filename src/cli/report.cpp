@@ -19,6 +19,7 @@
 
 #include "cli/commands.h"
 #include "cli/output_paths.h"
+#include "lucent/core/text.h"
 #include "lucent/core/files.h"
 #include "lucent/image/metrics.h"
 
@@ -391,8 +392,9 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
 
 int runReport(const ReportOptions& opt) {
   // CLI11's range checks let NaN through.
-  if (!(opt.alpha > 0 && opt.alpha < 1)) throw std::invalid_argument("--alpha must lie in (0, 1)");
-  if (!std::isfinite(opt.exposure)) throw std::invalid_argument("--exposure must be finite");
+  // Ranges checked here (CLI11's range checks print their bounds with 309 digits and let NaN through).
+  if (!(opt.alpha >= 1e-12 && opt.alpha <= 0.5)) throw std::invalid_argument("--alpha must lie in [1e-12, 0.5]");
+  if (!(opt.exposure >= -30 && opt.exposure <= 30)) throw std::invalid_argument("--exposure must lie in [-30, 30]");
   for (const double s : opt.seconds)
     if (!(std::isfinite(s) && s > 0)) throw std::invalid_argument("--seconds must be positive and finite");
   if (!opt.labels.empty() && opt.labels.size() != opt.candidates.size())
@@ -469,21 +471,18 @@ void addReportCommand(CLI::App& app, int& exitCode) {
       ->required();
   cmd->add_option("candidates", opt->candidates, "Images to compare with the reference")->required();
   cmd->add_option("-o,--output", opt->output, "The HTML page to write")->required();
-  cmd->add_option("--label", opt->labels, "A name per candidate, in order (default: the file name)")
-      ->allow_extra_args(false);
+  // --label and --seconds take every value up to the next option: --label a b names two candidates.
+  cmd->add_option("--label", opt->labels, "A name per candidate, in order (default: the file name)");
   cmd->add_option("--seconds", opt->seconds,
                   "Seconds per candidate, in order, for the speed-accuracy chart (default: the "
-                  "lucent:render_seconds a Lucent render stores)")
-      ->allow_extra_args(false)
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--alpha", opt->alpha, "Significance of the noise test (default 0.01)")->check(CLI::Range(1e-12, 0.5));
-  cmd->add_option("--exposure", opt->exposure, "Exposure of the shown images, in stops (default 0)")
-      ->check(CLI::Range(-30.0, 30.0));
+                  "lucent:render_seconds a Lucent render stores)");
+  cmd->add_option("--alpha", opt->alpha, "Significance of the noise test, in [1e-12, 0.5] (default 0.01)");
+  cmd->add_option("--exposure", opt->exposure, "Exposure of the shown images, in stops, in [-30, 30] (default 0)");
   cmd->callback([opt, &exitCode] {
     try {
       exitCode = runReport(*opt);
     } catch (const std::exception& e) {
-      std::cerr << "lucent report: error: " << e.what() << "\n";
+      std::cerr << "lucent report: error: " << printable(e.what()) << "\n";
       exitCode = 1;
     }
   });

@@ -91,6 +91,12 @@ uint64_t availableMemory() {
   return available;
 }
 
+uint64_t addressSpaceLimit() {
+  rlimit as{};
+  if (getrlimit(RLIMIT_AS, &as) != 0 || as.rlim_cur == RLIM_INFINITY) return UINT64_MAX;
+  return uint64_t(as.rlim_cur);
+}
+
 uint64_t memoryInUse() {
   const uint64_t resident = residentMemory();
   const uint64_t retained = mallinfo2().fordblks;

@@ -3,10 +3,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
+#include <set>
 #include <nlohmann/json.hpp>
 
 #include "json_fields.h"
 #include "lucent/core/files.h"
+#include "lucent/core/text.h"
 #include "lucent/image/image.h"
 #include "lucent/scene/texture.h"
 #include "obj_import.h"
@@ -69,10 +72,11 @@ std::vector<Rgb> readTexels(const std::string& path, const std::string& context,
   mostNegative = 0;
   for (const Rgb& t : texels)
     for (int k = 0; k < 3; ++k) sum += std::abs(t[k]), mostNegative = std::min(mostNegative, t[k]);
-  const double mean = sum / (3.0 * double(texels.size()));
-  if (mostNegative < 0 && !(double(-mostNegative) <= 0.01 * mean))
-    throw SceneError(context + ": image '" + path + "' has negative texels (down to " + std::to_string(mostNegative) +
-                     "; its mean value is " + std::to_string(mean) + ")");
+  const double meanMagnitude = sum / (3.0 * double(texels.size()));
+  if (mostNegative < 0 && !(double(-mostNegative) <= 0.01 * meanMagnitude))
+    throw SceneError(context + ": image '" + path + "' has negative texels, down to " + std::to_string(mostNegative) +
+                     ", more than 1% of its texels' mean magnitude (" + std::to_string(meanMagnitude) +
+                     ") below 0");
   clamped = 0;
   for (Rgb& t : texels)
     if (t.r < 0 || t.g < 0 || t.b < 0) {
@@ -153,6 +157,7 @@ void applyMaterialOverride(JsonFields fields, detail::MaterialSpec& spec, const 
   if (fields.has("Ni")) spec.ni = fields.number("Ni");
   if (fields.has("map_Kd")) {
     spec.mapKd = resolve(base, fields.string("map_Kd"));
+    spec.mapKdOrigin = fields.file() + ": " + fields.keyPath("map_Kd");
     requireFile(fields, "map_Kd", spec.mapKd);
   }
   fields.finish();
@@ -210,6 +215,66 @@ void loadLight(JsonFields light, Scene& scene, const fs::path& base) {
   light.finish();
 }
 
+// "line L, column C" of byte `offset` of `text`.
+std::string positionOf(const std::string& text, size_t offset) {
+  size_t line = 1, column = 1;
+  for (size_t i = 0; i < offset && i < text.size(); ++i) {
+    if (text[i] == '\n') ++line, column = 1;
+    else ++column;
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(column);
+}
+
+// The scene file's JSON. Refuses what nlohmann::json would take silently: a key given twice in one
+// object (the second value would win unseen), naming the key's path.
+nlohmann::json parseSceneJson(const std::string& text, const std::string& path) {
+  std::vector<std::set<std::string>> keysOfOpenObjects;
+  std::vector<std::string> keyPath;  // the key of each open object or array, "" for an array element
+  std::string pendingKey;
+  const nlohmann::json::parser_callback_t checkKeys = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& value) {
+    using Event = nlohmann::json::parse_event_t;
+    if (event == Event::object_start || event == Event::array_start) {
+      keyPath.push_back(pendingKey);
+      pendingKey.clear();
+      if (event == Event::object_start) keysOfOpenObjects.emplace_back();
+      else keysOfOpenObjects.emplace_back(std::set<std::string>{"\x01array"});
+    } else if (event == Event::object_end || event == Event::array_end) {
+      keysOfOpenObjects.pop_back();
+      keyPath.pop_back();
+    } else if (event == Event::key) {
+      const std::string key = value.get<std::string>();
+      pendingKey = key;
+      if (!keysOfOpenObjects.back().insert(key).second) {
+        std::string where;
+        for (const std::string& k : keyPath)
+          if (!k.empty()) where += k + ".";
+        throw SceneError(path + ": " + where + excerpt(key) + ": the key is given twice in one object");
+      }
+    } else if (event == Event::value) {
+      pendingKey.clear();
+    }
+    return true;
+  };
+  try {
+    return nlohmann::json::parse(text, checkKeys);
+  } catch (const nlohmann::json::parse_error& e) {
+    // what() is "[json.exception.parse_error.101] parse error at line 3, column 10: ...".
+    const std::string what = e.what();
+    const size_t start = what.rfind("] ", what.find("parse error"));
+    throw SceneError(path + ": invalid JSON: " + printable(start == std::string::npos ? what : what.substr(start + 2)));
+  } catch (const nlohmann::json::out_of_range& e) {
+    // A number beyond double's range ("1e400") is out_of_range.406, which names the number but not
+    // where it is: the first such number in the text.
+    const std::string what = e.what();
+    const size_t quote = what.find('\'');
+    const size_t end = quote == std::string::npos ? quote : what.find('\'', quote + 1);
+    const std::string number = end == std::string::npos ? "" : what.substr(quote + 1, end - quote - 1);
+    const size_t at = number.empty() ? std::string::npos : text.find(number);
+    throw SceneError(path + ": invalid JSON: the number " + excerpt(number) + " is beyond a double's range" +
+                     (at == std::string::npos ? "" : " (at " + positionOf(text, at) + ")"));
+  }
+}
+
 // Each option's value as text: numbers as written, flags as true or false, strings as they are.
 void loadRenderBlock(JsonFields fields, const nlohmann::json& block, RenderBlock& render) {
   render.present = true;
@@ -230,22 +295,10 @@ void loadRenderBlock(JsonFields fields, const nlohmann::json& block, RenderBlock
 Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
   const std::string problem = regularFileProblem(jsonPath);
   if (!problem.empty()) throw SceneError(jsonPath + ": scene file " + problem);
-  std::ifstream in(jsonPath);
+  std::ifstream in(jsonPath, std::ios::binary);
   if (!in) throw SceneError(jsonPath + ": cannot open scene file");
-  nlohmann::json root;
-  try {
-    root = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    // what() is "[json.exception.parse_error.101] parse error at line 3, column 10: ...".
-    const std::string what = e.what();
-    const size_t start = what.rfind("] ", what.find("parse error"));
-    throw SceneError(jsonPath + ": invalid JSON: " + (start == std::string::npos ? what : what.substr(start + 2)));
-  } catch (const nlohmann::json::exception& e) {
-    // A number beyond double's range ("1e400") is out_of_range.406 rather than a parse error.
-    const std::string what = e.what();
-    const size_t start = what.find("] ");
-    throw SceneError(jsonPath + ": invalid JSON: " + (start == std::string::npos ? what : what.substr(start + 2)));
-  }
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const nlohmann::json root = parseSceneJson(text, jsonPath);
   const fs::path base = fs::absolute(jsonPath).parent_path();
   Scene scene;
   scene.sourcePath = jsonPath;
@@ -285,7 +338,8 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
       scene.inputFiles.push_back(spec.mapKd);
       Texture tex;
       tex.offset = static_cast<uint32_t>(scene.texels.size());
-      const auto texels = readSrgb8Texels(spec.mapKd, spec.origin + ": material '" + spec.name + "'", tex.width, tex.height);
+      const auto texels = readSrgb8Texels(spec.mapKd, spec.mapKdOrigin + ": material '" + spec.name + "' map_Kd",
+                                          tex.width, tex.height);
       scene.texels.insert(scene.texels.end(), texels.begin(), texels.end());
       m.kdTexture = static_cast<int32_t>(scene.textures.size());
       scene.textures.push_back(tex);

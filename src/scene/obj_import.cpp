@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "lucent/core/files.h"
+#include "lucent/core/text.h"
 #include "lucent/scene/loader.h"
 
 namespace lucent::detail {
@@ -71,15 +72,15 @@ std::vector<std::string> readLines(const std::string& path, const std::string& w
 std::vector<float> expectNumbers(const std::string& file, int line, const std::vector<std::string>& t,
                                  size_t minCount, size_t maxCount, const std::string& expected) {
   if (t.size() - 1 < minCount || t.size() - 1 > maxCount)
-    failAt(file, line, "'" + t[0] + "' expects " + expected + ", found " + std::to_string(t.size() - 1));
+    failAt(file, line, "'" + excerpt(t[0]) + "' expects " + expected + ", found " + std::to_string(t.size() - 1));
   std::vector<float> values;
   for (size_t i = 1; i < t.size(); ++i) {
     float f;
     const std::errc ec = parseFloat(t[i], f);
-    if (ec == std::errc::result_out_of_range) failAt(file, line, "'" + t[i] + "' is out of range for a float");
-    if (ec != std::errc()) failAt(file, line, "'" + t[i] + "' is not a number");
-    if (!std::isfinite(f)) failAt(file, line, "'" + t[0] + "' has a non-finite value");
-    if (std::abs(f) > kMaxInputMagnitude) failAt(file, line, "'" + t[i] + "' exceeds 1e15 in magnitude");
+    if (ec == std::errc::result_out_of_range) failAt(file, line, "'" + excerpt(t[i]) + "' is out of range for a float");
+    if (ec != std::errc()) failAt(file, line, "'" + excerpt(t[i]) + "' is not a number");
+    if (!std::isfinite(f)) failAt(file, line, "'" + excerpt(t[0]) + "' has a non-finite value");
+    if (std::abs(f) > kMaxInputMagnitude) failAt(file, line, "'" + excerpt(t[i]) + "' exceeds 1e15 in magnitude");
     values.push_back(f);
   }
   return values;
@@ -103,19 +104,19 @@ std::vector<MaterialSpec> readMtl(const std::string& path) {
       const auto [it, inserted] = definitionLine.emplace(t[1], line);
       if (!inserted)
         failAt(path, line,
-               "material '" + t[1] + "' is defined twice (first at line " + std::to_string(it->second) + ")");
+               "material '" + excerpt(t[1]) + "' is defined twice (first at line " + std::to_string(it->second) + ")");
       MaterialSpec& spec = materials.emplace_back();
       spec.name = t[1];
       spec.origin = path + ":" + std::to_string(line);
       continue;
     }
-    if (materials.empty()) failAt(path, line, "'" + key + "' before any 'newmtl'");
+    if (materials.empty()) failAt(path, line, "'" + excerpt(key) + "' before any 'newmtl'");
     MaterialSpec& spec = materials.back();
     if (colourKeys.count(key)) {
-      if (t.size() == 3) failAt(path, line, "'" + key + "' expects 3 numbers (r g b) or 1 (grey), found 2");
+      if (t.size() == 3) failAt(path, line, "'" + excerpt(key) + "' expects 3 numbers (r g b) or 1 (grey), found 2");
       const auto v = expectNumbers(path, line, t, 1, 3, "3 numbers (r g b) or 1 (grey)");
       for (float f : v)
-        if (f < 0) failAt(path, line, "'" + key + "' must not be negative");
+        if (f < 0) failAt(path, line, "'" + excerpt(key) + "' must not be negative");
       const Rgb colour = v.size() == 1 ? Rgb(v[0]) : Rgb{v[0], v[1], v[2]};
       if (key == "Kd") spec.kd = colour;
       else if (key == "Ks") spec.ks = colour;
@@ -134,10 +135,11 @@ std::vector<MaterialSpec> readMtl(const std::string& path) {
       if (t.size() != 2) failAt(path, line, "'map_Kd' expects one file name (options are not supported)");
       const fs::path texture = fs::path(path).parent_path() / t[1];
       const std::string problem = regularFileProblem(texture);
-      if (!problem.empty()) failAt(path, line, "texture '" + t[1] + "' " + problem);
+      if (!problem.empty()) failAt(path, line, "texture '" + excerpt(t[1], 160) + "' " + problem);
       spec.mapKd = fs::absolute(texture).lexically_normal().string();
+      spec.mapKdOrigin = path + ":" + std::to_string(line);
     } else if (!ignoredKeys.count(key)) {
-      failAt(path, line, "unknown MTL key '" + key + "'");
+      failAt(path, line, "unknown MTL key '" + excerpt(key, 16) + "'");
     }
   }
   return materials;
@@ -159,7 +161,7 @@ struct FaceVertexHash {
 FaceVertex parseFaceVertex(const std::string& file, int line, const std::string& token, const long counts[3]) {
   static const char* names[3] = {"vertex", "texture coordinate", "normal"};
   const auto malformed = [&] {
-    failAt(file, line, "malformed face vertex '" + token + "' (expected v, v/vt, v//vn or v/vt/vn)");
+    failAt(file, line, "malformed face vertex '" + excerpt(token) + "' (expected v, v/vt, v//vn or v/vt/vn)");
   };
   std::vector<std::string> parts;
   for (size_t start = 0;;) {
@@ -246,13 +248,16 @@ void triangulateFace(const std::string& file, int line, const std::vector<Vec3>&
   }
   double area = 0;  // twice the face's, by the shoelace formula
   for (size_t k = 0; k < n; ++k) area += p[k].x * p[(k + 1) % n].y - p[(k + 1) % n].x * p[k].y;
-  // Convex up to rounding: every corner turns the face's way, or strays from straight by less than
-  // a thousandth of a radian (the corners of a finely tessellated circle, written as floats, do).
+  // Convex up to rounding: every corner turns the face's way, or runs on nearly straight, straying
+  // by less than a thousandth of a radian (the corners of a finely tessellated circle, written as
+  // floats, do). A corner that turns back on itself (a narrow notch's tip) has as small a sine, but
+  // is the sharpest of reflex corners.
   bool convex = true;
   for (size_t k = 0; k < n && convex; ++k) {
     const size_t a = (k + n - 1) % n, c = (k + 1) % n;
     const double ea = std::hypot(p[k].x - p[a].x, p[k].y - p[a].y), ec = std::hypot(p[c].x - p[k].x, p[c].y - p[k].y);
-    convex = turn(a, k, c) >= -1e-3 * ea * ec;
+    const double onward = (p[k].x - p[a].x) * (p[c].x - p[k].x) + (p[k].y - p[a].y) * (p[c].y - p[k].y);
+    convex = turn(a, k, c) >= 0 || (onward > 0 && turn(a, k, c) >= -1e-3 * ea * ec);
   }
   if (convex) {
     for (uint32_t k = 1; k + 1 < n; ++k) corners.insert(corners.end(), {0, k, k + 1});
@@ -374,7 +379,7 @@ void importObj(const std::string& objPath, Scene& scene, ObjImport& import) {
       for (size_t k = 1; k < t.size(); ++k) {
         const fs::path mtl = fs::path(objPath).parent_path() / t[k];
         const std::string problem = regularFileProblem(mtl);
-        if (!problem.empty()) failAt(objPath, line, "material library '" + t[k] + "' " + problem);
+        if (!problem.empty()) failAt(objPath, line, "material library '" + excerpt(t[k], 160) + "' " + problem);
         import.libraries.push_back(mtl.string());
         // The first definition of a name, in this file or an earlier one, is the material.
         for (MaterialSpec& spec : readMtl(mtl.string())) {
@@ -386,10 +391,10 @@ void importObj(const std::string& objPath, Scene& scene, ObjImport& import) {
     } else if (key == "usemtl") {
       if (t.size() != 2) failAt(objPath, line, "'usemtl' expects one material name");
       if (!libraryMaterials.count(t[1]))
-        failAt(objPath, line, "material '" + t[1] + "' is not defined in a material library named before it");
+        failAt(objPath, line, "material '" + excerpt(t[1]) + "' is not defined in a material library named before it");
       material = import.materialIndex.at(t[1]);
     } else if (key != "o" && key != "g" && key != "s") {
-      failAt(objPath, line, "unsupported OBJ statement '" + key + "'");
+      failAt(objPath, line, "unsupported OBJ statement '" + excerpt(key, 16) + "'");
     }
   }
 }

@@ -17,6 +17,7 @@ struct MaterialSpec {
   float ns = 1.0f, ni = 1.0f;
   int illum = 0;
   std::string mapKd;                 // absolute path, empty for none
+  std::string mapKdOrigin;           // "file:line" (or the scene's key) that names it
   std::optional<MaterialType> type;  // set by the scene file's "type"
   std::string origin;                // "file:line" of its definition, for error messages
 };

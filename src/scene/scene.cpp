@@ -1,6 +1,8 @@
 #include "lucent/scene/scene.h"
 
 #include <algorithm>
+#include <cfloat>
+#include <cmath>
 #include <cstring>
 
 #include "lucent/core/rng.h"
@@ -22,6 +24,24 @@ uint64_t hashArray(uint64_t h, const std::vector<T>& v) {
 }
 }  // namespace
 
+TriangleGeometry triangleGeometry(Vec3 p0, Vec3 p1, Vec3 p2) {
+  const Vec3 c = cross(p1 - p0, p2 - p0);
+  const float len = length(c);
+  if (std::isfinite(len)) return {c / len, 0.5f * len};
+  // The area itself (at most about 1e31 with coordinates up to 1e15) fits a float.
+  const double e1[3] = {double(p1.x) - p0.x, double(p1.y) - p0.y, double(p1.z) - p0.z};
+  const double e2[3] = {double(p2.x) - p0.x, double(p2.y) - p0.y, double(p2.z) - p0.z};
+  const double d[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+  const double dl = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  return {{float(d[0] / dl), float(d[1] / dl), float(d[2] / dl)}, float(0.5 * dl)};
+}
+
+namespace {
+// A light's power as the float product, where finite (ordinary scenes keep their exact weights),
+// else the double one.
+double lightPower(float asFloat, double asDouble) { return std::isfinite(asFloat) ? double(asFloat) : asDouble; }
+}  // namespace
+
 void finalizeScene(Scene& scene) {
   scene.bounds = {};
   for (const Vec3& p : scene.positions) scene.bounds.extend(p);
@@ -29,9 +49,9 @@ void finalizeScene(Scene& scene) {
   scene.faceNormals.resize(n);
   scene.faceAreas.resize(n);
   for (uint32_t t = 0; t < n; ++t) {
-    const Vec3 c = cross(scene.vertex(t, 1) - scene.vertex(t, 0), scene.vertex(t, 2) - scene.vertex(t, 0));
-    scene.faceAreas[t] = 0.5f * length(c);
-    scene.faceNormals[t] = normalize(c);
+    const TriangleGeometry g = triangleGeometry(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2));
+    scene.faceAreas[t] = g.area;
+    scene.faceNormals[t] = g.normal;
   }
 
   // Light power estimates decide how often next-event estimation picks each light.
@@ -40,20 +60,23 @@ void finalizeScene(Scene& scene) {
                                                                 l.type == LightType::Environment; }),
                      scene.lights.end());
   std::vector<Light> lights;
-  std::vector<float> power;
+  std::vector<double> power;  // in double: an area of 1e31 times a radiance of 1e15 is beyond float
   scene.triangleLight.assign(scene.triangleCount(), -1);
   for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
     const Rgb ke = scene.materials[scene.materialIds[t]].ke;
     if (ke.isBlack()) continue;
     scene.triangleLight[t] = static_cast<int32_t>(lights.size());
     lights.push_back({LightType::Triangle, t, {}, {}});
-    power.push_back(ke.luminance() * scene.triangleArea(t) * kPi);
+    power.push_back(lightPower(ke.luminance() * scene.triangleArea(t) * kPi,
+                               double(ke.luminance()) * scene.triangleArea(t) * kPi));
   }
-  const float r = scene.boundingRadius();
+  const double r = scene.boundingRadius();
   for (const Light& l : scene.lights) {
     lights.push_back(l);
-    power.push_back(l.type == LightType::Point ? 4 * kPi * l.value.luminance()
-                                               : kPi * r * r * l.value.luminance());
+    power.push_back(l.type == LightType::Point
+                        ? lightPower(4 * kPi * l.value.luminance(), 4 * kPi * double(l.value.luminance()))
+                        : lightPower(kPi * float(r) * float(r) * l.value.luminance(),
+                                     kPi * r * r * double(l.value.luminance())));
   }
   if (scene.environment.present) {
     Light env;
@@ -65,10 +88,20 @@ void finalizeScene(Scene& scene) {
       // distribution total = sum of luminance * sin(theta): mean radiance over the sphere ~ total * pi/(2 w h)
       mean = e.distribution.total() * kPi / (2.0f * e.width * e.height);
     }
-    power.push_back(kPi * kPi * r * r * mean);  // flux through the scene's cross-section
+    // The flux through the scene's cross-section.
+    power.push_back(lightPower(kPi * kPi * float(r) * float(r) * mean, kPi * kPi * r * r * mean));
   }
   scene.lights = std::move(lights);
-  if (!power.empty()) scene.lightDistribution = Distribution1D(power);
+  // As floats; where the largest is beyond a float's range, all scaled by the same power of two
+  // (a light with any power keeps a chance to be picked).
+  if (!power.empty()) {
+    const double largest = *std::max_element(power.begin(), power.end());
+    const double scale = largest > 0x1p100 ? std::exp2(100 - std::ceil(std::log2(largest))) : 1.0;
+    std::vector<float> weights(power.size());
+    for (size_t i = 0; i < power.size(); ++i)
+      weights[i] = power[i] > 0 ? std::max(float(power[i] * scale), FLT_MIN) : 0.0f;
+    scene.lightDistribution = Distribution1D(weights);
+  }
 
   scene.contentHash = sceneContentHash(scene);
 }

@@ -10,8 +10,9 @@ inline constexpr float kPi = 3.14159265358979323846f;
 inline constexpr float kInvPi = 0.31830988618379067154f;
 inline constexpr float kInf = INFINITY;
 // Largest magnitude accepted for any input coordinate or value: squares and sums of such values
-// stay finite in float, and Embree's rays stay valid (it rejects origins beyond about 1.8e18).
-inline constexpr float kMaxInputMagnitude = 1e15f;
+// stay finite in float, and Embree's rays stay valid (it rejects origins beyond about 1.8e18). A
+// double, so that an input written as 1e15 is compared with 1e15 (the float 1e15f lies below it).
+inline constexpr double kMaxInputMagnitude = 1e15;
 
 struct Vec2 {
   float x = 0, y = 0;

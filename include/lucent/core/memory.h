@@ -18,6 +18,10 @@ struct MemoryLimitError : std::runtime_error {
 // its control group (a batch system's job allocation) or RLIMIT_AS allows less.
 uint64_t availableMemory();
 
+// The process's address-space limit (RLIMIT_AS, ulimit -v), or UINT64_MAX for none: no memory
+// limit above it can be honoured (allocations fail first).
+uint64_t addressSpaceLimit();
+
 // What this process holds: its resident memory, less the freed heap memory it keeps for reuse
 // (retainFreedMemory), which later allocations take first.
 uint64_t memoryInUse();

@@ -124,6 +124,15 @@ struct Scene {
 // Used by the loader and by tests that build scenes in code.
 void finalizeScene(Scene& scene);
 
+// A triangle's unit counter-clockwise normal and area from its corners, as faceNormals and
+// faceAreas hold them: in float, and in double where the float cross product's squared length
+// overflows (corners more than about 1e9 apart; coordinates go up to 1e15).
+struct TriangleGeometry {
+  Vec3 normal;
+  float area = 0;
+};
+TriangleGeometry triangleGeometry(Vec3 p0, Vec3 p1, Vec3 p2);
+
 // Hash of everything that determines an image: geometry, materials, textures, lights, environment
 // and camera. Recompute it after changing the scene (e.g. the camera resolution).
 uint64_t sceneContentHash(const Scene& scene);

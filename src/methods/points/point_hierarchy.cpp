@@ -22,14 +22,13 @@ struct TriangleShape {
   float area = 0;
 };
 
-// The triangle's face normal and area for the current vertex positions, by the expressions
-// finalizeScene uses, so that undeformed leaves match scene.faceNormals and faceAreas bit for bit.
+// The triangle's face normal and area for the current vertex positions, as finalizeScene computes
+// them (triangleGeometry), so that undeformed leaves match scene.faceNormals and faceAreas bit for bit.
 TriangleShape triangleShape(const Scene& scene, uint32_t tri) {
-  const Vec3 c = cross(scene.vertex(tri, 1) - scene.vertex(tri, 0), scene.vertex(tri, 2) - scene.vertex(tri, 0));
-  const float len = length(c);
+  const TriangleGeometry g = triangleGeometry(scene.vertex(tri, 0), scene.vertex(tri, 1), scene.vertex(tri, 2));
   // A triangle deformed to nothing keeps the scene's normal and stands for no area.
-  if (!(len > 0)) return {scene.faceNormals[tri], 0.0f};
-  return {c / len, 0.5f * len};
+  if (!(g.area > 0)) return {scene.faceNormals[tri], 0.0f};
+  return {g.normal, g.area};
 }
 
 // Diffuse albedo at the point, the texture looked up at its uv; specular materials (mirror, glass)
