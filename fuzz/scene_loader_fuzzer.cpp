@@ -5,44 +5,25 @@
 // part is a missing file. Every
 // rejection must be a SceneError; anything else that escapes, a crash, a sanitizer report, a hang
 // (-timeout) or a large allocation (-malloc_limit_mb) is a defect. Seeds: scripts/fuzz-corpus.py.
-#include <unistd.h>
-
 #include <cstdint>
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <string>
 #include <string_view>
 
+#include "fuzz_files.h"
 #include "lucent/core/memory.h"
 #include "lucent/scene/loader.h"
 
 namespace {
 
 namespace fs = std::filesystem;
+using lucent::fuzz::scratchDirectory;
+using lucent::fuzz::writeFile;
 
 constexpr const char* kTextFiles[] = {"scene.json", "mesh.obj", "mesh.mtl"};
 constexpr const char* kImageFiles[] = {"texture.png", "sky.hdr"};
-
-void writeFile(const fs::path& path, std::string_view content) {
-  std::ofstream(path, std::ios::binary | std::ios::trunc).write(content.data(), std::streamsize(content.size()));
-}
-
-// A directory of this process's own, in memory where /dev/shm exists, removed at exit.
-const fs::path& scratchDirectory() {
-  static const fs::path dir = [] {
-    std::string pattern = (fs::is_directory("/dev/shm") ? "/dev/shm" : fs::temp_directory_path().string()) +
-                          "/lucent-fuzz-XXXXXX";
-    if (!mkdtemp(pattern.data())) std::abort();
-    std::atexit([] {
-      std::error_code ec;
-      fs::remove_all(scratchDirectory(), ec);
-    });
-    return fs::path(pattern);
-  }();
-  return dir;
-}
 
 }  // namespace
 

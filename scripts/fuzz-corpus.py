@@ -1,10 +1,14 @@
 #!/usr/bin/env python3
-"""Writes the scene loader fuzzer's seed corpus: one input per scene of tests/data (good and bad),
-its files joined by NUL bytes in the fuzzer's order (fuzz/scene_loader_fuzzer.cpp: scene.json,
-mesh.obj, mesh.mtl, then one image read as texture.png and as sky.hdr) and renamed to the fuzzer's
-names, plus scenes with a texture and with an environment map written here.
+"""Writes a fuzz target's seed corpus (scripts/fuzz.sh).
 
-Usage: scripts/fuzz-corpus.py OUT_DIR
+scene_loader: one input per scene of tests/data (good and bad), its files joined by NUL bytes in the
+fuzzer's order (fuzz/scene_loader_fuzzer.cpp: scene.json, mesh.obj, mesh.mtl, then one image read as
+texture.png and as sky.hdr) and renamed to the fuzzer's names, plus scenes with a texture and with an
+environment map written here. film_reader and merge: film files of whole renders, parts, checkpoints
+and layered films, in fuzz/film_fuzz_input.h's two forms; merge's joined as parts. image_header:
+pairs of small EXR, PNG, Radiance and PPM images, of equal and of different sizes.
+
+Usage: scripts/fuzz-corpus.py TARGET OUT_DIR
 """
 import json
 import pathlib
@@ -78,11 +82,93 @@ def seed_from(scene_path):
     return pack([json.dumps(scene, indent=1).encode(), obj, mtl])
 
 
-def main():
-    if len(sys.argv) != 2:
-        sys.exit(__doc__)
-    out = pathlib.Path(sys.argv[1])
-    out.mkdir(parents=True, exist_ok=True)
+def film_header(width=4, height=4, crop=None, first=0, count=2, spp=2, complete=True, sums="per_part",
+                features=False, caustic=False, variance=False):
+    """A film file's header (docs/film-format.md) with its sums_per_pixel."""
+    per_pixel = (3 if sums == "per_sample" or not features else 0) + (3 if variance else 0) + \
+        (3 + 3 + (3 if sums == "per_part" else 0) + 7 if features else 0)
+    header = {"method": "pt", "options": {"spp": spp, "seed": 0}, "derived": {}, "scene": "scene.json",
+              "scene_hash": "0123456789abcdef", "version": "0.1.0", "embree_isa": "avx2", "lane_isa": "avx2",
+              "width": width, "height": height, "crop": crop or [0, 0, width, height], "spp": spp,
+              "first_sample": first, "sample_count": count, "complete": complete, "sums": sums,
+              "layers": {"features": features, "caustic": caustic, "variance": variance},
+              "sums_per_pixel": per_pixel, "counters": {"rays": 100}}
+    return header
+
+
+def film_input(header, taken=None):
+    """fuzz/film_fuzz_input.h's structured form: an odd byte, the header, NUL, the arrays."""
+    crop = header["crop"]
+    pixels = (crop[2] - crop[0]) * (crop[3] - crop[1])
+    count = header["sample_count"] if taken is None else taken
+    sums = b"".join(struct.pack("<QQq", 1 << 90 >> 64 if k % 3 == 0 else 0, 0, 0) for k in range(pixels * header["sums_per_pixel"]))
+    counts = struct.pack("<%dI" % pixels, *([count] * pixels))
+    return b"\x01" + json.dumps(header).encode() + b"\0" + sums + counts + counts
+
+
+def film_seeds():
+    seeds = {
+        "whole": film_input(film_header()),
+        "checkpoint": film_input(film_header(complete=False), taken=1),
+        "layers": film_input(film_header(features=True)),
+        "variance": film_input(film_header(sums="per_sample", variance=True)),
+        "crop": film_input(film_header(crop=[1, 1, 3, 4])),
+        "samples": film_input(film_header(first=1, count=1)),
+        "lying-first-sample": film_input(film_header(first=2147483647, count=1)),
+    }
+    seeds["raw"] = b"\0" + seeds["whole"][1:]  # the even form: the bytes as they are (a wrong hash)
+    return seeds
+
+
+def merge_seeds():
+    join = b"\n--part--\n".join
+    return {
+        "rows": join([film_input(film_header(crop=[0, 0, 4, 2])), film_input(film_header(crop=[0, 2, 4, 4]))]),
+        "samples": join([film_input(film_header(first=0, count=1)), film_input(film_header(first=1, count=1))]),
+        "overlap": join([film_input(film_header(crop=[0, 0, 4, 3])), film_input(film_header(crop=[0, 2, 4, 4]))]),
+        "four": join([film_input(film_header(crop=[x, y, x + 2, y + 2])) for x in (0, 2) for y in (0, 2)]),
+        "layers": join([film_input(film_header(crop=[0, 0, 4, 2], features=True)),
+                        film_input(film_header(crop=[0, 2, 4, 4], features=True))]),
+    }
+
+
+def exr(width, height, channels):
+    """An uncompressed scanline EXR of half-float zeros."""
+    def attr(name, kind, data):
+        return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(data)) + data
+    chlist = b"".join(c.encode() + b"\0" + struct.pack("<iBBBBii", 1, 0, 0, 0, 0, 1, 1) for c in sorted(channels)) + b"\0"
+    header = b"\x76\x2f\x31\x01" + struct.pack("<i", 2)
+    header += attr("channels", "chlist", chlist) + attr("compression", "compression", b"\0")
+    header += attr("dataWindow", "box2i", struct.pack("<iiii", 0, 0, width - 1, height - 1))
+    header += attr("displayWindow", "box2i", struct.pack("<iiii", 0, 0, width - 1, height - 1))
+    header += attr("lineOrder", "lineOrder", b"\0") + attr("pixelAspectRatio", "float", struct.pack("<f", 1))
+    header += attr("screenWindowCenter", "v2f", struct.pack("<ff", 0, 0)) + attr("screenWindowWidth", "float", struct.pack("<f", 1))
+    header += b"\0"
+    line = 2 * width * len(channels)
+    start = len(header) + 8 * height
+    table = b"".join(struct.pack("<Q", start + k * (8 + line)) for k in range(height))
+    rows = b"".join(struct.pack("<ii", k, line) + b"\0" * line for k in range(height))
+    return header + table + rows
+
+
+def image_seeds():
+    images = {
+        "exr": (0, exr(4, 4, ["R", "G", "B"])),
+        "png": (1, png(4, 4, (200, 120, 40))),
+        "hdr": (2, radiance_hdr(4, 4, (128, 128, 160, 129))),
+        "ppm": (5, b"P6\n4 4\n255\n" + bytes(48)),
+    }
+    seeds = {}
+    for a, (ka, da) in images.items():
+        for b, (kb, db) in images.items():
+            seeds[f"{a}-{b}"] = bytes([ka + 8 * kb]) + struct.pack("<H", len(da)) + da + db
+    seeds["exr-sizes"] = bytes([0]) + struct.pack("<H", len(images["exr"][1])) + images["exr"][1] + exr(8, 2, ["R", "G", "B"])
+    seeds["exr-variance"] = bytes([0]) + struct.pack("<H", len(images["exr"][1])) + images["exr"][1] + \
+        exr(4, 4, ["R", "G", "B", "variance.R", "variance.G", "variance.B"])
+    return seeds
+
+
+def scene_loader_seeds():
     seeds = {}
     for scene_path in sorted((ROOT / "tests" / "data").glob("*/*/scene.json")):
         seeds[f"{scene_path.parent.parent.name}-{scene_path.parent.name}"] = seed_from(scene_path)
@@ -100,9 +186,20 @@ def main():
     seeds["textured"] = pack([scene_text, obj, textured_mtl, png(4, 4, (200, 120, 40))])
     scene["lights"] = scene.get("lights", []) + [{"type": "environment", "map": "sky.hdr"}]
     seeds["environment"] = pack([json.dumps(scene, indent=1).encode(), obj, mtl, radiance_hdr(8, 4, (128, 128, 160, 129))])
+    return seeds
+
+
+def main():
+    targets = {"scene_loader": scene_loader_seeds, "film_reader": film_seeds, "merge": merge_seeds,
+               "image_header": image_seeds}
+    if len(sys.argv) != 3 or sys.argv[1] not in targets:
+        sys.exit(__doc__)
+    out = pathlib.Path(sys.argv[2])
+    out.mkdir(parents=True, exist_ok=True)
+    seeds = targets[sys.argv[1]]()
     for name, data in seeds.items():
         (out / name).write_bytes(data)
-    print(f"fuzz-corpus: {len(seeds)} seeds in {out}")
+    print(f"fuzz-corpus: {len(seeds)} {sys.argv[1]} seeds in {out}")
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs Lucent's build dependencies from Debian packages, and the packages named as arguments
-# (scripts/fuzz-loader.sh adds Clang's); does nothing when they are all there.
+# (scripts/fuzz.sh adds Clang's); does nothing when they are all there.
 set -euo pipefail
 packages=(build-essential cmake libembree-dev libtbb-dev libopenimageio-dev openimageio-tools
           libopenexr-dev libcli11-dev catch2 nlohmann-json3-dev python3-imath

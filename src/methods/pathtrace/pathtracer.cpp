@@ -600,6 +600,7 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
   const double totalPixelSamples = double(region.pixelCount()) * part.samples();
   CheckpointClock checkpoints(control);
 
+  beginStage("trace_paths");
   Stopwatch clock;
   // A resumed render goes on from the fewest samples any pixel has (pixels with more skip them).
   int done = int(*std::min_element(film->samplesTaken().begin(), film->samplesTaken().end()));

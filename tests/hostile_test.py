@@ -1,0 +1,559 @@
+"""Hostile input, as a new user and an attacker would give it: every input of issue 35 and its class.
+
+Each case runs the built `lucent` (LUCENT_CLI) in a directory of its own and asserts the exact exit
+status, the words of the message (the file and key or flag it names), how long it took where a hang
+was the defect, and that no file but the outputs it was asked to write changed (the directory is
+hashed before and after). Run by ctest with Debian's pytest; the sources are LUCENT_SOURCE.
+"""
+import hashlib
+import json
+import os
+import re
+import resource
+import shutil
+import signal
+import struct
+import subprocess
+import sys
+import time
+import zlib
+
+import pytest
+
+LUCENT = os.environ["LUCENT_CLI"]
+SOURCE = os.environ["LUCENT_SOURCE"]
+
+
+# --- helpers -------------------------------------------------------------------------------------
+
+class Run:
+    def __init__(self, code, out, err, seconds):
+        self.code, self.out, self.err, self.seconds = code, out, err, seconds
+
+    def __repr__(self):
+        return "exit %d after %.2f s\nstdout: %s\nstderr: %s" % (self.code, self.seconds, self.out[-2000:], self.err[-2000:])
+
+
+def lucent(*args, cwd, timeout=120, preexec=None):
+    start = time.monotonic()
+    p = subprocess.run([LUCENT, *map(str, args)], cwd=cwd, capture_output=True, timeout=timeout,
+                       preexec_fn=preexec)
+    return Run(p.returncode, p.stdout.decode(errors="replace"), p.stderr.decode(errors="replace"),
+               time.monotonic() - start)
+
+
+def snapshot(directory):
+    """Every file below `directory` (hidden ones too) with the SHA-256 of its bytes."""
+    files = {}
+    for root, _, names in os.walk(directory):
+        for name in names:
+            path = os.path.join(root, name)
+            with open(path, "rb") as f:
+                files[os.path.relpath(path, directory)] = hashlib.sha256(f.read()).hexdigest()
+    return files
+
+
+def changed(before, after):
+    """The files added, removed or rewritten between two snapshots."""
+    return sorted({p for p in before.keys() | after.keys() if before.get(p) != after.get(p)})
+
+
+def write(path, data):
+    os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    with open(path, "wb" if isinstance(data, bytes) else "w") as f:
+        f.write(data)
+
+
+def box_scene(directory, name="scene.json", resolution=(16, 16), extra=None):
+    """The Cornell box, its OBJ beside the scene file, at a small resolution."""
+    shutil.copytree(os.path.join(SOURCE, "scenes", "cornell-box"), os.path.join(directory, "cornell-box"),
+                    dirs_exist_ok=True)
+    with open(os.path.join(SOURCE, "scenes", "cornell-box.json")) as f:
+        scene = json.load(f)
+    scene["camera"]["resolution"] = list(resolution)
+    scene.update(extra or {})
+    write(os.path.join(directory, name), json.dumps(scene))
+    return name
+
+
+def exr_attributes(path):
+    """The string attributes of an EXR's header."""
+    with open(path, "rb") as f:
+        data = f.read()
+    at, attributes = 8, {}
+    while data[at] != 0:
+        name_end = data.index(b"\0", at)
+        kind_end = data.index(b"\0", name_end + 1)
+        size = struct.unpack_from("<i", data, kind_end + 1)[0]
+        value = data[kind_end + 5:kind_end + 5 + size]
+        if data[name_end + 1:kind_end] == b"string":
+            attributes[data[at:name_end].decode()] = value.decode(errors="replace")
+        at = kind_end + 5 + size
+    return attributes
+
+
+def exr(width, height, channels, compression=3, data_bytes=None):
+    """A scanline EXR whose header claims width x height pixels of `channels` (half floats), with
+    a complete offset table and chunks of `data_bytes` each (default: what the pixels need)."""
+    def attr(name, kind, body):
+        return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(body)) + body
+    chlist = b"".join(c.encode() + b"\0" + struct.pack("<iBBBBii", 1, 0, 0, 0, 0, 1, 1) for c in sorted(channels)) + b"\0"
+    header = b"\x76\x2f\x31\x01" + struct.pack("<i", 2) + attr("channels", "chlist", chlist)
+    header += attr("compression", "compression", bytes([compression]))
+    header += attr("dataWindow", "box2i", struct.pack("<iiii", 0, 0, width - 1, height - 1))
+    header += attr("displayWindow", "box2i", struct.pack("<iiii", 0, 0, width - 1, height - 1))
+    header += attr("lineOrder", "lineOrder", b"\0") + attr("pixelAspectRatio", "float", struct.pack("<f", 1))
+    header += attr("screenWindowCenter", "v2f", struct.pack("<ff", 0, 0))
+    header += attr("screenWindowWidth", "float", struct.pack("<f", 1)) + b"\0"
+    lines = {0: 1, 1: 1, 2: 16, 3: 16}[compression]
+    chunks = (height + lines - 1) // lines
+    size = 2 * width * len(channels) * lines if data_bytes is None else data_bytes
+    start = len(header) + 8 * chunks
+    table = b"".join(struct.pack("<Q", start + k * (8 + size)) for k in range(chunks))
+    return header + table + b"".join(struct.pack("<ii", k * lines, size) + b"\0" * size for k in range(chunks))
+
+
+FNV_OFFSET, FNV_PRIME = 0xcbf29ce484222325, 0x100000001b3
+
+
+def fnv(data, value=FNV_OFFSET):
+    for i in range(0, len(data), 8):
+        word = int.from_bytes(data[i:i + 8].ljust(8, b"\0"), "little")
+        value = ((value ^ word) * FNV_PRIME) & 0xFFFFFFFFFFFFFFFF
+    return value
+
+
+def read_film(path):
+    """A film file's header (JSON), its arrays' bytes and their sizes, as docs/film-format.md lays
+    them out."""
+    with open(path, "rb") as f:
+        data = f.read()
+    header_bytes = struct.unpack_from("<I", data, 12)[0]
+    header = json.loads(data[24:24 + header_bytes])
+    crop = header["crop"]
+    pixels = (crop[2] - crop[0]) * (crop[3] - crop[1])
+    sums = data[24 + header_bytes:24 + header_bytes + pixels * header["sums_per_pixel"] * 24]
+    counts = data[24 + header_bytes + len(sums):]
+    padded = (pixels * 4 + 7) // 8 * 8
+    return header, sums, counts[:pixels * 4], counts[padded:padded + pixels * 4]
+
+
+def write_film(path, header, sums, valid, taken, fix_hash=True):
+    text = json.dumps(header).encode()
+    text += b" " * (-len(text) % 8)
+    value = fnv(taken, fnv(valid, fnv(sums, fnv(text)))) if fix_hash else 12345
+    data = b"LCNTFILM" + struct.pack("<IIQ", 3, len(text), value) + text + sums
+    for counts in (valid, taken):
+        data += counts + b"\0" * (-len(counts) % 8)
+    write(path, data)
+
+
+@pytest.fixture
+def work(tmp_path):
+    return str(tmp_path)
+
+
+# --- temporary files: only Lucent's own, only when their writer is proven gone --------------------
+
+FOREIGN = [".notes.tmp-4000000-1.txt", ".out.tmp-999999999-0.exr", ".x.tmp-99999999999999999999-0.exr",
+           ".a.lucent-tmp.zz.1.2.3.0.exr", ".a.lucent-tmp.0123456789abcdef.1.2.exr"]
+
+
+def lucent_temporary_name(stem, pid, start_ticks, boot=None, namespace=None, ext=".exr"):
+    with open("/proc/sys/kernel/random/boot_id") as f:
+        own_boot = f.read().strip().replace("-", "")[:16]
+    return ".%s.lucent-tmp.%s.%d.%d.%d.0%s" % (stem, boot or own_boot, namespace or os.stat("/proc/self/ns/pid").st_ino,
+                                              pid, start_ticks, ext)
+
+
+def dead_process():
+    """The id and start time of a process that has ended."""
+    child = subprocess.Popen([sys.executable, "-c", "import sys; sys.stdin.read()"], stdin=subprocess.PIPE)
+    with open("/proc/%d/stat" % child.pid) as f:
+        start = int(f.read().rsplit(")", 1)[1].split()[19])
+    child.stdin.close()
+    child.wait()
+    return child.pid, start
+
+
+@pytest.mark.parametrize("command", ["render", "merge", "report", "compare"])
+def test_other_programs_files_survive_every_write(work, command):
+    scene = box_scene(work)
+    assert lucent("render", scene, "--spp", "1", "-q", "-o", "ref.exr", cwd=work).code == 0
+    assert lucent("render", scene, "--spp", "1", "--crop", "0,0,16,16", "-q", "-o", "part.exr", cwd=work).code == 0
+    for name in FOREIGN:
+        write(os.path.join(work, name), "someone's data")
+    before = snapshot(work)
+    args = {"render": ["render", scene, "--spp", "1", "-q", "-o", "out.exr"],
+            "merge": ["merge", "part.film", "-o", "out.exr"],
+            "report": ["report", "ref.exr", "part.exr", "-o", "out.html"],
+            "compare": ["compare", "part.exr", "ref.exr", "--heatmap", "out.png"]}[command]
+    run = lucent(*args, cwd=work)
+    assert run.code == 0, run
+    assert set(changed(before, snapshot(work))) <= {"out.exr", "out.html", "out.png", "out.film"}
+    for name in FOREIGN:
+        assert os.path.exists(os.path.join(work, name))
+
+
+def test_an_abandoned_temporary_file_of_lucents_is_removed_and_no_other(work):
+    scene = box_scene(work)
+    pid, start = dead_process()
+    abandoned = lucent_temporary_name("out", pid, start)
+    other_machine = lucent_temporary_name("out", pid, start, boot="0123456789abcdef")
+    other_namespace = lucent_temporary_name("out", pid, start, namespace=4026531111)
+    live = lucent_temporary_name("out", os.getpid(), int(open("/proc/self/stat").read().rsplit(")", 1)[1].split()[19]))
+    for name in (abandoned, other_machine, other_namespace, live):
+        write(os.path.join(work, name), "half an image")
+    run = lucent("render", scene, "--spp", "1", "-q", "-o", "out.exr", cwd=work)
+    assert run.code == 0, run
+    assert not os.path.exists(os.path.join(work, abandoned))
+    for name in (other_machine, other_namespace, live):
+        assert os.path.exists(os.path.join(work, name))
+
+
+def test_an_output_that_cannot_be_written_is_refused_before_the_render(work):
+    scene = box_scene(work, resolution=(256, 256))
+    os.mkdir(os.path.join(work, "taken.exr"))
+    before = snapshot(work)
+    run = lucent("render", scene, "--spp", "4096", "-o", "taken.exr", cwd=work)
+    assert run.code == 1 and run.seconds < 5, run
+    assert "-o" in run.err and "taken.exr" in run.err and "it is a directory" in run.err
+    os.mkdir(os.path.join(work, "out.film"))
+    run = lucent("render", scene, "--spp", "4096", "--crop", "0,0,8,8", "-o", "out.exr", cwd=work)
+    assert run.code == 1 and run.seconds < 5 and "out.film" in run.err, run
+    assert changed(before, snapshot(work)) == []
+
+
+@pytest.mark.parametrize("args, status, words", [
+    (["compare", "a.exr", "a.exr", "--heatmap", "x.exr"], 2, "--heatmap 'x.exr' must end in .png"),
+    (["report", "a.exr", "a.exr", "-o", "x.exr"], 1, "-o 'x.exr' must end in .html"),
+    (["merge", "a.film", "-o", "x.png"], 1, "-o 'x.png' must end in .exr"),
+    (["compare", "a.exr", "a.exr", "--heatmap", "a.exr"], 2, "must end in .png"),
+])
+def test_outputs_are_checked_as_render_checks_them(work, args, status, words):
+    write(os.path.join(work, "a.exr"), exr(2, 2, ["R", "G", "B"], compression=0))
+    write(os.path.join(work, "a.film"), b"")
+    before = snapshot(work)
+    run = lucent(*args, cwd=work)
+    assert run.code == status and words in run.err, run
+    assert changed(before, snapshot(work)) == []
+
+
+# --- grids, hangs and signals ---------------------------------------------------------------------
+
+def test_a_hashed_grid_too_fine_for_its_photons_is_refused_at_once(work):
+    scene = box_scene(work, resolution=(32, 32))
+    before = snapshot(work)
+    run = lucent("render", scene, "--method", "purcell", "--map", "hash", "--grid-resolution", "1x1x2097152",
+                 "--photons", "1000", "-o", "h.exr", cwd=work, timeout=60)
+    assert run.code == 1 and run.seconds < 10, run
+    assert "--grid-resolution" in run.err and "hashed grid" in run.err
+    assert changed(before, snapshot(work)) == []
+
+
+# Per method, a render whose stages each take a noticeable time on 2 cores, and whether it keeps
+# whole samples (a partial image and a checkpoint) when stopped while sampling.
+SIGNAL_RENDERS = {
+    "pt": (["--method", "pt", "--spp", "4096"], (64, 64)),
+    "pmfg": (["--method", "pmfg", "--photons", "400000", "--gather-rays", "256"], (48, 48)),
+    "purcell": (["--method", "purcell", "--photons", "300000", "--map", "stencil", "--spp", "16"], (64, 64)),
+    "micro": (["--method", "micro", "--points", "262144", "--lighting", "radiosity"], (96, 96)),
+    "envpbgi": (["--method", "envpbgi", "--points", "262144"], (320, 180)),
+    "particles": (["--method", "particles", "--area-particles", "60000"], (96, 96)),
+}
+SAMPLING_STAGES = {"pt": {"trace_paths"}, "pmfg": {"bands"}, "purcell": {"bands"}}
+
+
+def stages_of(work, scene, args):
+    run = lucent("render", scene, *args, "--log-stages", "-q", "-o", "dry.exr", cwd=work, timeout=300)
+    assert run.code == 0, run
+    return list(dict.fromkeys(re.findall(r"^lucent: stage (\S+) at", run.err, re.M)))
+
+
+def stop_at_stage(work, scene, args, stage, signum):
+    """Renders until `stage` is announced, sends `signum` 50 ms later; the exit status, the seconds
+    from the signal to the exit, and stderr."""
+    p = subprocess.Popen([LUCENT, "render", scene, *args, "--log-stages", "-q", "-o", "out.exr"], cwd=work,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    sent = None
+    for line in p.stderr:
+        if line.startswith("lucent: stage %s at" % stage):
+            time.sleep(0.05)
+            p.send_signal(signum)
+            sent = time.monotonic()
+            break
+    rest = p.stderr.read()
+    p.wait(timeout=60)
+    p.stdout.read()
+    return p.returncode, (time.monotonic() - sent) if sent else None, rest
+
+
+@pytest.mark.parametrize("method", sorted(SIGNAL_RENDERS))
+def test_sigterm_in_every_stage_ends_the_render_within_a_second(work, method):
+    args, resolution = SIGNAL_RENDERS[method]
+    scene = box_scene(work, resolution=resolution) if method != "envpbgi" else None
+    if method == "envpbgi":
+        shutil.copytree(os.path.join(SOURCE, "scenes", "primitives"), os.path.join(work, "primitives"))
+        with open(os.path.join(SOURCE, "scenes", "primitives.json")) as f:
+            s = json.load(f)
+        s["camera"]["resolution"] = list(resolution)
+        write(os.path.join(work, "scene.json"), json.dumps(s))
+        scene = "scene.json"
+    stages = stages_of(work, scene, args)
+    assert stages, "no stage announced"
+    os.remove(os.path.join(work, "dry.exr"))
+    for stage in stages:
+        before = snapshot(work)
+        code, seconds, err = stop_at_stage(work, scene, args, stage, signal.SIGTERM)
+        if seconds is None:
+            continue
+        after = snapshot(work)
+        if code == 0:  # the render finished in the 50 ms
+            for name in changed(before, after):
+                os.remove(os.path.join(work, name))
+            continue
+        assert code == 143, "%s, stage %s: exit %d: %s" % (method, stage, code, err)
+        assert seconds < 1.0, "%s, stage %s: %.2f s after SIGTERM" % (method, stage, seconds)
+        new = changed(before, after)
+        # The stage the signal found: this one, or a later one it had reached within the 50 ms.
+        reached = (re.findall(r"^lucent: stage (\S+) at", err, re.M) or [stage])[-1]
+        if reached in SAMPLING_STAGES.get(method, ()) and new:
+            assert set(new) == {"out.exr", "out.film"}, new
+            assert exr_attributes(os.path.join(work, "out.exr")).get("lucent:partial") == "true"
+        else:
+            assert new == [], "%s, stage %s (reached %s) left %s" % (method, stage, reached, new)
+            assert "stopped by SIGTERM" in err and "nothing written" in err, err
+        for name in new:
+            os.remove(os.path.join(work, name))
+
+
+def test_sigint_while_sampling_leaves_a_partial_image_and_a_checkpoint_that_resumes(work):
+    scene = box_scene(work, resolution=(64, 64))
+    code, seconds, err = stop_at_stage(work, scene, ["--spp", "4096"], "trace_paths", signal.SIGINT)
+    assert code == 130 and seconds < 1.0, err
+    assert exr_attributes(os.path.join(work, "out.exr"))["lucent:partial"] == "true"
+    assert os.path.exists(os.path.join(work, "out.film"))
+
+
+def test_sigkill_leaves_no_output_and_the_next_render_writes_cleanly(work):
+    scene = box_scene(work, resolution=(64, 64))
+    p = subprocess.Popen([LUCENT, "render", scene, "--spp", "4096", "-q", "-o", "out.exr"], cwd=work)
+    time.sleep(1.0)
+    p.kill()
+    p.wait()
+    assert not os.path.exists(os.path.join(work, "out.exr"))
+    run = lucent("render", scene, "--spp", "1", "-q", "-o", "out.exr", cwd=work)
+    assert run.code == 0, run
+    assert [n for n in os.listdir(work) if "lucent-tmp" in n] == []
+
+
+# --- crafted film and checkpoint files -----------------------------------------------------------
+
+@pytest.fixture
+def parts(work):
+    scene = box_scene(work)
+    for k, samples in enumerate(["0:1", "1:1"]):
+        run = lucent("render", scene, "--spp", "2", "--samples", samples, "-q", "-o", "p%d.exr" % k, cwd=work)
+        assert run.code == 0, run
+    return work
+
+
+@pytest.mark.parametrize("lie, words", [
+    (lambda h: h.update(first_sample=2147483647, sample_count=1), "first_sample"),
+    (lambda h: h.update(sample_count=-1), "sample_count"),
+    (lambda h: h.update(spp=1e300), "spp"),
+    (lambda h: h.update(width=70000), "width"),
+    (lambda h: h.update(crop=[0, 0, 16, 4000]), "'crop' is not inside the image"),
+    (lambda h: h.update(options=[1, 2]), "'options' is not a JSON object"),
+    (lambda h: h["counters"].update(rays=-5), "counter 'rays'"),
+    (lambda h: h.update(sums_per_pixel=64), "bytes its header makes"),
+    (lambda h: h["layers"].update(variance=True), "'sums_per_pixel' does not match"),
+])
+def test_merge_refuses_a_film_whose_hashed_header_lies(parts, lie, words):
+    header, sums, valid, taken = read_film(os.path.join(parts, "p1.film"))
+    lie(header)
+    write_film(os.path.join(parts, "p1.film"), header, sums, valid, taken)
+    before = snapshot(parts)
+    run = lucent("merge", "p0.film", "p1.film", "-o", "m.exr", cwd=parts)
+    assert run.code == 1 and "p1.film" in run.err and words in run.err, run
+    assert changed(before, snapshot(parts)) == []
+
+
+def test_a_film_whose_header_changed_after_hashing_is_refused(parts):
+    header, sums, valid, taken = read_film(os.path.join(parts, "p1.film"))
+    header["first_sample"] = 0
+    write_film(os.path.join(parts, "p1.film"), header, sums, valid, taken, fix_hash=False)
+    run = lucent("merge", "p0.film", "p1.film", "-o", "m.exr", cwd=parts)
+    assert run.code == 1 and "p1.film" in run.err and "does not match its hash" in run.err, run
+
+
+def test_a_film_that_says_it_is_complete_must_have_every_sample(parts):
+    header, sums, valid, taken = read_film(os.path.join(parts, "p1.film"))
+    taken = b"\0" * len(taken)
+    valid = b"\0" * len(valid)
+    write_film(os.path.join(parts, "p1.film"), header, sums, valid, taken)
+    run = lucent("merge", "p0.film", "p1.film", "-o", "m.exr", cwd=parts)
+    assert run.code == 1 and "says it is complete" in run.err, run
+
+
+def test_a_resume_refuses_a_crafted_checkpoint_and_keeps_it(work):
+    scene = box_scene(work, resolution=(32, 32))
+    code, _, err = stop_at_stage(work, scene, ["--spp", "4096", "--checkpoint", "100"], "trace_paths", signal.SIGTERM)
+    assert code == 143, err
+    header, sums, valid, taken = read_film(os.path.join(work, "out.film"))
+    header["sample_count"] = 2147483647
+    write_film(os.path.join(work, "out.film"), header, sums, valid, taken)
+    before = snapshot(work)
+    run = lucent("render", scene, "--spp", "4096", "--resume", "-q", "-o", "out.exr", cwd=work)
+    assert run.code == 1 and "out.film" in run.err and "sample_count" in run.err, run
+    assert changed(before, snapshot(work)) == []
+
+
+def test_parts_that_differ_only_in_tile_size_merge(work):
+    scene = box_scene(work)
+    assert lucent("render", scene, "--spp", "2", "--samples", "0:1", "--tile-size", "4", "-q", "-o", "a.exr", cwd=work).code == 0
+    assert lucent("render", scene, "--spp", "2", "--samples", "1:1", "--tile-size", "13", "-q", "-o", "b.exr", cwd=work).code == 0
+    run = lucent("merge", "a.film", "b.film", "-o", "m.exr", cwd=work)
+    assert run.code == 0, run
+
+
+# --- scene files that try to write, and what messages quote ---------------------------------------
+
+@pytest.mark.parametrize("dump", ["/tmp", "elsewhere", "."])
+def test_a_scene_file_cannot_choose_where_lucent_writes(work, dump):
+    os.mkdir(os.path.join(work, "elsewhere"))
+    scene = box_scene(work, extra={"render": {"method": "micro", "dump": dump, "points": 4096}})
+    before, tmp_before = snapshot(work), set(os.listdir("/tmp"))
+    run = lucent("render", scene, "-o", "out.exr", cwd=work)
+    assert run.code == 1 and "scene.json: render.dump" in run.err and "--dump" in run.err, run
+    assert changed(before, snapshot(work)) == [] and set(os.listdir("/tmp")) <= tmp_before | {"nothing"}
+
+
+def test_a_mesh_that_is_not_an_obj_is_quoted_short_and_escaped(work):
+    write(os.path.join(work, "mesh.obj"), b"\x1b]0;title\x07\x1b[2J" + b"root:x:0:0:root:/root:/bin/bash-secret\nsecond\n")
+    scene = box_scene(work)
+    with open(os.path.join(work, scene)) as f:
+        s = json.load(f)
+    s["meshes"] = [{"obj": "mesh.obj"}]
+    write(os.path.join(work, scene), json.dumps(s))
+    for obj in ("mesh.obj", "/etc/passwd"):
+        s["meshes"] = [{"obj": obj}]
+        write(os.path.join(work, scene), json.dumps(s))
+        run = lucent("render", scene, "-o", "out.exr", cwd=work)
+        assert run.code == 1, run
+        assert ("%s:1:" % obj) in run.err
+        assert "\x1b" not in run.err and "\x07" not in run.err
+        assert "/bin/bash" not in run.err and "secret" not in run.err
+
+
+@pytest.mark.parametrize("text, words", [
+    ('{"camera": {"fov_y": 40, "fov_y": 50}}', "camera.fov_y: the key is given twice"),
+    ('{\n  "camera": {"fov_y": 1e400}}', "the number 1e400 is beyond a double's range (at line 2, column 23)"),
+    ('{"camera": "\x1b[31m"', "scene.json: invalid JSON"),
+])
+def test_json_errors_name_the_key_or_the_line(work, text, words):
+    write(os.path.join(work, "scene.json"), text)
+    run = lucent("render", "scene.json", "-o", "out.exr", cwd=work)
+    assert run.code == 1 and words in run.err and "\x1b" not in run.err, run
+
+
+def test_a_texture_error_cites_the_map_kd_line(work):
+    write(os.path.join(work, "m.obj"), "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl floor\nf 1 2 3\n")
+    write(os.path.join(work, "m.mtl"), "newmtl floor\nKd 0.5 0.5 0.5\n\n\nmap_Kd m.obj\n")
+    scene = box_scene(work)
+    with open(os.path.join(work, scene)) as f:
+        s = json.load(f)
+    s["meshes"].append({"obj": "m.obj"})
+    write(os.path.join(work, scene), json.dumps(s))
+    run = lucent("render", scene, "-o", "out.exr", cwd=work)
+    assert run.code == 1 and "m.mtl:5:" in run.err and "map_Kd" in run.err, run
+
+
+@pytest.mark.parametrize("args, status, words", [
+    (["bogus"], 1, "unknown command 'bogus'"),
+    (["compare", "a.exr", "b.exr", "--max-error", "-1"], 2, "--max-error must be a finite number of at least 0"),
+    (["report", "a.exr", "b.exr", "-o", "r.html", "--seconds", "-1"], 1, "--seconds must be positive"),
+    (["report", "a.exr", "b.exr", "-o", "r.html", "--alpha", "1"], 1, "--alpha must lie in [1e-12, 0.5]"),
+    (["render", "\x1b[31mx.json", "-o", "o.exr"], 1, "\\x1b[31mx.json"),
+])
+def test_command_line_errors_are_short_and_named(work, args, status, words):
+    run = lucent(*args, cwd=work)
+    assert run.code == status and words in run.err and len(run.err) < 300 and "\x1b" not in run.err, run
+
+
+def test_a_memory_limit_beyond_the_address_space_is_refused(work):
+    scene = box_scene(work)
+    limit = 4 << 30
+
+    def cap():
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    run = lucent("render", scene, "--memory-limit", "64G", "-o", "out.exr", cwd=work, preexec=cap)
+    assert run.code == 1 and "--memory-limit 64G" in run.err and "ulimit -v" in run.err, run
+
+
+def test_report_names_a_one_channel_image_and_takes_several_labels(work):
+    scene = box_scene(work)
+    assert lucent("render", scene, "--spp", "1", "-q", "-o", "a.exr", cwd=work).code == 0
+    assert lucent("render", scene, "--spp", "2", "-q", "-o", "b.exr", cwd=work).code == 0
+    write(os.path.join(work, "y.exr"), exr(16, 16, ["Y"], compression=0))
+    run = lucent("report", "a.exr", "y.exr", "-o", "r.html", cwd=work)
+    assert run.code == 1 and "y.exr" in run.err and "has no R channel" in run.err, run
+    run = lucent("report", "a.exr", "a.exr", "b.exr", "--label", "one", "two", "-o", "r.html", cwd=work)
+    assert run.code == 0, run
+    assert [c["label"] for c in json.loads(run.out)["candidates"]] == ["one", "two"]
+
+
+def test_a_flag_shown_as_default_true_takes_false(work):
+    scene = box_scene(work)
+    run = lucent("render", scene, "--method", "micro", "--points", "4096", "--ray-casting", "false", "-q", "-o",
+                 "out.exr", cwd=work)
+    assert run.code == 0, run
+    assert json.loads(run.out)["options"]["ray_casting"] is False
+
+
+# --- images that lie about their size ------------------------------------------------------------
+
+def test_compare_refuses_an_exr_header_its_file_cannot_hold_at_once(work):
+    write(os.path.join(work, "big.exr"), exr(8192, 8192, ["R", "G", "B", "A", "albedo.R", "albedo.G", "albedo.B",
+                                                         "depth.Z", "normal.X", "normal.Y"], data_bytes=0))
+    write(os.path.join(work, "small.exr"), exr(4, 4, ["R", "G", "B"], compression=0))
+    for args in (["big.exr", "big.exr"], ["small.exr", "big.exr"]):
+        run = lucent("compare", *args, cwd=work, timeout=60)
+        assert run.code == 2 and run.seconds < 5 and "big.exr" in run.err and "can hold" in run.err, run
+
+
+def test_compare_says_the_sizes_differ_before_decoding_a_huge_png(work):
+    # 8000 x 8000 black pixels: 186 KB compressed, 1.6 GB decoded as floats.
+    rows = zlib.compressobj(9)
+    body = b"".join(rows.compress(b"\0" * (1 + 3 * 8000)) for _ in range(8000)) + rows.flush()
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 8000, 8000, 8, 2, 0, 0, 0)) +
+           chunk(b"IDAT", body) + chunk(b"IEND", b""))
+    write(os.path.join(work, "huge.png"), png)
+    write(os.path.join(work, "small.exr"), exr(4, 4, ["R", "G", "B"], compression=0))
+    run = lucent("compare", "huge.png", "small.exr", cwd=work, timeout=60)
+    assert run.code == 2 and run.seconds < 2 and "sizes differ" in run.err, run
+
+
+# --- valid input that used to be refused ---------------------------------------------------------
+
+def test_values_at_documented_bounds_are_taken(work):
+    scene = box_scene(work, extra={"lights": [{"type": "point", "position": [278, 500, 279], "power": [1e15, 1, 1]}]})
+    assert lucent("render", scene, "--spp", "1", "-q", "-o", "a.exr", cwd=work).code == 0
+    run = lucent("render", scene, "--method", "micro", "--point-spacing", "0.01", "--resolution", "2x2", "-q",
+                 "-o", "b.exr", cwd=work)
+    assert "--point-spacing" not in run.err, run
+
+
+def test_a_narrow_notch_is_split_and_a_huge_triangle_rendered(work):
+    write(os.path.join(work, "m.obj"), "v 0 0 0\nv 4 0 0\nv 4 4 0\nv 2.001 4 0\nv 2 1 0\nv 1.999 4 0\nv 0 4 0\n"
+          "v 0 0 -1\nv 1e10 0 -1\nv 0 1e10 -1\nf 1 2 3 4 5 6 7\nf 8 9 10\n")
+    write(os.path.join(work, "scene.json"), json.dumps({
+        "camera": {"eye": [2, 2, 6], "look_at": [2, 2, 0], "up": [0, 1, 0], "fov_y": 60, "resolution": [8, 8]},
+        "meshes": [{"obj": "m.obj"}], "lights": [{"type": "environment", "radiance": [1, 1, 1]}]}))
+    for method in ("pt", "micro", "envpbgi", "particles", "pmfg"):
+        extra = ["--points", "4096"] if method in ("micro", "envpbgi") else []
+        run = lucent("render", "scene.json", "--method", method, *extra, "-q", "-o", method + ".exr", cwd=work)
+        assert run.code == 0, run
