@@ -35,10 +35,16 @@ inline std::string filmFileFromInput(std::string_view input) {
   try {
     const auto j = nlohmann::json::parse(header);
     const auto& crop = j.at("crop");
-    const int64_t w = crop.at(2).get<int64_t>() - crop.at(0).get<int64_t>();
-    const int64_t h = crop.at(3).get<int64_t>() - crop.at(1).get<int64_t>();
-    const int64_t s = j.at("sums_per_pixel").get<int64_t>();
-    if (w > 0 && h > 0 && s > 0 && w * h <= (1 << 16) && s <= 64) pixels = uint64_t(w * h), sums = uint64_t(s);
+    const auto small = [](const nlohmann::json& v) {  // a whole number the reader would take
+      if (!v.is_number_integer()) return false;
+      return v.is_number_unsigned() ? v.get<uint64_t>() <= 65536 : v.get<int64_t>() >= 0 && v.get<int64_t>() <= 65536;
+    };
+    if (small(crop.at(0)) && small(crop.at(1)) && small(crop.at(2)) && small(crop.at(3)) && small(j.at("sums_per_pixel"))) {
+      const int64_t w = crop[2].get<int64_t>() - crop[0].get<int64_t>();
+      const int64_t h = crop[3].get<int64_t>() - crop[1].get<int64_t>();
+      const int64_t s = j["sums_per_pixel"].get<int64_t>();
+      if (w > 0 && h > 0 && s > 0 && w * h <= (1 << 16) && s <= 64) pixels = uint64_t(w * h), sums = uint64_t(s);
+    }
   } catch (const nlohmann::json::exception&) {
   }
   header.resize((header.size() + 7) / 8 * 8, ' ');

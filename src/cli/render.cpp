@@ -372,10 +372,13 @@ int runRender(const RenderArgs& a) {
 
   RenderOutput out;
   int stopSignal = 0;
+  // From here to the end, SIGINT and SIGTERM ask the render to stop (the scene's loading and the
+  // BVH before it end at once by the signal's default action); one that comes after the render
+  // returned lets the outputs be written whole, and is otherwise ignored: the render is done.
+  StopOnSignals signals;
   {
     ProgressBar bar(!a.quiet);
     control.progress = [&](double f) { bar.update(f); };
-    StopOnSignals signals;
     control.stop = &signals.requested();
     try {
       out = method->render(scene, visibility, resolved, control);
@@ -387,7 +390,7 @@ int runRender(const RenderArgs& a) {
                 << " before the image had any sample to keep; nothing written\n";
       return 128 + signal;
     }
-    stopSignal = signals.signal();
+    if (!out.complete) stopSignal = signals.signal();
   }
   for (const auto& s : out.stats.stageSeconds) stats.addStage(s.first, s.second);
   stats.counters = out.stats.counters;
