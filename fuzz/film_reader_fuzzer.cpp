@@ -1,7 +1,7 @@
 // libFuzzer target for the film file reader (docs/film-format.md): one input is one film file, as
 // it is or with its size and hash made to match its header (film_fuzz_input.h). Every rejection
 // must be a std::runtime_error or std::invalid_argument naming the file; anything else, a crash, a
-// sanitizer report, a hang or a large allocation is a defect. Seeds: scripts/fuzz-corpus.py film.
+// sanitizer report, a hang or a large allocation is a defect. Seeds: scripts/fuzz-corpus.py film_reader.
 #include <cstdint>
 #include <stdexcept>
 #include <string_view>

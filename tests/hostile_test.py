@@ -522,6 +522,20 @@ def test_compare_refuses_an_exr_header_its_file_cannot_hold_at_once(work):
         assert run.code == 2 and run.seconds < 5 and "big.exr" in run.err and "can hold" in run.err, run
 
 
+def test_compare_refuses_an_exr_attribute_its_file_cannot_hold(work):
+    # OpenEXR allocates an attribute's claimed size as it reads the header (found by fuzzing: a
+    # 300-byte file claimed 1.8 GB); and a line-offset table for the data window it claims.
+    small = exr(4, 4, ["R", "G", "B"], compression=0)
+    at = small.index(b"compression\0compression\0") + len(b"compression\0compression\0")
+    write(os.path.join(work, "attribute.exr"), small[:at] + struct.pack("<i", 1886220131) + small[at + 4:])
+    at = small.index(b"dataWindow\0box2i\0") + len(b"dataWindow\0box2i\0") + 4
+    write(os.path.join(work, "window.exr"), small[:at] + struct.pack("<iiii", 0, 0, 1 << 30, 1 << 30) + small[at + 16:])
+    for name, words in (("attribute.exr", "attribute 'compression' claims 1886220131 bytes"),
+                        ("window.exr", "dataWindow claims")):
+        run = lucent("compare", name, name, cwd=work, timeout=60)
+        assert run.code == 2 and run.seconds < 2 and name in run.err and words in run.err, run
+
+
 def test_compare_says_the_sizes_differ_before_decoding_a_huge_png(work):
     # 8000 x 8000 black pixels: 186 KB compressed, 1.6 GB decoded as floats.
     rows = zlib.compressobj(9)

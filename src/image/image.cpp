@@ -15,6 +15,7 @@
 #include "lucent/core/files.h"
 #include "lucent/core/memory.h"
 #include "lucent/core/srgb.h"
+#include "lucent/core/text.h"
 #include "lucent/scene/scene.h"
 
 namespace lucent {
@@ -131,12 +132,80 @@ namespace {
 // 1,032 (EXR's zip and pxr24, PNG, TIFF's deflate); run-length and block codecs stay below 2,048.
 constexpr uint64_t kMostDecodedPerByte = 2048;
 
+// Why an OpenEXR file's headers would make OpenEXR allocate more than the file holds (it allocates
+// each attribute's claimed size, and a line-offset table for the claimed data window, as it reads
+// the header: a 300-byte file claimed a 1.8 GB attribute), or "" where they would not. The layout:
+// the magic and version words, then per part attributes (name, type name, int32 size, value) up to
+// an empty name, parts up to an empty header where the file has several (version bit 12).
+std::string exrHeaderProblem(std::ifstream& in, uint64_t fileBytes) {
+  const auto readByte = [&]() {
+    const int c = in.get();
+    if (c == std::char_traits<char>::eof()) throw std::runtime_error("its header ends early");
+    return char(c);
+  };
+  const auto readWord = [&]() {
+    char b[4];
+    for (char& c : b) c = readByte();
+    int32_t v;
+    std::memcpy(&v, b, 4);
+    return v;
+  };
+  try {
+    in.seekg(4);
+    const int32_t version = readWord();
+    const bool multipart = (version & 0x1000) != 0;
+    for (int part = 0;; ++part) {
+      bool empty = true;
+      for (;;) {
+        std::string name;
+        for (char c; (c = readByte()) != 0;) {
+          name += c;
+          if (name.size() > 255) return "an attribute name is longer than 255 bytes";
+        }
+        if (name.empty()) break;
+        empty = false;
+        std::string type;
+        for (char c; (c = readByte()) != 0;)
+          if ((type += c).size() > 255) return "an attribute type is longer than 255 bytes";
+        const int32_t size = readWord();
+        const uint64_t at = uint64_t(in.tellg());
+        if (size < 0 || uint64_t(size) > fileBytes - std::min(fileBytes, at))
+          return "attribute '" + excerpt(name) + "' claims " + std::to_string(size) + " bytes, more than the file holds";
+        if ((name == "dataWindow" || name == "displayWindow") && size == 16) {
+          const int32_t x0 = readWord(), y0 = readWord(), x1 = readWord(), y1 = readWord();
+          const int64_t w = int64_t(x1) - x0 + 1, h = int64_t(y1) - y0 + 1;
+          if (w < 1 || h < 1 || uint64_t(w) * uint64_t(h) > kMaxImagePixels)
+            return std::string(name) + " claims " + std::to_string(w) + " x " + std::to_string(h) +
+                   " pixels (at most 2^26)";
+        } else {
+          in.seekg(size, std::ios::cur);
+        }
+      }
+      if (!multipart || empty || part > 64) break;
+    }
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
 // The opened file, its header checked (see readImageHeader).
 std::unique_ptr<OIIO::ImageInput> openChecked(const std::string& path) {
   // A device or pipe (/dev/zero) would be read for ever.
   const std::string problem = regularFileProblem(path);
   if (problem == "not found") throw std::runtime_error("image file not found: '" + path + "'");
   if (!problem.empty()) throw std::runtime_error("cannot read image '" + path + "': " + problem);
+  {
+    std::ifstream file(path, std::ios::binary);
+    char magic[4] = {};
+    file.read(magic, 4);
+    std::error_code ec;
+    const uint64_t fileBytes = std::filesystem::file_size(path, ec);
+    if (file && std::memcmp(magic, "\x76\x2f\x31\x01", 4) == 0) {
+      const std::string why = exrHeaderProblem(file, ec ? 0 : fileBytes);
+      if (!why.empty()) throw std::runtime_error("cannot read image '" + path + "': a damaged EXR header: " + why);
+    }
+  }
   auto in = OIIO::ImageInput::open(path);
   if (!in) throw std::runtime_error("cannot read image '" + path + "': " + OIIO::geterror());
   const OIIO::ImageSpec& spec = in->spec();
