@@ -530,8 +530,14 @@ def test_compare_refuses_an_exr_attribute_its_file_cannot_hold(work):
     write(os.path.join(work, "attribute.exr"), small[:at] + struct.pack("<i", 1886220131) + small[at + 4:])
     at = small.index(b"dataWindow\0box2i\0") + len(b"dataWindow\0box2i\0") + 4
     write(os.path.join(work, "window.exr"), small[:at] + struct.pack("<iiii", 0, 0, 1 << 30, 1 << 30) + small[at + 16:])
-    for name, words in (("attribute.exr", "attribute 'compression' claims 1886220131 bytes"),
-                        ("window.exr", "dataWindow claims")):
+    # A typed value is read by its type, not its size field: a channel list one byte shorter than
+    # its size says puts every later field elsewhere than a size-by-size walk finds it.
+    at = small.index(b"channels\0chlist\0") + len(b"channels\0chlist\0")
+    size = struct.unpack_from("<i", small, at)[0]
+    write(os.path.join(work, "chlist.exr"), small[:at] + struct.pack("<i", size - 1) + small[at + 4:])
+    for name, words in (("attribute.exr", "attribute 'compression' claims 1886220131 bytes, more than the file holds"),
+                        ("window.exr", "dataWindow claims"),
+                        ("chlist.exr", "its channel list's size is not its content's")):
         run = lucent("compare", name, name, cwd=work, timeout=60)
         assert run.code == 2 and run.seconds < 2 and name in run.err and words in run.err, run
 

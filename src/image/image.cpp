@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <stdexcept>
 
@@ -132,6 +133,14 @@ namespace {
 // 1,032 (EXR's zip and pxr24, PNG, TIFF's deflate); run-length and block codecs stay below 2,048.
 constexpr uint64_t kMostDecodedPerByte = 2048;
 
+// The values OpenEXR reads at a fixed size whatever an attribute's size field says.
+const std::map<std::string, int32_t> kExrFixedSizes = {
+    {"box2i", 16},    {"box2f", 16},    {"chromaticities", 32}, {"compression", 1}, {"deepImageState", 1},
+    {"double", 8},    {"envmap", 1},    {"float", 4},           {"int", 4},         {"keycode", 28},
+    {"lineOrder", 1}, {"m33f", 36},     {"m33d", 72},           {"m44f", 64},       {"m44d", 128},
+    {"rational", 8},  {"tiledesc", 9},  {"timecode", 8},        {"v2i", 8},         {"v2f", 8},
+    {"v2d", 16},      {"v3i", 12},      {"v3f", 12},            {"v3d", 24}};
+
 // Why an OpenEXR file's headers would make OpenEXR allocate more than the file holds (it allocates
 // each attribute's claimed size, and a line-offset table for the claimed data window, as it reads
 // the header: a 300-byte file claimed a 1.8 GB attribute), or "" where they would not. The layout:
@@ -154,24 +163,52 @@ std::string exrHeaderProblem(std::ifstream& in, uint64_t fileBytes) {
     in.seekg(4);
     const int32_t version = readWord();
     const bool multipart = (version & 0x1000) != 0;
+    // Names are read as OpenEXR reads them: up to a NUL or 32 bytes (256 with long names), the
+    // next field starting where that stops.
+    const int longest = (version & 0x400) != 0 ? 255 : 31;
+    const auto readName = [&]() {
+      std::string name;
+      for (int n = longest; n >= 0; --n) {
+        const char c = readByte();
+        if (c == 0) break;
+        name += c;
+      }
+      return name;
+    };
     for (int part = 0;; ++part) {
       bool empty = true;
       for (;;) {
-        std::string name;
-        for (char c; (c = readByte()) != 0;) {
-          name += c;
-          if (name.size() > 255) return "an attribute name is longer than 255 bytes";
-        }
+        const std::string name = readName();
         if (name.empty()) break;
         empty = false;
-        std::string type;
-        for (char c; (c = readByte()) != 0;)
-          if ((type += c).size() > 255) return "an attribute type is longer than 255 bytes";
+        const std::string type = readName();
         const int32_t size = readWord();
         const uint64_t at = uint64_t(in.tellg());
         if (size < 0 || uint64_t(size) > fileBytes - std::min(fileBytes, at))
           return "attribute '" + excerpt(name) + "' claims " + std::to_string(size) + " bytes, more than the file holds";
-        if ((name == "dataWindow" || name == "displayWindow") && size == 16) {
+        // OpenEXR reads a typed value by its type and goes on where that ends, whatever the size
+        // says: the size must be the value's, or the fields after it are not where they seem.
+        const auto fixed = kExrFixedSizes.find(type);
+        if (fixed != kExrFixedSizes.end() && size != fixed->second)
+          return "attribute '" + excerpt(name) + "' of type " + excerpt(type) + " claims " + std::to_string(size) +
+                 " bytes, not " + std::to_string(fixed->second);
+        if (type == "chlist") {
+          int32_t consumed = 0;
+          for (;;) {  // channel names, each followed by 16 bytes, up to an empty name
+            const std::string channel = readName();
+            consumed += int32_t(channel.size()) + 1;
+            if (channel.empty()) break;
+            for (int k = 0; k < 4; ++k) readWord();
+            consumed += 16;
+            if (consumed > size) break;
+          }
+          if (consumed != size) return "its channel list's size is not its content's";
+        } else if (type == "preview") {
+          if (size < 8) return "a preview of " + std::to_string(size) + " bytes";
+          const uint32_t w = uint32_t(readWord()), h = uint32_t(readWord());
+          if (uint64_t(w) * h * 4 + 8 != uint64_t(size)) return "its preview's size is not its content's";
+          in.seekg(size - 8, std::ios::cur);
+        } else if ((name == "dataWindow" || name == "displayWindow") && type == "box2i") {
           const int32_t x0 = readWord(), y0 = readWord(), x1 = readWord(), y1 = readWord();
           const int64_t w = int64_t(x1) - x0 + 1, h = int64_t(y1) - y0 + 1;
           if (w < 1 || h < 1 || uint64_t(w) * uint64_t(h) > kMaxImagePixels)
