@@ -361,12 +361,15 @@ def parts(work):
 @pytest.mark.parametrize("lie, words", [
     (lambda h: h.update(first_sample=2147483647, sample_count=1), "first_sample"),
     (lambda h: h.update(sample_count=-1), "sample_count"),
+    (lambda h: h.update(sample_count=0), "sample_count"),
+    (lambda h: h.update(spp=0), "spp"),
     (lambda h: h.update(spp=1e300), "spp"),
     (lambda h: h.update(width=70000), "width"),
     (lambda h: h.update(crop=[0, 0, 16, 4000]), "'crop' is not inside the image"),
     (lambda h: h.update(options=[1, 2]), "'options' is not a JSON object"),
     (lambda h: h["counters"].update(rays=-5), "counter 'rays'"),
-    (lambda h: h.update(sums_per_pixel=64), "bytes its header makes"),
+    (lambda h: h.update(sums_per_pixel=64), "'sums_per_pixel' does not match"),
+    (lambda h: h.update(sums_per_pixel=1), "'sums_per_pixel' does not match"),
     (lambda h: h["layers"].update(variance=True), "'sums_per_pixel' does not match"),
 ])
 def test_merge_refuses_a_film_whose_hashed_header_lies(parts, lie, words):
@@ -530,6 +533,8 @@ def test_compare_refuses_an_exr_attribute_its_file_cannot_hold(work):
     write(os.path.join(work, "attribute.exr"), small[:at] + struct.pack("<i", 1886220131) + small[at + 4:])
     at = small.index(b"dataWindow\0box2i\0") + len(b"dataWindow\0box2i\0") + 4
     write(os.path.join(work, "window.exr"), small[:at] + struct.pack("<iiii", 0, 0, 1 << 30, 1 << 30) + small[at + 16:])
+    # Within 2^26 pixels, but a row per chunk offset: 512 MiB of offsets in a file of 400 bytes.
+    write(os.path.join(work, "rows.exr"), small[:at] + struct.pack("<iiii", 0, 0, 0, (1 << 26) - 1) + small[at + 16:])
     # A typed value is read by its type, not its size field: a channel list one byte shorter than
     # its size says puts every later field elsewhere than a size-by-size walk finds it.
     at = small.index(b"channels\0chlist\0") + len(b"channels\0chlist\0")
@@ -537,6 +542,7 @@ def test_compare_refuses_an_exr_attribute_its_file_cannot_hold(work):
     write(os.path.join(work, "chlist.exr"), small[:at] + struct.pack("<i", size - 1) + small[at + 4:])
     for name, words in (("attribute.exr", "attribute 'compression' claims 1886220131 bytes, more than the file holds"),
                         ("window.exr", "dataWindow claims"),
+                        ("rows.exr", "needs 67108864 chunk offsets, more than the file holds"),
                         ("chlist.exr", "its channel list's size is not its content's")):
         run = lucent("compare", name, name, cwd=work, timeout=60)
         assert run.code == 2 and run.seconds < 2 and name in run.err and words in run.err, run
@@ -570,10 +576,16 @@ def test_values_at_documented_bounds_are_taken(work):
 def test_a_narrow_notch_is_split_and_a_huge_triangle_rendered(work):
     write(os.path.join(work, "m.obj"), "v 0 0 0\nv 4 0 0\nv 4 4 0\nv 2.001 4 0\nv 2 1 0\nv 1.999 4 0\nv 0 4 0\n"
           "v 0 0 -1\nv 1e10 0 -1\nv 0 1e10 -1\nf 1 2 3 4 5 6 7\nf 8 9 10\n")
-    write(os.path.join(work, "scene.json"), json.dumps({
-        "camera": {"eye": [2, 2, 6], "look_at": [2, 2, 0], "up": [0, 1, 0], "fov_y": 60, "resolution": [8, 8]},
-        "meshes": [{"obj": "m.obj"}], "lights": [{"type": "environment", "radiance": [1, 1, 1]}]}))
+    # An emitter 1e10 wide (its power in float would overflow the light selection's weights).
+    write(os.path.join(work, "light.obj"), "mtllib light.mtl\nv 0 0 -2\nv 1e10 0 -2\nv 0 1e10 -2\nusemtl light\nf 1 2 3\n")
+    write(os.path.join(work, "light.mtl"), "newmtl light\nKd 0 0 0\nKe 10 10 10\n")
+    camera = {"eye": [2, 2, 6], "look_at": [2, 2, 0], "up": [0, 1, 0], "fov_y": 60, "resolution": [8, 8]}
+    environment = [{"type": "environment", "radiance": [1, 1, 1]}]
+    write(os.path.join(work, "lit.json"), json.dumps({"camera": camera, "meshes": [{"obj": "m.obj"}, {"obj": "light.obj"}],
+                                                      "lights": environment}))
+    write(os.path.join(work, "sky.json"), json.dumps({"camera": camera, "meshes": [{"obj": "m.obj"}], "lights": environment}))
     for method in ("pt", "micro", "envpbgi", "particles", "pmfg"):
         extra = ["--points", "4096"] if method in ("micro", "envpbgi") else []
-        run = lucent("render", "scene.json", "--method", method, *extra, "-q", "-o", method + ".exr", cwd=work)
+        scene = "sky.json" if method == "envpbgi" else "lit.json"  # envpbgi takes no emitting triangles
+        run = lucent("render", scene, "--method", method, *extra, "-q", "-o", method + ".exr", cwd=work)
         assert run.code == 0, run

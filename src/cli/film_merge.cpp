@@ -75,7 +75,12 @@ MergedFilm mergeFilmFiles(const std::vector<std::string>& parts) {
     const FilmFile& f = films.back();
     if (!f.info.complete)
       throw std::invalid_argument("'" + path + "' is the checkpoint of an interrupted render: finish it first (render ... --resume)");
-    const std::string difference = renderDifference(f.info, films.front().info);
+    std::string difference;
+    try {
+      difference = renderDifference(f.info, films.front().info);
+    } catch (const std::invalid_argument& e) {  // a method this Lucent does not have
+      throw std::invalid_argument("'" + path + "': " + e.what());
+    }
     if (!difference.empty())
       throw std::invalid_argument("'" + path + "' and '" + parts.front() + "' are parts of different renders: " + difference);
     const Film &film = *f.film, &first = *films.front().film;

@@ -237,6 +237,9 @@ int runRender(const RenderArgs& a) {
   Scene scene;
   Stopwatch total;
   RenderStats stats;
+  struct ObserverScope {  // the observer refers to `total`: it ends with this render
+    ~ObserverScope() { setStageObserver(nullptr); }
+  } observerScope;
   if (a.logStages)
     setStageObserver([&total](const std::string& stage) {
       std::fprintf(stderr, "lucent: stage %s at %.3f s\n", stage.c_str(), total.seconds());

@@ -1,6 +1,7 @@
 #include "lucent/core/files.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -50,6 +51,14 @@ std::optional<uint64_t> processStartTicks(uint64_t pid) {
       return ec == std::errc() && p == field.data() + field.size() ? ticks : 0;
     }
   return 0;
+}
+
+// Whether /proc shows this process as itself: a /proc of another pid namespace (unshare -p without
+// a new mount) would answer for other processes than the ids name.
+bool procIsOurs() {
+  std::ifstream in("/proc/self/stat");
+  uint64_t pid = 0;
+  return (in >> pid) && pid == uint64_t(::getpid());
 }
 
 Writer readThisWriter() {
@@ -137,8 +146,11 @@ bool isAbandonedTemporaryFile(const std::string& name) {
       self.pidNamespace == 0 || writer->boot != self.boot || writer->pidNamespace != self.pidNamespace)
     return false;
   if (writer->pid == self.pid && writer->startTicks == self.startTicks) return false;  // this process: alive
+  if (!procIsOurs()) return false;
   const std::optional<uint64_t> started = processStartTicks(writer->pid);
-  if (!started) return true;  // no such process
+  // No such process: /proc has no entry, and the kernel says so too (/proc mounted with hidepid
+  // hides other users' processes, which kill answers with EPERM).
+  if (!started) return ::kill(pid_t(writer->pid), 0) != 0 && errno == ESRCH;
   // The id now belongs to a process that started at another time; 0: its state could not be read.
   return *started != 0 && *started != writer->startTicks;
 }
@@ -165,6 +177,13 @@ void checkWritable(const std::filesystem::path& path, const std::string& what) {
   }
   ::close(fd);
   removeQuietly(probe);
+  // In a sticky directory (/tmp), a file of another user cannot be replaced by a rename.
+  struct stat dirStat {}, fileStat {};
+  const std::filesystem::path dir = path.parent_path().empty() ? "." : path.parent_path();
+  if (::geteuid() != 0 && ::stat(dir.c_str(), &dirStat) == 0 && (dirStat.st_mode & S_ISVTX) &&
+      ::lstat(path.c_str(), &fileStat) == 0 && fileStat.st_uid != ::geteuid() && dirStat.st_uid != ::geteuid())
+    throw std::runtime_error("cannot write " + what + " '" + path.string() +
+                             "': it belongs to another user in a sticky directory");
 }
 
 void writeFilesAtomically(const std::vector<FileToWrite>& files) {

@@ -129,9 +129,10 @@ void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageM
 
 namespace {
 
-// The most bytes of pixel data that a byte of a compressed file decodes to: deflate's limit is
-// 1,032 (EXR's zip and pxr24, PNG, TIFF's deflate); run-length and block codecs stay below 2,048.
-constexpr uint64_t kMostDecodedPerByte = 2048;
+// The most bytes of pixel data, as OpenImageIO hands them over, that a byte of a compressed file
+// decodes to: deflate's limit is 1,032 (EXR's zip and pxr24, PNG, TIFF's deflate), and a PNG's
+// 1-bit palette indices become 3 bytes of RGB each: 1,032 x 8 x 3 = 24,768 below 2^15.
+constexpr uint64_t kMostDecodedPerByte = uint64_t(1) << 15;
 
 // The values OpenEXR reads at a fixed size whatever an attribute's size field says.
 const std::map<std::string, int32_t> kExrFixedSizes = {
@@ -177,6 +178,9 @@ std::string exrHeaderProblem(std::ifstream& in, uint64_t fileBytes) {
     };
     for (int part = 0;; ++part) {
       bool empty = true;
+      int64_t width = 0, height = 0;
+      int compression = 0;
+      uint32_t tileX = 0, tileY = 0;
       for (;;) {
         const std::string name = readName();
         if (name.empty()) break;
@@ -214,11 +218,29 @@ std::string exrHeaderProblem(std::ifstream& in, uint64_t fileBytes) {
           if (w < 1 || h < 1 || uint64_t(w) * uint64_t(h) > kMaxImagePixels)
             return std::string(name) + " claims " + std::to_string(w) + " x " + std::to_string(h) +
                    " pixels (at most 2^26)";
+          if (name == "dataWindow") width = w, height = h;
+        } else if (name == "compression" && type == "compression") {
+          compression = static_cast<unsigned char>(readByte());
+        } else if (name == "tiles" && type == "tiledesc") {
+          tileX = uint32_t(readWord()), tileY = uint32_t(readWord());
+          readByte();
         } else {
           in.seekg(size, std::ios::cur);
         }
       }
-      if (!multipart || empty || part > 64) break;
+      // Each chunk (a run of lines, or a tile) has an 8-byte offset in the file, which OpenEXR
+      // reads into a table as long as the data window makes it.
+      const int64_t linesPerChunk = compression == 3 || compression == 5 ? 16  // zip, pxr24
+                                    : compression >= 4 && compression <= 8 ? 32  // piz, b44, b44a, dwaa
+                                    : compression == 9                     ? 256 // dwab
+                                                                           : 1;
+      const uint64_t chunks = tileX > 0 && tileY > 0
+                                  ? uint64_t((width + tileX - 1) / tileX) * uint64_t((height + tileY - 1) / tileY)
+                                  : uint64_t((height + linesPerChunk - 1) / linesPerChunk);
+      if (!empty && chunks * 8 > fileBytes)
+        return "its data window needs " + std::to_string(chunks) + " chunk offsets, more than the file holds";
+      if (!multipart || empty) break;
+      if (part >= 64) return "more than 64 parts";
     }
   } catch (const std::runtime_error& e) {
     return e.what();

@@ -137,9 +137,13 @@ FilmFile readFilmFile(const std::string& path) {
     if (!header.is_object()) throw fail("header: not a JSON object");
     // Whole numbers checked against their range before they are narrowed: a header's numbers are
     // read as written, never wrapped.
+    // (nlohmann reads every integer of at least 0 as unsigned: both bounds apply to both kinds.)
     auto integer = [&](const nlohmann::json& value, const std::string& key, int64_t min, int64_t max) {
-      if (!value.is_number_integer() || (value.is_number_unsigned() && value.get<uint64_t>() > uint64_t(max)) ||
-          (!value.is_number_unsigned() && (value.get<int64_t>() < min || value.get<int64_t>() > max)))
+      const bool inRange =
+          value.is_number_unsigned()
+              ? value.get<uint64_t>() <= uint64_t(max) && (min <= 0 || value.get<uint64_t>() >= uint64_t(min))
+              : value.is_number_integer() && value.get<int64_t>() >= min && value.get<int64_t>() <= max;
+      if (!inRange)
         throw fail("header: '" + key + "' is not a whole number in [" + std::to_string(min) + ", " +
                    std::to_string(max) + "]");
       return int(value.get<int64_t>());
@@ -188,7 +192,10 @@ FilmFile readFilmFile(const std::string& path) {
     throw fail("samples " + std::to_string(info.firstSample) + ":" + std::to_string(info.sampleCount) + " of " +
                std::to_string(info.spp));
 
-  // The file's size bounds what is allocated: a header cannot ask for more than the file holds.
+  // The file's size bounds what is allocated: a header cannot ask for more than the file holds, and
+  // its sums per pixel are the ones its sums and layers make (a film of one pixel tells).
+  if (Film(1, 1, {0, 0, 1, 1}, sums, layers).sumsPerPixel() != sumsPerPixel)
+    throw fail("'sums_per_pixel' does not match its sums and layers");
   const uint64_t pixels = region.pixelCount();
   const uint64_t sumBytes = pixels * uint64_t(sumsPerPixel) * sizeof(ExactSum), countBytes = padded(pixels * 4);
   const uint64_t expected = kPreambleBytes + uint64_t(headerBytes) + sumBytes + 2 * countBytes;
@@ -198,7 +205,6 @@ FilmFile readFilmFile(const std::string& path) {
                 "raise --memory-limit if the machine has the memory");
   file.film = std::make_unique<Film>(width, height, region, sums, layers);
   Film& film = *file.film;
-  if (film.sumsPerPixel() != sumsPerPixel) throw fail("'sums_per_pixel' does not match its sums and layers");
   const auto sumsData = film.pixelSums();
   const auto valid = film.validSamples(), taken = film.samplesTaken();
   in.read(reinterpret_cast<char*>(sumsData.data()), std::streamsize(sumsData.size_bytes()));

@@ -1,5 +1,6 @@
 #include "lucent/scene/loader.h"
 
+#include <cfloat>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -228,30 +229,38 @@ std::string positionOf(const std::string& text, size_t offset) {
 // The scene file's JSON. Refuses what nlohmann::json would take silently: a key given twice in one
 // object (the second value would win unseen), naming the key's path.
 nlohmann::json parseSceneJson(const std::string& text, const std::string& path) {
-  std::vector<std::set<std::string>> keysOfOpenObjects;
-  std::vector<std::string> keyPath;  // the key of each open object or array, "" for an array element
+  // The open objects and arrays: how each is named in its parent (".key" or "[i]"), the keys an
+  // object has had, the elements an array has had.
+  struct Open {
+    std::string name;
+    bool array = false;
+    std::set<std::string> keys;
+    size_t elements = 0;
+  };
+  std::vector<Open> open;
   std::string pendingKey;
+  // The name of the value that starts now in the innermost open container.
+  const auto nameOfNext = [&]() -> std::string {
+    if (open.empty()) return "";
+    if (open.back().array) return "[" + std::to_string(open.back().elements++) + "]";
+    return (open.size() > 1 ? "." : "") + excerpt(pendingKey);
+  };
   const nlohmann::json::parser_callback_t checkKeys = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& value) {
     using Event = nlohmann::json::parse_event_t;
     if (event == Event::object_start || event == Event::array_start) {
-      keyPath.push_back(pendingKey);
-      pendingKey.clear();
-      if (event == Event::object_start) keysOfOpenObjects.emplace_back();
-      else keysOfOpenObjects.emplace_back(std::set<std::string>{"\x01array"});
+      open.push_back({nameOfNext(), event == Event::array_start, {}, 0});
     } else if (event == Event::object_end || event == Event::array_end) {
-      keysOfOpenObjects.pop_back();
-      keyPath.pop_back();
+      open.pop_back();
     } else if (event == Event::key) {
-      const std::string key = value.get<std::string>();
-      pendingKey = key;
-      if (!keysOfOpenObjects.back().insert(key).second) {
+      pendingKey = value.get<std::string>();
+      if (!open.back().keys.insert(pendingKey).second) {
         std::string where;
-        for (const std::string& k : keyPath)
-          if (!k.empty()) where += k + ".";
-        throw SceneError(path + ": " + where + excerpt(key) + ": the key is given twice in one object");
+        for (const Open& o : open) where += o.name;
+        throw SceneError(path + ": " + where + (open.size() > 1 ? "." : "") + excerpt(pendingKey) +
+                         ": the key is given twice in one object");
       }
     } else if (event == Event::value) {
-      pendingKey.clear();
+      nameOfNext();  // counts an array's element
     }
     return true;
   };
@@ -362,8 +371,9 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
   for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
     const uint32_t id = scene.materialIds[t];
     const Rgb ke = scene.materials[id].ke;
-    const Vec3 e = cross(scene.vertex(t, 1) - scene.vertex(t, 0), scene.vertex(t, 2) - scene.vertex(t, 0));
-    if (!ke.isBlack() && !std::isfinite(ke.luminance() * length(e) * kPi))
+    if (ke.isBlack()) continue;
+    const double area = triangleGeometry(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2)).area;
+    if (!(double(ke.luminance()) * area * kPi <= double(FLT_MAX)))
       throw SceneError(import.specs[id].origin + ": material '" + import.specs[id].name +
                        "': the emitted power of a triangle overflows (Ke or the triangle is too large)");
   }

@@ -60,6 +60,7 @@ struct DiscForRays {
   float ax, ay, az;  // disc normal
   float height;      // of the gather point above the disc's plane
   float radius2, tMin;
+  float tScale;      // the hit's distance as compared and kept: 1, or more for a back face
 };
 LUCENT_LANE_LOOP(void, intersectDisc, (const DiscForRays disc, uint32_t index, const float* dx, const float* dy, const float* dz,
                   size_t count, float* nearestT, uint32_t* nearestNode)) {
@@ -67,8 +68,9 @@ LUCENT_LANE_LOOP(void, intersectDisc, (const DiscForRays disc, uint32_t index, c
     const float cosine = dx[k] * disc.ax + dy[k] * disc.ay + dz[k] * disc.az;  // < 0 towards the disc
     const float t = disc.height / -cosine;
     const float qx = disc.px + t * dx[k], qy = disc.py + t * dy[k], qz = disc.pz + t * dz[k];
-    const bool hit = (cosine < 0) & (t > disc.tMin) & (t < nearestT[k]) & (qx * qx + qy * qy + qz * qz <= disc.radius2);
-    nearestT[k] = hit ? t : nearestT[k];
+    const float kept = t * disc.tScale;
+    const bool hit = (cosine < 0) & (t > disc.tMin) & (kept < nearestT[k]) & (qx * qx + qy * qy + qz * qz <= disc.radius2);
+    nearestT[k] = hit ? kept : nearestT[k];
     nearestNode[k] = hit ? index : nearestNode[k];
   }
 }
@@ -430,6 +432,10 @@ class LaneRasterizer {
   // A listed leaf seen from behind (postTraversal's top bit).
   static constexpr uint32_t kListedBack = 1u << 31;
 
+  // A back face's distance as ray casting compares it: one depth code's worth further (codes are
+  // at most 4.8% apart).
+  static constexpr float kBackFaceDistanceScale = 1.05f;
+
   // An occluder's word: its depth one code further than its own, so that a front face at the same
   // place (the other side of a wall modelled as two faces) wins the depth test.
   uint32_t backFacePixel(float distance) const {
@@ -603,7 +609,9 @@ class LaneRasterizer {
       const float ax = disc.axis.x, ay = disc.axis.y, az = disc.axis.z;
       const float height = dot(pc, disc.axis);  // > 0: p in front of the disc
       const float r2 = disc.radius * disc.radius;
-      const DiscForRays rays{pc.x, pc.y, pc.z, ax, ay, az, height, r2, tMin};
+      // A back face's hit counts a little further away, so that a front face at the same place (a
+      // wall of two faces) takes the ray, as it wins a splat's depth test.
+      const DiscForRays rays{pc.x, pc.y, pc.z, ax, ay, az, height, r2, tMin, back ? kBackFaceDistanceScale : 1.0f};
       // The disc lies within its bounding sphere, which subtends a cone of half-angle alpha about
       // the direction to its centre; a tile whose cone (half-angle beta) is further than alpha + beta
       // from it has no ray that can hit the disc.
@@ -629,8 +637,8 @@ class LaneRasterizer {
     for (size_t k = 0; k < used; ++k)
       if (nearestT[k] < kInf) {
         uint32_t& px = b_->grid[b_->rayGridIndex[k]];
-        px = std::min(px, nearestNode[k] == kBackFaceMicroNode ? backFacePixel(nearestT[k])
-                                                                : packMicroPixel(s_->depth.code(nearestT[k]), nearestNode[k]));
+        // A back face's distance is already kept a code further (kBackFaceDistanceScale).
+        px = std::min(px, packMicroPixel(s_->depth.code(nearestT[k]), nearestNode[k]));
       }
     b_->listed = 0;
     c_->rayCastSeconds += clock.seconds();

@@ -59,8 +59,9 @@ bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptio
     Stopwatch rayClock;
     // A stop in the middle of a band drops the band: the film keeps the bands before it whole.
     std::optional<BandShadingPoints> traced;
+    uint64_t bandShadowRays = 0;  // counted once the band is kept
     try {
-      traced.emplace(traceBand(scene, vis, options, band, part, totals.shadowRays));
+      traced.emplace(traceBand(scene, vis, options, band, part, bandShadowRays));
       totals.traceSeconds += rayClock.seconds();
       estimate(*traced, [&](double fraction) {
         if (control.progress) control.progress((double(first - region.y0) + fraction * (end - first)) / rows);
@@ -70,6 +71,7 @@ bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptio
     }
     dumpBand(options, index, traced->eye, traced->radiance);
     addBand(film, traced->eye, traced->radiance, width, part);
+    totals.shadowRays += bandShadowRays;
     totals.addBand(traced->eye);
     bands.finished(end - first, bandClock.seconds());
     row = end;
