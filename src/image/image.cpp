@@ -164,12 +164,11 @@ std::string exrHeaderProblem(std::ifstream& in, uint64_t fileBytes) {
     in.seekg(4);
     const int32_t version = readWord();
     const bool multipart = (version & 0x1000) != 0;
-    // Names are read as OpenEXR reads them: up to a NUL or 32 bytes (256 with long names), the
-    // next field starting where that stops.
-    const int longest = (version & 0x400) != 0 ? 255 : 31;
+    // Names are read as OpenEXR reads them: up to a NUL or 256 bytes whatever the long-names flag
+    // (which it checks afterwards), the next field starting where that stops.
     const auto readName = [&]() {
       std::string name;
-      for (int n = longest; n >= 0; --n) {
+      for (int n = 255; n >= 0; --n) {
         const char c = readByte();
         if (c == 0) break;
         name += c;
