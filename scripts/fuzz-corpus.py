@@ -6,7 +6,8 @@ fuzzer's order (fuzz/scene_loader_fuzzer.cpp: scene.json, mesh.obj, mesh.mtl, th
 texture.png and as sky.hdr) and renamed to the fuzzer's names, plus scenes with a texture and with an
 environment map written here. film_reader and merge: film files of whole renders, parts, checkpoints
 and layered films, in fuzz/film_fuzz_input.h's two forms; merge's joined as parts. image_header:
-pairs of small EXR, PNG, Radiance and PPM images, of equal and of different sizes.
+pairs of small EXR, PNG and Radiance images (and a TGA, which Lucent refuses), of equal and of
+different sizes.
 
 Usage: scripts/fuzz-corpus.py TARGET OUT_DIR
 """
@@ -156,7 +157,7 @@ def image_seeds():
         "exr": (0, exr(4, 4, ["R", "G", "B"])),
         "png": (1, png(4, 4, (200, 120, 40))),
         "hdr": (2, radiance_hdr(4, 4, (128, 128, 160, 129))),
-        "ppm": (5, b"P6\n4 4\n255\n" + bytes(48)),
+        "tga": (7, b"\0\0\2" + bytes(9) + struct.pack("<HHBB", 4, 4, 24, 0) + bytes(48)),
     }
     seeds = {}
     for a, (ka, da) in images.items():

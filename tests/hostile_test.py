@@ -535,6 +535,9 @@ def test_compare_refuses_an_exr_attribute_its_file_cannot_hold(work):
     write(os.path.join(work, "window.exr"), small[:at] + struct.pack("<iiii", 0, 0, 1 << 30, 1 << 30) + small[at + 16:])
     # Within 2^26 pixels, but a row per chunk offset: 512 MiB of offsets in a file of 400 bytes.
     write(os.path.join(work, "rows.exr"), small[:at] + struct.pack("<iiii", 0, 0, 0, (1 << 26) - 1) + small[at + 16:])
+    # One row of 2^26 pixels: a single chunk offset, but a line buffer of 384 MiB that OpenEXR
+    # allocates as it opens the file.
+    write(os.path.join(work, "wide.exr"), small[:at] + struct.pack("<iiii", 0, 0, (1 << 26) - 1, 0) + small[at + 16:])
     # A typed value is read by its type, not its size field: a channel list one byte shorter than
     # its size says puts every later field elsewhere than a size-by-size walk finds it.
     at = small.index(b"channels\0chlist\0") + len(b"channels\0chlist\0")
@@ -543,9 +546,22 @@ def test_compare_refuses_an_exr_attribute_its_file_cannot_hold(work):
     for name, words in (("attribute.exr", "attribute 'compression' claims 1886220131 bytes, more than the file holds"),
                         ("window.exr", "dataWindow claims"),
                         ("rows.exr", "needs 67108864 chunk offsets, more than the file holds"),
+                        ("wide.exr", "claim more pixel bytes than its"),
                         ("chlist.exr", "its channel list's size is not its content's")):
         run = lucent("compare", name, name, cwd=work, timeout=60)
         assert run.code == 2 and run.seconds < 2 and name in run.err and words in run.err, run
+
+
+def test_only_the_reader_an_image_is_named_for_reads_it(work):
+    # OpenImageIO would try every reader it has on a file its own refuses; some abort on crafted
+    # files (found by fuzzing: the RLA reader's assertion). Lucent reads EXR, HDR, PNG, JPEG, TIFF.
+    small = exr(4, 4, ["R", "G", "B"], compression=0)
+    write(os.path.join(work, "a.exr"), small)
+    write(os.path.join(work, "exr-named.png"), small)
+    write(os.path.join(work, "a.tga"), b"\0\0\2" + bytes(9) + struct.pack("<HHBB", 4, 4, 24, 0) + bytes(48))
+    for name, words in (("exr-named.png", "exr-named.png"), ("a.tga", "not a format Lucent reads")):
+        run = lucent("compare", name, "a.exr", cwd=work)
+        assert run.code == 2 and words in run.err, run
 
 
 def test_compare_says_the_sizes_differ_before_decoding_a_huge_png(work):

@@ -178,6 +178,7 @@ std::string exrHeaderProblem(std::ifstream& in, uint64_t fileBytes) {
     for (int part = 0;; ++part) {
       bool empty = true;
       int64_t width = 0, height = 0;
+      uint64_t pixelBytes = 0;
       int compression = 0;
       uint32_t tileX = 0, tileY = 0;
       for (;;) {
@@ -201,7 +202,9 @@ std::string exrHeaderProblem(std::ifstream& in, uint64_t fileBytes) {
             const std::string channel = readName();
             consumed += int32_t(channel.size()) + 1;
             if (channel.empty()) break;
-            for (int k = 0; k < 4; ++k) readWord();
+            const int32_t pixelType = readWord();  // uint, half, float
+            for (int k = 0; k < 3; ++k) readWord();
+            pixelBytes += pixelType == 1 ? 2 : 4;
             consumed += 16;
             if (consumed > size) break;
           }
@@ -238,6 +241,15 @@ std::string exrHeaderProblem(std::ifstream& in, uint64_t fileBytes) {
                                   : uint64_t((height + linesPerChunk - 1) / linesPerChunk);
       if (!empty && chunks * 8 > fileBytes)
         return "its data window needs " + std::to_string(chunks) + " chunk offsets, more than the file holds";
+      // OpenEXR allocates a chunk's decoded bytes when it opens the file, before any pixel is read:
+      // neither a chunk nor the whole image may hold more than the file's bytes can decode to.
+      const uint64_t most = compression == 0 ? fileBytes : fileBytes * kMostDecodedPerByte;
+      const uint64_t chunkBytes = tileX > 0 && tileY > 0 ? uint64_t(std::min<int64_t>(tileX, width)) *
+                                                               uint64_t(std::min<int64_t>(tileY, height)) * pixelBytes
+                                                         : uint64_t(width) * uint64_t(linesPerChunk) * pixelBytes;
+      if (!empty && (chunkBytes > most || uint64_t(width) * uint64_t(height) * pixelBytes > most))
+        return "its data window or tiles claim more pixel bytes than its " + std::to_string(fileBytes) +
+               " bytes can hold";
       if (!multipart || empty) break;
       if (part >= 64) return "more than 64 parts";
     }
@@ -264,8 +276,21 @@ std::unique_ptr<OIIO::ImageInput> openChecked(const std::string& path) {
       if (!why.empty()) throw std::runtime_error("cannot read image '" + path + "': a damaged EXR header: " + why);
     }
   }
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) throw std::runtime_error("cannot read image '" + path + "': " + OIIO::geterror());
+  // The reader of the file's extension, and only that one: OpenImageIO's open() tries every reader
+  // it has on a file its own does not take, and some abort the process on a crafted file (its RLA
+  // reader asserts on a channel type; found by fuzzing).
+  std::string extension = std::filesystem::path(path).extension().string();
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (extension != ".exr" && extension != ".hdr" && extension != ".png" && extension != ".jpg" && extension != ".jpeg" &&
+      extension != ".tif" && extension != ".tiff")
+    throw std::runtime_error("cannot read image '" + path +
+                             "': not a format Lucent reads (.exr, .hdr, .png, .jpg or .jpeg, .tif or .tiff)");
+  // Created by the format's name: given the path, create() also tries every other reader when the
+  // file is not valid for its own.
+  auto in = OIIO::ImageInput::create(extension.substr(1), false);
+  OIIO::ImageSpec opened;
+  if (!in || !in->open(path, opened))
+    throw std::runtime_error("cannot read image '" + path + "': " + (in ? in->geterror() : OIIO::geterror()));
   const OIIO::ImageSpec& spec = in->spec();
   // The header's size is checked before any pixel is allocated (a 69-byte PNG may claim 20,000 x
   // 20,000).

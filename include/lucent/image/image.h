@@ -54,12 +54,13 @@ struct ImageHeader {
   int width = 0, height = 0;
   std::vector<std::string> channels;
 };
-// The header of any image OpenImageIO reads, checked as readImage checks it (a regular file, at most
+// The header of an image in a format Lucent reads (EXR, Radiance HDR, PNG, JPEG, TIFF, by the
+// extension; its content must be that format), checked as readImage checks it (a regular file, at most
 // 2^26 pixels and 1,024 channels, no more pixel data than the file's bytes could hold however they
 // are compressed). Throws std::runtime_error naming the file.
 ImageHeader readImageHeader(const std::string& path);
-// Reads any image OpenImageIO reads, as float, with its channel names and string metadata: the
-// values as stored. Refuses what readImageHeader refuses before any pixel is allocated.
+// Reads an image as float, with its channel names and string metadata: the values as stored.
+// Refuses what readImageHeader refuses before any pixel is allocated.
 Image readImage(const std::string& path, ImageMetadata* metadata = nullptr);
 // Whether stored values are sRGB-encoded: the colour space OpenImageIO reports for the file (sRGB
 // for 8-bit JPEG, PNG, TIFF...; linear for EXR and HDR), or, where it reports none, the extension.
