@@ -8,12 +8,14 @@
 # over 10 s or an allocation over 1 GiB (the input is then in build-fuzz/artifacts-TARGET/, the
 # report in build-fuzz/logs-TARGET/).
 #
-# Usage: scripts/fuzz.sh TARGET [SECONDS (default 600)] [JOBS (default: the cores)]
+# Usage: scripts/fuzz.sh TARGET [SECONDS (default 600)] [JOBS (default: the cores)] [RUNS]
+# With RUNS, each job stops after that many executions if SECONDS have not run out first.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 target=${1:?usage: scripts/fuzz.sh scene_loader|film_reader|merge|image_header [SECONDS] [JOBS]}
 seconds=${2:-600}
 jobs=${3:-$(nproc)}
+runs=${4:--1}
 case "$target" in scene_loader|film_reader|merge|image_header) ;; *) echo "fuzz: unknown target $target" >&2; exit 2;; esac
 scripts/setup.sh clang libclang-rt-dev
 CXX=clang++ cmake -S . -B build-fuzz -DLUCENT_FUZZ=ON -DLUCENT_BUILD_TESTS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo > /dev/null
@@ -25,11 +27,12 @@ fuzzer=$PWD/build-fuzz/lucent_fuzz_$target
 # One job per core, each for the whole time; they share the corpus. -malloc_limit_mb: an input of
 # at most 64 KiB must not need a gigabyte at once.
 export LSAN_OPTIONS="suppressions=$PWD/fuzz/lsan-suppressions.txt print_suppressions=0"
-(cd "build-fuzz/logs-$target" && "$fuzzer" -jobs="$jobs" -workers="$jobs" -max_total_time="$seconds" -timeout=10 \
+started=$(date +%s)
+(cd "build-fuzz/logs-$target" && "$fuzzer" -jobs="$jobs" -workers="$jobs" -max_total_time="$seconds" -runs="$runs" -timeout=10 \
    -max_len=65536 -rss_limit_mb=2048 -malloc_limit_mb=1024 -print_final_stats=1 \
    -artifact_prefix="$PWD/../artifacts-$target/" "../corpus-$target" "../seeds-$target" > /dev/null 2>&1) || true
-runs=$(awk '/^stat::number_of_executed_units:/ { n += $2 } END { print n + 0 }' "build-fuzz/logs-$target"/fuzz-*.log)
-echo "fuzz $target: ${runs} executions in ${seconds} s on ${jobs} jobs, corpus of $(ls "build-fuzz/corpus-$target" | wc -l) inputs"
+executed=$(awk '/^stat::number_of_executed_units:/ { n += $2 } END { print n + 0 }' "build-fuzz/logs-$target"/fuzz-*.log)
+echo "fuzz $target: ${executed} executions in $(( $(date +%s) - started )) s on ${jobs} jobs, corpus of $(ls "build-fuzz/corpus-$target" | wc -l) inputs"
 if grep -l -E "^==[0-9]+==ERROR|runtime error:|ERROR: libFuzzer|deadly signal|Timeout|out-of-memory|malloc\(" \
      "build-fuzz/logs-$target"/fuzz-*.log; then
   echo "fuzz $target: defects found; inputs in build-fuzz/artifacts-$target/, reports in the logs above" >&2
