@@ -1,4 +1,4 @@
-// The point hierarchy (src/methods/points): best-candidate sampling, median split, node data and refit
+// The point hierarchy (src/techniques/points): best-candidate sampling, median split, node data and refit
 // times for 2^a .. 2^b points, the points' spacing against plain uniform sampling, how much of the
 // surface the leaf discs cover for several disc areas, and the packed nodes' quantization error.
 // Prints one JSON object. Timings are the best of --repeats runs.
@@ -17,8 +17,8 @@
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
 #include "lucent/core/stats.h"
-#include "lucent/methods/points/point_hierarchy.h"
 #include "lucent/scene/loader.h"
+#include "lucent/techniques/points/point_hierarchy.h"
 
 using namespace lucent;
 using nlohmann::json;

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Point hierarchy (src/methods/points): best-candidate sampling, median split, node data and refit
+# Point hierarchy (src/techniques/points): best-candidate sampling, median split, node data and refit
 # times from 2^16 to 2^21 points with 2 threads, point spacing against uniform sampling, leaf-disc
 # coverage and the packed nodes' quantization error (bench/bench_points.cpp), on the Cornell box and
 # Sponza. One JSON object per scene. Run it on an otherwise idle machine.

@@ -19,27 +19,39 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LUCENT = os.path.join(ROOT, "build", "lucent")
 
 SCENES = ["cornell-box", "cornell-box-glossy", "cornell-box-spheres", "glass-ball", "ring", "ring-area", "sponza"]
+# envpbgi refuses emitting triangles: its scenes are lit by an environment and a sun.
+ENVIRONMENT_SCENES = ["primitives", "primitives-glossy", "sponza-courtyard"]
 
-# Per method: the options every scene is rendered with, and extra variants on the Cornell box.
+# Per method: the options every scene is rendered with, extra variants on its first scene, its
+# scenes and the two of them --quick renders.
 METHODS = {
-    "pt": (["--spp", "4"], [["--strategy", "light"], ["--strategy", "bsdf"], ["--max-depth", "2", "--layers"]]),
+    "pt": (["--spp", "4"], [["--strategy", "light"], ["--strategy", "bsdf"], ["--max-depth", "2", "--layers"]],
+           SCENES, ["cornell-box", "glass-ball"]),
     "purcell": (["--photons", "20000", "--caustic-photons", "20000", "--light-samples", "4"],
-                [["--map", "stencil"], ["--map", "hash"], ["--map", "kdtree"], ["--layers"]]),
+                [["--map", "stencil"], ["--map", "hash"], ["--map", "kdtree"], ["--layers"]],
+                SCENES, ["cornell-box", "glass-ball"]),
     "pmfg": (["--photons", "20000", "--caustic-photons", "20000", "--gather-rays", "16", "--light-samples", "4"],
-             [["--map", "sort"], ["--layers"]]),
+             [["--map", "sort"], ["--layers"]], SCENES, ["cornell-box", "glass-ball"]),
     "micro": (["--light-samples", "4"],
               [["--lighting", "vpl"], ["--lighting", "radiosity"], ["--lighting", "photons"], ["--upsampling", "4"],
-               ["--encoding", "packed", "--mapping", "nusselt"], ["--layers"]]),
+               ["--encoding", "packed", "--mapping", "nusselt"], ["--layers"]], SCENES, ["cornell-box", "glass-ball"]),
+    "envpbgi": (["--points", "16384"],
+                [["--spp", "3"], ["--mapping", "nusselt"], ["--point-sampling", "best-candidate"], ["--layers"]],
+                ENVIRONMENT_SCENES, ["primitives", "sponza-courtyard"]),
+    "particles": (["--area-particles", "4000", "--light-samples", "4"],
+                  [["--sides", "front"], ["--particle-area", "uniform"], ["--spp", "3"], ["--layers"]],
+                  SCENES + ["primitives"], ["cornell-box", "glass-ball"]),
 }
 
 
 def cases(quick):
-    for method, (base, variants) in METHODS.items():
-        for scene in (["cornell-box", "glass-ball"] if quick else SCENES):
-            resolution = "64x40" if scene == "sponza" else "48x48"
+    for method, (base, variants, scenes, quick_scenes) in METHODS.items():
+        for scene in (quick_scenes if quick else scenes):
+            resolution = "64x40" if scene.startswith("sponza") else "48x48"
             yield f"{scene} {method}", scene, method, ["--resolution", resolution] + base
         for variant in variants:
-            yield f"cornell-box {method} {' '.join(variant)}", "cornell-box", method, ["--resolution", "48x48"] + base + variant
+            yield (f"{scenes[0]} {method} {' '.join(variant)}", scenes[0], method,
+                   ["--resolution", "48x48"] + base + variant)
 
 
 def render(binary, scene, method, args, output):

@@ -16,11 +16,11 @@
 #include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
-#include "lucent/methods/points/point_hierarchy.h"
-#include "lucent/methods/points/point_radiance.h"
 #include "lucent/scene/loader.h"
 #include "lucent/scene/surface.h"
-#include "methods/points/radix_sort.h"
+#include "lucent/techniques/points/point_hierarchy.h"
+#include "lucent/techniques/points/point_radiance.h"
+#include "techniques/points/radix_sort.h"
 #include "test_scenes.h"
 
 using namespace lucent;

@@ -17,7 +17,6 @@
 #include "lucent/core/memory.h"
 #include "lucent/core/srgb.h"
 #include "lucent/core/text.h"
-#include "lucent/scene/scene.h"
 
 namespace lucent {
 

@@ -10,8 +10,8 @@
 #include "lucent/image/image.h"
 #include "lucent/image/metrics.h"
 #include "lucent/methods/methods.h"
-#include "lucent/methods/photons/photon.h"
 #include "lucent/scene/loader.h"
+#include "lucent/techniques/photons/photon.h"
 #include "lucent/trace/visibility.h"
 
 int main(int argc, char** argv) {

@@ -1,5 +1,6 @@
 // Float images with named channels (interleaved), and their EXR/PNG input and output.
 #pragma once
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -8,6 +9,10 @@
 #include "lucent/core/math.h"
 
 namespace lucent {
+
+// Largest image Lucent reads, and a camera may ask for (the path tracer keeps about 40 bytes per
+// pixel).
+inline constexpr uint64_t kMaxImagePixels = uint64_t(1) << 26;
 
 class Image {
  public:

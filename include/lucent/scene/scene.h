@@ -7,6 +7,7 @@
 
 #include "lucent/core/distribution.h"
 #include "lucent/core/math.h"
+#include "lucent/image/image.h"
 
 namespace lucent {
 
@@ -43,9 +44,6 @@ struct Light {
   Vec3 vector;            // Point: position; Directional: direction the light travels
   Rgb value;              // Point: intensity (W/sr); Directional: irradiance normal to it; others unused
 };
-
-// Largest image a camera may ask for (the path tracer keeps about 40 bytes per pixel).
-inline constexpr uint64_t kMaxImagePixels = uint64_t(1) << 26;
 
 struct Camera {
   Vec3 eye{0, 0, 0}, lookAt{0, 0, -1}, up{0, 1, 0};

@@ -12,12 +12,12 @@
 #include "lucent/core/morton.h"
 #include "lucent/core/parallel.h"
 #include "lucent/core/stop.h"
-#include "lucent/methods/microrender/micro_buffer.h"
-#include "lucent/methods/points/bottom_up.h"
-#include "lucent/methods/points/node_tree.h"
 #include "lucent/scene/bsdf.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/texture.h"
+#include "lucent/techniques/microbuffers/micro_buffer.h"
+#include "lucent/techniques/points/bottom_up.h"
+#include "lucent/techniques/points/node_tree.h"
 
 namespace lucent {
 

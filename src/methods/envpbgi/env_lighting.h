@@ -8,9 +8,9 @@
 #include <span>
 #include <vector>
 
-#include "lucent/methods/microrender/hemisphere_mapping.h"
-#include "lucent/methods/microrender/micro_rendering.h"
 #include "lucent/scene/scene.h"
+#include "lucent/techniques/microbuffers/hemisphere_mapping.h"
+#include "lucent/techniques/microbuffers/micro_rendering.h"
 #include "lucent/trace/visibility.h"
 #include "methods/envpbgi/env_points.h"
 

@@ -2,8 +2,8 @@
 
 #include <stdexcept>
 
-#include "lucent/methods/points/bottom_up.h"
-#include "lucent/methods/points/node_tree.h"
+#include "lucent/techniques/points/bottom_up.h"
+#include "lucent/techniques/points/node_tree.h"
 
 namespace lucent {
 

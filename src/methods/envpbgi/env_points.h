@@ -1,6 +1,6 @@
 // The point hierarchy as the environment-lighting PBGI paper stores it (section 4, "Data
 // structure"): 48-byte unquantized nodes with two child indices, a skip index for stackless
-// traversal and a 32-bit selection field, over the shared point hierarchy (src/methods/points). Also
+// traversal and a 32-bit selection field, over the shared point hierarchy (src/techniques/points). Also
 // per node the surface point a micro-buffer is rendered from (its leaves' area-weighted mean
 // position and normal) and the flags of the selection.
 #pragma once
@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "lucent/core/math.h"
-#include "lucent/methods/points/point_hierarchy.h"
+#include "lucent/techniques/points/point_hierarchy.h"
 
 namespace lucent {
 

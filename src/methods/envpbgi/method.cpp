@@ -2,8 +2,8 @@
 // the method list.
 #include <bit>
 
-#include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/pipeline/render_options.h"
+#include "lucent/techniques/microbuffers/micro_buffer.h"
 #include "methods/envpbgi/env_pbgi.h"
 
 namespace lucent {

@@ -8,8 +8,8 @@
 
 #include "lucent/core/lane_clones.h"
 #include "lucent/core/stop.h"
-#include "lucent/methods/microrender/micro_buffer.h"
 #include "lucent/scene/texture.h"
+#include "lucent/techniques/microbuffers/micro_buffer.h"
 
 namespace lucent {
 

@@ -9,9 +9,9 @@
 
 #include "lucent/core/parallel.h"
 #include "lucent/core/stop.h"
-#include "lucent/methods/microrender/micro_buffer.h"
-#include "lucent/methods/points/bottom_up.h"
-#include "lucent/methods/points/node_tree.h"
+#include "lucent/techniques/microbuffers/micro_buffer.h"
+#include "lucent/techniques/points/bottom_up.h"
+#include "lucent/techniques/points/node_tree.h"
 
 namespace lucent {
 

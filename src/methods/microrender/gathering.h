@@ -16,8 +16,8 @@
 #include "lucent/core/rng.h"
 #include "lucent/core/stats.h"
 #include "lucent/core/stop.h"
-#include "lucent/methods/microrender/hemisphere_mapping.h"
-#include "lucent/methods/microrender/micro_rendering.h"
+#include "lucent/techniques/microbuffers/hemisphere_mapping.h"
+#include "lucent/techniques/microbuffers/micro_rendering.h"
 
 namespace lucent {
 

@@ -7,12 +7,12 @@
 #include <cstdint>
 #include <string>
 
-#include "lucent/methods/microrender/hemisphere_mapping.h"
-#include "lucent/methods/points/point_hierarchy.h"
-#include "lucent/methods/points/point_radiance.h"
 #include "lucent/pipeline/method.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
+#include "lucent/techniques/microbuffers/hemisphere_mapping.h"
+#include "lucent/techniques/points/point_hierarchy.h"
+#include "lucent/techniques/points/point_radiance.h"
 #include "lucent/trace/visibility.h"
 
 namespace lucent {

@@ -6,14 +6,14 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
-#include "lucent/methods/points/bottom_up.h"
 #include "lucent/core/dump.h"
-#include "lucent/methods/photons/photon_estimate.h"
-#include "lucent/methods/photons/photon_tracing.h"
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/particle_scattering.h"
 #include "lucent/scene/surface.h"
+#include "lucent/techniques/photons/photon_estimate.h"
+#include "lucent/techniques/photons/photon_tracing.h"
+#include "lucent/techniques/points/bottom_up.h"
 
 namespace lucent {
 

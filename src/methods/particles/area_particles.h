@@ -9,8 +9,8 @@
 
 #include "lucent/core/oriented_point_grid.h"
 #include "lucent/core/stats.h"
-#include "lucent/methods/points/point_hierarchy.h"
 #include "lucent/scene/scene.h"
+#include "lucent/techniques/points/point_hierarchy.h"
 
 namespace lucent {
 

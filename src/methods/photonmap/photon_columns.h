@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "lucent/core/uninitialized.h"
-#include "lucent/methods/photons/photon.h"
+#include "lucent/techniques/photons/photon.h"
 
 namespace lucent {
 

@@ -8,7 +8,7 @@
 #include "lucent/core/dump.h"
 #include "lucent/core/memory.h"
 #include "lucent/pipeline/options.h"
-#include "lucent/methods/photons/photon_tracing.h"
+#include "lucent/techniques/photons/photon_tracing.h"
 
 namespace lucent {
 

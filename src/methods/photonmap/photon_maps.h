@@ -4,7 +4,7 @@
 #include <span>
 #include <variant>
 
-#include "lucent/methods/photons/kd_tree.h"
+#include "lucent/techniques/photons/kd_tree.h"
 #include "methods/photonmap/photon_mapping.h"
 #include "radiance_estimate.h"
 #include "sorted_grid.h"

@@ -8,7 +8,7 @@
 #include <cstdint>
 
 #include "knn_grid.h"
-#include "lucent/methods/photons/photon_estimate.h"
+#include "lucent/techniques/photons/photon_estimate.h"
 #include "photon_columns.h"
 
 namespace lucent {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "lucent/core/math.h"
-#include "lucent/methods/photons/photon.h"
+#include "lucent/techniques/photons/photon.h"
 
 namespace lucent {
 

@@ -1,10 +1,10 @@
-#include "lucent/methods/points/point_radiance.h"
+#include "lucent/techniques/points/point_radiance.h"
 
 #include <algorithm>
 #include <stdexcept>
 
-#include "lucent/methods/points/bottom_up.h"
-#include "lucent/methods/points/point_hierarchy.h"
+#include "lucent/techniques/points/bottom_up.h"
+#include "lucent/techniques/points/point_hierarchy.h"
 
 namespace lucent {
 

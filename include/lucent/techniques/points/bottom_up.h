@@ -8,7 +8,7 @@
 #include <cstdint>
 
 #include "lucent/core/stop.h"
-#include "lucent/methods/points/node_tree.h"
+#include "lucent/techniques/points/node_tree.h"
 
 namespace lucent::points {
 

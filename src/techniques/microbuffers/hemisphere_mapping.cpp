@@ -1,12 +1,12 @@
 // Nusselt and BRDF importance-warped micro-buffer mappings (Ritschel et al. 2009, 2.2, 2.3).
-#include "lucent/methods/microrender/hemisphere_mapping.h"
+#include "lucent/techniques/microbuffers/hemisphere_mapping.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
-#include "lucent/methods/microrender/micro_buffer.h"
+#include "lucent/techniques/microbuffers/micro_buffer.h"
 
 namespace lucent {
 

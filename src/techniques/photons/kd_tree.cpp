@@ -1,4 +1,4 @@
-#include "lucent/methods/photons/kd_tree.h"
+#include "lucent/techniques/photons/kd_tree.h"
 
 #include "lucent/core/dump.h"
 #include "lucent/core/stop.h"

@@ -1,5 +1,5 @@
 // Building the point hierarchy and computing (and recomputing) its node data (paper 2.1, 3.1).
-#include "lucent/methods/points/point_hierarchy.h"
+#include "lucent/techniques/points/point_hierarchy.h"
 
 #include <tbb/parallel_reduce.h>
 
@@ -9,9 +9,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "lucent/methods/points/bottom_up.h"
-#include "lucent/scene/surface.h"
 #include "lucent/core/stop.h"
+#include "lucent/scene/surface.h"
+#include "lucent/techniques/points/bottom_up.h"
 
 namespace lucent {
 

@@ -11,10 +11,10 @@
 #pragma once
 #include <cstdint>
 
-#include "lucent/methods/photons/kd_tree.h"
-#include "lucent/methods/photons/photon.h"
 #include "lucent/pipeline/shading_points.h"
 #include "lucent/scene/bsdf.h"
+#include "lucent/techniques/photons/kd_tree.h"
+#include "lucent/techniques/photons/photon.h"
 
 namespace lucent {
 

@@ -1,4 +1,4 @@
-#include "lucent/methods/photons/photon_tracing.h"
+#include "lucent/techniques/photons/photon_tracing.h"
 
 #include "lucent/core/uninitialized.h"
 
@@ -7,10 +7,10 @@
 
 #include "lucent/core/memory.h"
 #include "lucent/core/rng.h"
+#include "lucent/core/stop.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/particle_scattering.h"
 #include "lucent/scene/surface.h"
-#include "lucent/core/stop.h"
 
 namespace lucent {
 namespace {

@@ -9,8 +9,8 @@
 #include "lucent/core/stats.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/scene.h"
+#include "lucent/techniques/photons/photon.h"
 #include "lucent/trace/visibility.h"
-#include "lucent/methods/photons/photon.h"
 
 namespace lucent {
 

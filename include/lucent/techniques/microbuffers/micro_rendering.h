@@ -9,10 +9,10 @@
 
 #include "lucent/core/math.h"
 #include "lucent/core/stats.h"
-#include "lucent/methods/microrender/hemisphere_mapping.h"
-#include "lucent/methods/microrender/micro_buffer.h"
-#include "lucent/methods/points/point_hierarchy.h"
-#include "lucent/methods/points/point_radiance.h"
+#include "lucent/techniques/microbuffers/hemisphere_mapping.h"
+#include "lucent/techniques/microbuffers/micro_buffer.h"
+#include "lucent/techniques/points/point_hierarchy.h"
+#include "lucent/techniques/points/point_radiance.h"
 
 namespace lucent {
 

@@ -2,7 +2,7 @@
 // shared by micro-rendering and point-based GI under environment lighting: points on the triangles
 // by best-candidate sampling, a complete binary tree over them by recursive median split, and per
 // node a bounding sphere, a cone of normals and an albedo, in full float or in the paper's 128 bits.
-// src/methods/points/README.md maps the paper to the functions.
+// src/techniques/points/README.md maps the paper to the functions.
 #pragma once
 #include <cstdint>
 #include <span>
@@ -10,9 +10,9 @@
 
 #include "lucent/core/math.h"
 #include "lucent/core/stats.h"
-#include "lucent/methods/points/node_tree.h"
-#include "lucent/methods/points/point_nodes.h"
 #include "lucent/scene/scene.h"
+#include "lucent/techniques/points/node_tree.h"
+#include "lucent/techniques/points/point_nodes.h"
 
 namespace lucent {
 

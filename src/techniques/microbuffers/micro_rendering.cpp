@@ -2,7 +2,7 @@
 // depth-first traversal with computed skip pointers (2.1, 3.1), the packet's lanes tested together,
 // rasterization with a depth test, on-demand ray casting of the post-traversal list, and the
 // convolution. One template per node encoding, no virtual calls.
-#include "lucent/methods/microrender/micro_rendering.h"
+#include "lucent/techniques/microbuffers/micro_rendering.h"
 
 #include <algorithm>
 #include <bit>

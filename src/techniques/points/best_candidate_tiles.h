@@ -13,7 +13,7 @@
 #include "lucent/core/distribution.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
-#include "lucent/methods/points/point_hierarchy.h"
+#include "lucent/techniques/points/point_hierarchy.h"
 
 namespace lucent::points {
 

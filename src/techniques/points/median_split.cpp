@@ -10,7 +10,7 @@
 #include <bit>
 #include <stdexcept>
 
-#include "lucent/methods/points/point_hierarchy.h"
+#include "lucent/techniques/points/point_hierarchy.h"
 
 namespace lucent {
 

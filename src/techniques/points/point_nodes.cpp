@@ -1,4 +1,4 @@
-#include "lucent/methods/points/point_nodes.h"
+#include "lucent/techniques/points/point_nodes.h"
 
 #include <algorithm>
 #include <cmath>

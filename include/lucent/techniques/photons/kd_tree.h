@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "lucent/core/stats.h"
-#include "lucent/methods/photons/photon.h"
+#include "lucent/techniques/photons/photon.h"
 
 namespace lucent {
 
