@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
-"""Checks that every code name in the tables of the method READMEs (src/methods/*/README.md) exists:
+"""Checks that every code name in the tables of the method READMEs (src/methods/*/README.md and
+src/techniques/*/README.md) exists:
 each `backticked` name in a table row that looks like an identifier (`traceEyePaths`,
 `PhotonTracingOptions::causticOnly`) must occur as a word in the sources, and each file name
 (`photon_columns.h`) must be a file of the repository. A README that maps a paper to code must not
 name what is gone.
 
-    scripts/check-readme-identifiers.py [README...]    (default: every method README)
+    scripts/check-readme-identifiers.py [README...]    (default: every method and technique README)
 
 Prints each name that is missing and exits 1 if there is one.
 """
@@ -21,7 +22,8 @@ FILE = re.compile(r"^[\w./-]+\.(h|cpp|py|sh|md|json|obj|mtl)$")
 
 
 def main():
-    readmes = sys.argv[1:] or sorted(glob.glob(os.path.join(ROOT, "src", "methods", "*", "README.md")))
+    readmes = sys.argv[1:] or sorted(glob.glob(os.path.join(ROOT, "src", "methods", "*", "README.md")) +
+                                     glob.glob(os.path.join(ROOT, "src", "techniques", "*", "README.md")))
     files = [f for pattern in SOURCE_GLOBS for f in glob.glob(os.path.join(ROOT, pattern), recursive=True)
              if os.path.isfile(f)]
     words = set()
