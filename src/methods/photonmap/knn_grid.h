@@ -220,7 +220,7 @@ template <GridPhotonMap Map, class Visit>
 void exploreRow(const Map& map, KnnGridSearch& s, int32_t x0, int32_t x1, int32_t y, int32_t z, Visit& visit) {
   if constexpr (kReadsRuns<Map>) {
     // An empty row costs two loads, not a chord. (The run is read again after the chord trims it:
-    // reusing this read where the chord trims nothing made the RING estimate 20% slower, 12e1eda.)
+    // reusing this read where the chord trims nothing made the RING estimate 20% slower.)
     if (map.rowPhotons(x0, x1, y, z).count == 0) return;
   }
   const float limit2 = acceptanceLimit2(s);

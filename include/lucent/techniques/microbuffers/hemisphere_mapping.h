@@ -57,7 +57,7 @@ struct WarpTable {
 // exactly). The traversal calls this in loops over a packet's lanes, with one array and each lane's
 // bases: selects rather than std::clamp and std::min, and 32-bit indices from the same arrays, let
 // GCC vectorize them (a pointer per lane does not: Cornell box micro at 128 x 128, 2 threads,
-// final gathering 1.58-1.76 against 1.00-1.13 s with packets of 8, 70b4cd2).
+// final gathering 1.58-1.76 against 1.00-1.13 s with packets of 8).
 inline Vec2 inverseCdfs(const float* columns, int32_t columnBase, const float* rows, int32_t rowBase, int32_t n,
                         float lx, float ly) {
   constexpr float kBelowOne = 0x1.fffffep-1f;
