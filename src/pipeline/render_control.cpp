@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "lucent/core/stop.h"
+
 namespace lucent {
 
 RenderPart resolvePart(const RenderControl& control, const Scene& scene, int spp) {
@@ -23,6 +25,12 @@ RenderPart resolvePart(const RenderControl& control, const Scene& scene, int spp
                                 std::to_string(control.sampleCount) + ": not inside the " + std::to_string(spp) +
                                 " samples per pixel (--spp)");
   return part;
+}
+
+void refuseResume(const RenderControl& control, std::string_view atOnce) {
+  if (control.resume || control.checkpointSeconds > 0)
+    throw std::invalid_argument(std::string(atOnce) + " and cannot checkpoint or resume; render it in parts (--crop, "
+                                "--samples) to bound the work a kill loses");
 }
 
 Film startFilm(const RenderControl& control, const Scene& scene, const RenderPart& part, Film::Sums sums,
@@ -86,6 +94,42 @@ std::pair<int, int> RowBands::next(int row) {
 
 void RowBands::finished(int rows, double seconds) {
   if (rows > 0) secondsPerRow_ = seconds / rows;
+}
+
+bool renderRowBands(const RenderControl& control, const RenderPart& part, const BandLoop& loop, const Film& film,
+                    const BandRenderer& renderBand) {
+  const PixelRect& region = part.region;
+  const uint64_t width = uint64_t(film.imageWidth());
+  auto rowDone = [&](int y) {
+    for (int x = region.x0; x < region.x1; ++x)
+      if (film.taken(uint64_t(y) * width + uint64_t(x)) != uint32_t(part.samples())) return false;
+    return true;
+  };
+  int row = region.y0;
+  while (row < region.y1 && rowDone(row)) ++row;
+  RowBands bands(part, loop.maxSamples, loop.targetSeconds);
+  CheckpointClock checkpoints(control);
+  const double rows = region.height();
+  auto report = [&](double done) {
+    if (control.progress) control.progress(loop.progressFrom + (loop.progressTo - loop.progressFrom) * done);
+  };
+  for (size_t index = 0; row < region.y1; ++index) {
+    if (control.stopRequested()) return false;
+    Stopwatch bandClock;
+    const std::pair<int, int> next = bands.next(row);
+    const int first = next.first, end = next.second;
+    try {
+      renderBand(PixelRect{region.x0, first, region.x1, end}, index,
+                 [&](double fraction) { report((double(first - region.y0) + fraction * (end - first)) / rows); });
+    } catch (const RenderStopped&) {
+      return false;
+    }
+    bands.finished(end - first, bandClock.seconds());
+    row = end;
+    report(double(row - region.y0) / rows);
+    if (row < region.y1) checkpoints.reached(film);
+  }
+  return true;
 }
 
 }  // namespace lucent

@@ -4,9 +4,12 @@
 // (SIGINT, SIGTERM). Every method takes one; the default is the whole render, uninterrupted.
 #pragma once
 #include <atomic>
+#include <cstdint>
 #include <functional>
+#include <string_view>
 
 #include "lucent/pipeline/film.h"
+#include "lucent/pipeline/options.h"
 #include "lucent/pipeline/pixel_rect.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
@@ -44,6 +47,22 @@ struct RenderPart {
   int samples() const { return sampleEnd - sampleBegin; }
 };
 RenderPart resolvePart(const RenderControl& control, const Scene& scene, int spp);
+
+// Refuses a resume or checkpoints (std::invalid_argument) for a method that renders its image at
+// once, with no state between stages to save: `atOnce` says so ("--method micro gathers the whole
+// image at once").
+void refuseResume(const RenderControl& control, std::string_view atOnce);
+
+// The start every method's render shares: its options checked against their declarations, a
+// resume or checkpoints refused where the method renders at once (`atOnce` non-empty, as for
+// refuseResume), and the part the control asks for.
+template <class Options>
+RenderPart beginRender(const OptionTable<Options>& table, const Options& options, const RenderControl& control,
+                       const Scene& scene, std::string_view atOnce = {}) {
+  table.validate(options);
+  if (!atOnce.empty()) refuseResume(control, atOnce);
+  return resolvePart(control, scene, options.spp);
+}
 
 // The film a render starts from: empty, or a copy of control.resume, which must be a film of this
 // part with this layout (std::invalid_argument otherwise).
@@ -112,5 +131,22 @@ class RowBands {
   uint64_t maxRows_;
   double targetSeconds_, secondsPerRow_ = 0;
 };
+
+// The band loop of the methods that shade a band of rows at once: the part's rows in bands of at
+// most `maxSamples` camera samples (and about `targetSeconds` of work each, where that is above 0;
+// RowBands), from the first row the film does not hold in full (a resumed render). Each band goes
+// to `renderBand` with its index (0, 1, ... from that row) and a progress callback taking the
+// fraction of the band done, reported to control.progress mapped into [progressFrom, progressTo].
+// Between bands: stop requests, and checkpoints of the film. Returns false when a stop ended the
+// loop; a band that a stop interrupts (RenderStopped) is dropped whole.
+struct BandLoop {
+  uint64_t maxSamples = kReusableBandSamples;
+  double targetSeconds = 0;
+  double progressFrom = 0, progressTo = 1;
+};
+using BandRenderer =
+    std::function<void(const PixelRect& band, size_t index, const std::function<void(double)>& progress)>;
+bool renderRowBands(const RenderControl& control, const RenderPart& part, const BandLoop& loop, const Film& film,
+                    const BandRenderer& renderBand);
 
 }  // namespace lucent

@@ -63,12 +63,8 @@ void dumpStages(const std::string& dir, const EnvHierarchy& h, std::span<const u
 
 RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvPbgiOptions& o,
                            const RenderControl& control) {
-  envPbgiOptionTable().validate(o);
+  const RenderPart part = beginRender(envPbgiOptionTable(), o, control, scene, "--method envpbgi renders the image at once");
   requireEnvironmentLights(scene);
-  if (control.resume || control.checkpointSeconds > 0)
-    throw std::invalid_argument("--method envpbgi renders the image at once and cannot checkpoint or resume; "
-                                "render it in parts (--crop, --samples) to bound the work a kill loses");
-  const RenderPart part = resolvePart(control, scene, o.spp);
   RenderOutput out;
   RenderStats& stats = out.stats;
   const ProgressFn& progress = control.progress;
@@ -228,7 +224,6 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   Stopwatch pixelClock;
   double imageSeconds = 0;
   auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {o.layers, false}));
-  RowBands bands(part, o.dumpDirectory.empty() ? kReusableBandSamples : ~uint64_t(0), 0.0);
   const PinholeCamera camera(scene.camera);
   Interpolation interpolation;
   interpolation.maxAngle = o.cacheMaxAngle * kPi / 180.0f;
@@ -240,10 +235,12 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
   backSettings.backFacesOcclude = true;
   std::vector<float> depthOfPoint;
   TileLists tileLists;
-  for (int row = part.region.y0; row < part.region.y1;) {
-    const std::pair<int, int> rows = bands.next(row);
+  BandLoop loop;
+  loop.maxSamples = o.dumpDirectory.empty() ? kReusableBandSamples : ~uint64_t(0);
+  loop.progressFrom = 0.65;
+  const bool finished = renderRowBands(control, part, loop, *film, [&](const PixelRect& band, size_t, const auto&) {
     EyePathSettings settingsOfBand = eyePathSettings(o, part);
-    settingsOfBand.region = {part.region.x0, rows.first, part.region.x1, rows.second};
+    settingsOfBand.region = band;
     const EyePaths eye = traceEyePaths(scene, vis, settingsOfBand);
     const size_t n = eye.points.size();
     PointRadiance shading(n);
@@ -331,9 +328,8 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
     addBand(*film, eye, shading, scene.camera.width, part);
     imageSeconds += filmClock.seconds();
     eyeRays += eye.rays, shadingPoints += n, invalidSamples += eye.invalid;
-    row = rows.second;
-    report(0.65 + 0.35 * double(row - part.region.y0) / double(part.region.height()));
-  }
+  });
+  if (!finished) throw RenderStopped();
   stats.addStage("pixels", pixelClock.seconds() - imageSeconds);
   Stopwatch imageClock;
   out.image = film->image();

@@ -106,13 +106,9 @@ EyePaths latticeMargin(const Scene& scene, const Visibility& vis, const MicroRen
 
 RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroRenderOptions& o,
                          const RenderControl& control) {
-  microOptionTable().validate(o);
   // Gathering runs over the whole part at once (its Morton order and the upsampling lattice span
   // it): there is no state between stages to checkpoint.
-  if (control.resume || control.checkpointSeconds > 0)
-    throw std::invalid_argument("--method micro gathers the whole image at once and cannot checkpoint or resume; "
-                                "render it in parts (--crop, --samples) to bound the work a kill loses");
-  const RenderPart part = resolvePart(control, scene, o.spp);
+  const RenderPart part = beginRender(microOptionTable(), o, control, scene, "--method micro gathers the whole image at once");
   const ProgressFn& progress = control.progress;
   RenderOutput out;
   RenderStats& stats = out.stats;

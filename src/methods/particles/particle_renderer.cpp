@@ -95,14 +95,10 @@ std::vector<uint8_t> detectAliases(const Scene& scene, const EyePaths& eye, cons
 
 RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const ParticleOptions& o,
                              const RenderControl& control) {
-  particleOptionTable().validate(o);
-  if (control.resume || control.checkpointSeconds > 0)
-    throw std::invalid_argument("--method particles renders the image at once and cannot checkpoint or resume; "
-                                "render it in parts (--crop, --samples) to bound the work a kill loses");
+  const RenderPart part = beginRender(particleOptionTable(), o, control, scene, "--method particles renders the image at once");
   if (o.supersample > 0 && control.isPart())
     throw std::invalid_argument("--supersample decides each pixel from its neighbours, which a part (--crop, "
                                 "--samples) does not have: render the whole image");
-  const RenderPart part = resolvePart(control, scene, o.spp);
   RenderOutput out;
   RenderStats& stats = out.stats;
   auto report = [&](double fraction) {
@@ -255,17 +251,18 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
     return filmClock.seconds();
   };
   const bool wholeImage = o.supersample > 0 || !dump.empty();
-  RowBands bands(part, wholeImage ? ~uint64_t(0) : kReusableBandSamples, 0.0);
   RenderStats frameStages;
   FieldUpdate first;
   EyePaths eye;  // with wholeImage, the whole image's after the loop
   PointRadiance shading(0);
   double imageSeconds = 0;
   uint64_t eyeRays = 0, shadingPoints = 0, invalidSamples = 0;
-  for (int row = part.region.y0; row < part.region.y1;) {
-    const std::pair<int, int> rows = bands.next(row);
+  BandLoop loop;
+  loop.maxSamples = wholeImage ? ~uint64_t(0) : kReusableBandSamples;
+  loop.progressFrom = 0.6, loop.progressTo = 0.95;
+  const bool finished = renderRowBands(control, part, loop, *film, [&](const PixelRect& band, size_t, const auto&) {
     EyePathSettings settingsOfBand = eyePathSettings(o, part);
-    settingsOfBand.region = {part.region.x0, rows.first, part.region.x1, rows.second};
+    settingsOfBand.region = band;
     beginStage("preliminary_ray_tracing");
     Stopwatch preliminaryClock;
     eye = traceEyePaths(scene, vis, settingsOfBand);
@@ -277,9 +274,8 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
     shading = shade(eye, around, "", frameStages);
     eyeRays += eye.rays, shadingPoints += eye.points.size(), invalidSamples += eye.invalid;
     if (!wholeImage) imageSeconds += addToFilm(eye, shading);
-    row = rows.second;
-    report(0.6 + 0.35 * double(row - part.region.y0) / double(part.region.height()));
-  }
+  });
+  if (!finished) throw RenderStopped();
   stats.addStagesSummed(frameStages);
 
   // 4.3.3, Table 2(b): adaptive supersampling. Pixels whose neighbours differ from them (alias

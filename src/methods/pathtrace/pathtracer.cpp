@@ -578,12 +578,11 @@ int nextPassEnd(const PathTraceOptions& options, int samples, int done, double e
 
 RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, const PathTraceOptions& options,
                               const RenderControl& control) {
-  pathTraceOptionTable().validate(options);
+  const RenderPart part = beginRender(pathTraceOptionTable(), options, control, scene);
   if (options.timeBudget > 0 && (control.isPart() || control.resume || control.checkpointSeconds > 0))
     throw OptionError("time_budget",
                       "--time-budget: a render with a time budget takes as many samples as time allows, so it cannot "
                       "be split (--crop, --samples), checkpointed or resumed");
-  const RenderPart part = resolvePart(control, scene, options.spp);
   // Every pixel is owned by one tile, and its samples are added in sample order.
   auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, {options.layers, false, options.variance}));
   const PathTracer tracer(scene, visibility, options);

@@ -1,8 +1,5 @@
 #include "methods/photonmap/band_stages.h"
 
-#include <optional>
-
-#include "lucent/core/stop.h"
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 
@@ -35,49 +32,22 @@ BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const Pho
 bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                  const RenderControl& control, const RenderPart& part, Film& film, RenderTotals& totals,
                  const std::function<void(BandShadingPoints& band, const std::function<void(double)>& progress)>& estimate) {
-  const PixelRect& region = part.region;
-  const int width = scene.camera.width;
-  auto rowDone = [&](int y) {
-    for (int x = region.x0; x < region.x1; ++x)
-      if (film.taken(uint64_t(y) * uint64_t(width) + uint64_t(x)) != uint32_t(part.samples())) return false;
-    return true;
-  };
-  int row = region.y0;
-  while (row < region.y1 && rowDone(row)) ++row;
   // Dumped bands are named by their index: fixed bands, whatever the time they take.
-  RowBands bands(part, options.bandSamples, options.dumpDirectory.empty() ? 2.0 : 0.0);
-  CheckpointClock checkpoints(control);
-  const double rows = region.height();
+  BandLoop loop;
+  loop.maxSamples = options.bandSamples;
+  loop.targetSeconds = options.dumpDirectory.empty() ? 2.0 : 0.0;
   beginStage("bands");
-  for (size_t index = 0; row < region.y1; ++index) {
-    if (control.stopRequested()) return false;
-    Stopwatch bandClock;
-    // Not a structured binding: the lambda below captures them (Clang 14 cannot).
-    const std::pair<int, int> next = bands.next(row);
-    const int first = next.first, end = next.second;
-    const PixelRect band{region.x0, first, region.x1, end};
+  return renderRowBands(control, part, loop, film, [&](const PixelRect& band, size_t index, const auto& progress) {
     Stopwatch rayClock;
-    // A stop in the middle of a band drops the band: the film keeps the bands before it whole.
-    std::optional<BandShadingPoints> traced;
     uint64_t bandShadowRays = 0;  // counted once the band is kept
-    try {
-      traced.emplace(traceBand(scene, vis, options, band, part, bandShadowRays));
-      totals.traceSeconds += rayClock.seconds();
-      estimate(*traced, [&](double fraction) {
-        if (control.progress) control.progress((double(first - region.y0) + fraction * (end - first)) / rows);
-      });
-    } catch (const RenderStopped&) {
-      return false;
-    }
-    dumpBand(options, index, traced->eye, traced->radiance);
-    addBand(film, traced->eye, traced->radiance, width, part);
+    BandShadingPoints traced = traceBand(scene, vis, options, band, part, bandShadowRays);
+    totals.traceSeconds += rayClock.seconds();
+    estimate(traced, progress);
+    dumpBand(options, index, traced.eye, traced.radiance);
+    addBand(film, traced.eye, traced.radiance, scene.camera.width, part);
     totals.shadowRays += bandShadowRays;
-    totals.addBand(traced->eye);
-    bands.finished(end - first, bandClock.seconds());
-    row = end;
-    if (row < region.y1) checkpoints.reached(film);
-  }
-  return true;
+    totals.addBand(traced.eye);
+  });
 }
 
 void RenderTotals::report(RenderStats& stats, const EstimateCounters& global, const EstimateCounters& caustic) const {

@@ -160,9 +160,8 @@ bool irradianceAt(const PrecomputedIrradiance& samples, const EstimatePoint& q, 
 
 RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                                         const RenderControl& control) {
-  pmfgOptionTable().validate(options);
+  const RenderPart part = beginRender(pmfgOptionTable(), options, control, scene);
   if (options.bandSamples < 1) throw std::invalid_argument("band samples must be at least 1");
-  const RenderPart part = resolvePart(control, scene, options.spp);
   RenderOutput out;
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::All, out.stats);
 

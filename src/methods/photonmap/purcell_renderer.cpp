@@ -15,9 +15,8 @@ namespace lucent {
 
 RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                            const RenderControl& control) {
-  purcellOptionTable().validate(options);
+  const RenderPart part = beginRender(purcellOptionTable(), options, control, scene);
   if (options.bandSamples < 1) throw std::invalid_argument("band samples must be at least 1");
-  const RenderPart part = resolvePart(control, scene, options.spp);
   RenderOutput out;
   // The global map without direct and caustic photons: direct light comes from shadow rays and
   // caustics from the caustic map, so each light path is counted once.
