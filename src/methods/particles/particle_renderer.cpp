@@ -10,7 +10,9 @@
 
 #include <atomic>
 #include <cmath>
+#include <memory>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include "lucent/core/dump.h"
@@ -91,6 +93,320 @@ std::vector<uint8_t> detectAliases(const Scene& scene, const EyePaths& eye, cons
   return flagged;
 }
 
+// The paper's stages (Fig. 4), in order, and what they hand on to each other.
+class ParticleRender {
+ public:
+  ParticleRender(const Scene& scene, const Visibility& vis, const ParticleOptions& o, const RenderControl& control,
+                 const RenderPart& part, RenderStats& stats)
+      : scene_(scene), vis_(vis), o_(o), control_(control), part_(part), stats_(stats) {}
+  ParticleRender(const ParticleRender&) = delete;
+  ParticleRender& operator=(const ParticleRender&) = delete;
+
+  // Geometry stage (4.1). G1: area particles; G2, G3: their links (G3 here with --geometry all;
+  // --geometry frame builds them at the used particles in R3).
+  void placeAreaParticles() {
+    const uint64_t scatterPer = uint64_t(o_.scatterLinks) * uint64_t(o_.scatterLinks);
+    const uint64_t gatherPer = uint64_t(o_.gatherLinks) * uint64_t(o_.gatherLinks);
+    const uint64_t particleCount = uint64_t(o_.areaParticles) * sides_;
+    requireMemory(particleCount * (sizeof(AreaParticle) + 4 * (scatterPer + gatherPer) + 6 * sizeof(Rgb) + 16),
+                  "the area particles and their links", "lower --area-particles, --gather-links or --scatter-links");
+    AreaParticleOptions ao;
+    ao.positions = o_.areaParticles;
+    ao.sides = o_.sides;
+    ao.sampling.method = o_.pointSampling;
+    ao.sampling.seed = particleSeed(o_.seed, ParticleStream::Positions);
+    area_ = distributeAreaParticles(scene_, ao, &stats_);
+    spacing_ = area_.spacing;
+    stats_.addDerived("particle_spacing", spacing_);
+    linkRadius_ = o_.linkRadius * spacing_;
+    {
+      StageTimer timer(stats_, "particle_grid");
+      linkGrid_ = buildParticleGrid(area_.particles, linkRadius_);
+    }
+    if (o_.particleArea == ParticleArea::Catchment) {
+      StageTimer timer(stats_, "particle_areas");
+      measureCatchments(scene_, area_, linkGrid_, linkRadius_, uint32_t(o_.areaSamples),
+                        particleSeed(o_.seed, ParticleStream::Areas), catchments_);
+    }
+  }
+
+  void buildScatterLinks() {
+    StageTimer timer(stats_, "scatter_links");
+    scatterLinks_ = buildParticleLinks(scene_, vis_, particles(), linkGrid_,
+                                       {particleSeed(o_.seed, ParticleStream::ScatterLinks), uint32_t(o_.scatterLinks)},
+                                       linkRadius_, scatterCounters_);
+  }
+
+  void buildGatherLinks() {
+    if (!everything_) return;
+    StageTimer timer(stats_, "gather_links");
+    gatherLinks_ = buildParticleLinks(scene_, vis_, particles(), linkGrid_, gatherDirections_, linkRadius_, gatherCounters_);
+  }
+
+  // G4, G5: radiance particles and their estimation lists (those of the found radiance particles
+  // only in R2, with --geometry frame).
+  void buildRadianceParticles() {
+    {
+      StageTimer timer(stats_, "tessellation");
+      tess_ = tessellate(scene_, o_.tessellation * spacing_, sides_);
+    }
+    listRadius_ = o_.listRadius * spacing_;
+    listCosine_ = std::cos(o_.listAngle * kPi / 180.0f);
+    {
+      StageTimer timer(stats_, "list_grid");
+      listGrid_ = buildParticleGrid(particles(), listRadius_);
+    }
+    if (everything_) {
+      StageTimer timer(stats_, "estimation_lists");
+      std::vector<uint32_t> all(tess_.count);
+      std::iota(all.begin(), all.end(), 0u);
+      lists_ = buildEstimationLists(scene_, tess_, listGrid_, listRadius_, listCosine_, all);
+    }
+  }
+
+  // Lighting stage (4.2): emission, then scattering.
+  void light() {
+    {
+      StageTimer timer(stats_, "light_emission");
+      directFlux_ = emitLight(scene_, vis_, particles(), o_.emissionSamples, particleSeed(o_.seed, ParticleStream::Emission),
+                              shadowRays_);
+    }
+    StageTimer timer(stats_, "scattering");
+    flux_ = scatterLight(particles(), directFlux_, scatterLinks_, o_.bounces,
+                         particleSeed(o_.seed, ParticleStream::Scattering), scattered_);
+    radiance_.resize(particles().size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, particles().size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+      stopPoint();
+      for (size_t i = r.begin(); i != r.end(); ++i) radiance_[i] = particleRadiance(particles()[i], flux_[i]);
+    });
+  }
+
+  // Ray tracing stage (4.3), band by band of rows: the camera paths (the preliminary ray tracing,
+  // whose shading points the final ray tracing reuses), R1 to R4 for the particles they newly need
+  // (a particle's light does not depend on which band found it), R5, and the band's light into the
+  // film (bands of kReusableBandSamples). Alias detection and dumps need the whole image: one band
+  // then.
+  void traceFrame() {
+    IndirectFieldSetup fs;
+    fs.scene = &scene_;
+    fs.vis = &vis_;
+    fs.tessellation = &tess_;
+    fs.particles = particles();
+    fs.radiance = radiance_;
+    fs.linkGrid = &linkGrid_;
+    fs.listGrid = &listGrid_;
+    fs.gatherDirections = gatherDirections_;
+    fs.linkRadius = linkRadius_;
+    fs.listRadius = listRadius_;
+    fs.listCosine = listCosine_;
+    fs.allLists = everything_ ? &lists_ : nullptr;
+    fs.allGatherLinks = everything_ ? &gatherLinks_ : nullptr;
+    field_.emplace(fs);
+
+    film_ = std::make_shared<Film>(startFilm(control_, scene_, part_, Film::Sums::PerPart, {o_.layers, false}));
+    RenderStats frameStages;
+    BandLoop loop;
+    loop.maxSamples = wholeImage_ ? ~uint64_t(0) : kReusableBandSamples;
+    loop.progressFrom = 0.6, loop.progressTo = 0.95;
+    const bool finished = renderRowBands(control_, part_, loop, *film_, [&](const PixelRect& band, size_t, const auto&) {
+      EyePathSettings settingsOfBand = eyePathSettings(o_, part_);
+      settingsOfBand.region = band;
+      beginStage("preliminary_ray_tracing");
+      Stopwatch preliminaryClock;
+      eye_ = traceEyePaths(scene_, vis_, settingsOfBand);
+      frameStages.addStage("preliminary_ray_tracing", preliminaryClock.seconds());
+      std::vector<SubtriangleWeights> around(eye_.points.size());
+      const FieldUpdate update = field_->add(eye_.points, around, frameStages);
+      first_.foundRadianceParticles += update.foundRadianceParticles;
+      first_.usedAreaParticles += update.usedAreaParticles;
+      shading_ = shade(eye_, around, "", frameStages);
+      countPaths(eye_);
+      if (!wholeImage_) addToFilm(eye_, shading_);
+    });
+    if (!finished) throw RenderStopped();
+    stats_.addStagesSummed(frameStages);
+  }
+
+  // 4.3.3, Table 2(b): adaptive supersampling. Pixels whose neighbours differ from them (alias
+  // detection) are traced again with supersample x supersample stratified samples, whose new
+  // radiance and area particles are found and gathered, and which replace the pixel's one sample.
+  void supersample() {
+    if (o_.supersample <= 0) return;
+    std::vector<uint8_t> flagged;
+    {
+      StageTimer timer(stats_, "alias_detection");
+      flagged = detectAliases(scene_, eye_, shading_, o_.aliasContrast);
+      for (uint8_t f : flagged) aliased_ += f;
+    }
+    {
+      StageTimer timer(stats_, "preliminary_ray_tracing_adaptive");
+      EyePathSettings es = eyePathSettings(o_, part_);
+      es.spp = o_.supersample * o_.supersample;
+      es.sampleBegin = 0;
+      es.sampleEnd = es.spp;
+      es.pixelMask = flagged;
+      extra_ = traceEyePaths(scene_, vis_, es);
+    }
+    std::vector<SubtriangleWeights> extraAround(extra_.points.size());
+    added_ = field_->add(extra_.points, extraAround, stats_, "_adaptive");
+    extraShading_ = shade(extra_, extraAround, "_adaptive", stats_);
+    countPaths(extra_);
+    // The flagged pixels' first samples give way to their supersamples.
+    for (size_t i = 0; i < eye_.pixels.size(); ++i)
+      if (flagged[i]) {
+        eye_.pixels[i] = EyePixel{};
+        if (o_.layers) eye_.features[i] = EyeFeatures{};
+      }
+    for (size_t i = 0; i < eye_.points.size(); ++i) {
+      const size_t local = size_t(eye_.points[i].pixel % uint32_t(scene_.camera.width) - uint32_t(part_.region.x0)) +
+                           size_t(eye_.points[i].pixel / uint32_t(scene_.camera.width) - uint32_t(part_.region.y0)) *
+                               size_t(part_.region.width());
+      if (flagged[local]) shading_.direct[i] = shading_.indirect[i] = Rgb(0.0f);
+    }
+  }
+
+  void dumpStages() const {
+    const std::string& dump = o_.dumpDirectory;
+    if (dump.empty()) return;
+    writeDump(dump, "particles.area_particles", "AreaParticle", particles());
+    writeDump(dump, "particles.scatter_links", "uint32", std::span(scatterLinks_.targets));
+    const ParticleLinks& gl = gatherLinksBuilt();
+    writeDump(dump, "particles.gather_links", "uint32", std::span(gl.targets));
+    writeDump(dump, "particles.gather_link_particles", "uint32", std::span(gl.rowParticles));
+    writeDump(dump, "particles.tessellation", "TriangleTessellation", std::span(tess_.triangles));
+    const EstimationLists& ls = listsBuilt();
+    writeDump(dump, "particles.list_offsets", "uint64", std::span(ls.offsets));
+    writeDump(dump, "particles.list_particles", "uint32", std::span(ls.particles));
+    writeDump(dump, "particles.direct_flux", "Rgb", std::span(directFlux_));
+    writeDump(dump, "particles.flux", "Rgb", std::span(flux_));
+    writeDump(dump, "particles.radiance", "Rgb", std::span(radiance_));
+    writeDump(dump, "particles.found_radiance_particles", "uint32", std::span(field_->found()));
+    writeDump(dump, "particles.used_area_particles", "uint32", std::span(field_->used()));
+    writeDump(dump, "particles.gathered_irradiance", "Rgb", std::span(field_->gathered()));
+    writeDump(dump, "particles.radiance_particle_irradiance", "Rgb", std::span(field_->foundIrradiance()));
+    dumpShadingPoints(dump, "", eye_, shading_, false);
+  }
+
+  void finishImage(RenderOutput& out) {
+    if (wholeImage_) {
+      addToFilm(eye_, shading_);
+      if (o_.supersample > 0) addToFilm(extra_, extraShading_);
+    }
+    Stopwatch imageClock;
+    out.image = film_->image();
+    out.film = film_;
+    out.sppDone = part_.samples();
+    stats_.addStage("image", imageSeconds_ + imageClock.seconds());
+  }
+
+  void reportCounters(const RenderOutput& out) {
+    const LinkCounters& frameLinks = field_->gatherCounters();
+    gatherCounters_.rays += frameLinks.rays;
+    gatherCounters_.misses += frameLinks.misses;
+    gatherCounters_.unmatched += frameLinks.unmatched;
+    stats_.addCounter("area_particle_positions", o_.areaParticles);
+    stats_.addCounter("area_samples", catchments_.samples);
+    stats_.addCounter("area_samples_unmatched", catchments_.unmatched);
+    stats_.addCounter("particles_without_area_samples", catchments_.empty);
+    stats_.addCounter("scatter_link_rays", scatterCounters_.rays);
+    stats_.addCounter("scatter_link_misses", scatterCounters_.misses);
+    stats_.addCounter("scatter_links_unmatched", scatterCounters_.unmatched);
+    stats_.addCounter("scatter_link_bytes", scatterLinks_.targets.size() * sizeof(uint32_t));
+    stats_.addCounter("gather_link_rays", gatherCounters_.rays);
+    stats_.addCounter("gather_link_misses", gatherCounters_.misses);
+    stats_.addCounter("gather_links_unmatched", gatherCounters_.unmatched);
+    stats_.addCounter("gather_link_bytes", gatherLinksBuilt().targets.size() * sizeof(uint32_t));
+    stats_.addCounter("radiance_particles", tess_.count);
+    const EstimationLists& ls = listsBuilt();
+    stats_.addCounter("estimation_list_entries", ls.particles.size());
+    stats_.addCounter("estimation_list_bytes", ls.particles.size() * sizeof(uint32_t) + ls.offsets.size() * sizeof(uint64_t));
+    stats_.addCounter("lit_particles", scattered_.litParticles);
+    stats_.addCounter("scatter_deposits", scattered_.deposits);
+    stats_.addCounter("scatter_packets_lost", scattered_.lost);
+    stats_.addCounter("found_radiance_particles", first_.foundRadianceParticles);
+    stats_.addCounter("used_area_particles", first_.usedAreaParticles);
+    stats_.addCounter("aliased_pixels", aliased_);
+    stats_.addCounter("additional_radiance_particles", added_.foundRadianceParticles);
+    stats_.addCounter("additional_area_particles", added_.usedAreaParticles);
+    stats_.addCounter("empty_estimation_lists", field_->emptyLists());
+    stats_.addCounter("shadow_rays", shadowRays_);
+    stats_.addCounter("eye_rays", eyeRays_);
+    stats_.addCounter("shading_points", shadingPoints_);
+    stats_.addCounter("glossy_shaded_diffuse", glossy_);
+    stats_.addCounter("invalid_samples", invalidSamples_ + out.film->droppedPoints());
+  }
+
+ private:
+  std::span<const AreaParticle> particles() const { return area_.particles; }
+  const ParticleLinks& gatherLinksBuilt() const { return everything_ ? gatherLinks_ : field_->frameGatherLinks(); }
+  const EstimationLists& listsBuilt() const { return everything_ ? lists_ : field_->frameLists(); }
+
+  // R5: the final ray tracing at the shading points: direct light by shadow rays, indirect light
+  // interpolated from the three radiance particles around the hit (times the hit's own diffuse
+  // reflectance, so that textures stay sharp: README, "Departures").
+  PointRadiance shade(const EyePaths& paths, std::span<const SubtriangleWeights> weights, const std::string& suffix,
+                      RenderStats& timing) {
+    Stopwatch tracingClock;
+    PointRadiance shading(paths.points.size());
+    estimateDirectLight(scene_, vis_, paths.points, o_.lightSamples, streamSeed(o_.seed, RenderStream::Direct),
+                        shading.direct, shadowRays_);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, paths.points.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+      stopPoint();
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        shading.indirect[i] = paths.points[i].bsdf.kd * field_->irradiance(weights[i]) * kInvPi;
+        if (paths.points[i].bsdf.type != MaterialType::Diffuse) ++glossy_;
+      }
+    });
+    timing.addStage("ray_tracing" + suffix, tracingClock.seconds());
+    return shading;
+  }
+
+  void addToFilm(const EyePaths& paths, const PointRadiance& light) {
+    Stopwatch filmClock;
+    addBand(*film_, paths, light, scene_.camera.width, part_);
+    imageSeconds_ += filmClock.seconds();
+  }
+
+  void countPaths(const EyePaths& paths) {
+    eyeRays_ += paths.rays, shadingPoints_ += paths.points.size(), invalidSamples_ += paths.invalid;
+  }
+
+  const Scene& scene_;
+  const Visibility& vis_;
+  const ParticleOptions& o_;
+  const RenderControl& control_;
+  const RenderPart& part_;
+  RenderStats& stats_;
+  const uint32_t sides_ = o_.sides == ParticleSides::Both ? 2 : 1;
+  const bool everything_ = o_.geometry == ParticleGeometry::All;
+  const bool wholeImage_ = o_.supersample > 0 || !o_.dumpDirectory.empty();
+  const LinkDirections gatherDirections_{particleSeed(o_.seed, ParticleStream::GatherLinks), uint32_t(o_.gatherLinks)};
+
+  // Geometry.
+  AreaParticles area_;
+  float spacing_ = 0, linkRadius_ = 0, listRadius_ = 0, listCosine_ = 0;
+  OrientedPointGrid linkGrid_, listGrid_;
+  ParticleLinks scatterLinks_, gatherLinks_;
+  Tessellation tess_;
+  EstimationLists lists_;
+  // Lighting.
+  std::vector<Rgb> directFlux_, flux_, radiance_;
+  // Ray tracing: the frame's (with wholeImage_, the whole image's) paths and light, and the
+  // supersamples'.
+  std::optional<IndirectField> field_;
+  std::shared_ptr<Film> film_;
+  EyePaths eye_, extra_;
+  PointRadiance shading_{0}, extraShading_{0};
+  FieldUpdate first_, added_;
+  double imageSeconds_ = 0;
+
+  CatchmentCounters catchments_;
+  LinkCounters scatterCounters_, gatherCounters_;
+  ScatterCounters scattered_;
+  uint64_t shadowRays_ = 0, aliased_ = 0, eyeRays_ = 0, shadingPoints_ = 0, invalidSamples_ = 0;
+  std::atomic<uint64_t> glossy_{0};
+};
+
 }  // namespace
 
 RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const ParticleOptions& o,
@@ -100,291 +416,25 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
     throw std::invalid_argument("--supersample decides each pixel from its neighbours, which a part (--crop, "
                                 "--samples) does not have: render the whole image");
   RenderOutput out;
-  RenderStats& stats = out.stats;
   auto report = [&](double fraction) {
     if (control.progress) control.progress(fraction);
   };
-  const std::string& dump = o.dumpDirectory;
-
-  // Geometry stage (4.1). G1: area particles.
-  const uint32_t sides = o.sides == ParticleSides::Both ? 2 : 1;
-  const uint64_t scatterPer = uint64_t(o.scatterLinks) * uint64_t(o.scatterLinks);
-  const uint64_t gatherPer = uint64_t(o.gatherLinks) * uint64_t(o.gatherLinks);
-  const uint64_t particleCount = uint64_t(o.areaParticles) * sides;
-  requireMemory(particleCount * (sizeof(AreaParticle) + 4 * (scatterPer + gatherPer) + 6 * sizeof(Rgb) + 16),
-                "the area particles and their links", "lower --area-particles, --gather-links or --scatter-links");
-  AreaParticleOptions ao;
-  ao.positions = o.areaParticles;
-  ao.sides = o.sides;
-  ao.sampling.method = o.pointSampling;
-  ao.sampling.seed = particleSeed(o.seed, ParticleStream::Positions);
-  AreaParticles area = distributeAreaParticles(scene, ao, &stats);
-  const float spacing = area.spacing;
-  stats.addDerived("particle_spacing", spacing);
-  beginStage("particle_grid");
-  Stopwatch linkGridClock;
-  const float linkRadius = o.linkRadius * spacing;
-  const OrientedPointGrid linkGrid = buildParticleGrid(area.particles, linkRadius);
-  stats.addStage("particle_grid", linkGridClock.seconds());
-  CatchmentCounters catchments;
-  if (o.particleArea == ParticleArea::Catchment) {
-    beginStage("particle_areas");
-    Stopwatch areaClock;
-    measureCatchments(scene, area, linkGrid, linkRadius, uint32_t(o.areaSamples),
-                      particleSeed(o.seed, ParticleStream::Areas), catchments);
-    stats.addStage("particle_areas", areaClock.seconds());
-  }
-  const std::span<const AreaParticle> particles(area.particles);
-
-  // G2, G3: the links.
-  LinkCounters scatterCounters, gatherCounters;
-  beginStage("scatter_links");
-  Stopwatch scatterClock;
-  const ParticleLinks scatterLinks =
-      buildParticleLinks(scene, vis, particles, linkGrid,
-                         {particleSeed(o.seed, ParticleStream::ScatterLinks), uint32_t(o.scatterLinks)}, linkRadius,
-                         scatterCounters);
-  stats.addStage("scatter_links", scatterClock.seconds());
+  ParticleRender render(scene, vis, o, control, part, out.stats);
+  render.placeAreaParticles();
+  render.buildScatterLinks();
   report(0.05);
-  // G3 (the paper's geometry stage; --geometry frame builds them at the used particles in R3).
-  const bool everything = o.geometry == ParticleGeometry::All;
-  const LinkDirections gatherDirections{particleSeed(o.seed, ParticleStream::GatherLinks), uint32_t(o.gatherLinks)};
-  ParticleLinks gatherLinks;
-  if (everything) {
-    beginStage("gather_links");
-    Stopwatch gatherLinkClock;
-    gatherLinks = buildParticleLinks(scene, vis, particles, linkGrid, gatherDirections, linkRadius, gatherCounters);
-    stats.addStage("gather_links", gatherLinkClock.seconds());
-  }
+  render.buildGatherLinks();
   report(0.4);
-
-  // G4, G5: radiance particles and their estimation lists (those of the found radiance particles
-  // only in R2, with --geometry frame).
-  beginStage("tessellation");
-  Stopwatch tessellationClock;
-  const Tessellation tess = tessellate(scene, o.tessellation * spacing, sides);
-  stats.addStage("tessellation", tessellationClock.seconds());
-  const float listRadius = o.listRadius * spacing;
-  const float listCosine = std::cos(o.listAngle * kPi / 180.0f);
-  beginStage("list_grid");
-  Stopwatch listGridClock;
-  const OrientedPointGrid listGrid = buildParticleGrid(particles, listRadius);
-  stats.addStage("list_grid", listGridClock.seconds());
-  EstimationLists lists;
-  if (everything) {
-    beginStage("estimation_lists");
-    Stopwatch listClock;
-    std::vector<uint32_t> all(tess.count);
-    std::iota(all.begin(), all.end(), 0u);
-    lists = buildEstimationLists(scene, tess, listGrid, listRadius, listCosine, all);
-    stats.addStage("estimation_lists", listClock.seconds());
-  }
+  render.buildRadianceParticles();
   report(0.5);
-
-  // Lighting stage (4.2): emission, then scattering.
-  beginStage("light_emission");
-  Stopwatch emissionClock;
-  uint64_t shadowRays = 0;
-  const std::vector<Rgb> directFlux =
-      emitLight(scene, vis, particles, o.emissionSamples, particleSeed(o.seed, ParticleStream::Emission), shadowRays);
-  stats.addStage("light_emission", emissionClock.seconds());
-  beginStage("scattering");
-  Stopwatch scatteringClock;
-  ScatterCounters scattered;
-  const std::vector<Rgb> flux = scatterLight(particles, directFlux, scatterLinks, o.bounces,
-                                             particleSeed(o.seed, ParticleStream::Scattering), scattered);
-  std::vector<Rgb> radiance(particles.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    stopPoint();
-    for (size_t i = r.begin(); i != r.end(); ++i) radiance[i] = particleRadiance(particles[i], flux[i]);
-  });
-  stats.addStage("scattering", scatteringClock.seconds());
+  render.light();
   report(0.55);
-
-  // Ray tracing stage (4.3): the camera paths (the preliminary ray tracing, whose shading points
-  // the final ray tracing reuses), then R1 to R4 for the particles they need.
-  IndirectFieldSetup fs;
-  fs.scene = &scene;
-  fs.vis = &vis;
-  fs.tessellation = &tess;
-  fs.particles = particles;
-  fs.radiance = radiance;
-  fs.linkGrid = &linkGrid;
-  fs.listGrid = &listGrid;
-  fs.gatherDirections = gatherDirections;
-  fs.linkRadius = linkRadius;
-  fs.listRadius = listRadius;
-  fs.listCosine = listCosine;
-  fs.allLists = everything ? &lists : nullptr;
-  fs.allGatherLinks = everything ? &gatherLinks : nullptr;
-  IndirectField field(fs);
-
-  // R5: the final ray tracing at the shading points: direct light by shadow rays, indirect light
-  // interpolated from the three radiance particles around the hit (times the hit's own diffuse
-  // reflectance, so that textures stay sharp: README, "Departures").
-  std::atomic<uint64_t> glossy{0};
-  auto shade = [&](const EyePaths& paths, std::span<const SubtriangleWeights> weights, const std::string& suffix,
-                   RenderStats& timing) {
-    Stopwatch tracingClock;
-    PointRadiance shading(paths.points.size());
-    estimateDirectLight(scene, vis, paths.points, o.lightSamples, streamSeed(o.seed, RenderStream::Direct),
-                        shading.direct, shadowRays);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, paths.points.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-      stopPoint();
-      for (size_t i = r.begin(); i != r.end(); ++i) {
-        shading.indirect[i] = paths.points[i].bsdf.kd * field.irradiance(weights[i]) * kInvPi;
-        if (paths.points[i].bsdf.type != MaterialType::Diffuse) ++glossy;
-      }
-    });
-    timing.addStage("ray_tracing" + suffix, tracingClock.seconds());
-    return shading;
-  };
-
-  // The frame band by band of rows: the camera paths (the preliminary ray tracing, whose shading
-  // points the final ray tracing reuses), R1 to R4 for the particles they newly need (a particle's
-  // light does not depend on which band found it), R5, and the band's light into the film (bands of
-  // kReusableBandSamples). Alias detection and dumps need the whole image: one band then.
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {o.layers, false}));
-  auto addToFilm = [&](const EyePaths& paths, const PointRadiance& light) {
-    Stopwatch filmClock;
-    addBand(*film, paths, light, scene.camera.width, part);
-    return filmClock.seconds();
-  };
-  const bool wholeImage = o.supersample > 0 || !dump.empty();
-  RenderStats frameStages;
-  FieldUpdate first;
-  EyePaths eye;  // with wholeImage, the whole image's after the loop
-  PointRadiance shading(0);
-  double imageSeconds = 0;
-  uint64_t eyeRays = 0, shadingPoints = 0, invalidSamples = 0;
-  BandLoop loop;
-  loop.maxSamples = wholeImage ? ~uint64_t(0) : kReusableBandSamples;
-  loop.progressFrom = 0.6, loop.progressTo = 0.95;
-  const bool finished = renderRowBands(control, part, loop, *film, [&](const PixelRect& band, size_t, const auto&) {
-    EyePathSettings settingsOfBand = eyePathSettings(o, part);
-    settingsOfBand.region = band;
-    beginStage("preliminary_ray_tracing");
-    Stopwatch preliminaryClock;
-    eye = traceEyePaths(scene, vis, settingsOfBand);
-    frameStages.addStage("preliminary_ray_tracing", preliminaryClock.seconds());
-    std::vector<SubtriangleWeights> around(eye.points.size());
-    const FieldUpdate update = field.add(eye.points, around, frameStages);
-    first.foundRadianceParticles += update.foundRadianceParticles;
-    first.usedAreaParticles += update.usedAreaParticles;
-    shading = shade(eye, around, "", frameStages);
-    eyeRays += eye.rays, shadingPoints += eye.points.size(), invalidSamples += eye.invalid;
-    if (!wholeImage) imageSeconds += addToFilm(eye, shading);
-  });
-  if (!finished) throw RenderStopped();
-  stats.addStagesSummed(frameStages);
-
-  // 4.3.3, Table 2(b): adaptive supersampling. Pixels whose neighbours differ from them (alias
-  // detection) are traced again with supersample x supersample stratified samples, whose new
-  // radiance and area particles are found and gathered, and which replace the pixel's one sample.
-  EyePaths extra;
-  PointRadiance extraShading(0);
-  FieldUpdate added;
-  uint64_t aliased = 0;
-  if (o.supersample > 0) {
-    beginStage("alias_detection");
-    Stopwatch detectClock;
-    std::vector<uint8_t> flagged = detectAliases(scene, eye, shading, o.aliasContrast);
-    for (uint8_t f : flagged) aliased += f;
-    stats.addStage("alias_detection", detectClock.seconds());
-    beginStage("preliminary_ray_tracing_adaptive");
-    Stopwatch adaptiveClock;
-    EyePathSettings es = eyePathSettings(o, part);
-    es.spp = o.supersample * o.supersample;
-    es.sampleBegin = 0;
-    es.sampleEnd = es.spp;
-    es.pixelMask = flagged;
-    extra = traceEyePaths(scene, vis, es);
-    stats.addStage("preliminary_ray_tracing_adaptive", adaptiveClock.seconds());
-    std::vector<SubtriangleWeights> extraAround(extra.points.size());
-    added = field.add(extra.points, extraAround, stats, "_adaptive");
-    extraShading = shade(extra, extraAround, "_adaptive", stats);
-    eyeRays += extra.rays, shadingPoints += extra.points.size(), invalidSamples += extra.invalid;
-    // The flagged pixels' first samples give way to their supersamples.
-    for (size_t i = 0; i < eye.pixels.size(); ++i)
-      if (flagged[i]) {
-        eye.pixels[i] = EyePixel{};
-        if (o.layers) eye.features[i] = EyeFeatures{};
-      }
-    for (size_t i = 0; i < eye.points.size(); ++i) {
-      const size_t local = size_t(eye.points[i].pixel % uint32_t(scene.camera.width) - uint32_t(part.region.x0)) +
-                           size_t(eye.points[i].pixel / uint32_t(scene.camera.width) - uint32_t(part.region.y0)) *
-                               size_t(part.region.width());
-      if (flagged[local]) shading.direct[i] = shading.indirect[i] = Rgb(0.0f);
-    }
-  }
-
-  if (!dump.empty()) {
-    writeDump(dump, "particles.area_particles", "AreaParticle", particles);
-    writeDump(dump, "particles.scatter_links", "uint32", std::span(scatterLinks.targets));
-    const ParticleLinks& gl = everything ? gatherLinks : field.frameGatherLinks();
-    writeDump(dump, "particles.gather_links", "uint32", std::span(gl.targets));
-    writeDump(dump, "particles.gather_link_particles", "uint32", std::span(gl.rowParticles));
-    writeDump(dump, "particles.tessellation", "TriangleTessellation", std::span(tess.triangles));
-    const EstimationLists& ls = everything ? lists : field.frameLists();
-    writeDump(dump, "particles.list_offsets", "uint64", std::span(ls.offsets));
-    writeDump(dump, "particles.list_particles", "uint32", std::span(ls.particles));
-    writeDump(dump, "particles.direct_flux", "Rgb", std::span(directFlux));
-    writeDump(dump, "particles.flux", "Rgb", std::span(flux));
-    writeDump(dump, "particles.radiance", "Rgb", std::span(radiance));
-    writeDump(dump, "particles.found_radiance_particles", "uint32", std::span(field.found()));
-    writeDump(dump, "particles.used_area_particles", "uint32", std::span(field.used()));
-    writeDump(dump, "particles.gathered_irradiance", "Rgb", std::span(field.gathered()));
-    writeDump(dump, "particles.radiance_particle_irradiance", "Rgb", std::span(field.foundIrradiance()));
-    dumpShadingPoints(dump, "", eye, shading, false);
-  }
-
-  if (wholeImage) {
-    imageSeconds += addToFilm(eye, shading);
-    if (o.supersample > 0) imageSeconds += addToFilm(extra, extraShading);
-  }
-  Stopwatch imageClock;
-  out.image = film->image();
-  out.film = film;
-  out.sppDone = part.samples();
-  stats.addStage("image", imageSeconds + imageClock.seconds());
+  render.traceFrame();
+  render.supersample();
+  render.dumpStages();
+  render.finishImage(out);
   report(1.0);
-
-  const LinkCounters& frameLinks = field.gatherCounters();
-  gatherCounters.rays += frameLinks.rays;
-  gatherCounters.misses += frameLinks.misses;
-  gatherCounters.unmatched += frameLinks.unmatched;
-  stats.addCounter("area_particle_positions", o.areaParticles);
-  stats.addCounter("area_samples", catchments.samples);
-  stats.addCounter("area_samples_unmatched", catchments.unmatched);
-  stats.addCounter("particles_without_area_samples", catchments.empty);
-  stats.addCounter("scatter_link_rays", scatterCounters.rays);
-  stats.addCounter("scatter_link_misses", scatterCounters.misses);
-  stats.addCounter("scatter_links_unmatched", scatterCounters.unmatched);
-  stats.addCounter("scatter_link_bytes", scatterLinks.targets.size() * sizeof(uint32_t));
-  stats.addCounter("gather_link_rays", gatherCounters.rays);
-  stats.addCounter("gather_link_misses", gatherCounters.misses);
-  stats.addCounter("gather_links_unmatched", gatherCounters.unmatched);
-  stats.addCounter("gather_link_bytes",
-                   (everything ? gatherLinks : field.frameGatherLinks()).targets.size() * sizeof(uint32_t));
-  stats.addCounter("radiance_particles", tess.count);
-  const EstimationLists& listsBuilt = everything ? lists : field.frameLists();
-  stats.addCounter("estimation_list_entries", listsBuilt.particles.size());
-  stats.addCounter("estimation_list_bytes",
-                   listsBuilt.particles.size() * sizeof(uint32_t) + listsBuilt.offsets.size() * sizeof(uint64_t));
-  stats.addCounter("lit_particles", scattered.litParticles);
-  stats.addCounter("scatter_deposits", scattered.deposits);
-  stats.addCounter("scatter_packets_lost", scattered.lost);
-  stats.addCounter("found_radiance_particles", first.foundRadianceParticles);
-  stats.addCounter("used_area_particles", first.usedAreaParticles);
-  stats.addCounter("aliased_pixels", aliased);
-  stats.addCounter("additional_radiance_particles", added.foundRadianceParticles);
-  stats.addCounter("additional_area_particles", added.usedAreaParticles);
-  stats.addCounter("empty_estimation_lists", field.emptyLists());
-  stats.addCounter("shadow_rays", shadowRays);
-  stats.addCounter("eye_rays", eyeRays);
-  stats.addCounter("shading_points", shadingPoints);
-  stats.addCounter("glossy_shaded_diffuse", glossy);
-  stats.addCounter("invalid_samples", invalidSamples + out.film->droppedPoints());
+  render.reportCounters(out);
   return out;
 }
 
