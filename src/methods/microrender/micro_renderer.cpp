@@ -104,92 +104,27 @@ EyePaths latticeMargin(const Scene& scene, const Visibility& vis, const MicroRen
   return traceEyePaths(scene, vis, settings);
 }
 
-RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroRenderOptions& o,
-                         const RenderControl& control) {
-  // Gathering runs over the whole part at once (its Morton order and the upsampling lattice span
-  // it): there is no state between stages to checkpoint.
-  const RenderPart part = beginRender(microOptionTable(), o, control, scene, "--method micro gathers the whole image at once");
-  const ProgressFn& progress = control.progress;
-  RenderOutput out;
-  RenderStats& stats = out.stats;
+namespace {
 
-  // The point hierarchy (2.1). Its node data is what a deforming scene would refit every frame:
-  // the paper's "hierarchy update".
-  PointHierarchyOptions ho;
-  ho.pointCount = o.points > 0 ? o.points : defaultPointCount(scene, o.pointSpacing);
-  ho.encoding = o.encoding;
-  ho.sampling.seed = hashKey(o.seed, uint64_t(MicroStream::Points));
-  // Two nodes per point (leaves and interior), each as floats in the hierarchy and in the micro
-  // copy, packed, with its area, radiance and thickness; the samples and the median split's keys.
-  const uint64_t nodeBytes = 2 * sizeof(FloatNode) + sizeof(PackedNode) + sizeof(float) + sizeof(Rgb) + 2 * sizeof(float);
-  requireMemory(uint64_t(ho.pointCount) * (2 * nodeBytes + sizeof(PointSample) + 32), "the point hierarchy",
-                "lower --points or raise --point-spacing");
-  RenderStats hierarchyStats;
-  beginStage("hierarchy");
-  Stopwatch hierarchyClock;
-  const PointHierarchy hierarchy = buildPointHierarchy(scene, ho, &hierarchyStats);
-  MicroHierarchy micro = prepareMicroHierarchy(hierarchy);
-  stats.addStage("hierarchy", hierarchyClock.seconds());
-  double update = 0;
-  for (const auto& [name, s] : hierarchyStats.stageSeconds) {
-    stats.addStage("hierarchy." + name, s);
-    if (name == "leaf_nodes" || name == "interior_nodes" || name == "packed_nodes") update += s;
-  }
-  stats.addStage("hierarchy_update", update);
-  stats.addCounter("points", hierarchy.leafCount);
-  stats.addDerived("points", hierarchy.leafCount);
-  if (!o.dumpDirectory.empty()) dumpHierarchy(o.dumpDirectory, hierarchy);
+// Final gathering (2.2, 3.2) at a set of gather points (`order`: indices into `points`), by the way
+// they face and in Morton order of their positions (facingMortonKey), so that neighbouring work
+// items compute similar cuts: on Sponza at 512 x 512, 1/16 of the pixels, a packet visit tests 6.17
+// active lanes instead of 5.89. Results go to `indirect`; progress runs from progressBase by
+// progressShare.
+struct GatherPass {
+  const GatherContext& ctx;
+  const GatherContext& backCtx;  // the same, back faces occluding
+  const NodeRadiance& radiance;
+  std::span<const ShadingPoint> points;
+  const Scene& scene;
+  uint64_t seed;
+  const ProgressFn& progress;
+  tbb::enumerable_thread_specific<GatherScratch>& scratch;
+  UninitializedVector<Rgb>& indirect;
 
-  MicroRenderSettings settings;
-  settings.rayCasting = o.rayCasting;
-  settings.splatReach = o.splatReach;
-  settings.depth = DepthCoding::forExtent(length(scene.bounds.extent()));
-  const MappingTables tables = makeMappingTables(o.bufferSide, o.tableSize);
-  const GatherContext ctx{&micro, &tables, o.mapping, settings};
-  GatherContext backCtx = ctx;
-  backCtx.settings.backFacesOcclude = true;
-
-  // Section 4: the radiance of the points.
-  beginStage("point_lighting");
-  Stopwatch lightingClock;
-  const NodeRadiance radiance = lightPoints(scene, vis, hierarchy, ctx, o, stats);
-  stats.addStage("point_lighting", lightingClock.seconds());
-  if (!o.dumpDirectory.empty()) dumpPointRadiance(o.dumpDirectory, radiance);
-
-  // Camera paths and direct light, at every pixel.
-  beginStage("eye_rays_and_direct_light");
-  Stopwatch eyeClock;
-  const EyePaths eye = traceEyePaths(scene, vis, eyePathSettings(o, part));
-  const size_t n = eye.points.size();
-  PointRadiance shading(n);
-  uint64_t shadowRays = 0;
-  if (o.lightSamples > 0) estimateDirectLight(scene, vis, eye.points, o.lightSamples, o.seed, shading.direct, shadowRays);
-  stats.addStage("eye_rays_and_direct_light", eyeClock.seconds());
-
-  // Final gathering (2.2, 3.2) at the gather points, by the way they face and in Morton order of
-  // their positions (facingMortonKey), so that neighbouring work items compute similar cuts: on
-  // Sponza at 512 x 512, 1/16 of the pixels, a packet visit tests 6.17 active lanes instead of 5.89.
-  const int step = o.upsampling == 16 ? 4 : o.upsampling == 4 ? 2 : 1;
-  const int width = scene.camera.width;
-  // A crop's pixels near its edges interpolate from lattice pixels beyond it: those are traced and
-  // gathered too (after the crop's own points), so that a crop's pixels are the whole image's.
-  const EyePaths margin = latticeMargin(scene, vis, o, part, step);
-  std::vector<ShadingPoint> withMargin;
-  if (!margin.points.empty()) {
-    withMargin.assign(eye.points.begin(), eye.points.end());
-    withMargin.insert(withMargin.end(), margin.points.begin(), margin.points.end());
-  }
-  const std::span<const ShadingPoint> points =
-      withMargin.empty() ? std::span<const ShadingPoint>(eye.points) : std::span<const ShadingPoint>(withMargin);
-  UninitializedVector<Rgb> indirect(points.size());
-  std::vector<uint32_t> gatherOrder;
-  for (uint32_t i = 0; i < points.size(); ++i)
-    if (onGatherLattice(points[i].pixel, width, step)) gatherOrder.push_back(i);
-  tbb::enumerable_thread_specific<GatherScratch> scratch;
-  const uint64_t gatherSeed = hashKey(o.seed, uint64_t(MicroStream::Gather));
-  std::atomic<size_t> done{0};
-  auto gather = [&](std::vector<uint32_t>& order, double progressShare, double progressBase) {
-    Stopwatch sortClock;
+  // Its wall-clock seconds.
+  double run(std::vector<uint32_t>& order, double progressShare, double progressBase) const {
+    Stopwatch clock;
     if (order.size() >= (size_t(1) << 31)) throw std::logic_error("micro: at most 2^31 - 1 gather points at once");
     std::vector<uint64_t> keys(order.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4096), [&](const auto& r) {
@@ -206,16 +141,16 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     const size_t front = size_t(std::stable_partition(order.begin(), order.end(), [&](uint32_t i) {
                                   return dot(points[i].normal, points[i].geometricNormal) >= 0;
                                 }) - order.begin());
-    // Packets of consecutive gather points in that order (one SIMD lane each, as the threads of
-    // a warp in the paper).
-    done = 0;
+    // Packets of consecutive gather points in that order (one SIMD lane each, as the threads of a
+    // warp in the paper).
+    std::atomic<size_t> done{0};
     for (const bool back : {false, true}) {
       const size_t first = back ? front : 0, count = back ? order.size() - front : front;
       gatherInPackets(
           back ? backCtx : ctx, count, radiance, scratch,
           [&](size_t k, Rng& rng) {
             const ShadingPoint& p = points[order[first + k]];
-            rng = Rng(gatherSeed, p.pixel, uint64_t(p.sample) << 32 | p.branch);
+            rng = Rng(seed, p.pixel, uint64_t(p.sample) << 32 | p.branch);
             return GatherRequest{p.position, p.normal, p.wo, &p.bsdf, &rng};
           },
           [&](size_t k, Rgb result) { indirect[order[first + k]] = result; },
@@ -223,10 +158,123 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
             if (progress) progress(progressBase + progressShare * double(done += gathered) / double(order.size()));
           });
     }
-    return sortClock.seconds();
-  };
+    return clock.seconds();
+  }
+};
+
+// The hierarchy's stages as the paper's Table 1 has them: its build's parts, and their sum over the
+// node data that a deforming scene would refit every frame, the "hierarchy update".
+void reportHierarchyStages(const RenderStats& hierarchyStats, RenderStats& stats) {
+  double update = 0;
+  for (const auto& [name, s] : hierarchyStats.stageSeconds) {
+    stats.addStage("hierarchy." + name, s);
+    if (name == "leaf_nodes" || name == "interior_nodes" || name == "packed_nodes") update += s;
+  }
+  stats.addStage("hierarchy_update", update);
+}
+
+// Gathering's parts are timed per thread; the stage's wall time is split in proportion.
+GatherTotals reportGatherStages(const tbb::enumerable_thread_specific<GatherScratch>& scratch, double gatherSeconds,
+                                double upsampleSeconds, RenderStats& stats) {
+  GatherTotals totals;
+  totals.add(scratch);
+  const double cpu = totals.build + totals.evaluate + totals.rasterize + totals.rayCast + totals.convolve;
+  const double scale = cpu > 0 ? gatherSeconds / cpu : 0.0;
+  stats.addStage("final_gathering", gatherSeconds);
+  stats.addStage("build_mappings", totals.build * scale);
+  stats.addStage("evaluate_mappings", totals.evaluate * scale);
+  stats.addStage("rasterize", totals.rasterize * scale);
+  stats.addStage("ray_casting", totals.rayCast * scale);
+  stats.addStage("convolution", totals.convolve * scale);
+  stats.addStage("upsampling", upsampleSeconds);
+  return totals;
+}
+
+}  // namespace
+
+RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroRenderOptions& o,
+                         const RenderControl& control) {
+  // Gathering runs over the whole part at once (its Morton order and the upsampling lattice span
+  // it): there is no state between stages to checkpoint.
+  const RenderPart part = beginRender(microOptionTable(), o, control, scene, "--method micro gathers the whole image at once");
+  RenderOutput out;
+  RenderStats& stats = out.stats;
+
+  // The point hierarchy (2.1).
+  PointHierarchyOptions ho;
+  ho.pointCount = o.points > 0 ? o.points : defaultPointCount(scene, o.pointSpacing);
+  ho.encoding = o.encoding;
+  ho.sampling.seed = hashKey(o.seed, uint64_t(MicroStream::Points));
+  // Two nodes per point (leaves and interior), each as floats in the hierarchy and in the micro
+  // copy, packed, with its area, radiance and thickness; the samples and the median split's keys.
+  const uint64_t nodeBytes = 2 * sizeof(FloatNode) + sizeof(PackedNode) + sizeof(float) + sizeof(Rgb) + 2 * sizeof(float);
+  requireMemory(uint64_t(ho.pointCount) * (2 * nodeBytes + sizeof(PointSample) + 32), "the point hierarchy",
+                "lower --points or raise --point-spacing");
+  RenderStats hierarchyStats;
+  PointHierarchy hierarchy;
+  MicroHierarchy micro;  // reads `hierarchy`
+  {
+    StageTimer timer(stats, "hierarchy");
+    hierarchy = buildPointHierarchy(scene, ho, &hierarchyStats);
+    micro = prepareMicroHierarchy(hierarchy);
+  }
+  reportHierarchyStages(hierarchyStats, stats);
+  stats.addCounter("points", hierarchy.leafCount);
+  stats.addDerived("points", hierarchy.leafCount);
+  if (!o.dumpDirectory.empty()) dumpHierarchy(o.dumpDirectory, hierarchy);
+
+  MicroRenderSettings settings;
+  settings.rayCasting = o.rayCasting;
+  settings.splatReach = o.splatReach;
+  settings.depth = DepthCoding::forExtent(length(scene.bounds.extent()));
+  const MappingTables tables = makeMappingTables(o.bufferSide, o.tableSize);
+  const GatherContext ctx{&micro, &tables, o.mapping, settings};
+  GatherContext backCtx = ctx;
+  backCtx.settings.backFacesOcclude = true;
+
+  // Section 4: the radiance of the points.
+  NodeRadiance radiance;
+  {
+    StageTimer timer(stats, "point_lighting");
+    radiance = lightPoints(scene, vis, hierarchy, ctx, o, stats);
+  }
+  if (!o.dumpDirectory.empty()) dumpPointRadiance(o.dumpDirectory, radiance);
+
+  // Camera paths and direct light, at every pixel.
+  EyePaths eye;
+  PointRadiance shading(0);
+  uint64_t shadowRays = 0;
+  {
+    StageTimer timer(stats, "eye_rays_and_direct_light");
+    eye = traceEyePaths(scene, vis, eyePathSettings(o, part));
+    shading = PointRadiance(eye.points.size());
+    if (o.lightSamples > 0) estimateDirectLight(scene, vis, eye.points, o.lightSamples, o.seed, shading.direct, shadowRays);
+  }
+  const size_t n = eye.points.size();
+
+  // Final gathering at the points of the gathering lattice (every pixel without upsampling). A
+  // crop's pixels near its edges interpolate from lattice pixels beyond it: those are traced and
+  // gathered too (after the crop's own points), so that a crop's pixels are the whole image's.
+  const int step = o.upsampling == 16 ? 4 : o.upsampling == 4 ? 2 : 1;
+  const int width = scene.camera.width;
+  const EyePaths margin = latticeMargin(scene, vis, o, part, step);
+  std::vector<ShadingPoint> withMargin;
+  if (!margin.points.empty()) {
+    withMargin.assign(eye.points.begin(), eye.points.end());
+    withMargin.insert(withMargin.end(), margin.points.begin(), margin.points.end());
+  }
+  const std::span<const ShadingPoint> points =
+      withMargin.empty() ? std::span<const ShadingPoint>(eye.points) : std::span<const ShadingPoint>(withMargin);
+  UninitializedVector<Rgb> indirect(points.size());
+  std::vector<uint32_t> gatherOrder;
+  for (uint32_t i = 0; i < points.size(); ++i)
+    if (onGatherLattice(points[i].pixel, width, step)) gatherOrder.push_back(i);
+  tbb::enumerable_thread_specific<GatherScratch> scratch;
+  const GatherPass pass{ctx,   backCtx, radiance, points,  scene, hashKey(o.seed, uint64_t(MicroStream::Gather)),
+                        control.progress, scratch, indirect};
   beginStage("final_gathering");
-  double gatherSeconds = gather(gatherOrder, step == 1 ? 1.0 : 0.9, 0.0);
+  double gatherSeconds = pass.run(gatherOrder, step == 1 ? 1.0 : 0.9, 0.0);
+  // 2.4: bilateral upsampling from the lattice; the pixels it cannot interpolate are gathered.
   uint64_t recomputed = 0;
   double upsampleSeconds = 0;
   if (step > 1) {
@@ -241,25 +289,12 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     std::vector<uint32_t> left = upsampleIndirect(points, us, indirect);
     upsampleSeconds = upClock.seconds();
     recomputed = left.size();
-    gatherSeconds += gather(left, 0.1, 0.9);
+    gatherSeconds += pass.run(left, 0.1, 0.9);
   }
   std::copy(indirect.begin(), indirect.begin() + ptrdiff_t(n), shading.indirect.begin());
-
-  // Gathering's parts are timed per thread; the stage's wall time is split in proportion.
-  GatherTotals totals;
-  totals.add(scratch);
-  const double cpu = totals.build + totals.evaluate + totals.rasterize + totals.rayCast + totals.convolve;
-  const double scale = cpu > 0 ? gatherSeconds / cpu : 0.0;
-  stats.addStage("final_gathering", gatherSeconds);
-  stats.addStage("build_mappings", totals.build * scale);
-  stats.addStage("evaluate_mappings", totals.evaluate * scale);
-  stats.addStage("rasterize", totals.rasterize * scale);
-  stats.addStage("ray_casting", totals.rayCast * scale);
-  stats.addStage("convolution", totals.convolve * scale);
-  stats.addStage("upsampling", upsampleSeconds);
+  const GatherTotals totals = reportGatherStages(scratch, gatherSeconds, upsampleSeconds, stats);
 
   if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
-
   shadeImage(out, control, scene, part, eye, shading, {o.layers, false});
 
   const MicroCounters& c = totals.counters;
