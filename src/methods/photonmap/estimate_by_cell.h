@@ -226,6 +226,129 @@ struct Scratch {
   std::vector<PhotonDistance> heap;
 };
 
+// What the spheres of a cell's queries reach together, and the cost of the first one's own rows.
+struct CellReach {
+  float lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+  uint32_t spheres = 0;
+  float ownCost = 0;  // of reading a sphere's own rows
+};
+
+// Each query's radius from the cell's shell order (s.order, begun at the cell), and the extent
+// that the spheres reach; queries settled on the way (nothing within reach, or fewer than k photons
+// in all) get their estimate in `out` now.
+template <class Map>
+CellReach planCellQueries(const Map& map, std::span<const CellQuery> cell, const EstimateSettings& settings, Scratch& s,
+                          EstimateCounters& c, std::span<Rgb> out) {
+  using estimate_detail::diffuseRadiance;
+  const auto& sums = sumGridOf(map);
+  const uint32_t k = settings.k;
+  const float maxRadius2 = settings.maxRadius * settings.maxRadius;
+  CellReach reach;
+  for (size_t j = 0; j < cell.size(); ++j) {
+    const CellQuery& q = cell[j];
+    QueryPlan& plan = s.plans[j];
+    plan = {{}, QueryPlan::Search};
+    if (!q.diffuse) continue;
+    GrowingRadius& radius = plan.radius;
+    radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.side, maxRadius2, k);
+    if (radius.found < k && !s.order.covers) {
+      // Some of the cell's first photons lie beyond this query's maximum radius. None
+      // within it (a point far outside the grid, its cell clamped): nothing to sum.
+      knn_grid_detail::Reach cells;
+      cells.update(map.grid, q.position, maxRadius2);
+      if (map.cellCounts.count(cells.lo, cells.hi) == 0) {
+        out[q.point] = Rgb();
+        plan.how = QueryPlan::Done;
+        ++c.queries;
+        continue;
+      }
+      // Otherwise the cell records further (always to the same length, so that what a query
+      // sees depends on its cell alone).
+      const uint32_t further = uint32_t(std::min<uint64_t>(uint64_t(kFurtherShells) * k, UINT32_MAX));
+      if (s.order.recorded < further) {  // else an earlier query extended it: radius has seen it all
+        s.order.extend(map, further, settings.maxRadius);
+        radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.side, maxRadius2, k);
+      }
+    }
+    if (radius.found < k) {
+      // Fewer than k within the maximum radius, every one recorded: the search accepts them
+      // all, over the maximum radius (Jensen's convention).
+      if (!s.order.covers) continue;
+      const ColumnRun all{0, s.order.recorded};
+      const SphereSum sphere = sumWithinRadius(s.order.photons, {&all, 1}, q.position, q.side, maxRadius2);
+      if (sphere.farthestD2 == maxRadius2) continue;  // one exactly on it: its share as the search leaves it out
+      out[q.point] = diffuseRadiance(sphere.sum, q.kd, maxRadius2);
+      plan.how = QueryPlan::Done;
+      ++c.queries;
+      c.photonsUsed += sphere.used;
+      c.photonsExamined += s.order.recorded;
+      continue;
+    }
+    plan.how = QueryPlan::Sphere;
+    // The cells the sphere reaches, as exploreRow bounds a row by the sphere's chord.
+    const float extent = std::sqrt(radius.d2) * 1.00001f + sums.grid.slack;
+    const Vec3 sphereLo = q.position - Vec3(extent), sphereHi = q.position + Vec3(extent);
+    for (int a = 0; a < 3; ++a)
+      reach.lo[a] = std::min(reach.lo[a], sphereLo[a]), reach.hi[a] = std::max(reach.hi[a], sphereHi[a]);
+    if (reach.spheres++ > 0) continue;
+    // The first sphere's own rows stand for the others' (their radii differ little).
+    const CellCoord l = sums.grid.cellOf(sphereLo), h = sums.grid.cellOf(sphereHi);
+    const int32_t boxLo[3] = {l.x, l.y, l.z}, boxHi[3] = {h.x, h.y, h.z};
+    reach.ownCost =
+        kPhotonCost * float(sums.cellCounts.count(boxLo, boxHi)) + kRowCost * float((h.y - l.y + 1) * (h.z - l.z + 1));
+  }
+  return reach;
+}
+
+// The planned queries' sums.
+template <class Map>
+void sumCellQueries(const Map& map, std::span<const CellQuery> cell, std::span<const ShadingPoint> points,
+                    const EstimateSettings& settings, const CellReach& reach, Scratch& s, EstimateCounters& c,
+                    std::span<Rgb> out) {
+  using estimate_detail::diffuseRadiance;
+  const auto& sums = sumGridOf(map);
+  // Each sphere reads either the rows of the box of cells that the cell's spheres reach
+  // together (found once; where the cells are small beside the spheres, that box is little
+  // larger than each sphere's) or its own rows trimmed to its chords, whichever holds fewer
+  // photons. Both give the same sums (sumWithinRadius), so a query's estimate does not
+  // depend on the other points in its cell.
+  s.rows.clear();
+  bool boxRows = false;
+  if (reach.spheres > 0) {
+    const CellCoord l = sums.grid.cellOf(Vec3(reach.lo[0], reach.lo[1], reach.lo[2]));
+    const CellCoord h = sums.grid.cellOf(Vec3(reach.hi[0], reach.hi[1], reach.hi[2]));
+    const int32_t boxLo[3] = {l.x, l.y, l.z}, boxHi[3] = {h.x, h.y, h.z};
+    boxRows = kPhotonCost * float(sums.cellCounts.count(boxLo, boxHi)) <= reach.ownCost;
+    if (boxRows)
+      for (int32_t z = l.z; z <= h.z; ++z)
+        for (int32_t y = l.y; y <= h.y; ++y) {
+          const CellPhotons row = sums.rowPhotons(l.x, h.x, y, z);
+          if (row.count > 0) s.rows.push_back({row.first, row.count});
+        }
+  }
+
+  for (size_t j = 0; j < cell.size(); ++j) {
+    const CellQuery& q = cell[j];
+    const QueryPlan& plan = s.plans[j];
+    if (plan.how == QueryPlan::Done) continue;
+    if (plan.how == QueryPlan::Search) {
+      out[q.point] = estimateRadiance(map, estimatePoint(points[q.point]), settings, s.heap.data(), c);
+      continue;
+    }
+    const GrowingRadius& radius = plan.radius;
+    if (!boxRows) sphereRows(sums, q.position, radius.d2, s.ownRows);
+    const std::span<const ColumnRun> rows = boxRows ? std::span<const ColumnRun>(s.rows) : s.ownRows;
+    const SphereSum sphere = sumWithinRadius(sums.columns, rows, q.position, q.side, radius.d2);
+    // The photon that set the radius is left out (see Accumulator::radiance).
+    out[q.point] = radius.d2 > 0 ? diffuseRadiance(sphere.sum - radius.share, q.kd, radius.d2) : Rgb();
+    ++c.queries;
+    c.photonsUsed += sphere.used;
+    c.photonsExamined += radius.examined;
+    for (const ColumnRun& row : rows) c.photonsExamined += row.count;
+    c.cellsVisited += uint32_t(rows.size());
+  }
+}
+
 }  // namespace cell_estimate_detail
 
 // The estimate of `map` (nullptr: none, black) at every point, into out[i]; per thread counters.
@@ -235,7 +358,6 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
                       std::span<Rgb> out, tbb::enumerable_thread_specific<EstimateCounters>& counters,
                       const std::function<void(size_t)>& done = {}) {
   using namespace cell_estimate_detail;
-  using estimate_detail::diffuseRadiance;
   const size_t n = points.size();
   if (!map) {
     std::fill(out.begin(), out.end(), Rgb());
@@ -265,9 +387,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
   }
   if constexpr (knn_grid_detail::kReadsRuns<Map> && knn_grid_detail::kHasCellCounts<Map>) {
     const UniformGrid& g = map->grid;
-    const auto& sums = sumGridOf(*map);
     const uint32_t k = settings.k;
-    const float maxRadius2 = settings.maxRadius * settings.maxRadius;
     // The points by cell (then by index: the same groups whatever the thread count), and what the
     // estimate reads of them in that order.
     std::vector<uint32_t> order, groupStart;
@@ -295,102 +415,8 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
         s.plans.resize(cell.size());
         const bool anyDiffuse = std::any_of(cell.begin(), cell.end(), [](const CellQuery& q) { return q.diffuse != 0; });
         if (anyDiffuse && s.order.recorded < k && !s.order.covers) s.order.extend(*map, k, settings.maxRadius);
-
-        // Each query's radius from the cell's shell order, and the extent that the spheres reach.
-        float lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
-        uint32_t spheres = 0;
-        float ownCost = 0;  // of reading a sphere's own rows
-        for (size_t j = 0; j < cell.size(); ++j) {
-          const CellQuery& q = cell[j];
-          QueryPlan& plan = s.plans[j];
-          plan = {{}, QueryPlan::Search};
-          if (!q.diffuse) continue;
-          GrowingRadius& radius = plan.radius;
-          radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.side, maxRadius2, k);
-          if (radius.found < k && !s.order.covers) {
-            // Some of the cell's first photons lie beyond this query's maximum radius. None
-            // within it (a point far outside the grid, its cell clamped): nothing to sum.
-            knn_grid_detail::Reach reach;
-            reach.update(g, q.position, maxRadius2);
-            if (map->cellCounts.count(reach.lo, reach.hi) == 0) {
-              out[q.point] = Rgb();
-              plan.how = QueryPlan::Done;
-              ++c.queries;
-              continue;
-            }
-            // Otherwise the cell records further (always to the same length, so that what a query
-            // sees depends on its cell alone).
-            const uint32_t further = uint32_t(std::min<uint64_t>(uint64_t(kFurtherShells) * k, UINT32_MAX));
-            if (s.order.recorded < further) {  // else an earlier query extended it: radius has seen it all
-              s.order.extend(*map, further, settings.maxRadius);
-              radius = growingRadius(s.order.photons, s.order.recorded, q.position, q.side, maxRadius2, k);
-            }
-          }
-          if (radius.found < k) {
-            // Fewer than k within the maximum radius, every one recorded: the search accepts them
-            // all, over the maximum radius (Jensen's convention).
-            if (!s.order.covers) continue;
-            const ColumnRun all{0, s.order.recorded};
-            const SphereSum sphere = sumWithinRadius(s.order.photons, {&all, 1}, q.position, q.side, maxRadius2);
-            if (sphere.farthestD2 == maxRadius2) continue;  // one exactly on it: its share as the search leaves it out
-            out[q.point] = diffuseRadiance(sphere.sum, q.kd, maxRadius2);
-            plan.how = QueryPlan::Done;
-            ++c.queries;
-            c.photonsUsed += sphere.used;
-            c.photonsExamined += s.order.recorded;
-            continue;
-          }
-          plan.how = QueryPlan::Sphere;
-          // The cells the sphere reaches, as exploreRow bounds a row by the sphere's chord.
-          const float reach = std::sqrt(radius.d2) * 1.00001f + sums.grid.slack;
-          const Vec3 sphereLo = q.position - Vec3(reach), sphereHi = q.position + Vec3(reach);
-          for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], sphereLo[a]), hi[a] = std::max(hi[a], sphereHi[a]);
-          if (spheres++ > 0) continue;
-          // The first sphere's own rows stand for the others' (their radii differ little).
-          const CellCoord l = sums.grid.cellOf(sphereLo), h = sums.grid.cellOf(sphereHi);
-          const int32_t boxLo[3] = {l.x, l.y, l.z}, boxHi[3] = {h.x, h.y, h.z};
-          ownCost = kPhotonCost * float(sums.cellCounts.count(boxLo, boxHi)) + kRowCost * float((h.y - l.y + 1) * (h.z - l.z + 1));
-        }
-
-        // Each sphere reads either the rows of the box of cells that the cell's spheres reach
-        // together (found once; where the cells are small beside the spheres, that box is little
-        // larger than each sphere's) or its own rows trimmed to its chords, whichever holds fewer
-        // photons. Both give the same sums (sumWithinRadius), so a query's estimate does not
-        // depend on the other points in its cell.
-        s.rows.clear();
-        bool boxRows = false;
-        if (spheres > 0) {
-          const CellCoord l = sums.grid.cellOf(Vec3(lo[0], lo[1], lo[2])), h = sums.grid.cellOf(Vec3(hi[0], hi[1], hi[2]));
-          const int32_t boxLo[3] = {l.x, l.y, l.z}, boxHi[3] = {h.x, h.y, h.z};
-          boxRows = kPhotonCost * float(sums.cellCounts.count(boxLo, boxHi)) <= ownCost;
-          if (boxRows)
-            for (int32_t z = l.z; z <= h.z; ++z)
-              for (int32_t y = l.y; y <= h.y; ++y) {
-                const CellPhotons row = sums.rowPhotons(l.x, h.x, y, z);
-                if (row.count > 0) s.rows.push_back({row.first, row.count});
-              }
-        }
-
-        for (size_t j = 0; j < cell.size(); ++j) {
-          const CellQuery& q = cell[j];
-          const QueryPlan& plan = s.plans[j];
-          if (plan.how == QueryPlan::Done) continue;
-          if (plan.how == QueryPlan::Search) {
-            out[q.point] = estimateRadiance(*map, estimatePoint(points[q.point]), settings, s.heap.data(), c);
-            continue;
-          }
-          const GrowingRadius& radius = plan.radius;
-          if (!boxRows) sphereRows(sums, q.position, radius.d2, s.ownRows);
-          const std::span<const ColumnRun> rows = boxRows ? std::span<const ColumnRun>(s.rows) : s.ownRows;
-          const SphereSum sphere = sumWithinRadius(sums.columns, rows, q.position, q.side, radius.d2);
-          // The photon that set the radius is left out (see Accumulator::radiance).
-          out[q.point] = radius.d2 > 0 ? diffuseRadiance(sphere.sum - radius.share, q.kd, radius.d2) : Rgb();
-          ++c.queries;
-          c.photonsUsed += sphere.used;
-          c.photonsExamined += radius.examined;
-          for (const ColumnRun& row : rows) c.photonsExamined += row.count;
-          c.cellsVisited += uint32_t(rows.size());
-        }
+        const CellReach reach = planCellQueries(*map, cell, settings, s, c, out);
+        sumCellQueries(*map, cell, points, settings, reach, s, c, out);
       }
       if (done) done(pointsDone);
     });
