@@ -14,7 +14,7 @@
 namespace lucent {
 
 // Lanes per structure: the path tracer's wave (waves of 256 measured fastest once the arrays were
-// padded: 128 1-2% slower, 512 no faster; README "Throughput").
+// padded: 128 1-2% slower, 512 no faster; docs/measurements/pathtrace.md).
 inline constexpr int kMaxLanes = 256;
 // Each lane array holds kMaxLanes entries and 16 unused ones (a cache line of floats): with arrays
 // a power of two bytes long, the dozens of arrays a lane loop walks at once fell into few sets of

@@ -248,8 +248,8 @@ class PathTracer {
   }
 
  private:
-  // The wave's shadow rays, in packets of 16 (9% faster than one by one on the Cornell box; README
-  // "Throughput"), and the light of those that reach it added to their paths in query order.
+  // The wave's shadow rays, in packets of 16 (9% faster than one by one on the Cornell box;
+  // docs/measurements/pathtrace.md), and the light of those that reach it added to their paths in query order.
   void traceShadows(Wave& w) const {
     occludedInPackets(
         vis_, w.shadows.size(), [&](size_t i) -> const Ray& { return w.shadows[i].ray; },
