@@ -12,6 +12,7 @@
 #include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <string_view>
 #include <tuple>
 
 #include "cli/commands.h"
@@ -44,39 +45,6 @@ struct RenderArgs {
   OptionValues methodOptions;  // as given, in order
 };
 
-// The render command's own options, beside the method's: name, value placeholder ("" for a
-// flag), help.
-struct RenderFlag {
-  const char* names;
-  const char* value;
-  const char* help;
-};
-const RenderFlag kRenderFlags[] = {
-    {"--method", "NAME", "rendering method (lucent methods lists them; default: the scene's render block's, else pt)"},
-    {"-o, --output", "FILE", "output EXR file (required)"},
-    {"--png", "FILE", "also write an sRGB PNG"},
-    {"--threads", "N", "worker threads (0: all cores; default 0)"},
-    {"--resolution", "WxH", "override the camera's resolution"},
-    {"--crop", "X0,Y0,X1,Y1", "render only the pixels [X0, X1) x [Y0, Y1): a part of a split render, with OUT.film "
-                              "for lucent merge"},
-    {"--samples", "FIRST:COUNT", "take only the camera samples FIRST to FIRST+COUNT-1 of each pixel: a part of a "
-                                 "split render, with OUT.film for lucent merge"},
-    {"--part", "rows|samples:K/N", "the K-th of N parts (K from 0) of the image's rows or of each pixel's samples, as "
-                                   "--crop or --samples would give it (for job arrays)"},
-    {"--checkpoint", "SECONDS", "every SECONDS, write the render's state to OUT.film (also on SIGINT and SIGTERM)"},
-    {"--resume", "", "continue from OUT.film, left by a checkpoint or a stop, if there is one"},
-    {"--memory-limit", "SIZE", "the most memory the render may hold, as 512M, 8G or bytes; one that would need more "
-                               "stops at once, naming the option to lower (default: the available memory)"},
-    {"--robust", "", "Embree's robust traversal (watertight at edges)"},
-    {"--isa", "ISA", "run as a CPU of sse4.2, avx, avx2 or avx512 would: Embree's kernels and the lane loops "
-                     "(default: this CPU's best)"},
-    {"-q, --quiet", "", "no progress bar or warnings"},
-    {"--log-stages", "", "print each stage's name on stderr as it starts, with the seconds since the start"},
-    {"-h, --help", "", "this help, with the options of --method NAME"},
-};
-
-// Splits the arguments into the render command's own and the methods' (every method's options are
-// known by name, so each can be told to take a value or not before the method is chosen).
 // The value `parse` reads from a render flag's text; its OptionError named after the flag.
 template <class Parse>
 auto flagged(Parse parse) {
@@ -127,6 +95,90 @@ void applyPart(const std::string& text, const Scene& scene, int spp, RenderContr
   else control.firstSample = first, control.sampleCount = end - first;
 }
 
+// "512M", "8G" or bytes: more than 0, within what the process may address.
+uint64_t parseMemoryLimit(const std::string& text) {
+  uint64_t limit = 0;
+  try {
+    limit = parseMemorySize(text);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("--memory-limit " + std::string(e.what()));
+  }
+  if (limit == 0) throw std::invalid_argument("--memory-limit must be more than 0 bytes");
+  if (limit > addressSpaceLimit())
+    throw std::invalid_argument("--memory-limit " + text + ": more than this process may address (ulimit -v: " +
+                                memoryText(addressSpaceLimit()) + ")");
+  return limit;
+}
+
+// The render command's own options, beside the method's: names, value placeholder ("" for a flag,
+// which takes no value), help, and what its value sets. Both the help and the parsing read this
+// table.
+struct RenderFlag {
+  const char* names;
+  const char* value;
+  const char* help;
+  void (*apply)(RenderArgs& a, const std::string& value);
+};
+const RenderFlag kRenderFlags[] = {
+    {"--method", "NAME", "rendering method (lucent methods lists them; default: the scene's render block's, else pt)",
+     [](RenderArgs& a, const std::string& v) { a.method = v; }},
+    {"-o, --output", "FILE", "output EXR file (required)", [](RenderArgs& a, const std::string& v) { a.output = v; }},
+    {"--png", "FILE", "also write an sRGB PNG", [](RenderArgs& a, const std::string& v) { a.png = v; }},
+    {"--threads", "N", "worker threads (0: all cores; default 0)",
+     [](RenderArgs& a, const std::string& v) {
+       a.threads = int(flagged([&] { return parseOptionInteger("threads", v, 0, 4096); }));
+     }},
+    {"--resolution", "WxH", "override the camera's resolution",
+     [](RenderArgs& a, const std::string& v) { a.resolution = v; }},
+    {"--crop", "X0,Y0,X1,Y1",
+     "render only the pixels [X0, X1) x [Y0, Y1): a part of a split render, with OUT.film for lucent merge",
+     [](RenderArgs& a, const std::string& v) { a.crop = parseCrop(v); }},
+    {"--samples", "FIRST:COUNT",
+     "take only the camera samples FIRST to FIRST+COUNT-1 of each pixel: a part of a split render, with OUT.film "
+     "for lucent merge",
+     [](RenderArgs& a, const std::string& v) { a.samples = parseSamples(v); }},
+    {"--part", "rows|samples:K/N",
+     "the K-th of N parts (K from 0) of the image's rows or of each pixel's samples, as --crop or --samples would "
+     "give it (for job arrays)",
+     [](RenderArgs& a, const std::string& v) { a.part = v; }},
+    {"--checkpoint", "SECONDS", "every SECONDS, write the render's state to OUT.film (also on SIGINT and SIGTERM)",
+     [](RenderArgs& a, const std::string& v) {
+       a.checkpointSeconds = flagged([&] { return parseOptionReal("checkpoint", v, 1e-3, 1e9); });
+     }},
+    {"--resume", "", "continue from OUT.film, left by a checkpoint or a stop, if there is one",
+     [](RenderArgs& a, const std::string&) { a.resume = true; }},
+    {"--memory-limit", "SIZE",
+     "the most memory the render may hold, as 512M, 8G or bytes; one that would need more stops at once, naming "
+     "the option to lower (default: the available memory)",
+     [](RenderArgs& a, const std::string& v) { a.memoryLimit = parseMemoryLimit(v); }},
+    {"--robust", "", "Embree's robust traversal (watertight at edges)",
+     [](RenderArgs& a, const std::string&) { a.robust = true; }},
+    {"--isa", "ISA",
+     "run as a CPU of sse4.2, avx, avx2 or avx512 would: Embree's kernels and the lane loops (default: this CPU's "
+     "best)",
+     [](RenderArgs& a, const std::string& v) { a.isa = v; }},
+    {"-q, --quiet", "", "no progress bar or warnings", [](RenderArgs& a, const std::string&) { a.quiet = true; }},
+    {"--log-stages", "", "print each stage's name on stderr as it starts, with the seconds since the start",
+     [](RenderArgs& a, const std::string&) { a.logStages = true; }},
+    {"-h, --help", "", "this help, with the options of --method NAME",
+     [](RenderArgs& a, const std::string&) { a.help = true; }},
+};
+
+// The render flag one of whose names is `key`, or nullptr.
+const RenderFlag* renderFlag(const std::string& key) {
+  for (const RenderFlag& f : kRenderFlags) {
+    std::string_view names = f.names;
+    while (!names.empty()) {
+      const size_t comma = names.find(", ");
+      if (names.substr(0, comma) == key) return &f;
+      names = comma == std::string_view::npos ? std::string_view() : names.substr(comma + 2);
+    }
+  }
+  return nullptr;
+}
+
+// Splits the arguments into the render command's own and the methods' (every method's options are
+// known by name, so each can be told to take a value or not before the method is chosen).
 RenderArgs parseArgs(const std::vector<std::string>& args) {
   RenderArgs a;
   for (size_t i = 0; i < args.size(); ++i) {
@@ -139,38 +191,9 @@ RenderArgs parseArgs(const std::vector<std::string>& args) {
       if (i + 1 >= args.size()) throw std::invalid_argument(key + " needs a value");
       return args[++i];
     };
-    if (key == "-h" || key == "--help") a.help = true;
-    else if (key == "-q" || key == "--quiet") a.quiet = true;
-    else if (key == "--robust") a.robust = true;
-    else if (key == "--log-stages") a.logStages = true;
-    else if (key == "--resume") a.resume = true;
-    else if (key == "--crop") a.crop = parseCrop(value());
-    else if (key == "--samples") a.samples = parseSamples(value());
-    else if (key == "--part") a.part = value();
-    else if (key == "--checkpoint") {
-      const std::string text = value();
-      a.checkpointSeconds = flagged([&] { return parseOptionReal("checkpoint", text, 1e-3, 1e9); });
-    }
-    else if (key == "-o" || key == "--output") a.output = value();
-    else if (key == "--png") a.png = value();
-    else if (key == "--method") a.method = value();
-    else if (key == "--resolution") a.resolution = value();
-    else if (key == "--isa") a.isa = value();
-    else if (key == "--memory-limit") {
-      const std::string text = value();
-      try {
-        a.memoryLimit = parseMemorySize(text);
-      } catch (const std::invalid_argument& e) {
-        throw std::invalid_argument("--memory-limit " + std::string(e.what()));
-      }
-      if (a.memoryLimit == 0) throw std::invalid_argument("--memory-limit must be more than 0 bytes");
-      if (a.memoryLimit > addressSpaceLimit())
-        throw std::invalid_argument("--memory-limit " + text + ": more than this process may address (ulimit -v: " +
-                                    memoryText(addressSpaceLimit()) + ")");
-    }
-    else if (key == "--threads") {
-      const std::string text = value();
-      a.threads = int(flagged([&] { return parseOptionInteger("threads", text, 0, 4096); }));
+    if (const RenderFlag* flag = renderFlag(key)) {
+      if (!*flag->value && inlineValue) throw std::invalid_argument(key + " takes no value");
+      flag->apply(a, *flag->value ? value() : std::string());
     } else if (key.rfind("--", 0) == 0) {
       a.methodOptions.push_back(methodOptionArg(key, inlineValue ? std::optional(arg.substr(eq + 1)) : std::nullopt,
                                                 i + 1 < args.size() ? std::optional(args[i + 1]) : std::nullopt,
