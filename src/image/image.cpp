@@ -3,6 +3,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -12,6 +13,7 @@
 #include <map>
 #include <memory>
 #include <stdexcept>
+#include <string_view>
 
 #include "lucent/core/files.h"
 #include "lucent/core/memory.h"
@@ -258,6 +260,14 @@ std::string exrHeaderProblem(std::ifstream& in, uint64_t fileBytes) {
   return "";
 }
 
+std::string lowercase(std::string text) {
+  for (char& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+// The formats Lucent reads, by extension (docs/scene-format.md, map_Kd).
+constexpr std::string_view kReadableExtensions[] = {".exr", ".hdr", ".png", ".jpg", ".jpeg", ".tif", ".tiff"};
+
 // The opened file, its header checked (see readImageHeader).
 std::unique_ptr<OIIO::ImageInput> openChecked(const std::string& path) {
   // A device or pipe (/dev/zero) would be read for ever.
@@ -278,10 +288,9 @@ std::unique_ptr<OIIO::ImageInput> openChecked(const std::string& path) {
   // The reader of the file's extension, and only that one: OpenImageIO's open() tries every reader
   // it has on a file its own does not take, and some abort the process on a crafted file (its RLA
   // reader asserts on a channel type; found by fuzzing).
-  std::string extension = std::filesystem::path(path).extension().string();
-  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (extension != ".exr" && extension != ".hdr" && extension != ".png" && extension != ".jpg" && extension != ".jpeg" &&
-      extension != ".tif" && extension != ".tiff")
+  const std::string extension = lowercase(std::filesystem::path(path).extension().string());
+  if (std::find(std::begin(kReadableExtensions), std::end(kReadableExtensions), extension) ==
+      std::end(kReadableExtensions))
     throw std::runtime_error("cannot read image '" + path +
                              "': not a format Lucent reads (.exr, .hdr, .png, .jpg or .jpeg, .tif or .tiff)");
   // Created by the format's name: given the path, create() also tries every other reader when the
@@ -359,14 +368,10 @@ Image readImage(const std::string& path, ImageMetadata* metadata) {
 }
 
 bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata) {
-  auto lowercase = [](std::string text) {
-    for (char& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return text;
-  };
   for (const auto& [key, value] : metadata)
     if (key == "oiio:ColorSpace") return lowercase(value).find("srgb") != std::string::npos;
   const std::string ext = lowercase(fs::path(path).extension().string());
-  return ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".bmp" || ext == ".tga";
+  return ext == ".jpg" || ext == ".jpeg" || ext == ".png";
 }
 
 Image readLinearImage(const std::string& path, ImageMetadata* metadataOut) {

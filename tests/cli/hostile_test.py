@@ -247,6 +247,13 @@ def test_outputs_are_checked_as_render_checks_them(work, args, status, words):
     assert changed(before, snapshot(work)) == []
 
 
+def test_a_render_flag_without_a_value_refuses_one(work):
+    scene = box_scene(work)
+    run = lucent("render", scene, "--quiet=1", "-o", "out.exr", cwd=work)
+    assert run.code == 1 and "--quiet takes no value" in run.err, run
+    assert not os.path.exists(os.path.join(work, "out.exr"))
+
+
 # --- grids, hangs and signals ---------------------------------------------------------------------
 
 def test_a_hashed_grid_too_fine_for_its_photons_is_refused_at_once(work):

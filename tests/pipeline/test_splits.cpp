@@ -10,9 +10,13 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
+#include <tuple>
 
 #include "lucent/image/image.h"
+#include "lucent/methods/methods.h"
 #include "lucent/pipeline/film_file.h"
+#include "lucent/scene/loader.h"
+#include "lucent/trace/visibility.h"
 #include "test_support.h"
 
 using namespace lucent;
@@ -282,4 +286,21 @@ TEST_CASE("render refuses a --resume, --checkpoint, --crop or --samples it canno
   const test::CliRun fresh = runLucent("render " + args + " --resume -o " + quoted(dir / "fresh.exr"));
   REQUIRE(fresh.status == 0);
   CHECK_FALSE(nlohmann::json::parse(fresh.output).contains("resumed_samples"));
+}
+
+TEST_CASE("Methods that render at once refuse a library caller's checkpoints and resume by name", "[splits][resume]") {
+  for (const auto& [method, scene, words] :
+       {std::tuple{"micro", "cornell-box", "--method micro gathers the whole image at once"},
+        std::tuple{"particles", "cornell-box", "--method particles renders the image at once"},
+        std::tuple{"envpbgi", "primitives", "--method envpbgi renders the image at once"}}) {
+    INFO(method);
+    Scene loaded = loadScene(std::string(LUCENT_SOURCE_DIR "/scenes/") + scene + ".json", {true});
+    loaded.camera.width = loaded.camera.height = 8;
+    const Visibility vis(loaded);
+    RenderControl control;
+    control.checkpointSeconds = 5;
+    control.checkpoint = [](const Film&) {};
+    REQUIRE_THROWS_WITH(renderingMethod(method).render(loaded, vis, {}, control),
+                        Catch::Contains(words) && Catch::Contains("cannot checkpoint or resume"));
+  }
 }
