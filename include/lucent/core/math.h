@@ -104,6 +104,10 @@ struct Frame {
   Vec3 toWorld(Vec3 v) const { return s * v.x + t * v.y + n * v.z; }
 };
 
+// c ? a : b per component: a select the vectorizer takes in lane loops, where a branch between
+// two vectors is not vectorized.
+inline Vec3 select(bool c, Vec3 a, Vec3 b) { return {c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z}; }
+
 // The distance below which a ray leaving p could meet p's own surface again through rounding: scaled
 // to the coordinates' magnitude so that it works for scenes in millimetres and in metres alike.
 inline float selfIntersectionScale(Vec3 p) {

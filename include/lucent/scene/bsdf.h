@@ -51,9 +51,32 @@ struct BsdfValue {
   Rgb f;
   float pdf = 0;
 };
+
+// The Lambertian lobe of albedo kd, from local directions' cosines: kd / pi and the cosine-weighted
+// density, both zero unless both directions are above the surface. Selects only: the path
+// tracer's lane loop vectorizes it (shadeDiffuseLanes); conditions chained on one comparison each,
+// not boolean algebra, which the vectorizer does not take.
+inline BsdfValue lambertianValue(Rgb kd, float woZ, float wiZ) {
+  const float bothAbove = woZ <= 0 ? 0.0f : wiZ <= 0 ? 0.0f : 1.0f;
+  return {{bothAbove == 0 ? 0.0f : kd.r * kInvPi, bothAbove == 0 ? 0.0f : kd.g * kInvPi,
+           bothAbove == 0 ? 0.0f : kd.b * kInvPi},
+          bothAbove == 0 ? 0.0f : cosineHemispherePdf(wiZ)};
+}
+
+// A cosine-distributed direction for the Lambertian lobe of albedo kd, its density and weight;
+// valid (pdf > 0) only where both directions are above the surface. Selects only, as above.
+inline BsdfSample sampleLambertian(Rgb kd, float woZ, Vec2 u) {
+  BsdfSample s;
+  s.wi = sampleCosineHemisphere(u);
+  s.pdf = woZ <= 0 ? 0.0f : s.wi.z <= 0 ? 0.0f : cosineHemispherePdf(s.wi.z);
+  s.weight = kd * kInvPi * (s.wi.z / s.pdf);
+  s.valid = s.pdf > 0;
+  return s;
+}
+
 inline BsdfValue evalBsdfAndPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
   if (b.isDelta() || wo.z <= 0 || wi.z <= 0) return {Rgb(0.0f), 0.0f};
-  BsdfValue v{b.kd * kInvPi, cosineHemispherePdf(wi.z)};
+  BsdfValue v = lambertianValue(b.kd, wo.z, wi.z);
   if (b.type == MaterialType::Phong) {
     // A cosine, rounded: above 1 by an ulp or two, its power overflowed for exponents of 1e8 and
     // more (f and pdf infinite, their ratio NaN).
@@ -102,10 +125,10 @@ inline BsdfSample sampleBsdf(const SurfaceBsdf& b, Vec3 wo, float u, Vec2 u2,
       }
       return s;
     }
-    case MaterialType::Diffuse:
+    case MaterialType::Diffuse: return sampleLambertian(b.kd, wo.z, u2);
     case MaterialType::Phong: {
       if (wo.z <= 0) return s;
-      if (b.type == MaterialType::Diffuse || u < b.diffuseChoice()) {
+      if (u < b.diffuseChoice()) {
         s.wi = sampleCosineHemisphere(u2);
       } else {
         const Vec3 local = samplePhongLobe(u2, b.ns);

@@ -42,24 +42,41 @@ inline bool isDeltaLight(const Light& light) {
   return light.type == LightType::Point || light.type == LightType::Directional;
 }
 
+// A uniformly chosen point on an emitting triangle (vertices q0, q1, q2, unit normal, area) seen
+// from receiver, chosen with probability pmf: the point, the unit direction and distance to it, and
+// the density (solid angle, times pmf); the density is 0 where the receiver sees the triangle's
+// back (emitters are one-sided) or lies on it. Selects only: the path tracer's lane loop
+// vectorizes it (shadeDiffuseLanes), and sampleChosenLight calls it.
+struct TrianglePointSample {
+  Vec3 point, wi;
+  float distance, pdf;
+};
+inline TrianglePointSample sampleTrianglePoint(Vec3 q0, Vec3 q1, Vec3 q2, Vec3 normal, float area, float pmf,
+                                               Vec3 receiver, Vec2 u) {
+  const Vec2 b = sampleUniformTriangle(u);
+  const Vec3 q = barycentric(q0, q1, q2, b.x, b.y);
+  const Vec3 d = q - receiver;
+  const float dist2 = dot(d, d);
+  const float distance = std::sqrt(dist2);
+  const Vec3 wi = d / distance;
+  const float cosLight = -dot(wi, normal);
+  const float pdf = cosLight <= 0 ? 0.0f : !(dist2 > 0) ? 0.0f : pmf * dist2 / (cosLight * area);
+  return {q, wi, distance, pdf};
+}
+
 // A sample of light `li`, chosen with probability `pmf` (its pdf includes it).
 inline LightSample sampleChosenLight(const Scene& scene, uint32_t li, float pmf, Vec3 receiver, Vec2 u) {
   LightSample s;
   const Light& light = scene.lights[li];
   switch (light.type) {
     case LightType::Triangle: {
-      const Vec2 b = sampleUniformTriangle(u);
       const uint32_t t = light.triangle;
-      const Vec3 q = barycentric(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), b.x, b.y);
-      const Vec3 d = q - receiver;
-      const float dist2 = dot(d, d);
-      s.point = q;
-      s.distance = std::sqrt(dist2);
-      s.wi = d / s.distance;
-      const float cosLight = -dot(s.wi, scene.geometricNormal(t));
-      if (cosLight <= 0 || !(dist2 > 0)) return {};  // emitters are one-sided
+      const TrianglePointSample q = sampleTrianglePoint(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2),
+                                                        scene.geometricNormal(t), scene.triangleArea(t), pmf,
+                                                        receiver, u);
+      if (!(q.pdf > 0)) return {};
+      s.point = q.point, s.wi = q.wi, s.distance = q.distance, s.pdf = q.pdf;
       s.radiance = scene.materials[scene.materialIds[t]].ke;
-      s.pdf = pmf * dist2 / (cosLight * scene.triangleArea(t));
       return s;
     }
     case LightType::Point:
@@ -98,16 +115,17 @@ inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, 
 // A shadow ray from receiver p (geometric normal ng) towards a light sample. Towards a point on a
 // light it ends short of that point by the same scale-aware margin by which its origin is offset
 // from the receiver, so that it never counts the light itself as an occluder.
-inline Ray shadowRay(Vec3 p, Vec3 ng, const LightSample& ls) {
-  Ray r{offsetOrigin(p, ng, ls.wi), ls.wi};
-  if (std::isfinite(ls.distance)) {
-    const Vec3 to = ls.point - r.origin;
-    const float d = length(to);
-    r.direction = to / d;
-    r.tMax = d - selfIntersectionScale(ls.point);
-  }
+// Selects only: the path tracer's lane loop vectorizes it (shadeDiffuseLanes).
+inline Ray shadowRay(Vec3 p, Vec3 ng, Vec3 wi, Vec3 lightPoint, float lightDistance) {
+  const Vec3 origin = offsetOrigin(p, ng, wi);
+  const Vec3 to = lightPoint - origin;
+  const float d = length(to);
+  const bool finite = lightDistance < kInf;
+  Ray r{origin, select(finite, to / d, wi)};
+  r.tMax = finite ? d - selfIntersectionScale(lightPoint) : kInf;
   return r;
 }
+inline Ray shadowRay(Vec3 p, Vec3 ng, const LightSample& ls) { return shadowRay(p, ng, ls.wi, ls.point, ls.distance); }
 
 // Density (solid angle, with selection probability) of choosing direction wi towards emissive
 // triangle `tri`, hit at distance `dist`.

@@ -15,6 +15,27 @@ struct SurfacePoint {
   uint32_t materialId = 0;
 };
 
+// The functions below that take scalars are the path tracer's lane loop's too (shadeDiffuseLanes):
+// written with selects only, so that the compiler vectorizes the very function the one-hit code
+// calls, and the two compute the same IEEE operations.
+
+// The vertex normals interpolated at a hit (not yet normalized), normalized and turned to the side
+// of the geometric normal ng; ng itself where they cancel.
+inline Vec3 orientedShadingNormal(Vec3 interpolated, Vec3 ng) {
+  const float len = length(interpolated);
+  const Vec3 n = select(len > 0, interpolated / len, ng);
+  return select(dot(n, ng) < 0, -n, n);
+}
+
+// The normal of a hit's shading frame, seen from wo: the shading normal sn, or the geometric normal
+// ng where the two put the viewer on different sides (at silhouettes of smooth meshes); turned to
+// the viewer's side for a two-sided material.
+inline Vec3 shadingFrameNormal(Vec3 wo, Vec3 sn, Vec3 ng, bool twoSided) {
+  const Vec3 n = select(dot(wo, sn) * dot(wo, ng) > 0, sn, ng);
+  const bool behind = dot(wo, ng) > 0 ? false : twoSided;
+  return select(behind, -n, n);
+}
+
 inline SurfacePoint surfaceAt(const Scene& scene, uint32_t tri, float b1, float b2) {
   SurfacePoint sp;
   sp.triangle = tri;
@@ -28,9 +49,7 @@ inline SurfacePoint surfaceAt(const Scene& scene, uint32_t tri, float b1, float 
   // OBJ faces have normals at all their vertices or at none (then they are stored as zero).
   if (!(scene.normals[v[0]] == Vec3{0, 0, 0})) {
     const Vec3 n = barycentric(scene.normals[v[0]], scene.normals[v[1]], scene.normals[v[2]], b1, b2);
-    const float len = length(n);
-    if (len > 0) sp.shadingNormal = n / len;
-    if (dot(sp.shadingNormal, sp.geometricNormal) < 0) sp.shadingNormal = -sp.shadingNormal;
+    sp.shadingNormal = orientedShadingNormal(n, sp.geometricNormal);
   }
   return sp;
 }

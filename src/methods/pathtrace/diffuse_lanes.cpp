@@ -3,15 +3,14 @@
 #include "lucent/core/math.h"
 #include "lucent/core/lane_clones.h"
 #include "lucent/core/sampling.h"
+#include "lucent/scene/light_sampling.h"
+#include "lucent/scene/surface.h"
+#include "methods/pathtrace/shading_steps.h"
 
 namespace lucent {
 
 namespace {
 void store(Vec3 v, float* x, float* y, float* z, uint32_t k) { x[k] = v.x, y[k] = v.y, z[k] = v.z; }
-Vec3 select(bool c, Vec3 a, Vec3 b) { return {c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z}; }
-// !Rgb::isBlack, NaN included, as a sum of one-comparison selects: the vectorizer takes neither
-// short-circuits nor a chain of selects on different comparisons here.
-bool notBlack(Rgb c) { return (c.r != 0 ? 1.0f : 0.0f) + (c.g != 0 ? 1.0f : 0.0f) + (c.b != 0 ? 1.0f : 0.0f) > 0; }
 }  // namespace
 
 LUCENT_LANE_LOOP(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32_t last, SamplerKind sampler,
@@ -43,94 +42,49 @@ LUCENT_LANE_VERSIONS(void, startCameraPaths, (CameraLanes& l, uint32_t first, ui
                   uint64_t seed, const PinholeCamera& camera, bool pixelCentres),
                      (l, first, last, sampler, seed, camera, pixelCentres))
 
-// The rest of surfaceAt (the shading normal), the start of PathTracer::shade for a two-sided
-// material, then next-event estimation as PathTracer::sampleDirect (the emitting triangle's sample
-// as sampleLight takes it) and sampleBsdf's Lambertian case, with shadowRay and offsetOrigin.
+// What PathTracer::shade does at a Lambertian hit, with the functions it calls: the shading
+// normal (surfaceAt's) and frame, next-event estimation (sampleDirect, with sampleLight's triangle
+// case where the light is an emitting triangle), and the next direction (sampleBsdf).
 LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l)) {
-  const bool lightOnly = l.strategy == PathStrategy::LightSampling, bsdfOnly = l.strategy == PathStrategy::BsdfSampling;
+  const PathStrategy strategy = l.strategy;
   for (uint32_t k = 0; k < l.count; ++k) {
-    const Vec3 ng = Vec3{l.ngx[k], l.ngy[k], l.ngz[k]};
-    const Vec3 interpolated{l.normalX[k], l.normalY[k], l.normalZ[k]};
-    const float len = length(interpolated);
-    Vec3 sn = select(len > 0, interpolated / len, ng);
-    sn = select(dot(sn, ng) < 0, -sn, sn);
-    sn = select(l.hasNormals[k] != 0, sn, ng);
-
+    const Vec3 ng{l.ngx[k], l.ngy[k], l.ngz[k]};
+    const Vec3 sn = select(l.hasNormals[k] != 0, orientedShadingNormal({l.normalX[k], l.normalY[k], l.normalZ[k]}, ng), ng);
     const Vec3 woWorld = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
-    const bool frontFace = dot(woWorld, ng) > 0;
-    Vec3 shadingN = select(dot(woWorld, sn) * dot(woWorld, ng) > 0, sn, ng);
-    shadingN = select(frontFace, shadingN, -shadingN);
-    const Frame frame(shadingN);
+    const Frame frame(shadingFrameNormal(woWorld, sn, ng, true));
     store(sn, l.snX, l.snY, l.snZ, k);
-    l.frontFace[k] = frontFace;
-
-    const Vec3 position = Vec3{l.posX[k], l.posY[k], l.posZ[k]};
-    const Vec3 s = frame.s, t = frame.t, n = frame.n;
+    l.frontFace[k] = dot(woWorld, ng) > 0;
+    const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
     const Vec3 wo = frame.toLocal(woWorld);
     const Rgb kd{l.kdR[k], l.kdG[k], l.kdB[k]};
 
-    // The light sample: a uniform point on the emitting triangle, or the one fetched.
-    const Vec2 b = sampleUniformTriangle({l.uLightX[k], l.uLightY[k]});
-    const Vec3 q = barycentric(Vec3{l.q0x[k], l.q0y[k], l.q0z[k]}, Vec3{l.q1x[k], l.q1y[k], l.q1z[k]},
-                               Vec3{l.q2x[k], l.q2y[k], l.q2z[k]}, b.x, b.y);
-    const Vec3 toLight = q - position;
-    const float dist2 = dot(toLight, toLight);
-    const float triangleDistance = std::sqrt(dist2);
-    const Vec3 triangleWi = toLight / triangleDistance;
-    const float cosLight = -dot(triangleWi, Vec3{l.lightNx[k], l.lightNy[k], l.lightNz[k]});
-    // sampleLight returns no sample (pdf 0) for the triangle's back or a zero distance.
-    const float trianglePdf =
-        cosLight <= 0 ? 0.0f : !(dist2 > 0) ? 0.0f : l.lightPmf[k] * dist2 / (cosLight * l.lightArea[k]);
+    // The light sample: a point on the emitting triangle, or the one fetched.
+    const TrianglePointSample q = sampleTrianglePoint(
+        {l.q0x[k], l.q0y[k], l.q0z[k]}, {l.q1x[k], l.q1y[k], l.q1z[k]}, {l.q2x[k], l.q2y[k], l.q2z[k]},
+        {l.lightNx[k], l.lightNy[k], l.lightNz[k]}, l.lightArea[k], l.lightPmf[k], position, {l.uLightX[k], l.uLightY[k]});
     const bool onTriangle = l.lightIsTriangle[k] != 0;
-    const Vec3 wi = select(onTriangle, triangleWi, Vec3{l.wiX[k], l.wiY[k], l.wiZ[k]});
-    const float fetchedDistance = l.lightDistance[k], fetchedPdf = l.lightPdf[k];
-    const float distance = onTriangle ? triangleDistance : fetchedDistance;
-    const Vec3 point = select(onTriangle, q, Vec3{l.pointX[k], l.pointY[k], l.pointZ[k]});
-    const float pdf = onTriangle ? trianglePdf : fetchedPdf;
+    const Vec3 wi = select(onTriangle, q.wi, {l.wiX[k], l.wiY[k], l.wiZ[k]});
+    const Vec3 point = select(onTriangle, q.point, {l.pointX[k], l.pointY[k], l.pointZ[k]});
+    const float distance = onTriangle ? q.distance : l.lightDistance[k];
+    const float pdf = onTriangle ? q.pdf : l.lightPdf[k];
+    const bool delta = l.lightDelta[k] != 0;
     const Rgb le{l.leR[k], l.leG[k], l.leB[k]};
+    const Vec3 wiLocal = frame.toLocal(wi);
+    const NextEventSample direct =
+        weighLightSample(strategy, pdf, delta, le, wi, wiLocal, frame.n, ng, lambertianValue(kd, wo.z, wiLocal.z));
+    l.shadowQueued[k] = direct.queued;
+    const Ray shadow = shadowRay(position, ng, wi, point, distance);
+    store(shadow.origin, l.shadowOx, l.shadowOy, l.shadowOz, k);
+    store(shadow.direction, l.shadowDx, l.shadowDy, l.shadowDz, k);
+    l.shadowTMax[k] = shadow.tMax;
+    l.directR[k] = direct.contribution.r, l.directG[k] = direct.contribution.g, l.directB[k] = direct.contribution.b;
 
-    // evalBsdf and bsdfPdf: zero unless both directions are above the surface. Conditions are
-    // chained selects, not boolean algebra, which the vectorizer does not take.
-    const Vec3 wiLocal{dot(wi, s), dot(wi, t), dot(wi, n)};  // Frame::toLocal
-    const float bothAbove = wo.z <= 0 ? 0.0f : wiLocal.z <= 0 ? 0.0f : 1.0f;
-    const Rgb f{bothAbove == 0 ? 0.0f : kd.r * kInvPi, bothAbove == 0 ? 0.0f : kd.g * kInvPi,
-                bothAbove == 0 ? 0.0f : kd.b * kInvPi};
-    const float lambertPdf = bothAbove == 0 ? 0.0f : cosineHemispherePdf(wiLocal.z);
-    // Point and directional lights cannot be hit: weight 1, as with light sampling alone. BSDF
-    // sampling alone samples only them (a pdf of 0 queues no shadow ray). Selects chained on one
-    // comparison each, for the vectorizer.
-    const float mis = powerHeuristic(pdf, lambertPdf);
-    const float misWeight = lightOnly ? 1.0f : mis;
-    const float w = onTriangle ? misWeight : l.lightDelta[k] != 0 ? 1.0f : misWeight;
-    const float deltaLight = onTriangle ? 0.0f : l.lightDelta[k] != 0 ? 1.0f : 0.0f;
-    const float queuedPdf = pdf * (bsdfOnly ? deltaLight : 1.0f);
-    const Rgb direct = f * le * (wiLocal.z * w / pdf);
-    // sampleDirect's tests, in its order.
-    l.shadowQueued[k] = !(queuedPdf > 0)                ? 0
-                        : !notBlack(le)                 ? 0
-                        : wiLocal.z <= 0                ? 0
-                        : dot(wi, ng) * dot(n, ng) <= 0 ? 0
-                        : notBlack(f)                   ? 1
-                                                        : 0;
-    const Vec3 origin = offsetOrigin(position, ng, wi);
-    const Vec3 toPoint = point - origin;
-    const float pointDistance = length(toPoint);
-    const bool finite = distance < kInf;
-    store(origin, l.shadowOx, l.shadowOy, l.shadowOz, k);
-    store(select(finite, toPoint / pointDistance, wi), l.shadowDx, l.shadowDy, l.shadowDz, k);
-    l.shadowTMax[k] = finite ? pointDistance - selfIntersectionScale(point) : kInf;
-    l.directR[k] = direct.r, l.directG[k] = direct.g, l.directB[k] = direct.b;
-
-    // The next direction, cosine-distributed.
-    const Vec3 wiNext = sampleCosineHemisphere({l.uBsdfX[k], l.uBsdfY[k]});
-    // sampleBsdf: no sample unless both directions are above the surface and the pdf is positive.
-    const float scatterPdf = wo.z <= 0 ? 0.0f : wiNext.z <= 0 ? 0.0f : cosineHemispherePdf(wiNext.z);
-    const Rgb weight = kd * kInvPi * (wiNext.z / scatterPdf);
-    const Vec3 wiWorld = s * wiNext.x + t * wiNext.y + n * wiNext.z;  // Frame::toWorld
-    // shade's test against leaks; with both local directions above the surface nothing transmits.
-    l.scattered[k] = scatterPdf > 0 ? (dot(wiWorld, ng) * dot(woWorld, ng) < 0 ? 0 : 1) : 0;
-    l.weightR[k] = weight.r, l.weightG[k] = weight.g, l.weightB[k] = weight.b;
-    l.scatterPdf[k] = scatterPdf;
+    // The next direction.
+    const BsdfSample next = sampleLambertian(kd, wo.z, {l.uBsdfX[k], l.uBsdfY[k]});
+    const Vec3 wiWorld = frame.toWorld(next.wi);
+    l.scattered[k] = next.valid ? !leaksThroughSurface(woWorld, wiWorld, ng, false) : false;
+    l.weightR[k] = next.weight.r, l.weightG[k] = next.weight.g, l.weightB[k] = next.weight.b;
+    l.scatterPdf[k] = next.pdf;
     store(offsetOrigin(position, ng, wiWorld), l.nextOx, l.nextOy, l.nextOz, k);
     store(wiWorld, l.nextDx, l.nextDy, l.nextDz, k);
   }

@@ -2,8 +2,8 @@
 // random numbers of each hit are fetched into a structure of arrays (one slot per path, a "lane"),
 // then every step that is the same arithmetic for all lanes runs as one loop over the lanes, which
 // the compiler vectorizes (eight lanes per instruction with AVX2, sixteen with AVX-512, chosen at
-// run time). It is the only code that shades a Lambertian hit: rendering one path at a time shades
-// each in a lane of its own.
+// run time). The loop calls the functions PathTracer::shade calls (shading_steps.h), which shades
+// every hit when paths are traced one at a time.
 #pragma once
 #include <cstdint>
 

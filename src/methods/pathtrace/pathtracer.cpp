@@ -14,6 +14,7 @@
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"
 #include "methods/pathtrace/diffuse_lanes.h"
+#include "methods/pathtrace/shading_steps.h"
 
 namespace lucent {
 namespace {
@@ -136,12 +137,9 @@ class PathTracer {
                         sp.shadingNormal, hit.t);
     if (path.bounce + 1 > opt_.maxDepth) return false;
 
-    // Glass keeps the winding orientation (inside/outside); other materials are two-sided. Where
-    // the shading normal puts the viewer on the other side than the geometric normal does (at
-    // silhouettes of smooth meshes), the geometric normal is used.
-    Vec3 n = dot(wo, sp.shadingNormal) * dot(wo, sp.geometricNormal) > 0 ? sp.shadingNormal : sp.geometricNormal;
-    if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
-    const Frame frame(n);
+    // Glass keeps the winding orientation (inside/outside); other materials are two-sided.
+    const bool twoSided = bsdf.type != MaterialType::Glass;
+    const Frame frame(shadingFrameNormal(wo, sp.shadingNormal, sp.geometricNormal, twoSided));
     const Vec3 woLocal = frame.toLocal(wo);
 
     if (!bsdf.isDelta()) {
@@ -154,9 +152,7 @@ class PathTracer {
     const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, path.sampler.uniform2(path.bounce, SampleUse::BsdfDirection));
     if (!bs.valid) return false;
     const Vec3 wi = frame.toWorld(bs.wi);
-    // Reject directions on the wrong side of the real surface (shading-normal light leaks).
-    const bool transmits = bs.wi.z * woLocal.z < 0;
-    if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) return false;
+    if (leaksThroughSurface(wo, wi, sp.geometricNormal, bs.wi.z * woLocal.z < 0)) return false;
     return continuePath(path, bs.weight, bs.pdf, bs.delta, sp.position,
                         {offsetOrigin(sp.position, sp.geometricNormal, wi), wi});
   }
@@ -225,11 +221,9 @@ class PathTracer {
       const bool drawnInLanes = drawDiffuseLaneNumbers(w);
       uint32_t diffuseHits = 0;
       for (const uint32_t i : w.active) {
-        if (inDiffuseLane(w.paths[i], w.hits[i])) {
+        if (opt_.laneShading && inDiffuseLane(w.paths[i], w.hits[i])) {
           fetchDiffuseLane(w.paths[i], w.hits[i], i, lanes, w.textured, w.otherLights,
                            drawnInLanes ? 3 * diffuseHits++ : kNotDrawn, w.sobol);
-          // One path at a time: its lane is shaded at once, alone.
-          if (!opt_.laneShading) shadeLanes(w, counters);
           continue;
         }
         ShadowQuery shadow;
@@ -374,6 +368,7 @@ class PathTracer {
     // of a scene without one (sampleLight gives no sample then).
     const TriangleLightRecord* light = s.lights.empty() ? nullptr : &lightRecords_[s.lightDistribution.pick(l.uLight[k])];
     l.lightIsTriangle[k] = light && light->isTriangle;
+    l.lightDelta[k] = false;  // set by sampleOtherLights for the others
     if (!l.lightIsTriangle[k]) {
       otherLights.push_back(k);
       return;
@@ -477,17 +472,12 @@ class PathTracer {
                     ShadowQuery& shadow) const {
     const float uLight = sampler.uniform(bounce, SampleUse::LightChoice);
     const LightSample ls = sampleLight(scene_, sp.position, uLight, sampler.uniform2(bounce, SampleUse::LightPoint));
-    if (!(ls.pdf > 0) || ls.radiance.isBlack()) return false;
-    if (opt_.strategy == PathStrategy::BsdfSampling && !ls.delta) return false;
     const Vec3 wiLocal = frame.toLocal(ls.wi);
-    if (wiLocal.z <= 0 || dot(ls.wi, sp.geometricNormal) * dot(frame.n, sp.geometricNormal) <= 0) return false;
-    const BsdfValue value = evalBsdfAndPdf(bsdf, woLocal, wiLocal);
-    const Rgb f = value.f;
-    if (f.isBlack()) return false;
-    const float w =
-        ls.delta || opt_.strategy == PathStrategy::LightSampling ? 1.0f : powerHeuristic(ls.pdf, value.pdf);
+    const NextEventSample sample = weighLightSample(opt_.strategy, ls.pdf, ls.delta, ls.radiance, ls.wi, wiLocal,
+                                                    frame.n, sp.geometricNormal, evalBsdfAndPdf(bsdf, woLocal, wiLocal));
+    if (!sample.queued) return false;
     shadow.ray = shadowRay(sp.position, sp.geometricNormal, ls);
-    shadow.contribution = f * ls.radiance * (wiLocal.z * w / ls.pdf);
+    shadow.contribution = sample.contribution;
     return true;
   }
 

@@ -1,0 +1,57 @@
+// The steps of shading a hit that PathTracer::shade (one path at a time, every material) and the
+// lanes (shadeDiffuseLanes, Lambertian hits many at a time) share, beside the scene layer's
+// orientedShadingNormal, shadingFrameNormal, lambertianValue, sampleLambertian,
+// sampleTrianglePoint and shadowRay. Each is written once, with selects only, so that the compiler
+// vectorizes in the lane loop the very function the one-path code calls.
+#pragma once
+#include "lucent/core/math.h"
+#include "lucent/core/sampling.h"
+#include "lucent/scene/bsdf.h"
+#include "methods/pathtrace/path_tracer.h"
+
+namespace lucent {
+
+// !Rgb::isBlack, NaN included, as a sum of one-comparison selects: the vectorizer takes neither
+// short-circuits nor a chain of selects on different comparisons here.
+inline bool anyNonZero(Rgb c) {
+  return (c.r != 0 ? 1.0f : 0.0f) + (c.g != 0 ? 1.0f : 0.0f) + (c.b != 0 ? 1.0f : 0.0f) > 0;
+}
+
+// Next-event estimation's light sample at a hit, weighed: the light's density lightPdf (with its
+// selection probability), a delta light (point or directional: BSDF sampling cannot hit it) or
+// not, its radiance le from direction wi (wiLocal in the shading frame of normal n, geometric
+// normal ng), and the BSDF's value and density there. What it brings if its shadow ray is
+// unoccluded (before the path's throughput), and whether that ray is worth tracing: not when the
+// sample or the BSDF is zero, when wi is below the shading or the geometric surface, or when the
+// strategy is BSDF sampling alone and the light could be hit by it. Conditions are float or int
+// selects, each on one comparison, and the BSDF's weight is computed before it is selected: the
+// vectorizer left the lane loop scalar with bool chains or a call inside a select's arm.
+struct NextEventSample {
+  Rgb contribution;
+  bool queued;
+};
+inline NextEventSample weighLightSample(PathStrategy strategy, float lightPdf, bool lightDelta, Rgb le, Vec3 wi,
+                                        Vec3 wiLocal, Vec3 n, Vec3 ng, BsdfValue bsdf) {
+  const float delta = lightDelta ? 1.0f : 0.0f;
+  const float mis = powerHeuristic(lightPdf, bsdf.pdf);
+  const float misWeight = strategy == PathStrategy::LightSampling ? 1.0f : mis;
+  const float w = delta != 0 ? 1.0f : misWeight;
+  const float queuedPdf = lightPdf * (strategy == PathStrategy::BsdfSampling ? delta : 1.0f);
+  const int queued = !(queuedPdf > 0)                ? 0
+                     : !anyNonZero(le)               ? 0
+                     : wiLocal.z <= 0                ? 0
+                     : dot(wi, ng) * dot(n, ng) <= 0 ? 0
+                     : anyNonZero(bsdf.f)            ? 1
+                                                     : 0;
+  return {bsdf.f * le * (wiLocal.z * w / lightPdf), queued != 0};
+}
+
+// Whether a scattered direction wi lies on the other side of the geometric surface (normal ng) than
+// the lobe sampled says, wo being where the path came from: a reflection through the surface or a
+// transmission that stays, which the shading normal allows and the real surface does not (a light
+// leak). Such samples end the path.
+inline bool leaksThroughSurface(Vec3 wo, Vec3 wi, Vec3 ng, bool transmits) {
+  return (dot(wi, ng) * dot(wo, ng) < 0) != transmits;
+}
+
+}  // namespace lucent
