@@ -44,7 +44,7 @@ RecordedRays recordRays(const Scene& scene, const Visibility& vis, const PathTra
   tbb::parallel_for(0, h, [&](int y) {
     RecordedRays& out = perRow[y];
     for (int x = 0; x < w; ++x)
-      for (int s = 0; s < opt.spp; ++s) {
+      for (int s = 0; s < opt.common.spp; ++s) {
         Rng rng(seed, uint64_t(y) * w + x, s);
         Ray ray = camera.generate(x + rng.uniform(), y + rng.uniform());
         Rgb beta(1.0f);  // the path's throughput, for the path tracer's roulette
@@ -129,7 +129,7 @@ int main(int argc, char** argv) {
     // machine's speed between phases does not show up as a speed-up.
     const Visibility vis(scene);
     PathTraceOptions opt;
-    opt.spp = spp;
+    opt.common.spp = spp;
     // The raw loop's rays are those of the independent sampler's paths: the path tracer is timed
     // with it, like with like, and with the default Sobol sampler apart (its numbers' cost).
     opt.sampler = SamplerKind::Independent;

@@ -132,4 +132,16 @@ bool renderRowBands(const RenderControl& control, const RenderPart& part, const 
   return true;
 }
 
+EyePathSettings eyePathSettings(const CommonOptions& common, int maxSpecularDepth, const RenderPart& part) {
+  EyePathSettings s;
+  s.spp = common.spp;
+  s.maxSpecularDepth = maxSpecularDepth;
+  s.seed = common.seed;
+  s.layers = common.layers;
+  s.region = part.region;
+  s.sampleBegin = part.sampleBegin;
+  s.sampleEnd = part.sampleEnd;
+  return s;
+}
+
 }  // namespace lucent

@@ -389,7 +389,7 @@ TEST_CASE("envpbgi: a plane under a uniform environment is its albedo times the 
   const Visibility vis(scene);
   EnvPbgiOptions o;
   o.points = 1u << 12;
-  o.layers = true;
+  o.common.layers = true;
   for (const PointDirectLight directLight : {PointDirectLight::Selected, PointDirectLight::EveryLeaf}) {
     o.directLight = directLight;
     const RenderOutput out = renderEnvPbgi(scene, vis, o);
@@ -451,7 +451,7 @@ TEST_CASE("envpbgi: the paper's approximations against its brute force, and both
   const RenderOutput bruteForce = renderEnvPbgi(scene, vis, o);
   PathTraceOptions pt;
   pt.maxDepth = 2;
-  pt.spp = 512;
+  pt.common.spp = 512;
   pt.pixelCentres = true;
   const RenderOutput reference = renderPathTraced(scene, vis, pt);
   auto relMse = [](const Image& a, const Image& b) { return compareImages(a, b).overall.relmse; };
@@ -485,7 +485,7 @@ TEST_CASE("envpbgi: glossy receivers are shaded by their diffuse part, counted, 
     out = renderEnvPbgi(scene, vis, o);
     PathTraceOptions pt;
     pt.maxDepth = 2;
-    pt.spp = 512;
+    pt.common.spp = 512;
     pt.pixelCentres = true;
     reference = renderPathTraced(scene, vis, pt);
     return compareImages(out.image, reference.image).overall.relmse;

@@ -122,8 +122,8 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
     outside.camera = test::testCamera({0.3f, 2.5f, 2.5f}, {0, 0, 0}, 12, 12, 60);
     const Visibility outsideVis(outside);
     PathTraceOptions pt;
-    pt.spp = 64;
-    pt.layers = true;
+    pt.common.spp = 64;
+    pt.common.layers = true;
     const float outsideLight = largestLight(renderPathTraced(outside, outsideVis, pt).image);
     CHECK(outsideLight > 1.0f);
 
@@ -133,8 +133,8 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
     pm.photons = 20000;
     pm.causticPhotons = 0;
     pm.gatherRays = 16;
-    pm.lightSamples = 4;
-    pm.layers = true;
+    pm.shading.lightSamples = 4;
+    pm.common.layers = true;
     for (PhotonMapKind map : {PhotonMapKind::Sort, PhotonMapKind::Stencil, PhotonMapKind::Hash, PhotonMapKind::KdTree}) {
       PhotonMapOptions o = pm;
       o.map = map;
@@ -165,9 +165,9 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
       micro.points = 1 << 18;
       micro.bufferSide = 8;
       micro.photons = 20000;
-      micro.lightSamples = 4;
+      micro.shading.lightSamples = 4;
       micro.pointLightSamples = 4;
-      micro.layers = true;
+      micro.common.layers = true;
       const Image image = renderMicro(scene, vis, micro).image;
       const int direct = image.channelIndex("direct.R");
       int lit = 0;
@@ -201,9 +201,9 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
       ParticleOptions particles;
       particles.sides = sides;
       particles.areaParticles = 4000;
-      particles.lightSamples = 4;
+      particles.shading.lightSamples = 4;
       particles.emissionSamples = 4;
-      particles.layers = true;
+      particles.common.layers = true;
       const Image image = renderParticles(scene, vis, particles).image;
       const LightInside inside = lightInside(image);
       INFO(name(light) << ", particles, sides " << int(sides) << ": mean " << inside.mean << ", the outside's light up to "
@@ -225,7 +225,7 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
     if (light != Outside::AreaLightFacingAway) {
       EnvPbgiOptions env;
       env.points = 1 << 16;
-      env.layers = true;
+      env.common.layers = true;
       const LightInside inside = lightInside(renderEnvPbgi(scene, vis, env).image);
       INFO(name(light) << ", envpbgi: mean " << inside.mean << ", the outside's light up to " << outsideLight);
       CHECK(inside.mean <= (faces == Walls::TwoSided && light == Outside::Environment ? 0.1 : 1e-3) * outsideLight);

@@ -754,11 +754,11 @@ TEST_CASE("Closed furnace: one bounce gives Le (1 + rho + rho^2), multiple bounc
     o.radiosityLevel = 9;
     o.vpls = 2000;
     o.photons = 100000;
-    o.lightSamples = 16;
-    o.layers = true;
+    o.shading.lightSamples = 16;
+    o.common.layers = true;
     std::vector<double> means;
     for (int seed = 0; seed < test::kSeeds; ++seed) {
-      o.seed = uint64_t(seed);
+      o.common.seed = uint64_t(seed);
       const Image image = renderMicro(box, vis, o).image;
       if (seed == 0) {
         const test::MeanAndError direct = test::channelMean(image, image.channelIndex("direct.R"));
@@ -786,16 +786,16 @@ TEST_CASE("Cornell box: micro with direct-lit points agrees with the path tracer
   const ParallelScope threads(2);
   PathTraceOptions pt;
   pt.maxDepth = 2;
-  pt.spp = 4096;
-  pt.layers = true;
-  pt.seed = 3;
+  pt.common.spp = 4096;
+  pt.common.layers = true;
+  pt.common.seed = 3;
   const Image reference = renderPathTraced(scene, vis, pt).image;
   auto micro = [&](uint32_t points, int side) {
     MicroRenderOptions o;
     o.points = points;
     o.bufferSide = side;
-    o.spp = 16;
-    o.layers = true;
+    o.common.spp = 16;
+    o.common.layers = true;
     return renderMicro(scene, vis, o).image;
   };
   const Image standard = micro(defaultPointCount(scene, 4.0f), 24);
@@ -827,7 +827,7 @@ TEST_CASE("Bilateral upsampling: 1/4 and 1/16 of the pixels gathered, close to g
   const ParallelScope threads(2);
   MicroRenderOptions o;
   o.points = 1u << 14;
-  o.layers = true;
+  o.common.layers = true;
   const RenderOutput full = renderMicro(scene, vis, o);
   const uint64_t points = full.stats.counter("shading_points");
   REQUIRE(full.stats.counter("micro_buffers") == points);

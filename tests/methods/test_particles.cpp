@@ -285,14 +285,14 @@ TEST_CASE("particles: in a furnace the image is the truncated series, without bo
   o.areaParticles = 6000;
   o.bounces = 4;
   o.emissionSamples = 4;
-  o.lightSamples = 4;
-  o.layers = true;
+  o.shading.lightSamples = 4;
+  o.common.layers = true;
   test::TempDir dumps("particles");
   Image images[2];
   for (int threads : {1, 2}) {
     ParallelScope scope(threads);
     ParticleOptions run = o;
-    if (threads == 1) run.dumpDirectory = dumps.path.string();
+    if (threads == 1) run.shading.dumpDirectory = dumps.path.string();
     images[threads - 1] = renderParticles(scene, vis, run).image;
   }
   REQUIRE(images[0].pixels().size() == images[1].pixels().size());
@@ -314,7 +314,7 @@ TEST_CASE("particles: in a furnace the image is the truncated series, without bo
   std::vector<double> means{indirectMean(images[0])};
   for (uint64_t seed = 1; seed < 6; ++seed) {
     ParticleOptions run = o;
-    run.seed = seed;
+    run.common.seed = seed;
     means.push_back(indirectMean(renderParticles(scene, vis, run).image));
   }
   double mean = 0, var = 0;
@@ -368,8 +368,8 @@ TEST_CASE("particles: building links and lists for the frame only gives the imag
   const Visibility vis(scene);
   ParticleOptions o;
   o.areaParticles = 3000;
-  o.lightSamples = 2;
-  o.layers = true;
+  o.shading.lightSamples = 2;
+  o.common.layers = true;
   o.geometry = ParticleGeometry::Frame;
   const RenderOutput frame = renderParticles(scene, vis, o);
   o.geometry = ParticleGeometry::All;
@@ -389,10 +389,10 @@ TEST_CASE("particles: a frame shaded band by band gives the image and counts of 
   const Visibility vis(scene);
   ParticleOptions o;
   o.areaParticles = 3000;
-  o.lightSamples = 2;
+  o.shading.lightSamples = 2;
   const RenderOutput bands = renderParticles(scene, vis, o);
   const test::TempDir dir("particles-bands");
-  o.dumpDirectory = dir.path.string();
+  o.shading.dumpDirectory = dir.path.string();
   const RenderOutput whole = renderParticles(scene, vis, o);
   CHECK(bands.image.pixels() == whole.image.pixels());
   for (const char* counter : {"found_radiance_particles", "used_area_particles", "gather_link_rays", "shading_points"})
@@ -408,10 +408,10 @@ TEST_CASE("particles: adaptive supersampling replaces the flagged pixels by thei
   const Visibility vis(scene);
   ParticleOptions o;
   o.areaParticles = 3000;
-  o.lightSamples = 2;
+  o.shading.lightSamples = 2;
   const Image single = renderParticles(scene, vis, o).image;
   ParticleOptions nine = o;
-  nine.spp = 9;
+  nine.common.spp = 9;
   const Image dense = renderParticles(scene, vis, nine).image;
   o.supersample = 3;
   const RenderOutput adaptive = renderParticles(scene, vis, o);
@@ -476,7 +476,7 @@ TEST_CASE("particles: features under the particle spacing and glossy receivers d
     finalizeScene(scene);
     const Visibility vis(scene);
     PathTraceOptions pt;
-    pt.spp = 4096;
+    pt.common.spp = 4096;
     pt.pixelCentres = true;
     const Image reference = renderPathTraced(scene, vis, pt).image;
     auto meanOf = [](const Image& image) {
@@ -490,7 +490,7 @@ TEST_CASE("particles: features under the particle spacing and glossy receivers d
     for (uint32_t positions : {1000u, 4000u, 16000u}) {
       ParticleOptions o;
       o.areaParticles = positions;
-      o.lightSamples = 16;
+      o.shading.lightSamples = 16;
       const RenderOutput out = renderParticles(scene, vis, o);
       CHECK(out.stats.counter("invalid_samples") == 0);
       for (float v : out.image.pixels()) REQUIRE(std::isfinite(v));

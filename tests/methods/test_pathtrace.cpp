@@ -18,9 +18,9 @@ TEST_CASE("Closed diffuse furnace: radiance converges to Le / (1 - rho)", "[path
   const Visibility vis(scene);
   for (const SamplerKind sampler : {SamplerKind::Independent, SamplerKind::Sobol}) {
     PathTraceOptions opt;
-    opt.spp = 64;
+    opt.common.spp = 64;
     opt.maxDepth = 100000;
-    opt.seed = 7;
+    opt.common.seed = 7;
     opt.sampler = sampler;
     const RenderOutput out = renderPathTraced(scene, vis, opt);
     INFO("sampler " << int(sampler));
@@ -36,9 +36,9 @@ TEST_CASE("Closed diffuse furnace with max depth: geometric series truncated", "
   for (const SamplerKind sampler : {SamplerKind::Independent, SamplerKind::Sobol})
     for (int depth : {1, 2, 4}) {
       PathTraceOptions opt;
-      opt.spp = 32;
+      opt.common.spp = 32;
       opt.maxDepth = depth;
-      opt.seed = 3;
+      opt.common.seed = 3;
       opt.sampler = sampler;
       const RenderOutput out = renderPathTraced(scene, vis, opt);
       float expected = 0, term = 1;
@@ -54,9 +54,9 @@ TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "
   small.camera.width = 48;
   small.camera.height = 40;
   PathTraceOptions opt;
-  opt.spp = 8;
-  opt.layers = true;
-  opt.seed = 5;
+  opt.common.spp = 8;
+  opt.common.layers = true;
+  opt.common.seed = 5;
   for (const SamplerKind sampler : {SamplerKind::Independent, SamplerKind::Sobol}) {
     opt.sampler = sampler;
     std::vector<float> reference;
@@ -113,9 +113,9 @@ TEST_CASE("Camera rays and Lambertian hits in lanes give the image of shade(), b
   for (const PathStrategy strategy : {PathStrategy::Mis, PathStrategy::LightSampling, PathStrategy::BsdfSampling})
     for (const int maxDepth : {1024, 2}) {
       PathTraceOptions opt;
-      opt.spp = 6;
-      opt.layers = true;
-      opt.seed = 9;
+      opt.common.spp = 6;
+      opt.common.layers = true;
+      opt.common.seed = 9;
       opt.maxDepth = maxDepth;
       opt.strategy = strategy;
       // The Sobol sampler's numbers are drawn in lanes on one side, one by one on the other; the
@@ -144,7 +144,7 @@ TEST_CASE("Pixel centres: every sample of a pixel takes the centre's camera ray,
   const Visibility vis(scene);
   auto render = [&](int spp, bool centres, bool lanes) {
     PathTraceOptions opt;
-    opt.spp = spp;
+    opt.common.spp = spp;
     opt.maxDepth = 0;
     opt.pixelCentres = centres;
     opt.laneShading = lanes;
@@ -175,7 +175,7 @@ void renderInLanesAndOneByOne(const Scene& scene, Check&& check) {
   const Visibility vis(scene);
   for (const bool lanes : {true, false}) {
     PathTraceOptions opt;
-    opt.spp = 2;
+    opt.common.spp = 2;
     opt.laneShading = lanes;
     INFO("lanes " << lanes);
     check(renderPathTraced(scene, vis, opt));
@@ -216,18 +216,18 @@ TEST_CASE("MIS, light sampling alone and BSDF sampling alone converge to the sam
     scene.camera.height = 64;
     const Visibility vis(scene);
     PathTraceOptions opt;
-    opt.spp = 256;
+    opt.common.spp = 256;
     opt.maxDepth = 3;
     std::vector<Image> images;
     for (PathStrategy s : {PathStrategy::Mis, PathStrategy::LightSampling, PathStrategy::BsdfSampling}) {
       opt.strategy = s;
-      opt.seed = images.size() + 1;  // independent images
+      opt.common.seed = images.size() + 1;  // independent images
       images.push_back(renderPathTraced(scene, vis, opt).image);
     }
     // And MIS by the Sobol sampler, whose pixels are independent of one another as well.
     opt.strategy = PathStrategy::Mis;
     opt.sampler = SamplerKind::Sobol;
-    opt.seed = 4;
+    opt.common.seed = 4;
     images.push_back(renderPathTraced(scene, vis, opt).image);
     for (const auto& [a, b] : {std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}, std::pair{0, 3}, std::pair{1, 3}})
       for (int c = 0; c < 3; ++c) {
@@ -254,8 +254,8 @@ TEST_CASE("White furnace: convex white, mirror and glass objects under a constan
     finalizeScene(scene);
     const Visibility vis(scene);
     PathTraceOptions opt;
-    opt.spp = 64;
-    opt.seed = 2;
+    opt.common.spp = 64;
+    opt.common.seed = 2;
     INFO("material type " << int(type));
     test::requireImageMean(renderPathTraced(scene, vis, opt).image, scene.environment.radiance);
   }
@@ -272,7 +272,7 @@ TEST_CASE("A directional light on a diffuse plane gives rho E cos(theta) / pi", 
   finalizeScene(scene);
   const Visibility vis(scene);
   PathTraceOptions opt;
-  opt.spp = 4;
+  opt.common.spp = 4;
   opt.maxDepth = 1;
   const Image image = renderPathTraced(scene, vis, opt).image;
   const float scale = 0.6f * std::abs(direction.y) * kInvPi;
@@ -299,8 +299,8 @@ TEST_CASE("Layers: light seen through mirrors and glass is direct", "[pathtrace]
   finalizeScene(scene);
   const Visibility vis(scene);
   PathTraceOptions opt;
-  opt.spp = 8;
-  opt.layers = true;
+  opt.common.spp = 8;
+  opt.common.layers = true;
   const Image image = renderPathTraced(scene, vis, opt).image;
   const int beauty = image.channelIndex("G"), direct = image.channelIndex("direct.G"),
             indirect = image.channelIndex("indirect.G");

@@ -37,8 +37,8 @@ Scene smallCornellBox(int size) {
 
 Image pathTraced(const Scene& scene, const Visibility& vis, int spp, uint64_t seed) {
   PathTraceOptions pt;
-  pt.spp = spp;
-  pt.seed = seed;
+  pt.common.spp = spp;
+  pt.common.seed = seed;
   return renderPathTraced(scene, vis, pt).image;
 }
 
@@ -127,9 +127,9 @@ TEST_CASE("Closed diffuse furnace: purcell and pmfg give Le / (1 - rho)", "[phot
   opt.k = 30;
   opt.maxRadius = 0.02f;
   opt.gatherRays = 64;
-  opt.lightSamples = 64;
-  opt.layers = true;
-  opt.seed = 3;
+  opt.shading.lightSamples = 64;
+  opt.common.layers = true;
+  opt.common.seed = 3;
   const float p = rho.maxComponent();
   const double bias = 0.5 * opt.maxRadius * (1 + opt.maxRadius);
   for (const char* method : {"purcell", "pmfg"}) {
@@ -191,14 +191,14 @@ TEST_CASE("pmfg converges to the path tracer on the Cornell box", "[photonmap-re
     opt.photons = s.photons;
     opt.gatherRays = s.gatherRays;
     opt.k = s.k;
-    opt.spp = 64;
-    opt.lightSamples = 4;
+    opt.common.spp = 64;
+    opt.shading.lightSamples = 4;
     opt.map = PhotonMapKind::KdTree;
-    opt.layers = true;
+    opt.common.layers = true;
     std::vector<double> relmse, means[3], indirect[3];
     double bias = 0;
     for (int seed = 0; seed < test::kSeeds; ++seed) {
-      opt.seed = 9 + uint64_t(seed);
+      opt.common.seed = 9 + uint64_t(seed);
       const RenderOutput out = renderPhotonMapFinalGather(scene, vis, opt);
       Image image(out.image.width(), out.image.height(), {"R", "G", "B"});
       for (int y = 0; y < image.height(); ++y)
@@ -234,8 +234,8 @@ TEST_CASE("pmfg converges to the path tracer on the Cornell box", "[photonmap-re
 // each pixel's centre, so that edges are point-sampled alike.
 Image pixelCentreReference(const Scene& scene, const Visibility& vis) {
   PathTraceOptions pt;
-  pt.spp = 4096;
-  pt.seed = 1;
+  pt.common.spp = 4096;
+  pt.common.seed = 1;
   pt.pixelCentres = true;
   return renderPathTraced(scene, vis, pt).image;
 }
@@ -277,7 +277,7 @@ TEST_CASE("pmfg's precomputed irradiance stands in for the photon estimate withi
   const RenderOutput irradiance = renderPhotonMapFinalGather(scene, vis, opt);
   opt.gatherEstimate = GatherEstimate::Photons;
   const RenderOutput photons = renderPhotonMapFinalGather(scene, vis, opt);
-  opt.seed = 7;
+  opt.common.seed = 7;
   const Image otherSeed = renderPhotonMapFinalGather(scene, vis, opt).image;
   const double apart = compareImages(irradiance.image, photons.image).overall.relmse;
   const double seeds = compareImages(otherSeed, photons.image).overall.relmse;
@@ -314,11 +314,11 @@ double checkCausticAgainstPathTracer(const Scene& scene, const Visibility& vis,
   opt.causticPhotons = causticPhotons;
   opt.k = k;
   opt.gatherRays = 16;
-  opt.spp = 4;
+  opt.common.spp = 4;
   opt.map = PhotonMapKind::KdTree;
-  opt.seed = 1;
+  opt.common.seed = 1;
   const Image pmA = renderPhotonMapFinalGather(scene, vis, opt).image;
-  opt.seed = 2;
+  opt.common.seed = 2;
   const test::MeanAndError pm = regionMean(pmA, renderPhotonMapFinalGather(scene, vis, opt).image);
   opt.causticPhotons = 0;
   const Image none = renderPhotonMapFinalGather(scene, vis, opt).image;
@@ -369,8 +369,8 @@ TEST_CASE("The glass ball's caustic: the caustic map matches the path tracer, an
   // the floor's light).
   MicroRenderOptions micro;
   micro.lighting = PointLighting::Vpl;
-  micro.spp = 4;
-  micro.layers = true;
+  micro.common.spp = 4;
+  micro.common.layers = true;
   const Image image = renderMicro(scene, vis, micro).image;
   for (const float v : image.pixels()) REQUIRE(std::isfinite(v));
   const int indirect = image.channelIndex("indirect.G");
@@ -436,9 +436,9 @@ TEST_CASE("Every photon map renders the Cornell box alike with purcell", "[photo
   auto render = [&](PhotonMapKind kind, uint64_t seed) {
     PhotonMapOptions opt;
     opt.k = 50;
-    opt.spp = 4;
+    opt.common.spp = 4;
     opt.map = kind;
-    opt.seed = seed;
+    opt.common.seed = seed;
     return renderPurcell(scene, vis, opt).image;
   };
   const PhotonMapKind kinds[] = {PhotonMapKind::Sort, PhotonMapKind::Stencil, PhotonMapKind::Hash, PhotonMapKind::KdTree};
@@ -504,11 +504,11 @@ TEST_CASE("Photon-mapped renders are bit-identical with 1 and 2 threads and in b
     opt.photons = 20000;
     opt.causticPhotons = 20000;
     opt.gatherRays = 16;
-    opt.lightSamples = 2;
-    opt.spp = 2;
-    opt.layers = true;
+    opt.shading.lightSamples = 2;
+    opt.common.spp = 2;
+    opt.common.layers = true;
     opt.map = kind;
-    opt.seed = 4;
+    opt.common.seed = 4;
     for (bool gather : {false, true}) {
       std::vector<float> reference;
       // One band with 1 and 2 threads, then bands of 2 rows (100 samples of 48 per row).
@@ -688,10 +688,10 @@ TEST_CASE("A flat mirror's caustic equals the mirrored light's illumination", "[
       opt.causticPhotons = 500000;
       opt.k = 100;
       opt.gatherRays = 1;
-      opt.lightSamples = 1;
-      opt.layers = true;
+      opt.shading.lightSamples = 1;
+      opt.common.layers = true;
       opt.map = kind;
-      opt.seed = seed;
+      opt.common.seed = seed;
       const Image image = renderPurcell(scene, vis, opt).image;
       const int caustic = image.channelIndex("caustic.G");
       double sum = 0, expected = 0;

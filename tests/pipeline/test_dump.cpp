@@ -79,10 +79,10 @@ TEST_CASE("A purcell dump recomputes its maps and its caustic estimates", "[dump
   opt.photons = 2000;
   opt.causticPhotons = 4000;
   opt.k = 16;
-  opt.lightSamples = 2;
+  opt.shading.lightSamples = 2;
   opt.map = PhotonMapKind::Sort;
   opt.photonsPerCell = 2;
-  opt.dumpDirectory = dir.path.string();
+  opt.shading.dumpDirectory = dir.path.string();
   const RenderOutput out = renderPurcell(scene, vis, opt);
 
   const auto photons = readDump<Photon>(dir / "caustic.photons.bin", "Photon");
@@ -135,13 +135,13 @@ TEST_CASE("Stencil and hashed grid dumps hold the routing and the buckets their 
   opt.photons = 3000;
   opt.causticPhotons = 6000;
   opt.k = 16;
-  opt.lightSamples = 1;
+  opt.shading.lightSamples = 1;
   opt.photonsPerCell = 2;
   opt.stencilSide = 3;  // few slots: crowded cells overflow
   for (PhotonMapKind kind : {PhotonMapKind::Stencil, PhotonMapKind::Hash}) {
     TempDir dir("grid-dump");
     opt.map = kind;
-    opt.dumpDirectory = dir.path.string();
+    opt.shading.dumpDirectory = dir.path.string();
     renderPurcell(scene, vis, opt);
     for (const std::string map : {"global", "caustic"}) {
       INFO(map << (kind == PhotonMapKind::Stencil ? " stencil" : " hash"));
@@ -192,7 +192,7 @@ TEST_CASE("A micro dump's interior radiance pulls up from its leaves", "[dump][m
   MicroRenderOptions opt;
   opt.points = 1024;
   opt.encoding = NodeEncoding::Packed;
-  opt.dumpDirectory = dir.path.string();
+  opt.shading.dumpDirectory = dir.path.string();
   renderMicro(scene, vis, opt);
 
   PointHierarchy h;

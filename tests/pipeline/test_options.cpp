@@ -29,13 +29,13 @@ struct Example {
 
 OptionTable<Example> exampleTable() {
   OptionTable<Example> t;
-  t.integer("count", [](Example& e) -> auto& { return e.count; }, 1, 1 << 20, "things", "how many");
-  t.real("scale", [](Example& e) -> auto& { return e.scale; }, 0, 10, "", "how large");
-  t.flag("on", [](Example& e) -> auto& { return e.on; }, "whether");
-  t.choice("mode", [](Example& e) -> auto& { return e.mode; },
+  t.integer("count", &Example::count, 1, 1 << 20, "things", "how many");
+  t.real("scale", &Example::scale, 0, 10, "", "how large");
+  t.flag("on", &Example::on, "whether");
+  t.choice("mode", &Example::mode,
            std::vector<std::pair<std::string, Example::Mode>>{{"a", Example::Mode::A}, {"b", Example::Mode::B}}, "which");
-  t.text("path", [](Example& e) -> auto& { return e.path; }, "", "where");
-  t.triple("cells", [](Example& e) -> auto& { return e.cells; }, 1, 100, "cells", "grid");
+  t.text("path", &Example::path, "", "where");
+  t.triple("cells", &Example::cells, 1, 100, "cells", "grid");
   t.rule("count", [](const Example& e) { return e.count % 2 == 1 ? "" : "must be odd"; });
   return t;
 }
@@ -90,7 +90,7 @@ TEST_CASE("An option table parses, prints, checks ranges and rules, and names th
   wrong.scale = -1;
   CHECK_THROWS_WITH(t.validate(wrong), "must be in [0, 10]");
   OptionTable<Example> twice = exampleTable();
-  CHECK_THROWS_AS(twice.flag("on", [](Example& x) -> auto& { return x.on; }, "again"), std::logic_error);
+  CHECK_THROWS_AS(twice.flag("on", &Example::on, "again"), std::logic_error);
 }
 
 TEST_CASE("Every method takes each option's bounds exactly as its range is written", "[options]") {
@@ -100,7 +100,7 @@ TEST_CASE("Every method takes each option's bounds exactly as its range is writt
     float value = 1;
   };
   OptionTable<Real> table;
-  table.real("value", [](Real& r) -> auto& { return r.value; }, 0.01, 0.3, "", "");
+  table.real("value", &Real::value, 0.01, 0.3, "", "");
   for (const char* text : {"0.01", "0.3"}) {
     Real r;
     CHECK_NOTHROW(table.set(r, "value", text));

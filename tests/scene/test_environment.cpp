@@ -60,9 +60,9 @@ TEST_CASE("Environment map: irradiance on a diffuse plane matches numerical inte
 
   const Visibility vis(scene);
   PathTraceOptions opt;
-  opt.spp = 256;
+  opt.common.spp = 256;
   opt.maxDepth = 1;
-  opt.seed = 4;
+  opt.common.seed = 4;
   const RenderOutput out = renderPathTraced(scene, vis, opt);
   const Rgb expected = irradianceFacingUp(map) * (0.5f * 0.5f * kInvPi);  // scale * albedo / pi
   test::requireImageMean(out.image, expected);

@@ -319,7 +319,7 @@ TEST_CASE("Photons under shading normals carry what the path tracer's radiance d
   // against the quadrature at the points they see: this is the answer photons must reach.
   {
     PathTraceOptions pt;
-    pt.spp = 4096;
+    pt.common.spp = 4096;
     pt.maxDepth = 2;
     pt.pixelCentres = true;
     Scene view = scene;

@@ -76,46 +76,43 @@ class OptionTable {
   explicit OptionTable(Options defaults = Options{}) : defaults_(std::move(defaults)) {}
   const Options& defaults() const { return defaults_; }
 
-  // `access` maps the options to the field: [](Options& o) -> auto& { return o.field; }.
-  template <class Access>
-  OptionTable& integer(std::string name, Access access, double min, double max, std::string unit, std::string help) {
-    using T = std::remove_reference_t<decltype(access(std::declval<Options&>()))>;
+  // Each declaration names its field by pointer to member: &Options::field.
+  template <class T>
+  OptionTable& integer(std::string name, T Options::*field, double min, double max, std::string unit, std::string help) {
     static_assert(std::is_integral_v<T>);
     OptionSpec spec{std::move(name), OptionKind::Integer, min, max, {}, std::move(unit), std::move(help), {}};
     const std::string n = spec.name;
     return add(std::move(spec),
-               [=](Options& o, std::string_view text) { access(o) = T(parseOptionInteger(n, text, min, max)); },
-               [=](const Options& o) { return std::to_string(access(const_cast<Options&>(o))); },
+               [=](Options& o, std::string_view text) { o.*field = T(parseOptionInteger(n, text, min, max)); },
+               [=](const Options& o) { return std::to_string(o.*field); },
                [=](const Options& o) {
-                 const double v = double(access(const_cast<Options&>(o)));
+                 const double v = double(o.*field);
                  return v >= min && v <= max ? std::string() : rangeText(min, max, OptionKind::Integer);
                });
   }
-  template <class Access>
-  OptionTable& real(std::string name, Access access, double min, double max, std::string unit, std::string help) {
-    using T = std::remove_reference_t<decltype(access(std::declval<Options&>()))>;
+  template <class T>
+  OptionTable& real(std::string name, T Options::*field, double min, double max, std::string unit, std::string help) {
     static_assert(std::is_floating_point_v<T>);
     OptionSpec spec{std::move(name), OptionKind::Real, min, max, {}, std::move(unit), std::move(help), {}};
     const std::string n = spec.name;
     constexpr bool asFloat = std::is_same_v<T, float>;
     return add(std::move(spec),
-               [=](Options& o, std::string_view text) { access(o) = T(parseOptionReal(n, text, min, max, asFloat)); },
-               [=](const Options& o) { return optionText(double(access(const_cast<Options&>(o))), OptionKind::Real); },
+               [=](Options& o, std::string_view text) { o.*field = T(parseOptionReal(n, text, min, max, asFloat)); },
+               [=](const Options& o) { return optionText(double(o.*field), OptionKind::Real); },
                [=](const Options& o) {
-                 const double v = double(access(const_cast<Options&>(o)));
-                 return realInRange<T>(v, min, max) ? std::string() : rangeText(min, max, OptionKind::Real);
+                 return realInRange<T>(double(o.*field), min, max) ? std::string() : rangeText(min, max, OptionKind::Real);
                });
   }
-  template <class Access>
-  OptionTable& flag(std::string name, Access access, std::string help) {
+  OptionTable& flag(std::string name, bool Options::*field, std::string help) {
     OptionSpec spec{std::move(name), OptionKind::Flag, 0, 1, {}, {}, std::move(help), {}};
     const std::string n = spec.name;
-    return add(std::move(spec), [=](Options& o, std::string_view text) { access(o) = parseOptionFlag(n, text); },
-               [=](const Options& o) { return std::string(access(const_cast<Options&>(o)) ? "true" : "false"); },
+    return add(std::move(spec), [=](Options& o, std::string_view text) { o.*field = parseOptionFlag(n, text); },
+               [=](const Options& o) { return std::string(o.*field ? "true" : "false"); },
                [](const Options&) { return std::string(); });
   }
-  template <class Access, class Enum>
-  OptionTable& choice(std::string name, Access access, std::vector<std::pair<std::string, Enum>> values, std::string help) {
+  template <class Enum>
+  OptionTable& choice(std::string name, Enum Options::*field, std::vector<std::pair<std::string, Enum>> values,
+                      std::string help) {
     OptionSpec spec{std::move(name), OptionKind::Choice, 0, 0, {}, {}, std::move(help), {}};
     for (const auto& [text, value] : values) spec.choices.push_back(text);
     const std::string n = spec.name;
@@ -125,7 +122,7 @@ class OptionTable {
         [=](Options& o, std::string_view text) {
           for (const auto& [t, value] : values)
             if (t == text) {
-              access(o) = value;
+              o.*field = value;
               return;
             }
           std::string list;
@@ -134,35 +131,48 @@ class OptionTable {
         },
         [=](const Options& o) {
           for (const auto& [t, value] : values)
-            if (value == access(const_cast<Options&>(o))) return t;
+            if (value == o.*field) return t;
           return std::string("?");
         },
         [=](const Options& o) {
           for (const auto& [t, value] : values)
-            if (value == access(const_cast<Options&>(o))) return std::string();
+            if (value == o.*field) return std::string();
           return std::string("has a value that is not one of its choices");
         });
   }
-  template <class Access>
-  OptionTable& text(std::string name, Access access, std::string unit, std::string help) {
+  OptionTable& text(std::string name, std::string Options::*field, std::string unit, std::string help) {
     OptionSpec spec{std::move(name), OptionKind::Text, 0, 0, {}, std::move(unit), std::move(help), {}};
-    return add(std::move(spec), [=](Options& o, std::string_view text) { access(o) = std::string(text); },
-               [=](const Options& o) { return access(const_cast<Options&>(o)); },
-               [](const Options&) { return std::string(); });
+    return add(std::move(spec), [=](Options& o, std::string_view text) { o.*field = std::string(text); },
+               [=](const Options& o) { return o.*field; }, [](const Options&) { return std::string(); });
   }
-  template <class Access>
-  OptionTable& triple(std::string name, Access access, double min, double max, std::string unit, std::string help) {
+  OptionTable& triple(std::string name, std::array<uint32_t, 3> Options::*field, double min, double max,
+                      std::string unit, std::string help) {
     OptionSpec spec{std::move(name), OptionKind::Triple, min, max, {}, std::move(unit), std::move(help), {}};
     const std::string n = spec.name;
-    return add(std::move(spec), [=](Options& o, std::string_view text) { access(o) = parseOptionTriple(n, text, min, max); },
-               [=](const Options& o) { return tripleText(access(const_cast<Options&>(o))); },
+    return add(std::move(spec), [=](Options& o, std::string_view text) { o.*field = parseOptionTriple(n, text, min, max); },
+               [=](const Options& o) { return tripleText(o.*field); },
                [=](const Options& o) {
-                 const std::array<uint32_t, 3>& v = access(const_cast<Options&>(o));
+                 const std::array<uint32_t, 3>& v = o.*field;
                  if (v[0] == 0 && v[1] == 0 && v[2] == 0) return std::string();
                  for (uint32_t c : v)
                    if (c < min || c > max) return "each of three " + rangeText(min, max, OptionKind::Integer) + ", or 0x0x0";
                  return std::string();
                });
+  }
+  // Every option and rule of `shared`, whose struct is the member `part` of these options (the
+  // options several methods share, render_options.h); the defaults are these options'.
+  template <class Part>
+  OptionTable& include(Part Options::*part, const OptionTable<Part>& shared) {
+    for (size_t i = 0; i < shared.specs_.size(); ++i) {
+      const typename OptionTable<Part>::Entry e = shared.entries_[i];
+      add(shared.specs_[i], [=](Options& o, std::string_view text) { e.parse(o.*part, text); },
+          [=](const Options& o) { return e.format(o.*part); }, [=](const Options& o) { return e.check(o.*part); });
+    }
+    for (const auto& r : shared.rules_) {
+      auto check = r.check;
+      rule(r.option, [=](const Options& o) { return check(o.*part); });
+    }
+    return *this;
   }
   // Marks an option whose value never changes the image (a tile size, a dump directory): parts and
   // checkpoints of renders that differ in it alone belong to the same render.
@@ -205,6 +215,8 @@ class OptionTable {
   }
 
  private:
+  template <class>
+  friend class OptionTable;
   struct Entry {
     std::function<void(Options&, std::string_view)> parse;
     std::function<std::string(const Options&)> format;

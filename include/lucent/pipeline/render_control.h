@@ -11,6 +11,7 @@
 #include "lucent/pipeline/film.h"
 #include "lucent/pipeline/options.h"
 #include "lucent/pipeline/pixel_rect.h"
+#include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 
@@ -61,7 +62,7 @@ RenderPart beginRender(const OptionTable<Options>& table, const Options& options
                        const Scene& scene, std::string_view atOnce = {}) {
   table.validate(options);
   if (!atOnce.empty()) refuseResume(control, atOnce);
-  return resolvePart(control, scene, options.spp);
+  return resolvePart(control, scene, options.common.spp);
 }
 
 // The film a render starts from: empty, or a copy of control.resume, which must be a film of this
@@ -69,20 +70,8 @@ RenderPart beginRender(const OptionTable<Options>& table, const Options& options
 Film startFilm(const RenderControl& control, const Scene& scene, const RenderPart& part, Film::Sums sums,
                FilmLayers layers);
 
-// The camera paths of a part, for a method whose options have spp, maxSpecularDepth, seed and
-// layers (render_options.h).
-template <class Options>
-EyePathSettings eyePathSettings(const Options& options, const RenderPart& part) {
-  EyePathSettings s;
-  s.spp = options.spp;
-  s.maxSpecularDepth = options.maxSpecularDepth;
-  s.seed = options.seed;
-  s.layers = options.layers;
-  s.region = part.region;
-  s.sampleBegin = part.sampleBegin;
-  s.sampleEnd = part.sampleEnd;
-  return s;
-}
+// The camera paths of a part, following mirrors and glass up to maxSpecularDepth bounces.
+EyePathSettings eyePathSettings(const CommonOptions& common, int maxSpecularDepth, const RenderPart& part);
 
 // A band of the part's camera samples into the film: its shading points' light, and its pixels
 // marked as having taken all the part's samples.

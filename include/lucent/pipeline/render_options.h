@@ -1,8 +1,7 @@
-// The options that methods share, each declared once here for every method that has it. A method's
-// options struct names them alike (seed, layers, dumpDirectory; spp, lightSamples and
-// maxSpecularDepth for the methods that shade camera paths' surface points), and its table calls
-// these instead of declaring them again.
+// The options that methods share, as structs that a method's options hold as members, and their
+// declarations, made once here: a method's table includes them (OptionTable::include).
 #pragma once
+#include <cstdint>
 #include <string>
 
 #include "lucent/core/dump.h"
@@ -10,42 +9,59 @@
 
 namespace lucent {
 
+// Every method's: samples per pixel, the seed and the layers.
+struct CommonOptions {
+  int spp = 1;
+  uint64_t seed = 0;
+  bool layers = false;  // add the first hit's albedo, normal and depth and the light's parts as layers
+};
+
+// `sppHelp` says what a sample is to the method.
+inline OptionTable<CommonOptions> commonOptionTable(std::string sppHelp) {
+  using O = CommonOptions;
+  OptionTable<O> t;
+  t.integer("spp", &O::spp, 1, 1 << 24, "samples", std::move(sppHelp));
+  t.integer("seed", &O::seed, 0, 0x1p62, "", "random seed (the same seed gives the same image, whatever the threads)");
+  t.flag("layers", &O::layers,
+         "add the first hit's albedo, normal and depth and the light's parts as layers of the EXR");
+  return t;
+}
+inline const char* const kCameraRaysHelp = "camera rays per pixel: one through the pixel's centre, more stratified over it";
+
 template <class Options>
-void declareSeed(OptionTable<Options>& table) {
-  table.integer("seed", [](Options& o) -> auto& { return o.seed; }, 0, 0x1p62, "",
-                "random seed (the same seed gives the same image, whatever the threads)");
+void declareMaxSpecularDepth(OptionTable<Options>& table, int Options::*field) {
+  table.integer("max_specular_depth", field, 0, 64, "bounces", "mirror and glass bounces followed from the camera");
 }
 
 template <class Options>
-void declareLayers(OptionTable<Options>& table) {
-  table.flag("layers", [](Options& o) -> auto& { return o.layers; },
-             "add the first hit's albedo, normal and depth and the light's parts as layers of the EXR");
-}
-
-template <class Options>
-void declareDumpDirectory(OptionTable<Options>& table) {
-  table.text("dump", [](Options& o) -> auto& { return o.dumpDirectory; }, "directory",
-             "write every stage's arrays into this existing directory (docs/dump-format.md)");
+void declareDumpDirectory(OptionTable<Options>& table, std::string Options::*field) {
+  table.text("dump", field, "directory", "write every stage's arrays into this existing directory (docs/dump-format.md)");
   table.imageNeutral("dump");
-  table.rule("dump", [](const Options& o) { return dumpDirectoryProblem(o.dumpDirectory); });
+  table.rule("dump", [field](const Options& o) { return dumpDirectoryProblem(o.*field); });
 }
 
-// Camera paths through mirrors and glass to shading points (pipeline/shading_points.h).
-template <class Options>
-void declareCameraPathOptions(OptionTable<Options>& table) {
-  table.integer("spp", [](Options& o) -> auto& { return o.spp; }, 1, 1 << 24, "samples",
-                "camera rays per pixel: one through the pixel's centre, more stratified over it");
-  table.integer("max_specular_depth", [](Options& o) -> auto& { return o.maxSpecularDepth; }, 0, 64, "bounces",
-                "mirror and glass bounces followed from the camera");
-}
+// The methods' that follow camera paths through mirrors and glass to shading points and light them
+// by shadow rays (pipeline/shading_points.h, direct_light.h), dumping their stages.
+struct ShadingPointOptions {
+  int maxSpecularDepth = 10;  // mirror and glass bounces followed from the camera
+  int lightSamples = 32;      // shadow rays per shading point to area lights and the environment
+  // Where each stage's arrays are dumped for checking another backend stage by stage
+  // (docs/dump-format.md); empty: none.
+  std::string dumpDirectory;
+};
 
-// Camera paths, and direct light at their shading points by shadow rays (pipeline/direct_light.h).
-template <class Options>
-void declareShadingPointOptions(OptionTable<Options>& table) {
-  declareCameraPathOptions(table);
-  table.integer("light_samples", [](Options& o) -> auto& { return o.lightSamples; }, 0, 1 << 16, "rays",
-                "shadow rays per shading point to the area lights and the environment, besides one to each "
-                "point or directional light (0: no direct light)");
+inline const OptionTable<ShadingPointOptions>& shadingPointOptionTable() {
+  static const OptionTable<ShadingPointOptions> table = [] {
+    using O = ShadingPointOptions;
+    OptionTable<O> t;
+    declareMaxSpecularDepth(t, &O::maxSpecularDepth);
+    t.integer("light_samples", &O::lightSamples, 0, 1 << 16, "rays",
+              "shadow rays per shading point to the area lights and the environment, besides one to each "
+              "point or directional light (0: no direct light)");
+    declareDumpDirectory(t, &O::dumpDirectory);
+    return t;
+  }();
+  return table;
 }
 
 }  // namespace lucent

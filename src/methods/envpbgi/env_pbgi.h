@@ -11,6 +11,7 @@
 #include <string>
 
 #include "lucent/pipeline/method.h"
+#include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/techniques/microbuffers/hemisphere_mapping.h"
@@ -41,11 +42,9 @@ struct EnvPbgiOptions {
   int tileSize = 16;             // pixels per side of the screen-space grid's tiles
   PointDirectLight directLight = PointDirectLight::Selected;
   PixelIrradiance pixelIrradiance = PixelIrradiance::Caches;
-  int spp = 1;
-  int maxSpecularDepth = 10;
-  uint64_t seed = 0;
-  bool layers = false;
-  std::string dumpDirectory;
+  CommonOptions common;
+  int maxSpecularDepth = 10;  // mirror and glass bounces followed from the camera
+  std::string dumpDirectory;  // where each stage's arrays are dumped (docs/dump-format.md); empty: none
 };
 
 const OptionTable<EnvPbgiOptions>& envPbgiOptionTable();

@@ -76,7 +76,7 @@ class EnvPbgiRender {
     ho.pointCount = o_.points;
     ho.encoding = NodeEncoding::Float;
     ho.sampling.method = o_.pointSampling;
-    ho.sampling.seed = hashKey(o_.seed, uint64_t(EnvStream::Points));
+    ho.sampling.seed = hashKey(o_.common.seed, uint64_t(EnvStream::Points));
     const uint64_t nodeBytes = sizeof(FloatNode) + sizeof(EnvPointNode) + sizeof(Surfel) + sizeof(TraversalNode) +
                                sizeof(Rgb) + 4 * sizeof(float);
     requireMemory(uint64_t(o_.points) * (2 * nodeBytes + sizeof(PointSample) + 32), "the point hierarchy",
@@ -205,7 +205,7 @@ class EnvPbgiRender {
   void shadePixels(RenderOutput& out) {
     beginStage("pixels");
     Stopwatch pixelClock;
-    auto film = std::make_shared<Film>(startFilm(control_, scene_, part_, Film::Sums::PerPart, {o_.layers, false}));
+    auto film = std::make_shared<Film>(startFilm(control_, scene_, part_, Film::Sums::PerPart, {o_.common.layers, false}));
     BandLoop loop;
     loop.maxSamples = o_.dumpDirectory.empty() ? kReusableBandSamples : ~uint64_t(0);
     loop.progressFrom = 0.65;
@@ -251,7 +251,7 @@ class EnvPbgiRender {
 
   // One band's camera paths and, in bandShading_, their light.
   EyePaths shadeBand(const PixelRect& band) {
-    EyePathSettings settingsOfBand = eyePathSettings(o_, part_);
+    EyePathSettings settingsOfBand = eyePathSettings(o_.common, o_.maxSpecularDepth, part_);
     settingsOfBand.region = band;
     EyePaths eye = traceEyePaths(scene_, vis_, settingsOfBand);
     const size_t n = eye.points.size();

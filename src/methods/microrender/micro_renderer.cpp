@@ -98,7 +98,7 @@ EyePaths latticeMargin(const Scene& scene, const Visibility& vis, const MicroRen
     for (int x = wide.x0; x < wide.x1; ++x)
       mask[size_t(y - wide.y0) * size_t(wide.width()) + size_t(x - wide.x0)] =
           x % step == 0 && y % step == 0 && !crop.contains(x, y);
-  EyePathSettings settings = eyePathSettings(o, part);
+  EyePathSettings settings = eyePathSettings(o.common, o.shading.maxSpecularDepth, part);
   settings.region = wide;
   settings.pixelMask = mask;
   return traceEyePaths(scene, vis, settings);
@@ -204,7 +204,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   PointHierarchyOptions ho;
   ho.pointCount = o.points > 0 ? o.points : defaultPointCount(scene, o.pointSpacing);
   ho.encoding = o.encoding;
-  ho.sampling.seed = hashKey(o.seed, uint64_t(MicroStream::Points));
+  ho.sampling.seed = hashKey(o.common.seed, uint64_t(MicroStream::Points));
   // Two nodes per point (leaves and interior), each as floats in the hierarchy and in the micro
   // copy, packed, with its area, radiance and thickness; the samples and the median split's keys.
   const uint64_t nodeBytes = 2 * sizeof(FloatNode) + sizeof(PackedNode) + sizeof(float) + sizeof(Rgb) + 2 * sizeof(float);
@@ -221,7 +221,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   reportHierarchyStages(hierarchyStats, stats);
   stats.addCounter("points", hierarchy.leafCount);
   stats.addDerived("points", hierarchy.leafCount);
-  if (!o.dumpDirectory.empty()) dumpHierarchy(o.dumpDirectory, hierarchy);
+  if (!o.shading.dumpDirectory.empty()) dumpHierarchy(o.shading.dumpDirectory, hierarchy);
 
   MicroRenderSettings settings;
   settings.rayCasting = o.rayCasting;
@@ -238,7 +238,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
     StageTimer timer(stats, "point_lighting");
     radiance = lightPoints(scene, vis, hierarchy, ctx, o, stats);
   }
-  if (!o.dumpDirectory.empty()) dumpPointRadiance(o.dumpDirectory, radiance);
+  if (!o.shading.dumpDirectory.empty()) dumpPointRadiance(o.shading.dumpDirectory, radiance);
 
   // Camera paths and direct light, at every pixel.
   EyePaths eye;
@@ -246,9 +246,9 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   uint64_t shadowRays = 0;
   {
     StageTimer timer(stats, "eye_rays_and_direct_light");
-    eye = traceEyePaths(scene, vis, eyePathSettings(o, part));
+    eye = traceEyePaths(scene, vis, eyePathSettings(o.common, o.shading.maxSpecularDepth, part));
     shading = PointRadiance(eye.points.size());
-    if (o.lightSamples > 0) estimateDirectLight(scene, vis, eye.points, o.lightSamples, o.seed, shading.direct, shadowRays);
+    if (o.shading.lightSamples > 0) estimateDirectLight(scene, vis, eye.points, o.shading.lightSamples, o.common.seed, shading.direct, shadowRays);
   }
   const size_t n = eye.points.size();
 
@@ -270,7 +270,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   for (uint32_t i = 0; i < points.size(); ++i)
     if (onGatherLattice(points[i].pixel, width, step)) gatherOrder.push_back(i);
   tbb::enumerable_thread_specific<GatherScratch> scratch;
-  const GatherPass pass{ctx,   backCtx, radiance, points,  scene, hashKey(o.seed, uint64_t(MicroStream::Gather)),
+  const GatherPass pass{ctx,   backCtx, radiance, points,  scene, hashKey(o.common.seed, uint64_t(MicroStream::Gather)),
                         control.progress, scratch, indirect};
   beginStage("final_gathering");
   double gatherSeconds = pass.run(gatherOrder, step == 1 ? 1.0 : 0.9, 0.0);
@@ -294,8 +294,8 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   std::copy(indirect.begin(), indirect.begin() + ptrdiff_t(n), shading.indirect.begin());
   const GatherTotals totals = reportGatherStages(scratch, gatherSeconds, upsampleSeconds, stats);
 
-  if (!o.dumpDirectory.empty()) dumpShadingPoints(o.dumpDirectory, "", eye, shading, false);
-  shadeImage(out, control, scene, part, eye, shading, {o.layers, false});
+  if (!o.shading.dumpDirectory.empty()) dumpShadingPoints(o.shading.dumpDirectory, "", eye, shading, false);
+  shadeImage(out, control, scene, part, eye, shading, {o.common.layers, false});
 
   const MicroCounters& c = totals.counters;
   stats.addCounter("eye_rays", eye.rays);

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "lucent/pipeline/method.h"
+#include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/techniques/microbuffers/hemisphere_mapping.h"
@@ -40,20 +41,14 @@ struct MicroRenderOptions {
   // they gather 5-10% faster (decoding costs more than the memory saved) and no less accurately
   // (README).
   NodeEncoding encoding = NodeEncoding::Float;
-  int spp = 1;                     // camera rays per pixel: 1 through the pixel centre, more stratified
-  int lightSamples = 32;           // shadow rays per shading point (direct light, at every pixel)
   int pointLightSamples = 16;      // shadow rays per point of the hierarchy
-  int maxSpecularDepth = 10;       // mirror and glass bounces followed from the camera
   uint32_t vpls = 256;             // Vpl: light paths traced for virtual point lights
   int radiosityLevel = 12;         // Radiosity: the tree level gathered at (4,096 nodes, the paper's)
   int bounces = 2;                 // Radiosity: Jacobi iterations (indirect bounces at the points)
   uint32_t photons = 200000;       // Photons: photon paths emitted
   uint32_t k = 50;                 // Photons: photons per radiance estimate
-  uint64_t seed = 0;
-  bool layers = false;             // albedo, normal, depth, direct and indirect layers
-  // Where each stage's arrays are dumped for checking another backend stage by stage
-  // (docs/dump-format.md); empty: none.
-  std::string dumpDirectory;
+  CommonOptions common;
+  ShadingPointOptions shading;
 };
 
 const OptionTable<MicroRenderOptions>& microOptionTable();

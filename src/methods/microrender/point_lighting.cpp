@@ -199,7 +199,7 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
     Stopwatch traceClock;
     PhotonTracingOptions tracing;
     tracing.photons = o.photons;
-    tracing.seed = lightingSeed(o.seed, LightingStream::Photons);
+    tracing.seed = lightingSeed(o.common.seed, LightingStream::Photons);
     PhotonMaps traced = tracePhotons(scene, vis, tracing);
     stats.addStage("point_lighting.trace_photons", traceClock.seconds());
     Stopwatch buildClock;
@@ -207,7 +207,7 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
     const PhotonKdTree tree = buildPhotonKdTree(traced.global, &buildStats);
     stats.addStage("point_lighting.build_map", buildClock.seconds());
     for (const auto& [name, s] : buildStats.stageSeconds) stats.addStage("point_lighting.build_map.global." + name, s);
-    if (!o.dumpDirectory.empty()) dumpPhotonKdTree(o.dumpDirectory, "global", tree);
+    if (!o.shading.dumpDirectory.empty()) dumpPhotonKdTree(o.shading.dumpDirectory, "global", tree);
     stats.addCounter("photons_emitted", traced.emitted);
     stats.addCounter("global_photons", tree.photons.size());
     radiance.rgb.assign(h.nodeCount(), Rgb());
@@ -232,9 +232,9 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
     return radiance;
   }
 
-  std::vector<Rgb> irradiance = directAtLeaves(scene, vis, h, o.pointLightSamples, o.seed, rays);
+  std::vector<Rgb> irradiance = directAtLeaves(scene, vis, h, o.pointLightSamples, o.common.seed, rays);
   if (o.lighting == PointLighting::Vpl) {
-    const std::vector<VirtualPointLight> vpls = traceVirtualPointLights(scene, vis, o.vpls, o.seed);
+    const std::vector<VirtualPointLight> vpls = traceVirtualPointLights(scene, vis, o.vpls, o.common.seed);
     const std::vector<Rgb> fromVpls = vplsAtLeaves(scene, vis, h, vpls, rays);
     for (uint32_t j = 0; j < h.leafCount; ++j) irradiance[j] += fromVpls[j];
     stats.addCounter("vpls", vpls.size());
@@ -243,7 +243,7 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
   radiance.finish(h);
   if (o.lighting == PointLighting::Radiosity) {
     const int level = std::min(o.radiosityLevel, int(leafLevel(h.leafCount)) - 1);
-    radiosityBounces(scene, h, ctx, std::max(level, 0), o.bounces, o.seed, irradiance, radiance, stats);
+    radiosityBounces(scene, h, ctx, std::max(level, 0), o.bounces, o.common.seed, irradiance, radiance, stats);
   }
   stats.addCounter("point_shadow_rays", rays);
   return radiance;

@@ -114,7 +114,7 @@ class ParticleRender {
     ao.positions = o_.areaParticles;
     ao.sides = o_.sides;
     ao.sampling.method = o_.pointSampling;
-    ao.sampling.seed = particleSeed(o_.seed, ParticleStream::Positions);
+    ao.sampling.seed = particleSeed(o_.common.seed, ParticleStream::Positions);
     area_ = distributeAreaParticles(scene_, ao, &stats_);
     spacing_ = area_.spacing;
     stats_.addDerived("particle_spacing", spacing_);
@@ -126,14 +126,14 @@ class ParticleRender {
     if (o_.particleArea == ParticleArea::Catchment) {
       StageTimer timer(stats_, "particle_areas");
       measureCatchments(scene_, area_, linkGrid_, linkRadius_, uint32_t(o_.areaSamples),
-                        particleSeed(o_.seed, ParticleStream::Areas), catchments_);
+                        particleSeed(o_.common.seed, ParticleStream::Areas), catchments_);
     }
   }
 
   void buildScatterLinks() {
     StageTimer timer(stats_, "scatter_links");
     scatterLinks_ = buildParticleLinks(scene_, vis_, particles(), linkGrid_,
-                                       {particleSeed(o_.seed, ParticleStream::ScatterLinks), uint32_t(o_.scatterLinks)},
+                                       {particleSeed(o_.common.seed, ParticleStream::ScatterLinks), uint32_t(o_.scatterLinks)},
                                        linkRadius_, scatterCounters_);
   }
 
@@ -168,12 +168,12 @@ class ParticleRender {
   void light() {
     {
       StageTimer timer(stats_, "light_emission");
-      directFlux_ = emitLight(scene_, vis_, particles(), o_.emissionSamples, particleSeed(o_.seed, ParticleStream::Emission),
+      directFlux_ = emitLight(scene_, vis_, particles(), o_.emissionSamples, particleSeed(o_.common.seed, ParticleStream::Emission),
                               shadowRays_);
     }
     StageTimer timer(stats_, "scattering");
     flux_ = scatterLight(particles(), directFlux_, scatterLinks_, o_.bounces,
-                         particleSeed(o_.seed, ParticleStream::Scattering), scattered_);
+                         particleSeed(o_.common.seed, ParticleStream::Scattering), scattered_);
     radiance_.resize(particles().size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, particles().size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
       stopPoint();
@@ -203,13 +203,13 @@ class ParticleRender {
     fs.allGatherLinks = everything_ ? &gatherLinks_ : nullptr;
     field_.emplace(fs);
 
-    film_ = std::make_shared<Film>(startFilm(control_, scene_, part_, Film::Sums::PerPart, {o_.layers, false}));
+    film_ = std::make_shared<Film>(startFilm(control_, scene_, part_, Film::Sums::PerPart, {o_.common.layers, false}));
     RenderStats frameStages;
     BandLoop loop;
     loop.maxSamples = wholeImage_ ? ~uint64_t(0) : kReusableBandSamples;
     loop.progressFrom = 0.6, loop.progressTo = 0.95;
     const bool finished = renderRowBands(control_, part_, loop, *film_, [&](const PixelRect& band, size_t, const auto&) {
-      EyePathSettings settingsOfBand = eyePathSettings(o_, part_);
+      EyePathSettings settingsOfBand = eyePathSettings(o_.common, o_.shading.maxSpecularDepth, part_);
       settingsOfBand.region = band;
       beginStage("preliminary_ray_tracing");
       Stopwatch preliminaryClock;
@@ -240,7 +240,7 @@ class ParticleRender {
     }
     {
       StageTimer timer(stats_, "preliminary_ray_tracing_adaptive");
-      EyePathSettings es = eyePathSettings(o_, part_);
+      EyePathSettings es = eyePathSettings(o_.common, o_.shading.maxSpecularDepth, part_);
       es.spp = o_.supersample * o_.supersample;
       es.sampleBegin = 0;
       es.sampleEnd = es.spp;
@@ -255,7 +255,7 @@ class ParticleRender {
     for (size_t i = 0; i < eye_.pixels.size(); ++i)
       if (flagged[i]) {
         eye_.pixels[i] = EyePixel{};
-        if (o_.layers) eye_.features[i] = EyeFeatures{};
+        if (o_.common.layers) eye_.features[i] = EyeFeatures{};
       }
     for (size_t i = 0; i < eye_.points.size(); ++i) {
       const size_t local = size_t(eye_.points[i].pixel % uint32_t(scene_.camera.width) - uint32_t(part_.region.x0)) +
@@ -266,7 +266,7 @@ class ParticleRender {
   }
 
   void dumpStages() const {
-    const std::string& dump = o_.dumpDirectory;
+    const std::string& dump = o_.shading.dumpDirectory;
     if (dump.empty()) return;
     writeDump(dump, "particles.area_particles", "AreaParticle", particles());
     writeDump(dump, "particles.scatter_links", "uint32", std::span(scatterLinks_.targets));
@@ -348,7 +348,7 @@ class ParticleRender {
                       RenderStats& timing) {
     Stopwatch tracingClock;
     PointRadiance shading(paths.points.size());
-    estimateDirectLight(scene_, vis_, paths.points, o_.lightSamples, streamSeed(o_.seed, RenderStream::Direct),
+    estimateDirectLight(scene_, vis_, paths.points, o_.shading.lightSamples, streamSeed(o_.common.seed, RenderStream::Direct),
                         shading.direct, shadowRays_);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, paths.points.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
       stopPoint();
@@ -379,8 +379,8 @@ class ParticleRender {
   RenderStats& stats_;
   const uint32_t sides_ = o_.sides == ParticleSides::Both ? 2 : 1;
   const bool everything_ = o_.geometry == ParticleGeometry::All;
-  const bool wholeImage_ = o_.supersample > 0 || !o_.dumpDirectory.empty();
-  const LinkDirections gatherDirections_{particleSeed(o_.seed, ParticleStream::GatherLinks), uint32_t(o_.gatherLinks)};
+  const bool wholeImage_ = o_.supersample > 0 || !o_.shading.dumpDirectory.empty();
+  const LinkDirections gatherDirections_{particleSeed(o_.common.seed, ParticleStream::GatherLinks), uint32_t(o_.gatherLinks)};
 
   // Geometry.
   AreaParticles area_;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "lucent/pipeline/method.h"
+#include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
@@ -38,12 +39,8 @@ struct ParticleOptions {
   ParticleGeometry geometry = ParticleGeometry::Frame;
   int supersample = 0;        // adaptive supersampling: flagged pixels get n x n samples (0: off)
   float aliasContrast = 0.1f; // luminance contrast that flags a pixel
-  int spp = 1;
-  int maxSpecularDepth = 10;
-  int lightSamples = 32;
-  uint64_t seed = 0;
-  bool layers = false;
-  std::string dumpDirectory;
+  CommonOptions common;
+  ShadingPointOptions shading;
 };
 
 const OptionTable<ParticleOptions>& particleOptionTable();

@@ -8,38 +8,35 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
   static const OptionTable<PathTraceOptions> table = [] {
     using O = PathTraceOptions;
     OptionTable<O> t;
-    t.integer("spp", [](O& o) -> auto& { return o.spp; }, 1, 1 << 24, "samples",
-              "samples per pixel (the most taken when a time budget is set)");
-    declareSeed(t);
-    declareLayers(t);
-    t.integer("max_depth", [](O& o) -> auto& { return o.maxDepth; }, 0, 1 << 24, "bounces",
+    t.include(&O::common, commonOptionTable("samples per pixel (the most taken when a time budget is set)"));
+    t.integer("max_depth", &O::maxDepth, 0, 1 << 24, "bounces",
               "path length: 1 is direct light alone, 2 adds one indirect bounce");
-    t.integer("roulette_depth", [](O& o) -> auto& { return o.rouletteDepth; }, 1, 1 << 16, "bounces",
+    t.integer("roulette_depth", &O::rouletteDepth, 1, 1 << 16, "bounces",
               "Russian roulette from this bounce on");
-    t.real("time_budget", [](O& o) -> auto& { return o.timeBudget; }, 0, 1e9, "s",
+    t.real("time_budget", &O::timeBudget, 0, 1e9, "s",
            "stop sampling within this many seconds (at least one sample per pixel); 0: no budget");
-    t.integer("tile_size", [](O& o) -> auto& { return o.tileSize; }, 1, 4096, "pixels",
+    t.integer("tile_size", &O::tileSize, 1, 4096, "pixels",
               "side of the tiles the image is rendered in (does not change the image)");
     t.imageNeutral("tile_size");
-    t.choice("strategy", [](O& o) -> auto& { return o.strategy; },
+    t.choice("strategy", &O::strategy,
              std::vector<std::pair<std::string, PathStrategy>>{
                  {"mis", PathStrategy::Mis}, {"light", PathStrategy::LightSampling}, {"bsdf", PathStrategy::BsdfSampling}},
              "mis combines light and BSDF sampling; light or bsdf alone, for validating the other two");
-    t.choice("sampler", [](O& o) -> auto& { return o.sampler; },
+    t.choice("sampler", &O::sampler,
              std::vector<std::pair<std::string, SamplerKind>>{{"independent", SamplerKind::Independent},
                                                               {"sobol", SamplerKind::Sobol}},
              "random numbers: independent, or an Owen-scrambled Sobol sequence padded per bounce and purpose");
-    t.flag("variance", [](O& o) -> auto& { return o.variance; },
+    t.flag("variance", &O::variance,
            "add the variance of each pixel's mean (variance.R, .G, .B), for lucent compare --test");
     t.rule("variance", [](const O& o) {
       // The spread of a pixel's samples says how its mean varies only for independent samples:
       // the Sobol sampler's mean varies less.
       return !o.variance                                  ? ""
-             : o.spp < 2                                  ? "needs at least 2 samples per pixel (--spp)"
+             : o.common.spp < 2                                  ? "needs at least 2 samples per pixel (--spp)"
              : o.sampler != SamplerKind::Independent      ? "needs --sampler independent (a Sobol pixel's samples are not independent)"
                                                           : "";
     });
-    t.flag("pixel_centres", [](O& o) -> auto& { return o.pixelCentres; },
+    t.flag("pixel_centres", &O::pixelCentres,
            "every camera ray through its pixel's centre (the reference for methods at one sample per pixel)");
     return t;
   }();

@@ -6,6 +6,7 @@
 
 #include "lucent/core/path_sampler.h"
 #include "lucent/pipeline/method.h"
+#include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
@@ -17,14 +18,11 @@ namespace lucent {
 enum class PathStrategy { Mis, LightSampling, BsdfSampling };
 
 struct PathTraceOptions {
-  int spp = 64;                // samples per pixel (the maximum when a time budget is set)
   int maxDepth = 1024;         // path length in bounces: 1 is direct light, 2 adds one indirect bounce;
                                // high enough by default that Russian roulette, not the cut, ends paths
   int rouletteDepth = 3;       // Russian roulette from this bounce on
-  uint64_t seed = 0;
   double timeBudget = 0;       // seconds; 0 for none. At least one sample per pixel is taken
   int tileSize = 16;           // pixels; does not change the image
-  bool layers = false;         // add albedo, normal, depth, direct and indirect layers
   bool variance = false;       // add each pixel mean's variance (variance.R, .G, .B), from 2 spp on
   PathStrategy strategy = PathStrategy::Mis;
   // Every camera ray through its pixel's centre instead of uniformly over the pixel: the reference
@@ -38,6 +36,7 @@ struct PathTraceOptions {
   // A padded Owen-scrambled Sobol sequence (lower error at equal samples), or independent random
   // numbers for validation (include/lucent/core/path_sampler.h).
   SamplerKind sampler = SamplerKind::Sobol;
+  CommonOptions common{.spp = 64};  // spp: the most taken when a time budget is set
 };
 
 const OptionTable<PathTraceOptions>& pathTraceOptionTable();

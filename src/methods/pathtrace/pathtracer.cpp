@@ -519,9 +519,9 @@ void PathTracer::renderTile(const PixelRect& tile, int sampleBegin, int sampleEn
       ++sample;
     }
     // The camera rays, all lanes at once, or one path at a time.
-    if (opt_.laneShading) startCameraPaths(start, 0, start.count, opt_.sampler, opt_.seed, camera_, opt_.pixelCentres);
+    if (opt_.laneShading) startCameraPaths(start, 0, start.count, opt_.sampler, opt_.common.seed, camera_, opt_.pixelCentres);
     else
-      for (uint32_t k = 0; k < start.count; ++k) startCameraPaths(start, k, k + 1, opt_.sampler, opt_.seed, camera_, opt_.pixelCentres);
+      for (uint32_t k = 0; k < start.count; ++k) startCameraPaths(start, k, k + 1, opt_.sampler, opt_.common.seed, camera_, opt_.pixelCentres);
     wave.paths.resize(start.count);
     for (uint32_t k = 0; k < start.count; ++k) {
       Path& path = wave.paths[k];
@@ -574,7 +574,7 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
                       "--time-budget: a render with a time budget takes as many samples as time allows, so it cannot "
                       "be split (--crop, --samples), checkpointed or resumed");
   // Every pixel is owned by one tile, and its samples are added in sample order.
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, {options.layers, false, options.variance}));
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, {options.common.layers, false, options.variance}));
   const PathTracer tracer(scene, visibility, options);
   // Tiles of the image's grid, cut to the part's region.
   const PixelRect& region = part.region;

@@ -6,8 +6,8 @@
 namespace lucent {
 
 void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance) {
-  if (options.dumpDirectory.empty()) return;
-  dumpShadingPoints(options.dumpDirectory, "band" + std::to_string(band) + ".", eye, radiance, true);
+  if (options.shading.dumpDirectory.empty()) return;
+  dumpShadingPoints(options.shading.dumpDirectory, "band" + std::to_string(band) + ".", eye, radiance, true);
 }
 
 void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& c) {
@@ -20,12 +20,12 @@ void addEstimateCounters(RenderStats& stats, const std::string& prefix, const Es
 
 BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                             const PixelRect& band, const RenderPart& part, uint64_t& shadowRays) {
-  EyePathSettings eyeSettings = eyePathSettings(options, part);
+  EyePathSettings eyeSettings = eyePathSettings(options.common, options.shading.maxSpecularDepth, part);
   eyeSettings.region = band;
   BandShadingPoints out{traceEyePaths(scene, vis, eyeSettings), PointRadiance(0)};
   out.radiance = PointRadiance(out.eye.points.size());
-  if (options.lightSamples > 0)
-    estimateDirectLight(scene, vis, out.eye.points, options.lightSamples, options.seed, out.radiance.direct, shadowRays);
+  if (options.shading.lightSamples > 0)
+    estimateDirectLight(scene, vis, out.eye.points, options.shading.lightSamples, options.common.seed, out.radiance.direct, shadowRays);
   return out;
 }
 
@@ -35,7 +35,7 @@ bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptio
   // Dumped bands are named by their index: fixed bands, whatever the time they take.
   BandLoop loop;
   loop.maxSamples = options.bandSamples;
-  loop.targetSeconds = options.dumpDirectory.empty() ? 2.0 : 0.0;
+  loop.targetSeconds = options.shading.dumpDirectory.empty() ? 2.0 : 0.0;
   beginStage("bands");
   return renderRowBands(control, part, loop, film, [&](const PixelRect& band, size_t index, const auto& progress) {
     Stopwatch rayClock;

@@ -165,7 +165,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   RenderOutput out;
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::All, out.stats);
 
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {options.layers, true}));
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {options.common.layers, true}));
   const uint32_t heapSize = maps.globalSettings.k;  // the caustic map is estimated by estimateAtPoints
   tbb::enumerable_thread_specific<GatherScratch> scratch([&] {
     GatherScratch s;
@@ -189,7 +189,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
     out.stats.addStage("precompute_irradiance", clock.seconds());
   }
   tbb::enumerable_thread_specific<EstimateCounters> causticCounters;
-  const uint64_t gatherSeed = streamSeed(options.seed, RenderStream::Gather);
+  const uint64_t gatherSeed = streamSeed(options.common.seed, RenderStream::Gather);
   RenderTotals totals;
   renderBands(scene, vis, options, control, part, *film, totals, [&](BandShadingPoints& band, const auto& progress) {
     const EyePaths& eye = band.eye;
@@ -215,7 +215,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
         for (size_t i = r.begin(); i != r.end(); ++i) {
           const ShadingPoint& point = eye.points[i];
           Stopwatch traceClock;
-          const size_t hits = traceGatherRays(scene, vis, point, options.gatherRays, options.maxSpecularDepth,
+          const size_t hits = traceGatherRays(scene, vis, point, options.gatherRays, options.shading.maxSpecularDepth,
                                               gatherSeed, s.hits.data(), s.rays);
           s.traceSeconds += traceClock.seconds();
           Stopwatch estimateClock;

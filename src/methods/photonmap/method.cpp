@@ -12,55 +12,54 @@ namespace {
 // The photon maps' options, the same for both renderers.
 void declarePhotonMapOptions(OptionTable<PhotonMapOptions>& t) {
   using O = PhotonMapOptions;
-  t.integer("photons", [](O& o) -> auto& { return o.photons; }, 0, 1 << 28, "paths",
+  t.integer("photons", &O::photons, 0, 1 << 28, "paths",
             "photon paths emitted for the global map");
-  t.integer("caustic_photons", [](O& o) -> auto& { return o.causticPhotons; }, 0, 1 << 28, "paths",
+  t.integer("caustic_photons", &O::causticPhotons, 0, 1 << 28, "paths",
             "photon paths emitted for the caustic map, towards the mirrors and glass (0: no caustic map)");
-  t.integer("k", [](O& o) -> auto& { return o.k; }, 1, 1 << 20, "photons", "photons sought per radiance estimate");
-  t.integer("caustic_k", [](O& o) -> auto& { return o.causticK; }, 0, 1 << 20, "photons",
+  t.integer("k", &O::k, 1, 1 << 20, "photons", "photons sought per radiance estimate");
+  t.integer("caustic_k", &O::causticK, 0, 1 << 20, "photons",
             "photons sought in the caustic map (0: k)");
-  t.real("max_radius", [](O& o) -> auto& { return o.maxRadius; }, 0, 1e30, "scene units",
+  t.real("max_radius", &O::maxRadius, 0, 1e30, "scene units",
          "maximum search radius (0: 0.1 x the scene's bounding-box diagonal)");
-  t.choice("map", [](O& o) -> auto& { return o.map; },
+  t.choice("map", &O::map,
            std::vector<std::pair<std::string, PhotonMapKind>>{{"sort", PhotonMapKind::Sort},
                                                               {"stencil", PhotonMapKind::Stencil},
                                                               {"hash", PhotonMapKind::Hash},
                                                               {"kdtree", PhotonMapKind::KdTree}},
            "where photons are stored and searched: the sorted, stencil-routed or hashed grid, or the kd-tree");
-  t.integer("shells", [](O& o) -> auto& { return o.shells; }, 0, 1 << 20, "shells",
+  t.integer("shells", &O::shells, 0, 1 << 20, "shells",
             "stop each kNN-grid search after this many shells (the progressive estimate; 0: to the end)");
   t.rule("shells", [](const O& o) {
     return o.shells > 0 && o.map == PhotonMapKind::KdTree ? "applies to the grid maps (sort, stencil, hash), not kdtree"
                                                           : "";
   });
-  t.integer("photon_bounces", [](O& o) -> auto& { return o.maxPhotonBounces; }, 1, 255, "bounces",
+  t.integer("photon_bounces", &O::maxPhotonBounces, 1, 255, "bounces",
             "interactions followed per photon path (a photon's bounce count has 8 bits)");
-  t.triple("grid_resolution", [](O& o) -> auto& { return o.gridResolution; }, 1, 1 << 21, "cells",
+  t.triple("grid_resolution", &O::gridResolution, 1, 1 << 21, "cells",
            "grid cells per axis, XxYxZ (auto: from the photons)");
-  t.real("cell_size", [](O& o) -> auto& { return o.cellSize; }, 0, 1e30, "scene units",
+  t.real("cell_size", &O::cellSize, 0, 1e30, "scene units",
          "cubic grid cells of this side (0: from the photons)");
-  t.real("photons_per_cell", [](O& o) -> auto& { return o.photonsPerCell; }, 0, 1e9, "photons",
+  t.real("photons_per_cell", &O::photonsPerCell, 0, 1e9, "photons",
          "otherwise, about this many photons per cell of the photons' bounds (0: max(1, k / 16))");
-  t.integer("stencil_side", [](O& o) -> auto& { return o.stencilSide; }, 1, 1024, "photons",
+  t.integer("stencil_side", &O::stencilSide, 1, 1024, "photons",
             "m, with m x m photons per stencil-routed cell");
 }
 
 OptionTable<PhotonMapOptions> rendererTable(PhotonMapOptions defaults, bool finalGathering) {
-  OptionTable<PhotonMapOptions> t(defaults);
-  declareShadingPointOptions(t);
-  declareSeed(t);
-  declareLayers(t);
-  declareDumpDirectory(t);
+  using O = PhotonMapOptions;
+  OptionTable<O> t(defaults);
+  t.include(&O::common, commonOptionTable(kCameraRaysHelp));
+  t.include(&O::shading, shadingPointOptionTable());
   declarePhotonMapOptions(t);
   if (finalGathering) {
-    t.integer("gather_rays", [](PhotonMapOptions& o) -> auto& { return o.gatherRays; }, 0, 1 << 20, "rays",
+    t.integer("gather_rays", &PhotonMapOptions::gatherRays, 0, 1 << 20, "rays",
               "final-gather rays per shading point");
-    t.choice("gather_estimate", [](PhotonMapOptions& o) -> auto& { return o.gatherEstimate; },
+    t.choice("gather_estimate", &PhotonMapOptions::gatherEstimate,
              std::vector<std::pair<std::string, GatherEstimate>>{{"irradiance", GatherEstimate::Irradiance},
                                                                  {"photons", GatherEstimate::Photons}},
              "a gather ray's diffuse hit reads the irradiance precomputed at photons nearest to it (Christensen "
              "1999), or estimates from the photons (k nearest)");
-    t.integer("irradiance_stride", [](PhotonMapOptions& o) -> auto& { return o.irradianceStride; }, 1, 1 << 20,
+    t.integer("irradiance_stride", &PhotonMapOptions::irradianceStride, 1, 1 << 20,
               "photons", "the irradiance is precomputed at every n-th photon of the global map");
   }
   return t;

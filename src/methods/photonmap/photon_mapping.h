@@ -8,6 +8,7 @@
 #include <string>
 
 #include "lucent/pipeline/method.h"
+#include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_control.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
@@ -37,18 +38,12 @@ struct PhotonMapOptions {
                                             // (Jensen's, the ground truth)
   uint32_t shells = 0;              // kNN-grid: stop after this many shells (the progressive estimate
                                     // of section 3.4); 0: run every search to the end
-  int lightSamples = 32;            // shadow rays per shading point for direct light (paper: 4, 32)
   int gatherRays = 4096;            // pmfg: final-gather rays per shading point
   // pmfg: what a gather ray's diffuse hit reads: the irradiance precomputed at every
   // irradianceStride-th photon (Christensen 1999), or an estimate from the photons themselves.
   GatherEstimate gatherEstimate = GatherEstimate::Irradiance;
   uint32_t irradianceStride = 1;
-  int spp = 1;                      // camera rays per pixel: 1 through the pixel centre (the paper);
-                                    // more are stratified over the pixel (a box filter)
-  int maxSpecularDepth = 10;        // mirror and glass bounces followed from the camera (and by gather rays)
   uint32_t maxPhotonBounces = 64;   // interactions followed per photon path
-  uint64_t seed = 0;
-  bool layers = false;              // add albedo, normal, depth, direct, indirect, caustic layers
   uint64_t bandSamples = kReusableBandSamples;  // the image renders in bands of rows of at most this
                                                 // many camera samples (memory); does not change the image
   // The grids (0: chosen from the photons, see GridOptions in src/methods/photonmap/uniform_grid.h).
@@ -57,9 +52,8 @@ struct PhotonMapOptions {
   float photonsPerCell = 0;                          // otherwise: about this many photons per cell of the
                                                      // bounds; 0: max(1, k / 16) (measured on the Cornell box)
   uint32_t stencilSide = 16;                         // m: m x m photons per stencil-routed cell
-  // Where each stage's arrays are dumped for checking another backend stage by stage
-  // (docs/dump-format.md); empty: none.
-  std::string dumpDirectory;
+  CommonOptions common;
+  ShadingPointOptions shading;
 };
 
 // purcell's options and pmfg's (with gather_rays, and the kd-tree by default).

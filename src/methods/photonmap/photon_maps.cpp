@@ -106,7 +106,7 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
   PhotonTracingOptions tracing;
   tracing.photons = options.photons;
   tracing.maxBounces = options.maxPhotonBounces;
-  tracing.seed = options.seed;
+  tracing.seed = options.common.seed;
   PhotonMaps global;
   if (options.photons > 0) global = tracePhotons(scene, vis, tracing);
   // Caustic paths start at a specular surface: they are emitted towards the specular objects'
@@ -115,7 +115,7 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
   if (options.causticPhotons > 0) tracing.target = specularTarget(scene);
   if (tracing.target) {
     tracing.photons = options.causticPhotons;
-    tracing.seed = streamSeed(options.seed, RenderStream::CausticPhotons);
+    tracing.seed = streamSeed(options.common.seed, RenderStream::CausticPhotons);
     tracing.causticOnly = true;
     tracing.photonsOption = "--caustic-photons";
     caustic = tracePhotons(scene, vis, tracing);
@@ -147,7 +147,7 @@ RenderPhotonMaps preparePhotonMaps(const Scene& scene, const Visibility& vis, co
 }
 
 void dumpPhotonMap(const PhotonMapOptions& options, const std::string& prefix, const BuiltPhotonMap& built) {
-  const std::string& dir = options.dumpDirectory;
+  const std::string& dir = options.shading.dumpDirectory;
   if (dir.empty()) return;
   auto dump = [&](const char* array, const char* type, const auto& records) {
     writeDump(dir, prefix + "." + array, type, std::span(records));
