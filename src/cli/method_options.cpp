@@ -71,7 +71,8 @@ void checkMethodOption(const Method& method, const std::string& name, const std:
   throw std::invalid_argument(where + ": not an option of --method " + method.name());
 }
 
-OptionValues resolveMethodOptions(const Method& method, const OptionValues& values, const std::vector<std::string>& origins) {
+std::unique_ptr<MethodOptions> resolveMethodOptions(const Method& method, const OptionValues& values,
+                                                    const std::vector<std::string>& origins) {
   try {
     return method.resolve(values);
   } catch (const OptionError& e) {

@@ -26,10 +26,10 @@ std::pair<std::string, std::string> methodOptionArg(const std::string& key, cons
 // that has it, if one does).
 void checkMethodOption(const Method& method, const std::string& name, const std::string& where);
 
-// The method's options with `values` over its defaults. A value an option does not take throws
+// The method's typed options with `values` over its defaults. A value an option does not take throws
 // std::invalid_argument naming where it came from: origins[i] for values[i].
-OptionValues resolveMethodOptions(const Method& method, const OptionValues& values,
-                                  const std::vector<std::string>& origins);
+std::unique_ptr<MethodOptions> resolveMethodOptions(const Method& method, const OptionValues& values,
+                                                    const std::vector<std::string>& origins);
 
 // The options as a JSON object: numbers, true or false, and strings, by each option's kind.
 nlohmann::ordered_json methodOptionsJson(const Method& method, const OptionValues& resolved);

@@ -313,7 +313,7 @@ int runRender(const RenderArgs& a) {
     checkMethodOption(*method, name, flagOf(name));
     values.emplace_back(name, text);
   }
-  const OptionValues resolved = resolveMethodOptions(*method, values, origins);
+  const std::unique_ptr<MethodOptions> resolved = resolveMethodOptions(*method, values, origins);
 
   if (!a.resolution.empty()) {
     int w = 0, h = 0;
@@ -353,14 +353,12 @@ int runRender(const RenderArgs& a) {
 
   // The part, the film file, and what it would be a film of.
   RenderControl control;
-  int spp = 1;
-  for (const auto& [name, text] : resolved)
-    if (name == "spp") spp = int(parseOptionInteger("spp", text, 1, 1 << 24));
+  const int spp = resolved->common().spp;
   control.crop = a.crop;
   std::tie(control.firstSample, control.sampleCount) = a.samples;
   if (!a.part.empty()) applyPart(a.part, scene, spp, control);
   const RenderPart part = resolvePart(control, scene, spp);
-  const nlohmann::ordered_json options = methodOptionsJson(*method, resolved);
+  const nlohmann::ordered_json options = methodOptionsJson(*method, resolved->values());
   FilmFileInfo info;
   info.method = method->name();
   info.options = options.dump();
@@ -407,7 +405,7 @@ int runRender(const RenderArgs& a) {
     control.progress = [&](double f) { bar.update(f); };
     control.stop = &signals.requested();
     try {
-      out = method->render(scene, visibility, resolved, control);
+      out = method->render(scene, visibility, *resolved, control);
     } catch (const RenderStopped&) {
       // Before any sample (or a method that cannot keep a part of its image): nothing is written,
       // and a checkpoint resumed from stays as it was.

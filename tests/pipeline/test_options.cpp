@@ -12,6 +12,7 @@
 
 #include "lucent/image/image.h"
 #include "lucent/methods/methods.h"
+#include "test_scenes.h"
 #include "test_support.h"
 
 using namespace lucent;
@@ -292,4 +293,23 @@ TEST_CASE("A scene file's render block chooses the method and its options; the c
     CHECK(r.status == 1);
     CHECK_THAT(r.output, Catch::Contains(message));
   }
+}
+
+TEST_CASE("Options are resolved once into the method's typed struct, and only that method renders them",
+          "[options]") {
+  // The values given by name become the typed options (spp read back from them, not from text),
+  // and their echo is those options formatted, in declaration order.
+  const std::unique_ptr<MethodOptions> micro = renderingMethod("micro").resolve({{"spp", "3"}, {"seed", "7"}});
+  CHECK(micro->common().spp == 3);
+  CHECK(micro->common().seed == 7);
+  const OptionValues values = micro->values();
+  REQUIRE(values.size() == renderingMethod("micro").options().size());
+  CHECK(std::find(values.begin(), values.end(), std::pair<std::string, std::string>("spp", "3")) != values.end());
+  const Scene scene = test::furnaceBox(Rgb(0.5f), Rgb(1.0f), test::testCamera({0, 0, 0}, {0, 0, -1}, 4, 4));
+  const Visibility vis(scene);
+  REQUIRE_THROWS_WITH(renderingMethod("pt").render(scene, vis, *micro),
+                      Catch::Contains("--method pt was given another method's options"));
+  // purcell and pmfg share one options struct; each still takes only its own.
+  REQUIRE_THROWS_WITH(renderingMethod("pmfg").render(scene, vis, *renderingMethod("purcell").resolve({})),
+                      Catch::Contains("another method's options"));
 }

@@ -1,13 +1,16 @@
 // A rendering method as the command line, scene files and other programs see it: a name, a line
-// of summary, its declared options (pipeline/options.h), and a render call that takes option
-// values by name over the defaults. `lucent/methods/methods.h` lists the methods.
+// of summary, its declared options (pipeline/options.h), the resolution of option values given by
+// name into the method's typed options, and a render call that takes them. `lucent/methods/methods.h`
+// lists the methods; a program that knows its method calls the typed renderX functions instead.
 #pragma once
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "lucent/core/stop.h"
 #include "lucent/pipeline/options.h"
+#include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_control.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
@@ -15,20 +18,36 @@
 
 namespace lucent {
 
+// A method's options, set from values by name over its defaults and checked: the method's typed
+// options struct inside (Method::resolve).
+class MethodOptions {
+ public:
+  virtual ~MethodOptions() = default;
+  virtual const CommonOptions& common() const = 0;
+  // Every option's value as text, in declaration order (the JSON echo and the EXR metadata).
+  virtual OptionValues values() const = 0;
+};
+
 class Method {
  public:
   virtual ~Method() = default;
   virtual const std::string& name() const = 0;
   virtual const std::string& summary() const = 0;
   virtual const std::vector<OptionSpec>& options() const = 0;
-  // Every option's value once `values` are set over the defaults, in declaration order, as text.
-  // Throws OptionError for an unknown option or a value the option does not take.
-  virtual OptionValues resolve(const OptionValues& values) const = 0;
-  // Renders with `values` set over the defaults; throws OptionError as resolve does. A stop request
-  // (control.stop) ends an interruptible method's sampling with what it has (complete false); one
-  // before its sampling starts, or in any other method, throws RenderStopped (core/stop.h).
-  virtual RenderOutput render(const Scene& scene, const Visibility& visibility, const OptionValues& values,
+  // The method's options with `values` set over its defaults, parsed and checked once. Throws
+  // OptionError for an unknown option, a value the option does not take, or a broken rule.
+  virtual std::unique_ptr<MethodOptions> resolve(const OptionValues& values) const = 0;
+  // Renders with options this method resolved (std::invalid_argument for another method's). A stop
+  // request (control.stop) ends an interruptible method's sampling with what it has (complete
+  // false); one before its sampling starts, or in any other method, throws RenderStopped
+  // (core/stop.h).
+  virtual RenderOutput render(const Scene& scene, const Visibility& visibility, const MethodOptions& options,
                               const RenderControl& control = {}) const = 0;
+  // Resolves `values` and renders with them.
+  RenderOutput render(const Scene& scene, const Visibility& visibility, const OptionValues& values,
+                      const RenderControl& control = {}) const {
+    return render(scene, visibility, *resolve(values), control);
+  }
   // Whether the method honours RenderControl's checkpoints and resume, and returns the samples it
   // has when stopped (a method that does not refuses a control that asks for checkpoints or a
   // resume).
@@ -47,21 +66,31 @@ class DeclaredMethod final : public Method {
   const std::string& name() const override { return name_; }
   const std::string& summary() const override { return summary_; }
   const std::vector<OptionSpec>& options() const override { return table_.specs(); }
-  OptionValues resolve(const OptionValues& values) const override { return table_.values(parse(values)); }
-  RenderOutput render(const Scene& scene, const Visibility& visibility, const OptionValues& values,
-                      const RenderControl& control) const override {
-    const StopScope stops(control.stop);
-    return render_(scene, visibility, parse(values), control);
+  std::unique_ptr<MethodOptions> resolve(const OptionValues& values) const override {
+    auto resolved = std::make_unique<Resolved>(table_);
+    for (const auto& [name, text] : values) table_.set(resolved->options, name, text);
+    table_.validate(resolved->options);
+    return resolved;
   }
+  RenderOutput render(const Scene& scene, const Visibility& visibility, const MethodOptions& options,
+                      const RenderControl& control) const override {
+    const auto* resolved = dynamic_cast<const Resolved*>(&options);
+    if (!resolved || &resolved->table != &table_)
+      throw std::invalid_argument("--method " + name_ + " was given another method's options");
+    const StopScope stops(control.stop);
+    return render_(scene, visibility, resolved->options, control);
+  }
+  using Method::render;
   bool interruptible() const override { return interruptible_; }
 
  private:
-  Options parse(const OptionValues& values) const {
-    Options options = table_.defaults();
-    for (const auto& [name, text] : values) table_.set(options, name, text);
-    table_.validate(options);
-    return options;
-  }
+  struct Resolved final : MethodOptions {
+    explicit Resolved(const OptionTable<Options>& t) : table(t), options(t.defaults()) {}
+    const CommonOptions& common() const override { return options.common; }
+    OptionValues values() const override { return table.values(options); }
+    const OptionTable<Options>& table;
+    Options options;
+  };
   std::string name_, summary_;
   const OptionTable<Options>& table_;
   RenderFn render_;
