@@ -20,7 +20,7 @@
 
 #include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
-#include "methods/pathtrace/path_tracer.h"
+#include "lucent/methods/pathtrace.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/loader.h"

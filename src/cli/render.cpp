@@ -25,6 +25,7 @@
 #include "lucent/core/parallel.h"
 #include "lucent/methods/methods.h"
 #include "lucent/pipeline/film_file.h"
+#include "lucent/pipeline/render_stages.h"
 #include "lucent/scene/loader.h"
 
 namespace lucent::cli {

@@ -2,11 +2,11 @@
 
 #include <stdexcept>
 
-#include "methods/envpbgi/env_pbgi.h"
-#include "methods/microrender/micro_renderer.h"
-#include "methods/particles/particles.h"
-#include "methods/pathtrace/path_tracer.h"
-#include "methods/photonmap/photon_mapping.h"
+#include "lucent/methods/envpbgi.h"
+#include "lucent/methods/microrender.h"
+#include "lucent/methods/particles.h"
+#include "lucent/methods/pathtrace.h"
+#include "lucent/methods/photonmap.h"
 
 namespace lucent {
 

@@ -1,17 +1,25 @@
-// What another backend's program does with an installed Lucent: load a scene, render it with any
-// method by name, compare images, read a stage dump. Renders the Cornell box with the path tracer
-// at 16 x 16 (16 samples per pixel, seed 1) and requires it identical to REFERENCE.exr (rendered
-// the same way by `lucent render`); then renders it with purcell, dumping its stages into DUMPS,
-// and reads the photons back.   consumer SCENE.json REFERENCE.exr DUMPS
+// What another backend's program does with an installed Lucent: load a scene, render it with a
+// method's typed options (and with any method by name), compare images, read a stage dump.
+// Renders the Cornell box with the path tracer at 16 x 16 (16 samples per pixel, seed 1) and
+// requires it identical to REFERENCE.exr (rendered the same way by `lucent render`), by the typed
+// call and by name; then renders it with purcell, dumping its stages into DUMPS, and reads the
+// photons back. Every supported header is included: each compiles from the installed tree alone.
+//   consumer SCENE.json REFERENCE.exr DUMPS
 #include <cstdio>
 #include <exception>
 
 #include "lucent/core/dump.h"
 #include "lucent/image/image.h"
 #include "lucent/image/metrics.h"
+#include "lucent/methods/envpbgi.h"
 #include "lucent/methods/methods.h"
+#include "lucent/methods/microrender.h"
+#include "lucent/methods/particles.h"
+#include "lucent/methods/pathtrace.h"
+#include "lucent/methods/photonmap.h"
 #include "lucent/scene/loader.h"
 #include "lucent/techniques/photons/photon.h"
+#include "lucent/techniques/points/point_nodes.h"
 #include "lucent/trace/visibility.h"
 
 int main(int argc, char** argv) {
@@ -23,14 +31,23 @@ int main(int argc, char** argv) {
     lucent::Scene scene = lucent::loadScene(argv[1], {true});
     scene.camera.width = scene.camera.height = 16;
     const lucent::Visibility visibility(scene);
-    const lucent::Image image =
-        lucent::renderingMethod("pt").render(scene, visibility, {{"spp", "16"}, {"seed", "1"}}).image;
-    const lucent::ImageError error = lucent::compareImages(image, lucent::readImage(argv[2]));
-    std::printf("consumer: pt, RMSE %g against the reference\n", error.overall.rmse);
-    if (error.overall.rmse != 0 || error.nonFinite != 0) return 1;
+    const lucent::Image reference = lucent::readImage(argv[2]);
 
-    const lucent::RenderOutput purcell = lucent::renderingMethod("purcell").render(
-        scene, visibility, {{"photons", "2000"}, {"caustic_photons", "0"}, {"dump", argv[3]}});
+    lucent::PathTraceOptions pt;
+    pt.common.spp = 16;
+    pt.common.seed = 1;
+    const lucent::ImageError typed = lucent::compareImages(lucent::renderPathTraced(scene, visibility, pt).image, reference);
+    const lucent::ImageError byName = lucent::compareImages(
+        lucent::renderingMethod("pt").render(scene, visibility, {{"spp", "16"}, {"seed", "1"}}).image, reference);
+    std::printf("consumer: pt, RMSE %g (typed options) and %g (by name) against the reference\n", typed.overall.rmse,
+                byName.overall.rmse);
+    if (typed.overall.rmse != 0 || typed.nonFinite != 0 || byName.overall.rmse != 0 || byName.nonFinite != 0) return 1;
+
+    lucent::PhotonMapOptions purcellOptions;
+    purcellOptions.photons = 2000;
+    purcellOptions.causticPhotons = 0;
+    purcellOptions.shading.dumpDirectory = argv[3];
+    const lucent::RenderOutput purcell = lucent::renderPurcell(scene, visibility, purcellOptions);
     const auto photons = lucent::readDump<lucent::Photon>(std::string(argv[3]) + "/global.photons.bin", "Photon");
     std::printf("consumer: purcell, %zu photons dumped, %llu in the map\n", photons.size(),
                 static_cast<unsigned long long>(purcell.stats.counter("global_photons")));

@@ -1,13 +1,19 @@
 #!/usr/bin/env bash
 # Installs the build into a temporary prefix, builds tests/consumer against it with find_package,
-# and runs it: it renders the Cornell box, which must match `lucent render`'s image bit for bit, and
-# reads back a stage dump.
+# and runs it: it renders the Cornell box by typed options and by name, each of which must match
+# `lucent render`'s image bit for bit, and reads back a stage dump. Only the supported headers are
+# installed (CMakeLists.txt, LUCENT_API_HEADERS): the lane loops' are not.
 # Usage: run.sh BUILD_DIR SOURCE_DIR LUCENT_CLI
 set -euo pipefail
 build=$1 source=$2 cli=$3
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 cmake --install "$build" --prefix "$tmp/prefix" > "$tmp/install.log"
+if [ -e "$tmp/prefix/include/lucent/core/lane_clones.h" ] || [ -e "$tmp/prefix/include/lucent/core/uninitialized.h" ]; then
+  echo "run.sh: internal headers were installed:" >&2
+  find "$tmp/prefix/include" -name '*.h' >&2
+  exit 1
+fi
 cmake -S "$source/tests/consumer" -B "$tmp/build" -DCMAKE_PREFIX_PATH="$tmp/prefix" -DCMAKE_BUILD_TYPE=Release \
   > "$tmp/configure.log" || { cat "$tmp/configure.log"; exit 1; }
 cmake --build "$tmp/build" > "$tmp/build.log" 2>&1 || { cat "$tmp/build.log"; exit 1; }

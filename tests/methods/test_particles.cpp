@@ -12,11 +12,11 @@
 #include "lucent/core/dump.h"
 #include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
+#include "lucent/methods/particles.h"
+#include "lucent/methods/pathtrace.h"
 #include "methods/particles/particle_lighting.h"
 #include "methods/particles/particle_links.h"
-#include "methods/particles/particles.h"
 #include "methods/particles/radiance_particles.h"
-#include "methods/pathtrace/path_tracer.h"
 #include "test_scenes.h"
 #include "test_support.h"
 

@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "lucent/core/parallel.h"
-#include "methods/pathtrace/path_tracer.h"
+#include "lucent/methods/pathtrace.h"
 #include "lucent/scene/loader.h"
 #include "test_scenes.h"
 #include "test_support.h"

@@ -10,13 +10,13 @@
 
 #include "lucent/core/parallel.h"
 #include "lucent/image/metrics.h"
-#include "methods/microrender/micro_renderer.h"
-#include "methods/pathtrace/path_tracer.h"
-#include "methods/photonmap/photon_mapping.h"
-#include "lucent/scene/camera.h"
-#include "lucent/scene/loader.h"
+#include "lucent/methods/microrender.h"
+#include "lucent/methods/pathtrace.h"
+#include "lucent/methods/photonmap.h"
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/shading_points.h"
+#include "lucent/scene/camera.h"
+#include "lucent/scene/loader.h"
 #include "test_scenes.h"
 #include "test_support.h"
 

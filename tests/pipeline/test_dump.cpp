@@ -6,11 +6,12 @@
 #include <fstream>
 
 #include "lucent/core/dump.h"
+#include "lucent/methods/microrender.h"
+#include "lucent/methods/photonmap.h"
 #include "lucent/pipeline/shading_points.h"
 #include "lucent/scene/loader.h"
+#include "lucent/techniques/points/point_hierarchy.h"
 #include "lucent/techniques/points/point_radiance.h"
-#include "methods/microrender/micro_renderer.h"
-#include "methods/photonmap/photon_mapping.h"
 #include "methods/photonmap/photon_maps.h"
 #include "methods/photonmap/radiance_estimate.h"
 #include "methods/photonmap/sorted_grid.h"

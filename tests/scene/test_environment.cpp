@@ -6,7 +6,7 @@
 #include <fstream>
 
 #include "lucent/image/image.h"
-#include "methods/pathtrace/path_tracer.h"
+#include "lucent/methods/pathtrace.h"
 #include "lucent/scene/loader.h"
 #include "test_support.h"
 

@@ -5,12 +5,12 @@
 #include <cstring>
 
 #include "lucent/core/parallel.h"
+#include "lucent/methods/pathtrace.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/loader.h"
 #include "lucent/scene/particle_scattering.h"
 #include "lucent/techniques/photons/photon_tracing.h"
 #include "lucent/trace/visibility.h"
-#include "methods/pathtrace/path_tracer.h"
 #include "test_bsdfs.h"
 #include "test_scenes.h"
 #include "test_support.h"

@@ -10,11 +10,10 @@
 #include <cstdint>
 
 #include "lucent/core/rng.h"
+#include "lucent/core/sampler_kind.h"
 #include "lucent/core/sobol.h"
 
 namespace lucent {
-
-enum class SamplerKind { Independent, Sobol };
 
 // What a number is for, at one bounce. Two-dimensional purposes take a pair of dimensions.
 enum class SampleUse : uint32_t {

@@ -9,6 +9,12 @@
 
 namespace lucent {
 
+// Camera samples per band for methods that shade a band's points at once: the band's shading points
+// (112 bytes each) stay below glibc's mmap threshold (32 MiB, as retainFreedMemory sets it), so that
+// each band's arrays reuse the heap pages of the band before instead of touching fresh ones (slow on
+// virtual machines).
+inline constexpr uint64_t kReusableBandSamples = uint64_t(1) << 17;
+
 // Every method's: samples per pixel, the seed and the layers.
 struct CommonOptions {
   int spp = 1;

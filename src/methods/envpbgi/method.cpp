@@ -2,9 +2,9 @@
 // the method list.
 #include <bit>
 
+#include "lucent/methods/envpbgi.h"
 #include "lucent/pipeline/render_options.h"
 #include "lucent/techniques/microbuffers/micro_buffer.h"
-#include "methods/envpbgi/env_pbgi.h"
 
 namespace lucent {
 

@@ -1,9 +1,9 @@
 // --method micro: micro-rendering's options, declared once, and its entry in the method list.
 #include <bit>
 
+#include "lucent/methods/microrender.h"
 #include "lucent/pipeline/render_options.h"
 #include "lucent/techniques/microbuffers/micro_buffer.h"
-#include "methods/microrender/micro_renderer.h"
 
 namespace lucent {
 

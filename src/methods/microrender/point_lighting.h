@@ -2,7 +2,7 @@
 // sends towards gather points, for one or several indirect bounces.
 #pragma once
 #include "gathering.h"
-#include "methods/microrender/micro_renderer.h"
+#include "lucent/methods/microrender.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"
 

@@ -9,6 +9,7 @@
 
 #include "lucent/core/oriented_point_grid.h"
 #include "lucent/core/stats.h"
+#include "lucent/methods/particles.h"
 #include "lucent/scene/scene.h"
 #include "lucent/techniques/points/point_hierarchy.h"
 
@@ -27,10 +28,6 @@ struct AreaParticle {
 };
 static_assert(sizeof(AreaParticle) == 44 && std::is_trivially_copyable_v<AreaParticle>, "dumped as records");
 
-// The paper's surfaces have one side that matters; Lucent's surfaces reflect on both (as the path
-// tracer's do), so a position carries a particle for each side by default.
-enum class ParticleSides : uint32_t { Both = 0, Front = 1 };
-
 struct AreaParticleOptions {
   uint32_t positions = 50000;  // places on the surfaces (the paper: 50,000 for CBOX, 150,000 for SPONZA)
   ParticleSides sides = ParticleSides::Both;
@@ -47,10 +44,6 @@ struct AreaParticles {
 // for the same area (5.2: "distributed uniformly", hence 4.3.1's constant Delta A = A / N).
 // Throws std::invalid_argument for a scene without area.
 AreaParticles distributeAreaParticles(const Scene& scene, const AreaParticleOptions& options, RenderStats* stats);
-
-// How a particle's Delta A is set: the area per position (4.3.1: "constant area Delta A"), or the
-// area of the surface nearest to it, which is what links and lookups hand it.
-enum class ParticleArea : uint32_t { Catchment = 0, Uniform = 1 };
 
 struct CatchmentCounters {
   uint64_t samples = 0;    // surface points looked up (per side)

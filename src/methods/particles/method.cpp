@@ -1,8 +1,8 @@
 // --method particles: the particle-space method's options, declared once, and its entry in the
 // method list.
+#include "lucent/methods/particles.h"
 #include "lucent/pipeline/render_options.h"
 #include "lucent/techniques/points/point_hierarchy.h"
-#include "methods/particles/particles.h"
 
 namespace lucent {
 

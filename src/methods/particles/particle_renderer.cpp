@@ -18,15 +18,15 @@
 #include "lucent/core/dump.h"
 #include "lucent/core/memory.h"
 #include "lucent/core/stop.h"
+#include "lucent/methods/particles.h"
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 #include "lucent/pipeline/film.h"
-#include "lucent/pipeline/render_control.h"
+#include "lucent/pipeline/render_stages.h"
 #include "lucent/pipeline/shading_points.h"
 #include "methods/particles/indirect_field.h"
 #include "methods/particles/particle_lighting.h"
 #include "methods/particles/particle_links.h"
-#include "methods/particles/particles.h"
 #include "methods/particles/radiance_particles.h"
 
 namespace lucent {

@@ -8,8 +8,8 @@
 #include <cstdint>
 
 #include "lucent/core/path_sampler.h"
+#include "lucent/methods/pathtrace.h"
 #include "lucent/scene/camera.h"
-#include "methods/pathtrace/path_tracer.h"
 
 namespace lucent {
 

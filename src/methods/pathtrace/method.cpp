@@ -1,6 +1,6 @@
 // --method pt: the path tracer's options, declared once, and its entry in the method list.
+#include "lucent/methods/pathtrace.h"
 #include "lucent/pipeline/render_options.h"
-#include "methods/pathtrace/path_tracer.h"
 
 namespace lucent {
 

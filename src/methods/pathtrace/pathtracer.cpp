@@ -7,9 +7,9 @@
 
 #include "lucent/core/parallel.h"
 #include "lucent/core/path_sampler.h"
-#include "methods/pathtrace/path_tracer.h"
+#include "lucent/methods/pathtrace.h"
 #include "lucent/pipeline/film.h"
-#include "lucent/pipeline/render_control.h"
+#include "lucent/pipeline/render_stages.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"

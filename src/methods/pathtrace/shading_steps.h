@@ -6,8 +6,8 @@
 #pragma once
 #include "lucent/core/math.h"
 #include "lucent/core/sampling.h"
+#include "lucent/methods/pathtrace.h"
 #include "lucent/scene/bsdf.h"
-#include "methods/pathtrace/path_tracer.h"
 
 namespace lucent {
 

@@ -7,11 +7,11 @@
 #include <utility>
 
 #include "lucent/core/stats.h"
+#include "lucent/methods/photonmap.h"
 #include "lucent/pipeline/film.h"
-#include "lucent/pipeline/render_control.h"
+#include "lucent/pipeline/render_stages.h"
 #include "lucent/pipeline/shading_points.h"
 #include "lucent/techniques/photons/photon_estimate.h"
-#include "methods/photonmap/photon_mapping.h"
 
 namespace lucent {
 

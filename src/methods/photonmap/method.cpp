@@ -2,8 +2,8 @@
 // method list.
 #include <bit>
 
+#include "lucent/methods/photonmap.h"
 #include "lucent/pipeline/render_options.h"
-#include "methods/photonmap/photon_mapping.h"
 
 namespace lucent {
 

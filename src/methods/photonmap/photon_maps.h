@@ -4,8 +4,8 @@
 #include <span>
 #include <variant>
 
+#include "lucent/methods/photonmap.h"
 #include "lucent/techniques/photons/kd_tree.h"
-#include "methods/photonmap/photon_mapping.h"
 #include "radiance_estimate.h"
 #include "sorted_grid.h"
 #include "stencil_grid.h"

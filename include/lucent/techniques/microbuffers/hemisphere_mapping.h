@@ -25,10 +25,9 @@
 
 #include "lucent/core/math.h"
 #include "lucent/scene/bsdf.h"
+#include "lucent/techniques/technique_kinds.h"
 
 namespace lucent {
-
-enum class MappingKind : uint32_t { Nusselt = 0, Warped = 1, Paraboloid = 2 };
 
 // The paraboloid projection's point (x, y) of a local direction with z > -1, and the direction of
 // a point of the plane (below the horizon outside the unit disc).

@@ -13,6 +13,7 @@
 #include "lucent/scene/scene.h"
 #include "lucent/techniques/points/node_tree.h"
 #include "lucent/techniques/points/point_nodes.h"
+#include "lucent/techniques/technique_kinds.h"
 
 namespace lucent {
 
@@ -29,11 +30,6 @@ inline Vec3 pointPosition(const Scene& scene, const PointSample& s) {
   const uint32_t* v = &scene.indices[3 * s.triangle];
   return barycentric(scene.positions[v[0]], scene.positions[v[1]], scene.positions[v[2]], s.b1, s.b2);
 }
-
-enum class PointSampling : uint32_t {
-  BestCandidate = 0,   // Ritschel et al. 2009, 2.1: each point the farthest of its candidates
-  LowDiscrepancy = 1,  // the environment-lighting PBGI paper's: a scrambled Sobol sequence by area
-};
 
 struct PointSamplingOptions {
   PointSampling method = PointSampling::BestCandidate;
@@ -62,8 +58,6 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
 // of largest extent. Returns, for each tree position j (leaf n + j), the index of its input point.
 // The size must be a power of two. Ties are broken by input index, so the order is unique.
 std::vector<uint32_t> medianSplitOrder(std::span<const Vec3> positions);
-
-enum class NodeEncoding : uint32_t { Float = 0, Packed = 1 };
 
 struct PointHierarchyOptions {
   uint32_t pointCount = 1u << 16;  // n, a power of two

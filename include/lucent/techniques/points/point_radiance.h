@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lucent/core/math.h"
+#include "lucent/techniques/technique_kinds.h"
 
 namespace lucent {
 
@@ -48,9 +49,6 @@ static_assert(sizeof(HalfRgb) == 6, "half-float RGB radiance, 48 bits per node")
 inline HalfRgb toHalf(Rgb c) { return {floatToHalf(c.r), floatToHalf(c.g), floatToHalf(c.b)}; }
 inline Rgb toFloat(HalfRgb c) { return {halfToFloat(c.r), halfToFloat(c.g), halfToFloat(c.b)}; }
 
-// What a node sends: its leaves' area-weighted mean every way (the paper's nodes), or towards each
-// direction its leaves' radiance weighted by the area they show that way (DirectionalRadiance).
-enum class NodeRadianceKind { Isotropic, Directional };
 
 // A node's radiance by direction (a departure from the paper; micro-rendering README, "Directional
 // node radiance"): seen from direction w, a leaf of area A and normal n shows A max(0, n . w), so the

@@ -9,7 +9,6 @@
 
 #include "lucent/pipeline/method.h"
 #include "lucent/pipeline/render_options.h"
-#include "lucent/pipeline/render_control.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
 #include "lucent/trace/visibility.h"

@@ -12,10 +12,18 @@
 #include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
+#include "lucent/techniques/technique_kinds.h"
 #include "lucent/trace/visibility.h"
-#include "methods/particles/area_particles.h"
 
 namespace lucent {
+
+// The paper's surfaces have one side that matters; Lucent's surfaces reflect on both (as the path
+// tracer's do), so a position carries a particle for each side by default.
+enum class ParticleSides : uint32_t { Both = 0, Front = 1 };
+
+// How a particle's Delta A is set: the area per position (4.3.1: "constant area Delta A"), or the
+// area of the surface nearest to it, which is what links and lookups hand it.
+enum class ParticleArea : uint32_t { Catchment = 0, Uniform = 1 };
 
 // What the geometry stage builds (4.1): everything, as the paper's does, for any view and lights; or
 // only what the frame needs, gathering links at the used area particles and lists at the found

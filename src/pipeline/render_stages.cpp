@@ -1,4 +1,4 @@
-#include "lucent/pipeline/render_control.h"
+#include "lucent/pipeline/render_stages.h"
 
 #include <algorithm>
 #include <cmath>

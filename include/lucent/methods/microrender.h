@@ -11,9 +11,7 @@
 #include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_output.h"
 #include "lucent/scene/scene.h"
-#include "lucent/techniques/microbuffers/hemisphere_mapping.h"
-#include "lucent/techniques/points/point_hierarchy.h"
-#include "lucent/techniques/points/point_radiance.h"
+#include "lucent/techniques/technique_kinds.h"
 #include "lucent/trace/visibility.h"
 
 namespace lucent {

@@ -4,7 +4,7 @@
 #pragma once
 #include <cstdint>
 
-#include "lucent/core/path_sampler.h"
+#include "lucent/core/sampler_kind.h"
 #include "lucent/pipeline/method.h"
 #include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_output.h"
