@@ -23,6 +23,7 @@ std::string optionName(const std::string& flag) {
 }
 
 std::string valuePlaceholder(const OptionSpec& spec) {
+  if (!spec.placeholder.empty()) return spec.placeholder;
   switch (spec.kind) {
     case OptionKind::Integer: return "N";
     case OptionKind::Real: return "X";
@@ -99,11 +100,12 @@ nlohmann::ordered_json methodOptionsJson(const Method& method, const OptionValue
   return out;
 }
 
-std::string methodOptionsHelp(const Method& method) {
+std::string optionsHelp(const std::vector<OptionSpec>& options) {
   std::ostringstream out;
-  for (const OptionSpec& spec : method.options()) {
+  for (const OptionSpec& spec : options) {
     const std::string value = valuePlaceholder(spec);
-    out << "  " << spec.flag() << (value.empty() ? "" : " " + value) << "\n      " << spec.help << "\n      ";
+    out << "  " << (spec.shortFlag.empty() ? "" : spec.shortFlag + ", ") << spec.flag() << (value.empty() ? "" : " " + value)
+        << "\n      " << spec.help << "\n      ";
     if (spec.kind == OptionKind::Integer || spec.kind == OptionKind::Real || spec.kind == OptionKind::Triple) {
       std::string range = rangeText(spec.min, spec.max, spec.kind);  // "must be in [a, b]" or "must be ..."
       range = range.rfind("must be in ", 0) == 0 ? range.substr(11) : range.substr(8);

@@ -35,6 +35,6 @@ std::unique_ptr<MethodOptions> resolveMethodOptions(const Method& method, const 
 nlohmann::ordered_json methodOptionsJson(const Method& method, const OptionValues& resolved);
 
 // One entry per option: the flag and its values, then the help, unit, range and default.
-std::string methodOptionsHelp(const Method& method);
+std::string optionsHelp(const std::vector<OptionSpec>& options);
 
 }  // namespace lucent::cli

@@ -58,7 +58,7 @@ void addMethodsCommand(CLI::App& app, int& exitCode) {
       std::cout << out.dump(2) << std::endl;
     } else {
       for (const Method* m : methods)
-        std::cout << m->name() << ": " << m->summary() << "\n" << methodOptionsHelp(*m) << "\n";
+        std::cout << m->name() << ": " << m->summary() << "\n" << optionsHelp(m->options()) << "\n";
     }
     exitCode = 0;
   });

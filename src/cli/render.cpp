@@ -34,10 +34,10 @@ namespace fs = std::filesystem;
 namespace {
 
 struct RenderArgs {
-  std::string scene, method, output, png, resolution, isa;
-  PixelRect crop;                     // empty: the whole image
-  std::pair<int, int> samples{0, 0};  // first, count; count 0: all
-  std::string part;                   // --part as given
+  std::string scene, method, output, png, isa, part;
+  std::pair<int, int> resolution{0, 0};  // width, height; 0: the camera's
+  PixelRect crop;                        // empty: the whole image
+  std::pair<int, int> samples{0, 0};     // first, count; count 0: all
   int threads = 0;
   double checkpointSeconds = 0;
   bool resume = false;
@@ -96,6 +96,17 @@ void applyPart(const std::string& text, const Scene& scene, int spp, RenderContr
   else control.firstSample = first, control.sampleCount = end - first;
 }
 
+// "WIDTHxHEIGHT", each in [1, 65536], at most kMaxImagePixels in all.
+std::pair<int, int> parseResolution(const std::string& text) {
+  int w = 0, h = 0;
+  char x = 0, rest = 0;
+  std::istringstream in(text);
+  if (!(in >> w >> x >> h) || x != 'x' || (in >> rest) || w < 1 || h < 1 || w > 65536 || h > 65536)
+    throw std::invalid_argument("--resolution '" + text + "': expected WIDTHxHEIGHT, e.g. 512x512");
+  if (uint64_t(w) * h > kMaxImagePixels) throw std::invalid_argument("--resolution '" + text + "': more than 2^26 pixels");
+  return {w, h};
+}
+
 // "512M", "8G" or bytes: more than 0, within what the process may address.
 uint64_t parseMemoryLimit(const std::string& text) {
   uint64_t limit = 0;
@@ -111,70 +122,69 @@ uint64_t parseMemoryLimit(const std::string& text) {
   return limit;
 }
 
-// The render command's own options, beside the method's: names, value placeholder ("" for a flag,
-// which takes no value), help, and what its value sets. Both the help and the parsing read this
-// table.
-struct RenderFlag {
-  const char* names;
-  const char* value;
-  const char* help;
-  void (*apply)(RenderArgs& a, const std::string& value);
-};
-const RenderFlag kRenderFlags[] = {
-    {"--method", "NAME", "rendering method (lucent methods lists them; default: the scene's render block's, else pt)",
-     [](RenderArgs& a, const std::string& v) { a.method = v; }},
-    {"-o, --output", "FILE", "output EXR file (required)", [](RenderArgs& a, const std::string& v) { a.output = v; }},
-    {"--png", "FILE", "also write an sRGB PNG", [](RenderArgs& a, const std::string& v) { a.png = v; }},
-    {"--threads", "N", "worker threads (0: all cores; default 0)",
-     [](RenderArgs& a, const std::string& v) {
-       a.threads = int(flagged([&] { return parseOptionInteger("threads", v, 0, 4096); }));
-     }},
-    {"--resolution", "WxH", "override the camera's resolution",
-     [](RenderArgs& a, const std::string& v) { a.resolution = v; }},
-    {"--crop", "X0,Y0,X1,Y1",
-     "render only the pixels [X0, X1) x [Y0, Y1): a part of a split render, with OUT.film for lucent merge",
-     [](RenderArgs& a, const std::string& v) { a.crop = parseCrop(v); }},
-    {"--samples", "FIRST:COUNT",
-     "take only the camera samples FIRST to FIRST+COUNT-1 of each pixel: a part of a split render, with OUT.film "
-     "for lucent merge",
-     [](RenderArgs& a, const std::string& v) { a.samples = parseSamples(v); }},
-    {"--part", "rows|samples:K/N",
-     "the K-th of N parts (K from 0) of the image's rows or of each pixel's samples, as --crop or --samples would "
-     "give it (for job arrays)",
-     [](RenderArgs& a, const std::string& v) { a.part = v; }},
-    {"--checkpoint", "SECONDS", "every SECONDS, write the render's state to OUT.film (also on SIGINT and SIGTERM)",
-     [](RenderArgs& a, const std::string& v) {
-       a.checkpointSeconds = flagged([&] { return parseOptionReal("checkpoint", v, 1e-3, 1e9); });
-     }},
-    {"--resume", "", "continue from OUT.film, left by a checkpoint or a stop, if there is one",
-     [](RenderArgs& a, const std::string&) { a.resume = true; }},
-    {"--memory-limit", "SIZE",
-     "the most memory the render may hold, as 512M, 8G or bytes; one that would need more stops at once, naming "
-     "the option to lower (default: the available memory)",
-     [](RenderArgs& a, const std::string& v) { a.memoryLimit = parseMemoryLimit(v); }},
-    {"--robust", "", "Embree's robust traversal (watertight at edges)",
-     [](RenderArgs& a, const std::string&) { a.robust = true; }},
-    {"--isa", "ISA",
-     "run as a CPU of sse4.2, avx, avx2 or avx512 would: Embree's kernels and the lane loops (default: this CPU's "
-     "best)",
-     [](RenderArgs& a, const std::string& v) { a.isa = v; }},
-    {"-q, --quiet", "", "no progress bar or warnings", [](RenderArgs& a, const std::string&) { a.quiet = true; }},
-    {"--log-stages", "", "print each stage's name on stderr as it starts, with the seconds since the start",
-     [](RenderArgs& a, const std::string&) { a.logStages = true; }},
-    {"-h, --help", "", "this help, with the options of --method NAME",
-     [](RenderArgs& a, const std::string&) { a.help = true; }},
-};
+std::string pairText(const std::pair<int, int>& p, char separator) {
+  return p.second == 0 ? std::string() : std::to_string(p.first) + separator + std::to_string(p.second);
+}
 
-// The render flag one of whose names is `key`, or nullptr.
-const RenderFlag* renderFlag(const std::string& key) {
-  for (const RenderFlag& f : kRenderFlags) {
-    std::string_view names = f.names;
-    while (!names.empty()) {
-      const size_t comma = names.find(", ");
-      if (names.substr(0, comma) == key) return &f;
-      names = comma == std::string_view::npos ? std::string_view() : names.substr(comma + 2);
-    }
-  }
+// The render command's own options, beside the method's, declared as the methods' are
+// (pipeline/options.h): the help and the parsing read this table.
+const OptionTable<RenderArgs>& renderFlags() {
+  static const OptionTable<RenderArgs> table = [] {
+    using A = RenderArgs;
+    OptionTable<A> t;
+    t.text("method", &A::method, "", "rendering method (lucent methods lists them); none: the scene's render block's, else pt");
+    t.placeholder("method", "NAME");
+    t.text("output", &A::output, "", "output EXR file (required)");
+    t.placeholder("output", "FILE").shortFlag("output", "-o");
+    t.text("png", &A::png, "", "also write an sRGB PNG");
+    t.placeholder("png", "FILE");
+    t.integer("threads", &A::threads, 0, 4096, "threads", "worker threads (0: all cores)");
+    t.value<std::pair<int, int>>("resolution", &A::resolution, "WxH", parseResolution,
+                                 [](const std::pair<int, int>& r) { return pairText(r, 'x'); },
+                                 "override the camera's resolution");
+    t.value<PixelRect>("crop", &A::crop, "X0,Y0,X1,Y1", parseCrop,
+                       [](const PixelRect& r) {
+                         return r.empty() ? std::string()
+                                          : std::to_string(r.x0) + "," + std::to_string(r.y0) + "," +
+                                                std::to_string(r.x1) + "," + std::to_string(r.y1);
+                       },
+                       "render only the pixels [X0, X1) x [Y0, Y1): a part of a split render, with OUT.film for "
+                       "lucent merge");
+    t.value<std::pair<int, int>>("samples", &A::samples, "FIRST:COUNT", parseSamples,
+                                 [](const std::pair<int, int>& s) { return pairText(s, ':'); },
+                                 "take only the camera samples FIRST to FIRST+COUNT-1 of each pixel: a part of a "
+                                 "split render, with OUT.film for lucent merge");
+    t.text("part", &A::part, "",
+           "the K-th of N parts (K from 0) of the image's rows or of each pixel's samples, as --crop or --samples "
+           "would give it (for job arrays)");
+    t.placeholder("part", "rows|samples:K/N");
+    t.real("checkpoint", &A::checkpointSeconds, 1e-3, 1e9, "s",
+           "every SECONDS, write the render's state to OUT.film (also on SIGINT and SIGTERM)");
+    t.placeholder("checkpoint", "SECONDS");
+    t.flag("resume", &A::resume, "continue from OUT.film, left by a checkpoint or a stop, if there is one");
+    t.value<uint64_t>("memory_limit", &A::memoryLimit, "SIZE", parseMemoryLimit,
+                      [](const uint64_t& bytes) { return bytes == 0 ? std::string() : memoryText(bytes); },
+                      "the most memory the render may hold, as 512M, 8G or bytes; one that would need more stops "
+                      "at once, naming the option to lower (none: the available memory)");
+    t.flag("robust", &A::robust, "Embree's robust traversal (watertight at edges)");
+    t.text("isa", &A::isa, "",
+           "run as a CPU of sse4.2, avx, avx2 or avx512 would: Embree's kernels and the lane loops (none: this "
+           "CPU's best)");
+    t.placeholder("isa", "ISA");
+    t.flag("quiet", &A::quiet, "no progress bar or warnings");
+    t.shortFlag("quiet", "-q");
+    t.flag("log_stages", &A::logStages, "print each stage's name on stderr as it starts, with the seconds since the start");
+    t.flag("help", &A::help, "this help, with the options of --method NAME");
+    t.shortFlag("help", "-h");
+    return t;
+  }();
+  return table;
+}
+
+// The render flag whose long or short form is `key`, or nullptr.
+const OptionSpec* renderFlag(const std::string& key) {
+  for (const OptionSpec& spec : renderFlags().specs())
+    if (key == spec.flag() || key == spec.shortFlag) return &spec;
   return nullptr;
 }
 
@@ -192,9 +202,14 @@ RenderArgs parseArgs(const std::vector<std::string>& args) {
       if (i + 1 >= args.size()) throw std::invalid_argument(key + " needs a value");
       return args[++i];
     };
-    if (const RenderFlag* flag = renderFlag(key)) {
-      if (!*flag->value && inlineValue) throw std::invalid_argument(key + " takes no value");
-      flag->apply(a, *flag->value ? value() : std::string());
+    if (const OptionSpec* flag = renderFlag(key)) {
+      const bool takesValue = flag->kind != OptionKind::Flag;
+      if (!takesValue && inlineValue) throw std::invalid_argument(key + " takes no value");
+      try {
+        renderFlags().set(a, flag->name, takesValue ? value() : "true");
+      } catch (const OptionError& e) {
+        throw std::invalid_argument(flag->flag() + ": " + e.what());
+      }
     } else if (key.rfind("--", 0) == 0) {
       a.methodOptions.push_back(methodOptionArg(key, inlineValue ? std::optional(arg.substr(eq + 1)) : std::nullopt,
                                                 i + 1 < args.size() ? std::optional(args[i + 1]) : std::nullopt,
@@ -250,10 +265,9 @@ class StopOnSignals {
 
 void printHelp(const Method& method) {
   std::cout << "Usage: lucent render SCENE.json [--method NAME] -o OUT.exr [options]\n\nRender options:\n";
-  for (const RenderFlag& f : kRenderFlags)
-    std::cout << "  " << f.names << (*f.value ? std::string(" ") + f.value : "") << "\n      " << f.help << "\n";
-  std::cout << "\nOptions of --method " << method.name() << " (" << method.summary() << "):\n"
-            << methodOptionsHelp(method);
+  std::cout << optionsHelp(renderFlags().specs()) << "\nOptions of --method " << method.name() << " ("
+            << method.summary() << "):\n"
+            << optionsHelp(method.options());
 }
 
 int runRender(const RenderArgs& a) {
@@ -316,16 +330,9 @@ int runRender(const RenderArgs& a) {
   }
   const std::unique_ptr<MethodOptions> resolved = resolveMethodOptions(*method, values, origins);
 
-  if (!a.resolution.empty()) {
-    int w = 0, h = 0;
-    char x = 0, rest = 0;
-    std::istringstream in(a.resolution);
-    if (!(in >> w >> x >> h) || x != 'x' || (in >> rest) || w < 1 || h < 1 || w > 65536 || h > 65536)
-      throw std::invalid_argument("--resolution '" + a.resolution + "': expected WIDTHxHEIGHT, e.g. 512x512");
-    if (uint64_t(w) * h > kMaxImagePixels)
-      throw std::invalid_argument("--resolution '" + a.resolution + "': more than 2^26 pixels");
-    scene.camera.width = w;
-    scene.camera.height = h;
+  if (a.resolution.second > 0) {
+    scene.camera.width = a.resolution.first;
+    scene.camera.height = a.resolution.second;
     scene.contentHash = sceneContentHash(scene);
   }
 

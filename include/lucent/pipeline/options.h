@@ -32,7 +32,7 @@ enum class OptionKind {
   Real,     // finite numbers in [min, max]
   Flag,     // true or false
   Choice,   // one of `choices`
-  Text,     // any text (a directory)
+  Text,     // any text (a directory), or a value of its own syntax (OptionTable::value)
   Triple,   // three whole numbers XxYxZ in [min, max] each, or 0x0x0 for none
 };
 
@@ -45,6 +45,8 @@ struct OptionSpec {
   std::string help;                  // one line
   std::string defaultText;           // the default as text
   bool changesImage = true;          // false: renders that differ in it alone give the same image
+  std::string shortFlag;             // "-o" beside "--output", or ""
+  std::string placeholder;           // what help shows for the value ("FILE"); "": from the kind
   std::string flag() const;          // "--gather-rays"
 };
 
@@ -80,7 +82,7 @@ class OptionTable {
   template <class T>
   OptionTable& integer(std::string name, T Options::*field, double min, double max, std::string unit, std::string help) {
     static_assert(std::is_integral_v<T>);
-    OptionSpec spec{std::move(name), OptionKind::Integer, min, max, {}, std::move(unit), std::move(help), {}};
+    OptionSpec spec{std::move(name), OptionKind::Integer, min, max, {}, std::move(unit), std::move(help), {}, true, {}, {}};
     const std::string n = spec.name;
     return add(std::move(spec),
                [=](Options& o, std::string_view text) { o.*field = T(parseOptionInteger(n, text, min, max)); },
@@ -93,7 +95,7 @@ class OptionTable {
   template <class T>
   OptionTable& real(std::string name, T Options::*field, double min, double max, std::string unit, std::string help) {
     static_assert(std::is_floating_point_v<T>);
-    OptionSpec spec{std::move(name), OptionKind::Real, min, max, {}, std::move(unit), std::move(help), {}};
+    OptionSpec spec{std::move(name), OptionKind::Real, min, max, {}, std::move(unit), std::move(help), {}, true, {}, {}};
     const std::string n = spec.name;
     constexpr bool asFloat = std::is_same_v<T, float>;
     return add(std::move(spec),
@@ -104,7 +106,7 @@ class OptionTable {
                });
   }
   OptionTable& flag(std::string name, bool Options::*field, std::string help) {
-    OptionSpec spec{std::move(name), OptionKind::Flag, 0, 1, {}, {}, std::move(help), {}};
+    OptionSpec spec{std::move(name), OptionKind::Flag, 0, 1, {}, {}, std::move(help), {}, true, {}, {}};
     const std::string n = spec.name;
     return add(std::move(spec), [=](Options& o, std::string_view text) { o.*field = parseOptionFlag(n, text); },
                [=](const Options& o) { return std::string(o.*field ? "true" : "false"); },
@@ -113,7 +115,7 @@ class OptionTable {
   template <class Enum>
   OptionTable& choice(std::string name, Enum Options::*field, std::vector<std::pair<std::string, Enum>> values,
                       std::string help) {
-    OptionSpec spec{std::move(name), OptionKind::Choice, 0, 0, {}, {}, std::move(help), {}};
+    OptionSpec spec{std::move(name), OptionKind::Choice, 0, 0, {}, {}, std::move(help), {}, true, {}, {}};
     for (const auto& [text, value] : values) spec.choices.push_back(text);
     const std::string n = spec.name;
     const std::vector<std::string> choices = spec.choices;
@@ -141,13 +143,13 @@ class OptionTable {
         });
   }
   OptionTable& text(std::string name, std::string Options::*field, std::string unit, std::string help) {
-    OptionSpec spec{std::move(name), OptionKind::Text, 0, 0, {}, std::move(unit), std::move(help), {}};
+    OptionSpec spec{std::move(name), OptionKind::Text, 0, 0, {}, std::move(unit), std::move(help), {}, true, {}, {}};
     return add(std::move(spec), [=](Options& o, std::string_view text) { o.*field = std::string(text); },
                [=](const Options& o) { return o.*field; }, [](const Options&) { return std::string(); });
   }
   OptionTable& triple(std::string name, std::array<uint32_t, 3> Options::*field, double min, double max,
                       std::string unit, std::string help) {
-    OptionSpec spec{std::move(name), OptionKind::Triple, min, max, {}, std::move(unit), std::move(help), {}};
+    OptionSpec spec{std::move(name), OptionKind::Triple, min, max, {}, std::move(unit), std::move(help), {}, true, {}, {}};
     const std::string n = spec.name;
     return add(std::move(spec), [=](Options& o, std::string_view text) { o.*field = parseOptionTriple(n, text, min, max); },
                [=](const Options& o) { return tripleText(o.*field); },
@@ -174,15 +176,30 @@ class OptionTable {
     }
     return *this;
   }
+  // A value of a syntax of its own ("X0,Y0,X1,Y1"), read by `parse` (which throws
+  // std::invalid_argument with the whole message, naming the flag) and written by `format`.
+  template <class T>
+  OptionTable& value(std::string name, T Options::*field, std::string placeholder, std::function<T(const std::string&)> parse,
+                     std::function<std::string(const T&)> format, std::string help) {
+    OptionSpec spec{std::move(name), OptionKind::Text, 0, 0, {}, {}, std::move(help), {}, true, {}, {}};
+    spec.placeholder = std::move(placeholder);
+    return add(std::move(spec), [=](Options& o, std::string_view text) { o.*field = parse(std::string(text)); },
+               [=](const Options& o) { return format(o.*field); }, [](const Options&) { return std::string(); });
+  }
+  // What help shows for an option's value, and a short flag beside its long one.
+  OptionTable& placeholder(std::string_view name, std::string text) {
+    spec(name).placeholder = std::move(text);
+    return *this;
+  }
+  OptionTable& shortFlag(std::string_view name, std::string flag) {
+    spec(name).shortFlag = std::move(flag);
+    return *this;
+  }
   // Marks an option whose value never changes the image (a tile size, a dump directory): parts and
   // checkpoints of renders that differ in it alone belong to the same render.
   OptionTable& imageNeutral(std::string_view name) {
-    for (OptionSpec& spec : specs_)
-      if (spec.name == name) {
-        spec.changesImage = false;
-        return *this;
-      }
-    throw std::logic_error("no option '" + std::string(name) + "' to mark");
+    spec(name).changesImage = false;
+    return *this;
   }
   // A condition beyond the option's range (a power of two, a pairing with another option):
   // check(options) returns why the options break it, or "".
@@ -233,6 +250,11 @@ class OptionTable {
     specs_.push_back(std::move(spec));
     entries_.push_back({std::move(parse), std::move(format), std::move(check)});
     return *this;
+  }
+  OptionSpec& spec(std::string_view name) {
+    for (OptionSpec& s : specs_)
+      if (s.name == name) return s;
+    throw std::logic_error("no option '" + std::string(name) + "' to mark");
   }
   const Entry* find(std::string_view name) const {
     for (size_t i = 0; i < specs_.size(); ++i)
