@@ -435,6 +435,8 @@ int runRender(const RenderArgs& a) {
   ImageMetadata meta = filmMetadata(info, *out.film);
   meta.emplace_back("lucent:render_seconds", std::to_string(total.seconds()));
   meta.emplace_back("lucent:threads", std::to_string(parallel.threads()));
+  // What the scene's files hold that this render leaves out: a reference says how it differs.
+  if (!scene.ignored.empty()) meta.emplace_back("lucent:ignored", nlohmann::json(scene.ignored).dump());
   // A part of a split render and an interrupted render keep their film (merged later, or resumed);
   // a whole render that completes removes the checkpoint it resumed from or wrote.
   std::vector<FileToWrite> alsoWrite;
@@ -474,6 +476,7 @@ int runRender(const RenderArgs& a) {
   if (!a.png.empty()) summary["png"] = a.png;
   if (keepFilm) summary["film"] = filmPath;
   summary["scene_hash"] = hex(scene.contentHash);
+  if (!scene.ignored.empty()) summary["ignored"] = scene.ignored;
   std::cout << summary.dump() << std::endl;
   // Interrupted: the status a shell gives a process that the signal ended.
   return out.complete ? 0 : 128 + (stopSignal > 0 ? stopSignal : SIGTERM);

@@ -13,6 +13,7 @@
 #include "lucent/core/text.h"
 #include "lucent/image/image.h"
 #include "lucent/scene/texture.h"
+#include "gltf_import.h"
 #include "obj_import.h"
 
 namespace lucent {
@@ -301,7 +302,77 @@ void loadRenderBlock(JsonFields fields, const nlohmann::json& block, RenderBlock
 
 }  // namespace
 
+namespace {
+
+// The scene's materials from their specs (and textures), its emitters checked, then finalized:
+// what every scene shares once its triangles are in.
+void finishScene(Scene& scene, const detail::ObjImport& import, const std::string& path, const LoadOptions& options) {
+  scene.inputFiles.insert(scene.inputFiles.end(), import.libraries.begin(), import.libraries.end());
+  for (const auto& spec : import.specs) {
+    Material m = detail::classifyMaterial(spec);
+    if (!spec.mapKd.empty()) {
+      scene.inputFiles.push_back(spec.mapKd);
+      Texture tex;
+      tex.offset = static_cast<uint32_t>(scene.texels.size());
+      const auto texels = readSrgb8Texels(spec.mapKd, spec.mapKdOrigin + ": material '" + spec.name + "' map_Kd",
+                                          tex.width, tex.height);
+      scene.texels.insert(scene.texels.end(), texels.begin(), texels.end());
+      m.kdTexture = static_cast<int32_t>(scene.textures.size());
+      scene.textures.push_back(tex);
+    }
+    scene.materials.push_back(m);
+    scene.materialNames.push_back(spec.name);
+  }
+  // Light selection weighs lights by power; an emitter whose power overflows a float would break it.
+  for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
+    const uint32_t id = scene.materialIds[t];
+    const Rgb ke = scene.materials[id].ke;
+    if (ke.isBlack()) continue;
+    const double area = triangleGeometry(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2)).area;
+    if (!(double(ke.luminance()) * area * kPi <= double(FLT_MAX)))
+      throw SceneError(import.specs[id].origin + ": material '" + import.specs[id].name +
+                       "': the emitted power of a triangle overflows (Ke or the triangle is too large)");
+  }
+  try {
+    finalizeScene(scene);
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(path + ": the light power overflows (a light or the scene is too large): " + e.what());
+  }
+  if (scene.lights.empty())
+    throw SceneError(path + ": the scene has no light (no emissive material, no entry in 'lights')");
+  if (scene.environment.clampedTexels > 0 && !options.quiet)
+    std::cerr << "lucent: warning: " << scene.environment.source << ": clamped " << scene.environment.clampedTexels
+              << " slightly negative texels (down to " << scene.environment.mostNegativeTexel << ") to 0\n";
+  if (scene.droppedDegenerateTriangles > 0 && !options.quiet)
+    std::cerr << "lucent: warning: " << path << ": dropped " << scene.droppedDegenerateTriangles
+              << " degenerate (zero-area) triangles\n";
+}
+
+bool isGltf(const std::string& path) {
+  const std::string extension = fs::path(path).extension().string();
+  return extension == ".gltf" || extension == ".glb";
+}
+
+Scene loadGltfScene(const std::string& path, const LoadOptions& options) {
+  const std::string problem = regularFileProblem(path);
+  if (!problem.empty()) throw SceneError(path + ": glTF file " + problem);
+  Scene scene;
+  scene.sourcePath = path;
+  scene.inputFiles.push_back(path);
+  detail::ObjImport import;
+  detail::GltfContent content;
+  detail::importGltf(path, scene, import, content);
+  if (!content.camera) throw SceneError(path + ": the file's scene has no camera (render it from a scene file that gives one)");
+  scene.camera = *content.camera;
+  if (scene.triangleCount() == 0) throw SceneError(path + ": the scene has no (non-degenerate) triangles");
+  finishScene(scene, import, path, options);
+  return scene;
+}
+
+}  // namespace
+
 Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
+  if (isGltf(jsonPath)) return loadGltfScene(jsonPath, options);
   const std::string problem = regularFileProblem(jsonPath);
   if (!problem.empty()) throw SceneError(jsonPath + ": scene file " + problem);
   std::ifstream in(jsonPath, std::ios::binary);
@@ -321,6 +392,17 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
   if (!meshes.is_array() || meshes.empty()) top.failKey("meshes", "expected a non-empty array");
   for (size_t i = 0; i < meshes.size(); ++i) {
     JsonFields mesh(meshes[i], jsonPath, "meshes[" + std::to_string(i) + "]");
+    if (mesh.has("gltf")) {
+      // Its triangles, materials and lights; the scene file gives the camera.
+      const std::string gltf = resolve(base, mesh.string("gltf"));
+      requireFile(mesh, "gltf", gltf);
+      mesh.finish();
+      if (!isGltf(gltf)) mesh.failKey("gltf", "expected a .gltf or .glb file");
+      scene.inputFiles.push_back(gltf);
+      detail::GltfContent content;
+      detail::importGltf(gltf, scene, import, content);
+      continue;
+    }
     const std::string obj = resolve(base, mesh.string("obj"));
     requireFile(mesh, "obj", obj);
     mesh.finish();
@@ -340,23 +422,6 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
     materials.finish();
   }
 
-  scene.inputFiles.insert(scene.inputFiles.end(), import.libraries.begin(), import.libraries.end());
-  for (const auto& spec : import.specs) {
-    Material m = detail::classifyMaterial(spec);
-    if (!spec.mapKd.empty()) {
-      scene.inputFiles.push_back(spec.mapKd);
-      Texture tex;
-      tex.offset = static_cast<uint32_t>(scene.texels.size());
-      const auto texels = readSrgb8Texels(spec.mapKd, spec.mapKdOrigin + ": material '" + spec.name + "' map_Kd",
-                                          tex.width, tex.height);
-      scene.texels.insert(scene.texels.end(), texels.begin(), texels.end());
-      m.kdTexture = static_cast<int32_t>(scene.textures.size());
-      scene.textures.push_back(tex);
-    }
-    scene.materials.push_back(m);
-    scene.materialNames.push_back(spec.name);
-  }
-
   if (top.has("render")) loadRenderBlock(top.object("render"), root.at("render"), scene.render);
 
   if (top.has("lights")) {
@@ -367,29 +432,7 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
   }
   top.finish();
 
-  // Light selection weighs lights by power; an emitter whose power overflows a float would break it.
-  for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
-    const uint32_t id = scene.materialIds[t];
-    const Rgb ke = scene.materials[id].ke;
-    if (ke.isBlack()) continue;
-    const double area = triangleGeometry(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2)).area;
-    if (!(double(ke.luminance()) * area * kPi <= double(FLT_MAX)))
-      throw SceneError(import.specs[id].origin + ": material '" + import.specs[id].name +
-                       "': the emitted power of a triangle overflows (Ke or the triangle is too large)");
-  }
-  try {
-    finalizeScene(scene);
-  } catch (const std::invalid_argument& e) {
-    throw SceneError(jsonPath + ": the light power overflows (a light or the scene is too large): " + e.what());
-  }
-  if (scene.lights.empty())
-    throw SceneError(jsonPath + ": the scene has no light (no emissive material, no entry in 'lights')");
-  if (scene.environment.clampedTexels > 0 && !options.quiet)
-    std::cerr << "lucent: warning: " << scene.environment.source << ": clamped " << scene.environment.clampedTexels
-              << " slightly negative texels (down to " << scene.environment.mostNegativeTexel << ") to 0\n";
-  if (scene.droppedDegenerateTriangles > 0 && !options.quiet)
-    std::cerr << "lucent: warning: " << jsonPath << ": dropped " << scene.droppedDegenerateTriangles
-              << " degenerate (zero-area) triangles\n";
+  finishScene(scene, import, jsonPath, options);
   return scene;
 }
 

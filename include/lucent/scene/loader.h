@@ -1,4 +1,5 @@
-// Loading a scene from its JSON file and OBJ/MTL files (docs/scene-format.md).
+// Loading a scene from its JSON file and OBJ/MTL or glTF files, or from a glTF file alone
+// (docs/scene-format.md).
 #pragma once
 #include <stdexcept>
 #include <string>
@@ -17,6 +18,8 @@ struct LoadOptions {
   bool quiet = false;  // suppress warnings (e.g. dropped degenerate triangles) on stderr
 };
 
-Scene loadScene(const std::string& jsonPath, const LoadOptions& options = {});
+// A .gltf or .glb path loads that file with its first camera (512 pixels wide, as high as its aspect
+// ratio makes it); any other path is a scene file.
+Scene loadScene(const std::string& path, const LoadOptions& options = {});
 
 }  // namespace lucent

@@ -100,6 +100,9 @@ struct Scene {
   uint32_t droppedDegenerateTriangles = 0;
   std::string sourcePath;
   std::vector<std::string> inputFiles;  // every file the scene was read from (JSON, OBJ, MTL, images)
+  // What the scene's files hold that the render leaves out (a glTF material's specular lobe, an
+  // extension not read), each with what it would change: reported with every render.
+  std::vector<std::string> ignored;
   RenderBlock render;
 
   uint32_t triangleCount() const { return static_cast<uint32_t>(materialIds.size()); }

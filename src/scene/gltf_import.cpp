@@ -1,0 +1,600 @@
+#include "gltf_import.h"
+
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "lucent/core/files.h"
+#include "lucent/scene/loader.h"
+
+namespace lucent::detail {
+namespace fs = std::filesystem;
+
+namespace {
+
+// glTF's photometric units to Lucent's radiometric ones: lumens per watt (Blender's importer's).
+constexpr double kLumensPerWatt = 683.0;
+// The most elements an accessor may have, and the deepest node hierarchy followed.
+constexpr size_t kMaxAccessorElements = size_t(1) << 28;
+constexpr int kMaxNodeDepth = 1024;
+
+// Extensions read, and those whose content is listed as left out rather than rendered.
+const std::set<std::string> kSupportedExtensions = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
+                                                    "KHR_materials_specular", "KHR_materials_ior"};
+
+struct Context {
+  const tinygltf::Model& model;
+  const std::string& file;
+  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
+    throw SceneError(file + ": " + path + ": " + what);
+  }
+};
+
+std::string at(const std::string& array, size_t index) { return array + "[" + std::to_string(index) + "]"; }
+
+// Column-major, as glTF writes matrices, in double.
+struct Matrix4 {
+  double m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  Matrix4 operator*(const Matrix4& b) const {
+    Matrix4 r;
+    for (int col = 0; col < 4; ++col)
+      for (int row = 0; row < 4; ++row) {
+        double s = 0;
+        for (int k = 0; k < 4; ++k) s += m[k * 4 + row] * b.m[col * 4 + k];
+        r.m[col * 4 + row] = s;
+      }
+    return r;
+  }
+  std::array<double, 3> point(const double p[3]) const {
+    return {m[0] * p[0] + m[4] * p[1] + m[8] * p[2] + m[12], m[1] * p[0] + m[5] * p[1] + m[9] * p[2] + m[13],
+            m[2] * p[0] + m[6] * p[1] + m[10] * p[2] + m[14]};
+  }
+  std::array<double, 3> direction(const double d[3]) const {
+    return {m[0] * d[0] + m[4] * d[1] + m[8] * d[2], m[1] * d[0] + m[5] * d[1] + m[9] * d[2],
+            m[2] * d[0] + m[6] * d[1] + m[10] * d[2]};
+  }
+  double determinant3() const {
+    return m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) + m[8] * (m[1] * m[6] - m[5] * m[2]);
+  }
+  // The cofactor matrix of the upper 3 x 3, row by row: normals transform by it (the inverse
+  // transpose times the determinant, whose size normalization removes and whose sign a mirroring
+  // transform's normals are turned back by).
+  std::array<double, 9> normalMatrix() const {
+    const double a = m[0], b = m[4], c = m[8], d = m[1], e = m[5], f = m[9], g = m[2], h = m[6], i = m[10];
+    return {e * i - f * h, f * g - d * i, d * h - e * g, c * h - b * i, a * i - c * g,
+            b * g - a * h, b * f - c * e, c * d - a * f, a * e - b * d};
+  }
+};
+
+Matrix4 nodeMatrix(const Context& c, const tinygltf::Node& node, const std::string& path) {
+  Matrix4 r;
+  const auto finite = [&](const std::vector<double>& v, const char* key) {
+    for (const double x : v)
+      if (!std::isfinite(x)) c.fail(path + "." + key, "has a non-finite value");
+  };
+  if (!node.matrix.empty()) {
+    if (node.matrix.size() != 16) c.fail(path + ".matrix", "expected 16 numbers");
+    finite(node.matrix, "matrix");
+    std::copy(node.matrix.begin(), node.matrix.end(), r.m);
+    return r;
+  }
+  if (!node.translation.empty() && node.translation.size() != 3) c.fail(path + ".translation", "expected 3 numbers");
+  if (!node.rotation.empty() && node.rotation.size() != 4) c.fail(path + ".rotation", "expected 4 numbers");
+  if (!node.scale.empty() && node.scale.size() != 3) c.fail(path + ".scale", "expected 3 numbers");
+  finite(node.translation, "translation");
+  finite(node.rotation, "rotation");
+  finite(node.scale, "scale");
+  double x = 0, y = 0, z = 0, w = 1;
+  if (!node.rotation.empty()) {
+    x = node.rotation[0], y = node.rotation[1], z = node.rotation[2], w = node.rotation[3];
+    const double len = std::sqrt(x * x + y * y + z * z + w * w);
+    if (!(len > 0)) c.fail(path + ".rotation", "is not a rotation (a zero quaternion)");
+    x /= len, y /= len, z /= len, w /= len;
+  }
+  const double s[3] = {node.scale.empty() ? 1 : node.scale[0], node.scale.empty() ? 1 : node.scale[1],
+                       node.scale.empty() ? 1 : node.scale[2]};
+  // T * R * S, column by column.
+  const double rot[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
+                         2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
+                         2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)};
+  for (int col = 0; col < 3; ++col)
+    for (int row = 0; row < 3; ++row) r.m[col * 4 + row] = rot[col * 3 + row] * s[col];
+  for (int k = 0; k < 3; ++k) r.m[12 + k] = node.translation.empty() ? 0 : node.translation[k];
+  return r;
+}
+
+int componentBytes(int type) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+    default: return 0;
+  }
+}
+
+const char* typeName(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return "SCALAR";
+    case TINYGLTF_TYPE_VEC2: return "VEC2";
+    case TINYGLTF_TYPE_VEC3: return "VEC3";
+    case TINYGLTF_TYPE_VEC4: return "VEC4";
+    default: return "a matrix";
+  }
+}
+
+// One component as glTF defines it, normalized integers mapped to [0, 1] or [-1, 1].
+double component(const unsigned char* p, int type, bool normalized) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+      int8_t v;
+      std::memcpy(&v, p, 1);
+      return normalized ? std::max(v / 127.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[0] / 255.0 : p[0];
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+      int16_t v;
+      std::memcpy(&v, p, 2);
+      return normalized ? std::max(v / 32767.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+      uint16_t v;
+      std::memcpy(&v, p, 2);
+      return normalized ? v / 65535.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+      uint32_t v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+    default: {
+      float v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+  }
+}
+
+// The bytes of buffer view `index` that hold `count` elements of `elementBytes` from `offset`, `stride`
+// apart (0: packed): checked against the view and the view against its buffer.
+const unsigned char* viewBytes(const Context& c, int index, const std::string& user, size_t offset, size_t count,
+                               size_t elementBytes, size_t* stride) {
+  const auto& views = c.model.bufferViews;
+  if (index < 0 || size_t(index) >= views.size()) c.fail(user, "buffer view " + std::to_string(index) + " does not exist");
+  const tinygltf::BufferView& view = views[size_t(index)];
+  const std::string path = at("bufferViews", size_t(index));
+  if (view.buffer < 0 || size_t(view.buffer) >= c.model.buffers.size())
+    c.fail(path + ".buffer", "buffer " + std::to_string(view.buffer) + " does not exist");
+  const auto& data = c.model.buffers[size_t(view.buffer)].data;
+  if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
+    c.fail(path, "bytes [" + std::to_string(view.byteOffset) + ", " + std::to_string(view.byteOffset) + " + " +
+                     std::to_string(view.byteLength) + ") lie beyond its buffer's " + std::to_string(data.size()));
+  const size_t step = view.byteStride == 0 ? elementBytes : view.byteStride;
+  if (view.byteStride != 0 && (view.byteStride < elementBytes || view.byteStride > 252))
+    c.fail(path + ".byteStride", std::to_string(view.byteStride) + " is not in [" + std::to_string(elementBytes) +
+                                     ", 252] for elements of " + std::to_string(elementBytes) + " bytes");
+  // count <= 2^28 and step <= 252: no overflow in 64 bits.
+  if (offset > view.byteLength || (count - 1) * step + elementBytes > view.byteLength - offset)
+    c.fail(user, std::to_string(count) + " elements of " + std::to_string(elementBytes) + " bytes from byte " +
+                     std::to_string(offset) + " do not fit " + path + " (" + std::to_string(view.byteLength) +
+                     " bytes)");
+  *stride = step;
+  return data.data() + view.byteOffset + offset;
+}
+
+// The elements of accessor `index` (named at `user`), `components` doubles each, of the type
+// expected and one of the component types allowed; sparse substitutions applied.
+std::vector<double> readAccessor(const Context& c, int index, const std::string& user, int expectedType,
+                                 std::initializer_list<int> componentTypes) {
+  const auto& accessors = c.model.accessors;
+  if (index < 0 || size_t(index) >= accessors.size()) c.fail(user, "accessor " + std::to_string(index) + " does not exist");
+  const tinygltf::Accessor& a = accessors[size_t(index)];
+  const std::string path = at("accessors", size_t(index));
+  if (a.type != expectedType) c.fail(path, std::string("is ") + typeName(a.type) + ", expected " + typeName(expectedType));
+  if (std::find(componentTypes.begin(), componentTypes.end(), a.componentType) == componentTypes.end())
+    c.fail(path + ".componentType", std::to_string(a.componentType) + " is not allowed for " + user);
+  if (a.count == 0 || a.count > kMaxAccessorElements)
+    c.fail(path + ".count", std::to_string(a.count) + " is not in [1, 2^28]");
+  const size_t n = size_t(tinygltf::GetNumComponentsInType(uint32_t(a.type)));
+  const size_t bytes = size_t(componentBytes(a.componentType));
+  std::vector<double> out(a.count * n, 0.0);
+  if (a.bufferView >= 0) {
+    size_t stride = 0;
+    const unsigned char* p = viewBytes(c, a.bufferView, path, a.byteOffset, a.count, n * bytes, &stride);
+    for (size_t e = 0; e < a.count; ++e)
+      for (size_t k = 0; k < n; ++k) out[e * n + k] = component(p + e * stride + k * bytes, a.componentType, a.normalized);
+  }
+  if (a.sparse.isSparse) {
+    const std::string sparse = path + ".sparse";
+    if (a.sparse.count < 1 || size_t(a.sparse.count) > a.count)
+      c.fail(sparse + ".count", std::to_string(a.sparse.count) + " is not in [1, " + std::to_string(a.count) + "]");
+    const size_t count = size_t(a.sparse.count);
+    const int indexType = a.sparse.indices.componentType;
+    if (indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        indexType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+      c.fail(sparse + ".indices.componentType", "must be an unsigned integer type");
+    size_t indexStride = 0, valueStride = 0;
+    const unsigned char* indices = viewBytes(c, a.sparse.indices.bufferView, sparse + ".indices",
+                                             size_t(std::max(a.sparse.indices.byteOffset, 0)), count,
+                                             size_t(componentBytes(indexType)), &indexStride);
+    const unsigned char* values = viewBytes(c, a.sparse.values.bufferView, sparse + ".values",
+                                            size_t(std::max(a.sparse.values.byteOffset, 0)), count, n * bytes, &valueStride);
+    double previous = -1;
+    for (size_t s = 0; s < count; ++s) {
+      const double target = component(indices + s * indexStride, indexType, false);
+      if (target <= previous || target >= double(a.count))
+        c.fail(sparse + ".indices", "element " + std::to_string(s) + " (" + std::to_string(size_t(target)) +
+                                        ") is not increasing and below the count " + std::to_string(a.count));
+      previous = target;
+      for (size_t k = 0; k < n; ++k)
+        out[size_t(target) * n + k] = component(values + s * valueStride + k * bytes, a.componentType, a.normalized);
+    }
+  }
+  for (size_t i = 0; i < out.size(); ++i)
+    if (!std::isfinite(out[i])) c.fail(path, "element " + std::to_string(i / n) + " is not finite");
+  return out;
+}
+
+double number(const tinygltf::Value& object, const char* key, double fallback) {
+  if (!object.IsObject() || !object.Has(key)) return fallback;
+  const tinygltf::Value& v = object.Get(key);
+  return v.IsNumber() ? v.GetNumberAsDouble() : v.IsInt() ? double(v.GetNumberAsInt()) : fallback;
+}
+
+const tinygltf::Value* extension(const tinygltf::ExtensionMap& extensions, const char* name) {
+  const auto it = extensions.find(name);
+  return it == extensions.end() ? nullptr : &it->second;
+}
+
+// A glTF material as Lucent renders it: its base colour as a Lambertian diffuse reflectance and its
+// emission; what that leaves out is listed in `ignored`, and what would change the image beyond
+// that (textures, metals) is refused.
+MaterialSpec materialSpec(const Context& c, size_t index, std::vector<std::string>& ignored) {
+  const tinygltf::Material& m = c.model.materials[index];
+  const std::string path = at("materials", index);
+  const std::string named = c.file + ": " + path + (m.name.empty() ? "" : " '" + m.name + "'");
+  const auto& pbr = m.pbrMetallicRoughness;
+  const std::pair<int, const char*> textures[] = {{pbr.baseColorTexture.index, ".pbrMetallicRoughness.baseColorTexture"},
+                                                  {pbr.metallicRoughnessTexture.index, ".pbrMetallicRoughness.metallicRoughnessTexture"},
+                                                  {m.normalTexture.index, ".normalTexture"},
+                                                  {m.occlusionTexture.index, ".occlusionTexture"},
+                                                  {m.emissiveTexture.index, ".emissiveTexture"}};
+  for (const auto& [texture, key] : textures)
+    if (texture >= 0) c.fail(path + key, "textures in glTF files are not read yet");
+  if (!(pbr.metallicFactor >= 0 && pbr.metallicFactor <= 1)) c.fail(path + ".pbrMetallicRoughness.metallicFactor", "must be in [0, 1]");
+  if (pbr.metallicFactor > 0)
+    c.fail(path + ".pbrMetallicRoughness.metallicFactor",
+           "metals (metallicFactor " + std::to_string(pbr.metallicFactor) + ") need glTF's GGX material model, which "
+           "Lucent does not render yet");
+  if (pbr.baseColorFactor.size() != 4) c.fail(path + ".pbrMetallicRoughness.baseColorFactor", "expected 4 numbers");
+  for (const double v : pbr.baseColorFactor)
+    if (!(v >= 0 && v <= 1)) c.fail(path + ".pbrMetallicRoughness.baseColorFactor", "every value must be in [0, 1]");
+  MaterialSpec spec;
+  spec.name = m.name.empty() ? path : m.name;
+  spec.origin = c.file + ": " + path;
+  spec.type = MaterialType::Diffuse;
+  spec.kd = Rgb(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
+  double strength = 1;
+  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_emissive_strength"))
+    strength = number(*e, "emissiveStrength", 1);
+  if (m.emissiveFactor.size() != 3) c.fail(path + ".emissiveFactor", "expected 3 numbers");
+  for (int k = 0; k < 3; ++k) {
+    const double e = m.emissiveFactor[size_t(k)] * strength;
+    if (!(e >= 0) || !std::isfinite(e) || e > 1e15)
+      c.fail(path + ".emissiveFactor", "times the emissive strength must be finite, non-negative and at most 1e15");
+    spec.ke[k] = float(e);
+  }
+  if (m.alphaMode != "OPAQUE")
+    ignored.push_back(named + ": alphaMode " + m.alphaMode + " (the surfaces are opaque; the base colour's alpha is not used)");
+  if (!spec.ke.isBlack() && m.doubleSided)
+    ignored.push_back(named + ": doubleSided emission (its triangles emit from their front faces only)");
+  // Appendix B's dielectric: fresnel_mix of the Lambertian base and a GGX lobe, whose Fresnel term
+  // runs from F0 at normal incidence to F90 at grazing angles (KHR_materials_specular,
+  // KHR_materials_ior). The lobe is left out where F90 > 0.
+  double specular = 1, ior = 1.5, specularColour = 1;
+  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_specular")) {
+    specular = number(*e, "specularFactor", 1);
+    if (e->Has("specularColorFactor") && e->Get("specularColorFactor").IsArray()) {
+      const tinygltf::Value& colour = e->Get("specularColorFactor");
+      specularColour = 0;
+      for (size_t k = 0; k < colour.ArrayLen(); ++k)
+        specularColour = std::max(specularColour, colour.Get(int(k)).IsNumber() ? colour.Get(int(k)).GetNumberAsDouble() : 0.0);
+    }
+    if (e->Has("specularTexture") || e->Has("specularColorTexture")) c.fail(path + ".extensions.KHR_materials_specular", "textures in glTF files are not read yet");
+  }
+  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_ior")) ior = number(*e, "ior", 1.5);
+  if (specular > 0) {
+    const double f0 = std::min(std::pow((ior - 1) / (ior + 1), 2) * specularColour, 1.0) * specular;
+    char lobe[160];
+    std::snprintf(lobe, sizeof lobe, "the dielectric's GGX specular lobe (roughness %.3g, F0 up to %.3g, F90 %.3g)",
+                  pbr.roughnessFactor, f0, specular);
+    ignored.push_back(named + ": " + lobe + ": rendered as Lambertian diffuse with its base colour alone");
+  }
+  return spec;
+}
+
+// Imports one node's mesh, placed by `world`, and its lights; then its children.
+struct NodeWalk {
+  const Context& c;
+  Scene& scene;
+  ObjImport& import;
+  GltfContent& content;
+  std::map<int, uint32_t> materialOf;  // glTF material (-1: the default) -> spec
+  uint64_t skippedPrimitives = 0;      // points and lines
+
+  uint32_t material(int index, const std::string& user) {
+    if (const auto it = materialOf.find(index); it != materialOf.end()) return it->second;
+    MaterialSpec spec;
+    if (index < 0) {
+      // The specification's default material is a white rough metal; refused as metals are.
+      c.fail(user, "has no material, and glTF's default material is a metal, which Lucent does not render yet");
+    }
+    if (size_t(index) >= c.model.materials.size()) c.fail(user, "material " + std::to_string(index) + " does not exist");
+    spec = materialSpec(c, size_t(index), scene.ignored);
+    std::string name = spec.name;
+    if (import.materialIndex.count(name)) name += " (" + c.file + ": " + at("materials", size_t(index)) + ")";
+    spec.name = name;
+    const uint32_t id = uint32_t(import.specs.size());
+    import.materialIndex.emplace(name, id);
+    import.specs.push_back(spec);
+    materialOf.emplace(index, id);
+    return id;
+  }
+
+  void primitive(const tinygltf::Primitive& p, const std::string& path, const Matrix4& world) {
+    const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
+    if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE || mode == TINYGLTF_MODE_LINE_LOOP ||
+        mode == TINYGLTF_MODE_LINE_STRIP) {
+      ++skippedPrimitives;
+      return;
+    }
+    if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN)
+      c.fail(path + ".mode", std::to_string(mode) + " is not a glTF primitive mode");
+    const auto attribute = [&](const char* name) {
+      const auto it = p.attributes.find(name);
+      return it == p.attributes.end() ? -1 : it->second;
+    };
+    if (attribute("POSITION") < 0) c.fail(path + ".attributes", "has no POSITION");
+    const std::vector<double> positions = readAccessor(c, attribute("POSITION"), path + ".attributes.POSITION",
+                                                       TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT});
+    const size_t vertices = positions.size() / 3;
+    std::vector<double> normals, texcoords;
+    if (attribute("NORMAL") >= 0)
+      normals = readAccessor(c, attribute("NORMAL"), path + ".attributes.NORMAL", TINYGLTF_TYPE_VEC3,
+                             {TINYGLTF_COMPONENT_TYPE_FLOAT});
+    if (attribute("TEXCOORD_0") >= 0)
+      texcoords = readAccessor(c, attribute("TEXCOORD_0"), path + ".attributes.TEXCOORD_0", TINYGLTF_TYPE_VEC2,
+                               {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                                TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
+    if ((!normals.empty() && normals.size() / 3 != vertices) || (!texcoords.empty() && texcoords.size() / 2 != vertices))
+      c.fail(path + ".attributes", "its attributes differ in count from POSITION's " + std::to_string(vertices));
+    for (const auto& [name, accessor] : p.attributes)
+      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0")
+        scene.ignored.push_back(c.file + ": " + path + ".attributes." + name + " (not read)");
+    if (!p.targets.empty()) scene.ignored.push_back(c.file + ": " + path + ".targets (morph targets: the base shape is rendered)");
+
+    std::vector<uint32_t> index;
+    if (p.indices >= 0) {
+      const std::vector<double> read = readAccessor(c, p.indices, path + ".indices", TINYGLTF_TYPE_SCALAR,
+                                                    {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                                                     TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
+      index.reserve(read.size());
+      for (size_t i = 0; i < read.size(); ++i) {
+        if (read[i] >= double(vertices))
+          c.fail(path + ".indices", "element " + std::to_string(i) + " (" + std::to_string(uint64_t(read[i])) +
+                                        ") is not below the vertex count " + std::to_string(vertices));
+        index.push_back(uint32_t(read[i]));
+      }
+    } else {
+      for (size_t i = 0; i < vertices; ++i) index.push_back(uint32_t(i));
+    }
+    // The triangles' corners, counter-clockwise as the specification orders strips and fans.
+    std::vector<uint32_t> corners;
+    if (mode == TINYGLTF_MODE_TRIANGLES) {
+      corners.assign(index.begin(), index.end() - ptrdiff_t(index.size() % 3));
+    } else {
+      for (size_t i = 0; i + 2 < index.size(); ++i) {
+        if (mode == TINYGLTF_MODE_TRIANGLE_STRIP)
+          corners.insert(corners.end(), {index[i], index[i + 1 + i % 2], index[i + 2 - i % 2]});
+        else
+          corners.insert(corners.end(), {index[i + 1], index[i + 2], index[0]});
+      }
+    }
+
+    const uint32_t materialId = material(p.material, path + ".material");
+    const bool mirrored = world.determinant3() < 0;  // the winding turns over
+    const std::array<double, 9> normalMatrix = world.normalMatrix();
+    const uint32_t first = uint32_t(scene.positions.size());
+    for (size_t v = 0; v < vertices; ++v) {
+      const std::array<double, 3> p3 = world.point(&positions[3 * v]);
+      for (const double x : p3)
+        if (!(std::abs(x) <= kMaxInputMagnitude))
+          c.fail(path + ".attributes.POSITION", "vertex " + std::to_string(v) + " lies beyond 1e15 once placed by its node");
+      scene.positions.push_back({float(p3[0]), float(p3[1]), float(p3[2])});
+      Vec3 n{0, 0, 0};
+      if (!normals.empty()) {
+        const double* a = &normals[3 * v];
+        const double x = normalMatrix[0] * a[0] + normalMatrix[1] * a[1] + normalMatrix[2] * a[2];
+        const double y = normalMatrix[3] * a[0] + normalMatrix[4] * a[1] + normalMatrix[5] * a[2];
+        const double z = normalMatrix[6] * a[0] + normalMatrix[7] * a[1] + normalMatrix[8] * a[2];
+        const double len = std::sqrt(x * x + y * y + z * z) * (mirrored ? -1 : 1);
+        if (len != 0 && std::isfinite(len)) n = {float(x / len), float(y / len), float(z / len)};
+      }
+      scene.normals.push_back(n);
+      // glTF's texture coordinates start at the image's top left; Lucent's v runs up.
+      scene.texcoords.push_back(texcoords.empty() ? Vec2{0, 0} : Vec2{float(texcoords[2 * v]), float(1 - texcoords[2 * v + 1])});
+    }
+    for (size_t t = 0; t + 2 < corners.size(); t += 3) {
+      uint32_t a = first + corners[t], b = first + corners[t + 1], d = first + corners[t + 2];
+      if (mirrored) std::swap(b, d);
+      const Vec3 p0 = scene.positions[a];
+      if (!(length(cross(scene.positions[b] - p0, scene.positions[d] - p0)) > 0)) {
+        ++scene.droppedDegenerateTriangles;
+        continue;
+      }
+      scene.indices.insert(scene.indices.end(), {a, b, d});
+      scene.materialIds.push_back(materialId);
+    }
+  }
+
+  void light(int index, const std::string& path, const Matrix4& world) {
+    const auto& lights = c.model.lights;
+    if (index < 0 || size_t(index) >= lights.size()) c.fail(path, "light " + std::to_string(index) + " does not exist");
+    const tinygltf::Light& l = lights[size_t(index)];
+    const std::string lightPath = "extensions.KHR_lights_punctual.lights[" + std::to_string(index) + "]";
+    Rgb colour(1.0f);
+    if (!l.color.empty()) {
+      if (l.color.size() != 3) c.fail(lightPath + ".color", "expected 3 numbers");
+      for (int k = 0; k < 3; ++k) {
+        if (!(l.color[size_t(k)] >= 0 && l.color[size_t(k)] <= 1)) c.fail(lightPath + ".color", "every value must be in [0, 1]");
+        colour[k] = float(l.color[size_t(k)]);
+      }
+    }
+    if (!(l.intensity >= 0 && l.intensity <= 1e15)) c.fail(lightPath + ".intensity", "must be in [0, 1e15]");
+    const Rgb value = colour * float(l.intensity / kLumensPerWatt);
+    if (l.range > 0) scene.ignored.push_back(c.file + ": " + lightPath + ".range (the light reaches every distance)");
+    Light light;
+    light.value = value;
+    if (l.type == "directional") {
+      const double down[3] = {0, 0, -1};
+      const std::array<double, 3> d = world.direction(down);
+      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      if (!(len > 0) || !std::isfinite(len)) c.fail(path, "places the directional light with a degenerate transform");
+      light.type = LightType::Directional;
+      light.vector = {float(d[0] / len), float(d[1] / len), float(d[2] / len)};
+    } else if (l.type == "point") {
+      const double origin[3] = {0, 0, 0};
+      const std::array<double, 3> p = world.point(origin);
+      light.type = LightType::Point;
+      light.vector = {float(p[0]), float(p[1]), float(p[2])};
+    } else if (l.type == "spot") {
+      c.fail(lightPath, "spot lights are not rendered yet");
+    } else {
+      c.fail(lightPath + ".type", "'" + l.type + "' is not directional, point or spot");
+    }
+    if (!value.isBlack()) scene.lights.push_back(light);
+  }
+
+  void camera(int index, const std::string& path, const Matrix4& world) {
+    if (content.camera) return;  // the first in the walk
+    if (size_t(index) >= c.model.cameras.size()) c.fail(path + ".camera", "camera " + std::to_string(index) + " does not exist");
+    const tinygltf::Camera& cam = c.model.cameras[size_t(index)];
+    const std::string camPath = at("cameras", size_t(index));
+    if (cam.type != "perspective") c.fail(camPath + ".type", "'" + cam.type + "': only perspective cameras are rendered");
+    const double yfov = cam.perspective.yfov;
+    if (!(yfov > 0 && yfov < kPi)) c.fail(camPath + ".perspective.yfov", "must be in (0, pi)");
+    const double origin[3] = {0, 0, 0}, forward[3] = {0, 0, -1}, up[3] = {0, 1, 0};
+    const std::array<double, 3> eye = world.point(origin), f = world.direction(forward), u = world.direction(up);
+    Camera camera;
+    camera.eye = {float(eye[0]), float(eye[1]), float(eye[2])};
+    camera.lookAt = camera.eye + normalize(Vec3{float(f[0]), float(f[1]), float(f[2])});
+    camera.up = normalize(Vec3{float(u[0]), float(u[1]), float(u[2])});
+    camera.fovY = float(yfov * 180.0 / kPi);
+    const double aspect = cam.perspective.aspectRatio > 0 ? cam.perspective.aspectRatio : 1.0;
+    if (!(aspect >= 1.0 / 64 && aspect <= 64)) c.fail(camPath + ".perspective.aspectRatio", "must be in [1/64, 64]");
+    camera.width = 512;
+    camera.height = std::max(1, int(std::lround(512 / aspect)));
+    content.camera = camera;
+  }
+
+  void node(int index, const Matrix4& parent, int depth, std::vector<bool>& onPath) {
+    const auto& nodes = c.model.nodes;
+    if (index < 0 || size_t(index) >= nodes.size()) c.fail("nodes", "node " + std::to_string(index) + " does not exist");
+    if (onPath[size_t(index)] || depth > kMaxNodeDepth)
+      c.fail(at("nodes", size_t(index)), "its children lead back to it, or the hierarchy is deeper than 1024");
+    onPath[size_t(index)] = true;
+    const tinygltf::Node& n = nodes[size_t(index)];
+    const std::string path = at("nodes", size_t(index));
+    const Matrix4 world = parent * nodeMatrix(c, n, path);
+    if (n.mesh >= 0) {
+      if (size_t(n.mesh) >= c.model.meshes.size()) c.fail(path + ".mesh", "mesh " + std::to_string(n.mesh) + " does not exist");
+      const tinygltf::Mesh& mesh = c.model.meshes[size_t(n.mesh)];
+      for (size_t k = 0; k < mesh.primitives.size(); ++k)
+        primitive(mesh.primitives[k], at("meshes", size_t(n.mesh)) + "." + at("primitives", k), world);
+    }
+    if (n.skin >= 0) scene.ignored.push_back(c.file + ": " + path + ".skin (the bind pose is rendered)");
+    if (n.camera >= 0) camera(n.camera, path, world);
+    if (const tinygltf::Value* e = extension(n.extensions, "KHR_lights_punctual"))
+      light(int(number(*e, "light", -1)), path + ".extensions.KHR_lights_punctual.light", world);
+    for (const int child : n.children) node(child, world, depth + 1, onPath);
+    onPath[size_t(index)] = false;
+  }
+};
+
+// The files TinyGLTF reads (the .gltf or .glb, and external buffers): regular files only, of at most
+// kMaxFileBytes, read whole; paths taken as they are written (no expansion); nothing written.
+constexpr uint64_t kMaxFileBytes = uint64_t(1) << 32;
+bool regularFileExists(const std::string& path, void*) { return regularFileProblem(path).empty(); }
+std::string pathAsWritten(const std::string& path, void*) { return path; }
+bool readRegularFile(std::vector<unsigned char>* out, std::string* error, const std::string& path, void*) {
+  const std::string problem = regularFileProblem(path);
+  std::error_code ec;
+  const uint64_t size = problem.empty() ? uint64_t(fs::file_size(path, ec)) : 0;
+  if (!problem.empty() || ec || size > kMaxFileBytes) {
+    if (error) *error += path + (problem.empty() ? " is larger than 4 GiB" : " " + problem) + "\n";
+    return false;
+  }
+  std::ifstream in(path, std::ios::binary);
+  out->resize(size_t(size));
+  if (!in.read(reinterpret_cast<char*>(out->data()), std::streamsize(size))) {
+    if (error) *error += path + ": cannot be read\n";
+    return false;
+  }
+  return true;
+}
+bool writeNothing(std::string* error, const std::string&, const std::vector<unsigned char>&, void*) {
+  if (error) *error += "writing is not allowed\n";
+  return false;
+}
+
+// Images are not decoded while the file is read: textures are refused before any would be used.
+bool keepImageUndecoded(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+  return true;
+}
+
+}  // namespace
+
+void importGltf(const std::string& path, Scene& scene, ObjImport& import, GltfContent& content) {
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(keepImageUndecoded, nullptr);
+  loader.SetFsCallbacks({regularFileExists, pathAsWritten, readRegularFile, writeNothing, nullptr});
+  tinygltf::Model model;
+  std::string error, warning;
+  const bool binary = fs::path(path).extension() == ".glb";
+  const bool read = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
+                           : loader.LoadASCIIFromFile(&model, &error, &warning, path);
+  if (!read) {
+    std::string first = error.substr(0, error.find('\n'));
+    if (first.size() > 200) first = first.substr(0, 200) + "...";
+    throw SceneError(path + ": not a readable glTF file: " + (first.empty() ? "unknown error" : first));
+  }
+  const Context c{model, path};
+  for (const std::string& name : model.extensionsRequired)
+    if (!kSupportedExtensions.count(name) || name == "KHR_materials_specular" || name == "KHR_materials_ior")
+      c.fail("extensionsRequired", "names " + name + ", which Lucent does not render");
+  for (const std::string& name : model.extensionsUsed)
+    if (!kSupportedExtensions.count(name)) scene.ignored.push_back(path + ": extension " + name + " (not read)");
+  for (size_t i = 0; i < model.buffers.size(); ++i)
+    if (!model.buffers[i].uri.empty() && model.buffers[i].uri.rfind("data:", 0) != 0)
+      scene.inputFiles.push_back((fs::path(path).parent_path() / model.buffers[i].uri).string());
+
+  if (model.scenes.empty()) c.fail("scenes", "the file has no scene");
+  const size_t sceneIndex = model.defaultScene >= 0 ? size_t(model.defaultScene) : 0;
+  if (sceneIndex >= model.scenes.size()) c.fail("scene", "scene " + std::to_string(sceneIndex) + " does not exist");
+  NodeWalk walk{c, scene, import, content, {}, 0};
+  std::vector<bool> onPath(model.nodes.size(), false);
+  for (const int root : model.scenes[sceneIndex].nodes) walk.node(root, Matrix4{}, 0, onPath);
+  if (walk.skippedPrimitives > 0)
+    scene.ignored.push_back(path + ": " + std::to_string(walk.skippedPrimitives) + " point and line primitives");
+}
+
+}  // namespace lucent::detail
