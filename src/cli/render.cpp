@@ -42,7 +42,7 @@ struct RenderArgs {
   double checkpointSeconds = 0;
   bool resume = false;
   uint64_t memoryLimit = 0;  // 0: the available memory
-  bool quiet = false, robust = false, help = false, logStages = false;
+  bool quiet = false, robust = false, help = false, logStages = false, strict = false;
   OptionValues methodOptions;  // as given, in order
 };
 
@@ -171,6 +171,9 @@ const OptionTable<RenderArgs>& renderFlags() {
            "run as a CPU of sse4.2, avx, avx2 or avx512 would: Embree's kernels and the lane loops (none: this "
            "CPU's best)");
     t.placeholder("isa", "ISA");
+    t.flag("strict", &A::strict,
+           "refuse a scene whose files hold what the render would leave out (a glTF material's specular lobe: "
+           "the JSON line's \"ignored\")");
     t.flag("quiet", &A::quiet, "no progress bar or warnings");
     t.shortFlag("quiet", "-q");
     t.flag("log_stages", &A::logStages, "print each stage's name on stderr as it starts, with the seconds since the start");
@@ -295,6 +298,11 @@ int runRender(const RenderArgs& a) {
     setMemoryLimit(a.memoryLimit);  // the scene's images are checked against it too
     scene = loadScene(a.scene, {a.quiet});
     stats.addStage("load_scene", loadClock.seconds());
+    if (a.strict && !scene.ignored.empty()) {
+      std::string list;
+      for (const std::string& left : scene.ignored) list += "\n  " + left;
+      throw std::invalid_argument("--strict: the render would leave out what the scene's files hold:" + list);
+    }
     if (!a.help) {
       checkOutputFile(a.output, ".exr", "-o", scene.inputFiles);
       if (!a.png.empty()) checkOutputFile(a.png, ".png", "--png", scene.inputFiles);

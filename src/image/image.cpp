@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -268,64 +269,78 @@ std::string lowercase(std::string text) {
 // The formats Lucent reads, by extension (docs/scene-format.md, map_Kd).
 constexpr std::string_view kReadableExtensions[] = {".exr", ".hdr", ".png", ".jpg", ".jpeg", ".tif", ".tiff"};
 
-// The opened file, its header checked (see readImageHeader).
-std::unique_ptr<OIIO::ImageInput> openChecked(const std::string& path) {
-  // A device or pipe (/dev/zero) would be read for ever.
-  const std::string problem = regularFileProblem(path);
-  if (problem == "not found") throw std::runtime_error("image file not found: '" + path + "'");
-  if (!problem.empty()) throw std::runtime_error("cannot read image '" + path + "': " + problem);
-  {
-    std::ifstream file(path, std::ios::binary);
-    char magic[4] = {};
-    file.read(magic, 4);
-    std::error_code ec;
-    const uint64_t fileBytes = std::filesystem::file_size(path, ec);
-    if (file && std::memcmp(magic, "\x76\x2f\x31\x01", 4) == 0) {
-      const std::string why = exrHeaderProblem(file, ec ? 0 : fileBytes);
-      if (!why.empty()) throw std::runtime_error("cannot read image '" + path + "': a damaged EXR header: " + why);
-    }
-  }
+// An opened image: its reader, and the bytes it reads where they are in memory.
+struct OpenedImage {
+  std::unique_ptr<OIIO::Filesystem::IOMemReader> memory;
+  std::unique_ptr<OIIO::ImageInput> in;
+};
+
+// The reader of `extension` (".png"...) opened on `name`, read from `memory` where given, its header
+// checked against `sourceBytes`, what the file or memory holds.
+OpenedImage openWithReader(const std::string& name, const std::string& extension, uint64_t sourceBytes,
+                           std::unique_ptr<OIIO::Filesystem::IOMemReader> memory) {
   // The reader of the file's extension, and only that one: OpenImageIO's open() tries every reader
   // it has on a file its own does not take, and some abort the process on a crafted file (its RLA
   // reader asserts on a channel type; found by fuzzing).
-  const std::string extension = lowercase(std::filesystem::path(path).extension().string());
   if (std::find(std::begin(kReadableExtensions), std::end(kReadableExtensions), extension) ==
       std::end(kReadableExtensions))
-    throw std::runtime_error("cannot read image '" + path +
+    throw std::runtime_error("cannot read image '" + name +
                              "': not a format Lucent reads (.exr, .hdr, .png, .jpg or .jpeg, .tif or .tiff)");
   // Created by the format's name: given the path, create() also tries every other reader when the
   // file is not valid for its own.
-  auto in = OIIO::ImageInput::create(extension.substr(1), false);
-  OIIO::ImageSpec opened;
-  if (!in || !in->open(path, opened))
-    throw std::runtime_error("cannot read image '" + path + "': " + (in ? in->geterror() : OIIO::geterror()));
+  OpenedImage opened{std::move(memory), OIIO::ImageInput::create(extension.substr(1), false)};
+  auto& in = opened.in;
+  OIIO::ImageSpec header;
+  if (in && opened.memory && !in->set_ioproxy(opened.memory.get()))
+    throw std::runtime_error("cannot read image '" + name + "': its reader cannot read from memory");
+  if (!in || !in->open(name, header))
+    throw std::runtime_error("cannot read image '" + name + "': " + (in ? in->geterror() : OIIO::geterror()));
   const OIIO::ImageSpec& spec = in->spec();
   // The header's size is checked before any pixel is allocated (a 69-byte PNG may claim 20,000 x
   // 20,000).
   if (spec.width < 1 || spec.height < 1 || spec.nchannels < 1 || spec.nchannels > 1024 ||
       uint64_t(spec.width) * uint64_t(spec.height) > kMaxImagePixels)
-    throw std::runtime_error("cannot read image '" + path + "': its header claims " + std::to_string(spec.width) + " x " +
+    throw std::runtime_error("cannot read image '" + name + "': its header claims " + std::to_string(spec.width) + " x " +
                              std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
                              " channels (at most 2^26 pixels and 1,024 channels)");
   if (spec.depth > 1)
-    throw std::runtime_error("cannot read image '" + path + "': a volume of " + std::to_string(spec.depth) +
+    throw std::runtime_error("cannot read image '" + name + "': a volume of " + std::to_string(spec.depth) +
                              " slices, not an image");
-  // And against the file's size: a 4.6 KB EXR claiming 8192 x 8192 pixels of 10 float channels
+  // And against the source's size: a 4.6 KB EXR claiming 8192 x 8192 pixels of 10 float channels
   // would have 2.7 GB allocated and filled before its missing data failed the read.
   uint64_t pixelBytes = 0;
   for (int c = 0; c < spec.nchannels; ++c) pixelBytes += spec.channelformat(c).size();
   const uint64_t stored = uint64_t(spec.width) * uint64_t(spec.height) * pixelBytes;
-  std::error_code ec;
-  const uint64_t fileBytes = std::filesystem::file_size(path, ec);
   const std::string compression = spec.get_string_attribute("compression", "");
-  const uint64_t most = compression == "none" ? fileBytes : fileBytes * kMostDecodedPerByte;
-  if (!ec && stored > most)
-    throw std::runtime_error("cannot read image '" + path + "': its header claims " + std::to_string(spec.width) +
+  const uint64_t most = compression == "none" ? sourceBytes : sourceBytes * kMostDecodedPerByte;
+  if (stored > most)
+    throw std::runtime_error("cannot read image '" + name + "': its header claims " + std::to_string(spec.width) +
                              " x " + std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
                              " channels (" + std::to_string(stored) + " bytes), more than its " +
-                             std::to_string(fileBytes) + " bytes can hold" +
+                             std::to_string(sourceBytes) + " bytes can hold" +
                              (compression.empty() ? "" : " compressed as " + compression));
-  return in;
+  return opened;
+}
+
+// The opened file, its header checked (see readImageHeader).
+OpenedImage openChecked(const std::string& path) {
+  // A device or pipe (/dev/zero) would be read for ever.
+  const std::string problem = regularFileProblem(path);
+  if (problem == "not found") throw std::runtime_error("image file not found: '" + path + "'");
+  if (!problem.empty()) throw std::runtime_error("cannot read image '" + path + "': " + problem);
+  std::error_code ec;
+  const uint64_t fileBytes = std::filesystem::file_size(path, ec);
+  {
+    std::ifstream file(path, std::ios::binary);
+    char magic[4] = {};
+    file.read(magic, 4);
+    if (file && std::memcmp(magic, "\x76\x2f\x31\x01", 4) == 0) {
+      const std::string why = exrHeaderProblem(file, ec ? 0 : fileBytes);
+      if (!why.empty()) throw std::runtime_error("cannot read image '" + path + "': a damaged EXR header: " + why);
+    }
+  }
+  return openWithReader(path, lowercase(std::filesystem::path(path).extension().string()),
+                        ec ? std::numeric_limits<uint64_t>::max() / kMostDecodedPerByte : fileBytes, nullptr);
 }
 
 std::vector<std::string> channelNames(const OIIO::ImageSpec& spec) {
@@ -338,25 +353,28 @@ std::vector<std::string> channelNames(const OIIO::ImageSpec& spec) {
 }  // namespace
 
 ImageHeader readImageHeader(const std::string& path) {
-  const auto in = openChecked(path);
+  const OpenedImage opened = openChecked(path);
+  const auto& in = opened.in;
   const OIIO::ImageSpec& spec = in->spec();
   ImageHeader header{spec.width, spec.height, channelNames(spec)};
   in->close();
   return header;
 }
 
-Image readImage(const std::string& path, ImageMetadata* metadata) {
-  auto in = openChecked(path);
+namespace {
+
+Image readOpened(OpenedImage opened, const std::string& name, ImageMetadata* metadata) {
+  auto& in = opened.in;
   const OIIO::ImageSpec& spec = in->spec();
   // The pixels as floats, and OpenImageIO's scanlines, which it decodes up to 256 at a time in
   // their stored format (up to 8 bytes a channel): for a Radiance header claiming 19,854,521 x 2
   // pixels it asked for 61 GB (found by fuzzing).
   const uint64_t floats = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels);
   requireMemory(floats * sizeof(float) + 256 * uint64_t(spec.width) * uint64_t(spec.nchannels) * 8,
-                "the image '" + path + "'", "raise --memory-limit if the machine has the memory");
+                "the image '" + name + "'", "raise --memory-limit if the machine has the memory");
   Image image(spec.width, spec.height, channelNames(spec));
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels().data()))
-    throw std::runtime_error("cannot read image '" + path + "': " + in->geterror());
+    throw std::runtime_error("cannot read image '" + name + "': " + in->geterror());
   if (metadata) {
     metadata->clear();
     for (const OIIO::ParamValue& p : spec.extra_attribs)
@@ -365,6 +383,18 @@ Image readImage(const std::string& path, ImageMetadata* metadata) {
   }
   in->close();
   return image;
+}
+
+}  // namespace
+
+Image readImage(const std::string& path, ImageMetadata* metadata) { return readOpened(openChecked(path), path, metadata); }
+
+Image readImageFromMemory(const std::string& name, const std::string& extension, std::span<const unsigned char> bytes,
+                          ImageMetadata* metadata) {
+  if (extension != ".png" && extension != ".jpg")
+    throw std::runtime_error("cannot read image '" + name + "': only PNG and JPEG are read from memory");
+  auto memory = std::make_unique<OIIO::Filesystem::IOMemReader>(bytes.data(), bytes.size());
+  return readOpened(openWithReader(name, extension, bytes.size(), std::move(memory)), name, metadata);
 }
 
 bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata) {

@@ -255,6 +255,50 @@ const tinygltf::Value* extension(const tinygltf::ExtensionMap& extensions, const
   return it == extensions.end() ? nullptr : &it->second;
 }
 
+// The base colour texture: its image's bytes (a buffer view, checked, or what TinyGLTF read from a
+// URI) for the loader to decode as an sRGB texture multiplying the base colour factor.
+void baseColourTexture(const Context& c, const tinygltf::TextureInfo& info, const std::string& path,
+                       const std::string& named, MaterialSpec& spec, std::vector<std::string>& ignored) {
+  if (info.texCoord != 0) c.fail(path + ".texCoord", "TEXCOORD_" + std::to_string(info.texCoord) + " is not read yet");
+  if (info.extensions.count("KHR_texture_transform"))
+    ignored.push_back(named + ": KHR_texture_transform of its base colour texture (the coordinates are used as they are)");
+  if (info.index < 0 || size_t(info.index) >= c.model.textures.size())
+    c.fail(path + ".index", "texture " + std::to_string(info.index) + " does not exist");
+  const tinygltf::Texture& texture = c.model.textures[size_t(info.index)];
+  const std::string texturePath = at("textures", size_t(info.index));
+  if (texture.sampler >= 0) {
+    if (size_t(texture.sampler) >= c.model.samplers.size())
+      c.fail(texturePath + ".sampler", "sampler " + std::to_string(texture.sampler) + " does not exist");
+    const tinygltf::Sampler& sampler = c.model.samplers[size_t(texture.sampler)];
+    if (sampler.wrapS != TINYGLTF_TEXTURE_WRAP_REPEAT || sampler.wrapT != TINYGLTF_TEXTURE_WRAP_REPEAT)
+      ignored.push_back(named + ": the base colour texture's clamped or mirrored wrapping (it repeats)");
+    if (sampler.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST)
+      ignored.push_back(named + ": the base colour texture's nearest filtering (it is filtered bilinearly)");
+  }
+  if (texture.source < 0 || size_t(texture.source) >= c.model.images.size())
+    c.fail(texturePath + ".source", "image " + std::to_string(texture.source) + " does not exist");
+  const tinygltf::Image& image = c.model.images[size_t(texture.source)];
+  const std::string imagePath = at("images", size_t(texture.source));
+  std::vector<unsigned char> bytes;
+  if (image.bufferView >= 0) {
+    const auto& views = c.model.bufferViews;
+    const size_t length = size_t(image.bufferView) < views.size() ? views[size_t(image.bufferView)].byteLength : 0;
+    if (length == 0) c.fail(imagePath + ".bufferView", "is missing or empty");
+    size_t stride = 0;
+    const unsigned char* p = viewBytes(c, image.bufferView, imagePath, 0, 1, length, &stride);
+    bytes.assign(p, p + length);
+  } else {
+    bytes = image.image;  // as read from its URI (keepImageBytes)
+    if (bytes.empty()) c.fail(imagePath + ".uri", "the image could not be read");
+  }
+  const bool png = bytes.size() >= 8 && std::memcmp(bytes.data(), "\x89PNG\r\n\x1a\n", 8) == 0;
+  const bool jpeg = bytes.size() >= 3 && bytes[0] == 0xff && bytes[1] == 0xd8 && bytes[2] == 0xff;
+  if (!png && !jpeg) c.fail(imagePath, "is neither a PNG nor a JPEG image");
+  spec.mapKd = c.file + "#" + imagePath + (png ? ".png" : ".jpg");
+  spec.mapKdBytes = std::move(bytes);
+  spec.mapKdOrigin = c.file + ": " + path;
+}
+
 // A glTF material as Lucent renders it: its base colour as a Lambertian diffuse reflectance and its
 // emission; what that leaves out is listed in `ignored`, and what would change the image beyond
 // that (textures, metals) is refused.
@@ -263,13 +307,14 @@ MaterialSpec materialSpec(const Context& c, size_t index, std::vector<std::strin
   const std::string path = at("materials", index);
   const std::string named = c.file + ": " + path + (m.name.empty() ? "" : " '" + m.name + "'");
   const auto& pbr = m.pbrMetallicRoughness;
-  const std::pair<int, const char*> textures[] = {{pbr.baseColorTexture.index, ".pbrMetallicRoughness.baseColorTexture"},
-                                                  {pbr.metallicRoughnessTexture.index, ".pbrMetallicRoughness.metallicRoughnessTexture"},
-                                                  {m.normalTexture.index, ".normalTexture"},
-                                                  {m.occlusionTexture.index, ".occlusionTexture"},
-                                                  {m.emissiveTexture.index, ".emissiveTexture"}};
-  for (const auto& [texture, key] : textures)
-    if (texture >= 0) c.fail(path + key, "textures in glTF files are not read yet");
+  if (m.emissiveTexture.index >= 0) c.fail(path + ".emissiveTexture", "emissive textures are not read yet");
+  if (m.normalTexture.index >= 0)
+    ignored.push_back(named + ": normalTexture (shading uses the interpolated vertex normals)");
+  if (m.occlusionTexture.index >= 0)
+    ignored.push_back(named + ": occlusionTexture (a rasterizer's stand-in for the occlusion light transport computes)");
+  if (pbr.metallicRoughnessTexture.index >= 0)
+    ignored.push_back(named + ": metallicRoughnessTexture (the roughness of the specular lobe, itself left out; "
+                      "metallicFactor 0 makes every texel a dielectric)");
   if (!(pbr.metallicFactor >= 0 && pbr.metallicFactor <= 1)) c.fail(path + ".pbrMetallicRoughness.metallicFactor", "must be in [0, 1]");
   if (pbr.metallicFactor > 0)
     c.fail(path + ".pbrMetallicRoughness.metallicFactor",
@@ -283,6 +328,7 @@ MaterialSpec materialSpec(const Context& c, size_t index, std::vector<std::strin
   spec.origin = c.file + ": " + path;
   spec.type = MaterialType::Diffuse;
   spec.kd = Rgb(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
+  if (pbr.baseColorTexture.index >= 0) baseColourTexture(c, pbr.baseColorTexture, path + ".pbrMetallicRoughness.baseColorTexture", named, spec, ignored);
   double strength = 1;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_emissive_strength"))
     strength = number(*e, "emissiveStrength", 1);
@@ -556,8 +602,12 @@ bool writeNothing(std::string* error, const std::string&, const std::vector<unsi
   return false;
 }
 
-// Images are not decoded while the file is read: textures are refused before any would be used.
-bool keepImageUndecoded(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+// Images are not decoded while the file is read: an image named by a URI keeps its file's bytes, for
+// the loader's own image reader; one in a buffer view is read from the view once it is checked
+// (TinyGLTF hands such images over without checking the view against its buffer).
+bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int, const unsigned char* bytes,
+                    int size, void*) {
+  if (image->bufferView < 0 && bytes && size > 0) image->image.assign(bytes, bytes + size);
   return true;
 }
 
@@ -565,7 +615,7 @@ bool keepImageUndecoded(tinygltf::Image*, const int, std::string*, std::string*,
 
 void importGltf(const std::string& path, Scene& scene, ObjImport& import, GltfContent& content) {
   tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(keepImageUndecoded, nullptr);
+  loader.SetImageLoader(keepImageBytes, nullptr);
   loader.SetFsCallbacks({regularFileExists, pathAsWritten, readRegularFile, writeNothing, nullptr});
   tinygltf::Model model;
   std::string error, warning;

@@ -3,6 +3,7 @@
 #include <cfloat>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <iterator>
 #include <set>
@@ -25,13 +26,15 @@ namespace {
 // Reads an RGB (or grey) image into texels, convert(channel values as stored, sRGB-encoded or not)
 // giving each; row 0 is the top row.
 // Negative values are refused unless allowNegative (the caller checks them).
+// `read` reads the image named `path` (a file, or an image held in memory named as one).
 template <class Convert>
 auto readImageTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h, Convert convert,
-                     bool allowNegative = false) {
+                     bool allowNegative = false,
+                     const std::function<Image(ImageMetadata*)>& read = {}) {
   Image image;
   ImageMetadata metadata;
   try {
-    image = readImage(path, &metadata);
+    image = read ? read(&metadata) : readImage(path, &metadata);
   } catch (const std::exception& e) {
     throw SceneError(context + ": " + e.what());  // the message names the image
   }
@@ -92,7 +95,8 @@ std::vector<Rgb> readTexels(const std::string& path, const std::string& context,
 // sRGB file's values are its codes over 255 (to a rounding of the reader's) and are kept as they
 // are, which decoding to linear and encoding back would give too; other values are converted to
 // linear, clamped to [0, 1] (reflectance) and encoded.
-std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h) {
+std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h,
+                                      const std::function<Image(ImageMetadata*)>& read = {}) {
   return readImageTexels(path, context, w, h, [](const float* stored, bool srgb) {
     uint32_t packed = 0xffu << 24;
     for (int k = 0; k < 3; ++k) {
@@ -108,7 +112,7 @@ std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string
       packed |= byte << (8 * k);
     }
     return packed;
-  });
+  }, false, read);
 }
 
 std::string resolve(const fs::path& base, const std::string& relative) {
@@ -311,11 +315,15 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
   for (const auto& spec : import.specs) {
     Material m = detail::classifyMaterial(spec);
     if (!spec.mapKd.empty()) {
-      scene.inputFiles.push_back(spec.mapKd);
+      const bool embedded = !spec.mapKdBytes.empty();
+      if (!embedded) scene.inputFiles.push_back(spec.mapKd);
       Texture tex;
       tex.offset = static_cast<uint32_t>(scene.texels.size());
-      const auto texels = readSrgb8Texels(spec.mapKd, spec.mapKdOrigin + ": material '" + spec.name + "' map_Kd",
-                                          tex.width, tex.height);
+      const auto texels = readSrgb8Texels(
+          spec.mapKd, spec.mapKdOrigin + ": material '" + spec.name + "' " + (embedded ? "base colour texture" : "map_Kd"),
+          tex.width, tex.height, embedded ? std::function<Image(ImageMetadata*)>([&](ImageMetadata* metadata) {
+            return readImageFromMemory(spec.mapKd, fs::path(spec.mapKd).extension().string(), spec.mapKdBytes, metadata);
+          }) : std::function<Image(ImageMetadata*)>());
       scene.texels.insert(scene.texels.end(), texels.begin(), texels.end());
       m.kdTexture = static_cast<int32_t>(scene.textures.size());
       scene.textures.push_back(tex);

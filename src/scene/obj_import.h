@@ -16,7 +16,8 @@ struct MaterialSpec {
   Rgb kd{0.0f}, ks{0.0f}, ke{0.0f}, tf{0.0f};
   float ns = 1.0f, ni = 1.0f;
   int illum = 0;
-  std::string mapKd;                 // absolute path, empty for none
+  std::string mapKd;                 // absolute path, empty for none; for mapKdBytes, a name ending .png or .jpg
+  std::vector<unsigned char> mapKdBytes;  // the texture's file held in memory (a glTF file's image), or none
   std::string mapKdOrigin;           // "file:line" (or the scene's key) that names it
   std::optional<MaterialType> type;  // set by the scene file's "type"
   std::string origin;                // "file:line" of its definition, for error messages

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lucent/image/image.h"
+#include "lucent/scene/texture.h"
 #include "lucent/scene/loader.h"
 #include "test_support.h"
 
@@ -266,7 +267,12 @@ TEST_CASE("Broken glTF files are refused with the file and the JSON path of what
   f["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
   f["textures"] = {{{"source", 0}}};
   f["images"] = {{{"uri", "missing.png"}}};
-  refused(f, "textures in glTF files are not read yet");
+  refused(f, "images[0].uri: the image could not be read");
+  f["images"] = {{{"uri", "data:image/png;base64," + base64({'n', 'o', 't', ' ', 'a', 'n', ' ', 'i', 'm', 'a', 'g', 'e'})}}};
+  refused(f, "images[0]: is neither a PNG nor a JPEG image");
+  f = good;
+  f["materials"][0]["emissiveTexture"] = {{"index", 0}};
+  refused(f, "materials[0].emissiveTexture: emissive textures are not read yet");
   // A NaN position (written as the bytes of a NaN: JSON has no NaN).
   f = good;
   std::string uri = f["buffers"][0]["uri"];
@@ -320,4 +326,51 @@ TEST_CASE("lucent render renders a glTF file from its camera and says what it le
   const test::CliRun plain = test::runLucent(std::string("render ") + LUCENT_SOURCE_DIR "/scenes/cornell-box.json --spp 1 --resolution 16x16 -q -o " + exr);
   REQUIRE(plain.status == 0);
   CHECK(plain.output.find("\"ignored\"") == std::string::npos);
+}
+
+TEST_CASE("lucent render --strict refuses a scene whose files hold what the render leaves out", "[gltf][cli]") {
+  const test::TempDir dir;
+  const std::string exr = dir / "box.exr";
+  const test::CliRun r = test::runLucent(std::string("render ") + LUCENT_SOURCE_DIR
+                                         "/scenes/gltf/cornell-box.glb --strict --spp 1 --resolution 16x16 -q -o " + exr);
+  CHECK(r.status == 1);
+  CHECK_THAT(r.output, Catch::Contains("--strict: the render would leave out") && Catch::Contains("GGX specular lobe"));
+  CHECK(!fs::exists(exr));
+  const test::CliRun plain = test::runLucent(std::string("render ") + LUCENT_SOURCE_DIR
+                                             "/scenes/cornell-box.json --strict --spp 1 --resolution 16x16 -q -o " + exr);
+  CHECK(plain.status == 0);
+}
+
+TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read as its sRGB codes", "[gltf][loader]") {
+  const test::TempDir dir;
+  // A 2 x 1 PNG of known sRGB codes, written by Lucent's encoder from their linear values.
+  const uint8_t codes[2][3] = {{200, 30, 90}, {12, 250, 128}};
+  Image image(2, 1, {"R", "G", "B"});
+  for (int x = 0; x < 2; ++x)
+    for (int c = 0; c < 3; ++c) image.at(x, 0, c) = kSrgb8ToLinear[codes[x][c]];
+  const std::vector<unsigned char> png = encodePng(image);
+  json viaUri = quadFile({{{"mesh", 0}}}, {0});
+  viaUri["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
+  viaUri["textures"] = {{{"source", 0}, {"sampler", 0}}};
+  viaUri["samplers"] = {{{"wrapS", 33071}, {"wrapT", 10497}}};
+  json viaView = viaUri;
+  viaUri["images"] = {{{"uri", "data:image/png;base64," + base64(png)}}};
+  viaView["buffers"].push_back({{"byteLength", png.size()}, {"uri", "data:application/octet-stream;base64," + base64(png)}});
+  viaView["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", png.size()}});
+  viaView["images"] = {{{"bufferView", 3}, {"mimeType", "image/png"}}};
+  for (const json& f : {viaUri, viaView}) {
+    const Scene scene = loadWrapped(dir.path, f);
+    REQUIRE(scene.textures.size() == 1);
+    CHECK(scene.materials[0].kdTexture == 0);
+    CHECK(scene.materials[0].kd.r == Approx(0.5));  // the factor, which multiplies the texture
+    REQUIRE(scene.textures[0].width == 2);
+    REQUIRE(scene.textures[0].height == 1);
+    for (int x = 0; x < 2; ++x) {
+      const uint32_t texel = scene.texels[scene.textures[0].offset + uint32_t(x)];
+      for (int c = 0; c < 3; ++c) CHECK(((texel >> (8 * c)) & 0xff) == codes[x][c]);
+    }
+    // The clamped wrapping is said, not applied.
+    CHECK(std::any_of(scene.ignored.begin(), scene.ignored.end(),
+                      [](const std::string& s) { return s.find("wrapping") != std::string::npos; }));
+  }
 }

@@ -1,6 +1,7 @@
 // Float images with named channels (interleaved), and their EXR/PNG input and output.
 #pragma once
 #include <cstdint>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -67,6 +68,10 @@ ImageHeader readImageHeader(const std::string& path);
 // Reads an image as float, with its channel names and string metadata: the values as stored.
 // Refuses what readImageHeader refuses before any pixel is allocated.
 Image readImage(const std::string& path, ImageMetadata* metadata = nullptr);
+// readImage of a PNG or JPEG (`extension` ".png" or ".jpg") held in memory (an image embedded in a
+// glTF file), checked alike; `name` names it in messages.
+Image readImageFromMemory(const std::string& name, const std::string& extension, std::span<const unsigned char> bytes,
+                          ImageMetadata* metadata = nullptr);
 // Whether stored values are sRGB-encoded: the colour space OpenImageIO reports for the file (sRGB
 // for 8-bit JPEG, PNG, TIFF...; linear for EXR and HDR), or, where it reports none, the extension.
 bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata);
