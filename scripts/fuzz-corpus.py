@@ -7,7 +7,9 @@ texture.png and as sky.hdr) and renamed to the fuzzer's names, plus scenes with 
 environment map written here. film_reader and merge: film files of whole renders, parts, checkpoints
 and layered films, in fuzz/film_fuzz_input.h's two forms; merge's joined as parts. image_header:
 pairs of small EXR, PNG and Radiance images (and a TGA, which Lucent refuses), of equal and of
-different sizes.
+different sizes. gltf_loader: the exported Cornell box (scenes/gltf/cornell-box.glb) and small
+.gltf files with embedded buffers: a quad as a triangle strip with interleaved attributes and a
+point light, the same with a sparse accessor, with node transforms, and with a base colour texture.
 
 Usage: scripts/fuzz-corpus.py TARGET OUT_DIR
 """
@@ -190,9 +192,62 @@ def scene_loader_seeds():
     return seeds
 
 
+def gltf_seeds():
+    import base64
+    root = pathlib.Path(__file__).resolve().parent.parent
+    seeds = {"cornell-box.glb": (root / "scenes" / "gltf" / "cornell-box.glb").read_bytes()}
+    corners = [(0, 0), (1, 0), (0, 1), (1, 1)]
+    data = b"".join(struct.pack("<6f", x, y, 0, 0, 0, 1) for x, y in corners)
+    data += bytes(v for x, y in corners for v in (x * 255, y * 255)) + struct.pack("<4H", 0, 1, 2, 3)
+    sparse = struct.pack("<B3f", 3, 2.0, 2.0, 0.0)
+    image = png(2, 2, (200, 120, 40))
+
+    def uri(raw):
+        return "data:application/octet-stream;base64," + base64.b64encode(raw).decode()
+
+    quad = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0, "translation": [1, 2, 3], "camera": 0},
+                  {"translation": [0, 5, 0], "extensions": {"KHR_lights_punctual": {"light": 0}}}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.7, "aspectRatio": 1.5, "znear": 0.1}}],
+        "buffers": [{"byteLength": len(data), "uri": uri(data)}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 96, "byteStride": 24},
+                        {"buffer": 0, "byteOffset": 96, "byteLength": 8},
+                        {"buffer": 0, "byteOffset": 104, "byteLength": 8}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},
+                      {"bufferView": 0, "byteOffset": 12, "componentType": 5126, "count": 4, "type": "VEC3"},
+                      {"bufferView": 1, "componentType": 5121, "normalized": True, "count": 4, "type": "VEC2"},
+                      {"bufferView": 2, "componentType": 5123, "count": 4, "type": "SCALAR"}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3,
+                                    "material": 0, "mode": 5}]}],
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 683}]}},
+    }
+    seeds["quad.gltf"] = json.dumps(quad).encode()
+    with_sparse = json.loads(json.dumps(quad))
+    with_sparse["buffers"].append({"byteLength": len(sparse), "uri": uri(sparse)})
+    with_sparse["bufferViews"] += [{"buffer": 1, "byteOffset": 0, "byteLength": 1},
+                                   {"buffer": 1, "byteOffset": 1, "byteLength": 12}]
+    with_sparse["accessors"][0]["sparse"] = {"count": 1, "indices": {"bufferView": 3, "componentType": 5121},
+                                             "values": {"bufferView": 4}}
+    seeds["sparse.gltf"] = json.dumps(with_sparse).encode()
+    moved = json.loads(json.dumps(quad))
+    moved["nodes"][0] = {"rotation": [0, 0, 0.7071068, 0.7071068], "scale": [-2, 1, 1], "children": [2], "camera": 0}
+    moved["nodes"].append({"mesh": 0, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 5, 1]})
+    seeds["nodes.gltf"] = json.dumps(moved).encode()
+    textured = json.loads(json.dumps(quad))
+    textured["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+    textured["textures"] = [{"source": 0, "sampler": 0}]
+    textured["samplers"] = [{"wrapS": 33071}]
+    textured["images"] = [{"uri": "data:image/png;base64," + base64.b64encode(image).decode()}]
+    seeds["textured.gltf"] = json.dumps(textured).encode()
+    return seeds
+
+
 def main():
-    targets = {"scene_loader": scene_loader_seeds, "film_reader": film_seeds, "merge": merge_seeds,
-               "image_header": image_seeds}
+    targets = {"scene_loader": scene_loader_seeds, "gltf_loader": gltf_seeds, "film_reader": film_seeds,
+               "merge": merge_seeds, "image_header": image_seeds}
     if len(sys.argv) != 3 or sys.argv[1] not in targets:
         sys.exit(__doc__)
     out = pathlib.Path(sys.argv[2])

@@ -1,0 +1,35 @@
+// libFuzzer target for the glTF loader: one input is one glTF file, written as model.glb when it
+// starts with the binary container's magic ("glTF") and as model.gltf otherwise, then loaded as a
+// scene of its own (its camera, triangles, materials, textures and lights). Every rejection must be a
+// SceneError; anything else that escapes, a crash, a sanitizer report, a hang (-timeout) or a large
+// allocation (-malloc_limit_mb) is a defect. TinyGLTF is Debian's shared build, not instrumented:
+// the sanitizers see Lucent's checks and reads, and TinyGLTF's own faults only as crashes. Seeds:
+// scripts/fuzz-corpus.py.
+#include <cstdint>
+#include <filesystem>
+#include <string_view>
+
+#include "fuzz_files.h"
+#include "lucent/core/memory.h"
+#include "lucent/scene/loader.h"
+
+// As the scene loader's target: 1 GiB beside what the fuzzer holds at its start, so that an image
+// whose header claims more is refused with a SceneError before anything is allocated.
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  lucent::setMemoryLimit(lucent::memoryInUse() + (uint64_t(1) << 30));
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string_view input(reinterpret_cast<const char*>(data), size);
+  const std::filesystem::path& dir = lucent::fuzz::scratchDirectory();
+  const std::filesystem::path file = dir / (input.substr(0, 4) == "glTF" ? "model.glb" : "model.gltf");
+  lucent::fuzz::writeFile(file, input);
+  try {
+    lucent::loadScene(file.string(), {.quiet = true});
+  } catch (const lucent::SceneError&) {
+  }
+  std::error_code ec;
+  std::filesystem::remove(file, ec);
+  return 0;
+}
