@@ -3,6 +3,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -27,7 +28,8 @@ constexpr int kMaxNodeDepth = 1024;
 
 // Extensions read, and those whose content is listed as left out rather than rendered.
 const std::set<std::string> kSupportedExtensions = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
-                                                    "KHR_materials_specular", "KHR_materials_ior"};
+                                                    "KHR_texture_transform", "KHR_materials_specular",
+                                                    "KHR_materials_ior"};
 
 struct Context {
   const tinygltf::Model& model;
@@ -255,13 +257,37 @@ const tinygltf::Value* extension(const tinygltf::ExtensionMap& extensions, const
   return it == extensions.end() ? nullptr : &it->second;
 }
 
+// A texture's KHR_texture_transform, as the 2 x 3 matrix T R S of glTF's texture coordinates
+// (origin at the image's top left): u' = m[0] u + m[1] v + m[2], v' = m[3] u + m[4] v + m[5].
+using UvTransform = std::array<double, 6>;
+constexpr UvTransform kIdentityUv = {1, 0, 0, 0, 1, 0};
+
+UvTransform textureTransform(const Context& c, const tinygltf::Value& e, const std::string& path) {
+  const auto pair = [&](const char* key, double fallback) -> std::array<double, 2> {
+    if (!e.Has(key)) return {fallback, fallback};
+    const tinygltf::Value& v = e.Get(key);
+    if (!v.IsArray() || v.ArrayLen() != 2 || !v.Get(0).IsNumber() || !v.Get(1).IsNumber())
+      c.fail(path + "." + key, "expected 2 numbers");
+    return {v.Get(0).GetNumberAsDouble(), v.Get(1).GetNumberAsDouble()};
+  };
+  const std::array<double, 2> offset = pair("offset", 0), scale = pair("scale", 1);
+  const double rotation = number(e, "rotation", 0);
+  if (e.Has("texCoord") && number(e, "texCoord", 0) != 0) c.fail(path + ".texCoord", "only TEXCOORD_0 is read yet");
+  for (const double x : {offset[0], offset[1], scale[0], scale[1], rotation})
+    if (!std::isfinite(x) || std::abs(x) > kMaxInputMagnitude) c.fail(path, "its values must be finite and at most 1e15");
+  const double cs = std::cos(rotation), sn = std::sin(rotation);
+  // T * R * S with R = [[cos, sin], [-sin, cos]], the extension's rotation.
+  return {cs * scale[0], sn * scale[1], offset[0], -sn * scale[0], cs * scale[1], offset[1]};
+}
+
 // The base colour texture: its image's bytes (a buffer view, checked, or what TinyGLTF read from a
 // URI) for the loader to decode as an sRGB texture multiplying the base colour factor.
 void baseColourTexture(const Context& c, const tinygltf::TextureInfo& info, const std::string& path,
-                       const std::string& named, MaterialSpec& spec, std::vector<std::string>& ignored) {
+                       const std::string& named, MaterialSpec& spec, UvTransform& transform,
+                       std::vector<std::string>& ignored) {
   if (info.texCoord != 0) c.fail(path + ".texCoord", "TEXCOORD_" + std::to_string(info.texCoord) + " is not read yet");
-  if (info.extensions.count("KHR_texture_transform"))
-    ignored.push_back(named + ": KHR_texture_transform of its base colour texture (the coordinates are used as they are)");
+  if (const tinygltf::Value* e = extension(info.extensions, "KHR_texture_transform"))
+    transform = textureTransform(c, *e, path + ".extensions.KHR_texture_transform");
   if (info.index < 0 || size_t(info.index) >= c.model.textures.size())
     c.fail(path + ".index", "texture " + std::to_string(info.index) + " does not exist");
   const tinygltf::Texture& texture = c.model.textures[size_t(info.index)];
@@ -302,7 +328,7 @@ void baseColourTexture(const Context& c, const tinygltf::TextureInfo& info, cons
 // A glTF material as Lucent renders it: its base colour as a Lambertian diffuse reflectance and its
 // emission; what that leaves out is listed in `ignored`, and what would change the image beyond
 // that (textures, metals) is refused.
-MaterialSpec materialSpec(const Context& c, size_t index, std::vector<std::string>& ignored) {
+MaterialSpec materialSpec(const Context& c, size_t index, UvTransform& transform, std::vector<std::string>& ignored) {
   const tinygltf::Material& m = c.model.materials[index];
   const std::string path = at("materials", index);
   const std::string named = c.file + ": " + path + (m.name.empty() ? "" : " '" + m.name + "'");
@@ -328,7 +354,9 @@ MaterialSpec materialSpec(const Context& c, size_t index, std::vector<std::strin
   spec.origin = c.file + ": " + path;
   spec.type = MaterialType::Diffuse;
   spec.kd = Rgb(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
-  if (pbr.baseColorTexture.index >= 0) baseColourTexture(c, pbr.baseColorTexture, path + ".pbrMetallicRoughness.baseColorTexture", named, spec, ignored);
+  if (pbr.baseColorTexture.index >= 0)
+    baseColourTexture(c, pbr.baseColorTexture, path + ".pbrMetallicRoughness.baseColorTexture", named, spec, transform,
+                      ignored);
   double strength = 1;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_emissive_strength"))
     strength = number(*e, "emissiveStrength", 1);
@@ -374,7 +402,8 @@ struct NodeWalk {
   Scene& scene;
   ObjImport& import;
   GltfContent& content;
-  std::map<int, uint32_t> materialOf;  // glTF material (-1: the default) -> spec
+  std::map<int, uint32_t> materialOf;      // glTF material (-1: the default) -> spec
+  std::map<int, UvTransform> uvTransform;  // glTF material -> its base colour texture's transform
   uint64_t skippedPrimitives = 0;      // points and lines
 
   uint32_t material(int index, const std::string& user) {
@@ -385,7 +414,9 @@ struct NodeWalk {
       c.fail(user, "has no material, and glTF's default material is a metal, which Lucent does not render yet");
     }
     if (size_t(index) >= c.model.materials.size()) c.fail(user, "material " + std::to_string(index) + " does not exist");
-    spec = materialSpec(c, size_t(index), scene.ignored);
+    UvTransform transform = kIdentityUv;
+    spec = materialSpec(c, size_t(index), transform, scene.ignored);
+    uvTransform.emplace(index, transform);
     std::string name = spec.name;
     if (import.materialIndex.count(name)) name += " (" + c.file + ": " + at("materials", size_t(index)) + ")";
     spec.name = name;
@@ -477,7 +508,12 @@ struct NodeWalk {
       }
       scene.normals.push_back(n);
       // glTF's texture coordinates start at the image's top left; Lucent's v runs up.
-      scene.texcoords.push_back(texcoords.empty() ? Vec2{0, 0} : Vec2{float(texcoords[2 * v]), float(1 - texcoords[2 * v + 1])});
+      // The material's texture transform, then glTF's coordinates (origin at the image's top left)
+      // to Lucent's, whose v runs up.
+      const double u = texcoords.empty() ? 0 : texcoords[2 * v], w = texcoords.empty() ? 0 : texcoords[2 * v + 1];
+      const UvTransform& m = uvTransform.at(p.material);
+      const double tu = m[0] * u + m[1] * w + m[2], tw = m[3] * u + m[4] * w + m[5];
+      scene.texcoords.push_back(texcoords.empty() ? Vec2{0, 0} : Vec2{float(tu), float(1 - tw)});
     }
     for (size_t t = 0; t + 2 < corners.size(); t += 3) {
       uint32_t a = first + corners[t], b = first + corners[t + 1], d = first + corners[t + 2];
@@ -640,7 +676,7 @@ void importGltf(const std::string& path, Scene& scene, ObjImport& import, GltfCo
   if (model.scenes.empty()) c.fail("scenes", "the file has no scene");
   const size_t sceneIndex = model.defaultScene >= 0 ? size_t(model.defaultScene) : 0;
   if (sceneIndex >= model.scenes.size()) c.fail("scene", "scene " + std::to_string(sceneIndex) + " does not exist");
-  NodeWalk walk{c, scene, import, content, {}, 0};
+  NodeWalk walk{c, scene, import, content, {}, {}, 0};
   std::vector<bool> onPath(model.nodes.size(), false);
   for (const int root : model.scenes[sceneIndex].nodes) walk.node(root, Matrix4{}, 0, onPath);
   if (walk.skippedPrimitives > 0)

@@ -373,4 +373,20 @@ TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read
     CHECK(std::any_of(scene.ignored.begin(), scene.ignored.end(),
                       [](const std::string& s) { return s.find("wrapping") != std::string::npos; }));
   }
+  // KHR_texture_transform: T R S of glTF's coordinates, worked out by hand for the corner whose
+  // coordinates are (1, 0): scaled to (2, 0), turned by 90 degrees to (0, -2), moved to (0.25, -1.5);
+  // Lucent's v runs up: (0.25, 2.5). The corner (0, 1): (0, 3), (3, 0), (3.25, 0.5): (3.25, 0.5).
+  viaUri["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] = {
+      {"KHR_texture_transform", {{"offset", {0.25, 0.5}}, {"rotation", 1.5707963267948966}, {"scale", {2, 3}}}}};
+  const Scene moved = loadWrapped(dir.path, viaUri);
+  const auto texcoordAt = [&](Vec3 p) {
+    for (size_t v = 0; v < moved.positions.size(); ++v)
+      if (moved.positions[v] == p) return moved.texcoords[v];
+    FAIL("no vertex at the corner");
+    return Vec2{};
+  };
+  CHECK(texcoordAt({1, 0, 0}).x == Approx(0.25).margin(1e-6));
+  CHECK(texcoordAt({1, 0, 0}).y == Approx(2.5).margin(1e-6));
+  CHECK(texcoordAt({0, 1, 0}).x == Approx(3.25).margin(1e-6));
+  CHECK(texcoordAt({0, 1, 0}).y == Approx(0.5).margin(1e-6));
 }
