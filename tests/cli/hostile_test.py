@@ -620,3 +620,69 @@ def test_a_narrow_notch_is_split_and_a_huge_triangle_rendered(work):
         scene = "sky.json" if method == "envpbgi" else "lit.json"  # envpbgi takes no emitting triangles
         run = lucent("render", scene, "--method", method, *extra, "-q", "-o", method + ".exr", cwd=work)
         assert run.code == 0, run
+
+
+# --- glTF files: broken, lying or pointing at what is not a file ---------------------------------
+
+def gltf_box():
+    with open(os.path.join(SOURCE, "scenes", "gltf", "cornell-box.glb"), "rb") as f:
+        return f.read()
+
+
+def glb_with_json(edit):
+    """The exported Cornell box with its JSON chunk edited by `edit` (the binary chunk kept)."""
+    data = gltf_box()
+    length = struct.unpack_from("<I", data, 12)[0]
+    document = json.loads(data[20:20 + length])
+    edit(document)
+    text = json.dumps(document).encode()
+    text += b" " * (-len(text) % 4)
+    rest = data[20 + length:]
+    body = struct.pack("<II", len(text), 0x4E4F534A) + text + rest
+    return b"glTF" + struct.pack("<II", 2, 12 + len(body)) + body
+
+
+def accessor_count(count):
+    def edit(d):
+        d["accessors"][0]["count"] = count
+    return edit
+
+
+def buffer_uri(uri, length):
+    def edit(d):
+        d["buffers"] = [{"byteLength": length, "uri": uri}]
+    return edit
+
+
+@pytest.mark.parametrize("name, make, words", [
+    ("cut.glb", lambda work: gltf_box()[:4000], "cut.glb: not a readable glTF file"),
+    ("huge-chunk.glb", lambda work: gltf_box()[:12] + struct.pack("<II", 0x7FFFFFF0, 0x4E4F534A) + gltf_box()[20:],
+     "huge-chunk.glb: not a readable glTF file"),
+    ("count.glb", lambda work: glb_with_json(accessor_count(1 << 31)), "accessors[0].count: 2147483648 is not in [1, 2^28]"),
+    ("beyond.glb", lambda work: glb_with_json(accessor_count(100000)), "accessors[0]: 100000 elements"),
+    ("zero.gltf", lambda work: json.dumps({"asset": {"version": "2.0"}, "buffers": [{"byteLength": 100, "uri": "/dev/zero"}],
+                                           "scenes": [{"nodes": []}]}), "zero.gltf: not a readable glTF file"),
+    ("lying-uri.gltf", lambda work: json.dumps({"asset": {"version": "2.0"}, "scenes": [{"nodes": []}],
+                                                "buffers": [{"byteLength": 4000000000,
+                                                             "uri": "data:application/octet-stream;base64,AAAA"}]}),
+     "lying-uri.gltf: not a readable glTF file"),
+    ("required.glb", lambda work: glb_with_json(lambda d: d.update(extensionsRequired=["KHR_draco_mesh_compression"],
+                                                                   extensionsUsed=["KHR_draco_mesh_compression"])),
+     "extensionsRequired: names KHR_draco_mesh_compression"),
+])
+def test_a_broken_gltf_file_is_refused_at_once_and_nothing_is_written(work, name, make, words):
+    write(os.path.join(work, name), make(work))
+    before = snapshot(work)
+    run = lucent("render", name, "-o", "out.exr", cwd=work, timeout=30)
+    assert run.code == 1 and words in run.err, run
+    assert run.cpu_seconds < 5, run
+    assert changed(before, snapshot(work)) == []
+
+
+def test_a_gltf_buffer_that_is_a_fifo_is_refused_without_blocking(work):
+    os.mkfifo(os.path.join(work, "buffer.bin"))
+    write(os.path.join(work, "fifo.gltf"), json.dumps({"asset": {"version": "2.0"}, "scenes": [{"nodes": []}],
+                                                       "buffers": [{"byteLength": 8, "uri": "buffer.bin"}]}))
+    run = lucent("render", "fifo.gltf", "-o", "out.exr", cwd=work, timeout=30)
+    assert run.code == 1 and "fifo.gltf: not a readable glTF file" in run.err, run
+    assert not os.path.exists(os.path.join(work, "out.exr"))
