@@ -1,0 +1,77 @@
+// The GGX (Trowbridge-Reitz) microfacet distribution that glTF's metallic-roughness material uses
+// (glTF 2.0 specification, Appendix B), in the local shading frame (normal on +z), with alpha =
+// roughness^2: the distribution D, Smith's masking function in both forms a backend may implement
+// (the separable product that Appendix B gives, and the height-correlated form of the Khronos sample
+// renderer), and the sampling of visible normals (Heitz 2018, "Sampling the GGX Distribution of
+// Visible Normals", JCGT 7(4)) with its density.
+#pragma once
+#include <algorithm>
+#include <cmath>
+
+#include "lucent/core/math.h"
+
+namespace lucent {
+
+// D(m) for a microfacet normal at cosM = n.m from the normal; 0 below the surface.
+inline float ggxD(float alpha, float cosM) {
+  if (!(cosM > 0)) return 0.0f;
+  const float a2 = alpha * alpha;
+  const float d = cosM * cosM * (a2 - 1.0f) + 1.0f;
+  return a2 / (kPi * d * d);
+}
+
+// Smith's Lambda for a direction at cosW = n.w (|cosW| taken): the microsurface's shadowed share.
+inline float smithLambda(float alpha, float cosW) {
+  const float c2 = cosW * cosW;
+  if (!(c2 > 0)) return kInf;
+  const float tan2 = std::max(0.0f, 1.0f - c2) / c2;
+  return 0.5f * (std::sqrt(1.0f + alpha * alpha * tan2) - 1.0f);
+}
+
+// G1 = 1 / (1 + Lambda), written as Appendix B writes it: 2 |n.w| / (|n.w| + sqrt(alpha^2 + (1 -
+// alpha^2) (n.w)^2)).
+inline float smithG1(float alpha, float cosW) {
+  const float c = std::abs(cosW);
+  return 2.0f * c / (c + std::sqrt(alpha * alpha + (1.0f - alpha * alpha) * c * c));
+}
+
+// Masking-shadowing of the pair of directions: Appendix B's separable product G1(o) G1(i), or the
+// height-correlated 1 / (1 + Lambda(o) + Lambda(i)), never smaller.
+inline float smithSeparable(float alpha, float cosO, float cosI) { return smithG1(alpha, cosO) * smithG1(alpha, cosI); }
+inline float smithHeightCorrelated(float alpha, float cosO, float cosI) {
+  return 1.0f / (1.0f + smithLambda(alpha, cosO) + smithLambda(alpha, cosI));
+}
+
+// A microfacet normal visible from wo (wo.z > 0), with density D_wo(m) = G1(wo) max(0, wo.m) D(m) /
+// wo.z (ggxVisibleNormalPdf): the hemisphere seen from wo is stretched to the unit roughness
+// configuration, a point is sampled on the projected half-disc, and the normal is stretched back.
+inline Vec3 sampleGgxVisibleNormal(float alpha, Vec3 wo, Vec2 u) {
+  const Vec3 vh = normalize(Vec3{alpha * wo.x, alpha * wo.y, wo.z});
+  const float lensq = vh.x * vh.x + vh.y * vh.y;
+  const Vec3 t1 = lensq > 0 ? Vec3{-vh.y, vh.x, 0.0f} / std::sqrt(lensq) : Vec3{1, 0, 0};
+  const Vec3 t2 = cross(vh, t1);
+  const float r = std::sqrt(u.x), phi = 2.0f * kPi * u.y;
+  const float p1 = r * std::cos(phi);
+  const float s = 0.5f * (1.0f + vh.z);
+  const float p2 = (1.0f - s) * std::sqrt(std::max(0.0f, 1.0f - p1 * p1)) + s * r * std::sin(phi);
+  const Vec3 nh = t1 * p1 + t2 * p2 + vh * std::sqrt(std::max(0.0f, 1.0f - p1 * p1 - p2 * p2));
+  return normalize(Vec3{alpha * nh.x, alpha * nh.y, std::max(1e-7f, nh.z)});
+}
+
+inline float ggxVisibleNormalPdf(float alpha, Vec3 wo, Vec3 m) {
+  if (!(wo.z > 0)) return 0.0f;
+  return smithG1(alpha, wo.z) * std::max(0.0f, dot(wo, m)) * ggxD(alpha, m.z) / wo.z;
+}
+
+// The density of wi = wo reflected about a visible normal: D_wo(h) / (4 wo.h), h = normalize(wo +
+// wi).
+inline float ggxReflectionPdf(float alpha, Vec3 wo, Vec3 wi) {
+  const Vec3 sum = wo + wi;
+  const float len = length(sum);
+  if (!(len > 0)) return 0.0f;
+  const Vec3 h = sum / len;
+  const float woh = dot(wo, h);
+  return woh > 0 ? ggxVisibleNormalPdf(alpha, wo, h) / (4.0f * woh) : 0.0f;
+}
+
+}  // namespace lucent
