@@ -262,7 +262,19 @@ const tinygltf::Value* extension(const tinygltf::ExtensionMap& extensions, const
 using UvTransform = std::array<double, 6>;
 constexpr UvTransform kIdentityUv = {1, 0, 0, 0, 1, 0};
 
-UvTransform textureTransform(const Context& c, const tinygltf::Value& e, const std::string& path) {
+// The texture coordinates a material's base colour texture reads: the set (TEXCOORD_0 or _1) and
+// its transform.
+struct TextureCoordinates {
+  int set = 0;
+  UvTransform transform = kIdentityUv;
+};
+
+int coordinateSet(const Context& c, double set, const std::string& path) {
+  if (set != 0 && set != 1) c.fail(path, "TEXCOORD_" + std::to_string(int64_t(set)) + " is not read (TEXCOORD_0 and _1 are)");
+  return int(set);
+}
+
+UvTransform textureTransform(const Context& c, const tinygltf::Value& e, const std::string& path, int& set) {
   const auto pair = [&](const char* key, double fallback) -> std::array<double, 2> {
     if (!e.Has(key)) return {fallback, fallback};
     const tinygltf::Value& v = e.Get(key);
@@ -272,7 +284,7 @@ UvTransform textureTransform(const Context& c, const tinygltf::Value& e, const s
   };
   const std::array<double, 2> offset = pair("offset", 0), scale = pair("scale", 1);
   const double rotation = number(e, "rotation", 0);
-  if (e.Has("texCoord") && number(e, "texCoord", 0) != 0) c.fail(path + ".texCoord", "only TEXCOORD_0 is read yet");
+  if (e.Has("texCoord")) set = coordinateSet(c, number(e, "texCoord", 0), path + ".texCoord");
   for (const double x : {offset[0], offset[1], scale[0], scale[1], rotation})
     if (!std::isfinite(x) || std::abs(x) > kMaxInputMagnitude) c.fail(path, "its values must be finite and at most 1e15");
   const double cs = std::cos(rotation), sn = std::sin(rotation);
@@ -283,11 +295,11 @@ UvTransform textureTransform(const Context& c, const tinygltf::Value& e, const s
 // The base colour texture: its image's bytes (a buffer view, checked, or what TinyGLTF read from a
 // URI) for the loader to decode as an sRGB texture multiplying the base colour factor.
 void baseColourTexture(const Context& c, const tinygltf::TextureInfo& info, const std::string& path,
-                       const std::string& named, MaterialSpec& spec, UvTransform& transform,
+                       const std::string& named, MaterialSpec& spec, TextureCoordinates& coordinates,
                        std::vector<std::string>& ignored) {
-  if (info.texCoord != 0) c.fail(path + ".texCoord", "TEXCOORD_" + std::to_string(info.texCoord) + " is not read yet");
+  coordinates.set = coordinateSet(c, info.texCoord, path + ".texCoord");
   if (const tinygltf::Value* e = extension(info.extensions, "KHR_texture_transform"))
-    transform = textureTransform(c, *e, path + ".extensions.KHR_texture_transform");
+    coordinates.transform = textureTransform(c, *e, path + ".extensions.KHR_texture_transform", coordinates.set);
   if (info.index < 0 || size_t(info.index) >= c.model.textures.size())
     c.fail(path + ".index", "texture " + std::to_string(info.index) + " does not exist");
   const tinygltf::Texture& texture = c.model.textures[size_t(info.index)];
@@ -328,7 +340,8 @@ void baseColourTexture(const Context& c, const tinygltf::TextureInfo& info, cons
 // A glTF material as Lucent renders it: its base colour as a Lambertian diffuse reflectance and its
 // emission; what that leaves out is listed in `ignored`, and what would change the image beyond
 // that (textures, metals) is refused.
-MaterialSpec materialSpec(const Context& c, size_t index, UvTransform& transform, std::vector<std::string>& ignored) {
+MaterialSpec materialSpec(const Context& c, size_t index, TextureCoordinates& coordinates,
+                          std::vector<std::string>& ignored) {
   const tinygltf::Material& m = c.model.materials[index];
   const std::string path = at("materials", index);
   const std::string named = c.file + ": " + path + (m.name.empty() ? "" : " '" + m.name + "'");
@@ -355,8 +368,8 @@ MaterialSpec materialSpec(const Context& c, size_t index, UvTransform& transform
   spec.type = MaterialType::Diffuse;
   spec.kd = Rgb(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
   if (pbr.baseColorTexture.index >= 0)
-    baseColourTexture(c, pbr.baseColorTexture, path + ".pbrMetallicRoughness.baseColorTexture", named, spec, transform,
-                      ignored);
+    baseColourTexture(c, pbr.baseColorTexture, path + ".pbrMetallicRoughness.baseColorTexture", named, spec,
+                      coordinates, ignored);
   double strength = 1;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_emissive_strength"))
     strength = number(*e, "emissiveStrength", 1);
@@ -403,7 +416,7 @@ struct NodeWalk {
   ObjImport& import;
   GltfContent& content;
   std::map<int, uint32_t> materialOf;      // glTF material (-1: the default) -> spec
-  std::map<int, UvTransform> uvTransform;  // glTF material -> its base colour texture's transform
+  std::map<int, TextureCoordinates> coordinatesOf;  // glTF material -> what its base colour texture reads
   uint64_t skippedPrimitives = 0;      // points and lines
 
   uint32_t material(int index, const std::string& user) {
@@ -414,9 +427,9 @@ struct NodeWalk {
       c.fail(user, "has no material, and glTF's default material is a metal, which Lucent does not render yet");
     }
     if (size_t(index) >= c.model.materials.size()) c.fail(user, "material " + std::to_string(index) + " does not exist");
-    UvTransform transform = kIdentityUv;
-    spec = materialSpec(c, size_t(index), transform, scene.ignored);
-    uvTransform.emplace(index, transform);
+    TextureCoordinates coordinates;
+    spec = materialSpec(c, size_t(index), coordinates, scene.ignored);
+    coordinatesOf.emplace(index, coordinates);
     std::string name = spec.name;
     if (import.materialIndex.count(name)) name += " (" + c.file + ": " + at("materials", size_t(index)) + ")";
     spec.name = name;
@@ -448,14 +461,17 @@ struct NodeWalk {
     if (attribute("NORMAL") >= 0)
       normals = readAccessor(c, attribute("NORMAL"), path + ".attributes.NORMAL", TINYGLTF_TYPE_VEC3,
                              {TINYGLTF_COMPONENT_TYPE_FLOAT});
-    if (attribute("TEXCOORD_0") >= 0)
-      texcoords = readAccessor(c, attribute("TEXCOORD_0"), path + ".attributes.TEXCOORD_0", TINYGLTF_TYPE_VEC2,
+    const uint32_t materialId = material(p.material, path + ".material");
+    const TextureCoordinates& coordinates = coordinatesOf.at(p.material);
+    const std::string texcoordName = "TEXCOORD_" + std::to_string(coordinates.set);
+    if (attribute(texcoordName.c_str()) >= 0)
+      texcoords = readAccessor(c, attribute(texcoordName.c_str()), path + ".attributes." + texcoordName, TINYGLTF_TYPE_VEC2,
                                {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
                                 TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
     if ((!normals.empty() && normals.size() / 3 != vertices) || (!texcoords.empty() && texcoords.size() / 2 != vertices))
       c.fail(path + ".attributes", "its attributes differ in count from POSITION's " + std::to_string(vertices));
     for (const auto& [name, accessor] : p.attributes)
-      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0")
+      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && name != "TEXCOORD_1")
         scene.ignored.push_back(c.file + ": " + path + ".attributes." + name + " (not read)");
     if (!p.targets.empty()) scene.ignored.push_back(c.file + ": " + path + ".targets (morph targets: the base shape is rendered)");
 
@@ -487,7 +503,6 @@ struct NodeWalk {
       }
     }
 
-    const uint32_t materialId = material(p.material, path + ".material");
     const bool mirrored = world.determinant3() < 0;  // the winding turns over
     const std::array<double, 9> normalMatrix = world.normalMatrix();
     const uint32_t first = uint32_t(scene.positions.size());
@@ -511,7 +526,7 @@ struct NodeWalk {
       // The material's texture transform, then glTF's coordinates (origin at the image's top left)
       // to Lucent's, whose v runs up.
       const double u = texcoords.empty() ? 0 : texcoords[2 * v], w = texcoords.empty() ? 0 : texcoords[2 * v + 1];
-      const UvTransform& m = uvTransform.at(p.material);
+      const UvTransform& m = coordinates.transform;
       const double tu = m[0] * u + m[1] * w + m[2], tw = m[3] * u + m[4] * w + m[5];
       scene.texcoords.push_back(texcoords.empty() ? Vec2{0, 0} : Vec2{float(tu), float(1 - tw)});
     }

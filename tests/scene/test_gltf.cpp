@@ -389,4 +389,15 @@ TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read
   CHECK(texcoordAt({1, 0, 0}).y == Approx(2.5).margin(1e-6));
   CHECK(texcoordAt({0, 1, 0}).x == Approx(3.25).margin(1e-6));
   CHECK(texcoordAt({0, 1, 0}).y == Approx(0.5).margin(1e-6));
+  // The set the texture names: TEXCOORD_1 alone, then set 2, which no texture may read here.
+  json second = viaUri;
+  auto& attributes = second["meshes"][0]["primitives"][0]["attributes"];
+  attributes["TEXCOORD_1"] = attributes["TEXCOORD_0"];
+  attributes.erase("TEXCOORD_0");
+  second["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 1;
+  const Scene secondSet = loadWrapped(dir.path, second);
+  for (size_t v = 0; v < secondSet.positions.size(); ++v)
+    if (secondSet.positions[v] == Vec3{1, 0, 0}) CHECK(secondSet.texcoords[v].y == Approx(2.5).margin(1e-6));
+  second["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 2;
+  REQUIRE_THROWS_WITH(loadWrapped(dir.path, second), Catch::Contains("baseColorTexture.texCoord: TEXCOORD_2 is not read"));
 }
