@@ -82,6 +82,13 @@ TEST_CASE("GGX: Smith's masking in Appendix B's form and via Lambda, separable a
         CHECK(correlated >= separable * (1 - 1e-6f));
         // Equal where one direction is the normal (Lambda 0 there).
         if (a == 0.0) CHECK(correlated == Approx(separable).epsilon(1e-5));
+        // The height-correlated visibility term as GPU renderers write it (0.5 over the sum of
+        // each cosine times the other's sqrt(alpha^2 + (1 - alpha^2) cos^2)) is G / (4 cos cos).
+        if (co > 0.01f && ci > 0.01f) {
+          const double a2 = double(alpha) * alpha;
+          const double visibility = 0.5 / (ci * std::sqrt(co * co * (1 - a2) + a2) + co * std::sqrt(ci * ci * (1 - a2) + a2));
+          CHECK(correlated / (4.0 * co * ci) == Approx(visibility).epsilon(1e-4));
+        }
       }
   // Alpha 1 is a diffuse-like microsurface but masks: G1 < 1 away from the normal.
   CHECK(smithG1(1.0f, 0.5f) < 1.0f);
