@@ -62,15 +62,22 @@ void append(std::vector<unsigned char>& bytes, T value) {
 // A glTF file with one buffer (a data URI) and the given JSON around it: a unit quad in the xy
 // plane, its positions and normals interleaved (stride 24), its texture coordinates as normalized
 // bytes, a triangle strip of unsigned short indices; one Lambertian material and one point light.
-json quadFile(const std::vector<json>& nodes, const std::vector<int>& roots) {
+// The quad's buffer: positions and normals interleaved, texture coordinates, strip indices; the
+// first position's x replaced by `firstX` (a NaN for the broken-file test).
+std::vector<unsigned char> quadBuffer(float firstX = 0) {
   std::vector<unsigned char> b;
   const float corners[4][2] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
   for (const auto& c : corners) {
-    for (const float v : {c[0], c[1], 0.0f}) append(b, v);
+    for (const float v : {&c == &corners[0] ? firstX : c[0], c[1], 0.0f}) append(b, v);
     for (const float v : {0.0f, 0.0f, 1.0f}) append(b, v);
   }
   for (const auto& c : corners) append(b, uint8_t(c[0] * 255)), append(b, uint8_t(c[1] * 255));
   for (const uint16_t i : {0, 1, 2, 3}) append(b, i);
+  return b;
+}
+
+json quadFile(const std::vector<json>& nodes, const std::vector<int>& roots) {
+  const std::vector<unsigned char> b = quadBuffer();
   json f;
   f["asset"] = {{"version", "2.0"}};
   f["buffers"] = {{{"byteLength", b.size()}, {"uri", "data:application/octet-stream;base64," + base64(b)}}};
@@ -205,7 +212,6 @@ TEST_CASE("glTF accessors: sparse substitutions, fans, unindexed triangles, and 
   json f = quadFile({{{"mesh", 0}}}, {0});
   // A fan over the same four corners, unindexed, with corner 3 moved to (2, 2, 0) by a sparse
   // substitution; a second primitive of lines, skipped and said.
-  json sparseBuffer;
   std::vector<unsigned char> b;
   append(b, uint8_t(3));
   for (const float v : {2.0f, 2.0f, 0.0f}) append(b, v);
@@ -275,23 +281,7 @@ TEST_CASE("Broken glTF files are refused with the file and the JSON path of what
   refused(f, "materials[0].emissiveTexture: emissive textures are not read yet");
   // A NaN position (written as the bytes of a NaN: JSON has no NaN).
   f = good;
-  std::string uri = f["buffers"][0]["uri"];
-  std::vector<unsigned char> bytes(112);
-  // Rebuild the buffer with a NaN in the first position.
-  {
-    std::vector<unsigned char> b;
-    const float nan = std::nanf("");
-    const float corners[4][2] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
-    bool first = true;
-    for (const auto& c : corners) {
-      for (const float v : {first ? nan : c[0], c[1], 0.0f}) append(b, v);
-      first = false;
-      for (const float v : {0.0f, 0.0f, 1.0f}) append(b, v);
-    }
-    for (const auto& c : corners) append(b, uint8_t(c[0] * 255)), append(b, uint8_t(c[1] * 255));
-    for (const uint16_t i : {0, 1, 2, 3}) append(b, i);
-    f["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64(b);
-  }
+  f["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64(quadBuffer(std::nanf("")));
   refused(f, "accessors[0]: element 0 is not finite");
   // An external buffer that is not a regular file (a FIFO would block a plain read for ever).
   f = good;
