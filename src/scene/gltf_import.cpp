@@ -684,9 +684,12 @@ void importGltf(const std::string& path, Scene& scene, ObjImport& import, GltfCo
       c.fail("extensionsRequired", "names " + name + ", which Lucent does not render");
   for (const std::string& name : model.extensionsUsed)
     if (!kSupportedExtensions.count(name)) scene.ignored.push_back(path + ": extension " + name + " (not read)");
-  for (size_t i = 0; i < model.buffers.size(); ++i)
-    if (!model.buffers[i].uri.empty() && model.buffers[i].uri.rfind("data:", 0) != 0)
-      scene.inputFiles.push_back((fs::path(path).parent_path() / model.buffers[i].uri).string());
+  // The files beside it that it names (buffers and images), which no output may overwrite.
+  const auto named = [&](const std::string& uri) {
+    if (!uri.empty() && uri.rfind("data:", 0) != 0) scene.inputFiles.push_back((fs::path(path).parent_path() / uri).string());
+  };
+  for (const tinygltf::Buffer& buffer : model.buffers) named(buffer.uri);
+  for (const tinygltf::Image& image : model.images) named(image.uri);
 
   if (model.scenes.empty()) c.fail("scenes", "the file has no scene");
   const size_t sceneIndex = model.defaultScene >= 0 ? size_t(model.defaultScene) : 0;
