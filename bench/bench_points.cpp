@@ -179,7 +179,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   ParallelScope scope(threads);
-  const Scene scene = loadScene(scenePath, {.quiet = true});
+  const Scene scene = loadScene(scenePath, LoadOptions(true));
   const double area = totalArea(scene);
   json result = {{"scene", scenePath}, {"triangles", scene.triangleCount()}, {"threads", threads},
                  {"candidates", candidates}, {"tile_scale", tileScale}, {"rows", json::array()}};

@@ -43,6 +43,8 @@ struct RenderArgs {
   bool resume = false;
   uint64_t memoryLimit = 0;  // 0: the available memory
   bool quiet = false, robust = false, help = false, logStages = false, strict = false;
+  bool gltfHeightCorrelated = false;
+  double lumensPerWatt = GltfOptions{}.lumensPerWatt;
   OptionValues methodOptions;  // as given, in order
 };
 
@@ -172,8 +174,14 @@ const OptionTable<RenderArgs>& renderFlags() {
            "CPU's best)");
     t.placeholder("isa", "ISA");
     t.flag("strict", &A::strict,
-           "refuse a scene whose files hold what the render would leave out (a glTF material's specular lobe: "
+           "refuse a scene whose files hold what the render would leave out (a glTF material's normal texture: "
            "the JSON line's \"ignored\")");
+    t.choice<bool>("gltf_masking", &A::gltfHeightCorrelated, {{"separable", false}, {"height-correlated", true}},
+                   "Smith masking-shadowing of glTF materials: Appendix B's separable form, or the height-correlated "
+                   "one of the Khronos sample renderer and many GPU engines (a scene file's glTF entry may set its "
+                   "own)");
+    t.real("lumens_per_watt", &A::lumensPerWatt, 1e-6, 1e6, "lm/W",
+           "glTF lights' photometric intensities (cd, lx) to watts (a scene file's glTF entry may set its own)");
     t.flag("quiet", &A::quiet, "no progress bar or warnings");
     t.shortFlag("quiet", "-q");
     t.flag("log_stages", &A::logStages, "print each stage's name on stderr as it starts, with the seconds since the start");
@@ -296,7 +304,7 @@ int runRender(const RenderArgs& a) {
     }
     Stopwatch loadClock;
     setMemoryLimit(a.memoryLimit);  // the scene's images are checked against it too
-    scene = loadScene(a.scene, {a.quiet});
+    scene = loadScene(a.scene, {a.quiet, {a.gltfHeightCorrelated, a.lumensPerWatt}});
     stats.addStage("load_scene", loadClock.seconds());
     if (a.strict && !scene.ignored.empty()) {
       std::string list;

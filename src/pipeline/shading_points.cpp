@@ -72,16 +72,14 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
     Vec3 n = dot(wo, sp.shadingNormal) * dot(wo, sp.geometricNormal) > 0 ? sp.shadingNormal : sp.geometricNormal;
     if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
     if (firstHit) {
-      firstHit->albedo = bsdf.type == MaterialType::Diffuse || bsdf.type == MaterialType::Phong ? bsdf.kd + bsdf.ks
-                         : bsdf.type == MaterialType::Mirror                                   ? bsdf.ks
-                                                                                                : Rgb(1.0f);
+      firstHit->albedo = layerAlbedo(bsdf);
       firstHit->normal = sp.shadingNormal;
       firstHit->depth = hit.t;
       firstHit = nullptr;
     }
 
     if (!bsdf.isDelta()) {
-      if (!(bsdf.kd + bsdf.ks).isBlack())
+      if (!reflectanceBound(bsdf).isBlack())
         points.push_back({sp.position, sp.geometricNormal, n, wo, b.weight, bsdf, pixel, sample, branch++, sp.triangle});
       continue;
     }

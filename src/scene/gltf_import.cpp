@@ -14,14 +14,13 @@
 
 #include "lucent/core/files.h"
 #include "lucent/scene/loader.h"
+#include "lucent/scene/surface.h"
 
 namespace lucent::detail {
 namespace fs = std::filesystem;
 
 namespace {
 
-// glTF's photometric units to Lucent's radiometric ones: lumens per watt (Blender's importer's).
-constexpr double kLumensPerWatt = 683.0;
 // The most elements an accessor may have, and the deepest node hierarchy followed.
 constexpr size_t kMaxAccessorElements = size_t(1) << 28;
 constexpr int kMaxNodeDepth = 1024;
@@ -292,11 +291,11 @@ UvTransform textureTransform(const Context& c, const tinygltf::Value& e, const s
   return {cs * scale[0], sn * scale[1], offset[0], -sn * scale[0], cs * scale[1], offset[1]};
 }
 
-// The base colour texture: its image's bytes (a buffer view, checked, or what TinyGLTF read from a
-// URI) for the loader to decode as an sRGB texture multiplying the base colour factor.
-void baseColourTexture(const Context& c, const tinygltf::TextureInfo& info, const std::string& path,
-                       const std::string& named, MaterialSpec& spec, TextureCoordinates& coordinates,
-                       std::vector<std::string>& ignored) {
+// A texture's image: its bytes (a buffer view, checked, or what TinyGLTF read from a URI) for the
+// loader to decode; `what` names the texture's role in messages and in the ignored list.
+TextureFile textureImage(const Context& c, const tinygltf::TextureInfo& info, const std::string& path,
+                         const std::string& named, const std::string& what, TextureCoordinates& coordinates,
+                         std::vector<std::string>& ignored) {
   coordinates.set = coordinateSet(c, info.texCoord, path + ".texCoord");
   if (const tinygltf::Value* e = extension(info.extensions, "KHR_texture_transform"))
     coordinates.transform = textureTransform(c, *e, path + ".extensions.KHR_texture_transform", coordinates.set);
@@ -309,67 +308,99 @@ void baseColourTexture(const Context& c, const tinygltf::TextureInfo& info, cons
       c.fail(texturePath + ".sampler", "sampler " + std::to_string(texture.sampler) + " does not exist");
     const tinygltf::Sampler& sampler = c.model.samplers[size_t(texture.sampler)];
     if (sampler.wrapS != TINYGLTF_TEXTURE_WRAP_REPEAT || sampler.wrapT != TINYGLTF_TEXTURE_WRAP_REPEAT)
-      ignored.push_back(named + ": the base colour texture's clamped or mirrored wrapping (it repeats)");
+      ignored.push_back(named + ": the " + what + "'s clamped or mirrored wrapping (it repeats)");
     if (sampler.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST)
-      ignored.push_back(named + ": the base colour texture's nearest filtering (it is filtered bilinearly)");
+      ignored.push_back(named + ": the " + what + "'s nearest filtering (it is filtered bilinearly)");
   }
   if (texture.source < 0 || size_t(texture.source) >= c.model.images.size())
     c.fail(texturePath + ".source", "image " + std::to_string(texture.source) + " does not exist");
   const tinygltf::Image& image = c.model.images[size_t(texture.source)];
   const std::string imagePath = at("images", size_t(texture.source));
-  std::vector<unsigned char> bytes;
+  TextureFile file;
   if (image.bufferView >= 0) {
     const auto& views = c.model.bufferViews;
     const size_t length = size_t(image.bufferView) < views.size() ? views[size_t(image.bufferView)].byteLength : 0;
     if (length == 0) c.fail(imagePath + ".bufferView", "is missing or empty");
     size_t stride = 0;
     const unsigned char* p = viewBytes(c, image.bufferView, imagePath, 0, 1, length, &stride);
-    bytes.assign(p, p + length);
+    file.bytes.assign(p, p + length);
   } else {
-    bytes = image.image;  // as read from its URI (keepImageBytes)
-    if (bytes.empty()) c.fail(imagePath + ".uri", "the image could not be read");
+    file.bytes = image.image;  // as read from its URI (keepImageBytes)
+    if (file.bytes.empty()) c.fail(imagePath + ".uri", "the image could not be read");
   }
+  const auto& bytes = file.bytes;
   const bool png = bytes.size() >= 8 && std::memcmp(bytes.data(), "\x89PNG\r\n\x1a\n", 8) == 0;
   const bool jpeg = bytes.size() >= 3 && bytes[0] == 0xff && bytes[1] == 0xd8 && bytes[2] == 0xff;
   if (!png && !jpeg) c.fail(imagePath, "is neither a PNG nor a JPEG image");
-  spec.mapKd = c.file + "#" + imagePath + (png ? ".png" : ".jpg");
-  spec.mapKdBytes = std::move(bytes);
-  spec.mapKdOrigin = c.file + ": " + path;
+  file.path = c.file + "#" + imagePath + (png ? ".png" : ".jpg");
+  file.origin = c.file + ": " + path;
+  return file;
 }
 
-// A glTF material as Lucent renders it: its base colour as a Lambertian diffuse reflectance and its
-// emission; what that leaves out is listed in `ignored`, and what would change the image beyond
-// that (textures, metals) is refused.
-MaterialSpec materialSpec(const Context& c, size_t index, TextureCoordinates& coordinates,
+double unitNumber(const Context& c, double value, const std::string& path) {
+  if (!(value >= 0 && value <= 1)) c.fail(path, "must be in [0, 1]");
+  return value;
+}
+
+// The specification's default material, for primitives that name none: a white rough metal.
+MaterialSpec defaultMaterial(const Context& c, MaterialType type) {
+  MaterialSpec spec;
+  spec.name = "glTF default material";
+  spec.origin = c.file + ": the default material";
+  spec.type = type;
+  spec.kd = Rgb(1.0f);
+  spec.ks = Rgb(1.0f);
+  spec.ni = 1.5f;
+  spec.metallic = 1.0f;
+  return spec;
+}
+
+// A glTF material: pbrMetallicRoughness with KHR_materials_ior and KHR_materials_specular as
+// Appendix B's BRDF (the masking term's form as `type` says), and its emission; what that leaves
+// out is listed in `ignored`, and what would change the image beyond that is refused.
+MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, TextureCoordinates& coordinates,
                           std::vector<std::string>& ignored) {
   const tinygltf::Material& m = c.model.materials[index];
   const std::string path = at("materials", index);
   const std::string named = c.file + ": " + path + (m.name.empty() ? "" : " '" + m.name + "'");
   const auto& pbr = m.pbrMetallicRoughness;
+  const std::string pbrPath = path + ".pbrMetallicRoughness";
   if (m.emissiveTexture.index >= 0) c.fail(path + ".emissiveTexture", "emissive textures are not read yet");
   if (m.normalTexture.index >= 0)
     ignored.push_back(named + ": normalTexture (shading uses the interpolated vertex normals)");
   if (m.occlusionTexture.index >= 0)
     ignored.push_back(named + ": occlusionTexture (a rasterizer's stand-in for the occlusion light transport computes)");
-  if (pbr.metallicRoughnessTexture.index >= 0)
-    ignored.push_back(named + ": metallicRoughnessTexture (the roughness of the specular lobe, itself left out; "
-                      "metallicFactor 0 makes every texel a dielectric)");
-  if (!(pbr.metallicFactor >= 0 && pbr.metallicFactor <= 1)) c.fail(path + ".pbrMetallicRoughness.metallicFactor", "must be in [0, 1]");
-  if (pbr.metallicFactor > 0)
-    c.fail(path + ".pbrMetallicRoughness.metallicFactor",
-           "metals (metallicFactor " + std::to_string(pbr.metallicFactor) + ") need glTF's GGX material model, which "
-           "Lucent does not render yet");
-  if (pbr.baseColorFactor.size() != 4) c.fail(path + ".pbrMetallicRoughness.baseColorFactor", "expected 4 numbers");
+  if (pbr.baseColorFactor.size() != 4) c.fail(pbrPath + ".baseColorFactor", "expected 4 numbers");
   for (const double v : pbr.baseColorFactor)
-    if (!(v >= 0 && v <= 1)) c.fail(path + ".pbrMetallicRoughness.baseColorFactor", "every value must be in [0, 1]");
+    if (!(v >= 0 && v <= 1)) c.fail(pbrPath + ".baseColorFactor", "every value must be in [0, 1]");
   MaterialSpec spec;
   spec.name = m.name.empty() ? path : m.name;
   spec.origin = c.file + ": " + path;
-  spec.type = MaterialType::Diffuse;
+  spec.type = type;
   spec.kd = Rgb(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
+  spec.metallic = float(unitNumber(c, pbr.metallicFactor, pbrPath + ".metallicFactor"));
+  spec.roughness = float(unitNumber(c, pbr.roughnessFactor, pbrPath + ".roughnessFactor"));
+  if (spec.roughness * spec.roughness < kMinGgxAlpha)
+    ignored.push_back(named + ": roughness below " + std::to_string(std::sqrt(kMinGgxAlpha)).substr(0, 6) +
+                      " (rendered as " + std::to_string(std::sqrt(kMinGgxAlpha)).substr(0, 6) + ")");
+  // Every texture of a material reads one set of texture coordinates, transformed one way: the
+  // triangles carry one pair per vertex.
+  bool haveCoordinates = false;
+  const auto texture = [&](const tinygltf::TextureInfo& info, const std::string& at, const std::string& what) {
+    TextureCoordinates own;
+    TextureFile file = textureImage(c, info, at, named, what, own, ignored);
+    if (haveCoordinates && (own.set != coordinates.set || own.transform != coordinates.transform))
+      c.fail(at, "reads TEXCOORD_" + std::to_string(own.set) + " or a KHR_texture_transform other than the material's "
+                 "other textures; Lucent gives a material's textures one set of coordinates");
+    coordinates = own;
+    haveCoordinates = true;
+    return file;
+  };
   if (pbr.baseColorTexture.index >= 0)
-    baseColourTexture(c, pbr.baseColorTexture, path + ".pbrMetallicRoughness.baseColorTexture", named, spec,
-                      coordinates, ignored);
+    spec.mapKd = texture(pbr.baseColorTexture, pbrPath + ".baseColorTexture", "base colour texture");
+  if (pbr.metallicRoughnessTexture.index >= 0)
+    spec.metallicRoughness = texture(pbr.metallicRoughnessTexture, pbrPath + ".metallicRoughnessTexture",
+                                     "metallic-roughness texture");
   double strength = 1;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_emissive_strength"))
     strength = number(*e, "emissiveStrength", 1);
@@ -384,27 +415,30 @@ MaterialSpec materialSpec(const Context& c, size_t index, TextureCoordinates& co
     ignored.push_back(named + ": alphaMode " + m.alphaMode + " (the surfaces are opaque; the base colour's alpha is not used)");
   if (!spec.ke.isBlack() && m.doubleSided)
     ignored.push_back(named + ": doubleSided emission (its triangles emit from their front faces only)");
-  // Appendix B's dielectric: fresnel_mix of the Lambertian base and a GGX lobe, whose Fresnel term
-  // runs from F0 at normal incidence to F90 at grazing angles (KHR_materials_specular,
-  // KHR_materials_ior). The lobe is left out where F90 > 0.
-  double specular = 1, ior = 1.5, specularColour = 1;
+  // Appendix B's dielectric, its Fresnel term from KHR_materials_ior and KHR_materials_specular.
+  spec.ks = Rgb(1.0f);
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_specular")) {
-    specular = number(*e, "specularFactor", 1);
-    if (e->Has("specularColorFactor") && e->Get("specularColorFactor").IsArray()) {
+    const std::string at = path + ".extensions.KHR_materials_specular";
+    spec.specular = float(unitNumber(c, number(*e, "specularFactor", 1), at + ".specularFactor"));
+    if (e->Has("specularColorFactor")) {
       const tinygltf::Value& colour = e->Get("specularColorFactor");
-      specularColour = 0;
-      for (size_t k = 0; k < colour.ArrayLen(); ++k)
-        specularColour = std::max(specularColour, colour.Get(int(k)).IsNumber() ? colour.Get(int(k)).GetNumberAsDouble() : 0.0);
+      if (!colour.IsArray() || colour.ArrayLen() != 3) c.fail(at + ".specularColorFactor", "expected 3 numbers");
+      for (int k = 0; k < 3; ++k) {
+        const tinygltf::Value& v = colour.Get(k);
+        const double x = v.IsNumber() ? v.GetNumberAsDouble() : v.IsInt() ? double(v.GetNumberAsInt()) : -1;
+        if (!(x >= 0 && x <= kMaxInputMagnitude)) c.fail(at + ".specularColorFactor", "every value must be in [0, 1e15]");
+        spec.ks[k] = float(x);
+      }
     }
-    if (e->Has("specularTexture") || e->Has("specularColorTexture")) c.fail(path + ".extensions.KHR_materials_specular", "textures in glTF files are not read yet");
+    if (e->Has("specularTexture") || e->Has("specularColorTexture")) c.fail(at, "specular textures are not read yet");
   }
-  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_ior")) ior = number(*e, "ior", 1.5);
-  if (specular > 0) {
-    const double f0 = std::min(std::pow((ior - 1) / (ior + 1), 2) * specularColour, 1.0) * specular;
-    char lobe[160];
-    std::snprintf(lobe, sizeof lobe, "the dielectric's GGX specular lobe (roughness %.3g, F0 up to %.3g, F90 %.3g)",
-                  pbr.roughnessFactor, f0, specular);
-    ignored.push_back(named + ": " + lobe + ": rendered as Lambertian diffuse with its base colour alone");
+  spec.ni = 1.5f;
+  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_ior")) {
+    const double ior = number(*e, "ior", 1.5);
+    // The extension allows 0 (F0 = 1, for specular-glossiness conversions) and [1, inf).
+    if (!(ior == 0 || (ior >= 1 && ior <= kMaxInputMagnitude)))
+      c.fail(path + ".extensions.KHR_materials_ior.ior", "must be 0 or in [1, 1e15]");
+    spec.ni = float(ior);
   }
   return spec;
 }
@@ -415,20 +449,19 @@ struct NodeWalk {
   Scene& scene;
   ObjImport& import;
   GltfContent& content;
+  double lumensPerWatt;
+  MaterialType materialType;               // Gltf or GltfHeightCorrelated
   std::map<int, uint32_t> materialOf;      // glTF material (-1: the default) -> spec
   std::map<int, TextureCoordinates> coordinatesOf;  // glTF material -> what its base colour texture reads
   uint64_t skippedPrimitives = 0;      // points and lines
 
   uint32_t material(int index, const std::string& user) {
     if (const auto it = materialOf.find(index); it != materialOf.end()) return it->second;
-    MaterialSpec spec;
-    if (index < 0) {
-      // The specification's default material is a white rough metal; refused as metals are.
-      c.fail(user, "has no material, and glTF's default material is a metal, which Lucent does not render yet");
-    }
-    if (size_t(index) >= c.model.materials.size()) c.fail(user, "material " + std::to_string(index) + " does not exist");
+    if (index >= 0 && size_t(index) >= c.model.materials.size())
+      c.fail(user, "material " + std::to_string(index) + " does not exist");
     TextureCoordinates coordinates;
-    spec = materialSpec(c, size_t(index), coordinates, scene.ignored);
+    MaterialSpec spec = index < 0 ? defaultMaterial(c, materialType)
+                                  : materialSpec(c, size_t(index), materialType, coordinates, scene.ignored);
     coordinatesOf.emplace(index, coordinates);
     std::string name = spec.name;
     if (import.materialIndex.count(name)) name += " (" + c.file + ": " + at("materials", size_t(index)) + ")";
@@ -557,7 +590,7 @@ struct NodeWalk {
       }
     }
     if (!(l.intensity >= 0 && l.intensity <= 1e15)) c.fail(lightPath + ".intensity", "must be in [0, 1e15]");
-    const Rgb value = colour * float(l.intensity / kLumensPerWatt);
+    const Rgb value = colour * float(l.intensity / lumensPerWatt);
     if (l.range > 0) scene.ignored.push_back(c.file + ": " + lightPath + ".range (the light reaches every distance)");
     Light light;
     light.value = value;
@@ -664,7 +697,8 @@ bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string
 
 }  // namespace
 
-void importGltf(const std::string& path, Scene& scene, ObjImport& import, GltfContent& content) {
+void importGltf(const std::string& path, const GltfOptions& options, Scene& scene, ObjImport& import,
+                GltfContent& content) {
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keepImageBytes, nullptr);
   loader.SetFsCallbacks({regularFileExists, pathAsWritten, readRegularFile, writeNothing, nullptr});
@@ -680,7 +714,7 @@ void importGltf(const std::string& path, Scene& scene, ObjImport& import, GltfCo
   }
   const Context c{model, path};
   for (const std::string& name : model.extensionsRequired)
-    if (!kSupportedExtensions.count(name) || name == "KHR_materials_specular" || name == "KHR_materials_ior")
+    if (!kSupportedExtensions.count(name))
       c.fail("extensionsRequired", "names " + name + ", which Lucent does not render");
   for (const std::string& name : model.extensionsUsed)
     if (!kSupportedExtensions.count(name)) scene.ignored.push_back(path + ": extension " + name + " (not read)");
@@ -694,7 +728,7 @@ void importGltf(const std::string& path, Scene& scene, ObjImport& import, GltfCo
   if (model.scenes.empty()) c.fail("scenes", "the file has no scene");
   const size_t sceneIndex = model.defaultScene >= 0 ? size_t(model.defaultScene) : 0;
   if (sceneIndex >= model.scenes.size()) c.fail("scene", "scene " + std::to_string(sceneIndex) + " does not exist");
-  NodeWalk walk{c, scene, import, content, {}, {}, 0};
+  NodeWalk walk{c, scene, import, content, options.lumensPerWatt, options.heightCorrelated ? MaterialType::GltfHeightCorrelated : MaterialType::Gltf, {}, {}, 0};
   std::vector<bool> onPath(model.nodes.size(), false);
   for (const int root : model.scenes[sceneIndex].nodes) walk.node(root, Matrix4{}, 0, onPath);
   if (walk.skippedPrimitives > 0)

@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 
+#include "lucent/scene/loader.h"
 #include "lucent/scene/scene.h"
 #include "obj_import.h"
 
@@ -19,6 +20,7 @@ struct GltfContent {
 // placed by the node's world transform (a mesh used by several nodes is placed once for each),
 // with their materials as specs in `import`, and the scene's KHR_lights_punctual lights. What the
 // render leaves out of the file is listed in scene.ignored. Throws SceneError.
-void importGltf(const std::string& path, Scene& scene, ObjImport& import, GltfContent& content);
+void importGltf(const std::string& path, const GltfOptions& options, Scene& scene, ObjImport& import,
+                GltfContent& content);
 
 }  // namespace lucent::detail

@@ -115,6 +115,18 @@ std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string
   }, false, read);
 }
 
+// 8-bit linear texels packed as readSrgb8Texels packs them (glTF's data textures: metallic and
+// roughness): each stored value in [0, 1] to its nearest code, whatever colour space the file
+// declares, since glTF defines these channels as linear values.
+std::vector<uint32_t> readUnorm8Texels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h,
+                                       const std::function<Image(ImageMetadata*)>& read) {
+  return readImageTexels(path, context, w, h, [](const float* stored, bool) {
+    uint32_t packed = 0xffu << 24;
+    for (int k = 0; k < 3; ++k) packed |= uint32_t(std::lround(255.0f * std::clamp(stored[k], 0.0f, 1.0f))) << (8 * k);
+    return packed;
+  }, false, read);
+}
+
 std::string resolve(const fs::path& base, const std::string& relative) {
   return (base / relative).lexically_normal().string();
 }
@@ -162,9 +174,9 @@ void applyMaterialOverride(JsonFields fields, detail::MaterialSpec& spec, const 
   if (fields.has("Ns")) spec.ns = fields.number("Ns");
   if (fields.has("Ni")) spec.ni = fields.number("Ni");
   if (fields.has("map_Kd")) {
-    spec.mapKd = resolve(base, fields.string("map_Kd"));
-    spec.mapKdOrigin = fields.file() + ": " + fields.keyPath("map_Kd");
-    requireFile(fields, "map_Kd", spec.mapKd);
+    spec.mapKd.path = resolve(base, fields.string("map_Kd"));
+    spec.mapKd.origin = fields.file() + ": " + fields.keyPath("map_Kd");
+    requireFile(fields, "map_Kd", spec.mapKd.path);
   }
   fields.finish();
 }
@@ -312,22 +324,31 @@ namespace {
 // what every scene shares once its triangles are in.
 void finishScene(Scene& scene, const detail::ObjImport& import, const std::string& path, const LoadOptions& options) {
   scene.inputFiles.insert(scene.inputFiles.end(), import.libraries.begin(), import.libraries.end());
+  // An image as a texture of 8-bit texels: sRGB for colour, linear for data.
+  const auto addTexture = [&](const detail::TextureFile& file, const std::string& name, const std::string& role,
+                              bool colour) {
+    const bool embedded = !file.bytes.empty();
+    if (!embedded) scene.inputFiles.push_back(file.path);
+    Texture tex;
+    tex.offset = static_cast<uint32_t>(scene.texels.size());
+    const std::function<Image(ImageMetadata*)> read =
+        embedded ? std::function<Image(ImageMetadata*)>([&](ImageMetadata* metadata) {
+          return readImageFromMemory(file.path, fs::path(file.path).extension().string(), file.bytes, metadata);
+        })
+                 : std::function<Image(ImageMetadata*)>();
+    const std::string context = file.origin + ": material '" + name + "' " + role;
+    const auto texels = colour ? readSrgb8Texels(file.path, context, tex.width, tex.height, read)
+                               : readUnorm8Texels(file.path, context, tex.width, tex.height, read);
+    scene.texels.insert(scene.texels.end(), texels.begin(), texels.end());
+    scene.textures.push_back(tex);
+    return static_cast<int32_t>(scene.textures.size() - 1);
+  };
   for (const auto& spec : import.specs) {
     Material m = detail::classifyMaterial(spec);
-    if (!spec.mapKd.empty()) {
-      const bool embedded = !spec.mapKdBytes.empty();
-      if (!embedded) scene.inputFiles.push_back(spec.mapKd);
-      Texture tex;
-      tex.offset = static_cast<uint32_t>(scene.texels.size());
-      const auto texels = readSrgb8Texels(
-          spec.mapKd, spec.mapKdOrigin + ": material '" + spec.name + "' " + (embedded ? "base colour texture" : "map_Kd"),
-          tex.width, tex.height, embedded ? std::function<Image(ImageMetadata*)>([&](ImageMetadata* metadata) {
-            return readImageFromMemory(spec.mapKd, fs::path(spec.mapKd).extension().string(), spec.mapKdBytes, metadata);
-          }) : std::function<Image(ImageMetadata*)>());
-      scene.texels.insert(scene.texels.end(), texels.begin(), texels.end());
-      m.kdTexture = static_cast<int32_t>(scene.textures.size());
-      scene.textures.push_back(tex);
-    }
+    if (!spec.mapKd.empty())
+      m.kdTexture = addTexture(spec.mapKd, spec.name, spec.mapKd.bytes.empty() ? "map_Kd" : "base colour texture", true);
+    if (isGltf(m.type) && !spec.metallicRoughness.empty())
+      m.metallicRoughnessTexture = addTexture(spec.metallicRoughness, spec.name, "metallic-roughness texture", false);
     scene.materials.push_back(m);
     scene.materialNames.push_back(spec.name);
   }
@@ -369,7 +390,7 @@ Scene loadGltfScene(const std::string& path, const LoadOptions& options) {
   scene.inputFiles.push_back(path);
   detail::ObjImport import;
   detail::GltfContent content;
-  detail::importGltf(path, scene, import, content);
+  detail::importGltf(path, options.gltf, scene, import, content);
   if (!content.camera) throw SceneError(path + ": the file's scene has no camera (render it from a scene file that gives one)");
   scene.camera = *content.camera;
   if (scene.triangleCount() == 0) throw SceneError(path + ": the scene has no (non-degenerate) triangles");
@@ -404,11 +425,23 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
       // Its triangles, materials and lights; the scene file gives the camera.
       const std::string gltf = resolve(base, mesh.string("gltf"));
       requireFile(mesh, "gltf", gltf);
+      GltfOptions gltfOptions = options.gltf;
+      if (mesh.has("masking")) {
+        const std::string masking = mesh.string("masking");
+        if (masking != "separable" && masking != "height-correlated")
+          mesh.failKey("masking", "expected separable or height-correlated");
+        gltfOptions.heightCorrelated = masking == "height-correlated";
+      }
+      if (mesh.has("lumens_per_watt")) {
+        gltfOptions.lumensPerWatt = mesh.number("lumens_per_watt");
+        if (!(gltfOptions.lumensPerWatt > 0 && gltfOptions.lumensPerWatt <= 1e6))
+          mesh.failKey("lumens_per_watt", "must be in (0, 1e6]");
+      }
       mesh.finish();
       if (!isGltf(gltf)) mesh.failKey("gltf", "expected a .gltf or .glb file");
       scene.inputFiles.push_back(gltf);
       detail::GltfContent content;
-      detail::importGltf(gltf, scene, import, content);
+      detail::importGltf(gltf, gltfOptions, scene, import, content);
       continue;
     }
     const std::string obj = resolve(base, mesh.string("obj"));

@@ -136,8 +136,8 @@ std::vector<MaterialSpec> readMtl(const std::string& path) {
       const fs::path texture = fs::path(path).parent_path() / t[1];
       const std::string problem = regularFileProblem(texture);
       if (!problem.empty()) failAt(path, line, "texture '" + excerpt(t[1], 160) + "' " + problem);
-      spec.mapKd = fs::absolute(texture).lexically_normal().string();
-      spec.mapKdOrigin = path + ":" + std::to_string(line);
+      spec.mapKd.path = fs::absolute(texture).lexically_normal().string();
+      spec.mapKd.origin = path + ":" + std::to_string(line);
     } else if (!ignoredKeys.count(key)) {
       failAt(path, line, "unknown MTL key '" + excerpt(key, 16) + "'");
     }
@@ -409,6 +409,9 @@ Material classifyMaterial(const MaterialSpec& spec) {
   m.ke = spec.ke;
   m.ns = spec.ns;
   m.ni = spec.ni;
+  m.metallic = spec.metallic;
+  m.roughness = spec.roughness;
+  m.specular = spec.specular;
   if (spec.type) {
     m.type = *spec.type;
   } else {
@@ -437,6 +440,14 @@ Material classifyMaterial(const MaterialSpec& spec) {
     case MaterialType::Mirror:
       if (spec.ks.maxComponent() > 1.0f) fail("mirror reflectance Ks exceeds 1");
       m.kd = Rgb(0.0f);
+      break;
+    case MaterialType::Gltf:
+    case MaterialType::GltfHeightCorrelated:
+      // The glTF import checks each value against its JSON path; these are the model's own bounds.
+      if (!(spec.kd.maxComponent() <= 1) || !(m.metallic >= 0 && m.metallic <= 1) ||
+          !(m.roughness >= 0 && m.roughness <= 1) || !(m.specular >= 0 && m.specular <= 1) || !(m.ni >= 0) ||
+          !std::isfinite(m.ni) || !std::isfinite(m.ks.maxComponent()))
+        fail("glTF parameters out of their ranges");
       break;
     case MaterialType::Glass:
       if (!(m.ni > 0) || !std::isfinite(m.ni) || m.ni == 1.0f)

@@ -9,17 +9,25 @@
 
 namespace lucent::detail {
 
-// A material as written in an MTL file (and then completed by the scene file), before it is
-// classified into a Lucent material.
+// An image a material reads: a file, or a glTF file's image held in memory.
+struct TextureFile {
+  std::string path;                  // absolute path, empty for none; for `bytes`, a name ending .png or .jpg
+  std::vector<unsigned char> bytes;  // the image's file held in memory (a glTF file's image), or none
+  std::string origin;                // "file:line" (or the scene's key, or the glTF path) that names it
+  bool empty() const { return path.empty(); }
+};
+
+// A material as written in an MTL file or a glTF file (and then completed by the scene file),
+// before it is classified into a Lucent material.
 struct MaterialSpec {
   std::string name;
   Rgb kd{0.0f}, ks{0.0f}, ke{0.0f}, tf{0.0f};
   float ns = 1.0f, ni = 1.0f;
   int illum = 0;
-  std::string mapKd;                 // absolute path, empty for none; for mapKdBytes, a name ending .png or .jpg
-  std::vector<unsigned char> mapKdBytes;  // the texture's file held in memory (a glTF file's image), or none
-  std::string mapKdOrigin;           // "file:line" (or the scene's key) that names it
-  std::optional<MaterialType> type;  // set by the scene file's "type"
+  TextureFile mapKd;                 // map_Kd, or a glTF base colour texture (sRGB)
+  std::optional<MaterialType> type;  // set by the scene file's "type" or by the glTF import
+  float metallic = 0.0f, roughness = 1.0f, specular = 1.0f;  // glTF only
+  TextureFile metallicRoughness;     // glTF only (linear)
   std::string origin;                // "file:line" of its definition, for error messages
 };
 

@@ -31,7 +31,7 @@ namespace {
 const std::string kPrimitives = LUCENT_SOURCE_DIR "/scenes/primitives.json";
 
 Scene loadAt(const std::string& path, int width, int height) {
-  Scene scene = loadScene(path, {.quiet = true});
+  Scene scene = loadScene(path, LoadOptions(true));
   scene.camera.width = width, scene.camera.height = height;
   scene.contentHash = sceneContentHash(scene);
   return scene;

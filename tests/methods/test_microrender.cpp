@@ -396,7 +396,7 @@ TEST_CASE("Every pixel of a micro-buffer shows a node that its ray meets", "[mic
   // sample ray from the gather point: a leaf's one-sided disc, or an interior node's bounding sphere
   // within its slab (MicroHierarchy::thickness). Points on the Cornell box's walls and blocks, both
   // mappings and splat reaches, a diffuse and a glossy receiver.
-  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", LoadOptions(true));
   for (const int reach : {1, 2})
     for (const MappingKind kind : kAllMappings) {
       size_t leafPixels = 0, interiorPixels = 0;
@@ -448,7 +448,7 @@ TEST_CASE("An interior node in a micro-buffer reaches every pixel whose ray cros
   // its slab, whatever the slab's thickness) holds it or something no farther (the depth code of the
   // node's centre). Cornell box, both mappings and reaches, diffuse and glossy receivers.
   // Also measures the sheared warped pixels' misses (below).
-  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", LoadOptions(true));
   for (const int reach : {1, 2})
     for (const MappingKind kind : kAllMappings) {
       size_t checked = 0, wide = 0, violations = 0;
@@ -549,7 +549,7 @@ TEST_CASE("Packed and float nodes give nearly the same micro-buffers", "[microre
   // The Cornell box, gathered at points on its floor and walls: the packed nodes (16-bit positions,
   // 5-bit normals, 8-bit cones, half-float radiance) see the same node in most pixels, and the
   // convolution of a radiance that varies across the box differs by well under 1%.
-  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", LoadOptions(true));
   auto radiance = [](Vec3 p) { return Rgb(1.0f + p.x / 556.0f, 1.0f + p.y / 556.0f, 2.0f - p.z / 556.0f); };
   const GatherSetup packed(scene, 1u << 14, NodeEncoding::Packed, MappingKind::Warped, true, +radiance);
   const GatherSetup floats(scene, 1u << 14, NodeEncoding::Float, MappingKind::Warped, true, +radiance);
@@ -583,7 +583,7 @@ TEST_CASE("A packet of gather points gives every lane the buffer it gets alone",
   // different ways, diffuse and glossy receivers mixed (lanes with different tables), with every
   // mapping, both encodings, ray casting on and off, and 8 x 8 buffers over 2^9 large leaves whose
   // short post-traversal lists fill up and are flushed mid-traversal; splats of both reaches.
-  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", LoadOptions(true));
   const auto& sites = kCornellSites;
   const std::array<SurfaceBsdf, 2> bsdfs = diffuseAndGlossy();
   for (const NodeEncoding encoding : {NodeEncoding::Float, NodeEncoding::Packed})
@@ -708,7 +708,7 @@ double relMse(const Image& a, const Image& b, const std::string& first = "R") {
 
 // The Cornell box at size x size pixels.
 Scene cornellBoxAt(int size) {
-  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {.quiet = true});
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", LoadOptions(true));
   scene.camera.width = scene.camera.height = size;
   return scene;
 }

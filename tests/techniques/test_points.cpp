@@ -28,7 +28,7 @@ using namespace lucent;
 namespace {
 
 const Scene& cornellBox() {
-  static const Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + "/scenes/cornell-box.json", {.quiet = true});
+  static const Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + "/scenes/cornell-box.json", LoadOptions(true));
   return scene;
 }
 

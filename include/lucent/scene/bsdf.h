@@ -5,15 +5,24 @@
 #include <cmath>
 
 #include "lucent/core/sampling.h"
+#include "lucent/scene/ggx.h"
 #include "lucent/scene/scene.h"
 
 namespace lucent {
 
-// A material at a surface point, with the diffuse albedo already looked up in its texture.
+// A material at a surface point, with its textures looked up. For glTF's metallic-roughness
+// material (isGltf) the fields hold Appendix B's BRDF with the metal/dielectric mix expanded:
+//   f = kd / pi (1 - Fd) + F D G / (4 |n.wo| |n.wi|),
+//   F  = ks + (f90 - ks) (1 - |wo.h|)^5           (the mixed Fresnel term, per channel),
+//   Fd = dielectricF0 + (dielectricF90 - dielectricF0) (1 - |wo.h|)^5   (its dielectric's largest
+//        channel, which the diffuse base loses: KHR_materials_specular's max_value),
+// kd = (1 - metallic) base colour, D the GGX distribution of roughness alpha, G Smith's
+// masking-shadowing in the type's form (ggx.h).
 struct SurfaceBsdf {
   MaterialType type = MaterialType::Diffuse;
   Rgb kd, ks;
   float ns = 1, ni = 1.5f;
+  float alpha = 1, f90 = 1, dielectricF0 = 0, dielectricF90 = 0;  // glTF only
 
   bool isDelta() const { return type == MaterialType::Mirror || type == MaterialType::Glass; }
   // Probability of choosing the diffuse lobe when sampling a Phong material.
@@ -22,6 +31,20 @@ struct SurfaceBsdf {
     return d + s > 0 ? d / (d + s) : 1.0f;
   }
 };
+
+// The reflectance a first hit records in the albedo layer: the diffuse and specular albedos (a
+// glTF material's at normal incidence), a mirror's tint, 1 for glass.
+inline Rgb layerAlbedo(const SurfaceBsdf& b) {
+  return b.type == MaterialType::Mirror ? b.ks : b.type == MaterialType::Glass ? Rgb(1.0f) : b.kd + b.ks;
+}
+
+// An upper bound of the light the surface reflects, per channel, for Russian roulette by
+// reflectance; a glTF material's Fresnel term reaches f90 at grazing angles.
+inline Rgb reflectanceBound(const SurfaceBsdf& b) {
+  if (isGltf(b.type))
+    return b.kd + Rgb(std::max(b.ks.r, b.f90), std::max(b.ks.g, b.f90), std::max(b.ks.b, b.f90));
+  return layerAlbedo(b);
+}
 
 // Radiance is transported from the camera; importance (photon flux) from the lights. They differ in
 // refraction, where radiance is scaled by (eta_i / eta_t)^2 and flux is not (Veach 1997, 5.2).
@@ -74,8 +97,38 @@ inline BsdfSample sampleLambertian(Rgb kd, float woZ, Vec2 u) {
   return s;
 }
 
+// glTF's Schlick weight (1 - |wo.h|)^5, the share of the way from F0 to F90.
+inline float schlickWeight(float cosWoH) {
+  const float x = 1.0f - std::min(1.0f, std::abs(cosWoH));
+  const float x2 = x * x;
+  return x2 * x2 * x;
+}
+
+// Probability of choosing the GGX lobe when sampling a glTF material: the share of its two lobes'
+// weights at the Fresnel term of n.wo, the visible-normal distribution's centre.
+inline float gltfSpecularChoice(const SurfaceBsdf& b, float woZ) {
+  const float w = schlickWeight(woZ);
+  const float specular = (b.ks + (Rgb(b.f90) - b.ks) * w).average();
+  const float diffuse = b.kd.average() * (1.0f - (b.dielectricF0 + (b.dielectricF90 - b.dielectricF0) * w));
+  return specular + diffuse > 0 ? specular / (specular + diffuse) : 0.0f;
+}
+
+inline BsdfValue gltfValue(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
+  const Vec3 h = normalize(wo + wi);
+  const float w = schlickWeight(dot(wo, h));
+  const Rgb F = b.ks + (Rgb(b.f90) - b.ks) * w;
+  const float diffuseWeight = 1.0f - (b.dielectricF0 + (b.dielectricF90 - b.dielectricF0) * w);
+  const float G = b.type == MaterialType::Gltf ? smithSeparable(b.alpha, wo.z, wi.z)
+                                               : smithHeightCorrelated(b.alpha, wo.z, wi.z);
+  const float specular = ggxD(b.alpha, h) * G / (4.0f * wo.z * wi.z);
+  const float ps = gltfSpecularChoice(b, wo.z);
+  return {b.kd * (kInvPi * diffuseWeight) + F * specular,
+          ps * ggxReflectionPdf(b.alpha, wo, wi) + (1.0f - ps) * cosineHemispherePdf(wi.z)};
+}
+
 inline BsdfValue evalBsdfAndPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
   if (b.isDelta() || wo.z <= 0 || wi.z <= 0) return {Rgb(0.0f), 0.0f};
+  if (isGltf(b.type)) return gltfValue(b, wo, wi);
   BsdfValue v = lambertianValue(b.kd, wo.z, wi.z);
   if (b.type == MaterialType::Phong) {
     // A cosine, rounded: above 1 by an ulp or two, its power overflowed for exponents of 1e8 and
@@ -126,6 +179,22 @@ inline BsdfSample sampleBsdf(const SurfaceBsdf& b, Vec3 wo, float u, Vec2 u2,
       return s;
     }
     case MaterialType::Diffuse: return sampleLambertian(b.kd, wo.z, u2);
+    case MaterialType::Gltf:
+    case MaterialType::GltfHeightCorrelated: {
+      if (wo.z <= 0) return s;
+      if (u < gltfSpecularChoice(b, wo.z)) {
+        s.wi = reflect(wo, sampleGgxVisibleNormal(b.alpha, wo, u2));
+      } else {
+        s.wi = sampleCosineHemisphere(u2);
+      }
+      if (s.wi.z <= 0) return s;
+      const BsdfValue v = gltfValue(b, wo, s.wi);
+      s.pdf = v.pdf;
+      if (!(s.pdf > 0)) return s;
+      s.weight = v.f * (s.wi.z / s.pdf);
+      s.valid = true;
+      return s;
+    }
     case MaterialType::Phong: {
       if (wo.z <= 0) return s;
       if (u < b.diffuseChoice()) {

@@ -20,6 +20,16 @@ inline float ggxD(float alpha, float cosM) {
   return a2 / (kPi * d * d);
 }
 
+// D(m) from the unit normal's components, the same function written as 1 / (pi alpha^2 (x^2 /
+// alpha^2 + y^2 / alpha^2 + z^2)^2): exact to float rounding for small alpha, where 1 - cos^2 in
+// the form above loses every digit (alpha 1e-3: alpha^2 is below float's epsilon).
+inline float ggxD(float alpha, Vec3 m) {
+  if (!(m.z > 0)) return 0.0f;
+  const float x = m.x / alpha, y = m.y / alpha;
+  const float d = x * x + y * y + m.z * m.z;
+  return 1.0f / (kPi * alpha * alpha * d * d);
+}
+
 // Smith's Lambda for a direction at cosW = n.w (|cosW| taken): the microsurface's shadowed share.
 inline float smithLambda(float alpha, float cosW) {
   const float c2 = cosW * cosW;
@@ -60,7 +70,7 @@ inline Vec3 sampleGgxVisibleNormal(float alpha, Vec3 wo, Vec2 u) {
 
 inline float ggxVisibleNormalPdf(float alpha, Vec3 wo, Vec3 m) {
   if (!(wo.z > 0)) return 0.0f;
-  return smithG1(alpha, wo.z) * std::max(0.0f, dot(wo, m)) * ggxD(alpha, m.z) / wo.z;
+  return smithG1(alpha, wo.z) * std::max(0.0f, dot(wo, m)) * ggxD(alpha, m) / wo.z;
 }
 
 // The density of wi = wo reflected about a visible normal: D_wo(h) / (4 wo.h), h = normalize(wo +

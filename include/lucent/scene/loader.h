@@ -14,8 +14,21 @@ class SceneError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// How glTF files are read where the file leaves a choice to the renderer.
+struct GltfOptions {
+  // Smith's masking-shadowing term: Appendix B's separable product, or the height-correlated form
+  // of the Khronos sample renderer and many GPU engines (to compare a backend with the model it
+  // implements).
+  bool heightCorrelated = false;
+  // KHR_lights_punctual's photometric intensities (candela, lux) to Lucent's radiometric ones:
+  // lumens per watt (683, the luminous efficacy of 555 nm light, as Blender's importer uses).
+  double lumensPerWatt = 683.0;
+};
+
 struct LoadOptions {
   bool quiet = false;  // suppress warnings (e.g. dropped degenerate triangles) on stderr
+  GltfOptions gltf;    // for every glTF file, unless a scene file's entry sets its own
+  LoadOptions(bool quiet = false, GltfOptions gltf = {}) : quiet(quiet), gltf(gltf) {}
 };
 
 // A .gltf or .glb path loads that file with its first camera (512 pixels wide, as high as its aspect

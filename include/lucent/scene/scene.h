@@ -11,11 +11,18 @@
 
 namespace lucent {
 
-enum class MaterialType : uint32_t { Diffuse = 0, Phong = 1, Mirror = 2, Glass = 3 };
+// Gltf and GltfHeightCorrelated are glTF's metallic-roughness material (glTF 2.0, Appendix B), with
+// the Smith masking-shadowing term of the appendix (separable) or of the Khronos sample renderer
+// and many GPU engines (height-correlated): one type each, so that a kernel switches on the type.
+enum class MaterialType : uint32_t { Diffuse = 0, Phong = 1, Mirror = 2, Glass = 3, Gltf = 4, GltfHeightCorrelated = 5 };
+inline bool isGltf(MaterialType t) { return t == MaterialType::Gltf || t == MaterialType::GltfHeightCorrelated; }
 
 // Lambertian Kd (optionally textured) plus a normalized Phong lobe Ks (n+2)/(2 pi) cos^Ns;
 // mirror reflects with tint Ks; glass is a smooth dielectric of index Ni. Ke is one-sided emission
 // on the side of the counter-clockwise winding normal.
+// A glTF material keeps its parameters as the file gives them: Kd the base colour factor (times
+// the kdTexture), Ks the specular colour factor (KHR_materials_specular), Ni the index of refraction
+// (KHR_materials_ior), and the fields below; bsdfAt turns them into Appendix B's lobes.
 struct Material {
   MaterialType type = MaterialType::Diffuse;
   Rgb kd{0.5f};
@@ -24,12 +31,17 @@ struct Material {
   float ni = 1.5f;
   Rgb ke{0.0f};
   int32_t kdTexture = -1;  // index into Scene::textures, -1 for none
+  // glTF only.
+  float metallic = 0.0f, roughness = 1.0f;
+  float specular = 1.0f;                   // KHR_materials_specular's specularFactor
+  int32_t metallicRoughnessTexture = -1;   // linear; B scales metallic, G roughness
 };
-static_assert(sizeof(Material) == 52, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 68, "Material is a fixed-size record shared with GPU backends");
 
-// A reflectance texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1).
-// Texels are sRGB-encoded 8-bit RGBA packed in 32 bits (R in the low byte): reflectances lie in
-// [0, 1], the scenes' textures are 8-bit, and a third of the float size keeps lookups in cache.
+// A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
+// 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear
+// for data (metallicRoughnessTexture): reflectances lie in [0, 1], the scenes' textures are 8-bit,
+// and a third of the float size keeps lookups in cache.
 struct Texture {
   uint32_t offset = 0;
   uint32_t width = 0, height = 0;

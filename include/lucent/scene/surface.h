@@ -61,11 +61,52 @@ inline Vec2 texcoordsAt(const Scene& scene, const SurfacePoint& sp) {
   return {t0.x * b0 + t1.x * sp.b1 + t2.x * sp.b2, t0.y * b0 + t1.y * sp.b1 + t2.y * sp.b2};
 }
 
-inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
-  const Material& m = scene.materials[sp.materialId];
-  const Rgb kd = m.kdTexture < 0 ? m.kd : diffuseAlbedo(scene, m, texcoordsAt(scene, sp));
-  return {m.type, kd, m.ks, m.ns, m.ni};
+// The smallest GGX alpha rendered (roughness 0.0316): below it the lobe's peak, 1 / (pi alpha^2),
+// outgrows what float sampling weights resolve; a smoother glTF surface is listed in the ignored
+// content when its factor asks for one.
+constexpr float kMinGgxAlpha = 1e-3f;
+
+// Appendix B's metal/dielectric mix expanded into SurfaceBsdf's terms (bsdf.h) for base colour
+// `base`, from the file's factors times its metallic-roughness texture.
+inline SurfaceBsdf gltfBsdf(const Material& m, Rgb base, float metallic, float roughness) {
+  SurfaceBsdf b;
+  b.type = m.type;
+  // KHR_materials_ior and KHR_materials_specular: the dielectric's F0 from the index, coloured,
+  // clamped to 1, then weighted by the specular factor, which is also its F90.
+  const float r = (m.ni - 1.0f) / (m.ni + 1.0f);
+  const Rgb f0 = Rgb(std::min(r * r * m.ks.r, 1.0f), std::min(r * r * m.ks.g, 1.0f), std::min(r * r * m.ks.b, 1.0f)) *
+                 m.specular;
+  b.kd = base * (1.0f - metallic);
+  b.ks = f0 * (1.0f - metallic) + base * metallic;
+  b.f90 = m.specular * (1.0f - metallic) + metallic;
+  b.dielectricF0 = f0.maxComponent();
+  b.dielectricF90 = m.specular;
+  b.alpha = std::max(roughness * roughness, kMinGgxAlpha);
+  return b;
 }
 
+inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
+  const Material& m = scene.materials[sp.materialId];
+  const bool textured = m.kdTexture >= 0 || m.metallicRoughnessTexture >= 0;
+  const Vec2 uv = textured ? texcoordsAt(scene, sp) : Vec2{0, 0};
+  const Rgb kd = m.kdTexture < 0 ? m.kd : diffuseAlbedo(scene, m, uv);
+  if (isGltf(m.type)) {
+    float metallic = m.metallic, roughness = m.roughness;
+    if (m.metallicRoughnessTexture >= 0) {
+      const Rgb t = bilinear(bilinearFootprint(scene.textures[m.metallicRoughnessTexture], scene.texels.data(), uv),
+                             kUnorm8ToFloat);
+      metallic *= t.b;
+      roughness *= t.g;
+    }
+    return gltfBsdf(m, kd, metallic, roughness);
+  }
+  SurfaceBsdf b;
+  b.type = m.type;
+  b.kd = kd;
+  b.ks = m.ks;
+  b.ns = m.ns;
+  b.ni = m.ni;
+  return b;
+}
 
 }  // namespace lucent

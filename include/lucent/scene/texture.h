@@ -9,15 +9,21 @@
 
 namespace lucent {
 
-// Linear value of every 8-bit sRGB code.
+// Linear value of every 8-bit sRGB code (colour textures), and of every 8-bit code of a texture
+// that holds data, not colour (glTF's metallic-roughness and normal textures are linear).
 inline const std::array<float, 256> kSrgb8ToLinear = [] {
   std::array<float, 256> table{};
   for (int i = 0; i < 256; ++i) table[i] = srgbToLinear(i / 255.0f);
   return table;
 }();
+inline const std::array<float, 256> kUnorm8ToFloat = [] {
+  std::array<float, 256> table{};
+  for (int i = 0; i < 256; ++i) table[i] = i / 255.0f;
+  return table;
+}();
 
-inline Rgb decodeTexel(uint32_t texel) {
-  return {kSrgb8ToLinear[texel & 0xff], kSrgb8ToLinear[(texel >> 8) & 0xff], kSrgb8ToLinear[(texel >> 16) & 0xff]};
+inline Rgb decodeTexel(uint32_t texel, const std::array<float, 256>& decode = kSrgb8ToLinear) {
+  return {decode[texel & 0xff], decode[(texel >> 8) & 0xff], decode[(texel >> 16) & 0xff]};
 }
 
 // The four texels a bilinear lookup reads (wrapping around) and the weights between them; uv (0,0)
@@ -39,10 +45,10 @@ inline BilinearFootprint bilinearFootprint(const Texture& t, const uint32_t* tex
   return {texels + t.offset + size_t(y0) * t.width, texels + t.offset + size_t(y1) * t.width, x0, x1, x - fx, y - fy};
 }
 
-// Bilinear lookup, in linear space, with wrap-around.
-inline Rgb bilinear(const BilinearFootprint& f) {
-  const Rgb a = decodeTexel(f.row0[f.x0]) * (1 - f.tx) + decodeTexel(f.row0[f.x1]) * f.tx;
-  const Rgb b = decodeTexel(f.row1[f.x0]) * (1 - f.tx) + decodeTexel(f.row1[f.x1]) * f.tx;
+// Bilinear lookup of the decoded texels (linear for sRGB colour), with wrap-around.
+inline Rgb bilinear(const BilinearFootprint& f, const std::array<float, 256>& decode = kSrgb8ToLinear) {
+  const Rgb a = decodeTexel(f.row0[f.x0], decode) * (1 - f.tx) + decodeTexel(f.row0[f.x1], decode) * f.tx;
+  const Rgb b = decodeTexel(f.row1[f.x0], decode) * (1 - f.tx) + decodeTexel(f.row1[f.x1], decode) * f.tx;
   return a * (1 - f.ty) + b * f.ty;
 }
 inline Rgb bilinear(const Texture& t, const uint32_t* texels, Vec2 uv) {

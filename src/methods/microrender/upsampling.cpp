@@ -18,7 +18,7 @@ constexpr float kNormalPower = 16;
 // Below this sum of weights (bilinear weights sum to 1) the point is gathered instead.
 constexpr float kVanishingWeight = 0.05f;
 
-Rgb reflectance(const ShadingPoint& p) { return p.bsdf.kd + p.bsdf.ks; }
+Rgb reflectance(const ShadingPoint& p) { return layerAlbedo(p.bsdf); }
 
 Rgb demodulate(Rgb v, Rgb rho) {
   return {rho.r > 0 ? v.r / rho.r : 0.0f, rho.g > 0 ? v.g / rho.g : 0.0f, rho.b > 0 ? v.b / rho.b : 0.0f};

@@ -131,10 +131,7 @@ class PathTracer {
 
     if (frontFace) gatherEmission(path, hit.triangle, material, sp.position);
     const SurfaceBsdf bsdf = bsdfAt(scene_, sp);
-    path.recordFirstHit(bsdf.type == MaterialType::Diffuse || bsdf.type == MaterialType::Phong ? bsdf.kd + bsdf.ks
-                        : bsdf.type == MaterialType::Mirror                                  ? bsdf.ks
-                                                                                             : Rgb(1.0f),
-                        sp.shadingNormal, hit.t);
+    path.recordFirstHit(layerAlbedo(bsdf), sp.shadingNormal, hit.t);
     if (path.bounce + 1 > opt_.maxDepth) return false;
 
     // Glass keeps the winding orientation (inside/outside); other materials are two-sided.

@@ -74,7 +74,7 @@ size_t traceGatherRays(const Scene& scene, const Visibility& vis, const ShadingP
       if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
       const Frame f(n);
       if (!bsdf.isDelta()) {
-        if (!(bsdf.kd + bsdf.ks).isBlack())
+        if (!reflectanceBound(bsdf).isBlack())
           hits[found++] = {{sp.position, f, f.toLocal(wo), bsdf, frontFace ? sp.geometricNormal : -sp.geometricNormal},
                            weight};
         break;

@@ -59,7 +59,7 @@ BounceResult bounce(const Scene& scene, const PhotonPath& path, const Hit& hit, 
   const SurfaceBsdf bsdf = bsdfAt(scene, sp);
   const Vec3 wo = -path.ray.direction;
 
-  if (!bsdf.isDelta() && !(bsdf.kd + bsdf.ks).isBlack()) {
+  if (!bsdf.isDelta() && !reflectanceBound(bsdf).isBlack()) {
     // Stored with the ratio of the cosines that viewers above the shading normal see it with
     // (particle_scattering.h); one from below the shading normal adds nothing for them.
     const float arrival = particleArrivalRatio(sp, particleShadingNormal(bsdf, sp, wo), wo);
@@ -74,9 +74,7 @@ BounceResult bounce(const Scene& scene, const PhotonPath& path, const Hit& hit, 
   Rng rng(seed, path.index, depth + 1);
   // Russian roulette by reflectance: on a grey surface without shading normals the photon keeps
   // its power.
-  const float survival = bsdf.type == MaterialType::Glass    ? 1.0f
-                         : bsdf.type == MaterialType::Mirror ? std::min(1.0f, bsdf.ks.maxComponent())
-                                                             : std::min(1.0f, (bsdf.kd + bsdf.ks).maxComponent());
+  const float survival = std::min(1.0f, reflectanceBound(bsdf).maxComponent());
   if (!(rng.uniform() < survival)) return out;
   const float uLobe = rng.uniform();
   const ParticleScatter scatter = scatterParticle(bsdf, sp, wo, uLobe, rng.uniform2(), rng);

@@ -31,17 +31,19 @@ TriangleShape triangleShape(const Scene& scene, uint32_t tri) {
   return {g.normal, g.area};
 }
 
-// Diffuse albedo at the point, the texture looked up at its uv; specular materials (mirror, glass)
-// have no diffuse lobe and get 0.
+// Diffuse albedo at the point, its textures looked up at its uv (a glTF material's diffuse colour,
+// (1 - metallic) times the base colour); specular materials (mirror, glass) have no diffuse lobe and
+// get 0.
 Rgb pointAlbedo(const Scene& scene, const PointSample& s) {
   const Material& m = scene.materials[scene.materialIds[s.triangle]];
   if (m.type == MaterialType::Mirror || m.type == MaterialType::Glass) return Rgb(0.0f);
-  if (m.kdTexture < 0) return m.kd;
+  if (m.kdTexture < 0 && !isGltf(m.type)) return m.kd;
   SurfacePoint sp;
   sp.triangle = s.triangle;
+  sp.materialId = scene.materialIds[s.triangle];
   sp.b1 = s.b1;
   sp.b2 = s.b2;
-  return diffuseAlbedo(scene, m, texcoordsAt(scene, sp));
+  return bsdfAt(scene, sp).kd;
 }
 
 void computeLeaves(PointHierarchy& h, const Scene& scene) {
