@@ -366,8 +366,6 @@ MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, Tex
   const auto& pbr = m.pbrMetallicRoughness;
   const std::string pbrPath = path + ".pbrMetallicRoughness";
   if (m.emissiveTexture.index >= 0) c.fail(path + ".emissiveTexture", "emissive textures are not read yet");
-  if (m.normalTexture.index >= 0)
-    ignored.push_back(named + ": normalTexture (shading uses the interpolated vertex normals)");
   if (m.occlusionTexture.index >= 0)
     ignored.push_back(named + ": occlusionTexture (a rasterizer's stand-in for the occlusion light transport computes)");
   if (pbr.baseColorFactor.size() != 4) c.fail(pbrPath + ".baseColorFactor", "expected 4 numbers");
@@ -401,6 +399,16 @@ MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, Tex
   if (pbr.metallicRoughnessTexture.index >= 0)
     spec.metallicRoughness = texture(pbr.metallicRoughnessTexture, pbrPath + ".metallicRoughnessTexture",
                                      "metallic-roughness texture");
+  if (m.normalTexture.index >= 0) {
+    tinygltf::TextureInfo info;
+    info.index = m.normalTexture.index;
+    info.texCoord = m.normalTexture.texCoord;
+    info.extensions = m.normalTexture.extensions;
+    spec.normal = texture(info, path + ".normalTexture", "normal texture");
+    if (!(std::abs(m.normalTexture.scale) <= kMaxInputMagnitude))
+      c.fail(path + ".normalTexture.scale", "must be finite and at most 1e15");
+    spec.normalScale = float(m.normalTexture.scale);
+  }
   double strength = 1;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_emissive_strength"))
     strength = number(*e, "emissiveStrength", 1);
@@ -495,16 +503,23 @@ struct NodeWalk {
       normals = readAccessor(c, attribute("NORMAL"), path + ".attributes.NORMAL", TINYGLTF_TYPE_VEC3,
                              {TINYGLTF_COMPONENT_TYPE_FLOAT});
     const uint32_t materialId = material(p.material, path + ".material");
+    const bool normalMapped = !import.specs[materialId].normal.empty();
+    std::vector<double> tangents;
+    if (normalMapped && attribute("TANGENT") >= 0)
+      tangents = readAccessor(c, attribute("TANGENT"), path + ".attributes.TANGENT", TINYGLTF_TYPE_VEC4,
+                              {TINYGLTF_COMPONENT_TYPE_FLOAT});
     const TextureCoordinates& coordinates = coordinatesOf.at(p.material);
     const std::string texcoordName = "TEXCOORD_" + std::to_string(coordinates.set);
     if (attribute(texcoordName.c_str()) >= 0)
       texcoords = readAccessor(c, attribute(texcoordName.c_str()), path + ".attributes." + texcoordName, TINYGLTF_TYPE_VEC2,
                                {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
                                 TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
-    if ((!normals.empty() && normals.size() / 3 != vertices) || (!texcoords.empty() && texcoords.size() / 2 != vertices))
+    if ((!normals.empty() && normals.size() / 3 != vertices) || (!texcoords.empty() && texcoords.size() / 2 != vertices) ||
+        (!tangents.empty() && tangents.size() / 4 != vertices))
       c.fail(path + ".attributes", "its attributes differ in count from POSITION's " + std::to_string(vertices));
     for (const auto& [name, accessor] : p.attributes)
-      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && name != "TEXCOORD_1")
+      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && name != "TEXCOORD_1" &&
+          !(name == "TANGENT" && normalMapped))
         scene.ignored.push_back(c.file + ": " + path + ".attributes." + name + " (not read)");
     if (!p.targets.empty()) scene.ignored.push_back(c.file + ": " + path + ".targets (morph targets: the base shape is rendered)");
 
@@ -563,6 +578,7 @@ struct NodeWalk {
       const double tu = m[0] * u + m[1] * w + m[2], tw = m[3] * u + m[4] * w + m[5];
       scene.texcoords.push_back(texcoords.empty() ? Vec2{0, 0} : Vec2{float(tu), float(1 - tw)});
     }
+    if (normalMapped) placeTangents(tangents, world, mirrored, first, corners);
     for (size_t t = 0; t + 2 < corners.size(); t += 3) {
       uint32_t a = first + corners[t], b = first + corners[t + 1], d = first + corners[t + 2];
       if (mirrored) std::swap(b, d);
@@ -573,6 +589,54 @@ struct NodeWalk {
       }
       scene.indices.insert(scene.indices.end(), {a, b, d});
       scene.materialIds.push_back(materialId);
+    }
+  }
+
+  // The tangents of the vertices from `first` on: the file's (placed by the node's transform, the
+  // sign turned over by a mirroring one), or, where it gives none, from the texture coordinates,
+  // each triangle's dP/du and dP/dv summed at its corners (Lengyel's construction; MikkTSpace's
+  // without its splitting of vertices), the sign where the summed bitangent lies against
+  // cross(normal, tangent).
+  void placeTangents(const std::vector<double>& given, const Matrix4& world, bool mirrored, uint32_t first,
+                     const std::vector<uint32_t>& corners) {
+    scene.tangents.resize(scene.positions.size());
+    const size_t vertices = scene.positions.size() - first;
+    if (!given.empty()) {
+      for (size_t v = 0; v < vertices; ++v) {
+        const std::array<double, 3> d = world.direction(&given[4 * v]);
+        const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (!(len > 0) || !std::isfinite(len)) continue;  // no frame: the vertex normal
+        scene.tangents[first + v] = {{float(d[0] / len), float(d[1] / len), float(d[2] / len)},
+                                     (given[4 * v + 3] < 0) != mirrored ? -1.0f : 1.0f};
+      }
+      return;
+    }
+    std::vector<Vec3> bitangents(vertices, Vec3{0, 0, 0});
+    for (size_t t = 0; t + 2 < corners.size(); t += 3) {
+      const uint32_t i[3] = {first + corners[t], first + corners[t + 1], first + corners[t + 2]};
+      const Vec3 e1 = scene.positions[i[1]] - scene.positions[i[0]], e2 = scene.positions[i[2]] - scene.positions[i[0]];
+      const Vec2 uv0 = scene.texcoords[i[0]], uv1 = scene.texcoords[i[1]], uv2 = scene.texcoords[i[2]];
+      const float du1 = uv1.x - uv0.x, dv1 = uv1.y - uv0.y, du2 = uv2.x - uv0.x, dv2 = uv2.y - uv0.y;
+      const float det = du1 * dv2 - du2 * dv1;
+      if (!(std::abs(det) > 0) || !std::isfinite(det)) continue;
+      // Unnormalized by the triangle's uv area sign only: larger triangles weigh more.
+      const float s = det > 0 ? 1.0f : -1.0f;
+      const Vec3 tangent = (e1 * dv2 - e2 * dv1) * s, bitangent = (e2 * du1 - e1 * du2) * s;
+      for (const uint32_t k : i) {
+        scene.tangents[k].direction = scene.tangents[k].direction + tangent;
+        bitangents[k - first] = bitangents[k - first] + bitangent;
+      }
+    }
+    for (size_t v = 0; v < vertices; ++v) {
+      Tangent& t = scene.tangents[first + v];
+      const float len = length(t.direction);
+      if (!(len > 0) || !std::isfinite(len)) {
+        t = {};
+        continue;
+      }
+      t.direction = t.direction / len;
+      const Vec3 n = scene.normals[first + v] == Vec3{0, 0, 0} ? t.direction : scene.normals[first + v];
+      t.sign = dot(cross(n, t.direction), bitangents[v]) < 0 ? -1.0f : 1.0f;
     }
   }
 

@@ -349,9 +349,18 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
       m.kdTexture = addTexture(spec.mapKd, spec.name, spec.mapKd.bytes.empty() ? "map_Kd" : "base colour texture", true);
     if (isGltf(m.type) && !spec.metallicRoughness.empty())
       m.metallicRoughnessTexture = addTexture(spec.metallicRoughness, spec.name, "metallic-roughness texture", false);
+    // Normal textures perturb glTF materials' shading normals only: Lambertian hits are shaded in
+    // the path tracer's lanes, from the vertex normals.
+    if (isGltf(m.type) && !spec.normal.empty())
+      m.normalTexture = addTexture(spec.normal, spec.name, "normal texture", false);
+    else if (!spec.normal.empty())
+      scene.ignored.push_back(spec.origin + ": material '" + spec.name +
+                              "': its normal texture (the material is overridden as " +
+                              (m.type == MaterialType::Diffuse ? "diffuse" : "another type") + ")");
     scene.materials.push_back(m);
     scene.materialNames.push_back(spec.name);
   }
+  if (!scene.tangents.empty()) scene.tangents.resize(scene.positions.size());  // meshes read after a glTF file's
   // Light selection weighs lights by power; an emitter whose power overflows a float would break it.
   for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
     const uint32_t id = scene.materialIds[t];

@@ -412,6 +412,7 @@ Material classifyMaterial(const MaterialSpec& spec) {
   m.metallic = spec.metallic;
   m.roughness = spec.roughness;
   m.specular = spec.specular;
+  m.normalScale = spec.normalScale;
   if (spec.type) {
     m.type = *spec.type;
   } else {

@@ -28,6 +28,8 @@ struct MaterialSpec {
   std::optional<MaterialType> type;  // set by the scene file's "type" or by the glTF import
   float metallic = 0.0f, roughness = 1.0f, specular = 1.0f;  // glTF only
   TextureFile metallicRoughness;     // glTF only (linear)
+  TextureFile normal;                // glTF only (linear)
+  float normalScale = 1.0f;
   std::string origin;                // "file:line" of its definition, for error messages
 };
 

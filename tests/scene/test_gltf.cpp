@@ -14,6 +14,7 @@
 
 #include "lucent/image/image.h"
 #include "lucent/image/metrics.h"
+#include "lucent/scene/surface.h"
 #include "lucent/scene/texture.h"
 #include "lucent/scene/loader.h"
 #include "test_support.h"
@@ -430,4 +431,75 @@ TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read
     if (secondSet.positions[v] == Vec3{1, 0, 0}) CHECK(secondSet.texcoords[v].y == Approx(2.5).margin(1e-6));
   second["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 2;
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, second), Catch::Contains("baseColorTexture.texCoord: TEXCOORD_2 is not read"));
+}
+
+TEST_CASE("glTF normal and metallic-roughness textures are read as linear data; the normal tilts in the tangent frame",
+          "[gltf][loader]") {
+  const test::TempDir dir;
+  // 1 x 1 PNGs of known codes (Lucent's encoder writes the sRGB code of each linear value).
+  const auto png = [](std::array<int, 3> codes) {
+    Image image(1, 1, {"R", "G", "B"});
+    for (int c = 0; c < 3; ++c) image.at(0, 0, c) = kSrgb8ToLinear[size_t(codes[size_t(c)])];
+    return "data:image/png;base64," + base64(encodePng(image));
+  };
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  auto& material = f["materials"][0];
+  material["pbrMetallicRoughness"]["metallicFactor"] = 0.8;
+  material["pbrMetallicRoughness"]["roughnessFactor"] = 0.9;
+  material["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {{"index", 0}};
+  material["normalTexture"] = {{"index", 1}, {"scale", 2}};
+  f["textures"] = {{{"source", 0}}, {{"source", 1}}};
+  // Metallic 64/255 (B), roughness 128/255 (G); a normal of x 2 * 191/255 - 1, y 2 * 128/255 - 1,
+  // z 2 * 221/255 - 1 in tangent space.
+  f["images"] = {{{"uri", png({0, 128, 64})}}, {{"uri", png({191, 128, 221})}}};
+  const double x = 2 * 191 / 255.0 - 1, y = 2 * 128 / 255.0 - 1, z = 2 * 221 / 255.0 - 1;
+  // The quad lies in z = 0 facing +z; glTF's u runs along +x, its v along +y, so Lucent's v (1 - v)
+  // along -y: tangent +x, bitangent -y, sign -1.
+  const auto expectNormal = [&](const Scene& scene, double sx, double scale) {
+    REQUIRE(scene.tangents.size() == scene.positions.size());
+    for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
+      const SurfacePoint sp = surfaceAt(scene, t, 1 / 3.0f, 1 / 3.0f);
+      const double px = sx * x * scale, py = -y * scale, len = std::sqrt(px * px + py * py + z * z);
+      CHECK(sp.shadingNormal.x == Approx(px / len).margin(1e-5));
+      CHECK(sp.shadingNormal.y == Approx(py / len).margin(1e-5));
+      CHECK(sp.shadingNormal.z == Approx(z / len).margin(1e-5));
+    }
+  };
+  SECTION("tangents from the texture coordinates") {
+    const Scene scene = loadWrapped(dir.path, f);
+    const Material& m = scene.materials[0];
+    REQUIRE(m.metallicRoughnessTexture >= 0);
+    REQUIRE(m.normalTexture >= 0);
+    SurfacePoint sp = surfaceAt(scene, 0, 0.25f, 0.25f);
+    const SurfaceBsdf b = bsdfAt(scene, sp);
+    const double metallic = 0.8 * 64 / 255.0, roughness = 0.9 * 128 / 255.0;
+    CHECK(b.alpha == Approx(roughness * roughness).epsilon(1e-5));
+    CHECK(b.kd.r == Approx(0.5 * (1 - metallic)).epsilon(1e-5));
+    CHECK(b.ks.r == Approx(0.5 * metallic).epsilon(1e-5));  // the quad's specularFactor 0: no dielectric F0
+    expectNormal(scene, 1, 2);
+    // The default scale, 1.
+    f["materials"][0]["normalTexture"].erase("scale");
+    expectNormal(loadWrapped(dir.path, f), 1, 1);
+    // Mirrored by its node (x to -x): the tilt mirrors with the surface.
+    f["nodes"][0]["scale"] = {-1, 1, 1};
+    expectNormal(loadWrapped(dir.path, f), -1, 1);
+  }
+  SECTION("tangents as the file gives them") {
+    std::vector<unsigned char> tangents;
+    for (int v = 0; v < 4; ++v)
+      for (const float c : {1.0f, 0.0f, 0.0f, -1.0f}) append(tangents, c);
+    f["buffers"].push_back({{"byteLength", tangents.size()}, {"uri", "data:application/octet-stream;base64," + base64(tangents)}});
+    f["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", tangents.size()}});
+    f["accessors"].push_back({{"bufferView", 3}, {"componentType", 5126}, {"count", 4}, {"type", "VEC4"}});
+    f["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = 4;
+    expectNormal(loadWrapped(dir.path, f), 1, 2);
+    // The opposite sign turns the bitangent: y's sign flips.
+    std::vector<unsigned char> flipped;
+    for (int v = 0; v < 4; ++v)
+      for (const float c : {1.0f, 0.0f, 0.0f, 1.0f}) append(flipped, c);
+    f["buffers"][1]["uri"] = "data:application/octet-stream;base64," + base64(flipped);
+    const Scene scene = loadWrapped(dir.path, f);
+    const SurfacePoint sp = surfaceAt(scene, 0, 1 / 3.0f, 1 / 3.0f);
+    CHECK(sp.shadingNormal.y > 0);
+  }
 }

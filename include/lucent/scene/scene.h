@@ -35,8 +35,10 @@ struct Material {
   float metallic = 0.0f, roughness = 1.0f;
   float specular = 1.0f;                   // KHR_materials_specular's specularFactor
   int32_t metallicRoughnessTexture = -1;   // linear; B scales metallic, G roughness
+  int32_t normalTexture = -1;              // linear tangent-space normals, x and y scaled by normalScale
+  float normalScale = 1.0f;
 };
-static_assert(sizeof(Material) == 68, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 76, "Material is a fixed-size record shared with GPU backends");
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear
@@ -87,11 +89,21 @@ struct RenderBlock {
   std::vector<std::pair<std::string, std::string>> options;
 };
 
+// A vertex's tangent, for normal textures: the direction in which u grows, and the sign with which
+// the bitangent cross(normal, direction) * sign points where v grows (Lucent's v, which runs up the
+// image: glTF's TANGENT convention, MikkTSpace's).
+struct Tangent {
+  Vec3 direction;
+  float sign = 1.0f;
+};
+static_assert(sizeof(Tangent) == 16);
+
 struct Scene {
   // Vertices (one entry per unique position/normal/uv combination).
   std::vector<Vec3> positions;
   std::vector<Vec3> normals;    // shading normals; zero where the OBJ had none (geometric is used)
   std::vector<Vec2> texcoords;  // zero where the OBJ had none
+  std::vector<Tangent> tangents;  // empty, or one per vertex (zero direction where none is known)
   // Triangles.
   std::vector<uint32_t> indices;      // 3 per triangle
   std::vector<uint32_t> materialIds;  // 1 per triangle

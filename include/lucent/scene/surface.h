@@ -36,6 +36,33 @@ inline Vec3 shadingFrameNormal(Vec3 wo, Vec3 sn, Vec3 ng, bool twoSided) {
   return select(behind, -n, n);
 }
 
+inline Vec2 texcoordsAt(const Scene& scene, const SurfacePoint& sp) {
+  const uint32_t* v = &scene.indices[3 * sp.triangle];
+  const Vec2 t0 = scene.texcoords[v[0]], t1 = scene.texcoords[v[1]], t2 = scene.texcoords[v[2]];
+  const float b0 = 1.0f - sp.b1 - sp.b2;
+  return {t0.x * b0 + t1.x * sp.b1 + t2.x * sp.b2, t0.y * b0 + t1.y * sp.b1 + t2.y * sp.b2};
+}
+
+// glTF's normal texture at a hit: the texel's tangent-space normal (2 c - 1, x and y times the
+// scale) in the frame of the unit normal n, the interpolated tangent made orthogonal to it, and the
+// bitangent cross(n, t) * sign; n itself where the vertices have no tangent.
+inline Vec3 normalMapped(const Scene& scene, const Material& m, const SurfacePoint& sp, Vec3 n) {
+  const uint32_t* v = &scene.indices[3 * sp.triangle];
+  const Tangent& a = scene.tangents[v[0]];
+  Vec3 t = barycentric(a.direction, scene.tangents[v[1]].direction, scene.tangents[v[2]].direction, sp.b1, sp.b2);
+  t = t - n * dot(n, t);
+  const float len = length(t);
+  if (!(len > 0)) return n;
+  t = t / len;
+  const Vec3 b = cross(n, t) * a.sign;
+  const Rgb c = bilinear(bilinearFootprint(scene.textures[m.normalTexture], scene.texels.data(), texcoordsAt(scene, sp)),
+                         kUnorm8ToFloat);
+  const Vec3 p = t * ((2.0f * c.r - 1.0f) * m.normalScale) + b * ((2.0f * c.g - 1.0f) * m.normalScale) +
+                 n * (2.0f * c.b - 1.0f);
+  const float plen = length(p);
+  return plen > 0 ? p / plen : n;
+}
+
 inline SurfacePoint surfaceAt(const Scene& scene, uint32_t tri, float b1, float b2) {
   SurfacePoint sp;
   sp.triangle = tri;
@@ -47,18 +74,19 @@ inline SurfacePoint surfaceAt(const Scene& scene, uint32_t tri, float b1, float 
   sp.geometricNormal = scene.geometricNormal(tri);
   sp.shadingNormal = sp.geometricNormal;
   // OBJ faces have normals at all their vertices or at none (then they are stored as zero).
-  if (!(scene.normals[v[0]] == Vec3{0, 0, 0})) {
+  const bool vertexNormals = !(scene.normals[v[0]] == Vec3{0, 0, 0});
+  const Material& m = scene.materials[sp.materialId];
+  if (m.normalTexture >= 0) {
+    const Vec3 n = vertexNormals ? barycentric(scene.normals[v[0]], scene.normals[v[1]], scene.normals[v[2]], b1, b2)
+                                 : sp.geometricNormal;
+    const float len = length(n);
+    sp.shadingNormal = orientedShadingNormal(normalMapped(scene, m, sp, len > 0 ? n / len : sp.geometricNormal),
+                                             sp.geometricNormal);
+  } else if (vertexNormals) {
     const Vec3 n = barycentric(scene.normals[v[0]], scene.normals[v[1]], scene.normals[v[2]], b1, b2);
     sp.shadingNormal = orientedShadingNormal(n, sp.geometricNormal);
   }
   return sp;
-}
-
-inline Vec2 texcoordsAt(const Scene& scene, const SurfacePoint& sp) {
-  const uint32_t* v = &scene.indices[3 * sp.triangle];
-  const Vec2 t0 = scene.texcoords[v[0]], t1 = scene.texcoords[v[1]], t2 = scene.texcoords[v[2]];
-  const float b0 = 1.0f - sp.b1 - sp.b2;
-  return {t0.x * b0 + t1.x * sp.b1 + t2.x * sp.b2, t0.y * b0 + t1.y * sp.b1 + t2.y * sp.b2};
 }
 
 // The smallest GGX alpha rendered (roughness 0.0316): below it the lobe's peak, 1 / (pi alpha^2),
