@@ -1,6 +1,6 @@
 // glTF's metallic-roughness BRDF (bsdf.h, surface.h's gltfBsdf): its value against Appendix B's
 // formulas written out independently in double, reciprocity, chi-square tests of its sampling, the
-// directional albedo of its sample weights against numerical integration (the furnace), and the
+// directional albedo of its sample weights against numerical integration (the furnace, test_bsdfs.h), and the
 // limit of small roughness against a mirror.
 #include <catch2/catch.hpp>
 
@@ -68,25 +68,6 @@ double appendixB(const Parameters& p, Vec3 wo, Vec3 wi, int channel) {
   const double dielectric = fd[channel] * specularBrdf + (1 - fdMax) * base / kPi;
   const double metal = (base + (1 - base) * w) * specularBrdf;
   return (1 - p.metallic) * dielectric + p.metallic * metal;
-}
-
-// The directional albedo: the integral of f cos over the hemisphere of wi, by the midpoint rule in
-// coordinates around the mirror direction (where the lobe is narrow); for roughness 0.3 and up.
-Rgb albedoByQuadrature(const SurfaceBsdf& b, Vec3 wo) {
-  const Frame lobe(reflect(wo, {0, 0, 1}));
-  const int nTheta = 3000, nPhi = 360;
-  double sum[3] = {0, 0, 0};
-  for (int i = 0; i < nTheta; ++i) {
-    const double theta = (i + 0.5) * kPi / nTheta;
-    for (int j = 0; j < nPhi; ++j) {
-      const Vec3 wi = lobe.toWorld(directionAt(theta, (j + 0.5) * 2 * kPi / nPhi));
-      if (wi.z <= 0) continue;
-      const Rgb f = evalBsdf(b, wo, wi);
-      for (int c = 0; c < 3; ++c) sum[c] += f[c] * wi.z * std::sin(theta);
-    }
-  }
-  const double cell = (kPi / nTheta) * (2 * kPi / nPhi);
-  return Rgb(float(sum[0] * cell), float(sum[1] * cell), float(sum[2] * cell));
 }
 
 // The mean of sampleBsdf's weights (what a path tracer multiplies by; invalid samples weigh 0) and
@@ -219,7 +200,7 @@ TEST_CASE("glTF furnace: the sample weights' mean is the directional albedo; met
   const auto check = [&](const Parameters& p, double theta) {
     const SurfaceBsdf b = bsdfOf(p);
     const Vec3 wo = directionAt(theta, 0.4);
-    const Rgb quadrature = albedoByQuadrature(b, wo);
+    const Rgb quadrature = test::directionalAlbedo(b, wo);
     const MeanWeight m = meanSampleWeight(b, wo, n, seed++);
     for (int c = 0; c < 3; ++c) {
       INFO("metallic " << p.metallic << ", roughness " << p.roughness << ", theta " << theta << ", channel " << c
