@@ -671,7 +671,20 @@ struct NodeWalk {
       light.type = LightType::Point;
       light.vector = {float(p[0]), float(p[1]), float(p[2])};
     } else if (l.type == "spot") {
-      c.fail(lightPath, "spot lights are not rendered yet");
+      const double inner = l.spot.innerConeAngle, outer = l.spot.outerConeAngle;
+      if (!(outer > 0 && outer <= kPi / 2)) c.fail(lightPath + ".spot.outerConeAngle", "must be in (0, pi/2]");
+      if (!(inner >= 0 && inner < outer)) c.fail(lightPath + ".spot.innerConeAngle", "must be in [0, outerConeAngle)");
+      const double origin[3] = {0, 0, 0}, down[3] = {0, 0, -1};
+      const std::array<double, 3> p = world.point(origin), d = world.direction(down);
+      const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      if (!(len > 0) || !std::isfinite(len)) c.fail(path, "places the spot light with a degenerate transform");
+      light.type = LightType::Spot;
+      light.vector = {float(p[0]), float(p[1]), float(p[2])};
+      light.axis = {float(d[0] / len), float(d[1] / len), float(d[2] / len)};
+      // The extension's falloff: scale 1 / max(0.001, cos(inner) - cos(outer)), offset -cos(outer) scale.
+      const double scale = 1.0 / std::max(0.001, std::cos(inner) - std::cos(outer));
+      light.angleScale = float(scale);
+      light.angleOffset = float(-std::cos(outer) * scale);
     } else {
       c.fail(lightPath + ".type", "'" + l.type + "' is not directional, point or spot");
     }

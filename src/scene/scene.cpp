@@ -75,6 +75,8 @@ void finalizeScene(Scene& scene) {
     lights.push_back(l);
     power.push_back(l.type == LightType::Point
                         ? lightPower(4 * kPi * l.value.luminance(), 4 * kPi * double(l.value.luminance()))
+                    : l.type == LightType::Spot
+                        ? lightPower(spotSolidAngle(l) * l.value.luminance(), spotSolidAngle(l) * double(l.value.luminance()))
                         : lightPower(kPi * float(r) * float(r) * l.value.luminance(),
                                      kPi * r * r * double(l.value.luminance())));
   }

@@ -6,6 +6,7 @@
 
 #include "lucent/core/parallel.h"
 #include "lucent/methods/pathtrace.h"
+#include "lucent/scene/camera.h"
 #include "lucent/scene/loader.h"
 #include "lucent/scene/surface.h"
 #include "test_bsdfs.h"
@@ -399,4 +400,42 @@ TEST_CASE("glTF metals and dielectrics: MIS, light sampling alone and BSDF sampl
       INFO("strategy " << a << " against " << b << ", channel " << c << ": z = " << std::to_string(z));
       CHECK(std::abs(z) < 4.5);
     }
+}
+
+TEST_CASE("A spot light on a diffuse plane gives rho I falloff cos(theta) / (pi d^2)", "[pathtrace]") {
+  Scene scene;
+  Material grey;
+  grey.kd = Rgb(0.6f);
+  test::addBox(scene, {-50, -1, -50}, {50, 0, 50}, test::addMaterial(scene, grey, "grey"), false);
+  Light spot;
+  spot.type = LightType::Spot;
+  spot.vector = {0.3f, 2, -0.2f};
+  spot.axis = normalize(Vec3{0.2f, -1, 0.1f});
+  spot.value = Rgb(2.0f, 3.0f, 4.0f);
+  spot.angleScale = float(1 / (std::cos(0.15) - std::cos(0.45)));
+  spot.angleOffset = float(-std::cos(0.45) * spot.angleScale);
+  scene.lights.push_back(spot);
+  scene.camera = test::testCamera({0, 5, 0}, {0, 0, 0.001f}, 24, 24, 40);
+  finalizeScene(scene);
+  const Visibility vis(scene);
+  PathTraceOptions opt;
+  opt.common.spp = 1;
+  opt.maxDepth = 1;
+  opt.pixelCentres = true;  // every pixel's value at its centre's hit, computed below
+  const Image image = renderPathTraced(scene, vis, opt).image;
+  const PinholeCamera camera(scene.camera);
+  int lit = 0, dark = 0;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      const Ray ray = camera.generate(x + 0.5f, y + 0.5f);
+      const Vec3 p = ray.origin + ray.direction * (-ray.origin.y / ray.direction.y);
+      const Vec3 toLight = spot.vector - p;
+      const float d2 = dot(toLight, toLight);
+      const Vec3 wi = toLight / std::sqrt(d2);
+      const float expected = 0.6f * kInvPi * spotFalloff(spot, -wi) * wi.y / d2;
+      (expected > 0 ? lit : dark)++;
+      for (int c = 0; c < 3; ++c) REQUIRE(image.at(x, y, c) == Approx(expected * (c + 2.0f)).epsilon(1e-3).margin(1e-7));
+    }
+  CHECK(lit > 50);
+  CHECK(dark > 50);
 }

@@ -503,3 +503,31 @@ TEST_CASE("glTF normal and metallic-roughness textures are read as linear data; 
     CHECK(sp.shadingNormal.y > 0);
   }
 }
+
+TEST_CASE("glTF spot lights: placed by their node, their cone from the extension, and the path tracer's image",
+          "[gltf][loader]") {
+  const test::TempDir dir;
+  // A spot 2 in front of the quad's centre, unrotated: it shines along its node's -z, onto the quad.
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  f["extensions"]["KHR_lights_punctual"]["lights"] = {
+      {{"type", "spot"}, {"intensity", 683 * 4}, {"spot", {{"innerConeAngle", 0.2}, {"outerConeAngle", 0.5}}}}};
+  f["nodes"][1] = {{"translation", {0.5, 0.5, 2}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}};
+  const Scene scene = loadWrapped(dir.path, f);
+  REQUIRE(scene.lights.size() == 1);
+  const Light& l = scene.lights[0];
+  CHECK(l.type == LightType::Spot);
+  CHECK(near(l.vector, {0.5f, 0.5f, 2}, 1e-6f));
+  CHECK(near(l.axis, {0, 0, -1}, 1e-6f));
+  CHECK(l.value.g == Approx(4));
+  CHECK(l.angleScale == Approx(1 / (std::cos(0.2) - std::cos(0.5))));
+  CHECK(l.angleOffset == Approx(-std::cos(0.5) / (std::cos(0.2) - std::cos(0.5))));
+  // Refused cones, with their paths.
+  for (const auto& [spot, expected] :
+       {std::pair{json{{"innerConeAngle", 0.5}, {"outerConeAngle", 0.5}}, "spot.innerConeAngle: must be in [0, outerConeAngle)"},
+        std::pair{json{{"outerConeAngle", 2.0}}, "spot.outerConeAngle: must be in (0, pi/2]"}}) {
+    json bad = f;
+    bad["extensions"]["KHR_lights_punctual"]["lights"][0]["spot"] = spot;
+    REQUIRE_THROWS_WITH(loadWrapped(dir.path, bad), Catch::Contains("extensions.KHR_lights_punctual.lights[0]." +
+                                                                    std::string(expected)));
+  }
+}

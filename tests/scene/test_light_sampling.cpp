@@ -6,6 +6,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include "lucent/image/image.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/loader.h"
+#include "test_bsdfs.h"
 #include "test_scenes.h"
 #include "test_support.h"
 
@@ -574,4 +576,57 @@ TEST_CASE("Light choice: each light as often as its share of the estimated power
     wrong.lightDistribution = Distribution1D(weights);
     CHECK_CHI2_REJECT(chi2::testDiscrete(sampler(wrong), visiblePmf, n, {.seed = 5, .mass = std::nullopt}));
   }
+}
+
+TEST_CASE("Spot lights: KHR_lights_punctual's falloff, its integral, and emission that carries it", "[lights]") {
+  Light spot;
+  spot.type = LightType::Spot;
+  spot.vector = {1, 2, 3};
+  spot.axis = normalize(Vec3{0.3f, -1, 0.2f});
+  spot.value = Rgb(2.0f, 3.0f, 4.0f);
+  const double inner = 0.3, outer = 0.7;
+  spot.angleScale = float(1 / (std::cos(inner) - std::cos(outer)));
+  spot.angleOffset = float(-std::cos(outer) * spot.angleScale);
+  const Frame frame(spot.axis);
+  // The falloff: 1 inside the inner cone, 0 outside the outer, the square of the linear ramp in the
+  // cosine between (the extension's formula, written out).
+  for (const double angle : {0.0, 0.29, 0.31, 0.5, 0.69, 0.71, 1.5, 3.0}) {
+    const Vec3 d = frame.toWorld(test::directionAt(angle, 0.4));
+    const double ramp = std::clamp((std::cos(angle) - std::cos(outer)) / (std::cos(inner) - std::cos(outer)), 0.0, 1.0);
+    CHECK(spotFalloff(spot, d) == Approx(ramp * ramp).margin(2e-5));
+  }
+  // Its integral over the sphere, by the midpoint rule in the cosine.
+  double integral = 0;
+  const int n = 200000;
+  for (int i = 0; i < n; ++i) {
+    const double c = -1 + (i + 0.5) * 2.0 / n;
+    const double a = std::clamp(c * spot.angleScale + spot.angleOffset, 0.0, 1.0);
+    integral += a * a * 2 * kPi * 2.0 / n;
+  }
+  CHECK(spotSolidAngle(spot) == Approx(integral).epsilon(1e-4));
+  // Emission from the spot alone carries its flux, I times that integral, and leaves within the
+  // outer cone only.
+  Scene scene;
+  Material grey;
+  test::addBox(scene, {-10, -10, -10}, {10, 10, 10}, test::addMaterial(scene, grey, "grey"), true);
+  scene.lights.push_back(spot);
+  finalizeScene(scene);
+  Rng rng(8);
+  double sum = 0, sum2 = 0;
+  const int samples = 200000;
+  for (int i = 0; i < samples; ++i) {
+    const float uLight = rng.uniform();
+    const Vec2 uPosition = rng.uniform2(), uDirection = rng.uniform2();
+    const EmissionSample e = sampleEmission(scene, uLight, uPosition, uDirection, nullptr, 0);
+    REQUIRE(dot(e.ray.direction, spot.axis) >= std::cos(outer) - 1e-5);
+    sum += e.power.g, sum2 += double(e.power.g) * e.power.g;
+  }
+  const double mean = sum / samples, error = std::sqrt((sum2 / samples - mean * mean) / samples);
+  CHECK(std::abs(mean - 3.0 * integral) <= 4.5 * error);
+  // Seen from a receiver, its radiance is the intensity times the falloff over the squared distance.
+  const Vec3 receiver = spot.vector + frame.toWorld(test::directionAt(0.5, 1.0)) * 4.0f;
+  const LightSample ls = deltaLightSample(spot, receiver);
+  const double ramp = (std::cos(0.5) - std::cos(outer)) / (std::cos(inner) - std::cos(outer));
+  CHECK(ls.radiance.b == Approx(4.0 * ramp * ramp / 16.0).epsilon(1e-4));
+  CHECK(ls.delta);
 }

@@ -17,7 +17,7 @@ struct LightSample {
   bool delta = false;   // point and directional lights cannot be hit by BSDF sampling
 };
 
-// A point or directional light as seen from a receiver: the one direction it arrives from, its
+// A point, spot or directional light as seen from a receiver: the one direction it arrives from, its
 // radiance there, pdf 1 (before the light's selection probability).
 inline LightSample deltaLightSample(const Light& light, Vec3 receiver) {
   LightSample s;
@@ -35,11 +35,12 @@ inline LightSample deltaLightSample(const Light& light, Vec3 receiver) {
   s.distance = std::sqrt(dist2);
   s.wi = d / s.distance;
   s.radiance = light.value / dist2;
+  if (light.type == LightType::Spot) s.radiance = s.radiance * spotFalloff(light, -s.wi);
   return s;
 }
 
 inline bool isDeltaLight(const Light& light) {
-  return light.type == LightType::Point || light.type == LightType::Directional;
+  return light.type == LightType::Point || light.type == LightType::Directional || light.type == LightType::Spot;
 }
 
 // A uniformly chosen point on an emitting triangle (vertices q0, q1, q2, unit normal, area) seen
@@ -80,6 +81,7 @@ inline LightSample sampleChosenLight(const Scene& scene, uint32_t li, float pmf,
       return s;
     }
     case LightType::Point:
+    case LightType::Spot:
     case LightType::Directional:
       s = deltaLightSample(light, receiver);
       s.pdf = pmf;
@@ -271,6 +273,14 @@ inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPos
       s.ray = {light.vector, sampleUniformSphere(uDirection)};
       s.power = light.value * (4.0f * kPi / pmf);
       break;
+    case LightType::Spot: {
+      // Uniformly within the cone where the falloff is not 0, weighted by it.
+      const float cosOuter = light.angleScale > 0 ? -light.angleOffset / light.angleScale : -1.0f;
+      const Vec3 d = Frame(light.axis).toWorld(sampleUniformCone(uDirection, cosOuter));
+      s.ray = {light.vector, d};
+      s.power = light.value * (spotFalloff(light, d) * 2.0f * kPi * (1.0f - cosOuter) / pmf);
+      break;
+    }
     case LightType::Directional:
       s.ray = {discOrigin(light.vector), light.vector};
       s.power = light.value * (discArea / pmf);

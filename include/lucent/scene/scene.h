@@ -1,5 +1,6 @@
 // The loaded scene: flat arrays of plain data, indices instead of pointers (DESIGN.md "Data model").
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -49,15 +50,34 @@ struct Texture {
   uint32_t width = 0, height = 0;
 };
 
-enum class LightType : uint32_t { Triangle = 0, Point = 1, Directional = 2, Environment = 3 };
+enum class LightType : uint32_t { Triangle = 0, Point = 1, Directional = 2, Environment = 3, Spot = 4 };
 
 // One entry of the light list that next-event estimation chooses from.
 struct Light {
   LightType type = LightType::Point;
   uint32_t triangle = 0;  // Triangle lights: the emissive triangle
-  Vec3 vector;            // Point: position; Directional: direction the light travels
-  Rgb value;              // Point: intensity (W/sr); Directional: irradiance normal to it; others unused
+  Vec3 vector;            // Point, Spot: position; Directional: direction the light travels
+  Rgb value;              // Point, Spot: intensity (W/sr; a spot's on its axis); Directional: irradiance
+                          // normal to it; others unused
+  // Spot: the axis it shines along, and KHR_lights_punctual's angular falloff, the square of
+  // saturate(cos(angle to the axis) * angleScale + angleOffset) (spotFalloff).
+  Vec3 axis{0, 0, -1};
+  float angleScale = 0, angleOffset = 1;
 };
+
+// A spot light's share of its axial intensity in direction d (unit, away from the light).
+inline float spotFalloff(const Light& light, Vec3 d) {
+  const float a = std::clamp(dot(d, light.axis) * light.angleScale + light.angleOffset, 0.0f, 1.0f);
+  return a * a;
+}
+// The falloff integrated over the sphere (steradians): 2 pi times the integral over c = cos(angle)
+// of saturate(c s + o)^2, which is (s + o)^3 / (3 s) on the ramp (capped at 1) plus 1 - c where
+// the falloff is 1.
+inline float spotSolidAngle(const Light& light) {
+  const float s = light.angleScale, o = light.angleOffset;
+  const float top = std::min(1.0f, s + o), full = std::min(1.0f, (1.0f - o) / s);
+  return 2.0f * kPi * (top * top * top / (3.0f * s) + (1.0f - full));
+}
 
 struct Camera {
   Vec3 eye{0, 0, 0}, lookAt{0, 0, -1}, up{0, 1, 0};

@@ -106,7 +106,7 @@ BufferIrradiance bufferIrradiance(std::span<const uint32_t> texels, const Buffer
 Rgb analyticIrradiance(const Scene& scene, const Visibility& vis, Vec3 p, Vec3 n, uint64_t& rays) {
   Rgb sum;
   for (const Light& light : scene.lights) {
-    if (light.type != LightType::Directional && light.type != LightType::Point) continue;
+    if (!isDeltaLight(light)) continue;
     const LightSample ls = deltaLightSample(light, p);
     const float cosine = dot(n, ls.wi);
     if (!(cosine > 0)) continue;  // also a point at the light itself (NaN)
@@ -120,7 +120,7 @@ void requireEnvironmentLights(const Scene& scene) {
   for (const Light& light : scene.lights)
     if (light.type == LightType::Triangle)
       throw std::invalid_argument(
-          "--method envpbgi renders scenes lit by an environment and directional or point lights; '" +
+          "--method envpbgi renders scenes lit by an environment and directional, point or spot lights; '" +
           scene.sourcePath + "' has emitting triangles (render it with pt, pmfg or micro)");
 }
 

@@ -11,6 +11,7 @@
 #include "lucent/core/rng.h"
 #include "lucent/core/stop.h"
 #include "lucent/pipeline/direct_light.h"
+#include "lucent/scene/light_sampling.h"
 
 namespace lucent {
 
@@ -35,7 +36,7 @@ std::vector<Rgb> emitLight(const Scene& scene, const Visibility& vis, std::span<
     }
   });
   bool sampled = scene.environment.present;
-  for (const Light& light : scene.lights) sampled |= light.type != LightType::Point && light.type != LightType::Directional;
+  for (const Light& light : scene.lights) sampled |= !isDeltaLight(light);
   std::vector<Rgb> reflected(particles.size());
   if (sampled)
     estimateDirectLight(scene, vis, points, samples, seed, reflected, rays);
