@@ -45,6 +45,7 @@ struct RenderArgs {
   bool quiet = false, robust = false, help = false, logStages = false, strict = false;
   bool gltfHeightCorrelated = false;
   double lumensPerWatt = GltfOptions{}.lumensPerWatt;
+  std::string gltfCamera;
   OptionValues methodOptions;  // as given, in order
 };
 
@@ -182,6 +183,9 @@ const OptionTable<RenderArgs>& renderFlags() {
                    "own)");
     t.real("lumens_per_watt", &A::lumensPerWatt, 1e-6, 1e6, "lm/W",
            "glTF lights' photometric intensities (cd, lx) to watts (a scene file's glTF entry may set its own)");
+    t.text("gltf_camera", &A::gltfCamera, "",
+           "render a glTF file from the camera of this name (its node's or its own; none: the first)");
+    t.placeholder("gltf_camera", "NAME");
     t.flag("quiet", &A::quiet, "no progress bar or warnings");
     t.shortFlag("quiet", "-q");
     t.flag("log_stages", &A::logStages, "print each stage's name on stderr as it starts, with the seconds since the start");
@@ -304,7 +308,7 @@ int runRender(const RenderArgs& a) {
     }
     Stopwatch loadClock;
     setMemoryLimit(a.memoryLimit);  // the scene's images are checked against it too
-    scene = loadScene(a.scene, {a.quiet, {a.gltfHeightCorrelated, a.lumensPerWatt}});
+    scene = loadScene(a.scene, {a.quiet, {a.gltfHeightCorrelated, a.lumensPerWatt, a.gltfCamera}});
     stats.addStage("load_scene", loadClock.seconds());
     if (a.strict && !scene.ignored.empty()) {
       std::string list;

@@ -293,7 +293,10 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
   OIIO::ImageSpec header;
   if (in && opened.memory && !in->set_ioproxy(opened.memory.get()))
     throw std::runtime_error("cannot read image '" + name + "': its reader cannot read from memory");
-  if (!in || !in->open(name, header))
+  // Colour as stored beside its alpha (PNG's and glTF's convention), not premultiplied by it.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  if (!in || !in->open(name, header, config))
     throw std::runtime_error("cannot read image '" + name + "': " + (in ? in->geterror() : OIIO::geterror()));
   const OIIO::ImageSpec& spec = in->spec();
   // The header's size is checked before any pixel is allocated (a 69-byte PNG may claim 20,000 x

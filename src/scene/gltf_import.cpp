@@ -419,8 +419,18 @@ MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, Tex
       c.fail(path + ".emissiveFactor", "times the emissive strength must be finite, non-negative and at most 1e15");
     spec.ke[k] = float(e);
   }
-  if (m.alphaMode != "OPAQUE")
-    ignored.push_back(named + ": alphaMode " + m.alphaMode + " (the surfaces are opaque; the base colour's alpha is not used)");
+  // Alpha: the base colour factor's times the base colour texture's A, against the cutoff (MASK),
+  // or as stochastic transparency (BLEND).
+  spec.baseAlpha = float(pbr.baseColorFactor[3]);
+  if (m.alphaMode == "MASK") {
+    spec.alphaMode = AlphaMode::Mask;
+    if (!(m.alphaCutoff >= 0 && m.alphaCutoff <= kMaxInputMagnitude)) c.fail(path + ".alphaCutoff", "must be 0 or more");
+    spec.alphaCutoff = float(m.alphaCutoff);
+  } else if (m.alphaMode == "BLEND") {
+    spec.alphaMode = AlphaMode::Blend;
+  } else if (m.alphaMode != "OPAQUE") {
+    c.fail(path + ".alphaMode", "'" + m.alphaMode + "' is not OPAQUE, MASK or BLEND");
+  }
   if (!spec.ke.isBlack() && m.doubleSided)
     ignored.push_back(named + ": doubleSided emission (its triangles emit from their front faces only)");
   // Appendix B's dielectric, its Fresnel term from KHR_materials_ior and KHR_materials_specular.
@@ -458,6 +468,8 @@ struct NodeWalk {
   ObjImport& import;
   GltfContent& content;
   double lumensPerWatt;
+  const std::string& cameraName;           // empty: the first camera
+  std::vector<std::string> cameraNames;    // the cameras passed over for another name
   MaterialType materialType;               // Gltf or GltfHeightCorrelated
   std::map<int, uint32_t> materialOf;      // glTF material (-1: the default) -> spec
   std::map<int, TextureCoordinates> coordinatesOf;  // glTF material -> what its base colour texture reads
@@ -691,10 +703,15 @@ struct NodeWalk {
     if (!value.isBlack()) scene.lights.push_back(light);
   }
 
-  void camera(int index, const std::string& path, const Matrix4& world) {
-    if (content.camera) return;  // the first in the walk
+  // The first camera in the walk, or the first named `cameraName` (its node's name or its own).
+  void camera(int index, const std::string& path, const std::string& nodeName, const Matrix4& world) {
+    if (content.camera) return;
     if (size_t(index) >= c.model.cameras.size()) c.fail(path + ".camera", "camera " + std::to_string(index) + " does not exist");
     const tinygltf::Camera& cam = c.model.cameras[size_t(index)];
+    if (!cameraName.empty() && cam.name != cameraName && nodeName != cameraName) {
+      cameraNames.push_back(nodeName.empty() ? cam.name : nodeName);
+      return;
+    }
     const std::string camPath = at("cameras", size_t(index));
     if (cam.type != "perspective") c.fail(camPath + ".type", "'" + cam.type + "': only perspective cameras are rendered");
     const double yfov = cam.perspective.yfov;
@@ -729,7 +746,7 @@ struct NodeWalk {
         primitive(mesh.primitives[k], at("meshes", size_t(n.mesh)) + "." + at("primitives", k), world);
     }
     if (n.skin >= 0) scene.ignored.push_back(c.file + ": " + path + ".skin (the bind pose is rendered)");
-    if (n.camera >= 0) camera(n.camera, path, world);
+    if (n.camera >= 0) camera(n.camera, path, n.name, world);
     if (const tinygltf::Value* e = extension(n.extensions, "KHR_lights_punctual"))
       light(int(number(*e, "light", -1)), path + ".extensions.KHR_lights_punctual.light", world);
     for (const int child : n.children) node(child, world, depth + 1, onPath);
@@ -805,9 +822,15 @@ void importGltf(const std::string& path, const GltfOptions& options, Scene& scen
   if (model.scenes.empty()) c.fail("scenes", "the file has no scene");
   const size_t sceneIndex = model.defaultScene >= 0 ? size_t(model.defaultScene) : 0;
   if (sceneIndex >= model.scenes.size()) c.fail("scene", "scene " + std::to_string(sceneIndex) + " does not exist");
-  NodeWalk walk{c, scene, import, content, options.lumensPerWatt, options.heightCorrelated ? MaterialType::GltfHeightCorrelated : MaterialType::Gltf, {}, {}, 0};
+  NodeWalk walk{c, scene, import, content, options.lumensPerWatt, options.camera, {}, options.heightCorrelated ? MaterialType::GltfHeightCorrelated : MaterialType::Gltf, {}, {}, 0};
   std::vector<bool> onPath(model.nodes.size(), false);
   for (const int root : model.scenes[sceneIndex].nodes) walk.node(root, Matrix4{}, 0, onPath);
+  if (!options.camera.empty() && !content.camera) {
+    std::string names;
+    for (const std::string& name : walk.cameraNames) names += (names.empty() ? "" : ", ") + ("'" + name + "'");
+    c.fail("cameras", "no camera in the scene is named '" + options.camera + "' (" +
+                          (names.empty() ? std::string("it has none") : "it has " + names) + ")");
+  }
   if (walk.skippedPrimitives > 0)
     scene.ignored.push_back(path + ": " + std::to_string(walk.skippedPrimitives) + " point and line primitives");
 }

@@ -23,8 +23,8 @@ using detail::JsonFields;
 
 namespace {
 
-// Reads an RGB (or grey) image into texels, convert(channel values as stored, sRGB-encoded or not)
-// giving each; row 0 is the top row.
+// Reads an RGB (or grey) image into texels, convert(channel values as stored, then alpha, 1 where the
+// image has none; sRGB-encoded or not) giving each; row 0 is the top row.
 // Negative values are refused unless allowNegative (the caller checks them).
 // `read` reads the image named `path` (a file, or an image held in memory named as one).
 template <class Convert>
@@ -43,10 +43,12 @@ auto readImageTexels(const std::string& path, const std::string& context, uint32
   const int nc = image.channelCount();
   if (nc < 1 || w == 0 || h == 0) throw SceneError(context + ": image '" + path + "' is empty");
   const bool srgb = isSrgbEncoded(path, metadata);
+  const int alpha = image.channelIndex("A");
   std::vector<decltype(convert(static_cast<const float*>(nullptr), srgb))> texels(size_t(w) * h);
   for (uint32_t y = 0; y < h; ++y)
     for (uint32_t x = 0; x < w; ++x) {
-      float stored[3];
+      float stored[4];
+      stored[3] = alpha >= 0 ? std::clamp(image.at(int(x), int(y), alpha), 0.0f, 1.0f) : 1.0f;
       for (int k = 0; k < 3; ++k) {
         const float v = stored[k] = image.at(int(x), int(y), nc >= 3 ? k : 0);
         // The linear value must be finite and not negative; for sRGB values in [0, 1] it is.
@@ -91,14 +93,15 @@ std::vector<Rgb> readTexels(const std::string& path, const std::string& context,
   return texels;
 }
 
-// 8-bit sRGB texels packed as R | G << 8 | B << 16 | 255 << 24 (diffuse albedo maps). An 8-bit
+// 8-bit sRGB texels packed as R | G << 8 | B << 16 | A << 24 (diffuse albedo maps; A linear, 255
+// where the image has no alpha). An 8-bit
 // sRGB file's values are its codes over 255 (to a rounding of the reader's) and are kept as they
 // are, which decoding to linear and encoding back would give too; other values are converted to
 // linear, clamped to [0, 1] (reflectance) and encoded.
 std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h,
                                       const std::function<Image(ImageMetadata*)>& read = {}) {
   return readImageTexels(path, context, w, h, [](const float* stored, bool srgb) {
-    uint32_t packed = 0xffu << 24;
+    uint32_t packed = uint32_t(std::lround(255.0f * stored[3])) << 24;
     for (int k = 0; k < 3; ++k) {
       const float v = stored[k];
       const long code = std::lround(255.0f * v);
@@ -418,6 +421,9 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const nlohmann::json root = parseSceneJson(text, jsonPath);
   const fs::path base = fs::absolute(jsonPath).parent_path();
+  if (!options.gltf.camera.empty())
+    throw SceneError(jsonPath + ": a glTF camera is chosen by name for a glTF file rendered on its own; a scene "
+                                "file gives its camera");
   Scene scene;
   scene.sourcePath = jsonPath;
   scene.inputFiles.push_back(jsonPath);

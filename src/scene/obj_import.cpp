@@ -413,6 +413,9 @@ Material classifyMaterial(const MaterialSpec& spec) {
   m.roughness = spec.roughness;
   m.specular = spec.specular;
   m.normalScale = spec.normalScale;
+  m.alphaMode = spec.alphaMode;
+  m.alphaCutoff = spec.alphaCutoff;
+  m.baseAlpha = spec.baseAlpha;
   if (spec.type) {
     m.type = *spec.type;
   } else {

@@ -30,6 +30,8 @@ struct MaterialSpec {
   TextureFile metallicRoughness;     // glTF only (linear)
   TextureFile normal;                // glTF only (linear)
   float normalScale = 1.0f;
+  AlphaMode alphaMode = AlphaMode::Opaque;  // glTF only
+  float alphaCutoff = 0.5f, baseAlpha = 1.0f;
   std::string origin;                // "file:line" of its definition, for error messages
 };
 

@@ -8,6 +8,8 @@
 #include <stdexcept>
 
 #include "lucent/core/parallel.h"
+#include "lucent/core/rng.h"
+#include "lucent/scene/surface.h"
 
 namespace lucent {
 
@@ -18,11 +20,63 @@ struct EmbreeError {
 };
 }  // namespace
 
+// The triangles with holes (glTF alpha masks and blending), in an Embree geometry of their own whose
+// filter rejects the hits where the surface is not: every query, camera, shadow, photon, gather,
+// honours them, and scenes without holes trace as before, without a filter.
+struct CutOutTriangles {
+  const Scene* scene = nullptr;
+  std::vector<uint32_t> triangle;  // the geometry's primitive -> the scene's triangle
+};
+
+// Whether the surface is at barycentrics (u, v) of triangle `tri`, for a ray from `origin` along
+// `direction`: where its alpha reaches the cutoff (masks), or with probability alpha, decided by a
+// hash of the ray and the triangle (blending: stochastic transparency, the same answer for the same
+// ray whatever the thread or packet).
+bool surfaceIsThere(const Scene& scene, uint32_t tri, float u, float v, Vec3 origin, Vec3 direction) {
+  const Material& m = scene.materials[scene.materialIds[tri]];
+  SurfacePoint sp;
+  sp.triangle = tri;
+  sp.b1 = u;
+  sp.b2 = v;
+  const float alpha = surfaceAlpha(scene, m, m.kdTexture >= 0 ? texcoordsAt(scene, sp) : Vec2{0, 0});
+  if (m.alphaMode == AlphaMode::Mask) return alpha >= m.alphaCutoff;
+  uint32_t bits[6];
+  std::memcpy(bits, &origin, 12);
+  std::memcpy(bits + 3, &direction, 12);
+  uint64_t key = tri;
+  for (const uint32_t b : bits) key = hashKey(key, b);
+  return float(key >> 40) * 0x1p-24f < alpha;
+}
+
+void cutOutFilter(const RTCFilterFunctionNArguments* args) {
+  const auto& cut = *static_cast<const CutOutTriangles*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const uint32_t tri = cut.triangle[RTCHitN_primID(args->hit, args->N, i)];
+    const Vec3 origin{RTCRayN_org_x(args->ray, args->N, i), RTCRayN_org_y(args->ray, args->N, i),
+                      RTCRayN_org_z(args->ray, args->N, i)};
+    const Vec3 direction{RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
+                         RTCRayN_dir_z(args->ray, args->N, i)};
+    if (!surfaceIsThere(*cut.scene, tri, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i), origin,
+                        direction))
+      args->valid[i] = 0;
+  }
+}
+
 struct Visibility::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   std::string isa;
   EmbreeError error;
+  unsigned cutOutGeometry = RTC_INVALID_GEOMETRY_ID;
+  CutOutTriangles cutOut;
+  std::vector<uint32_t> opaqueTriangle;  // the opaque geometry's primitive -> the scene's triangle; empty: the same
+  // A hit's triangle in the scene.
+  uint32_t triangle(unsigned geometry, unsigned primitive) const {
+    return geometry == cutOutGeometry ? cutOut.triangle[primitive]
+           : opaqueTriangle.empty()   ? primitive
+                                      : opaqueTriangle[primitive];
+  }
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -82,18 +136,38 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
   rtcSetSceneFlags(impl_->scene, options.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
 
-  RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                               3 * sizeof(float), scene.positions.size()));
-  auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                 3 * sizeof(uint32_t), scene.triangleCount()));
-  if (vertices && indices) {
-    std::memcpy(vertices, scene.positions.data(), scene.positions.size() * sizeof(Vec3));
-    std::memcpy(indices, scene.indices.data(), scene.indices.size() * sizeof(uint32_t));
+  // The opaque triangles first, as geometry 0 (in a scene without holes, all of them, numbered as
+  // the scene numbers them), then those with holes.
+  std::vector<uint32_t> opaque;
+  for (uint32_t t = 0; t < scene.triangleCount(); ++t)
+    (scene.materials[scene.materialIds[t]].alphaMode == AlphaMode::Opaque ? opaque : impl_->cutOut.triangle).push_back(t);
+  const auto attach = [&](const std::vector<uint32_t>& triangles, bool filtered) {
+    RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                                 3 * sizeof(float), scene.positions.size()));
+    auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(uint32_t), triangles.size()));
+    if (vertices && indices) {
+      std::memcpy(vertices, scene.positions.data(), scene.positions.size() * sizeof(Vec3));
+      for (size_t i = 0; i < triangles.size(); ++i)
+        std::memcpy(indices + 3 * i, &scene.indices[3 * size_t(triangles[i])], 3 * sizeof(uint32_t));
+    }
+    if (filtered) {
+      rtcSetGeometryUserData(geom, &impl_->cutOut);
+      rtcSetGeometryIntersectFilterFunction(geom, cutOutFilter);
+      rtcSetGeometryOccludedFilterFunction(geom, cutOutFilter);
+    }
+    rtcCommitGeometry(geom);
+    const unsigned id = rtcAttachGeometry(impl_->scene, geom);
+    rtcReleaseGeometry(geom);
+    return id;
+  };
+  if (!opaque.empty() || impl_->cutOut.triangle.empty()) attach(opaque, false);
+  if (!impl_->cutOut.triangle.empty()) {
+    impl_->opaqueTriangle = std::move(opaque);
+    impl_->cutOut.scene = &scene;
+    impl_->cutOutGeometry = attach(impl_->cutOut.triangle, true);
   }
-  rtcCommitGeometry(geom);
-  rtcAttachGeometry(impl_->scene, geom);
-  rtcReleaseGeometry(geom);
   rtcCommitScene(impl_->scene);
   if (!impl_->error.message.empty()) throw std::runtime_error(impl_->error.message);
 }
@@ -122,7 +196,7 @@ Hit Visibility::intersect(const Ray& ray) const {
   Hit hit;
   if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
     hit.t = rh.ray.tfar;
-    hit.triangle = rh.hit.primID;
+    hit.triangle = impl_->triangle(rh.hit.geomID, rh.hit.primID);
     hit.b1 = rh.hit.u;
     hit.b2 = rh.hit.v;
   }
@@ -162,7 +236,7 @@ bool Visibility::occluded(const Ray& ray) const {
     for (int i = 0; i < N; ++i) {                                                                  \
       const bool found = valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;                  \
       hits.t[i] = found ? rh.ray.tfar[i] : kInf;                                                   \
-      hits.triangle[i] = found ? rh.hit.primID[i] : kNoHit;                                        \
+      hits.triangle[i] = found ? impl_->triangle(rh.hit.geomID[i], rh.hit.primID[i]) : kNoHit;     \
       hits.b1[i] = found ? rh.hit.u[i] : 0.0f;                                                     \
       hits.b2[i] = found ? rh.hit.v[i] : 0.0f;                                                     \
     }                                                                                              \

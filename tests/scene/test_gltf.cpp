@@ -10,13 +10,17 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
+#include "lucent/core/rng.h"
 #include "lucent/image/image.h"
 #include "lucent/image/metrics.h"
 #include "lucent/scene/surface.h"
 #include "lucent/scene/texture.h"
 #include "lucent/scene/loader.h"
+#include "lucent/trace/visibility.h"
 #include "test_support.h"
 
 using namespace lucent;
@@ -530,4 +534,132 @@ TEST_CASE("glTF spot lights: placed by their node, their cone from the extension
     REQUIRE_THROWS_WITH(loadWrapped(dir.path, bad), Catch::Contains("extensions.KHR_lights_punctual.lights[0]." +
                                                                     std::string(expected)));
   }
+}
+
+TEST_CASE("glTF alpha: MASK cuts holes for every query, BLEND lets rays through with probability 1 - alpha",
+          "[gltf][loader][visibility]") {
+  const test::TempDir dir;
+  // A 2 x 1 RGBA PNG base colour texture (codes 188, alpha as stored beside them): its left texel
+  // of alpha 51/255 (a hole below the cutoff 0.5), its right opaque.
+  const unsigned char rgba[8] = {188, 188, 188, 51, 188, 188, 188, 255};
+  std::vector<unsigned char> png;
+  {
+    OIIO::ImageSpec spec(2, 1, 4, OIIO::TypeDesc::UINT8);
+    spec.alpha_channel = 3;
+    spec.attribute("oiio:UnassociatedAlpha", 1);
+    OIIO::Filesystem::IOVecOutput memory(png);
+    auto out = OIIO::ImageOutput::create("png");
+    REQUIRE(out);
+    REQUIRE(out->set_ioproxy(&memory));
+    REQUIRE(out->open("alpha.png", spec));
+    REQUIRE(out->write_image(OIIO::TypeDesc::UINT8, rgba));
+    REQUIRE(out->close());
+  }
+  json f = quadFile({{{"mesh", 0}}, {{"mesh", 0}, {"translation", {0, 0, -1}}}}, {0, 1});
+  f["images"] = {{{"uri", "data:image/png;base64," + base64(png)}}};
+  f["textures"] = {{{"source", 0}}};
+  // The first quad masked, the second (1 behind it) opaque: a second material.
+  f["materials"].push_back(f["materials"][0]);
+  f["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
+  f["materials"][0]["alphaMode"] = "MASK";
+  f["meshes"].push_back(f["meshes"][0]);
+  f["meshes"][1]["primitives"][0]["material"] = 1;
+  f["nodes"][1]["mesh"] = 1;
+  const Scene masked = loadWrapped(dir.path, f);
+  REQUIRE(masked.materials[0].alphaMode == AlphaMode::Mask);
+  CHECK(masked.texels[masked.textures[0].offset] >> 24 == 51);  // the A channel, kept (0.2)
+  CHECK(masked.texels[masked.textures[0].offset + 1] >> 24 == 255);
+  // Colour as stored beside alpha, not premultiplied by it: both texels alike.
+  CHECK((masked.texels[masked.textures[0].offset] & 0xff) == (masked.texels[masked.textures[0].offset + 1] & 0xff));
+  CHECK(hasCutOutSurfaces(masked));
+  const Visibility vis(masked);
+  // Through the left texel's centre the ray passes the hole and meets the opaque quad behind; through
+  // the right one it meets the masked quad. Single rays, packets of 8 and 16, and occlusion agree.
+  const auto ray = [](float u) { return Ray{{u, 0.5f, 1}, {0, 0, -1}}; };
+  const Hit hole = vis.intersect(ray(0.25f)), solid = vis.intersect(ray(0.75f));
+  REQUIRE(hole.found());
+  REQUIRE(solid.found());
+  CHECK(hole.t == Approx(2));
+  CHECK(masked.materialIds[hole.triangle] == 1);  // the scene's triangle numbers, whatever the geometry
+  CHECK(solid.t == Approx(1));
+  CHECK(masked.materialIds[solid.triangle] == 0);
+  Ray shortRay = ray(0.25f);
+  shortRay.tMax = 1.5f;  // would end before the opaque quad
+  CHECK(!vis.occluded(shortRay));
+  shortRay.origin.x = 0.75f;
+  CHECK(vis.occluded(shortRay));
+  Hit hits[16];
+  intersectPacket<16>(vis, 16, [&](int i) { return ray(i % 2 ? 0.75f : 0.25f); }, hits);
+  for (int i = 0; i < 16; ++i) CHECK(hits[i].t == Approx(i % 2 ? 1 : 2));
+  bool blocked[8];
+  occludedPacket<8>(vis, 8, [&](int i) { Ray r = ray(i % 2 ? 0.75f : 0.25f); r.tMax = 1.5f; return r; }, blocked);
+  for (int i = 0; i < 8; ++i) CHECK(blocked[i] == (i % 2 == 1));
+
+  // BLEND with alpha 0.3 and no texture: about 30% of rays stop at the first quad, each ray's fate
+  // the same every time it is traced.
+  f["materials"][0]["alphaMode"] = "BLEND";
+  f["materials"][0]["pbrMetallicRoughness"].erase("baseColorTexture");
+  f["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {0.5, 0.5, 0.5, 0.3};
+  const Scene blended = loadWrapped(dir.path, f);
+  const Visibility blendVis(blended);
+  Rng rng(12);
+  const int n = 100000;
+  int stopped = 0;
+  for (int i = 0; i < n; ++i) {
+    const Ray r{{rng.uniform(), rng.uniform(), 1}, {0, 0, -1}};
+    const Hit h = blendVis.intersect(r);
+    REQUIRE(h.found());
+    stopped += h.t < 1.5f;
+    if (i < 100) CHECK(blendVis.intersect(r).t == h.t);
+  }
+  CHECK(std::abs(stopped - 0.3 * n) <= 4.5 * std::sqrt(n * 0.3 * 0.7));
+  // A bad mode or cutoff is refused with its path.
+  f["materials"][0]["alphaMode"] = "HALF";
+  REQUIRE_THROWS_WITH(loadWrapped(dir.path, f), Catch::Contains("materials[0].alphaMode: 'HALF'"));
+}
+
+TEST_CASE("Methods that place points on surfaces refuse scenes with holes, naming the methods that take them",
+          "[gltf][cli]") {
+  const test::TempDir dir;
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  f["materials"][0]["alphaMode"] = "MASK";
+  f["cameras"] = {{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"aspectRatio", 1.0}, {"znear", 0.1}}}}};
+  f["nodes"].push_back({{"camera", 0}, {"translation", {0.5, 0.5, 3}}});
+  f["scenes"][0]["nodes"].push_back(int(f["nodes"].size()) - 1);
+  const std::string file = writeFile(dir.path, "holes.gltf", f);
+  for (const std::string method : {"micro", "particles"}) {
+    const test::CliRun r = test::runLucent("render " + file + " --method " + method + " --resolution 8x8 -q -o " +
+                                           (dir / "out.exr"));
+    INFO(r.output);
+    CHECK(r.status == 1);
+    CHECK_THAT(r.output, Catch::Contains("--method " + method) && Catch::Contains("alphaMode MASK or BLEND"));
+    CHECK(!fs::exists(dir / "out.exr"));
+  }
+  for (const std::string method : {"pt", "pmfg", "purcell"}) {
+    const test::CliRun r = test::runLucent("render " + file + " --method " + method + " --resolution 8x8 --spp 1 -q -o " +
+                                           (dir / "out.exr"));
+    INFO(r.output);
+    CHECK(r.status == 0);
+  }
+}
+
+TEST_CASE("A glTF file rendered on its own takes the camera named, its node's name or its own", "[gltf][loader]") {
+  const test::TempDir dir;
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  f["cameras"] = {{{"type", "perspective"}, {"name", "wide"}, {"perspective", {{"yfov", 1.0}, {"aspectRatio", 2.0}, {"znear", 0.1}}}},
+                  {{"type", "perspective"}, {"name", "narrow"}, {"perspective", {{"yfov", 0.2}, {"znear", 0.1}}}}};
+  f["nodes"].push_back({{"camera", 0}, {"name", "front"}, {"translation", {0.5, 0.5, 3}}});
+  f["nodes"].push_back({{"camera", 1}, {"name", "side"}, {"translation", {4, 0.5, 0}}});
+  f["scenes"][0]["nodes"].push_back(int(f["nodes"].size()) - 2);
+  f["scenes"][0]["nodes"].push_back(int(f["nodes"].size()) - 1);
+  const std::string file = writeFile(dir.path, "cameras.gltf", f);
+  const auto load = [&](const std::string& name) { return loadScene(file, LoadOptions(true, {false, 683.0, name})); };
+  CHECK(load("").camera.fovY == Approx(1.0 * 180 / kPi));  // the first in node order
+  CHECK(load("wide").camera.fovY == Approx(1.0 * 180 / kPi));
+  CHECK(load("narrow").camera.fovY == Approx(0.2 * 180 / kPi));
+  CHECK(load("side").camera.eye.x == Approx(4));
+  CHECK(load("front").camera.width == 512);
+  CHECK(load("front").camera.height == 256);
+  REQUIRE_THROWS_WITH(load("top"), Catch::Contains("cameras.gltf: cameras: no camera in the scene is named 'top'") &&
+                                       Catch::Contains("'front', 'side'"));
 }

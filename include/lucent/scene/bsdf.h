@@ -144,6 +144,20 @@ inline BsdfValue evalBsdfAndPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
 inline Rgb evalBsdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) { return evalBsdfAndPdf(b, wo, wi).f; }
 inline float bsdfPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) { return evalBsdfAndPdf(b, wo, wi).pdf; }
 
+// A direction wi drawn from one lobe of a mixture (Phong's, a glTF material's), weighed by the whole
+// mixture's value and density: valid where both are positive above the surface.
+inline BsdfSample mixtureSample(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
+  BsdfSample s;
+  s.wi = wi;
+  if (s.wi.z <= 0) return s;
+  const BsdfValue v = evalBsdfAndPdf(b, wo, s.wi);
+  s.pdf = v.pdf;
+  if (!(s.pdf > 0)) return s;
+  s.weight = v.f * (s.wi.z / s.pdf);
+  s.valid = true;
+  return s;
+}
+
 // Samples wi given wo; `u` picks the lobe, `u2` the direction. For glass the outside (index 1) is
 // the +z side, so wo.z < 0 means the path is inside the dielectric.
 inline BsdfSample sampleBsdf(const SurfaceBsdf& b, Vec3 wo, float u, Vec2 u2,
@@ -180,37 +194,14 @@ inline BsdfSample sampleBsdf(const SurfaceBsdf& b, Vec3 wo, float u, Vec2 u2,
     }
     case MaterialType::Diffuse: return sampleLambertian(b.kd, wo.z, u2);
     case MaterialType::Gltf:
-    case MaterialType::GltfHeightCorrelated: {
+    case MaterialType::GltfHeightCorrelated:
       if (wo.z <= 0) return s;
-      if (u < gltfSpecularChoice(b, wo.z)) {
-        s.wi = reflect(wo, sampleGgxVisibleNormal(b.alpha, wo, u2));
-      } else {
-        s.wi = sampleCosineHemisphere(u2);
-      }
-      if (s.wi.z <= 0) return s;
-      const BsdfValue v = gltfValue(b, wo, s.wi);
-      s.pdf = v.pdf;
-      if (!(s.pdf > 0)) return s;
-      s.weight = v.f * (s.wi.z / s.pdf);
-      s.valid = true;
-      return s;
-    }
-    case MaterialType::Phong: {
+      return mixtureSample(b, wo, u < gltfSpecularChoice(b, wo.z) ? reflect(wo, sampleGgxVisibleNormal(b.alpha, wo, u2))
+                                                                  : sampleCosineHemisphere(u2));
+    case MaterialType::Phong:
       if (wo.z <= 0) return s;
-      if (u < b.diffuseChoice()) {
-        s.wi = sampleCosineHemisphere(u2);
-      } else {
-        const Vec3 local = samplePhongLobe(u2, b.ns);
-        s.wi = Frame(reflect(wo, {0, 0, 1})).toWorld(local);
-      }
-      if (s.wi.z <= 0) return s;
-      const BsdfValue v = evalBsdfAndPdf(b, wo, s.wi);
-      s.pdf = v.pdf;
-      if (!(s.pdf > 0)) return s;
-      s.weight = v.f * (s.wi.z / s.pdf);
-      s.valid = true;
-      return s;
-    }
+      return mixtureSample(b, wo, u < b.diffuseChoice() ? sampleCosineHemisphere(u2)
+                                                        : Frame(reflect(wo, {0, 0, 1})).toWorld(samplePhongLobe(u2, b.ns)));
   }
   return s;
 }

@@ -23,6 +23,9 @@ struct GltfOptions {
   // KHR_lights_punctual's photometric intensities (candela, lux) to Lucent's radiometric ones:
   // lumens per watt (683, the luminous efficacy of 555 nm light, as Blender's importer uses).
   double lumensPerWatt = 683.0;
+  // The camera a glTF file is rendered from on its own: its node's name or its own; empty: the
+  // first in the scene's node order.
+  std::string camera;
 };
 
 struct LoadOptions {

@@ -18,6 +18,10 @@ namespace lucent {
 enum class MaterialType : uint32_t { Diffuse = 0, Phong = 1, Mirror = 2, Glass = 3, Gltf = 4, GltfHeightCorrelated = 5 };
 inline bool isGltf(MaterialType t) { return t == MaterialType::Gltf || t == MaterialType::GltfHeightCorrelated; }
 
+// glTF's alphaMode: opaque; masked (a point is there where its alpha is at least alphaCutoff); or
+// blended, rendered as stochastic transparency (a point is there with probability alpha).
+enum class AlphaMode : uint32_t { Opaque = 0, Mask = 1, Blend = 2 };
+
 // Lambertian Kd (optionally textured) plus a normalized Phong lobe Ks (n+2)/(2 pi) cos^Ns;
 // mirror reflects with tint Ks; glass is a smooth dielectric of index Ni. Ke is one-sided emission
 // on the side of the counter-clockwise winding normal.
@@ -38,8 +42,12 @@ struct Material {
   int32_t metallicRoughnessTexture = -1;   // linear; B scales metallic, G roughness
   int32_t normalTexture = -1;              // linear tangent-space normals, x and y scaled by normalScale
   float normalScale = 1.0f;
+  // Where the surface is (every visibility query, Visibility's filter): alpha = baseAlpha times the
+  // kdTexture's A channel (linear).
+  AlphaMode alphaMode = AlphaMode::Opaque;
+  float alphaCutoff = 0.5f, baseAlpha = 1.0f;
 };
-static_assert(sizeof(Material) == 76, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 88, "Material is a fixed-size record shared with GPU backends");
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear
@@ -163,6 +171,14 @@ struct Scene {
   Vec3 boundingCenter() const { return bounds.center(); }
   float boundingRadius() const { return 0.5f * length(bounds.extent()); }
 };
+
+// Whether any material has holes (glTF alpha masks and blending): methods that place points on the
+// surfaces refuse such scenes, whose points would cover the holes.
+inline bool hasCutOutSurfaces(const Scene& scene) {
+  for (const Material& m : scene.materials)
+    if (m.alphaMode != AlphaMode::Opaque) return true;
+  return false;
+}
 
 // Computes face normals and areas, the light list, the light distribution and the content hash
 // once geometry and materials are set.

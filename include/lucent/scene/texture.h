@@ -55,6 +55,19 @@ inline Rgb bilinear(const Texture& t, const uint32_t* texels, Vec2 uv) {
   return bilinear(bilinearFootprint(t, texels, uv));
 }
 
+// Bilinear lookup of the A channel (linear: coverage, not colour).
+inline float bilinearAlpha(const BilinearFootprint& f) {
+  const auto a = [](uint32_t texel) { return float(texel >> 24) * (1.0f / 255.0f); };
+  return (a(f.row0[f.x0]) * (1 - f.tx) + a(f.row0[f.x1]) * f.tx) * (1 - f.ty) +
+         (a(f.row1[f.x0]) * (1 - f.tx) + a(f.row1[f.x1]) * f.tx) * f.ty;
+}
+
+// A material's alpha at texture coordinates uv: its base alpha times its colour texture's A.
+inline float surfaceAlpha(const Scene& scene, const Material& m, Vec2 uv) {
+  if (m.kdTexture < 0) return m.baseAlpha;
+  return m.baseAlpha * bilinearAlpha(bilinearFootprint(scene.textures[m.kdTexture], scene.texels.data(), uv));
+}
+
 inline Rgb diffuseAlbedo(const Scene& scene, const Material& m, Vec2 uv) {
   if (m.kdTexture < 0) return m.kd;
   return m.kd * bilinear(scene.textures[m.kdTexture], scene.texels.data(), uv);

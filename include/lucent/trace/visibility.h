@@ -85,6 +85,8 @@ struct alignas(64) HitPacket {
 
 class Visibility {
  public:
+  // The scene's triangles; one with holes (a material's alphaMode) keeps a reference to `scene`, to
+  // look its alpha up at each candidate hit, and must outlive this.
   explicit Visibility(const Scene& scene, const VisibilityOptions& options = {});
   ~Visibility();
   Visibility(const Visibility&) = delete;

@@ -393,6 +393,9 @@ RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvP
                            const RenderControl& control) {
   const RenderPart part = beginRender(envPbgiOptionTable(), o, control, scene, "--method envpbgi renders the image at once");
   requireEnvironmentLights(scene);
+  if (hasCutOutSurfaces(scene))
+    throw std::invalid_argument("--method envpbgi places its surface points on the surfaces, which would cover the holes of '" +
+                                scene.sourcePath + "' (glTF alphaMode MASK or BLEND): render it with pt, pmfg or purcell");
   RenderOutput out;
   auto report = [&](double fraction) {
     if (control.progress) control.progress(fraction);

@@ -197,6 +197,9 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   // Gathering runs over the whole part at once (its Morton order and the upsampling lattice span
   // it): there is no state between stages to checkpoint.
   const RenderPart part = beginRender(microOptionTable(), o, control, scene, "--method micro gathers the whole image at once");
+  if (hasCutOutSurfaces(scene))
+    throw std::invalid_argument("--method micro places its point hierarchy's points on the surfaces, which would cover the holes of '" +
+                                scene.sourcePath + "' (glTF alphaMode MASK or BLEND): render it with pt, pmfg or purcell");
   RenderOutput out;
   RenderStats& stats = out.stats;
 

@@ -412,6 +412,9 @@ class ParticleRender {
 RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const ParticleOptions& o,
                              const RenderControl& control) {
   const RenderPart part = beginRender(particleOptionTable(), o, control, scene, "--method particles renders the image at once");
+  if (hasCutOutSurfaces(scene))
+    throw std::invalid_argument("--method particles places its area particles on the surfaces, which would cover the holes of '" +
+                                scene.sourcePath + "' (glTF alphaMode MASK or BLEND): render it with pt, pmfg or purcell");
   if (o.supersample > 0 && control.isPart())
     throw std::invalid_argument("--supersample decides each pixel from its neighbours, which a part (--crop, "
                                 "--samples) does not have: render the whole image");
