@@ -15,8 +15,8 @@ method, not the aliasing of point samples at edges.
 
 The references (path tracer, 16,384 samples per pixel, box-filtered and through the pixel centres)
 are rendered once and kept in out/charts/.
-Needs matplotlib (Debian: python3-matplotlib); run with /usr/bin/python3. About 25 minutes on 2
-cores with all six scenes; run on an otherwise idle machine.
+Needs matplotlib (Debian: python3-matplotlib); run with /usr/bin/python3. About 65 minutes on 2
+cores with all eleven scenes; run on an otherwise idle machine.
 """
 import argparse
 import json
@@ -104,6 +104,12 @@ SCENES = {
                     (8, 16, 24), (150000, (37500, 75000, 150000, 300000))),
     "maze": scene("128x128", 64, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
                   (8, 16), (150000, (37500, 75000, 150000, 300000))),
+    # glTF scenes (scenes/gltf): Sponza as Blender's exporter wrote it (normal textures, the sun) under
+    # the sky, and glTF's metals and rough dielectrics with a spot light and the sun.
+    "gltf/sponza-sky": scene("160x100", 1024, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
+                             (8, 16, 24), (150000, (37500, 75000, 150000, 300000))),
+    "gltf/materials-sky": scene("160x80", 256, (16, 64, 256), photons(["--photons"], "photons", *MILLION),
+                                (8, 16, 24), (50000, (12500, 25000, 50000, 100000))),
     "primitives": environment_scene("320x180"),
     "sponza-courtyard": environment_scene("160x100"),
 }
@@ -117,6 +123,11 @@ def run(args):
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def file_name(scene):
+    """A scene's name as a file name: gltf/sponza-sky becomes gltf-sponza-sky."""
+    return scene.replace("/", "-")
+
+
 def scene_path(name):
     return os.path.join(ROOT, "scenes", name + ".json")
 
@@ -124,7 +135,7 @@ def scene_path(name):
 def reference(scene, resolution, centres, max_depth):
     kind = "centres" if centres else "box"
     depth = f"-depth{max_depth}" if max_depth else ""
-    path = os.path.join(CACHE, f"{scene}-{resolution}-pt{depth}-{REFERENCE_SPP}spp-{kind}.exr")
+    path = os.path.join(CACHE, f"{file_name(scene)}-{resolution}-pt{depth}-{REFERENCE_SPP}spp-{kind}.exr")
     if not os.path.exists(path):
         print(f"  (path-tracing the reference {os.path.basename(path)})", flush=True)
         run(["render", scene_path(scene), "--method", "pt", "--spp", str(REFERENCE_SPP), "--seed", "1",
@@ -164,7 +175,7 @@ def chart(scene, results, out):
     ax.grid(True, which="both", linewidth=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    path = os.path.join(out, f"{scene}.png")
+    path = os.path.join(out, f"{file_name(scene)}.png")
     fig.savefig(path)
     plt.close(fig)
     return path

@@ -1,0 +1,136 @@
+#!/usr/bin/env python3
+"""Writes scenes/gltf/materials.glb: glTF's metallic-roughness material on five spheres in a row, on
+a ground and before a wall, lit by a spot light and the sun (KHR_lights_punctual): a rough gold and
+a polished copper metal, a rough white and a shiny blue dielectric (KHR_materials_ior 1.5), and a
+half-metallic sphere with a tinted specular colour (KHR_materials_specular); the ground and wall are
+rough grey dielectrics. Metal colours are the measured F0 of gold and copper that the glTF
+specification's examples use. Procedural, so the scene needs no third-party data; rerun to
+regenerate. materials-sky.json adds a sky."""
+import json
+import math
+import pathlib
+import struct
+
+from procedural_mesh import Mesh
+
+out = pathlib.Path(__file__).resolve().parent.parent / "scenes" / "gltf"
+
+# (name, base colour, metallic, roughness, extensions)
+MATERIALS = [
+    ("ground", (0.5, 0.5, 0.5), 0.0, 0.8, {}),
+    ("wall", (0.6, 0.6, 0.6), 0.0, 0.9, {}),
+    ("gold", (1.0, 0.766, 0.336), 1.0, 0.35, {}),
+    ("copper", (0.955, 0.638, 0.538), 1.0, 0.25, {}),
+    ("rough white", (0.8, 0.8, 0.8), 0.0, 0.6, {"KHR_materials_ior": {"ior": 1.5}}),
+    ("shiny blue", (0.1, 0.2, 0.6), 0.0, 0.2, {"KHR_materials_ior": {"ior": 1.5}}),
+    ("tinted", (0.7, 0.3, 0.2), 0.5, 0.4,
+     {"KHR_materials_specular": {"specularFactor": 0.8, "specularColorFactor": [1.0, 0.8, 0.6]}}),
+]
+index = {name: i for i, (name, *_) in enumerate(MATERIALS)}
+
+mesh = Mesh()
+vertex, quad = mesh.vertex, mesh.quad
+up, forward = (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
+# Ground y = 0 over [-6, 6] x [-4, 4]; wall z = -4, up to y = 5; normals given, as an exporter writes.
+quad(index["ground"], *(vertex(p, up) for p in [(-6, 0, -4), (-6, 0, 4), (6, 0, 4), (6, 0, -4)]))
+quad(index["wall"], *(vertex(p, forward) for p in [(-6, 0, -4), (6, 0, -4), (6, 5, -4), (-6, 5, -4)]))
+for k, name in enumerate(["gold", "copper", "rough white", "shiny blue", "tinted"]):
+    mesh.sphere(index[name], (-4.0 + 2.0 * k, 0.8, 0.0), 0.8, 24, 48)
+
+# One primitive per material, its vertices its own (positions and normals float32, indices uint32).
+binary = bytearray()
+views, accessors, primitives = [], [], []
+
+
+def add_view(data, target):
+    while len(binary) % 4:
+        binary.append(0)
+    views.append({"buffer": 0, "byteOffset": len(binary), "byteLength": len(data), "target": target})
+    binary.extend(data)
+    return len(views) - 1
+
+
+for m in range(len(MATERIALS)):
+    corners = [c for material, face in mesh.faces if material == m for c in face]
+    remap, positions, normals, indices = {}, [], [], []
+    for v, n in corners:
+        if (v, n) not in remap:
+            remap[v, n] = len(positions)
+            positions.append(mesh.vertices[v - 1])
+            normals.append(mesh.normals[n - 1])
+        indices.append(remap[v, n])
+    lo = [min(p[i] for p in positions) for i in range(3)]
+    hi = [max(p[i] for p in positions) for i in range(3)]
+    position_view = add_view(b"".join(struct.pack("<3f", *p) for p in positions), 34962)
+    normal_view = add_view(b"".join(struct.pack("<3f", *n) for n in normals), 34962)
+    index_view = add_view(struct.pack(f"<{len(indices)}I", *indices), 34963)
+    accessors += [{"bufferView": position_view, "componentType": 5126, "count": len(positions), "type": "VEC3",
+                   "min": lo, "max": hi},
+                  {"bufferView": normal_view, "componentType": 5126, "count": len(normals), "type": "VEC3"},
+                  {"bufferView": index_view, "componentType": 5125, "count": len(indices), "type": "SCALAR"}]
+    primitives.append({"attributes": {"POSITION": len(accessors) - 3, "NORMAL": len(accessors) - 2},
+                       "indices": len(accessors) - 1, "material": m})
+
+# The camera at (0, 2.5, 9) looking at (0, 1, 0): a rotation about x by -atan(1.5 / 9).
+pitch = -math.atan2(1.5, 9.0)
+camera_rotation = [math.sin(pitch / 2), 0.0, 0.0, math.cos(pitch / 2)]
+
+
+def turning_minus_z_onto(d):
+    """The unit quaternion (x, y, z, w) turning (0, 0, -1), where glTF's lights shine, onto the unit
+    direction d: about the axis (0, 0, -1) x d by the angle acos(-d.z)."""
+    axis = (d[1], -d[0], 0.0)
+    axis_length = math.sqrt(sum(x * x for x in axis))
+    angle = math.acos(-d[2])
+    return [x / axis_length * math.sin(angle / 2) for x in axis] + [math.cos(angle / 2)]
+
+
+def unit(v):
+    length = math.sqrt(sum(x * x for x in v))
+    return [x / length for x in v]
+
+
+# The spot at (1, 6, 3) aimed at (0, 0.8, 0); the sun from above and to the left.
+spot_from, spot_to = (1.0, 6.0, 3.0), (0.0, 0.8, 0.0)
+spot_rotation = turning_minus_z_onto(unit([b - a for a, b in zip(spot_from, spot_to)]))
+sun_rotation = turning_minus_z_onto(unit((0.4, -1.0, -0.3)))
+
+materials = []
+for name, base, metallic, roughness, extensions in MATERIALS:
+    material = {"name": name, "pbrMetallicRoughness": {"baseColorFactor": list(base) + [1.0],
+                                                       "metallicFactor": metallic, "roughnessFactor": roughness}}
+    if extensions:
+        material["extensions"] = extensions
+    materials.append(material)
+
+document = {
+    "asset": {"version": "2.0", "generator": "Lucent scripts/make-gltf-materials.py"},
+    "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_ior", "KHR_materials_specular"],
+    "extensions": {"KHR_lights_punctual": {"lights": [
+        {"name": "spot", "type": "spot", "color": [1.0, 0.95, 0.85], "intensity": 683 * 60.0,
+         "spot": {"innerConeAngle": 0.25, "outerConeAngle": 0.45}},
+        {"name": "sun", "type": "directional", "color": [1.0, 0.97, 0.9], "intensity": 683 * 1.5}]}},
+    "scene": 0,
+    "scenes": [{"nodes": [0, 1, 2, 3]}],
+    "nodes": [{"name": "objects", "mesh": 0},
+              {"name": "camera", "camera": 0, "translation": [0.0, 2.5, 9.0], "rotation": camera_rotation},
+              {"name": "spot", "translation": list(spot_from), "rotation": spot_rotation,
+               "extensions": {"KHR_lights_punctual": {"light": 0}}},
+              {"name": "sun", "rotation": sun_rotation, "extensions": {"KHR_lights_punctual": {"light": 1}}}],
+    "cameras": [{"type": "perspective", "perspective": {"yfov": 0.6, "aspectRatio": 2.0, "znear": 0.1}}],
+    "meshes": [{"name": "objects", "primitives": primitives}],
+    "materials": materials,
+    "accessors": accessors,
+    "bufferViews": views,
+    "buffers": [{"byteLength": len(binary)}],
+}
+
+text = json.dumps(document, separators=(",", ":")).encode()
+text += b" " * (-len(text) % 4)
+while len(binary) % 4:
+    binary.append(0)
+glb = struct.pack("<3I", 0x46546C67, 2, 12 + 8 + len(text) + 8 + len(binary))
+glb += struct.pack("<2I", len(text), 0x4E4F534A) + text
+glb += struct.pack("<2I", len(binary), 0x004E4942) + bytes(binary)
+(out / "materials.glb").write_bytes(glb)
+print(f"{out / 'materials.glb'}: {sum(1 for _ in mesh.faces)} triangles, {len(glb)} bytes")
