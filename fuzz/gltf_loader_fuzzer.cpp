@@ -26,7 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::filesystem::path file = dir / (input.substr(0, 4) == "glTF" ? "model.glb" : "model.gltf");
   lucent::fuzz::writeFile(file, input);
   try {
-    lucent::loadScene(file.string(), LoadOptions(true));
+    lucent::loadScene(file.string(), lucent::LoadOptions(true));
   } catch (const lucent::SceneError&) {
   }
   std::error_code ec;

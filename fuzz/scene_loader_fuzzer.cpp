@@ -59,7 +59,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
   }
   try {
-    lucent::loadScene((dir / kTextFiles[0]).string(), LoadOptions(true));
+    lucent::loadScene((dir / kTextFiles[0]).string(), lucent::LoadOptions(true));
   } catch (const lucent::SceneError&) {
   }
   return 0;
