@@ -663,3 +663,44 @@ TEST_CASE("A glTF file rendered on its own takes the camera named, its node's na
   REQUIRE_THROWS_WITH(load("top"), Catch::Contains("cameras.gltf: cameras: no camera in the scene is named 'top'") &&
                                        Catch::Contains("'front', 'side'"));
 }
+
+TEST_CASE("lucent render refuses to write over a glTF file's external buffer or image", "[gltf][cli]") {
+  const test::TempDir dir;
+  // The quad with its buffer and a base colour PNG as files beside the .gltf.
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  const std::vector<unsigned char> buffer = quadBuffer();
+  std::ofstream(dir / "quad.bin", std::ios::binary).write(reinterpret_cast<const char*>(buffer.data()),
+                                                           std::streamsize(buffer.size()));
+  f["buffers"][0]["uri"] = "quad.bin";
+  Image image(1, 1, {"R", "G", "B"});
+  writePng(image, dir / "texture.png");
+  f["images"] = {{{"uri", "texture.png"}}};
+  f["textures"] = {{{"source", 0}}};
+  f["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
+  f["cameras"] = {{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}, {"znear", 0.1}}}}};
+  f["nodes"].push_back({{"camera", 0}, {"translation", {0.5, 0.5, 3}}});
+  f["scenes"][0]["nodes"].push_back(int(f["nodes"].size()) - 1);
+  const std::string file = writeFile(dir.path, "model.gltf", f);
+  const auto bytes = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string pngBefore = bytes(dir / "texture.png");
+  const test::CliRun png = test::runLucent("render " + file + " --spp 1 --resolution 8x8 -q -o " + (dir / "out.exr") +
+                                           " --png " + (dir / "texture.png"));
+  INFO(png.output);
+  CHECK(png.status == 1);
+  CHECK_THAT(png.output, Catch::Contains("is a file this command reads"));
+  CHECK(bytes(dir / "texture.png") == pngBefore);
+  CHECK(!fs::exists(dir / "out.exr"));
+  // The buffer: an output named as it (renamed to .exr to pass the extension check) is refused too.
+  fs::rename(dir / "quad.bin", dir / "quad.exr");
+  f["buffers"][0]["uri"] = "quad.exr";
+  writeFile(dir.path, "model.gltf", f);
+  const std::string binBefore = bytes(dir / "quad.exr");
+  const test::CliRun exr = test::runLucent("render " + file + " --spp 1 --resolution 8x8 -q -o " + (dir / "quad.exr"));
+  INFO(exr.output);
+  CHECK(exr.status == 1);
+  CHECK_THAT(exr.output, Catch::Contains("is a file this command reads"));
+  CHECK(bytes(dir / "quad.exr") == binBefore);
+}
