@@ -669,6 +669,19 @@ def buffer_uri(uri, length):
     ("required.glb", lambda work: glb_with_json(lambda d: d.update(extensionsRequired=["KHR_draco_mesh_compression"],
                                                                    extensionsUsed=["KHR_draco_mesh_compression"])),
      "extensionsRequired: names KHR_draco_mesh_compression"),
+    ("alpha-mode.glb", lambda work: glb_with_json(lambda d: d["materials"][0].update(alphaMode="SOMETIMES")),
+     "materials[0].alphaMode: 'SOMETIMES' is not OPAQUE, MASK or BLEND"),
+    ("metallic.glb", lambda work: glb_with_json(lambda d: d["materials"][0]["pbrMetallicRoughness"].update(metallicFactor=2)),
+     "materials[0].pbrMetallicRoughness.metallicFactor: must be in [0, 1]"),
+    ("ior.glb", lambda work: glb_with_json(lambda d: d["materials"][0]["extensions"]["KHR_materials_ior"].update(ior=-1)),
+     "materials[0].extensions.KHR_materials_ior.ior: must be 0 or in [1, 1e15]"),
+    ("spot.glb", lambda work: glb_with_json(lambda d: d.update(
+        extensionsUsed=d["extensionsUsed"] + ["KHR_lights_punctual"],
+        extensions={"KHR_lights_punctual": {"lights": [{"type": "spot", "intensity": 1,
+                                                        "spot": {"innerConeAngle": 1.0, "outerConeAngle": 0.5}}]}},
+        nodes=d["nodes"] + [{"extensions": {"KHR_lights_punctual": {"light": 0}}}],
+        scenes=[{"nodes": d["scenes"][0]["nodes"] + [len(d["nodes"])]}])),
+     "KHR_lights_punctual.lights[0].spot.innerConeAngle: must be in [0, outerConeAngle)"),
 ])
 def test_a_broken_gltf_file_is_refused_at_once_and_nothing_is_written(work, name, make, words):
     write(os.path.join(work, name), make(work))
