@@ -303,20 +303,28 @@ TextureFile textureImage(const Context& c, const tinygltf::TextureInfo& info, co
     c.fail(path + ".index", "texture " + std::to_string(info.index) + " does not exist");
   const tinygltf::Texture& texture = c.model.textures[size_t(info.index)];
   const std::string texturePath = at("textures", size_t(info.index));
+  TextureFile file;
   if (texture.sampler >= 0) {
     if (size_t(texture.sampler) >= c.model.samplers.size())
       c.fail(texturePath + ".sampler", "sampler " + std::to_string(texture.sampler) + " does not exist");
     const tinygltf::Sampler& sampler = c.model.samplers[size_t(texture.sampler)];
-    if (sampler.wrapS != TINYGLTF_TEXTURE_WRAP_REPEAT || sampler.wrapT != TINYGLTF_TEXTURE_WRAP_REPEAT)
-      ignored.push_back(named + ": the " + what + "'s clamped or mirrored wrapping (it repeats)");
-    if (sampler.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST)
-      ignored.push_back(named + ": the " + what + "'s nearest filtering (it is filtered bilinearly)");
+    const std::string samplerPath = at("samplers", size_t(texture.sampler));
+    const auto wrap = [&](int mode, const char* key) {
+      switch (mode) {
+        case TINYGLTF_TEXTURE_WRAP_REPEAT: return TextureWrap::Repeat;
+        case TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE: return TextureWrap::Clamp;
+        case TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT: return TextureWrap::Mirror;
+        default: c.fail(samplerPath + "." + key, std::to_string(mode) + " is not a glTF wrapping mode");
+      }
+    };
+    file.wrapU = wrap(sampler.wrapS, "wrapS");
+    file.wrapV = wrap(sampler.wrapT, "wrapT");
+    file.nearest = sampler.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
   }
   if (texture.source < 0 || size_t(texture.source) >= c.model.images.size())
     c.fail(texturePath + ".source", "image " + std::to_string(texture.source) + " does not exist");
   const tinygltf::Image& image = c.model.images[size_t(texture.source)];
   const std::string imagePath = at("images", size_t(texture.source));
-  TextureFile file;
   if (image.bufferView >= 0) {
     const auto& views = c.model.bufferViews;
     const size_t length = size_t(image.bufferView) < views.size() ? views[size_t(image.bufferView)].byteLength : 0;

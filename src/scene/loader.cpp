@@ -334,6 +334,9 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
     if (!embedded) scene.inputFiles.push_back(file.path);
     Texture tex;
     tex.offset = static_cast<uint32_t>(scene.texels.size());
+    tex.wrapU = file.wrapU;
+    tex.wrapV = file.wrapV;
+    tex.nearest = file.nearest ? 1 : 0;
     const std::function<Image(ImageMetadata*)> read =
         embedded ? std::function<Image(ImageMetadata*)>([&](ImageMetadata* metadata) {
           return readImageFromMemory(file.path, fs::path(file.path).extension().string(), file.bytes, metadata);

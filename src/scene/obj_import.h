@@ -14,6 +14,8 @@ struct TextureFile {
   std::string path;                  // absolute path, empty for none; for `bytes`, a name ending .png or .jpg
   std::vector<unsigned char> bytes;  // the image's file held in memory (a glTF file's image), or none
   std::string origin;                // "file:line" (or the scene's key, or the glTF path) that names it
+  TextureWrap wrapU = TextureWrap::Repeat, wrapV = TextureWrap::Repeat;  // a glTF sampler's
+  bool nearest = false;
   bool empty() const { return path.empty(); }
 };
 

@@ -404,9 +404,11 @@ TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read
       const uint32_t texel = scene.texels[scene.textures[0].offset + uint32_t(x)];
       for (int c = 0; c < 3; ++c) CHECK(((texel >> (8 * c)) & 0xff) == codes[x][c]);
     }
-    // The clamped wrapping is said, not applied.
-    CHECK(std::any_of(scene.ignored.begin(), scene.ignored.end(),
-                      [](const std::string& s) { return s.find("wrapping") != std::string::npos; }));
+    // The sampler's wrapping is the texture's: clamped along u, repeated along v.
+    CHECK(scene.textures[0].wrapU == TextureWrap::Clamp);
+    CHECK(scene.textures[0].wrapV == TextureWrap::Repeat);
+    CHECK(scene.textures[0].nearest == 0);
+    CHECK(scene.ignored.empty());
   }
   // KHR_texture_transform: T R S of glTF's coordinates, worked out by hand for the corner whose
   // coordinates are (1, 0): scaled to (2, 0), turned by 90 degrees to (0, -2), moved to (0.25, -1.5);

@@ -101,3 +101,46 @@ TEST_CASE("An 8-bit sRGB texture keeps every code; a float texture is clamped an
     }
   }
 }
+
+TEST_CASE("Texture wrapping and filtering: glTF's repeat, clamp and mirror, bilinear and nearest", "[texture]") {
+  // A 2 x 1 texture of linear codes 0 and 255 in R; u in texture units, v at the row's centre.
+  const std::vector<uint32_t> texels = {0xff000000u, 0xff0000ffu};
+  Texture t;
+  t.width = 2;
+  t.height = 1;
+  const auto at = [&](float u) { return bilinear(bilinearFootprint(t, texels.data(), {u, 0.5f}), kUnorm8ToFloat).r; };
+  SECTION("repeat: between the last texel and the first across the edge, the default path") {
+    CHECK(at(0.25f) == Approx(0.0f).margin(1e-6));
+    CHECK(at(0.75f) == Approx(1.0f));
+    CHECK(at(1.0f) == Approx(0.5f));
+    CHECK(at(-0.25f) == Approx(1.0f));
+    t.wrapV = TextureWrap::Clamp;  // the non-default path, repeating along u: the same values
+    CHECK(at(0.0f) == Approx(0.5f));
+    CHECK(at(-0.25f) == Approx(1.0f));
+  }
+  SECTION("clamp: the edge texels extend outwards") {
+    t.wrapU = TextureWrap::Clamp;
+    CHECK(at(0.0f) == Approx(0.0f).margin(1e-6));
+    CHECK(at(-3.0f) == Approx(0.0f).margin(1e-6));
+    CHECK(at(1.0f) == Approx(1.0f));
+    CHECK(at(7.5f) == Approx(1.0f));
+    CHECK(at(0.5f) == Approx(0.5f));
+  }
+  SECTION("mirror: every other period reversed") {
+    t.wrapU = TextureWrap::Mirror;
+    CHECK(at(1.25f) == Approx(at(0.75f)));
+    CHECK(at(1.75f) == Approx(at(0.25f)));
+    CHECK(at(-0.25f) == Approx(at(0.25f)));
+    CHECK(at(2.25f) == Approx(at(0.25f)));
+    CHECK(at(1.0f) == Approx(1.0f));  // the mirror's edge: the last texel on both sides
+  }
+  SECTION("nearest: the texel holding the point, no blend") {
+    t.nearest = 1;
+    CHECK(at(0.49f) == Approx(0.0f).margin(1e-6));
+    CHECK(at(0.51f) == Approx(1.0f));
+    CHECK(at(0.99f) == Approx(1.0f));
+    t.wrapU = TextureWrap::Clamp;
+    CHECK(at(-0.5f) == Approx(0.0f).margin(1e-6));
+    CHECK(at(1.5f) == Approx(1.0f));
+  }
+}

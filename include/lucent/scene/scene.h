@@ -53,9 +53,14 @@ static_assert(sizeof(Material) == 88, "Material is a fixed-size record shared wi
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear
 // for data (metallicRoughnessTexture): reflectances lie in [0, 1], the scenes' textures are 8-bit,
 // and a third of the float size keeps lookups in cache.
+// How coordinates outside [0, 1] and between texels read a texture (glTF's samplers; MTL maps
+// repeat and filter bilinearly).
+enum class TextureWrap : uint32_t { Repeat = 0, Clamp = 1, Mirror = 2 };
 struct Texture {
   uint32_t offset = 0;
   uint32_t width = 0, height = 0;
+  TextureWrap wrapU = TextureWrap::Repeat, wrapV = TextureWrap::Repeat;  // along u (image x) and v (image y)
+  uint32_t nearest = 0;  // 1: the nearest texel, not a bilinear blend
 };
 
 enum class LightType : uint32_t { Triangle = 0, Point = 1, Directional = 2, Environment = 3, Spot = 4 };

@@ -34,7 +34,44 @@ struct BilinearFootprint {
   uint32_t x0, x1;
   float tx, ty;
 };
+// A coordinate c in image units (texel centres at k + 0.5) of an image `size` texels wide, under a
+// clamping or mirroring wrap: the two texels it lies between and the weight of the second.
+struct TexelPair {
+  uint32_t first, second;
+  float weight;
+};
+inline TexelPair boundedTexels(float c, uint32_t size, TextureWrap wrap) {
+  if (wrap == TextureWrap::Mirror) {
+    // Period 2 in texture units: [0, 1] then back.
+    const float period = 2.0f * float(size), m = c - period * std::floor(c / period);
+    c = m > float(size) ? period - m : m;
+  }
+  const float x = std::clamp(c, 0.5f, float(size) - 0.5f) - 0.5f;
+  const uint32_t first = std::min(uint32_t(x), size - 1);
+  return {first, std::min(first + 1, size - 1), x - float(first)};
+}
+
 inline BilinearFootprint bilinearFootprint(const Texture& t, const uint32_t* texels, Vec2 uv) {
+  if (t.wrapU != TextureWrap::Repeat || t.wrapV != TextureWrap::Repeat || t.nearest) {
+    // glTF's image coordinates: u along x, 1 - v (Lucent's v runs up) down the rows.
+    const auto along = [&](float c, uint32_t size, TextureWrap wrap) -> TexelPair {
+      if (wrap == TextureWrap::Repeat) {
+        const float x = (c - std::floor(c)) * float(size) - 0.5f, f = std::floor(x);
+        const uint32_t first = f < 0 ? size - 1 : std::min(uint32_t(f), size - 1);
+        return {first, first + 1 == size ? 0 : first + 1, x - f};
+      }
+      return boundedTexels(c * float(size), size, wrap);
+    };
+    TexelPair px = along(uv.x, t.width, t.wrapU), py = along(1.0f - uv.y, t.height, t.wrapV);
+    if (t.nearest) {
+      // The texel whose square holds the point.
+      px = {px.weight < 0.5f ? px.first : px.second, 0, 0.0f};
+      py = {py.weight < 0.5f ? py.first : py.second, 0, 0.0f};
+      px.second = px.first, py.second = py.first;
+    }
+    return {texels + t.offset + size_t(py.first) * t.width, texels + t.offset + size_t(py.second) * t.width, px.first,
+            px.second, px.weight, py.weight};
+  }
   const float x = (uv.x - std::floor(uv.x)) * t.width - 0.5f;
   const float y = (std::ceil(uv.y) - uv.y) * t.height - 0.5f;
   const float fx = std::floor(x), fy = std::floor(y);
