@@ -386,9 +386,10 @@ MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, Tex
   spec.kd = Rgb(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
   spec.metallic = float(unitNumber(c, pbr.metallicFactor, pbrPath + ".metallicFactor"));
   spec.roughness = float(unitNumber(c, pbr.roughnessFactor, pbrPath + ".roughnessFactor"));
-  if (spec.roughness * spec.roughness < kMinGgxAlpha)
-    ignored.push_back(named + ": roughness below " + std::to_string(std::sqrt(kMinGgxAlpha)).substr(0, 6) +
-                      " (rendered as " + std::to_string(std::sqrt(kMinGgxAlpha)).substr(0, 6) + ")");
+  if (spec.roughness * spec.roughness < kMinGgxAlpha) {
+    const std::string smallest = std::to_string(std::sqrt(kMinGgxAlpha)).substr(0, 6);
+    ignored.push_back(named + ": roughness below " + smallest + " (rendered as " + smallest + ")");
+  }
   // Every texture of a material reads one set of texture coordinates, transformed one way: the
   // triangles carry one pair per vertex.
   bool haveCoordinates = false;

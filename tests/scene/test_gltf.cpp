@@ -706,3 +706,29 @@ TEST_CASE("lucent render refuses to write over a glTF file's external buffer or 
   CHECK_THAT(exr.output, Catch::Contains("is a file this command reads"));
   CHECK(bytes(dir / "quad.exr") == binBefore);
 }
+
+TEST_CASE("A glTF entry's masking and lumens per watt, and the load options', reach its materials and lights",
+          "[gltf][loader]") {
+  const test::TempDir dir;
+  const json f = quadFile({{{"mesh", 0}}}, {0});  // a point light of 683 cd
+  const std::string file = writeFile(dir.path, "model.gltf", f);
+  const auto load = [&](const json& entry, const LoadOptions& options) {
+    const json scene = {{"camera", {{"eye", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"up", {0, 1, 0}}, {"fov_y", 40},
+                                    {"resolution", {8, 8}}}},
+                        {"meshes", {entry}}};
+    return loadScene(writeFile(dir.path, "scene.json", scene), options);
+  };
+  const Scene plain = load({{"gltf", file}}, LoadOptions(true));
+  CHECK(plain.materials[0].type == MaterialType::Gltf);
+  CHECK(plain.lights[0].value.g == Approx(1.0f));
+  const Scene flagged = load({{"gltf", file}}, LoadOptions(true, {true, 341.5, ""}));
+  CHECK(flagged.materials[0].type == MaterialType::GltfHeightCorrelated);
+  CHECK(flagged.lights[0].value.g == Approx(2.0f));
+  // The entry's own fields win over the load options.
+  const Scene own = load({{"gltf", file}, {"masking", "separable"}, {"lumens_per_watt", 68.3}},
+                         LoadOptions(true, {true, 341.5, ""}));
+  CHECK(own.materials[0].type == MaterialType::Gltf);
+  CHECK(own.lights[0].value.g == Approx(10.0f));
+  REQUIRE_THROWS_WITH(load({{"gltf", file}, {"masking", "smooth"}}, LoadOptions(true)),
+                      Catch::Contains("masking") && Catch::Contains("expected separable or height-correlated"));
+}

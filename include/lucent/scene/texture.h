@@ -52,34 +52,32 @@ inline TexelPair boundedTexels(float c, uint32_t size, TextureWrap wrap) {
 }
 
 inline BilinearFootprint bilinearFootprint(const Texture& t, const uint32_t* texels, Vec2 uv) {
-  if (t.wrapU != TextureWrap::Repeat || t.wrapV != TextureWrap::Repeat || t.nearest) {
-    // glTF's image coordinates: u along x, 1 - v (Lucent's v runs up) down the rows.
-    const auto along = [&](float c, uint32_t size, TextureWrap wrap) -> TexelPair {
-      if (wrap == TextureWrap::Repeat) {
-        const float x = (c - std::floor(c)) * float(size) - 0.5f, f = std::floor(x);
-        const uint32_t first = f < 0 ? size - 1 : std::min(uint32_t(f), size - 1);
-        return {first, first + 1 == size ? 0 : first + 1, x - f};
-      }
-      return boundedTexels(c * float(size), size, wrap);
-    };
-    TexelPair px = along(uv.x, t.width, t.wrapU), py = along(1.0f - uv.y, t.height, t.wrapV);
-    if (t.nearest) {
-      // The texel whose square holds the point.
-      px = {px.weight < 0.5f ? px.first : px.second, 0, 0.0f};
-      py = {py.weight < 0.5f ? py.first : py.second, 0, 0.0f};
-      px.second = px.first, py.second = py.first;
-    }
-    return {texels + t.offset + size_t(py.first) * t.width, texels + t.offset + size_t(py.second) * t.width, px.first,
-            px.second, px.weight, py.weight};
-  }
   const float x = (uv.x - std::floor(uv.x)) * t.width - 0.5f;
   const float y = (std::ceil(uv.y) - uv.y) * t.height - 0.5f;
   const float fx = std::floor(x), fy = std::floor(y);
   // x lies in [-0.5, width - 0.5], so wrapping needs only the two edge cases.
-  const uint32_t x0 = fx < 0 ? t.width - 1 : std::min(uint32_t(fx), t.width - 1);
-  const uint32_t y0 = fy < 0 ? t.height - 1 : std::min(uint32_t(fy), t.height - 1);
-  const uint32_t x1 = x0 + 1 == t.width ? 0 : x0 + 1, y1 = y0 + 1 == t.height ? 0 : y0 + 1;
-  return {texels + t.offset + size_t(y0) * t.width, texels + t.offset + size_t(y1) * t.width, x0, x1, x - fx, y - fy};
+  uint32_t x0 = fx < 0 ? t.width - 1 : std::min(uint32_t(fx), t.width - 1);
+  uint32_t y0 = fy < 0 ? t.height - 1 : std::min(uint32_t(fy), t.height - 1);
+  uint32_t x1 = x0 + 1 == t.width ? 0 : x0 + 1, y1 = y0 + 1 == t.height ? 0 : y0 + 1;
+  float tx = x - fx, ty = y - fy;
+  if (t.wrapU != TextureWrap::Repeat || t.wrapV != TextureWrap::Repeat || t.nearest) {
+    // glTF's samplers: a clamped or mirrored axis replaces the repeated one (image y runs along
+    // 1 - v: Lucent's v runs up); nearest keeps the texel holding the point.
+    if (t.wrapU != TextureWrap::Repeat) {
+      const TexelPair p = boundedTexels(uv.x * float(t.width), t.width, t.wrapU);
+      x0 = p.first, x1 = p.second, tx = p.weight;
+    }
+    if (t.wrapV != TextureWrap::Repeat) {
+      const TexelPair p = boundedTexels((1.0f - uv.y) * float(t.height), t.height, t.wrapV);
+      y0 = p.first, y1 = p.second, ty = p.weight;
+    }
+    if (t.nearest) {
+      x0 = x1 = tx < 0.5f ? x0 : x1;
+      y0 = y1 = ty < 0.5f ? y0 : y1;
+      tx = ty = 0.0f;
+    }
+  }
+  return {texels + t.offset + size_t(y0) * t.width, texels + t.offset + size_t(y1) * t.width, x0, x1, tx, ty};
 }
 
 // Bilinear lookup of the decoded texels (linear for sRGB colour), with wrap-around.
