@@ -7,6 +7,7 @@
 #include <iostream>
 #include <iterator>
 #include <set>
+#include <span>
 #include <nlohmann/json.hpp>
 
 #include "json_fields.h"
@@ -128,6 +129,21 @@ std::vector<uint32_t> readUnorm8Texels(const std::string& path, const std::strin
     for (int k = 0; k < 3; ++k) packed |= uint32_t(std::lround(255.0f * std::clamp(stored[k], 0.0f, 1.0f))) << (8 * k);
     return packed;
   }, false, read);
+}
+
+// The share of a normal texture's texels that tilt the normal more than 45 degrees from the
+// surface's. A height (bump) map stored as a normal texture tilts most of them: its grey codes
+// decode to equal x, y and z, (0.8, 0.8, 0.8) to a tilt of 55 degrees. Blender's OBJ importer turns
+// map_Bump into a normal texture so, and the glTF it exports carries it.
+double steepNormalShare(std::span<const uint32_t> texels) {
+  if (texels.empty()) return 0;
+  size_t steep = 0;
+  for (const uint32_t t : texels) {
+    float n[3];
+    for (int k = 0; k < 3; ++k) n[k] = float((t >> (8 * k)) & 0xffu) * (2.0f / 255.0f) - 1.0f;
+    steep += n[2] <= 0 || 2 * n[2] * n[2] < n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+  }
+  return double(steep) / double(texels.size());
 }
 
 std::string resolve(const fs::path& base, const std::string& relative) {
@@ -349,6 +365,7 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
     scene.textures.push_back(tex);
     return static_cast<int32_t>(scene.textures.size() - 1);
   };
+  std::vector<std::string> steepNormalTextures;  // materials whose normal textures look like height maps
   for (const auto& spec : import.specs) {
     Material m = detail::classifyMaterial(spec);
     if (!spec.mapKd.empty())
@@ -357,8 +374,12 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
       m.metallicRoughnessTexture = addTexture(spec.metallicRoughness, spec.name, "metallic-roughness texture", false);
     // Normal textures perturb glTF materials' shading normals only: Lambertian hits are shaded in
     // the path tracer's lanes, from the vertex normals.
-    if (isGltf(m.type) && !spec.normal.empty())
+    if (isGltf(m.type) && !spec.normal.empty()) {
       m.normalTexture = addTexture(spec.normal, spec.name, "normal texture", false);
+      const Texture& t = scene.textures[size_t(m.normalTexture)];
+      if (steepNormalShare(std::span(scene.texels).subspan(t.offset, size_t(t.width) * t.height)) > 0.5)
+        steepNormalTextures.push_back(spec.name);
+    }
     else if (!spec.normal.empty())
       scene.ignored.push_back(spec.origin + ": material '" + spec.name +
                               "': its normal texture (the material is overridden as " +
@@ -387,6 +408,14 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
   if (scene.environment.clampedTexels > 0 && !options.quiet)
     std::cerr << "lucent: warning: " << scene.environment.source << ": clamped " << scene.environment.clampedTexels
               << " slightly negative texels (down to " << scene.environment.mostNegativeTexel << ") to 0\n";
+  if (!steepNormalTextures.empty() && !options.quiet) {
+    std::cerr << "lucent: warning: " << path << ": the normal textures of " << steepNormalTextures.size()
+              << " material(s) tilt most of their texels more than 45 degrees from the surface (";
+    for (size_t k = 0; k < std::min<size_t>(3, steepNormalTextures.size()); ++k)
+      std::cerr << (k ? ", " : "") << "'" << steepNormalTextures[k] << "'";
+    std::cerr << (steepNormalTextures.size() > 3 ? ", ...)" : ")")
+              << ": height maps stored as normal textures? They are rendered as the file says.\n";
+  }
   if (scene.droppedDegenerateTriangles > 0 && !options.quiet)
     std::cerr << "lucent: warning: " << path << ": dropped " << scene.droppedDegenerateTriangles
               << " degenerate (zero-area) triangles\n";

@@ -250,7 +250,7 @@ TEST_CASE("envpbgi: buffers rendered together in packets of their own order are 
   std::vector<uint32_t> nodes;
   for (uint32_t i = kRootNode + 3; i < uint32_t(h.nodes.size()); i += 97) nodes.push_back(i);
   std::reverse(nodes.begin(), nodes.end());
-  auto origin = [&](size_t k) { return BufferOrigin{h.surfels[nodes[k]].position, h.surfels[nodes[k]].normal}; };
+  auto origin = [&](size_t k) { return surfelOrigin(h.surfels[nodes[k]]); };
   MicroCounters counters;
   std::vector<uint32_t> together(nodes.size() * q.texels()), alone(q.texels());
   renderBuffers(micro, settings, q, nodes.size(), origin, together, counters);

@@ -316,7 +316,7 @@ TEST_CASE("A plane facing the gather point: covered with ray casting, with holes
         int inside = 0, covered = 0;
         for (int g = 0; g < 16; ++g) {
           Vec2 jitter;
-          const GatherPoint gp = jitteredGatherPoint({0, 0, 0}, {0, 1, 0}, rng, jitter);
+          const GatherPoint gp = jitteredGatherPoint({0, 0, 0}, {0, 1, 0}, {0, 1, 0}, rng, jitter);
           evaluatePixels(scratch.lanes[0].mapping, kind, 24, jitter, kind == MappingKind::Warped ? &s.tables.lambertian : nullptr,
                          diffuseBsdf(Rgb(1.0f)), {0, 0, 1}, s.tables);
           renderMicroBuffer(s.micro, gp, scratch.lanes[0].mapping, s.ctx.settings, scratch.lanes[0].buffer, scratch.counters);
@@ -354,7 +354,7 @@ TEST_CASE("A plane seen edge-on covers no direction that passes below it", "[mic
     int below = 0, coveredBelow = 0, above = 0, coveredAbove = 0;
     for (int g = 0; g < 16; ++g) {
       Vec2 jitter;
-      const GatherPoint gp = jitteredGatherPoint({0, 0.9f, 0}, {1, 0, 0}, rng, jitter);
+      const GatherPoint gp = jitteredGatherPoint({0, 0.9f, 0}, {1, 0, 0}, {1, 0, 0}, rng, jitter);
       evaluatePixels(scratch.lanes[0].mapping, MappingKind::Nusselt, 24, jitter, nullptr, diffuseBsdf(Rgb(1.0f)), {0, 0, 1},
                      s.tables);
       renderMicroBuffer(s.micro, gp, scratch.lanes[0].mapping, s.ctx.settings, scratch.lanes[0].buffer, scratch.counters);
@@ -386,7 +386,7 @@ void forEachCornellBuffer(const Scene& scene, MappingKind kind, int reach, uint6
       GatherScratch scratch;
       Rng rng(seed, site);
       const Vec3 p = kCornellSites[site].position, n = kCornellSites[site].normal;
-      gatherAt(s.ctx, p, n, normalize(n + Vec3{0.3f, 0.2f, -0.4f}), bsdf, rng, s.radiance, scratch);
+      gatherAt(s.ctx, p, n, n, normalize(n + Vec3{0.3f, 0.2f, -0.4f}), bsdf, rng, s.radiance, scratch);
       visit(s, scratch.lanes[0], p, site);
     }
 }
@@ -513,7 +513,7 @@ TEST_CASE("Directional node radiance: a slab lit on its far side sends nothing t
     REQUIRE(s.radiance.directional.size() == (kind == NodeRadianceKind::Directional ? s.hierarchy.leafCount : 0));
     GatherScratch scratch;
     Rng rng(23);
-    gathered[int(kind)] = gatherAt(s.ctx, {0, -20, 0}, {0, 1, 0}, {0, 1, 0}, diffuseBsdf(Rgb(1.0f)), rng, s.radiance, scratch);
+    gathered[int(kind)] = gatherAt(s.ctx, {0, -20, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, diffuseBsdf(Rgb(1.0f)), rng, s.radiance, scratch);
   }
   INFO("isotropic " << gathered[0].r << ", directional " << gathered[1].r);
   // Isotropic: about 1/2 wherever interior nodes are seen (0.364 for a receiver of albedo 1).
@@ -561,8 +561,8 @@ TEST_CASE("Packed and float nodes give nearly the same micro-buffers", "[microre
   for (const auto& p : points) {
     GatherScratch a, b;
     Rng ra(9), rb(9);
-    const Rgb la = gatherAt(packed.ctx, p.position, p.normal, p.normal, diffuseBsdf(Rgb(1.0f)), ra, packed.radiance, a);
-    const Rgb lb = gatherAt(floats.ctx, p.position, p.normal, p.normal, diffuseBsdf(Rgb(1.0f)), rb, floats.radiance, b);
+    const Rgb la = gatherAt(packed.ctx, p.position, p.normal, p.normal, p.normal, diffuseBsdf(Rgb(1.0f)), ra, packed.radiance, a);
+    const Rgb lb = gatherAt(floats.ctx, p.position, p.normal, p.normal, p.normal, diffuseBsdf(Rgb(1.0f)), rb, floats.radiance, b);
     for (const uint16_t i : a.lanes[0].mapping.used) {
       ++pixels;
       same += a.lanes[0].buffer.pixels[i] == b.lanes[0].buffer.pixels[i] ||
@@ -600,13 +600,13 @@ TEST_CASE("A packet of gather points gives every lane the buffer it gets alone",
               const auto& site = sites[(l * 5 + count) % std::size(sites)];
               const Vec3 wo = normalize(site.normal + Vec3{0.3f, 0.2f, -0.4f});
               packetRngs[l] = aloneRngs[l] = Rng(31, l, count);
-              requests[l] = {site.position, site.normal, wo, &bsdfs[l % 2 == 0 ? 0 : 1], &packetRngs[l]};
+              requests[l] = {site.position, site.normal, site.normal, wo, &bsdfs[l % 2 == 0 ? 0 : 1], &packetRngs[l]};
             }
             Rgb packetResults[kGatherPacket];
             gatherPacket(s.ctx, std::span(requests, count), s.radiance, packet, packetResults);
             for (size_t l = 0; l < count; ++l) {
               const GatherRequest& q = requests[l];
-              const Rgb result = gatherAt(s.ctx, q.position, q.normal, q.wo, *q.bsdf, aloneRngs[l], s.radiance, alone);
+              const Rgb result = gatherAt(s.ctx, q.position, q.normal, q.surfaceNormal, q.wo, *q.bsdf, aloneRngs[l], s.radiance, alone);
               INFO("encoding " << int(encoding) << ", mapping " << int(kind) << ", ray casting " << rayCasting
                                << ", side " << side << ", reach " << reach << ", lane " << l << " of " << count);
               REQUIRE(alone.lanes[0].buffer.pixels == packet.lanes[l].buffer.pixels);
@@ -680,7 +680,7 @@ TEST_CASE("Gathering a uniform radiance field gives the receiver's directional a
         constexpr int kGathers = 48;
         for (int g = 0; g < kGathers; ++g) {
           const Vec3 p{-0.6f + 1.2f * rng.uniform(), -1.0f, -0.6f + 1.2f * rng.uniform()};
-          const double v = gatherAt(s.ctx, p, floor.n, floor.toWorld(woLocal), b, rng, s.radiance, scratch).average();
+          const double v = gatherAt(s.ctx, p, floor.n, floor.n, floor.toWorld(woLocal), b, rng, s.radiance, scratch).average();
           sum += v, sum2 += v * v;
         }
         const double mean = sum / kGathers, se = std::sqrt(std::max(0.0, sum2 / kGathers - mean * mean) / kGathers);

@@ -10,6 +10,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <sstream>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
@@ -119,11 +121,11 @@ std::string writeFile(const fs::path& dir, const std::string& name, const json& 
 }
 
 // A scene file around a glTF file (the camera is the scene file's).
-Scene loadWrapped(const fs::path& dir, const json& gltf) {
+Scene loadWrapped(const fs::path& dir, const json& gltf, bool quiet = true) {
   const std::string file = writeFile(dir, "model.gltf", gltf);
   json scene = {{"camera", {{"eye", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"up", {0, 1, 0}}, {"fov_y", 40}, {"resolution", {8, 8}}}},
                 {"meshes", {{{"gltf", file}}}}};
-  return loadScene(writeFile(dir, "scene.json", scene), {true});
+  return loadScene(writeFile(dir, "scene.json", scene), LoadOptions(quiet));
 }
 
 }  // namespace
@@ -508,6 +510,37 @@ TEST_CASE("glTF normal and metallic-roughness textures are read as linear data; 
     const SurfacePoint sp = surfaceAt(scene, 0, 1 / 3.0f, 1 / 3.0f);
     CHECK(sp.shadingNormal.y > 0);
   }
+}
+
+TEST_CASE("A normal texture that tilts most texels past 45 degrees, as a height map does, is warned of", "[gltf][loader]") {
+  // Blender's OBJ importer turns map_Bump into a normal texture, and the glTF it exports carries the
+  // grey heights as normals (sponza.glb: tilts of about 59 degrees). The render follows the file;
+  // the loader says what it sees.
+  const test::TempDir dir;
+  const auto loadWithTexture = [&](std::array<int, 3> codes) {
+    Image image(1, 1, {"R", "G", "B"});
+    for (int c = 0; c < 3; ++c) image.at(0, 0, c) = kSrgb8ToLinear[size_t(codes[size_t(c)])];
+    json f = quadFile({{{"mesh", 0}}}, {0});
+    f["materials"][0]["normalTexture"] = {{"index", 0}};
+    f["textures"] = {{{"source", 0}}};
+    f["images"] = {{{"uri", "data:image/png;base64," + base64(encodePng(image))}}};
+    std::ostringstream warnings;
+    std::streambuf* const saved = std::cerr.rdbuf(warnings.rdbuf());
+    try {
+      loadWrapped(dir.path, f, false);
+    } catch (...) {
+      std::cerr.rdbuf(saved);
+      throw;
+    }
+    std::cerr.rdbuf(saved);
+    return warnings.str();
+  };
+  // Grey 204: (0.6, 0.6, 0.6), 54.7 degrees from the surface's normal.
+  CHECK_THAT(loadWithTexture({204, 204, 204}), Catch::Contains("normal textures of 1 material(s) tilt most of their texels") &&
+                                                   Catch::Contains("'grey'") && Catch::Contains("height maps"));
+  // (0.5, 0, 0.73): 34 degrees; and a grey below the surface (z < 0).
+  CHECK(loadWithTexture({191, 128, 221}).find("normal textures") == std::string::npos);
+  CHECK_THAT(loadWithTexture({100, 100, 100}), Catch::Contains("normal textures of 1 material(s)"));
 }
 
 TEST_CASE("glTF spot lights: placed by their node, their cone from the extension, and the path tracer's image",

@@ -27,6 +27,10 @@ inline Vec3 orientedShadingNormal(Vec3 interpolated, Vec3 ng) {
   return select(dot(n, ng) < 0, -n, n);
 }
 
+// The geometric normal ng turned to the side of the shading normal n: directions below it meet the
+// surface itself (gathering cuts them as the path tracer's leak test does).
+inline Vec3 surfaceNormalOnSideOf(Vec3 ng, Vec3 n) { return dot(n, ng) < 0 ? -ng : ng; }
+
 // The normal of a hit's shading frame, seen from wo: the shading normal sn, or the geometric normal
 // ng where the two put the viewer on different sides (at silhouettes of smooth meshes); turned to
 // the viewer's side for a two-sided material.

@@ -78,6 +78,7 @@ void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& s
         g.position = o.position;
         g.frame = Frame(o.normal);
         g.selfDistance = selfIntersectionScale(o.position);
+        g.surfaceNormal = o.surfaceNormal;
         lanes[j - begin] = {&g, &q.mapping, &s.buffers[j - begin]};
       }
       renderMicroBuffers(hierarchy, std::span(lanes, end - begin), settings, s.counters);

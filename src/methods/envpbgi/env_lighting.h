@@ -28,10 +28,13 @@ struct BufferQuadrature {
 BufferQuadrature makeQuadrature(MappingKind kind, int side);
 
 // Where a micro-buffer is rendered from: a surface point and its normal (the frame is Frame(normal):
-// the same for the same normal, so that results do not depend on anything else).
+// the same for the same normal, so that results do not depend on anything else), and the
+// geometric normal that cuts it (GatherPoint::surfaceNormal).
 struct BufferOrigin {
-  Vec3 position, normal;
+  Vec3 position, normal, surfaceNormal;
 };
+// A surfel's buffer: its normal is its surface's, so nothing is cut.
+inline BufferOrigin surfelOrigin(const Surfel& s) { return {s.position, s.normal, s.normal}; }
 
 // Renders the micro-buffers of origins 0 .. count - 1 (origin(k)), in packets of kGatherPacket
 // origins that face alike and lie near each other (sorted by facing, then Morton code), in

@@ -24,6 +24,7 @@
 #include "lucent/pipeline/render_stages.h"
 #include "lucent/pipeline/shading_points.h"
 #include "lucent/scene/bsdf.h"
+#include "lucent/scene/surface.h"
 #include "lucent/techniques/points/point_radiance.h"
 #include "methods/envpbgi/env_lighting.h"
 #include "methods/envpbgi/radiance_cache.h"
@@ -110,7 +111,7 @@ class EnvPbgiRender {
                   "the primary points' micro-buffers and caches", "raise --primary-pixels or lower --resolution");
     primaryTexels_.resize(primary_.size() * primaryTexelCount_);
     renderBuffers(micro_, settings_, primaryQuadrature_, primary_.size(),
-                  [&](size_t k) { return BufferOrigin{h_.surfels[primary_[k]].position, h_.surfels[primary_[k]].normal}; },
+                  [&](size_t k) { return surfelOrigin(h_.surfels[primary_[k]]); },
                   primaryTexels_, counters_);
     markSecondaryPoints(h_, primaryTexels_);
   }
@@ -145,9 +146,7 @@ class EnvPbgiRender {
     for (size_t first = 0; first < ownBuffer.size(); first += chunk) {
       const size_t count = std::min(chunk, ownBuffer.size() - first);
       renderBuffers(micro_, settings_, secondaryQuadrature_, count,
-                    [&](size_t k) {
-                      return BufferOrigin{h_.surfels[ownBuffer[first + k]].position, h_.surfels[ownBuffer[first + k]].normal};
-                    },
+                    [&](size_t k) { return surfelOrigin(h_.surfels[ownBuffer[first + k]]); },
                     ownTexels, counters_);
       tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 64), [&](const tbb::blocked_range<size_t>& r) {
         stopPoint();
@@ -339,7 +338,7 @@ class EnvPbgiRender {
         renderBuffers(micro_, back ? backSettings : settings_, primaryQuadrature_, count,
                       [&](size_t k) {
                         const ShadingPoint& p = eye.points[group[first + k]];
-                        return BufferOrigin{p.position, p.normal};
+                        return BufferOrigin{p.position, p.normal, surfaceNormalOnSideOf(p.geometricNormal, p.normal)};
                       },
                       texels_, counters_);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 64), [&](const tbb::blocked_range<size_t>& r) {

@@ -64,10 +64,11 @@ struct GatherScratch {
 
 // A gather point's local frame: the shading normal on +z, turned about it by a random angle ("we
 // jitter the local coordinate system slightly at every gather sample", 2.3), and the pixels'
-// sample positions jittered together; both from `rng`.
-inline GatherPoint jitteredGatherPoint(Vec3 position, Vec3 normal, Rng& rng, Vec2& pixelJitter) {
+// sample positions jittered together; both from `rng`. surfaceNormal: GatherPoint's.
+inline GatherPoint jitteredGatherPoint(Vec3 position, Vec3 normal, Vec3 surfaceNormal, Rng& rng, Vec2& pixelJitter) {
   GatherPoint g;
   g.position = position;
+  g.surfaceNormal = surfaceNormal;
   const Frame f(normal);
   const float phi = 2.0f * kPi * rng.uniform();
   const float c = std::cos(phi), s = std::sin(phi);
@@ -79,10 +80,11 @@ inline GatherPoint jitteredGatherPoint(Vec3 position, Vec3 normal, Rng& rng, Vec
   return g;
 }
 
-// A surface point to gather at: reflected radiance towards wo (world), for the given BSDF; the
-// frame's and pixels' jitter drawn from rng.
+// A surface point to gather at: reflected radiance towards wo (world), for the given BSDF, about the
+// shading normal `normal`, cut by the geometric surface (surfaceNormal, GatherPoint's); the frame's
+// and pixels' jitter drawn from rng.
 struct GatherRequest {
-  Vec3 position, normal, wo;
+  Vec3 position, normal, surfaceNormal, wo;
   const SurfaceBsdf* bsdf = nullptr;
   Rng* rng = nullptr;
 };
@@ -97,7 +99,7 @@ inline void gatherPacket(const GatherContext& ctx, std::span<const GatherRequest
     const GatherRequest& q = requests[l];
     GatherLane& lane = s.lanes[l];
     Vec2 jitter;
-    lane.point = jitteredGatherPoint(q.position, q.normal, *q.rng, jitter);
+    lane.point = jitteredGatherPoint(q.position, q.normal, q.surfaceNormal, *q.rng, jitter);
     const Vec3 woLocal = lane.point.frame.toLocal(q.wo);
     const Stopwatch buildClock;
     const WarpTable* table = nullptr;
@@ -160,9 +162,9 @@ void gatherInPackets(const GatherContext& ctx, size_t count, const NodeRadiance&
 }
 
 // One point: a packet of one.
-inline Rgb gatherAt(const GatherContext& ctx, Vec3 position, Vec3 normal, Vec3 wo, const SurfaceBsdf& bsdf, Rng& rng,
-                    const NodeRadiance& radiance, GatherScratch& s) {
-  const GatherRequest request{position, normal, wo, &bsdf, &rng};
+inline Rgb gatherAt(const GatherContext& ctx, Vec3 position, Vec3 normal, Vec3 surfaceNormal, Vec3 wo,
+                    const SurfaceBsdf& bsdf, Rng& rng, const NodeRadiance& radiance, GatherScratch& s) {
+  const GatherRequest request{position, normal, surfaceNormal, wo, &bsdf, &rng};
   Rgb result;
   gatherPacket(ctx, std::span(&request, 1), radiance, s, &result);
   return result;

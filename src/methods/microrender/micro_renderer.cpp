@@ -26,6 +26,7 @@
 #include "lucent/pipeline/film.h"
 #include "lucent/pipeline/render_stages.h"
 #include "lucent/pipeline/shading_points.h"
+#include "lucent/scene/surface.h"
 #include "point_lighting.h"
 #include "upsampling.h"
 
@@ -151,7 +152,7 @@ struct GatherPass {
           [&](size_t k, Rng& rng) {
             const ShadingPoint& p = points[order[first + k]];
             rng = Rng(seed, p.pixel, uint64_t(p.sample) << 32 | p.branch);
-            return GatherRequest{p.position, p.normal, p.wo, &p.bsdf, &rng};
+            return GatherRequest{p.position, p.normal, surfaceNormalOnSideOf(p.geometricNormal, p.normal), p.wo, &p.bsdf, &rng};
           },
           [&](size_t k, Rgb result) { indirect[order[first + k]] = result; },
           [&](size_t gathered) {

@@ -174,7 +174,7 @@ void radiosityBounces(const Scene& scene, const PointHierarchy& h, const GatherC
           const uint32_t node = first + uint32_t(k);
           const LeafSurface rep = leafSurface(scene, h, firstLeafPoint(node, h.leafCount) + leavesPerNode / 2);
           rng = Rng(stream, node, uint64_t(b));
-          return GatherRequest{rep.position, rep.normal, rep.normal, &white, &rng};
+          return GatherRequest{rep.position, rep.normal, surfaceNormalOnSideOf(rep.faceNormal, rep.normal), rep.normal, &white, &rng};
         },
         [&](size_t k, Rgb result) { gathered[k] = result; }, [](size_t) {});
     points::parallelFor(0, h.leafCount, [&](uint32_t j) { irradiance[j] = directOverPi[j] + gathered[j / leavesPerNode]; });

@@ -357,7 +357,7 @@ class LaneRasterizer {
         const Vec3 d = m_->direction[p], w = g_->frame.toWorld(d);
         const size_t q = gridIndex(x, y);
         b_->worldX[q] = w.x, b_->worldY[q] = w.y, b_->worldZ[q] = w.z;
-        b_->grid[q] = kEmptyMicroPixel;
+        b_->grid[q] = dot(w, g_->surfaceNormal) < 0 ? kSurfaceItselfPixel : kEmptyMicroPixel;
       }
     b_->listed = 0;
     ++c_->buffers;

@@ -54,6 +54,9 @@ struct DepthCoding {
 inline constexpr uint32_t kBackFaceMicroNode = 0;
 
 constexpr uint32_t packMicroPixel(uint32_t depthCode, uint32_t node) { return depthCode << kMicroIndexBits | node; }
+// A pixel below the gather point's geometric surface (GatherPoint::surfaceNormal): the surface
+// itself, nearer than any node, so no splat or ray replaces it.
+inline constexpr uint32_t kSurfaceItselfPixel = packMicroPixel(0, kBackFaceMicroNode);
 constexpr uint32_t microPixelNode(uint32_t pixel) { return pixel & kMicroIndexMask; }
 constexpr uint32_t microPixelDepth(uint32_t pixel) { return pixel >> kMicroIndexBits; }
 // Whether a pixel shows a node's front, whose light it then receives (not empty, not a back face).

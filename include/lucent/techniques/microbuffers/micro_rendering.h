@@ -16,12 +16,17 @@
 
 namespace lucent {
 
-// Where gathering happens: a surface point, its frame (shading normal on +z, jittered about it) and
-// the distance below which hits count as the point's own surface.
+// Where gathering happens: a surface point, its frame (shading normal on +z, jittered about it),
+// the distance below which hits count as the point's own surface, and the surface's geometric
+// normal on the frame's side. Pixels whose direction lies below the geometric surface see the
+// surface itself: where a shading normal tilts the frame, they are the wedge that the path tracer's
+// leak test ends paths in (leaksThroughSurface), and they hold kBackFaceMicroNode at depth 0, so
+// they receive nothing. A zero surfaceNormal cuts nothing (a point in free space).
 struct GatherPoint {
   Vec3 position;
   Frame frame;
   float selfDistance = 0;
+  Vec3 surfaceNormal;
 };
 
 // One lane's micro-buffer, reused from one gather point to the next.
