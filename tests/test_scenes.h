@@ -1,5 +1,8 @@
 // Scenes built in code for tests with analytic answers.
 #pragma once
+#include <array>
+#include <vector>
+
 #include "lucent/scene/scene.h"
 
 namespace lucent::test {
@@ -69,6 +72,33 @@ inline Scene furnaceBox(Rgb rho, Rgb le, const Camera& camera) {
   scene.camera = camera;
   finalizeScene(scene);
   return scene;
+}
+
+// Adds a texture of opaque texels given by their 8-bit codes (R, G, B), row-major from the top
+// row: its index.
+inline int32_t addTexture(Scene& scene, uint32_t width, uint32_t height, const std::vector<std::array<uint32_t, 3>>& codes) {
+  Texture t;
+  t.offset = static_cast<uint32_t>(scene.texels.size());
+  t.width = width;
+  t.height = height;
+  for (const auto& c : codes) scene.texels.push_back(0xffu << 24 | c[2] << 16 | c[1] << 8 | c[0]);
+  scene.textures.push_back(t);
+  return static_cast<int32_t>(scene.textures.size() - 1);
+}
+
+// The emitter of a two-sided emission test: a square of half-side `half` at height y whose front
+// faces up, of radiance le (black as a reflector), emitting from its back face too when twoSided,
+// times `texture` (-1: none), its u running along x from 0 to 1 and v along z.
+inline void addCeilingEmitter(Scene& scene, float half, float y, Rgb le, bool twoSided, int32_t texture) {
+  Material m;
+  m.kd = Rgb(0.0f);
+  m.ke = le;
+  m.emitsBackFace = twoSided ? 1 : 0;
+  m.emissiveTexture = texture;
+  const auto base = static_cast<uint32_t>(scene.positions.size());
+  addQuad(scene, {-half, y, -half}, {-half, y, half}, {half, y, half}, {half, y, -half}, addMaterial(scene, m, "emitter"));
+  const Vec2 uv[4] = {{0, 0}, {0, 1}, {1, 1}, {1, 0}};
+  for (int k = 0; k < 4; ++k) scene.texcoords[base + k] = uv[k];
 }
 
 }  // namespace lucent::test

@@ -65,7 +65,7 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
     const Material& material = scene.materials[sp.materialId];
     const Vec3 wo = -b.ray.direction;
     const bool frontFace = dot(wo, sp.geometricNormal) > 0;
-    if (!material.ke.isBlack() && frontFace) out.emitted += b.weight * material.ke;
+    if (!material.ke.isBlack()) out.emitted += b.weight * emittedRadiance(scene, hit.triangle, hit.b1, hit.b2, frontFace);
     const SurfaceBsdf bsdf = bsdfAt(scene, sp);
     // As the path tracer: the geometric normal where the shading normal puts the viewer on the
     // other side; glass keeps the winding orientation, other materials are two-sided.

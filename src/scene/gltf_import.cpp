@@ -373,7 +373,6 @@ MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, Tex
   const std::string named = c.file + ": " + path + (m.name.empty() ? "" : " '" + m.name + "'");
   const auto& pbr = m.pbrMetallicRoughness;
   const std::string pbrPath = path + ".pbrMetallicRoughness";
-  if (m.emissiveTexture.index >= 0) c.fail(path + ".emissiveTexture", "emissive textures are not read yet");
   if (m.occlusionTexture.index >= 0)
     ignored.push_back(named + ": occlusionTexture (a rasterizer's stand-in for the occlusion light transport computes)");
   if (pbr.baseColorFactor.size() != 4) c.fail(pbrPath + ".baseColorFactor", "expected 4 numbers");
@@ -418,6 +417,9 @@ MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, Tex
       c.fail(path + ".normalTexture.scale", "must be finite and at most 1e15");
     spec.normalScale = float(m.normalTexture.scale);
   }
+  if (m.emissiveTexture.index >= 0)
+    spec.emissive = texture(m.emissiveTexture, path + ".emissiveTexture", "emissive texture");
+  spec.doubleSided = m.doubleSided;
   double strength = 1;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_emissive_strength"))
     strength = number(*e, "emissiveStrength", 1);
@@ -440,8 +442,6 @@ MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, Tex
   } else if (m.alphaMode != "OPAQUE") {
     c.fail(path + ".alphaMode", "'" + m.alphaMode + "' is not OPAQUE, MASK or BLEND");
   }
-  if (!spec.ke.isBlack() && m.doubleSided)
-    ignored.push_back(named + ": doubleSided emission (its triangles emit from their front faces only)");
   // Appendix B's dielectric, its Fresnel term from KHR_materials_ior and KHR_materials_specular.
   spec.ks = Rgb(1.0f);
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_specular")) {

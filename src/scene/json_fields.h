@@ -42,6 +42,11 @@ class JsonFields {
     return float(f);
   }
   float number(const std::string& key, float fallback) { return has(key) ? number(key) : fallback; }
+  bool boolean(const std::string& key) {
+    const auto& v = raw(key);
+    if (!v.is_boolean()) failKey(key, "expected true or false");
+    return v.get<bool>();
+  }
   std::string string(const std::string& key) {
     const auto& v = raw(key);
     if (!v.is_string()) failKey(key, "expected a string");

@@ -190,6 +190,7 @@ void applyMaterialOverride(JsonFields fields, detail::MaterialSpec& spec, const 
   if (fields.has("Kd")) spec.kd = fields.rgb("Kd");
   if (fields.has("Ks")) spec.ks = fields.rgb("Ks");
   if (fields.has("Ke")) spec.ke = fields.rgb("Ke");
+  if (fields.has("double_sided")) spec.doubleSided = fields.boolean("double_sided");
   if (fields.has("Ns")) spec.ns = fields.number("Ns");
   if (fields.has("Ni")) spec.ni = fields.number("Ni");
   if (fields.has("map_Kd")) {
@@ -374,6 +375,9 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
       m.metallicRoughnessTexture = addTexture(spec.metallicRoughness, spec.name, "metallic-roughness texture", false);
     // Normal textures perturb glTF materials' shading normals only: Lambertian hits are shaded in
     // the path tracer's lanes, from the vertex normals.
+    if (!spec.emissive.empty() && !m.ke.isBlack())
+      m.emissiveTexture = addTexture(spec.emissive, spec.name, "emissive texture", true);
+    m.emitsBackFace = spec.doubleSided && !m.ke.isBlack() ? 1 : 0;
     if (isGltf(m.type) && !spec.normal.empty()) {
       m.normalTexture = addTexture(spec.normal, spec.name, "normal texture", false);
       const Texture& t = scene.textures[size_t(m.normalTexture)];

@@ -32,6 +32,8 @@ struct MaterialSpec {
   TextureFile metallicRoughness;     // glTF only (linear)
   TextureFile normal;                // glTF only (linear)
   float normalScale = 1.0f;
+  TextureFile emissive;              // glTF only (sRGB), multiplies ke
+  bool doubleSided = false;          // an emitter's back faces emit too (glTF's doubleSided, a scene file's double_sided)
   AlphaMode alphaMode = AlphaMode::Opaque;  // glTF only
   float alphaCutoff = 0.5f, baseAlpha = 1.0f;
   std::string origin;                // "file:line" of its definition, for error messages

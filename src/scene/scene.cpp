@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "lucent/core/rng.h"
+#include "lucent/scene/texture.h"
 
 namespace lucent {
 
@@ -40,6 +41,25 @@ namespace {
 // A light's power as the float product, where finite (ordinary scenes keep their exact weights),
 // else the double one.
 double lightPower(float asFloat, double asDouble) { return std::isfinite(asFloat) ? double(asFloat) : asDouble; }
+
+// What multiplies an emitter's ke into its power per unit of pi times its area: its faces, times
+// its emissive texture's mean luminance (over the whole image: positive wherever any texel is, so
+// that light selection never leaves out a triangle that emits).
+std::vector<float> emissionScales(const Scene& scene) {
+  std::vector<float> scales(scene.materials.size());
+  for (size_t i = 0; i < scales.size(); ++i) {
+    const Material& m = scene.materials[i];
+    double textureMean = 1;
+    if (m.emissiveTexture >= 0) {
+      const Texture& t = scene.textures[size_t(m.emissiveTexture)];
+      double sum = 0;
+      for (size_t k = 0; k < size_t(t.width) * t.height; ++k) sum += decodeTexel(scene.texels[t.offset + k]).luminance();
+      textureMean = sum / std::max(1.0, double(t.width) * t.height);
+    }
+    scales[i] = float((m.emitsBackFace != 0 ? 2.0 : 1.0) * textureMean);
+  }
+  return scales;
+}
 }  // namespace
 
 void finalizeScene(Scene& scene) {
@@ -62,13 +82,15 @@ void finalizeScene(Scene& scene) {
   std::vector<Light> lights;
   std::vector<double> power;  // in double: an area of 1e31 times a radiance of 1e15 is beyond float
   scene.triangleLight.assign(scene.triangleCount(), -1);
+  const std::vector<float> scales = emissionScales(scene);
   for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
     const Rgb ke = scene.materials[scene.materialIds[t]].ke;
     if (ke.isBlack()) continue;
+    const float scale = scales[scene.materialIds[t]];
     scene.triangleLight[t] = static_cast<int32_t>(lights.size());
     lights.push_back({LightType::Triangle, t, {}, {}});
-    power.push_back(lightPower(ke.luminance() * scene.triangleArea(t) * kPi,
-                               double(ke.luminance()) * scene.triangleArea(t) * kPi));
+    power.push_back(lightPower(ke.luminance() * scene.triangleArea(t) * kPi * scale,
+                               double(ke.luminance()) * scene.triangleArea(t) * kPi * scale));
   }
   const double r = scene.boundingRadius();
   for (const Light& l : scene.lights) {

@@ -639,7 +639,7 @@ TEST_CASE("A packet refuses lanes beyond kGatherPacket and lanes whose mappings 
   // The lanes of a packet share one traversal and one pixel grid: a lane too many or a lane with
   // another mapping kind, side or table size is a programming error, reported rather than rendered.
   const GatherSetup s(ceilingPlane(50), 1u << 10, NodeEncoding::Float, MappingKind::Warped, true, unitRadiance);
-  const GatherPoint gp{{0, 0, 0}, Frame({0, 1, 0}), 0};
+  const GatherPoint gp{{0, 0, 0}, Frame({0, 1, 0}), 0, {0, 1, 0}};
   const SurfaceBsdf diffuse = diffuseBsdf(Rgb(0.5f));
   const TestMapping warped24(MappingKind::Warped, 24, diffuse, {0, 0, 1});
   const TestMapping nusselt24(MappingKind::Nusselt, 24, diffuse, {0, 0, 1});

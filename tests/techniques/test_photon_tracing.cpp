@@ -52,6 +52,51 @@ TEST_CASE("Photons leave area lights with the lights' total power", "[photons]")
   for (int c = 0; c < 3; ++c) REQUIRE(first[c] == Approx(total[c]).epsilon(1e-4));
 }
 
+TEST_CASE("A two-sided emitter sends photons from both faces, times its emissive texture", "[photons]") {
+  // A 1 x 1 emitter across the middle of a closed dark box: each face emits pi A Le, the front's
+  // photons landing above it, the back's below, and a two-sided emitter picks a face per photon.
+  // Its emissive texture of a white and a black texel along u, read bilinearly and repeating, takes
+  // values uniform in [0, 1] over the square (mean 1/2): each photon carries the value at its
+  // origin. Tolerances: 4 standard errors of each sum, from the per-photon spread of the face
+  // indicator I (p = 1/2) and the texture value v: relative sd of v sqrt(1/12) / (1/2), of I v
+  // sqrt(1/6 - 1/16) / (1/4), of I 1; exact sums to float rounding (1e-4) where neither varies.
+  const Rgb ke(1.0f, 2.0f, 0.5f);
+  const double n = 20000;
+  for (const bool twoSided : {true, false})
+    for (const bool textured : {false, true}) {
+      Scene scene = darkBox(0.5f);
+      const int32_t texture = textured ? test::addTexture(scene, 2, 1, {{255, 255, 255}, {0, 0, 0}}) : -1;
+      test::addCeilingEmitter(scene, 0.5f, 0, ke, twoSided, texture);
+      finalizeScene(scene);
+      const Visibility vis(scene);
+      PhotonTracingOptions opt;
+      opt.photons = uint32_t(n);
+      opt.maxBounces = 1;
+      const PhotonMaps maps = tracePhotons(scene, vis, opt);
+      double above[3] = {0, 0, 0}, below[3] = {0, 0, 0};
+      for (const Photon& p : maps.global)
+        if ((p.flags & 0xff) == 0)
+          for (int c = 0; c < 3; ++c) (p.position.y > 0 ? above : below)[c] += p.power[c];
+      const double face = kPi * (textured ? 0.5 : 1.0);  // a face's power over Le
+      const double faceSd = !twoSided ? (textured ? std::sqrt(1 / 12.0) / 0.5 : 0.0)
+                                      : (textured ? std::sqrt(1 / 6.0 - 1 / 16.0) / 0.25 : 1.0);
+      const double totalSd = textured ? std::sqrt(1 / 12.0) / 0.5 : 0.0;
+      const double faceTolerance = std::max(1e-4, 4 * faceSd / std::sqrt(n));
+      const double totalTolerance = std::max(1e-4, 4 * totalSd / std::sqrt(n));
+      INFO("two-sided " << twoSided << ", textured " << textured << ": above " << above[1] << ", below " << below[1]
+                        << ", a face's expected " << face * ke.g);
+      for (int c = 0; c < 3; ++c) {
+        CHECK(above[c] == Approx(face * ke[c]).epsilon(faceTolerance));
+        if (twoSided) {
+          CHECK(below[c] == Approx(face * ke[c]).epsilon(faceTolerance));
+          CHECK(above[c] + below[c] == Approx(2 * face * ke[c]).epsilon(totalTolerance));
+        } else {
+          CHECK(below[c] == 0.0);
+        }
+      }
+    }
+}
+
 TEST_CASE("Stored power over all bounces follows the geometric series of the albedo", "[photons]") {
   // With Russian roulette by a grey albedo rho, each photon keeps its power Phi/N and is stored
   // 1 + G times, G geometric with mean rho/(1-rho) and variance rho/(1-rho)^2.

@@ -4,6 +4,7 @@
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
 #include "lucent/scene/scene.h"
+#include "lucent/scene/surface.h"
 #include "lucent/scene/texture.h"
 
 namespace lucent {
@@ -44,25 +45,27 @@ inline bool isDeltaLight(const Light& light) {
 }
 
 // A uniformly chosen point on an emitting triangle (vertices q0, q1, q2, unit normal, area) seen
-// from receiver, chosen with probability pmf: the point, the unit direction and distance to it, and
-// the density (solid angle, times pmf); the density is 0 where the receiver sees the triangle's
-// back (emitters are one-sided) or lies on it. Selects only: the path tracer's lane loop
-// vectorizes it (shadeDiffuseLanes), and sampleChosenLight calls it.
+// from receiver, chosen with probability pmf: the point and its barycentrics, the unit direction
+// and distance to it, and the density (solid angle, times pmf); the density is 0 where the receiver
+// sees the back of a one-sided emitter (twoSided false) or lies on the triangle. Selects only: the
+// path tracer's lane loop vectorizes it (shadeDiffuseLanes), and sampleChosenLight calls it.
 struct TrianglePointSample {
   Vec3 point, wi;
   float distance, pdf;
+  Vec2 b;
 };
 inline TrianglePointSample sampleTrianglePoint(Vec3 q0, Vec3 q1, Vec3 q2, Vec3 normal, float area, float pmf,
-                                               Vec3 receiver, Vec2 u) {
+                                               Vec3 receiver, Vec2 u, bool twoSided = false) {
   const Vec2 b = sampleUniformTriangle(u);
   const Vec3 q = barycentric(q0, q1, q2, b.x, b.y);
   const Vec3 d = q - receiver;
   const float dist2 = dot(d, d);
   const float distance = std::sqrt(dist2);
   const Vec3 wi = d / distance;
-  const float cosLight = -dot(wi, normal);
+  const float facing = -dot(wi, normal);
+  const float cosLight = twoSided ? std::abs(facing) : facing;
   const float pdf = cosLight <= 0 ? 0.0f : !(dist2 > 0) ? 0.0f : pmf * dist2 / (cosLight * area);
-  return {q, wi, distance, pdf};
+  return {q, wi, distance, pdf, b};
 }
 
 // A sample of light `li`, chosen with probability `pmf` (its pdf includes it).
@@ -72,12 +75,13 @@ inline LightSample sampleChosenLight(const Scene& scene, uint32_t li, float pmf,
   switch (light.type) {
     case LightType::Triangle: {
       const uint32_t t = light.triangle;
-      const TrianglePointSample q = sampleTrianglePoint(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2),
-                                                        scene.geometricNormal(t), scene.triangleArea(t), pmf,
-                                                        receiver, u);
+      const Vec3 n = scene.geometricNormal(t);
+      const TrianglePointSample q =
+          sampleTrianglePoint(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), n, scene.triangleArea(t), pmf,
+                              receiver, u, scene.materials[scene.materialIds[t]].emitsBackFace != 0);
       if (!(q.pdf > 0)) return {};
       s.point = q.point, s.wi = q.wi, s.distance = q.distance, s.pdf = q.pdf;
-      s.radiance = scene.materials[scene.materialIds[t]].ke;
+      s.radiance = emittedRadiance(scene, t, q.b.x, q.b.y, dot(q.wi, n) < 0);
       return s;
     }
     case LightType::Point:
@@ -134,7 +138,8 @@ inline Ray shadowRay(Vec3 p, Vec3 ng, const LightSample& ls) { return shadowRay(
 inline float triangleLightPdf(const Scene& scene, uint32_t tri, Vec3 wi, float dist) {
   const int32_t li = scene.triangleLight[tri];
   if (li < 0) return 0.0f;
-  const float cosLight = -dot(wi, scene.geometricNormal(tri));
+  const float facing = -dot(wi, scene.geometricNormal(tri));
+  const float cosLight = scene.materials[scene.materialIds[tri]].emitsBackFace != 0 ? std::abs(facing) : facing;
   if (cosLight <= 0) return 0.0f;
   return scene.lightDistribution.pmf(uint32_t(li)) * dist * dist / (cosLight * scene.triangleArea(tri));
 }
@@ -238,18 +243,28 @@ inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPos
       const Vec2 b = sampleUniformTriangle(uPosition);
       const Vec3 p = barycentric(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), b.x, b.y);
       const Vec3 n = scene.geometricNormal(t);
-      const Rgb le = scene.materials[scene.materialIds[t]].ke;
+      const bool twoSided = scene.materials[scene.materialIds[t]].emitsBackFace != 0;
       if (target && coneTowards(*target, p, cone)) {
         const Vec3 d = cone.frame.toWorld(sampleUniformCone(uDirection, cone.cosMax));
-        const float cosTheta = dot(d, n);
-        if (!(cosTheta > 0)) return s;  // behind the one-sided emitter
+        const bool front = dot(d, n) > 0;
+        const float cosTheta = std::abs(dot(d, n));
+        const Rgb le = emittedRadiance(scene, t, b.x, b.y, front);  // black behind a one-sided emitter
+        if (!(cosTheta > 0) || le.isBlack()) return s;
         s.ray = {offsetOrigin(p, n, d), d};
         s.power = le * (cosTheta * cone.solidAngle * scene.triangleArea(t) / pmf);
         break;
       }
-      const Vec3 d = Frame(n).toWorld(sampleCosineHemisphere(uDirection));
+      // A two-sided emitter: a face chosen by the first direction number's upper half, which is
+      // then rescaled to [0, 1) for the cosine sample (each face emits pi A Le).
+      Vec2 u = uDirection;
+      bool front = true;
+      if (twoSided) {
+        front = u.x < 0.5f;
+        u.x = std::min(2.0f * u.x - (front ? 0.0f : 1.0f), 0x1.fffffep-1f);
+      }
+      const Vec3 d = Frame(front ? n : -n).toWorld(sampleCosineHemisphere(u));
       s.ray = {offsetOrigin(p, n, d), d};
-      s.power = le * (kPi * scene.triangleArea(t) / pmf);
+      s.power = emittedRadiance(scene, t, b.x, b.y, front) * ((twoSided ? 2.0f : 1.0f) * kPi * scene.triangleArea(t) / pmf);
       break;
     }
     case LightType::Point:

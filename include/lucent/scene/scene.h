@@ -23,8 +23,9 @@ inline bool isGltf(MaterialType t) { return t == MaterialType::Gltf || t == Mate
 enum class AlphaMode : uint32_t { Opaque = 0, Mask = 1, Blend = 2 };
 
 // Lambertian Kd (optionally textured) plus a normalized Phong lobe Ks (n+2)/(2 pi) cos^Ns;
-// mirror reflects with tint Ks; glass is a smooth dielectric of index Ni. Ke is one-sided emission
-// on the side of the counter-clockwise winding normal.
+// mirror reflects with tint Ks; glass is a smooth dielectric of index Ni. Ke is emission on the side
+// of the counter-clockwise winding normal (both sides where emitsBackFace is 1), times the
+// emissiveTexture.
 // A glTF material keeps its parameters as the file gives them: Kd the base colour factor (times
 // the kdTexture), Ks the specular colour factor (KHR_materials_specular), Ni the index of refraction
 // (KHR_materials_ior), and the fields below; bsdfAt turns them into Appendix B's lobes.
@@ -46,8 +47,12 @@ struct Material {
   // kdTexture's A channel (linear).
   AlphaMode alphaMode = AlphaMode::Opaque;
   float alphaCutoff = 0.5f, baseAlpha = 1.0f;
+  // Emission: ke times this texture (sRGB), from the front face, and from the back face too where
+  // emitsBackFace is 1 (glTF's doubleSided).
+  int32_t emissiveTexture = -1;
+  uint32_t emitsBackFace = 0;
 };
-static_assert(sizeof(Material) == 88, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 96, "Material is a fixed-size record shared with GPU backends");
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear

@@ -47,6 +47,18 @@ inline Vec2 texcoordsAt(const Scene& scene, const SurfacePoint& sp) {
   return {t0.x * b0 + t1.x * sp.b1 + t2.x * sp.b2, t0.y * b0 + t1.y * sp.b1 + t2.y * sp.b2};
 }
 
+// The radiance triangle tri emits at barycentrics (b1, b2) towards its front (front) or back side:
+// the material's ke times its emissive texture; black towards the back unless the material emits
+// there (Material::emitsBackFace).
+inline Rgb emittedRadiance(const Scene& scene, uint32_t tri, float b1, float b2, bool front) {
+  const Material& m = scene.materials[scene.materialIds[tri]];
+  if (!front && m.emitsBackFace == 0) return Rgb(0.0f);
+  if (m.emissiveTexture < 0) return m.ke;
+  SurfacePoint sp;
+  sp.triangle = tri, sp.b1 = b1, sp.b2 = b2;
+  return m.ke * bilinear(scene.textures[size_t(m.emissiveTexture)], scene.texels.data(), texcoordsAt(scene, sp));
+}
+
 // glTF's normal texture at a hit: the texel's tangent-space normal (2 c - 1, x and y times the
 // scale) in the frame of the unit normal n, the interpolated tangent made orthogonal to it, and the
 // bitangent cross(n, t) * sign; n itself where the vertices have no tangent.

@@ -104,9 +104,11 @@ class PathTracer {
       const Light& light = scene.lights[li];
       if (light.type != LightType::Triangle) continue;
       const uint32_t t = light.triangle;
+      // The lanes sample one-sided emitters of constant radiance; the others as other lights are.
+      const Material& m = scene.materials[scene.materialIds[t]];
       lightRecords_[li] = {scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), scene.geometricNormal(t),
-                           scene.triangleArea(t), scene.lightDistribution.pmf(li),
-                           scene.materials[scene.materialIds[t]].ke, true};
+                           scene.triangleArea(t), scene.lightDistribution.pmf(li), m.ke,
+                           m.emitsBackFace == 0 && m.emissiveTexture < 0};
     }
   }
 
@@ -125,11 +127,10 @@ class PathTracer {
       return false;
     }
     const SurfacePoint sp = surfaceAt(scene_, hit.triangle, hit.b1, hit.b2);
-    const Material& material = scene_.materials[sp.materialId];
     const Vec3 wo = -ray.direction;
     const bool frontFace = dot(wo, sp.geometricNormal) > 0;
 
-    if (frontFace) gatherEmission(path, hit.triangle, material, sp.position);
+    gatherEmission(path, hit, frontFace, sp.position);
     const SurfaceBsdf bsdf = bsdfAt(scene_, sp);
     path.recordFirstHit(layerAlbedo(bsdf), sp.shadingNormal, hit.t);
     if (path.bounce + 1 > opt_.maxDepth) return false;
@@ -399,7 +400,7 @@ class PathTracer {
       Path& path = w.paths[i];
       const Hit& hit = w.hits[i];
       const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
-      if (l.emits[k] && l.frontFace[k]) gatherEmission(path, hit.triangle, material(hit.triangle), position);
+      if (l.emits[k]) gatherEmission(path, hit, l.frontFace[k] != 0, position);
       if (path.bounce == 0)
         path.recordFirstHit(Rgb(l.kdR[k], l.kdG[k], l.kdB[k]) + material(hit.triangle).ks, {l.snX[k], l.snY[k], l.snZ[k]},
                             hit.t);
@@ -421,14 +422,15 @@ class PathTracer {
 
   const Material& material(uint32_t triangle) const { return scene_.materials[scene_.materialIds[triangle]]; }
 
-  // Emission of the front face the path has met, weighted against light sampling.
-  void gatherEmission(Path& path, uint32_t triangle, const Material& material, Vec3 position) const {
-    if (material.ke.isBlack()) return;
+  // Emission of the face the path has met (its front, or frontFace false), weighted against light
+  // sampling.
+  void gatherEmission(Path& path, const Hit& hit, bool frontFace, Vec3 position) const {
+    const Rgb le = emittedRadiance(scene_, hit.triangle, hit.b1, hit.b2, frontFace);
+    if (le.isBlack()) return;
     const float lightPdf = path.lastDelta ? 0.0f
-                                          : triangleLightPdf(scene_, triangle, path.ray.direction,
+                                          : triangleLightPdf(scene_, hit.triangle, path.ray.direction,
                                                              length(position - path.lastPosition));
-    path.gather(path.gatheringVertices,
-                path.beta * material.ke * emissionWeight(path.lastDelta, path.lastPdf, lightPdf));
+    path.gather(path.gatheringVertices, path.beta * le * emissionWeight(path.lastDelta, path.lastPdf, lightPdf));
   }
 
   // The path goes on from `position` along `next`, its throughput scaled by the sample's weight:
