@@ -261,8 +261,7 @@ const tinygltf::Value* extension(const tinygltf::ExtensionMap& extensions, const
 using UvTransform = std::array<double, 6>;
 constexpr UvTransform kIdentityUv = {1, 0, 0, 0, 1, 0};
 
-// The texture coordinates a material's base colour texture reads: the set (TEXCOORD_0 or _1) and
-// its transform.
+// The texture coordinates a texture reads: the set (TEXCOORD_0 or _1) and its transform.
 struct TextureCoordinates {
   int set = 0;
   UvTransform transform = kIdentityUv;
@@ -293,9 +292,8 @@ UvTransform textureTransform(const Context& c, const tinygltf::Value& e, const s
 
 // A texture's image: its bytes (a buffer view, checked, or what TinyGLTF read from a URI) for the
 // loader to decode; `what` names the texture's role in messages and in the ignored list.
-TextureFile textureImage(const Context& c, const tinygltf::TextureInfo& info, const std::string& path,
-                         const std::string& named, const std::string& what, TextureCoordinates& coordinates,
-                         std::vector<std::string>& ignored) {
+TextureFile textureImage(const Context& c, const tinygltf::TextureInfo& info, const std::string& path) {
+  TextureCoordinates coordinates;
   coordinates.set = coordinateSet(c, info.texCoord, path + ".texCoord");
   if (const tinygltf::Value* e = extension(info.extensions, "KHR_texture_transform"))
     coordinates.transform = textureTransform(c, *e, path + ".extensions.KHR_texture_transform", coordinates.set);
@@ -304,6 +302,12 @@ TextureFile textureImage(const Context& c, const tinygltf::TextureInfo& info, co
   const tinygltf::Texture& texture = c.model.textures[size_t(info.index)];
   const std::string texturePath = at("textures", size_t(info.index));
   TextureFile file;
+  // The transform in Lucent's coordinates, whose v is glTF's 1 - v: u' = m0 u - m1 v + (m1 + m2),
+  // v' = -m3 u + m4 v + (1 - m4 - m5).
+  const UvTransform& m = coordinates.transform;
+  file.set = uint32_t(coordinates.set);
+  file.transformed = m != kIdentityUv;
+  file.transform = {float(m[0]), float(-m[1]), float(m[1] + m[2]), float(-m[3]), float(m[4]), float(1 - m[4] - m[5])};
   if (texture.sampler >= 0) {
     if (size_t(texture.sampler) >= c.model.samplers.size())
       c.fail(texturePath + ".sampler", "sampler " + std::to_string(texture.sampler) + " does not exist");
@@ -345,6 +349,29 @@ TextureFile textureImage(const Context& c, const tinygltf::TextureInfo& info, co
   return file;
 }
 
+// A textureInfo object inside an extension (TinyGLTF leaves those as JSON values).
+tinygltf::TextureInfo textureInfo(const Context& c, const tinygltf::Value& parent, const char* key, const std::string& at) {
+  const tinygltf::Value& v = parent.Get(key);
+  const std::string path = at + "." + key;
+  if (!v.IsObject()) c.fail(path, "expected a textureInfo object");
+  tinygltf::TextureInfo info;
+  const auto integer = [&](const char* field, int fallback) {
+    if (!v.Has(field)) return fallback;
+    if (!v.Get(field).IsNumber() && !v.Get(field).IsInt()) c.fail(path + "." + field, "expected an index");
+    const double x = number(v, field, fallback);
+    if (!(x >= 0 && x <= 2147483647.0) || x != std::floor(x)) c.fail(path + "." + field, "expected an index");
+    return int(x);
+  };
+  if (!v.Has("index")) c.fail(path + ".index", "is required");
+  info.index = integer("index", -1);
+  info.texCoord = integer("texCoord", 0);
+  if (v.Has("extensions") && v.Get("extensions").IsObject()) {
+    const tinygltf::Value& extensions = v.Get("extensions");
+    for (const std::string& name : extensions.Keys()) info.extensions[name] = extensions.Get(name);
+  }
+  return info;
+}
+
 double unitNumber(const Context& c, double value, const std::string& path) {
   if (!(value >= 0 && value <= 1)) c.fail(path, "must be in [0, 1]");
   return value;
@@ -366,8 +393,7 @@ MaterialSpec defaultMaterial(const Context& c, MaterialType type) {
 // A glTF material: pbrMetallicRoughness with KHR_materials_ior and KHR_materials_specular as
 // Appendix B's BRDF (the masking term's form as `type` says), and its emission; what that leaves
 // out is listed in `ignored`, and what would change the image beyond that is refused.
-MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, TextureCoordinates& coordinates,
-                          std::vector<std::string>& ignored) {
+MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, std::vector<std::string>& ignored) {
   const tinygltf::Material& m = c.model.materials[index];
   const std::string path = at("materials", index);
   const std::string named = c.file + ": " + path + (m.name.empty() ? "" : " '" + m.name + "'");
@@ -389,36 +415,21 @@ MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, Tex
     const std::string smallest = std::to_string(std::sqrt(kMinGgxAlpha)).substr(0, 6);
     ignored.push_back(named + ": roughness below " + smallest + " (rendered as " + smallest + ")");
   }
-  // Every texture of a material reads one set of texture coordinates, transformed one way: the
-  // triangles carry one pair per vertex.
-  bool haveCoordinates = false;
-  const auto texture = [&](const tinygltf::TextureInfo& info, const std::string& at, const std::string& what) {
-    TextureCoordinates own;
-    TextureFile file = textureImage(c, info, at, named, what, own, ignored);
-    if (haveCoordinates && (own.set != coordinates.set || own.transform != coordinates.transform))
-      c.fail(at, "reads TEXCOORD_" + std::to_string(own.set) + " or a KHR_texture_transform other than the material's "
-                 "other textures; Lucent gives a material's textures one set of coordinates");
-    coordinates = own;
-    haveCoordinates = true;
-    return file;
-  };
-  if (pbr.baseColorTexture.index >= 0)
-    spec.mapKd = texture(pbr.baseColorTexture, pbrPath + ".baseColorTexture", "base colour texture");
+  if (pbr.baseColorTexture.index >= 0) spec.mapKd = textureImage(c, pbr.baseColorTexture, pbrPath + ".baseColorTexture");
   if (pbr.metallicRoughnessTexture.index >= 0)
-    spec.metallicRoughness = texture(pbr.metallicRoughnessTexture, pbrPath + ".metallicRoughnessTexture",
-                                     "metallic-roughness texture");
+    spec.metallicRoughness = textureImage(c, pbr.metallicRoughnessTexture, pbrPath + ".metallicRoughnessTexture");
   if (m.normalTexture.index >= 0) {
     tinygltf::TextureInfo info;
     info.index = m.normalTexture.index;
     info.texCoord = m.normalTexture.texCoord;
     info.extensions = m.normalTexture.extensions;
-    spec.normal = texture(info, path + ".normalTexture", "normal texture");
+    spec.normal = textureImage(c, info, path + ".normalTexture");
     if (!(std::abs(m.normalTexture.scale) <= kMaxInputMagnitude))
       c.fail(path + ".normalTexture.scale", "must be finite and at most 1e15");
     spec.normalScale = float(m.normalTexture.scale);
   }
   if (m.emissiveTexture.index >= 0)
-    spec.emissive = texture(m.emissiveTexture, path + ".emissiveTexture", "emissive texture");
+    spec.emissive = textureImage(c, m.emissiveTexture, path + ".emissiveTexture");
   spec.doubleSided = m.doubleSided;
   double strength = 1;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_emissive_strength"))
@@ -457,7 +468,10 @@ MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, Tex
         spec.ks[k] = float(x);
       }
     }
-    if (e->Has("specularTexture") || e->Has("specularColorTexture")) c.fail(at, "specular textures are not read yet");
+    if (e->Has("specularTexture")) spec.specularTexture = textureImage(c, textureInfo(c, *e, "specularTexture", at), at + ".specularTexture");
+    if (e->Has("specularColorTexture"))
+      spec.specularColourTexture =
+          textureImage(c, textureInfo(c, *e, "specularColorTexture", at), at + ".specularColorTexture");
   }
   spec.ni = 1.5f;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_ior")) {
@@ -481,17 +495,13 @@ struct NodeWalk {
   std::vector<std::string> cameraNames;    // the cameras passed over for another name
   MaterialType materialType;               // Gltf or GltfHeightCorrelated
   std::map<int, uint32_t> materialOf;      // glTF material (-1: the default) -> spec
-  std::map<int, TextureCoordinates> coordinatesOf;  // glTF material -> what its base colour texture reads
   uint64_t skippedPrimitives = 0;      // points and lines
 
   uint32_t material(int index, const std::string& user) {
     if (const auto it = materialOf.find(index); it != materialOf.end()) return it->second;
     if (index >= 0 && size_t(index) >= c.model.materials.size())
       c.fail(user, "material " + std::to_string(index) + " does not exist");
-    TextureCoordinates coordinates;
-    MaterialSpec spec = index < 0 ? defaultMaterial(c, materialType)
-                                  : materialSpec(c, size_t(index), materialType, coordinates, scene.ignored);
-    coordinatesOf.emplace(index, coordinates);
+    MaterialSpec spec = index < 0 ? defaultMaterial(c, materialType) : materialSpec(c, size_t(index), materialType, scene.ignored);
     std::string name = spec.name;
     if (import.materialIndex.count(name)) name += " (" + c.file + ": " + at("materials", size_t(index)) + ")";
     spec.name = name;
@@ -529,14 +539,24 @@ struct NodeWalk {
     if (normalMapped && attribute("TANGENT") >= 0)
       tangents = readAccessor(c, attribute("TANGENT"), path + ".attributes.TANGENT", TINYGLTF_TYPE_VEC4,
                               {TINYGLTF_COMPONENT_TYPE_FLOAT});
-    const TextureCoordinates& coordinates = coordinatesOf.at(p.material);
-    const std::string texcoordName = "TEXCOORD_" + std::to_string(coordinates.set);
-    if (attribute(texcoordName.c_str()) >= 0)
-      texcoords = readAccessor(c, attribute(texcoordName.c_str()), path + ".attributes." + texcoordName, TINYGLTF_TYPE_VEC2,
-                               {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
-                                TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
-    if ((!normals.empty() && normals.size() / 3 != vertices) || (!texcoords.empty() && texcoords.size() / 2 != vertices) ||
-        (!tangents.empty() && tangents.size() / 4 != vertices))
+    // TEXCOORD_0, and TEXCOORD_1 where one of the material's textures reads it.
+    const MaterialSpec& spec = import.specs[materialId];
+    bool readsSet1 = false;
+    for (const TextureFile* f : {&spec.mapKd, &spec.metallicRoughness, &spec.normal, &spec.emissive,
+                                 &spec.specularTexture, &spec.specularColourTexture})
+      readsSet1 = readsSet1 || (!f->empty() && f->set == 1);
+    const auto readTexcoords = [&](const std::string& name) {
+      if (attribute(name.c_str()) < 0) return std::vector<double>();
+      std::vector<double> read = readAccessor(c, attribute(name.c_str()), path + ".attributes." + name, TINYGLTF_TYPE_VEC2,
+                                              {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                                               TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
+      if (read.size() / 2 != vertices)
+        c.fail(path + ".attributes", "its attributes differ in count from POSITION's " + std::to_string(vertices));
+      return read;
+    };
+    texcoords = readTexcoords("TEXCOORD_0");
+    const std::vector<double> texcoords1 = readsSet1 ? readTexcoords("TEXCOORD_1") : std::vector<double>();
+    if ((!normals.empty() && normals.size() / 3 != vertices) || (!tangents.empty() && tangents.size() / 4 != vertices))
       c.fail(path + ".attributes", "its attributes differ in count from POSITION's " + std::to_string(vertices));
     for (const auto& [name, accessor] : p.attributes)
       if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && name != "TEXCOORD_1" &&
@@ -591,15 +611,17 @@ struct NodeWalk {
         if (len != 0 && std::isfinite(len)) n = {float(x / len), float(y / len), float(z / len)};
       }
       scene.normals.push_back(n);
-      // glTF's texture coordinates start at the image's top left; Lucent's v runs up.
-      // The material's texture transform, then glTF's coordinates (origin at the image's top left)
-      // to Lucent's, whose v runs up.
-      const double u = texcoords.empty() ? 0 : texcoords[2 * v], w = texcoords.empty() ? 0 : texcoords[2 * v + 1];
-      const UvTransform& m = coordinates.transform;
-      const double tu = m[0] * u + m[1] * w + m[2], tw = m[3] * u + m[4] * w + m[5];
-      scene.texcoords.push_back(texcoords.empty() ? Vec2{0, 0} : Vec2{float(tu), float(1 - tw)});
+      // glTF's texture coordinates (origin at the image's top left) as Lucent's, whose v runs up;
+      // each texture's transform applies at lookups (Texture::transform).
+      scene.texcoords.push_back(texcoords.empty() ? Vec2{0, 0}
+                                                  : Vec2{float(texcoords[2 * v]), float(1 - texcoords[2 * v + 1])});
+      if (readsSet1) {
+        scene.texcoords1.resize(scene.positions.size() - 1);  // zeros for the vertices of meshes without
+        scene.texcoords1.push_back(texcoords1.empty() ? Vec2{0, 0}
+                                                      : Vec2{float(texcoords1[2 * v]), float(1 - texcoords1[2 * v + 1])});
+      }
     }
-    if (normalMapped) placeTangents(tangents, world, mirrored, first, corners);
+    if (normalMapped) placeTangents(tangents, world, mirrored, first, corners, spec.normal);
     for (size_t t = 0; t + 2 < corners.size(); t += 3) {
       uint32_t a = first + corners[t], b = first + corners[t + 1], d = first + corners[t + 2];
       if (mirrored) std::swap(b, d);
@@ -619,7 +641,7 @@ struct NodeWalk {
   // without its splitting of vertices), the sign where the summed bitangent lies against
   // cross(normal, tangent).
   void placeTangents(const std::vector<double>& given, const Matrix4& world, bool mirrored, uint32_t first,
-                     const std::vector<uint32_t>& corners) {
+                     const std::vector<uint32_t>& corners, const TextureFile& normalTexture) {
     scene.tangents.resize(scene.positions.size());
     const size_t vertices = scene.positions.size() - first;
     if (!given.empty()) {
@@ -632,11 +654,18 @@ struct NodeWalk {
       }
       return;
     }
+    // The normal texture's own coordinates: its set, transformed (a rotation turns the frame).
+    const std::vector<Vec2>& set = normalTexture.set == 0 ? scene.texcoords : scene.texcoords1;
+    const auto& m = normalTexture.transform;
+    const auto uvOf = [&](uint32_t k) {
+      const Vec2 uv = set[k];
+      return normalTexture.transformed ? Vec2{m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]} : uv;
+    };
     std::vector<Vec3> bitangents(vertices, Vec3{0, 0, 0});
     for (size_t t = 0; t + 2 < corners.size(); t += 3) {
       const uint32_t i[3] = {first + corners[t], first + corners[t + 1], first + corners[t + 2]};
       const Vec3 e1 = scene.positions[i[1]] - scene.positions[i[0]], e2 = scene.positions[i[2]] - scene.positions[i[0]];
-      const Vec2 uv0 = scene.texcoords[i[0]], uv1 = scene.texcoords[i[1]], uv2 = scene.texcoords[i[2]];
+      const Vec2 uv0 = uvOf(i[0]), uv1 = uvOf(i[1]), uv2 = uvOf(i[2]);
       const float du1 = uv1.x - uv0.x, dv1 = uv1.y - uv0.y, du2 = uv2.x - uv0.x, dv2 = uv2.y - uv0.y;
       const float det = du1 * dv2 - du2 * dv1;
       if (!(std::abs(det) > 0) || !std::isfinite(det)) continue;
@@ -831,7 +860,7 @@ void importGltf(const std::string& path, const GltfOptions& options, Scene& scen
   if (model.scenes.empty()) c.fail("scenes", "the file has no scene");
   const size_t sceneIndex = model.defaultScene >= 0 ? size_t(model.defaultScene) : 0;
   if (sceneIndex >= model.scenes.size()) c.fail("scene", "scene " + std::to_string(sceneIndex) + " does not exist");
-  NodeWalk walk{c, scene, import, content, options.lumensPerWatt, options.camera, {}, options.heightCorrelated ? MaterialType::GltfHeightCorrelated : MaterialType::Gltf, {}, {}, 0};
+  NodeWalk walk{c, scene, import, content, options.lumensPerWatt, options.camera, {}, options.heightCorrelated ? MaterialType::GltfHeightCorrelated : MaterialType::Gltf, {}, 0};
   std::vector<bool> onPath(model.nodes.size(), false);
   for (const int root : model.scenes[sceneIndex].nodes) walk.node(root, Matrix4{}, 0, onPath);
   if (!options.camera.empty() && !content.camera) {

@@ -120,13 +120,13 @@ std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string
 }
 
 // 8-bit linear texels packed as readSrgb8Texels packs them (glTF's data textures: metallic and
-// roughness): each stored value in [0, 1] to its nearest code, whatever colour space the file
-// declares, since glTF defines these channels as linear values.
+// roughness, normals, the specular factor in A): each stored value in [0, 1] to its nearest code,
+// whatever colour space the file declares, since glTF defines these channels as linear values.
 std::vector<uint32_t> readUnorm8Texels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h,
                                        const std::function<Image(ImageMetadata*)>& read) {
   return readImageTexels(path, context, w, h, [](const float* stored, bool) {
-    uint32_t packed = 0xffu << 24;
-    for (int k = 0; k < 3; ++k) packed |= uint32_t(std::lround(255.0f * std::clamp(stored[k], 0.0f, 1.0f))) << (8 * k);
+    uint32_t packed = 0;
+    for (int k = 0; k < 4; ++k) packed |= uint32_t(std::lround(255.0f * std::clamp(stored[k], 0.0f, 1.0f))) << (8 * k);
     return packed;
   }, false, read);
 }
@@ -354,6 +354,9 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
     tex.wrapU = file.wrapU;
     tex.wrapV = file.wrapV;
     tex.nearest = file.nearest ? 1 : 0;
+    tex.set = file.set;
+    tex.transformed = file.transformed ? 1 : 0;
+    std::copy(file.transform.begin(), file.transform.end(), tex.transform);
     const std::function<Image(ImageMetadata*)> read =
         embedded ? std::function<Image(ImageMetadata*)>([&](ImageMetadata* metadata) {
           return readImageFromMemory(file.path, fs::path(file.path).extension().string(), file.bytes, metadata);
@@ -375,6 +378,10 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
       m.metallicRoughnessTexture = addTexture(spec.metallicRoughness, spec.name, "metallic-roughness texture", false);
     // Normal textures perturb glTF materials' shading normals only: Lambertian hits are shaded in
     // the path tracer's lanes, from the vertex normals.
+    if (isGltf(m.type) && !spec.specularTexture.empty())
+      m.specularTexture = addTexture(spec.specularTexture, spec.name, "specular texture", false);
+    if (isGltf(m.type) && !spec.specularColourTexture.empty())
+      m.specularColorTexture = addTexture(spec.specularColourTexture, spec.name, "specular colour texture", true);
     if (!spec.emissive.empty() && !m.ke.isBlack())
       m.emissiveTexture = addTexture(spec.emissive, spec.name, "emissive texture", true);
     m.emitsBackFace = spec.doubleSided && !m.ke.isBlack() ? 1 : 0;
@@ -392,6 +399,7 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
     scene.materialNames.push_back(spec.name);
   }
   if (!scene.tangents.empty()) scene.tangents.resize(scene.positions.size());  // meshes read after a glTF file's
+  if (!scene.texcoords1.empty()) scene.texcoords1.resize(scene.positions.size());
   // Light selection weighs lights by power; an emitter whose power overflows a float would break it.
   for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
     const uint32_t id = scene.materialIds[t];

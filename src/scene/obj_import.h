@@ -1,5 +1,6 @@
 // OBJ/MTL import into the flat scene arrays (internal to the loader).
 #pragma once
+#include <array>
 #include <map>
 #include <optional>
 #include <string>
@@ -16,6 +17,9 @@ struct TextureFile {
   std::string origin;                // "file:line" (or the scene's key, or the glTF path) that names it
   TextureWrap wrapU = TextureWrap::Repeat, wrapV = TextureWrap::Repeat;  // a glTF sampler's
   bool nearest = false;
+  uint32_t set = 0;                  // the texture coordinates it reads (Texture::set)
+  bool transformed = false;          // Texture::transformed and transform (Lucent's coordinates)
+  std::array<float, 6> transform = {1, 0, 0, 0, 1, 0};
   bool empty() const { return path.empty(); }
 };
 
@@ -33,6 +37,7 @@ struct MaterialSpec {
   TextureFile normal;                // glTF only (linear)
   float normalScale = 1.0f;
   TextureFile emissive;              // glTF only (sRGB), multiplies ke
+  TextureFile specularTexture, specularColourTexture;  // glTF only: KHR_materials_specular's (A linear; sRGB)
   bool doubleSided = false;          // an emitter's back faces emit too (glTF's doubleSided, a scene file's double_sided)
   AlphaMode alphaMode = AlphaMode::Opaque;  // glTF only
   float alphaCutoff = 0.5f, baseAlpha = 1.0f;

@@ -137,6 +137,7 @@ uint64_t sceneContentHash(const Scene& scene) {
   h = hashArray(h, scene.normals);
   h = hashArray(h, scene.texcoords);
   if (!scene.tangents.empty()) h = hashArray(h, scene.tangents);  // absent: the hash of scenes without them unchanged
+  if (!scene.texcoords1.empty()) h = hashArray(h, scene.texcoords1);
   h = hashArray(h, scene.indices);
   h = hashArray(h, scene.materialIds);
   h = hashArray(h, scene.materials);

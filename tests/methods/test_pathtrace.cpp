@@ -356,7 +356,7 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
       opt.strategy = strategy;
       const Image image = renderPathTraced(scene, vis, opt).image;
       Material plane = scene.materials[0];
-      const SurfaceBsdf b = gltfBsdf(plane, k.base, k.metallic, k.roughness);
+      const SurfaceBsdf b = gltfBsdf(plane, k.base, k.metallic, k.roughness, plane.specular, plane.ks);
       Rgb low(1e9f), high(0.0f);
       for (const double theta : {k.theta - 0.0175, k.theta, k.theta + 0.0175}) {
         const Rgb a = test::directionalAlbedo(b, test::directionAt(theta, 0)) * scene.environment.radiance;

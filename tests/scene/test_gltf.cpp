@@ -120,6 +120,22 @@ std::string writeFile(const fs::path& dir, const std::string& name, const json& 
   return p.string();
 }
 
+// An 8-bit RGBA PNG of the given codes (alpha unassociated: stored beside the colour), in memory.
+std::vector<unsigned char> rgbaPng(int width, int height, const std::vector<unsigned char>& rgba) {
+  std::vector<unsigned char> png;
+  OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
+  spec.alpha_channel = 3;
+  spec.attribute("oiio:UnassociatedAlpha", 1);
+  OIIO::Filesystem::IOVecOutput memory(png);
+  auto out = OIIO::ImageOutput::create("png");
+  REQUIRE(out);
+  REQUIRE(out->set_ioproxy(&memory));
+  REQUIRE(out->open("image.png", spec));
+  REQUIRE(out->write_image(OIIO::TypeDesc::UINT8, rgba.data()));
+  REQUIRE(out->close());
+  return png;
+}
+
 // A scene file around a glTF file (the camera is the scene file's): its path.
 std::string wrapGltf(const fs::path& dir, const json& gltf) {
   const std::string file = writeFile(dir, "model.gltf", gltf);
@@ -434,16 +450,22 @@ TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read
   viaUri["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] = {
       {"KHR_texture_transform", {{"offset", {0.25, 0.5}}, {"rotation", 1.5707963267948966}, {"scale", {2, 3}}}}};
   const Scene moved = loadWrapped(dir.path, viaUri);
-  const auto texcoordAt = [&](Vec3 p) {
-    for (size_t v = 0; v < moved.positions.size(); ++v)
-      if (moved.positions[v] == p) return moved.texcoords[v];
+  // Texture `texture`'s coordinates at the corner p (its set's, transformed at the lookup).
+  const auto uvAt = [](const Scene& s, int32_t texture, Vec3 p) {
+    for (uint32_t t = 0; t < s.triangleCount(); ++t)
+      for (int k = 0; k < 3; ++k)
+        if (s.vertex(t, k) == p) {
+          SurfacePoint sp;
+          sp.triangle = t, sp.b1 = k == 1 ? 1.0f : 0.0f, sp.b2 = k == 2 ? 1.0f : 0.0f;
+          return textureUv(s, s.textures[size_t(texture)], sp);
+        }
     FAIL("no vertex at the corner");
     return Vec2{};
   };
-  CHECK(texcoordAt({1, 0, 0}).x == Approx(0.25).margin(1e-6));
-  CHECK(texcoordAt({1, 0, 0}).y == Approx(2.5).margin(1e-6));
-  CHECK(texcoordAt({0, 1, 0}).x == Approx(3.25).margin(1e-6));
-  CHECK(texcoordAt({0, 1, 0}).y == Approx(0.5).margin(1e-6));
+  CHECK(uvAt(moved, 0, {1, 0, 0}).x == Approx(0.25).margin(1e-6));
+  CHECK(uvAt(moved, 0, {1, 0, 0}).y == Approx(2.5).margin(1e-6));
+  CHECK(uvAt(moved, 0, {0, 1, 0}).x == Approx(3.25).margin(1e-6));
+  CHECK(uvAt(moved, 0, {0, 1, 0}).y == Approx(0.5).margin(1e-6));
   // The set the texture names: TEXCOORD_1 alone, then set 2, which no texture may read here.
   json second = viaUri;
   auto& attributes = second["meshes"][0]["primitives"][0]["attributes"];
@@ -451,8 +473,35 @@ TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read
   attributes.erase("TEXCOORD_0");
   second["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 1;
   const Scene secondSet = loadWrapped(dir.path, second);
-  for (size_t v = 0; v < secondSet.positions.size(); ++v)
-    if (secondSet.positions[v] == Vec3{1, 0, 0}) CHECK(secondSet.texcoords[v].y == Approx(2.5).margin(1e-6));
+  REQUIRE(secondSet.texcoords1.size() == secondSet.positions.size());
+  CHECK(uvAt(secondSet, 0, {1, 0, 0}).y == Approx(2.5).margin(1e-6));
+  // A material's textures read their own sets and transforms: the base colour TEXCOORD_0 as it
+  // is, the metallic-roughness texture TEXCOORD_1 (here the quad's coordinates mirrored in u) moved
+  // by (0.5, 0): at the corner (1, 0), whose coordinates are (1, 0) and (0, 0), the first reads
+  // (1, 1) and the second (0.5, 1) in Lucent's coordinates.
+  json mixed = quadFile({{{"mesh", 0}}}, {0});
+  std::vector<unsigned char> mirrored;
+  for (const auto& uv : std::vector<std::array<unsigned char, 2>>{{255, 0}, {0, 0}, {255, 255}, {0, 255}})
+    mirrored.insert(mirrored.end(), uv.begin(), uv.end());
+  mixed["buffers"].push_back({{"byteLength", mirrored.size()}, {"uri", "data:application/octet-stream;base64," + base64(mirrored)}});
+  mixed["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", mirrored.size()}});
+  mixed["accessors"].push_back({{"bufferView", 3}, {"componentType", 5121}, {"normalized", true}, {"count", 4}, {"type", "VEC2"}});
+  mixed["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = 4;
+  mixed["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
+  mixed["materials"][0]["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {
+      {"index", 0}, {"texCoord", 1}, {"extensions", {{"KHR_texture_transform", {{"offset", {0.5, 0}}}}}}};
+  mixed["textures"] = viaUri["textures"];
+  mixed["samplers"] = viaUri["samplers"];
+  mixed["images"] = viaUri["images"];
+  const Scene both = loadWrapped(dir.path, mixed);
+  const Material& m = both.materials[0];
+  REQUIRE(m.metallicRoughnessTexture >= 0);
+  CHECK(both.textures[size_t(m.kdTexture)].set == 0);
+  CHECK(both.textures[size_t(m.metallicRoughnessTexture)].set == 1);
+  CHECK(uvAt(both, m.kdTexture, {1, 0, 0}).x == Approx(1).margin(1e-6));
+  CHECK(uvAt(both, m.kdTexture, {1, 0, 0}).y == Approx(1).margin(1e-6));
+  CHECK(uvAt(both, m.metallicRoughnessTexture, {1, 0, 0}).x == Approx(0.5).margin(1e-6));
+  CHECK(uvAt(both, m.metallicRoughnessTexture, {1, 0, 0}).y == Approx(1).margin(1e-6));
   second["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 2;
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, second), Catch::Contains("baseColorTexture.texCoord: TEXCOORD_2 is not read"));
 }
@@ -528,6 +577,34 @@ TEST_CASE("glTF normal and metallic-roughness textures are read as linear data; 
   }
 }
 
+TEST_CASE("KHR_materials_specular's textures: its factor times their A (linear), its colour times their RGB (sRGB)",
+          "[gltf][loader]") {
+  const test::TempDir dir;
+  // One 1 x 1 RGBA image of codes (128, 64, 255, 102) for both: the specular factor 0.5 x 102/255,
+  // the colour (1, 1, 1) x the sRGB decoding of (128, 64, 255); ior 1.5 (F0 0.04), not metallic.
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  f["images"] = {{{"uri", "data:image/png;base64," + base64(rgbaPng(1, 1, {128, 64, 255, 102}))}}};
+  f["textures"] = {{{"source", 0}}};
+  f["materials"][0]["extensions"]["KHR_materials_specular"] = {
+      {"specularFactor", 0.5}, {"specularColorFactor", {1, 1, 1}}, {"specularTexture", {{"index", 0}}},
+      {"specularColorTexture", {{"index", 0}}}};
+  const Scene scene = loadWrapped(dir.path, f);
+  const Material& m = scene.materials[0];
+  REQUIRE(m.specularTexture >= 0);
+  REQUIRE(m.specularColorTexture >= 0);
+  SurfacePoint sp = surfaceAt(scene, 0, 0.25f, 0.25f);
+  const SurfaceBsdf b = bsdfAt(scene, sp);
+  const double specular = 0.5 * 102 / 255.0;
+  CHECK(b.dielectricF90 == Approx(specular).epsilon(1e-5));
+  CHECK(b.f90 == Approx(specular).epsilon(1e-5));
+  const int codes[3] = {128, 64, 255};
+  for (int c = 0; c < 3; ++c) CHECK(b.ks[c] == Approx(0.04 * kSrgb8ToLinear[size_t(codes[c])] * specular).epsilon(1e-4));
+  // A textureInfo that is not one is refused with its path.
+  f["materials"][0]["extensions"]["KHR_materials_specular"]["specularTexture"] = 3;
+  REQUIRE_THROWS_WITH(loadWrapped(dir.path, f),
+                      Catch::Contains("materials[0].extensions.KHR_materials_specular.specularTexture: expected a textureInfo"));
+}
+
 TEST_CASE("A normal texture that tilts most texels past 45 degrees, as a height map does, is warned of", "[gltf][loader]") {
   // Blender's OBJ importer turns map_Bump into a normal texture, and the glTF it exports carries the
   // grey heights as normals (sponza.glb: tilts of about 59 degrees). The render follows the file;
@@ -592,20 +669,7 @@ TEST_CASE("glTF alpha: MASK cuts holes for every query, BLEND lets rays through 
   const test::TempDir dir;
   // A 2 x 1 RGBA PNG base colour texture (codes 188, alpha as stored beside them): its left texel
   // of alpha 51/255 (a hole below the cutoff 0.5), its right opaque.
-  const unsigned char rgba[8] = {188, 188, 188, 51, 188, 188, 188, 255};
-  std::vector<unsigned char> png;
-  {
-    OIIO::ImageSpec spec(2, 1, 4, OIIO::TypeDesc::UINT8);
-    spec.alpha_channel = 3;
-    spec.attribute("oiio:UnassociatedAlpha", 1);
-    OIIO::Filesystem::IOVecOutput memory(png);
-    auto out = OIIO::ImageOutput::create("png");
-    REQUIRE(out);
-    REQUIRE(out->set_ioproxy(&memory));
-    REQUIRE(out->open("alpha.png", spec));
-    REQUIRE(out->write_image(OIIO::TypeDesc::UINT8, rgba));
-    REQUIRE(out->close());
-  }
+  const std::vector<unsigned char> png = rgbaPng(2, 1, {188, 188, 188, 51, 188, 188, 188, 255});
   json f = quadFile({{{"mesh", 0}}, {{"mesh", 0}, {"translation", {0, 0, -1}}}}, {0, 1});
   f["images"] = {{{"uri", "data:image/png;base64," + base64(png)}}};
   f["textures"] = {{{"source", 0}}};

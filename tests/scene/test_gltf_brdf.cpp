@@ -37,7 +37,7 @@ SurfaceBsdf bsdfOf(const Parameters& p) {
   m.ks = p.specularColour;
   m.ni = p.ior;
   m.specular = p.specular;
-  return gltfBsdf(m, p.base, p.metallic, p.roughness);
+  return gltfBsdf(m, p.base, p.metallic, p.roughness, m.specular, m.ks);
 }
 
 // Appendix B with KHR_materials_ior and KHR_materials_specular, as the specifications write it:

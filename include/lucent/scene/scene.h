@@ -51,8 +51,10 @@ struct Material {
   // emitsBackFace is 1 (glTF's doubleSided).
   int32_t emissiveTexture = -1;
   uint32_t emitsBackFace = 0;
+  // KHR_materials_specular's textures: A (linear) times `specular`, RGB (sRGB) times ks.
+  int32_t specularTexture = -1, specularColorTexture = -1;
 };
-static_assert(sizeof(Material) == 96, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 104, "Material is a fixed-size record shared with GPU backends");
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear
@@ -61,12 +63,19 @@ static_assert(sizeof(Material) == 96, "Material is a fixed-size record shared wi
 // How coordinates outside [0, 1] and between texels read a texture (glTF's samplers; MTL maps
 // repeat and filter bilinearly).
 enum class TextureWrap : uint32_t { Repeat = 0, Clamp = 1, Mirror = 2 };
+// A texture reads the vertices' texture coordinates of its set (Scene::texcoords or texcoords1),
+// transformed where `transformed` is 1 (glTF's KHR_texture_transform, in Lucent's coordinates):
+// u' = transform[0] u + transform[1] v + transform[2], v' = transform[3] u + transform[4] v + transform[5].
 struct Texture {
   uint32_t offset = 0;
   uint32_t width = 0, height = 0;
   TextureWrap wrapU = TextureWrap::Repeat, wrapV = TextureWrap::Repeat;  // along u (image x) and v (image y)
   uint32_t nearest = 0;  // 1: the nearest texel, not a bilinear blend
+  uint32_t set = 0;      // 0: Scene::texcoords, 1: Scene::texcoords1
+  uint32_t transformed = 0;
+  float transform[6] = {1, 0, 0, 0, 1, 0};
 };
+static_assert(sizeof(Texture) == 56, "Texture is a fixed-size record shared with GPU backends");
 
 enum class LightType : uint32_t { Triangle = 0, Point = 1, Directional = 2, Environment = 3, Spot = 4 };
 
@@ -140,7 +149,8 @@ struct Scene {
   // Vertices (one entry per unique position/normal/uv combination).
   std::vector<Vec3> positions;
   std::vector<Vec3> normals;    // shading normals; zero where the OBJ had none (geometric is used)
-  std::vector<Vec2> texcoords;  // zero where the OBJ had none
+  std::vector<Vec2> texcoords;   // zero where the OBJ had none
+  std::vector<Vec2> texcoords1;  // glTF's TEXCOORD_1 where a texture reads it (else empty), zero where a mesh has none
   std::vector<Tangent> tangents;  // empty, or one per vertex (zero direction where none is known)
   // Triangles.
   std::vector<uint32_t> indices;      // 3 per triangle

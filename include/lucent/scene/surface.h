@@ -40,11 +40,23 @@ inline Vec3 shadingFrameNormal(Vec3 wo, Vec3 sn, Vec3 ng, bool twoSided) {
   return select(behind, -n, n);
 }
 
-inline Vec2 texcoordsAt(const Scene& scene, const SurfacePoint& sp) {
+// Texture t's coordinates at a surface point: its set's, interpolated, then transformed.
+inline Vec2 textureUv(const Scene& scene, const Texture& t, const SurfacePoint& sp) {
+  const std::vector<Vec2>& set = t.set == 0 ? scene.texcoords : scene.texcoords1;
   const uint32_t* v = &scene.indices[3 * sp.triangle];
-  const Vec2 t0 = scene.texcoords[v[0]], t1 = scene.texcoords[v[1]], t2 = scene.texcoords[v[2]];
+  const Vec2 t0 = set[v[0]], t1 = set[v[1]], t2 = set[v[2]];
   const float b0 = 1.0f - sp.b1 - sp.b2;
-  return {t0.x * b0 + t1.x * sp.b1 + t2.x * sp.b2, t0.y * b0 + t1.y * sp.b1 + t2.y * sp.b2};
+  const Vec2 uv{t0.x * b0 + t1.x * sp.b1 + t2.x * sp.b2, t0.y * b0 + t1.y * sp.b1 + t2.y * sp.b2};
+  if (t.transformed == 0) return uv;
+  const float* m = t.transform;
+  return {m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]};
+}
+
+// Texture `index` of the scene (>= 0) read at a surface point, bilinearly, decoded by `decode`.
+inline Rgb textureAt(const Scene& scene, int32_t index, const SurfacePoint& sp,
+                     const std::array<float, 256>& decode = kSrgb8ToLinear) {
+  const Texture& t = scene.textures[size_t(index)];
+  return bilinear(bilinearFootprint(t, scene.texels.data(), textureUv(scene, t, sp)), decode);
 }
 
 // The radiance triangle tri emits at barycentrics (b1, b2) towards its front (front) or back side:
@@ -56,7 +68,7 @@ inline Rgb emittedRadiance(const Scene& scene, uint32_t tri, float b1, float b2,
   if (m.emissiveTexture < 0) return m.ke;
   SurfacePoint sp;
   sp.triangle = tri, sp.b1 = b1, sp.b2 = b2;
-  return m.ke * bilinear(scene.textures[size_t(m.emissiveTexture)], scene.texels.data(), texcoordsAt(scene, sp));
+  return m.ke * textureAt(scene, m.emissiveTexture, sp);
 }
 
 // glTF's normal texture at a hit: the texel's tangent-space normal (2 c - 1, x and y times the
@@ -71,8 +83,7 @@ inline Vec3 normalMapped(const Scene& scene, const Material& m, const SurfacePoi
   if (!(len > 0)) return n;
   t = t / len;
   const Vec3 b = cross(n, t) * a.sign;
-  const Rgb c = bilinear(bilinearFootprint(scene.textures[m.normalTexture], scene.texels.data(), texcoordsAt(scene, sp)),
-                         kUnorm8ToFloat);
+  const Rgb c = textureAt(scene, m.normalTexture, sp, kUnorm8ToFloat);
   const Vec3 p = t * ((2.0f * c.r - 1.0f) * m.normalScale) + b * ((2.0f * c.g - 1.0f) * m.normalScale) +
                  n * (2.0f * c.b - 1.0f);
   const float plen = length(p);
@@ -111,38 +122,43 @@ inline SurfacePoint surfaceAt(const Scene& scene, uint32_t tri, float b1, float 
 constexpr float kMinGgxAlpha = 1e-3f;
 
 // Appendix B's metal/dielectric mix expanded into SurfaceBsdf's terms (bsdf.h) for base colour
-// `base`, from the file's factors times its metallic-roughness texture.
-inline SurfaceBsdf gltfBsdf(const Material& m, Rgb base, float metallic, float roughness) {
+// `base`, from the file's factors times its textures: metallic and roughness, and
+// KHR_materials_specular's specular factor and colour.
+inline SurfaceBsdf gltfBsdf(const Material& m, Rgb base, float metallic, float roughness, float specular,
+                            Rgb specularColour) {
   SurfaceBsdf b;
   b.type = m.type;
   // KHR_materials_ior and KHR_materials_specular: the dielectric's F0 from the index, coloured,
   // clamped to 1, then weighted by the specular factor, which is also its F90.
   const float r = (m.ni - 1.0f) / (m.ni + 1.0f);
-  const Rgb f0 = Rgb(std::min(r * r * m.ks.r, 1.0f), std::min(r * r * m.ks.g, 1.0f), std::min(r * r * m.ks.b, 1.0f)) *
-                 m.specular;
+  const Rgb c = specularColour;
+  const Rgb f0 = Rgb(std::min(r * r * c.r, 1.0f), std::min(r * r * c.g, 1.0f), std::min(r * r * c.b, 1.0f)) * specular;
   b.kd = base * (1.0f - metallic);
   b.ks = f0 * (1.0f - metallic) + base * metallic;
-  b.f90 = m.specular * (1.0f - metallic) + metallic;
+  b.f90 = specular * (1.0f - metallic) + metallic;
   b.dielectricF0 = f0.maxComponent();
-  b.dielectricF90 = m.specular;
+  b.dielectricF90 = specular;
   b.alpha = std::max(roughness * roughness, kMinGgxAlpha);
   return b;
 }
 
 inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
   const Material& m = scene.materials[sp.materialId];
-  const bool textured = m.kdTexture >= 0 || m.metallicRoughnessTexture >= 0;
-  const Vec2 uv = textured ? texcoordsAt(scene, sp) : Vec2{0, 0};
-  const Rgb kd = m.kdTexture < 0 ? m.kd : diffuseAlbedo(scene, m, uv);
+  const Rgb kd = m.kdTexture < 0 ? m.kd : m.kd * textureAt(scene, m.kdTexture, sp);
   if (isGltf(m.type)) {
-    float metallic = m.metallic, roughness = m.roughness;
+    float metallic = m.metallic, roughness = m.roughness, specular = m.specular;
+    Rgb specularColour = m.ks;
     if (m.metallicRoughnessTexture >= 0) {
-      const Rgb t = bilinear(bilinearFootprint(scene.textures[m.metallicRoughnessTexture], scene.texels.data(), uv),
-                             kUnorm8ToFloat);
+      const Rgb t = textureAt(scene, m.metallicRoughnessTexture, sp, kUnorm8ToFloat);
       metallic *= t.b;
       roughness *= t.g;
     }
-    return gltfBsdf(m, kd, metallic, roughness);
+    if (m.specularTexture >= 0) {
+      const Texture& t = scene.textures[size_t(m.specularTexture)];
+      specular *= bilinearAlpha(bilinearFootprint(t, scene.texels.data(), textureUv(scene, t, sp)));
+    }
+    if (m.specularColorTexture >= 0) specularColour = specularColour * textureAt(scene, m.specularColorTexture, sp);
+    return gltfBsdf(m, kd, metallic, roughness, specular, specularColour);
   }
   SurfaceBsdf b;
   b.type = m.type;

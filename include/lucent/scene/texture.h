@@ -103,11 +103,6 @@ inline float surfaceAlpha(const Scene& scene, const Material& m, Vec2 uv) {
   return m.baseAlpha * bilinearAlpha(bilinearFootprint(scene.textures[m.kdTexture], scene.texels.data(), uv));
 }
 
-inline Rgb diffuseAlbedo(const Scene& scene, const Material& m, Vec2 uv) {
-  if (m.kdTexture < 0) return m.kd;
-  return m.kd * bilinear(scene.textures[m.kdTexture], scene.texels.data(), uv);
-}
-
 // Radiance arriving from the environment along -direction (direction points away from the scene).
 // Maps are looked up per texel (nearest), matching the piecewise-constant sampling density exactly.
 inline Rgb environmentRadiance(const Environment& env, Vec3 direction) {

@@ -343,7 +343,8 @@ class PathTracer {
     } else {
       SurfacePoint sp;
       sp.triangle = hit.triangle, sp.b1 = hit.b1, sp.b2 = hit.b2;
-      const BilinearFootprint f = bilinearFootprint(s.textures[m.kdTexture], s.texels.data(), texcoordsAt(s, sp));
+      const Texture& t = s.textures[size_t(m.kdTexture)];
+      const BilinearFootprint f = bilinearFootprint(t, s.texels.data(), textureUv(s, t, sp));
       for (const uint32_t* texel : {f.row0 + f.x0, f.row0 + f.x1, f.row1 + f.x0, f.row1 + f.x1}) __builtin_prefetch(texel);
       textured.push_back({k, f, m.kd});
     }
