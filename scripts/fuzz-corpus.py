@@ -9,7 +9,9 @@ and layered films, in fuzz/film_fuzz_input.h's two forms; merge's joined as part
 pairs of small EXR, PNG and Radiance images (and a TGA, which Lucent refuses), of equal and of
 different sizes. gltf_loader: the exported Cornell box (scenes/gltf/cornell-box.glb) and small
 .gltf files with embedded buffers: a quad as a triangle strip with interleaved attributes and a
-point light, the same with a sparse accessor, with node transforms, and with a base colour texture.
+point light, the same with a sparse accessor, with node transforms, with a base colour texture, and
+with every material feature (textures on both sets, texture transforms, normal, emissive and specular
+textures, a doubleSided emitter, alpha masking) and a spot light.
 
 Usage: scripts/fuzz-corpus.py TARGET OUT_DIR
 """
@@ -242,6 +244,38 @@ def gltf_seeds():
     textured["samplers"] = [{"wrapS": 33071}]
     textured["images"] = [{"uri": "data:image/png;base64," + base64.b64encode(image).decode()}]
     seeds["textured.gltf"] = json.dumps(textured).encode()
+    # Every material feature at once: base colour, metallic-roughness (on TEXCOORD_1, moved by
+    # KHR_texture_transform), normal (tangents computed), emissive and specular textures, a
+    # doubleSided emitter, alpha masking; a mirrored, nearest sampler; and a spot light.
+    materials = json.loads(json.dumps(textured))
+    materials["buffers"].append({"byteLength": 8, "uri": uri(bytes([255, 0, 0, 0, 255, 255, 0, 255]))})
+    materials["bufferViews"].append({"buffer": 1, "byteOffset": 0, "byteLength": 8})
+    materials["accessors"].append({"bufferView": 3, "componentType": 5121, "normalized": True, "count": 4,
+                                   "type": "VEC2"})
+    materials["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = 4
+    materials["samplers"].append({"wrapS": 33648, "wrapT": 33071, "magFilter": 9728})
+    materials["textures"].append({"source": 0, "sampler": 1})
+    materials["materials"][0].update({
+        "normalTexture": {"index": 1, "scale": 0.8},
+        "emissiveTexture": {"index": 0},
+        "emissiveFactor": [1, 0.5, 0.25],
+        "doubleSided": True,
+        "alphaMode": "MASK", "alphaCutoff": 0.3,
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4},
+                       "KHR_materials_ior": {"ior": 1.4},
+                       "KHR_materials_specular": {"specularFactor": 0.7, "specularColorFactor": [1, 0.9, 0.8],
+                                                  "specularTexture": {"index": 1},
+                                                  "specularColorTexture": {"index": 0, "texCoord": 1}}}})
+    materials["materials"][0]["pbrMetallicRoughness"]["metallicRoughnessTexture"] = {
+        "index": 1, "texCoord": 1,
+        "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "rotation": 0.3, "scale": [2, 2]}}}
+    materials["extensionsUsed"] += ["KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_specular",
+                                    "KHR_texture_transform"]
+    materials["extensions"]["KHR_lights_punctual"]["lights"].append(
+        {"type": "spot", "intensity": 2000, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.6}})
+    materials["nodes"].append({"translation": [0, 0, 3], "extensions": {"KHR_lights_punctual": {"light": 1}}})
+    materials["scenes"][0]["nodes"].append(2)
+    seeds["materials.gltf"] = json.dumps(materials).encode()
     return seeds
 
 
