@@ -1,8 +1,9 @@
 // lucent compare IMAGE REFERENCE [--metric rmse|relmse|smape|mae] [--max-error X]
-//                [--test [--alpha A]] [--heatmap OUT.png]
+//                [--test [--block N]] [--within D] [--alpha A] [--heatmap OUT.png]
 // Exit status: 0 passed (or no threshold), 1 the chosen metric exceeds --max-error, the image
-// has NaN or infinite values, or --test finds it differs from the reference by more than their
-// noise; 2 error (the reference's NaN or infinite values among them).
+// has NaN or infinite values, --test finds it differs from the reference by more than their
+// noise, or --within cannot show it within D of the reference; 2 error (the reference's NaN or
+// infinite values among them).
 // 8-bit images (PNG, JPEG) are decoded from sRGB to linear before they are compared.
 #include <cmath>
 #include <filesystem>
@@ -22,8 +23,9 @@ namespace {
 
 struct CompareOptions {
   std::string image, reference, metric = "relmse", heatmap;
-  std::optional<double> maxError;
+  std::optional<double> maxError, within;
   bool test = false;
+  int block = 8;
   double alpha = 0.01;
 };
 
@@ -32,10 +34,11 @@ nlohmann::ordered_json testJson(const NoiseTest& t) {
   out["alpha"] = t.alpha;
   out["passed"] = t.passed;
   out["candidate_variance"] = t.candidateHasVariance;
-  out["pixels"] = t.pixels;
-  out["fraction_rejected_at_alpha"] = double(t.pixelsRejectedAtAlpha) / double(t.pixels);
-  out["pixels_rejected"] = t.pixelsRejected;
-  out["min_pixel_p_value"] = t.minPixelPValue;
+  out["block"] = t.block;
+  out["blocks"] = t.blocks;
+  out["fraction_rejected_at_alpha"] = double(t.blocksRejectedAtAlpha) / double(t.blocks);
+  out["blocks_rejected"] = t.blocksRejected;
+  out["min_block_p_value"] = t.minBlockPValue;
   out["regions"] = nlohmann::ordered_json::array();
   for (const RegionTest& r : t.regions)
     out["regions"].push_back({{"region", {r.x0, r.y0, r.x1, r.y1}},
@@ -43,6 +46,21 @@ nlohmann::ordered_json testJson(const NoiseTest& t) {
                               {"z", r.z},
                               {"p_value", r.pValue},
                               {"rejected", r.rejected}});
+  return out;
+}
+
+nlohmann::ordered_json equivalenceJson(const EquivalenceTest& t) {
+  nlohmann::ordered_json out;
+  out["within"] = t.within;
+  out["alpha"] = t.alpha;
+  out["passed"] = t.passed;
+  out["candidate_variance"] = t.candidateHasVariance;
+  out["regions"] = nlohmann::ordered_json::array();
+  for (const EquivalenceRegion& r : t.regions)
+    out["regions"].push_back({{"region", {r.x0, r.y0, r.x1, r.y1}},
+                              {"relative_difference", r.relativeDifference},
+                              {"interval", {r.low, r.high}},
+                              {"equivalent", r.equivalent}});
   return out;
 }
 
@@ -55,14 +73,18 @@ int runCompare(const CompareOptions& opt) {
   // through, which no error would ever exceed).
   if (opt.maxError && !(std::isfinite(*opt.maxError) && *opt.maxError >= 0))
     throw std::invalid_argument("--max-error must be a finite number of at least 0");
-  if (!(opt.alpha >= 1e-12 && opt.alpha <= 0.5)) throw std::invalid_argument("--alpha must lie in [1e-12, 0.5]");
+  if (!(opt.alpha >= 1e-12 && opt.alpha <= 0.25)) throw std::invalid_argument("--alpha must lie in [1e-12, 0.25]");
+  if (opt.block < 1 || opt.block > 4096) throw std::invalid_argument("--block must lie in [1, 4096]");
+  if (opt.within && !(std::isfinite(*opt.within) && *opt.within > 0 && *opt.within <= 10))
+    throw std::invalid_argument("--within must lie in (0, 10]");
+  const bool statistical = opt.test || opt.within.has_value();
   const ErrorMetric metric = parseErrorMetric(opt.metric);
   if (!opt.heatmap.empty()) checkOutputFile(opt.heatmap, ".png", "--heatmap", {opt.image, opt.reference});
   // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
   {
     const ImageHeader image = readImageHeader(opt.image), reference = readImageHeader(opt.reference);
     try {
-      checkComparable(image, reference, opt.test);
+      checkComparable(image, reference, statistical);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("'" + opt.image + "' vs '" + opt.reference + "': " + e.what());
     }
@@ -71,15 +93,15 @@ int runCompare(const CompareOptions& opt) {
   const Image referenceFile = readLinearImage(opt.reference);
   // The test reads the variance layers; the metrics compare the colours.
   std::optional<NoiseTest> test;
-  if (opt.test) {
-    try {
-      test = testWithinNoise(candidateFile, referenceFile, opt.alpha);
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument("'" + opt.image + "' vs '" + opt.reference + "': " + e.what());
-    }
+  std::optional<EquivalenceTest> equivalence;
+  try {
+    if (opt.test) test = testWithinNoise(candidateFile, referenceFile, opt.alpha, 4, opt.block);
+    if (opt.within) equivalence = testEquivalence(candidateFile, referenceFile, *opt.within, opt.alpha);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("'" + opt.image + "' vs '" + opt.reference + "': " + e.what());
   }
-  const Image image = opt.test ? rgbChannels(candidateFile) : candidateFile;
-  const Image reference = opt.test ? rgbChannels(referenceFile) : referenceFile;
+  const Image image = statistical ? rgbChannels(candidateFile) : candidateFile;
+  const Image reference = statistical ? rgbChannels(referenceFile) : referenceFile;
   ImageError error;
   try {
     error = compareImages(image, reference);
@@ -100,9 +122,11 @@ int runCompare(const CompareOptions& opt) {
   for (const ChannelError& c : error.perChannel) out["channels"][c.channel] = metricsJson(c);
   out["non_finite"] = error.nonFinite;
   // A NaN error must fail, hence "<=" rather than "not >".
-  const bool passed = error.nonFinite == 0 && (!opt.maxError || value <= *opt.maxError) && (!test || test->passed);
+  const bool passed = error.nonFinite == 0 && (!opt.maxError || value <= *opt.maxError) && (!test || test->passed) &&
+                      (!equivalence || equivalence->passed);
   if (opt.maxError) out["max_error"] = *opt.maxError;
   if (test) out["test"] = testJson(*test);
+  if (equivalence) out["equivalence"] = equivalenceJson(*equivalence);
   out["passed"] = passed;
   if (!opt.heatmap.empty()) {
     writePng(test ? statisticHeatmap(test->statistic) : errorHeatmap(image, reference, metric), opt.heatmap);
@@ -128,10 +152,20 @@ void addCompareCommand(CLI::App& app, int& exitCode) {
   CLI::Option* testFlag = cmd->add_flag("--test", opt->test,
                 "Test whether the image differs from the reference by more than both images' noise "
                 "(the reference needs variance layers: render it with --variance)");
-  cmd->add_option("--alpha", opt->alpha, "Significance of --test, in [1e-12, 0.5] (default 0.01)")->needs(testFlag);
-  cmd->callback([opt, &exitCode] {
+  cmd->add_option("--block", opt->block,
+                  "With --test: pixels per side of the blocks tested (default 8; 1 tests single pixels)")
+      ->needs(testFlag);
+  CLI::Option* within = cmd->add_option(
+      "--within", opt->within,
+      "Pass when, with confidence 1 - alpha, the image's relative difference from the reference lies inside "
+      "+-D over the image and in each of 4 x 4 regions (for biased methods; the reference needs variance layers)");
+  CLI::Option* alpha =
+      cmd->add_option("--alpha", opt->alpha, "Significance of --test and --within, in [1e-12, 0.25] (default 0.01)");
+  cmd->callback([opt, &exitCode, alpha, testFlag, within] {
     // Errors exit 2 so that scripts can tell them from a comparison that failed the threshold.
     try {
+      if (alpha->count() > 0 && testFlag->count() == 0 && within->count() == 0)
+        throw std::invalid_argument("--alpha needs --test or --within");
       exitCode = runCompare(*opt);
     } catch (const std::exception& e) {
       std::cerr << "lucent compare: error: " << printable(e.what()) << "\n";

@@ -319,8 +319,8 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
     if (c.test) {
       const NoiseTest& t = *c.test;
       html << "<td data-key=\"passed\" class=\"" << (t.passed ? "passed\">passed" : "failed\">failed") << "</td>"
-           << cell("pixels_rejected", std::to_string(t.pixelsRejected))
-           << cell("fraction_rejected_at_alpha", number(double(t.pixelsRejectedAtAlpha) / double(t.pixels)))
+           << cell("blocks_rejected", std::to_string(t.blocksRejected))
+           << cell("fraction_rejected_at_alpha", number(double(t.blocksRejectedAtAlpha) / double(t.blocks)))
            << cell("relative_difference", number(t.regions[0].relativeDifference))
            << cell("z", number(t.regions[0].z));
     }
@@ -360,15 +360,15 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
             "</figcaption></figure>";
     if (c.test)
       html << "<figure>" << imageTag(c.statisticUri, w, h, "test statistic heatmap of " + c.label, " class=\"pixelated\"")
-           << colourBar(bar, "5", "per-pixel |z|")
-           << "<figcaption>Per-pixel |z| of the noise test (largest over R, G, B); magenta: infinite.</figcaption>"
+           << colourBar(bar, "5", "block |z|")
+           << "<figcaption>|z| of the noise test per block of pixels (largest over R, G, B); magenta: infinite.</figcaption>"
               "</figure>";
     html << "</div>\n";
     if (c.test) {
       const NoiseTest& t = *c.test;
-      html << "<p>Relative difference Σ(c − r) / Σr (bias) and z per region; rejected regions in red. Pixels "
-              "rejected: "
-           << t.pixelsRejected << " of " << t.pixels << "; least pixel p-value " << number(t.minPixelPValue)
+      html << "<p>Relative difference Σ(c − r) / Σr (bias) and z per region; rejected regions in red. Blocks of "
+           << t.block << " x " << t.block << " pixels rejected: " << t.blocksRejected << " of " << t.blocks
+           << "; least block p-value " << number(t.minBlockPValue)
            << ".</p>\n<table class=\"regions\">";
       const int grid = int(std::lround(std::sqrt(double(t.regions.size() - 1))));
       for (int row = 0; row < grid; ++row) {

@@ -220,61 +220,84 @@ Image rgbChannels(const Image& image) {
   return rgb;
 }
 
-NoiseTest testWithinNoise(const Image& candidate, const Image& reference, double alpha, int grid) {
+namespace {
+
+// The region a tile index stands for: 0 the whole image, k > 0 the grid's tile k - 1, row by row.
+void regionBounds(size_t k, int tiles, int w, int h, int& x0, int& y0, int& x1, int& y1) {
+  if (k == 0) {
+    x0 = 0, y0 = 0, x1 = w, y1 = h;
+    return;
+  }
+  const int tx = int(k - 1) % tiles, ty = int(k - 1) / tiles;
+  x0 = tx * w / tiles, y0 = ty * h / tiles, x1 = (tx + 1) * w / tiles, y1 = (ty + 1) * h / tiles;
+}
+
+size_t tileOf(int x, int y, int tiles, int w, int h) { return size_t(1 + (y * tiles / h) * tiles + (x * tiles / w)); }
+
+}  // namespace
+
+NoiseTest testWithinNoise(const Image& candidate, const Image& reference, double alpha, int grid, int block) {
   if (!(alpha > 0 && alpha < 1)) throw std::invalid_argument("the significance must be in (0, 1)");
+  if (block < 1) throw std::invalid_argument("the block side must be at least 1 pixel");
   requireSameSize(candidate, reference);
   const auto cv = rgbIndices(candidate, "", "the image"), rv = rgbIndices(reference, "", "the reference");
   const auto rVar = rgbIndices(reference, "variance.", "the reference", " (render it with --variance)");
   const auto cVar = rgbIndices(candidate, "variance.", "");
   NoiseTest t;
   t.alpha = alpha;
+  t.block = block;
   t.candidateHasVariance = cVar[0] >= 0 && cVar[1] >= 0 && cVar[2] >= 0;
   const int w = candidate.width(), h = candidate.height();
+  const int blocksX = (w + block - 1) / block, blocksY = (h + block - 1) / block;
   t.pixels = uint64_t(w) * uint64_t(h);
+  t.blocks = uint64_t(blocksX) * uint64_t(blocksY);
   t.statistic = Image(w, h, {"z"});
   auto pValue = [](double z) { return std::isfinite(z) ? std::erfc(std::abs(z) / std::sqrt(2.0)) : 0.0; };
   auto statistic = [](double difference, double variance) {
     if (variance > 0) return difference / std::sqrt(variance);
     return difference == 0 ? 0.0 : std::copysign(double(kInf), difference);
   };
-  // Region sums per channel: difference, variance, reference.
+  // Sums per channel: difference, variance, reference.
   struct Sums {
     std::array<double, 3> difference{}, variance{}, reference{};
   };
   const int tiles = std::max(1, grid);
   std::vector<Sums> regionSums(size_t(1 + tiles * tiles));
-  const double pixelThreshold = alpha / (2.0 * 3.0 * double(t.pixels));
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
+  const double blockThreshold = alpha / (2.0 * 3.0 * double(t.blocks));
+  for (int by = 0; by < blocksY; ++by)
+    for (int bx = 0; bx < blocksX; ++bx) {
+      Sums sums;
+      const int x0 = bx * block, y0 = by * block, x1 = std::min(w, x0 + block), y1 = std::min(h, y0 + block);
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+          Sums& tile = regionSums[tileOf(x, y, tiles, w, h)];
+          for (int c = 0; c < 3; ++c) {
+            const double d = double(candidate.at(x, y, cv[size_t(c)])) - reference.at(x, y, rv[size_t(c)]);
+            const double v = double(reference.at(x, y, rVar[size_t(c)])) +
+                             (t.candidateHasVariance ? double(candidate.at(x, y, cVar[size_t(c)])) : 0.0);
+            for (Sums* s : {&regionSums[0], &tile, &sums}) {
+              s->difference[size_t(c)] += d, s->variance[size_t(c)] += v;
+              s->reference[size_t(c)] += reference.at(x, y, rv[size_t(c)]);
+            }
+          }
+        }
       double largest = 0, minP = 1;
-      Sums& tile = regionSums[size_t(1 + (y * tiles / h) * tiles + (x * tiles / w))];
       for (int c = 0; c < 3; ++c) {
-        const double d = double(candidate.at(x, y, cv[size_t(c)])) - reference.at(x, y, rv[size_t(c)]);
-        const double v = double(reference.at(x, y, rVar[size_t(c)])) +
-                         (t.candidateHasVariance ? double(candidate.at(x, y, cVar[size_t(c)])) : 0.0);
-        const double z = statistic(d, v);
+        const double z = statistic(sums.difference[size_t(c)], sums.variance[size_t(c)]);
         largest = std::max(largest, std::abs(z));
         minP = std::min(minP, pValue(z));
-        for (Sums* s : {&regionSums[0], &tile}) {
-          s->difference[size_t(c)] += d, s->variance[size_t(c)] += v;
-          s->reference[size_t(c)] += reference.at(x, y, rv[size_t(c)]);
-        }
       }
-      t.statistic.at(x, y, 0) = float(largest);
-      t.minPixelPValue = std::min(t.minPixelPValue, minP);
-      t.pixelsRejectedAtAlpha += std::min(1.0, 3.0 * minP) < alpha;
-      t.pixelsRejected += minP < pixelThreshold;
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) t.statistic.at(x, y, 0) = float(largest);
+      t.minBlockPValue = std::min(t.minBlockPValue, minP);
+      t.blocksRejectedAtAlpha += std::min(1.0, 3.0 * minP) < alpha;
+      t.blocksRejected += minP < blockThreshold;
     }
   const double regionThreshold = alpha / (2.0 * 3.0 * double(regionSums.size()));
   bool regionsPass = true;
   for (size_t k = 0; k < regionSums.size(); ++k) {
     RegionTest r;
-    if (k == 0) {
-      r.x1 = w, r.y1 = h;
-    } else {
-      const int tx = int(k - 1) % tiles, ty = int(k - 1) / tiles;
-      r = {tx * w / tiles, ty * h / tiles, (tx + 1) * w / tiles, (ty + 1) * h / tiles};
-    }
+    regionBounds(k, tiles, w, h, r.x0, r.y0, r.x1, r.y1);
     const Sums& s = regionSums[k];
     double difference = 0, total = 0;
     for (int c = 0; c < 3; ++c) {
@@ -287,7 +310,68 @@ NoiseTest testWithinNoise(const Image& candidate, const Image& reference, double
     regionsPass = regionsPass && !r.rejected;
     t.regions.push_back(r);
   }
-  t.passed = t.pixelsRejected == 0 && regionsPass;
+  t.passed = t.blocksRejected == 0 && regionsPass;
+  return t;
+}
+
+double normalUpperQuantile(double alpha) {
+  if (!(alpha > 0 && alpha < 1)) throw std::invalid_argument("a quantile's probability must be in (0, 1)");
+  // Bisection on the upper tail 0.5 erfc(z / sqrt 2), decreasing in z: to double precision.
+  double lo = -40, hi = 40;
+  for (int i = 0; i < 200 && hi - lo > 1e-15 * std::max(1.0, std::abs(lo)); ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+EquivalenceTest testEquivalence(const Image& candidate, const Image& reference, double within, double alpha, int grid) {
+  if (!(alpha > 0 && alpha < 0.5)) throw std::invalid_argument("the significance must be in (0, 0.5)");
+  if (!(within > 0) || !std::isfinite(within)) throw std::invalid_argument("the equivalence margin must be positive");
+  requireSameSize(candidate, reference);
+  const auto cv = rgbIndices(candidate, "", "the image"), rv = rgbIndices(reference, "", "the reference");
+  const auto rVar = rgbIndices(reference, "variance.", "the reference", " (render it with --variance)");
+  const auto cVar = rgbIndices(candidate, "variance.", "");
+  EquivalenceTest t;
+  t.within = within;
+  t.alpha = alpha;
+  t.candidateHasVariance = cVar[0] >= 0 && cVar[1] >= 0 && cVar[2] >= 0;
+  const int w = candidate.width(), h = candidate.height(), tiles = std::max(1, grid);
+  struct Sums {
+    double candidate = 0, reference = 0, candidateVariance = 0, referenceVariance = 0;
+  };
+  std::vector<Sums> sums(size_t(1 + tiles * tiles));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      double c = 0, r = 0, cs = 0, rs = 0;
+      for (int k = 0; k < 3; ++k) {
+        c += candidate.at(x, y, cv[size_t(k)]), r += reference.at(x, y, rv[size_t(k)]);
+        rs += std::sqrt(std::max(0.0, double(reference.at(x, y, rVar[size_t(k)]))));
+        if (t.candidateHasVariance) cs += std::sqrt(std::max(0.0, double(candidate.at(x, y, cVar[size_t(k)]))));
+      }
+      for (Sums* s : {&sums[0], &sums[tileOf(x, y, tiles, w, h)]})
+        s->candidate += c, s->reference += r, s->candidateVariance += cs * cs, s->referenceVariance += rs * rs;
+    }
+  const double z = normalUpperQuantile(alpha);
+  t.passed = true;
+  for (size_t k = 0; k < sums.size(); ++k) {
+    EquivalenceRegion e;
+    regionBounds(k, tiles, w, h, e.x0, e.y0, e.x1, e.y1);
+    const Sums& s = sums[k];
+    if (s.reference > 0) {
+      // d = C / R - 1; var(d) = var(C) / R^2 + C^2 var(R) / R^4 (the delta method).
+      const double ratio = s.candidate / s.reference;
+      const double se = std::sqrt(s.candidateVariance + ratio * ratio * s.referenceVariance) / s.reference;
+      e.relativeDifference = ratio - 1;
+      e.low = e.relativeDifference - z * se, e.high = e.relativeDifference + z * se;
+      e.equivalent = std::isfinite(se) && e.low > -within && e.high < within;
+    } else {
+      // A black reference region: equivalent only to a black candidate.
+      e.equivalent = s.candidate == 0;
+    }
+    t.passed = t.passed && e.equivalent;
+    t.regions.push_back(e);
+  }
   return t;
 }
 

@@ -92,7 +92,7 @@ def expected_numbers(i, result):
     out = {(row, k): fmt(result["overall"][k]) for k in ("relmse", "rmse", "mae", "smape")}
     out[(row, "non_finite")] = str(result["non_finite"])
     out[(row, "passed")] = "passed" if t["passed"] else "failed"
-    out[(row, "pixels_rejected")] = str(t["pixels_rejected"])
+    out[(row, "blocks_rejected")] = str(t["blocks_rejected"])
     out[(row, "fraction_rejected_at_alpha")] = fmt(t["fraction_rejected_at_alpha"])
     out[(row, "relative_difference")] = fmt(t["regions"][0]["relative_difference"])
     out[(row, "z")] = fmt(t["regions"][0]["z"])

@@ -371,35 +371,85 @@ Image noisyImage(int w, int h, const std::function<float(int, int, int)>& mean, 
 }  // namespace
 
 TEST_CASE("testWithinNoise: the reference plus noise passes, a bias below a pixel's noise fails", "[compare]") {
-  // Gaussian noise of a known variance: under no difference each pixel's smallest-of-three p-value,
-  // times 3, falls below alpha for at most alpha of the pixels (Bonferroni; about 0.01 x 16,384 =
-  // 164, binomial standard deviation 13); a bias of 3% of the mean with noise of 10% per pixel is
-  // invisible in one pixel (z 0.2) and plain in the whole image's sum (z about 27).
+  // Gaussian noise of a known variance, tested pixel by pixel (blocks of 1): under no difference
+  // each pixel's smallest-of-three p-value, times 3, falls below alpha for at most alpha of the
+  // pixels (Bonferroni; about 0.01 x 16,384 = 164, binomial standard deviation 13); a bias of 3% of
+  // the mean with noise of 10% per pixel is invisible in one pixel (z 0.3) and plain in the whole
+  // image's sum (z about 27).
   const int w = 128, h = 128;
   auto mean = [](int x, int y, int c) { return 1.0f + 0.5f * std::sin(0.1f * float(x + 2 * y + c)); };
   const Image reference = noisyImage(w, h, mean, 0.005f, 1);
   const Image candidate = noisyImage(w, h, mean, 0.005f, 2);
-  const NoiseTest same = testWithinNoise(candidate, reference, 0.01);
-  INFO("rejected at alpha: " << same.pixelsRejectedAtAlpha << ", whole image z " << same.regions[0].z);
+  const NoiseTest same = testWithinNoise(candidate, reference, 0.01, 4, 1);
+  INFO("rejected at alpha: " << same.blocksRejectedAtAlpha << ", whole image z " << same.regions[0].z);
   CHECK(same.passed);
-  CHECK(same.pixelsRejected == 0);
-  CHECK(same.pixelsRejectedAtAlpha > 164 - 4 * 13);
-  CHECK(same.pixelsRejectedAtAlpha < 164 + 4 * 13);
+  CHECK(same.blocks == same.pixels);
+  CHECK(same.blocksRejected == 0);
+  CHECK(same.blocksRejectedAtAlpha > 164 - 4 * 13);
+  CHECK(same.blocksRejectedAtAlpha < 164 + 4 * 13);
+  // Blocks of 8 x 8 (the default): 256 blocks, about 2.6 below alpha (standard deviation 1.6).
+  const NoiseTest blocks = testWithinNoise(candidate, reference, 0.01);
+  CHECK(blocks.passed);
+  CHECK(blocks.blocks == 256);
+  CHECK(blocks.blocksRejectedAtAlpha < 2.6 + 4 * 1.6);
   REQUIRE(same.regions.size() == 17);
   CHECK(same.regions[0].x1 == w);
   CHECK(same.regions[16].x0 == 96);
   CHECK(std::abs(same.regions[0].relativeDifference) < 0.001);
   const Image biased = noisyImage(w, h, [&](int x, int y, int c) { return 1.03f * mean(x, y, c); }, 0.005f, 2);
-  const NoiseTest off = testWithinNoise(biased, reference, 0.01);
+  const NoiseTest off = testWithinNoise(biased, reference, 0.01, 4, 1);
   CHECK_FALSE(off.passed);
-  CHECK(off.pixelsRejected == 0);  // no single pixel shows it
+  CHECK(off.blocksRejected == 0);  // no single pixel shows it
   CHECK(off.regions[0].rejected);
   CHECK(off.regions[0].relativeDifference == Approx(0.03).margin(0.003));
   // The candidate's own variance counts: without it the same candidate's z grow by sqrt(2).
   CHECK_THROWS_WITH(testWithinNoise(candidate, rgbChannels(reference), 0.01), Catch::Contains("--variance"));
-  const NoiseTest withoutVariance = testWithinNoise(rgbChannels(candidate), reference, 0.01);
+  const NoiseTest withoutVariance = testWithinNoise(rgbChannels(candidate), reference, 0.01, 4, 1);
   CHECK_FALSE(withoutVariance.candidateHasVariance);
-  CHECK(withoutVariance.pixelsRejectedAtAlpha > same.pixelsRejectedAtAlpha);
+  CHECK(withoutVariance.blocksRejectedAtAlpha > same.blocksRejectedAtAlpha);
+}
+
+TEST_CASE("testEquivalence: per region, an interval from both images' variance inside the margin", "[compare]") {
+  // Gaussian noise of variance 0.001 per channel about a mean near 1, candidate and reference alike,
+  // channels independent. A region of 32 x 32 pixels then has the relative standard error 0.08%;
+  // the test bounds each pixel's sum of channels by full correlation, a variance 3 times the true
+  // one, so its intervals are d +- 2.33 x 0.14%, wider than need be. The candidate scaled by 1.01
+  // is within 0.02 and not within 0.005; the unscaled one within 0.02; and over 20 seeds the
+  // intervals of all 17 regions cover the true bias 0.01 at least 1 - 2 alpha of the time (336 of
+  // 340 expected at the least, 4 standard deviations of the binomial below: 325).
+  const int w = 128, h = 128;
+  auto mean = [](int x, int y, int c) { return 1.0f + 0.5f * std::sin(0.1f * float(x + 2 * y + c)); };
+  auto scaled = [&](int x, int y, int c) { return 1.01f * mean(x, y, c); };
+  const Image reference = noisyImage(w, h, mean, 0.001f, 1);
+  const EquivalenceTest same = testEquivalence(noisyImage(w, h, mean, 0.001f, 2), reference, 0.02, 0.01);
+  CHECK(same.passed);
+  REQUIRE(same.regions.size() == 17);
+  CHECK(same.regions[16].x0 == 96);
+  int covered = 0, intervals = 0;
+  double widest = 0;
+  for (uint64_t seed = 2; seed < 22; ++seed) {
+    const Image candidate = noisyImage(w, h, scaled, 0.001f, seed);
+    const EquivalenceTest tight = testEquivalence(candidate, reference, 0.005, 0.01);
+    const EquivalenceTest loose = testEquivalence(candidate, reference, 0.02, 0.01);
+    INFO("seed " << seed << ": whole image " << loose.regions[0].relativeDifference << " in [" << loose.regions[0].low
+                 << ", " << loose.regions[0].high << "]");
+    CHECK_FALSE(tight.passed);
+    CHECK(loose.passed);
+    for (const EquivalenceRegion& r : loose.regions) {
+      covered += r.low < 0.01 && 0.01 < r.high;
+      ++intervals;
+      widest = std::max(widest, r.high - r.low);
+    }
+  }
+  INFO(covered << " of " << intervals << " intervals cover 0.01; the widest " << widest);
+  CHECK(covered >= 325);
+  CHECK(widest < 2 * 2.33 * 0.0015);  // each region's interval: about 2 x 2.33 x 0.14%
+  // Bad input: the reference's variance is needed, the margin and the significance checked.
+  CHECK_THROWS_WITH(testEquivalence(reference, rgbChannels(reference), 0.02, 0.01), Catch::Contains("--variance"));
+  CHECK_THROWS(testEquivalence(reference, reference, 0, 0.01));
+  CHECK_THROWS(testEquivalence(reference, reference, 0.02, 0.5));
+  CHECK(normalUpperQuantile(0.01) == Approx(2.3263478740).epsilon(1e-9));
+  CHECK(normalUpperQuantile(0.5) == Approx(0).margin(1e-12));
 }
 
 TEST_CASE("lucent compare --test: a path-traced candidate passes its reference, scaled by 1.01 it fails", "[compare][cli]") {
@@ -437,7 +487,29 @@ TEST_CASE("lucent compare --test: a path-traced candidate passes its reference, 
   CHECK(failed["test"]["passed"] == false);
   CHECK(failed["test"]["regions"][0]["rejected"] == true);
   CHECK(failed["test"]["regions"][0]["relative_difference"].get<double>() == Approx(0.01).margin(0.004));
-  // A reference without variance layers is bad input (exit 2); --alpha needs --test.
+  // --within: the candidate is within 0.03 of the reference (its regions' intervals reach 2.3%: at
+  // 64 x 64 and 1,024 samples a region of 16 x 16 pixels in the blocks' shadow has a relative
+  // standard error of 0.56% per image), the scaled one not within 0.005; a photon map is biased
+  // by design: it fails --test, and --within tells by how much (the whole image 4.4% dark, the
+  // shadow of the tall block 16% bright): within 0.2, not within 0.1.
+  const auto within = [&](const std::string& image, const char* margin) {
+    const test::CliRun r = runLucent("compare " + quoted(image) + " " + quoted(dir / "reference.exr") + " --within " + margin);
+    INFO(r.output);
+    REQUIRE(r.status <= 1);
+    const auto out = nlohmann::json::parse(r.output);
+    CHECK(out["equivalence"]["passed"] == (r.status == 0));
+    CHECK(out["equivalence"]["regions"].size() == 17);
+    return r.status == 0;
+  };
+  CHECK(within(dir / "candidate.exr", "0.03"));
+  CHECK_FALSE(within(dir / "scaled.exr", "0.005"));
+  const test::CliRun pmfg = runLucent("render " + quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json") +
+                                      " --method pmfg --resolution 64x64 --quiet -o " + quoted(dir / "pmfg.exr"));
+  REQUIRE(pmfg.status == 0);
+  CHECK(runLucent("compare " + quoted(dir / "pmfg.exr") + " " + quoted(dir / "reference.exr") + " --test").status == 1);
+  CHECK(within(dir / "pmfg.exr", "0.2"));
+  CHECK_FALSE(within(dir / "pmfg.exr", "0.1"));
+  // A reference without variance layers is bad input (exit 2); --alpha needs --test or --within.
   CHECK(runLucent("compare " + quoted(dir / "candidate.exr") + " " + quoted(dir / "z.png") + " --test").status == 2);
   CHECK(runLucent("compare " + quoted(dir / "candidate.exr") + " " + quoted(dir / "reference.exr") + " --alpha 0.05").status != 0);
   // --variance asks for independent samples.

@@ -226,7 +226,7 @@ TEST_CASE("The exported Cornell box renders as the OBJ scene within noise once L
   const Image reference = render("cornell-box.json", 1);
   const NoiseTest lambertian = testWithinNoise(render("gltf/cornell-box-diffuse.json", 2), reference, 0.01);
   CHECK(lambertian.passed);
-  CHECK(lambertian.pixelsRejected == 0);
+  CHECK(lambertian.blocksRejected == 0);
   // As exported: F0 0 and F90 1 (Blender's Specular 0), whose lobe shows near the walls' grazing
   // views, and a doubleSided light whose back face's light escapes from the 0.8 mm gap below the
   // ceiling (the image 2.4% brighter).
