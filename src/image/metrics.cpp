@@ -234,19 +234,35 @@ void regionBounds(size_t k, int tiles, int w, int h, int& x0, int& y0, int& x1, 
 
 size_t tileOf(int x, int y, int tiles, int w, int h) { return size_t(1 + (y * tiles / h) * tiles + (x * tiles / w)); }
 
+// The statistical tests' channels: each image's R, G, B and variance layers, the reference's
+// required (a candidate without them counts as exact).
+struct TestChannels {
+  std::array<int, 3> candidate, reference, candidateVariance, referenceVariance;
+  bool candidateHasVariance = false;
+};
+TestChannels testChannels(const Image& candidate, const Image& reference) {
+  requireSameSize(candidate, reference);
+  TestChannels c;
+  c.candidate = rgbIndices(candidate, "", "the image");
+  c.reference = rgbIndices(reference, "", "the reference");
+  c.referenceVariance = rgbIndices(reference, "variance.", "the reference", " (render it with --variance)");
+  c.candidateVariance = rgbIndices(candidate, "variance.", "");
+  c.candidateHasVariance = c.candidateVariance[0] >= 0 && c.candidateVariance[1] >= 0 && c.candidateVariance[2] >= 0;
+  return c;
+}
+
 }  // namespace
 
 NoiseTest testWithinNoise(const Image& candidate, const Image& reference, double alpha, int grid, int block) {
   if (!(alpha > 0 && alpha < 1)) throw std::invalid_argument("the significance must be in (0, 1)");
   if (block < 1) throw std::invalid_argument("the block side must be at least 1 pixel");
-  requireSameSize(candidate, reference);
-  const auto cv = rgbIndices(candidate, "", "the image"), rv = rgbIndices(reference, "", "the reference");
-  const auto rVar = rgbIndices(reference, "variance.", "the reference", " (render it with --variance)");
-  const auto cVar = rgbIndices(candidate, "variance.", "");
+  const TestChannels channels = testChannels(candidate, reference);
+  const auto &cv = channels.candidate, &rv = channels.reference;
+  const auto &cVar = channels.candidateVariance, &rVar = channels.referenceVariance;
   NoiseTest t;
   t.alpha = alpha;
   t.block = block;
-  t.candidateHasVariance = cVar[0] >= 0 && cVar[1] >= 0 && cVar[2] >= 0;
+  t.candidateHasVariance = channels.candidateHasVariance;
   const int w = candidate.width(), h = candidate.height();
   const int blocksX = (w + block - 1) / block, blocksY = (h + block - 1) / block;
   t.pixels = uint64_t(w) * uint64_t(h);
@@ -328,14 +344,13 @@ double normalUpperQuantile(double alpha) {
 EquivalenceTest testEquivalence(const Image& candidate, const Image& reference, double within, double alpha, int grid) {
   if (!(alpha > 0 && alpha < 0.5)) throw std::invalid_argument("the significance must be in (0, 0.5)");
   if (!(within > 0) || !std::isfinite(within)) throw std::invalid_argument("the equivalence margin must be positive");
-  requireSameSize(candidate, reference);
-  const auto cv = rgbIndices(candidate, "", "the image"), rv = rgbIndices(reference, "", "the reference");
-  const auto rVar = rgbIndices(reference, "variance.", "the reference", " (render it with --variance)");
-  const auto cVar = rgbIndices(candidate, "variance.", "");
+  const TestChannels channels = testChannels(candidate, reference);
+  const auto &cv = channels.candidate, &rv = channels.reference;
+  const auto &cVar = channels.candidateVariance, &rVar = channels.referenceVariance;
   EquivalenceTest t;
   t.within = within;
   t.alpha = alpha;
-  t.candidateHasVariance = cVar[0] >= 0 && cVar[1] >= 0 && cVar[2] >= 0;
+  t.candidateHasVariance = channels.candidateHasVariance;
   const int w = candidate.width(), h = candidate.height(), tiles = std::max(1, grid);
   struct Sums {
     double candidate = 0, reference = 0, candidateVariance = 0, referenceVariance = 0;
