@@ -87,6 +87,7 @@ const std::vector<BadCase> kBadCases = {
     {"material-energy", {"material-energy/scene.json", "materials.floor:", "Kd + Ks exceeds 1"}},
     {"material-unused", {"material-unused/scene.json", "materials.ceiling: no mesh uses"}},
     {"material-unknown-type", {"material-unknown-type/scene.json", "materials.floor.type:"}},
+    {"material-double-sided-not-bool", {"material-double-sided-not-bool/scene.json", "materials.floor.double_sided: expected true or false"}},
     {"material-glass-without-ni", {"material-glass-without-ni/scene.json", "materials.floor", "glass needs an index"}},
     // lights
     {"no-light", {"no-light/scene.json", "no light"}},
@@ -416,6 +417,8 @@ TEST_CASE("loader: MTL entries are classified as in docs/scene-format.md, and sc
   checkRgb(material("forced").ks, Rgb(0.0f));
   checkRgb(material("overridden").kd, {0.2f, 0.3f, 0.4f});  // JSON Kd replaces the MTL's 0.5
   checkRgb(material("light").ke, Rgb(1.0f));
+  CHECK(material("light").emitsBackFace == 1);  // "double_sided": true in JSON
+  CHECK(material("matte").emitsBackFace == 0);  // not an emitter
   CHECK(scene.lights.size() == 1);
 }
 
