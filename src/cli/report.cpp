@@ -1,5 +1,5 @@
 // lucent report REFERENCE CANDIDATE... -o REPORT.html [--label NAME]... [--seconds S]...
-//               [--alpha A] [--exposure STOPS]
+//               [--alpha A] [--within D] [--exposure STOPS]
 // Writes one self-contained HTML page (images embedded as PNG data, no outside resources)
 // comparing each candidate with the reference: the images side by side and as an A/B flip at
 // pixel zoom, the relMSE heatmap and the noise test's |z| heatmap with colour bars, the numbers of
@@ -32,6 +32,7 @@ struct ReportOptions {
   std::vector<std::string> candidates, labels;
   std::vector<double> seconds;
   double alpha = 0.01, exposure = 0;
+  std::optional<double> within;
 };
 
 std::string escapeHtml(const std::string& text) {
@@ -118,6 +119,7 @@ struct Candidate {
   ImageMetadata metadata;
   ImageError error;
   std::optional<NoiseTest> test;
+  std::optional<EquivalenceTest> equivalence;
   double errorScale = 0;
   std::string imageUri, errorUri, statisticUri;
 };
@@ -297,7 +299,7 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
   if (tested)
     html << "<p>Noise test (<code>lucent compare --test</code>): per pixel and channel Welch's z = (c − r) / "
             "√(var<sub>c</sub> + var<sub>r</sub>), and the same for the whole image and a 4 × 4 grid of regions; "
-            "an image passes when no pixel and no region is rejected at α = "
+            "an image passes when no block of pixels and no region is rejected at α = "
          << number(opt.alpha) << " with a Bonferroni correction.</p>\n";
   else
     html << "<p class=\"note\" id=\"untested\">The reference has no variance layers (render it with "
@@ -307,8 +309,10 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
   html << "<h2>Summary</h2>\n<table id=\"summary\"><tr><th>Candidate</th><th>Seconds</th><th>relMSE</th><th>RMSE</th>"
           "<th>MAE</th><th>SMAPE</th><th>Non-finite</th>";
   if (tested)
-    html << "<th>Within noise</th><th>Pixels rejected</th><th>Fraction at α</th><th>Bias (whole image)</th>"
+    html << "<th>Within noise</th><th>Blocks rejected</th><th>Fraction at α</th><th>Bias (whole image)</th>"
             "<th>z (whole image)</th>";
+  if (tested && opt.within)
+    html << "<th>Within ±" << number(*opt.within) << "</th><th>Interval (whole image)</th>";
   html << "</tr>\n";
   for (size_t i = 0; i < candidates.size(); ++i) {
     const Candidate& c = candidates[i];
@@ -323,6 +327,12 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
            << cell("fraction_rejected_at_alpha", number(double(t.blocksRejectedAtAlpha) / double(t.blocks)))
            << cell("relative_difference", number(t.regions[0].relativeDifference))
            << cell("z", number(t.regions[0].z));
+    }
+    if (c.equivalence) {
+      const EquivalenceTest& e = *c.equivalence;
+      html << "<td data-key=\"equivalent\" class=\"" << (e.passed ? "passed\">passed" : "failed\">failed") << "</td><td>"
+           << "<span data-key=\"interval_low\">" << number(e.regions[0].low) << "</span> to <span data-key=\"interval_high\">"
+           << number(e.regions[0].high) << "</span></td>";
     }
     html << "</tr>\n";
   }
@@ -366,7 +376,9 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
     html << "</div>\n";
     if (c.test) {
       const NoiseTest& t = *c.test;
-      html << "<p>Relative difference Σ(c − r) / Σr (bias) and z per region; rejected regions in red. Blocks of "
+      html << "<p>Relative difference Σ(c − r) / Σr (bias) and z per region; rejected regions in red"
+           << (c.equivalence ? "; with --within, its (1 − 2α) interval, red where it leaves ±" + number(*opt.within) : "")
+           << ". Blocks of "
            << t.block << " x " << t.block << " pixels rejected: " << t.blocksRejected << " of " << t.blocks
            << "; least block p-value " << number(t.minBlockPValue)
            << ".</p>\n<table class=\"regions\">";
@@ -378,7 +390,14 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
           const RegionTest& r = t.regions[k];
           html << "<td" << (r.rejected ? " class=\"rejected\"" : "") << " data-key=\"region-" << k << "\">"
                << "<span data-key=\"region-" << k << "-relative_difference\">" << number(r.relativeDifference)
-               << "</span><br>z <span data-key=\"region-" << k << "-z\">" << number(r.z) << "</span></td>";
+               << "</span><br>z <span data-key=\"region-" << k << "-z\">" << number(r.z) << "</span>";
+          if (c.equivalence) {
+            const EquivalenceRegion& e = c.equivalence->regions[k];
+            html << "<br><span class=\"" << (e.equivalent ? "passed" : "failed") << "\">[<span data-key=\"region-" << k
+                 << "-interval_low\">" << number(e.low) << "</span>, <span data-key=\"region-" << k
+                 << "-interval_high\">" << number(e.high) << "</span>]</span>";
+          }
+          html << "</td>";
         }
         html << "</tr>";
       }
@@ -393,7 +412,9 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
 int runReport(const ReportOptions& opt) {
   // CLI11's range checks let NaN through.
   // Ranges checked here (CLI11's range checks print their bounds with 309 digits and let NaN through).
-  if (!(opt.alpha >= 1e-12 && opt.alpha <= 0.5)) throw std::invalid_argument("--alpha must lie in [1e-12, 0.5]");
+  if (!(opt.alpha >= 1e-12 && opt.alpha <= 0.25)) throw std::invalid_argument("--alpha must lie in [1e-12, 0.25]");
+  if (opt.within && !(std::isfinite(*opt.within) && *opt.within > 0 && *opt.within <= 10))
+    throw std::invalid_argument("--within must lie in (0, 10]");
   if (!(opt.exposure >= -30 && opt.exposure <= 30)) throw std::invalid_argument("--exposure must lie in [-30, 30]");
   for (const double s : opt.seconds)
     if (!(std::isfinite(s) && s > 0)) throw std::invalid_argument("--seconds must be positive and finite");
@@ -429,6 +450,7 @@ int runReport(const ReportOptions& opt) {
     const Image image = rgbChannels(file);
     try {
       if (tested) c.test = testWithinNoise(file, referenceFile, opt.alpha);
+      if (tested && opt.within) c.equivalence = testEquivalence(file, referenceFile, *opt.within, opt.alpha);
       c.error = compareImages(image, reference);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("'" + c.path + "' vs '" + opt.reference + "': " + e.what());
@@ -455,6 +477,7 @@ int runReport(const ReportOptions& opt) {
     nlohmann::ordered_json entry = {{"label", c.label}, {"image", c.path}, {"relmse", c.error.overall.relmse}};
     if (c.seconds) entry["seconds"] = *c.seconds;
     if (c.test) entry["passed"] = c.test->passed;
+    if (c.equivalence) entry["equivalent"] = c.equivalence->passed;
     line["candidates"].push_back(entry);
   }
   std::cout << line.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << std::endl;
@@ -476,7 +499,9 @@ void addReportCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("--seconds", opt->seconds,
                   "Seconds per candidate, in order, for the speed-accuracy chart (default: the "
                   "lucent:render_seconds a Lucent render stores)");
-  cmd->add_option("--alpha", opt->alpha, "Significance of the noise test, in [1e-12, 0.5] (default 0.01)");
+  cmd->add_option("--alpha", opt->alpha, "Significance of the noise test and --within, in [1e-12, 0.25] (default 0.01)");
+  cmd->add_option("--within", opt->within,
+                  "Also show compare --within D's verdict: each region's relative difference with its interval");
   cmd->add_option("--exposure", opt->exposure, "Exposure of the shown images, in stops, in [-30, 30] (default 0)");
   cmd->callback([opt, &exitCode] {
     try {

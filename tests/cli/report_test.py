@@ -99,6 +99,13 @@ def expected_numbers(i, result):
     for k, region in enumerate(t["regions"][1:], start=1):
         out[("section-%d" % i, "region-%d-relative_difference" % k)] = fmt(region["relative_difference"])
         out[("section-%d" % i, "region-%d-z" % k)] = fmt(region["z"])
+    e = result["equivalence"]
+    out[(row, "equivalent")] = "passed" if e["passed"] else "failed"
+    out[(row, "interval_low")] = fmt(e["regions"][0]["interval"][0])
+    out[(row, "interval_high")] = fmt(e["regions"][0]["interval"][1])
+    for k, region in enumerate(e["regions"][1:], start=1):
+        out[("section-%d" % i, "region-%d-interval_low" % k)] = fmt(region["interval"][0])
+        out[("section-%d" % i, "region-%d-interval_high" % k)] = fmt(region["interval"][1])
     return out
 
 
@@ -138,16 +145,18 @@ try:
     candidates = [p("pt.exr"), p("micro.exr"), p("pt.png")]
     labels = ["path tracer <64 spp>", "micro", "8-bit PNG"]
     r = run([lucent, "report", p("reference.exr")] + candidates + sum([["--label", l] for l in labels], []) +
-            ["-o", p("report.html")])
+            ["--within", "0.05", "-o", p("report.html")])
     check(r.returncode == 0, "report failed: " + r.stderr)
     summary = json.loads(r.stdout)
     results = []
     for c in candidates:
-        r = run([lucent, "compare", "--test", c, p("reference.exr")])
+        r = run([lucent, "compare", "--test", "--within", "0.05", c, p("reference.exr")])
         check(r.returncode in (0, 1), "compare failed: " + r.stderr)
         results.append(json.loads(r.stdout))
-    check([c["passed"] for c in summary["candidates"]] == [x["passed"] for x in results],
+    check([c["passed"] for c in summary["candidates"]] == [x["test"]["passed"] for x in results],
           "the report's JSON verdicts differ from compare's")
+    check([c["equivalent"] for c in summary["candidates"]] == [x["equivalence"]["passed"] for x in results],
+          "the report's JSON equivalence verdicts differ from compare's")
 
     with open(p("report.html"), encoding="utf-8") as f:
         text = f.read()
