@@ -279,8 +279,10 @@ nlohmann::json parseSceneJson(const std::string& text, const std::string& path) 
   // The name of the value that starts now in the innermost open container.
   const auto nameOfNext = [&]() -> std::string {
     if (open.empty()) return "";
-    if (open.back().array) return "[" + std::to_string(open.back().elements++) + "]";
-    return (open.size() > 1 ? "." : "") + excerpt(pendingKey);
+    // Appended rather than "[" + ...: GCC 12 warns falsely of overlapping copies there (-Wrestrict).
+    std::string name = open.back().array ? "[" : open.size() > 1 ? "." : "";
+    if (open.back().array) return name.append(std::to_string(open.back().elements++)).append("]");
+    return name.append(excerpt(pendingKey));
   };
   const nlohmann::json::parser_callback_t checkKeys = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& value) {
     using Event = nlohmann::json::parse_event_t;
