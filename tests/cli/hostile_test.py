@@ -491,7 +491,7 @@ def test_a_texture_error_cites_the_map_kd_line(work):
     (["bogus"], 1, "unknown command 'bogus'"),
     (["compare", "a.exr", "b.exr", "--max-error", "-1"], 2, "--max-error must be a finite number of at least 0"),
     (["report", "a.exr", "b.exr", "-o", "r.html", "--seconds", "-1"], 1, "--seconds must be positive"),
-    (["report", "a.exr", "b.exr", "-o", "r.html", "--alpha", "1"], 1, "--alpha must lie in [1e-12, 0.5]"),
+    (["report", "a.exr", "b.exr", "-o", "r.html", "--alpha", "1"], 1, "--alpha must lie in [1e-12, 0.25]"),
     (["render", "\x1b[31mx.json", "-o", "o.exr"], 1, "\\x1b[31mx.json"),
 ])
 def test_command_line_errors_are_short_and_named(work, args, status, words):
