@@ -479,6 +479,15 @@ TEST_CASE("lucent compare --test: a path-traced candidate passes its reference, 
   const auto passed = nlohmann::json::parse(pass.output);
   CHECK(passed["test"]["passed"] == true);
   CHECK(passed["test"]["fraction_rejected_at_alpha"].get<double>() < 0.03);
+  CHECK(passed["test"]["block"] == 8);
+  CHECK(passed["test"]["blocks"] == 64);  // 64 x 64 pixels in blocks of 8 x 8
+  const test::CliRun pixels = runLucent("compare " + quoted(dir / "candidate.exr") + " " + quoted(dir / "reference.exr") +
+                                        " --test --block 1");
+  INFO(pixels.output);
+  REQUIRE(pixels.status <= 1);
+  CHECK(nlohmann::json::parse(pixels.output)["test"]["blocks"] == 4096);
+  CHECK(runLucent("compare " + quoted(dir / "candidate.exr") + " " + quoted(dir / "reference.exr") + " --test --block 0")
+            .status == 2);
   CHECK(std::filesystem::exists(dir / "z.png"));
   const test::CliRun fail = runLucent("compare " + quoted(dir / "scaled.exr") + " " + quoted(dir / "reference.exr") + " --test");
   INFO(fail.output);
