@@ -111,7 +111,7 @@ TEST_CASE("A render split by crops and sample ranges merges into the single rend
         const std::string out = dir / ("part" + std::to_string(part++) + ".exr");
         renderPart(args + " --crop " + crop + " --samples " + samples, out);
         REQUIRE(metadata(out, "lucent:crop") == crop);
-        films += " " + quoted(fs::path(out).replace_extension(".film").string());
+        films.append(" ").append(quoted(fs::path(out).replace_extension(".film").string()));
       }
     const test::CliRun merge = runLucent("merge" + films + " -o " + quoted(dir / "merged.exr"));
     INFO(merge.output);
@@ -135,7 +135,7 @@ TEST_CASE("render --part divides rows and samples into N parts that merge into t
     for (int k = 0; k < 3; ++k) {
       const std::string out = dir / (axis + std::to_string(k) + ".exr");
       renderPart(args + " --part " + axis + ":" + std::to_string(k) + "/3", out);
-      films += " " + quoted(fs::path(out).replace_extension(".film").string());
+      films.append(" ").append(quoted(fs::path(out).replace_extension(".film").string()));
       // 17 rows: 5, 6, 6; 7 samples: 2, 2, 3.
       const std::string expected = axis == "rows" ? std::vector<std::string>{"0,0,24,5", "0,5,24,11", "0,11,24,17"}[k]
                                                   : std::vector<std::string>{"0:2", "2:2", "4:3"}[k];

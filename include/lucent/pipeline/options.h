@@ -127,9 +127,11 @@ class OptionTable {
               o.*field = value;
               return;
             }
-          std::string list;
-          for (const std::string& c : choices) list += (list.empty() ? "" : ", ") + c;
-          throw OptionError(n, "'" + std::string(text) + "' is not one of " + list);
+          // Appended piece by piece: "'" + a temporary makes GCC 12 warn falsely (-Wrestrict).
+          std::string message = "'";
+          message.append(text).append("' is not one of ");
+          for (size_t k = 0; k < choices.size(); ++k) message.append(k ? ", " : "").append(choices[k]);
+          throw OptionError(n, message);
         },
         [=](const Options& o) {
           for (const auto& [t, value] : values)
