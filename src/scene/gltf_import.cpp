@@ -656,10 +656,8 @@ struct NodeWalk {
     }
     // The normal texture's own coordinates: its set, transformed (a rotation turns the frame).
     const std::vector<Vec2>& set = normalTexture.set == 0 ? scene.texcoords : scene.texcoords1;
-    const auto& m = normalTexture.transform;
     const auto uvOf = [&](uint32_t k) {
-      const Vec2 uv = set[k];
-      return normalTexture.transformed ? Vec2{m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]} : uv;
+      return normalTexture.transformed ? transformedUv(normalTexture.transform.data(), set[k]) : set[k];
     };
     std::vector<Vec3> bitangents(vertices, Vec3{0, 0, 0});
     for (size_t t = 0; t + 2 < corners.size(); t += 3) {

@@ -77,6 +77,11 @@ struct Texture {
 };
 static_assert(sizeof(Texture) == 56, "Texture is a fixed-size record shared with GPU backends");
 
+// Texture coordinates uv moved by a Texture::transform m.
+inline Vec2 transformedUv(const float* m, Vec2 uv) {
+  return {m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]};
+}
+
 enum class LightType : uint32_t { Triangle = 0, Point = 1, Directional = 2, Environment = 3, Spot = 4 };
 
 // One entry of the light list that next-event estimation chooses from.

@@ -47,9 +47,7 @@ inline Vec2 textureUv(const Scene& scene, const Texture& t, const SurfacePoint& 
   const Vec2 t0 = set[v[0]], t1 = set[v[1]], t2 = set[v[2]];
   const float b0 = 1.0f - sp.b1 - sp.b2;
   const Vec2 uv{t0.x * b0 + t1.x * sp.b1 + t2.x * sp.b2, t0.y * b0 + t1.y * sp.b1 + t2.y * sp.b2};
-  if (t.transformed == 0) return uv;
-  const float* m = t.transform;
-  return {m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]};
+  return t.transformed == 0 ? uv : transformedUv(t.transform, uv);
 }
 
 // Texture `index` of the scene (>= 0) read at a surface point, bilinearly, decoded by `decode`.
