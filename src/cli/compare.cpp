@@ -1,10 +1,12 @@
-// lucent compare IMAGE REFERENCE [--metric rmse|relmse|smape|mae] [--max-error X]
+// lucent compare IMAGE REFERENCE [--metric rmse|relmse|smape|mae|flip] [--max-error X]
 //                [--test [--block N]] [--within D] [--alpha A] [--heatmap OUT.png]
+//                [--ppd P] [--start-exposure S] [--stop-exposure S]
 // Exit status: 0 passed (or no threshold), 1 the chosen metric exceeds --max-error, the image
 // has NaN or infinite values, --test finds it differs from the reference by more than their
 // noise, or --within cannot show it within D of the reference; 2 error (the reference's NaN or
 // infinite values among them).
-// 8-bit images (PNG, JPEG) are decoded from sRGB to linear before they are compared.
+// 8-bit images (PNG, JPEG) are decoded from sRGB to linear before they are compared. FLIP is
+// LDR-FLIP where both images are 8-bit sRGB files, HDR-FLIP otherwise.
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -15,6 +17,7 @@
 #include "cli/commands.h"
 #include "cli/output_paths.h"
 #include "lucent/core/text.h"
+#include "lucent/image/flip.h"
 #include "lucent/image/metrics.h"
 
 namespace lucent::cli {
@@ -23,7 +26,8 @@ namespace {
 
 struct CompareOptions {
   std::string image, reference, metric = "relmse", heatmap;
-  std::optional<double> maxError, within;
+  std::optional<double> maxError, within, startExposure, stopExposure;
+  double pixelsPerDegree = kFlipPixelsPerDegree;
   bool test = false;
   int block = 8;
   double alpha = 0.01;
@@ -68,6 +72,17 @@ nlohmann::ordered_json metricsJson(const ChannelError& e) {
   return {{"rmse", e.rmse}, {"mae", e.mae}, {"relmse", e.relmse}, {"smape", e.smape}};
 }
 
+nlohmann::ordered_json flipJson(const FlipResult& f, double pixelsPerDegree) {
+  nlohmann::ordered_json out;
+  out["mean"] = f.mean;
+  out["weighted_median"] = f.weightedMedian;
+  out["weighted_quartiles"] = {f.weightedQuartile1, f.weightedQuartile3};
+  out["range"] = f.hdr ? "hdr" : "ldr";
+  out["pixels_per_degree"] = pixelsPerDegree;
+  if (f.hdr) out["exposures"] = {{"start", f.startExposure}, {"stop", f.stopExposure}, {"count", f.exposures}};
+  return out;
+}
+
 int runCompare(const CompareOptions& opt) {
   // Ranges checked here (CLI11's range checks print their bounds with 309 digits and let NaN
   // through, which no error would ever exceed).
@@ -77,8 +92,15 @@ int runCompare(const CompareOptions& opt) {
   if (opt.block < 1 || opt.block > 4096) throw std::invalid_argument("--block must lie in [1, 4096]");
   if (opt.within && !(std::isfinite(*opt.within) && *opt.within > 0 && *opt.within <= 10))
     throw std::invalid_argument("--within must lie in (0, 10]");
+  if (!(opt.pixelsPerDegree >= 1 && opt.pixelsPerDegree <= 1000))
+    throw std::invalid_argument("--ppd must lie in [1, 1000]");
+  for (const auto& [name, value] : {std::pair{"--start-exposure", opt.startExposure}, {"--stop-exposure", opt.stopExposure}})
+    if (value && !(std::abs(*value) <= 100)) throw std::invalid_argument(std::string(name) + " must lie in [-100, 100]");
+  if (opt.startExposure && opt.stopExposure && *opt.startExposure > *opt.stopExposure)
+    throw std::invalid_argument("--start-exposure must not exceed --stop-exposure");
   const bool statistical = opt.test || opt.within.has_value();
-  const ErrorMetric metric = parseErrorMetric(opt.metric);
+  const bool flip = opt.metric == "flip";
+  const ErrorMetric metric = flip ? ErrorMetric::RelMse : parseErrorMetric(opt.metric);
   if (!opt.heatmap.empty()) checkOutputFile(opt.heatmap, ".png", "--heatmap", {opt.image, opt.reference});
   // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
   {
@@ -89,12 +111,22 @@ int runCompare(const CompareOptions& opt) {
       throw std::invalid_argument("'" + opt.image + "' vs '" + opt.reference + "': " + e.what());
     }
   }
-  const Image candidateFile = readLinearImage(opt.image);
-  const Image referenceFile = readLinearImage(opt.reference);
+  ImageMetadata candidateMetadata, referenceMetadata;
+  const Image candidateFile = readLinearImage(opt.image, &candidateMetadata);
+  const Image referenceFile = readLinearImage(opt.reference, &referenceMetadata);
   // The test reads the variance layers; the metrics compare the colours.
   std::optional<NoiseTest> test;
   std::optional<EquivalenceTest> equivalence;
+  std::optional<FlipResult> flipResult;
   try {
+    if (flip) {
+      FlipOptions flipOptions;
+      flipOptions.pixelsPerDegree = opt.pixelsPerDegree;
+      flipOptions.hdr = !(isSrgbEncoded(opt.image, candidateMetadata) && isSrgbEncoded(opt.reference, referenceMetadata));
+      flipOptions.startExposure = opt.startExposure;
+      flipOptions.stopExposure = opt.stopExposure;
+      flipResult = computeFlip(candidateFile, referenceFile, flipOptions);
+    }
     if (opt.test) test = testWithinNoise(candidateFile, referenceFile, opt.alpha, 4, opt.block);
     if (opt.within) equivalence = testEquivalence(candidateFile, referenceFile, *opt.within, opt.alpha);
   } catch (const std::invalid_argument& e) {
@@ -115,7 +147,7 @@ int runCompare(const CompareOptions& opt) {
   out["width"] = image.width();
   out["height"] = image.height();
   out["metric"] = opt.metric;
-  const double value = errorValue(error.overall, metric);
+  const double value = flipResult ? flipResult->mean : errorValue(error.overall, metric);
   out["value"] = value;
   out["overall"] = metricsJson(error.overall);
   out["channels"] = nlohmann::ordered_json::object();
@@ -127,9 +159,13 @@ int runCompare(const CompareOptions& opt) {
   if (opt.maxError) out["max_error"] = *opt.maxError;
   if (test) out["test"] = testJson(*test);
   if (equivalence) out["equivalence"] = equivalenceJson(*equivalence);
+  if (flipResult) out["flip"] = flipJson(*flipResult, opt.pixelsPerDegree);
   out["passed"] = passed;
   if (!opt.heatmap.empty()) {
-    writePng(test ? statisticHeatmap(test->statistic) : errorHeatmap(image, reference, metric), opt.heatmap);
+    writePng(flipResult ? valueHeatmap(flipResult->map, 1)
+             : test     ? valueHeatmap(test->statistic, 5)
+                        : errorHeatmap(image, reference, metric),
+             opt.heatmap);
     out["heatmap"] = opt.heatmap;
   }
   std::cout << out.dump() << std::endl;
@@ -144,11 +180,21 @@ void addCompareCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("image", opt->image, "Image to evaluate")->required();
   cmd->add_option("reference", opt->reference, "Reference image")->required();
   cmd->add_option("--metric", opt->metric, "Metric tested against --max-error (default relmse)")
-      ->check(CLI::IsMember({"rmse", "relmse", "smape", "mae"}));
+      ->check(CLI::IsMember({"rmse", "relmse", "smape", "mae", "flip"}));
   cmd->add_option("--max-error", opt->maxError, "Fail (exit 1) when the metric exceeds this")
 ;
   cmd->add_option("--heatmap", opt->heatmap,
-                  "Write a false-colour PNG of the per-pixel error (with --test: of |z|, 0 to 5)");
+                  "Write a false-colour PNG of the per-pixel error (with --test: of |z|, 0 to 5; with --metric "
+                  "flip: of FLIP, 0 to 1)");
+  CLI::Option* ppd = cmd->add_option("--ppd", opt->pixelsPerDegree,
+                                     "With --metric flip: the observer's pixels per degree of visual angle, in [1, 1000] "
+                                     "(default 67.02: a 0.7 m wide 4K display seen from 0.7 m)");
+  CLI::Option* startExposure = cmd->add_option(
+      "--start-exposure", opt->startExposure,
+      "With --metric flip on HDR images: the first exposure in stops (default from the reference's largest luminance)");
+  CLI::Option* stopExposure = cmd->add_option(
+      "--stop-exposure", opt->stopExposure,
+      "With --metric flip on HDR images: the last exposure in stops (default from the reference's median luminance)");
   CLI::Option* testFlag = cmd->add_flag("--test", opt->test,
                 "Test whether the image differs from the reference by more than both images' noise "
                 "(the reference needs variance layers: render it with --variance)");
@@ -161,11 +207,13 @@ void addCompareCommand(CLI::App& app, int& exitCode) {
       "+-D over the image and in each of 4 x 4 regions (for biased methods; the reference needs variance layers)");
   CLI::Option* alpha =
       cmd->add_option("--alpha", opt->alpha, "Significance of --test and --within, in [1e-12, 0.25] (default 0.01)");
-  cmd->callback([opt, &exitCode, alpha, testFlag, within] {
+  cmd->callback([opt, &exitCode, alpha, testFlag, within, ppd, startExposure, stopExposure] {
     // Errors exit 2 so that scripts can tell them from a comparison that failed the threshold.
     try {
       if (alpha->count() > 0 && testFlag->count() == 0 && within->count() == 0)
         throw std::invalid_argument("--alpha needs --test or --within");
+      for (const CLI::Option* o : {ppd, startExposure, stopExposure})
+        if (o->count() > 0 && opt->metric != "flip") throw std::invalid_argument(o->get_name() + " needs --metric flip");
       exitCode = runCompare(*opt);
     } catch (const std::exception& e) {
       std::cerr << "lucent compare: error: " << printable(e.what()) << "\n";

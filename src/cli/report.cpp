@@ -1,10 +1,10 @@
 // lucent report REFERENCE CANDIDATE... -o REPORT.html [--label NAME]... [--seconds S]...
-//               [--alpha A] [--within D] [--exposure STOPS]
+//               [--alpha A] [--within D] [--exposure STOPS] [--ppd P]
 // Writes one self-contained HTML page (images embedded as PNG data, no outside resources)
 // comparing each candidate with the reference: the images side by side and as an A/B flip at
-// pixel zoom, the relMSE heatmap and the noise test's |z| heatmap with colour bars, the numbers of
+// pixel zoom, the relMSE, FLIP and noise test's |z| heatmaps with colour bars, the numbers of
 // `lucent compare --test` (of `lucent compare` on the colours where the reference has no variance
-// layers), the bias per region, and relMSE against seconds where the candidates' times are known
+// layers) and of `lucent compare --metric flip`, the bias per region, and relMSE against seconds where the candidates' times are known
 // (--seconds, or the lucent:render_seconds a Lucent render stores). Prints one JSON line; exits 0
 // when the page is written, 1 on bad input (no page is written then).
 #include <cmath>
@@ -21,6 +21,7 @@
 #include "cli/output_paths.h"
 #include "lucent/core/text.h"
 #include "lucent/core/files.h"
+#include "lucent/image/flip.h"
 #include "lucent/image/metrics.h"
 
 namespace lucent::cli {
@@ -31,7 +32,7 @@ struct ReportOptions {
   std::string reference, output;
   std::vector<std::string> candidates, labels;
   std::vector<double> seconds;
-  double alpha = 0.01, exposure = 0;
+  double alpha = 0.01, exposure = 0, pixelsPerDegree = kFlipPixelsPerDegree;
   std::optional<double> within;
 };
 
@@ -120,8 +121,9 @@ struct Candidate {
   ImageError error;
   std::optional<NoiseTest> test;
   std::optional<EquivalenceTest> equivalence;
+  FlipResult flip;
   double errorScale = 0;
-  std::string imageUri, errorUri, statisticUri;
+  std::string imageUri, errorUri, statisticUri, flipUri;
 };
 
 bool hasVarianceLayers(const Image& image) {
@@ -191,6 +193,18 @@ std::string speedAccuracyChart(const std::vector<Candidate>& candidates) {
   }
   svg << "</svg>";
   return svg.str();
+}
+
+// What the FLIP map shows: which FLIP, its observer and exposures, and its pooled numbers.
+std::string flipCaption(const FlipResult& f, double pixelsPerDegree) {
+  std::string text = std::string(f.hdr ? "HDR" : "LDR") + "-FLIP at " + number(pixelsPerDegree) + " pixels per degree";
+  if (f.hdr)
+    text += ", " + std::to_string(f.exposures) + " exposures from " + number(f.startExposure) + " to " +
+            number(f.stopExposure) + " stops";
+  return escapeHtml(text) + ": mean <span data-key=\"flip-mean\">" + number(f.mean) +
+         "</span>, weighted median <span data-key=\"flip-weighted_median\">" + number(f.weightedMedian) +
+         "</span>, weighted quartiles <span data-key=\"flip-first_quartile\">" + number(f.weightedQuartile1) +
+         "</span> and <span data-key=\"flip-third_quartile\">" + number(f.weightedQuartile3) + "</span>.";
 }
 
 std::string colourBar(const std::string& uri, const std::string& top, const std::string& what) {
@@ -307,7 +321,7 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
             "<code>lucent compare</code>'s on the colours.</p>\n";
 
   html << "<h2>Summary</h2>\n<table id=\"summary\"><tr><th>Candidate</th><th>Seconds</th><th>relMSE</th><th>RMSE</th>"
-          "<th>MAE</th><th>SMAPE</th><th>Non-finite</th>";
+          "<th>MAE</th><th>SMAPE</th><th>FLIP</th><th>Non-finite</th>";
   if (tested)
     html << "<th>Within noise</th><th>Blocks rejected</th><th>Fraction at α</th><th>Bias (whole image)</th>"
             "<th>z (whole image)</th>";
@@ -319,7 +333,7 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
     html << "<tr data-candidate=\"" << i << "\"><td><a href=\"#candidate-" << i << "\">" << escapeHtml(c.label)
          << "</a></td>" << cell("seconds", c.seconds ? number(*c.seconds) : "–") << cell("relmse", number(c.error.overall.relmse))
          << cell("rmse", number(c.error.overall.rmse)) << cell("mae", number(c.error.overall.mae))
-         << cell("smape", number(c.error.overall.smape)) << cell("non_finite", std::to_string(c.error.nonFinite));
+         << cell("smape", number(c.error.overall.smape)) << cell("flip", number(c.flip.mean)) << cell("non_finite", std::to_string(c.error.nonFinite));
     if (c.test) {
       const NoiseTest& t = *c.test;
       html << "<td data-key=\"passed\" class=\"" << (t.passed ? "passed\">passed" : "failed\">failed") << "</td>"
@@ -367,7 +381,9 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
          << imageTag(c.errorUri, w, h, "relMSE heatmap of " + c.label, " class=\"pixelated\"")
          << colourBar(bar, number(c.errorScale), "per-pixel relMSE")
          << "<figcaption>Per-pixel relMSE, (c − r)² / (r + 0.01)², over R, G, B; magenta: NaN or infinite."
-            "</figcaption></figure>";
+            "</figcaption></figure><figure>"
+         << imageTag(c.flipUri, w, h, "FLIP map of " + c.label, " class=\"pixelated\"") << colourBar(bar, "1", "FLIP")
+         << "<figcaption>" << flipCaption(c.flip, opt.pixelsPerDegree) << "</figcaption></figure>";
     if (c.test)
       html << "<figure>" << imageTag(c.statisticUri, w, h, "test statistic heatmap of " + c.label, " class=\"pixelated\"")
            << colourBar(bar, "5", "block |z|")
@@ -410,12 +426,12 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
 }
 
 int runReport(const ReportOptions& opt) {
-  // CLI11's range checks let NaN through.
   // Ranges checked here (CLI11's range checks print their bounds with 309 digits and let NaN through).
   if (!(opt.alpha >= 1e-12 && opt.alpha <= 0.25)) throw std::invalid_argument("--alpha must lie in [1e-12, 0.25]");
   if (opt.within && !(std::isfinite(*opt.within) && *opt.within > 0 && *opt.within <= 10))
     throw std::invalid_argument("--within must lie in (0, 10]");
   if (!(opt.exposure >= -30 && opt.exposure <= 30)) throw std::invalid_argument("--exposure must lie in [-30, 30]");
+  if (!(opt.pixelsPerDegree >= 1 && opt.pixelsPerDegree <= 1000)) throw std::invalid_argument("--ppd must lie in [1, 1000]");
   for (const double s : opt.seconds)
     if (!(std::isfinite(s) && s > 0)) throw std::invalid_argument("--seconds must be positive and finite");
   if (!opt.labels.empty() && opt.labels.size() != opt.candidates.size())
@@ -438,6 +454,7 @@ int runReport(const ReportOptions& opt) {
   }
   ImageMetadata referenceMetadata;
   const Image referenceFile = readLinearImage(opt.reference, &referenceMetadata);
+  const bool referenceIsSrgb = isSrgbEncoded(opt.reference, referenceMetadata);
   const bool tested = hasVarianceLayers(referenceFile);
   const Image reference = rgbChannels(referenceFile);
   std::vector<Candidate> candidates;
@@ -452,12 +469,18 @@ int runReport(const ReportOptions& opt) {
       if (tested) c.test = testWithinNoise(file, referenceFile, opt.alpha);
       if (tested && opt.within) c.equivalence = testEquivalence(file, referenceFile, *opt.within, opt.alpha);
       c.error = compareImages(image, reference);
+      // As lucent compare --metric flip: LDR-FLIP between 8-bit files, HDR-FLIP otherwise.
+      FlipOptions flipOptions;
+      flipOptions.pixelsPerDegree = opt.pixelsPerDegree;
+      flipOptions.hdr = !(referenceIsSrgb && isSrgbEncoded(c.path, c.metadata));
+      c.flip = computeFlip(image, reference, flipOptions);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("'" + c.path + "' vs '" + opt.reference + "': " + e.what());
     }
     c.imageUri = pngDataUri(exposed(image, opt.exposure));
     c.errorUri = pngDataUri(errorHeatmap(image, reference, ErrorMetric::RelMse, 0, &c.errorScale));
-    if (c.test) c.statisticUri = pngDataUri(statisticHeatmap(c.test->statistic));
+    c.flipUri = pngDataUri(valueHeatmap(c.flip.map, 1));
+    if (c.test) c.statisticUri = pngDataUri(valueHeatmap(c.test->statistic, 5));
     candidates.push_back(std::move(c));
   }
   const std::string page = reportPage(opt, referenceFile, referenceMetadata, candidates, tested);
@@ -474,7 +497,7 @@ int runReport(const ReportOptions& opt) {
   line["tested"] = tested;
   line["candidates"] = nlohmann::ordered_json::array();
   for (const Candidate& c : candidates) {
-    nlohmann::ordered_json entry = {{"label", c.label}, {"image", c.path}, {"relmse", c.error.overall.relmse}};
+    nlohmann::ordered_json entry = {{"label", c.label}, {"image", c.path}, {"relmse", c.error.overall.relmse}, {"flip", c.flip.mean}};
     if (c.seconds) entry["seconds"] = *c.seconds;
     if (c.test) entry["passed"] = c.test->passed;
     if (c.equivalence) entry["equivalent"] = c.equivalence->passed;
@@ -503,6 +526,9 @@ void addReportCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("--within", opt->within,
                   "Also show compare --within D's verdict: each region's relative difference with its interval");
   cmd->add_option("--exposure", opt->exposure, "Exposure of the shown images, in stops, in [-30, 30] (default 0)");
+  cmd->add_option("--ppd", opt->pixelsPerDegree,
+                  "FLIP's observer: pixels per degree of visual angle, in [1, 1000] (default 67.02: a 0.7 m wide 4K "
+                  "display seen from 0.7 m)");
   cmd->callback([opt, &exitCode] {
     try {
       exitCode = runReport(*opt);

@@ -400,12 +400,12 @@ Image heatmapColourBar(int width, int height) {
   return bar;
 }
 
-Image statisticHeatmap(const Image& statistic) {
-  Image heatmap(statistic.width(), statistic.height(), {"R", "G", "B"});
-  for (int y = 0; y < statistic.height(); ++y)
-    for (int x = 0; x < statistic.width(); ++x) {
-      const double z = statistic.at(x, y, 0);
-      const std::array<float, 3> rgb = std::isfinite(z) ? viridis(z / 5.0) : std::array<float, 3>{1, 0, 1};
+Image valueHeatmap(const Image& values, double top) {
+  Image heatmap(values.width(), values.height(), {"R", "G", "B"});
+  for (int y = 0; y < values.height(); ++y)
+    for (int x = 0; x < values.width(); ++x) {
+      const double v = values.at(x, y, 0);
+      const std::array<float, 3> rgb = std::isfinite(v) ? viridis(v / top) : std::array<float, 3>{1, 0, 1};
       for (int c = 0; c < 3; ++c) heatmap.at(x, y, c) = rgb[size_t(c)];
     }
   return heatmap;

@@ -91,6 +91,13 @@ def expected_numbers(i, result):
     row = "row-%d" % i
     out = {(row, k): fmt(result["overall"][k]) for k in ("relmse", "rmse", "mae", "smape")}
     out[(row, "non_finite")] = str(result["non_finite"])
+    f = result["flip"]
+    out[(row, "flip")] = fmt(f["mean"])
+    section = "section-%d" % i
+    out[(section, "flip-mean")] = fmt(f["mean"])
+    out[(section, "flip-weighted_median")] = fmt(f["weighted_median"])
+    out[(section, "flip-first_quartile")] = fmt(f["weighted_quartiles"][0])
+    out[(section, "flip-third_quartile")] = fmt(f["weighted_quartiles"][1])
     out[(row, "passed")] = "passed" if t["passed"] else "failed"
     out[(row, "blocks_rejected")] = str(t["blocks_rejected"])
     out[(row, "fraction_rejected_at_alpha")] = fmt(t["fraction_rejected_at_alpha"])
@@ -120,8 +127,8 @@ def number_mismatches(page, results):
 
 def image_problems(page, candidates):
     b = page.body
-    # The reference, and per candidate: the viewer's two, side by side two, two heatmaps, two colour bars.
-    expected = 1 + 8 * candidates
+    # The reference, and per candidate: the viewer's two, side by side two, three heatmaps, three colour bars.
+    expected = 1 + 10 * candidates
     problems = []
     if b.get("data-checked") != "yes":
         problems.append("the page's self-check did not run: %r" % b)
@@ -150,7 +157,7 @@ try:
     summary = json.loads(r.stdout)
     results = []
     for c in candidates:
-        r = run([lucent, "compare", "--test", "--within", "0.05", c, p("reference.exr")])
+        r = run([lucent, "compare", "--test", "--within", "0.05", "--metric", "flip", c, p("reference.exr")])
         check(r.returncode in (0, 1), "compare failed: " + r.stderr)
         results.append(json.loads(r.stdout))
     check([c["passed"] for c in summary["candidates"]] == [x["test"]["passed"] for x in results],

@@ -108,7 +108,8 @@ EquivalenceTest testEquivalence(const Image& candidate, const Image& reference, 
 double normalUpperQuantile(double alpha);
 // The R, G, B channels of an image.
 Image rgbChannels(const Image& image);
-// False colour of testWithinNoise's statistic: |z| from 0 to 5 (viridis), magenta where infinite.
-Image statisticHeatmap(const Image& statistic);
+// False colour (viridis) of an image's first channel from 0 to `top`, magenta where not finite:
+// testWithinNoise's statistic |z| to 5, a FLIP map to 1.
+Image valueHeatmap(const Image& values, double top);
 
 }  // namespace lucent
