@@ -64,7 +64,7 @@ TEST_CASE("render writes EXR and PNG with metadata and prints one JSON summary",
       REQUIRE(image.at(x, y, r0) == Approx(image.at(x, y, d0) + image.at(x, y, i0)).margin(1e-5));
 }
 
-TEST_CASE("render: same seed gives the same pixels with 1 and 2 threads; another seed differs", "[cli][render][determinism]") {
+TEST_CASE("render: same seed gives the same pixels with 1 and 2 threads, another seed differs", "[cli][render][determinism]") {
   const test::TempDir dir("render-cli");
   auto render = [&](const std::string& name, const std::string& extra) {
     const std::string exr = dir / name;

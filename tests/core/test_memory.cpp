@@ -47,7 +47,7 @@ TEST_CASE("The memory in use follows the process's allocations", "[memory]") {
   CHECK(available <= totalKib * 1024);
 }
 
-TEST_CASE("An allocation beyond the limit is refused with the remedy; one within passes", "[memory]") {
+TEST_CASE("An allocation beyond the limit is refused with the remedy, one within passes", "[memory]") {
   struct RestoreDefault {
     ~RestoreDefault() { setMemoryLimit(0); }
   } restore;

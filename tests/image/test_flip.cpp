@@ -352,7 +352,7 @@ TEST_CASE("HDR-FLIP's exposure range puts the brightest pixel and the median at 
   CHECK_THROWS_WITH(computeFlip(grey, grey, options), "FLIP's start exposure must not exceed its stop exposure");
 }
 
-TEST_CASE("FLIP's pooling: mean and error-weighted percentiles; NaN pixels count as error 1", "[flip]") {
+TEST_CASE("FLIP's pooling: mean and error-weighted percentiles, and NaN pixels count as error 1", "[flip]") {
   const Image reference = structuredImage(31, 1, false);
   FlipOptions ldr;
   ldr.hdr = false;

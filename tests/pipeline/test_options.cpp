@@ -239,7 +239,7 @@ TEST_CASE("lucent methods lists every method with its declared options", "[optio
   CHECK(runLucent("methods nonsense").status != 0);
 }
 
-TEST_CASE("A scene file's render block chooses the method and its options; the command line overrides them",
+TEST_CASE("A scene file's render block chooses the method and its options, the command line overrides them",
           "[options][cli]") {
   test::TempDir dir("options");
   const nlohmann::json original = nlohmann::json::parse(std::ifstream(kScene));

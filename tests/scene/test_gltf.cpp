@@ -209,7 +209,7 @@ TEST_CASE("The Cornell box as Blender's glTF exporter writes it loads as the OBJ
   CHECK(gltf.materials[size_t(light - gltf.materialNames.begin())].emitsBackFace == 1);
 }
 
-TEST_CASE("The exported Cornell box renders as the OBJ scene within noise once Lambertian; as exported its "
+TEST_CASE("The exported Cornell box renders as the OBJ scene within noise once Lambertian, as exported its "
           "grazing Fresnel lobe shows",
           "[gltf][cli]") {
   const test::TempDir dir;
@@ -506,7 +506,7 @@ TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, second), Catch::Contains("baseColorTexture.texCoord: TEXCOORD_2 is not read"));
 }
 
-TEST_CASE("glTF normal and metallic-roughness textures are read as linear data; the normal tilts in the tangent frame",
+TEST_CASE("glTF normal and metallic-roughness textures are read as linear data, the normal tilts in the tangent frame",
           "[gltf][loader]") {
   const test::TempDir dir;
   // 1 x 1 PNGs of known codes (Lucent's encoder writes the sRGB code of each linear value).

@@ -191,7 +191,7 @@ TEST_CASE("glTF BRDF: the chi-square test rejects a lobe choice other than the o
   CHECK_CHI2_REJECT(chi2::testSphere(sampler, [&](Vec3 wi) { return bsdfPdf(b, wo, wi); }, opt));
 }
 
-TEST_CASE("glTF furnace: the sample weights' mean is the directional albedo; metals never reflect more than they "
+TEST_CASE("glTF furnace: the sample weights' mean is the directional albedo, metals never reflect more than they "
           "receive, the white dielectric does at grazing angles",
           "[bsdf][gltf]") {
   // The tolerance is 4.5 standard errors of the mean weight, plus the quadrature's own error.

@@ -68,7 +68,7 @@ TEST_CASE("Textures: 8-bit files are decoded from sRGB, float files read as line
   }
 }
 
-TEST_CASE("An 8-bit sRGB texture keeps every code; a float texture is clamped and encoded", "[texture]") {
+TEST_CASE("An 8-bit sRGB texture keeps every code, a float texture is clamped and encoded", "[texture]") {
   // The loader keeps an 8-bit file's codes as they are (what decoding to linear and encoding back
   // would give), and encodes a linear file's values, clamped to reflectance [0, 1], to the nearest
   // code (negative texels are an error). All 256 codes in each channel, in different orders.
