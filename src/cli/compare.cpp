@@ -1,6 +1,7 @@
 // lucent compare IMAGE REFERENCE [--metric rmse|relmse|smape|mae|flip] [--max-error X]
 //                [--test [--block N]] [--within D] [--alpha A] [--heatmap OUT.png]
 //                [--ppd P] [--start-exposure S] [--stop-exposure S]
+//                [--layer NAME [--image-layer NAME]]
 // Exit status: 0 passed (or no threshold), 1 the chosen metric exceeds --max-error, the image
 // has NaN or infinite values, --test finds it differs from the reference by more than their
 // noise, or --within cannot show it within D of the reference; 2 error (the reference's NaN or
@@ -25,7 +26,7 @@ namespace lucent::cli {
 namespace {
 
 struct CompareOptions {
-  std::string image, reference, metric = "relmse", heatmap;
+  std::string image, reference, metric = "relmse", heatmap, layer, imageLayer;
   std::optional<double> maxError, within, startExposure, stopExposure;
   double pixelsPerDegree = kFlipPixelsPerDegree;
   bool test = false;
@@ -106,14 +107,24 @@ int runCompare(const CompareOptions& opt) {
   {
     const ImageHeader image = readImageHeader(opt.image), reference = readImageHeader(opt.reference);
     try {
-      checkComparable(image, reference, statistical);
+      checkComparable(image, reference, statistical || !opt.layer.empty());
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("'" + opt.image + "' vs '" + opt.reference + "': " + e.what());
     }
   }
   ImageMetadata candidateMetadata, referenceMetadata;
-  const Image candidateFile = readLinearImage(opt.image, &candidateMetadata);
-  const Image referenceFile = readLinearImage(opt.reference, &referenceMetadata);
+  Image candidateFile = readLinearImage(opt.image, &candidateMetadata);
+  Image referenceFile = readLinearImage(opt.reference, &referenceMetadata);
+  std::optional<LayerChoice> layer;
+  if (!opt.layer.empty()) {
+    try {
+      layer = chooseLayer(candidateFile, referenceFile, opt.layer, opt.imageLayer);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("'" + opt.image + "' vs '" + opt.reference + "': " + e.what());
+    }
+    candidateFile = std::move(layer->candidate);
+    referenceFile = std::move(layer->reference);
+  }
   // The test reads the variance layers; the metrics compare the colours.
   std::optional<NoiseTest> test;
   std::optional<EquivalenceTest> equivalence;
@@ -147,6 +158,7 @@ int runCompare(const CompareOptions& opt) {
   out["width"] = image.width();
   out["height"] = image.height();
   out["metric"] = opt.metric;
+  if (layer) out["layer"] = {{"image", layer->candidateLayer}, {"reference", layer->referenceLayer}};
   const double value = flipResult ? flipResult->mean : errorValue(error.overall, metric);
   out["value"] = value;
   out["overall"] = metricsJson(error.overall);
@@ -186,6 +198,12 @@ void addCompareCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("--heatmap", opt->heatmap,
                   "Write a false-colour PNG of the per-pixel error (with --test: of |z|, 0 to 5; with --metric "
                   "flip: of FLIP, 0 to 1)");
+  CLI::Option* layerOption = cmd->add_option(
+      "--layer", opt->layer,
+      "Compare the reference's layer NAME (or paths.NAME: render --paths) with the image's layer of that name, or "
+      "with the whole image where it has none");
+  cmd->add_option("--image-layer", opt->imageLayer, "With --layer: the image's layer to compare, by its own name")
+      ->needs(layerOption);
   CLI::Option* ppd = cmd->add_option("--ppd", opt->pixelsPerDegree,
                                      "With --metric flip: the observer's pixels per degree of visual angle, in [1, 1000] "
                                      "(default 67.02: a 0.7 m wide 4K display seen from 0.7 m)");

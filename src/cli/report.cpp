@@ -1,5 +1,5 @@
 // lucent report REFERENCE CANDIDATE... -o REPORT.html [--label NAME]... [--seconds S]...
-//               [--alpha A] [--within D] [--exposure STOPS] [--ppd P]
+//               [--alpha A] [--within D] [--exposure STOPS] [--ppd P] [--layer NAME [--image-layer NAME]]
 // Writes one self-contained HTML page (images embedded as PNG data, no outside resources)
 // comparing each candidate with the reference: the images side by side and as an A/B flip at
 // pixel zoom, the relMSE, FLIP and noise test's |z| heatmaps with colour bars, the numbers of
@@ -29,7 +29,7 @@ namespace lucent::cli {
 namespace {
 
 struct ReportOptions {
-  std::string reference, output;
+  std::string reference, output, layer, imageLayer;
   std::vector<std::string> candidates, labels;
   std::vector<double> seconds;
   double alpha = 0.01, exposure = 0, pixelsPerDegree = kFlipPixelsPerDegree;
@@ -453,7 +453,23 @@ int runReport(const ReportOptions& opt) {
     }
   }
   ImageMetadata referenceMetadata;
-  const Image referenceFile = readLinearImage(opt.reference, &referenceMetadata);
+  const Image referenceWhole = readLinearImage(opt.reference, &referenceMetadata);
+  // With --layer, every image is its layer's R, G, B and variance (chooseLayer, as compare --layer).
+  auto chosen = [&](const Image& candidate, const std::string& path) {
+    try {
+      return chooseLayer(candidate, referenceWhole, opt.layer, opt.imageLayer);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("'" + path + "' vs '" + opt.reference + "': " + e.what());
+    }
+  };
+  Image referenceFile = referenceWhole;
+  if (!opt.layer.empty()) {
+    try {
+      referenceFile = chooseLayer(referenceWhole, referenceWhole, opt.layer).reference;
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("'" + opt.reference + "': " + e.what());
+    }
+  }
   const bool referenceIsSrgb = isSrgbEncoded(opt.reference, referenceMetadata);
   const bool tested = hasVarianceLayers(referenceFile);
   const Image reference = rgbChannels(referenceFile);
@@ -462,7 +478,8 @@ int runReport(const ReportOptions& opt) {
     Candidate c;
     c.path = opt.candidates[i];
     c.label = opt.labels.empty() ? std::filesystem::path(c.path).filename().string() : opt.labels[i];
-    const Image file = readLinearImage(c.path, &c.metadata);
+    Image file = readLinearImage(c.path, &c.metadata);
+    if (!opt.layer.empty()) file = chosen(file, c.path).candidate;
     c.seconds = opt.seconds.empty() ? renderSeconds(c.metadata) : std::optional<double>(opt.seconds[i]);
     const Image image = rgbChannels(file);
     try {
@@ -526,6 +543,12 @@ void addReportCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("--within", opt->within,
                   "Also show compare --within D's verdict: each region's relative difference with its interval");
   cmd->add_option("--exposure", opt->exposure, "Exposure of the shown images, in stops, in [-30, 30] (default 0)");
+  CLI::Option* layerOption = cmd->add_option(
+      "--layer", opt->layer,
+      "Compare the reference's layer NAME (or paths.NAME: render --paths) with each candidate's layer of that name, "
+      "or with the whole candidate where it has none");
+  cmd->add_option("--image-layer", opt->imageLayer, "With --layer: the candidates' layer to compare, by its own name")
+      ->needs(layerOption);
   cmd->add_option("--ppd", opt->pixelsPerDegree,
                   "FLIP's observer: pixels per degree of visual angle, in [1, 1000] (default 67.02: a 0.7 m wide 4K "
                   "display seen from 0.7 m)");

@@ -411,6 +411,73 @@ Image valueHeatmap(const Image& values, double top) {
   return heatmap;
 }
 
+std::optional<Image> layerImage(const Image& image, const std::string& name, std::string* resolvedName) {
+  auto hasRgb = [&](const std::string& layer) {
+    return image.channelIndex(layer + ".R") >= 0 && image.channelIndex(layer + ".G") >= 0 &&
+           image.channelIndex(layer + ".B") >= 0;
+  };
+  const std::string inPaths = "paths." + name;
+  if (hasRgb(name) && hasRgb(inPaths))
+    throw std::invalid_argument("layer '" + name + "' is ambiguous: the image has '" + name + "' and '" + inPaths + "'");
+  const std::string layer = hasRgb(name) ? name : hasRgb(inPaths) ? inPaths : "";
+  if (layer.empty()) return std::nullopt;
+  if (resolvedName) *resolvedName = layer;
+  std::vector<std::string> channels = {"R", "G", "B"};
+  std::vector<int> from = {image.channelIndex(layer + ".R"), image.channelIndex(layer + ".G"),
+                           image.channelIndex(layer + ".B")};
+  const std::array<int, 3> variance = {image.channelIndex(layer + ".variance.R"), image.channelIndex(layer + ".variance.G"),
+                                       image.channelIndex(layer + ".variance.B")};
+  if (variance[0] >= 0 && variance[1] >= 0 && variance[2] >= 0) {
+    channels.insert(channels.end(), {"variance.R", "variance.G", "variance.B"});
+    from.insert(from.end(), variance.begin(), variance.end());
+  }
+  Image out(image.width(), image.height(), channels);
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x)
+      for (size_t c = 0; c < from.size(); ++c) out.at(x, y, int(c)) = image.at(x, y, from[c]);
+  return out;
+}
+
+std::vector<std::string> colourLayers(const Image& image) {
+  std::vector<std::string> layers;
+  for (const std::string& channel : image.channels()) {
+    if (channel.size() < 2 || channel.substr(channel.size() - 2) != ".R") continue;
+    const std::string layer = channel.substr(0, channel.size() - 2);
+    if (image.channelIndex(layer + ".G") >= 0 && image.channelIndex(layer + ".B") >= 0 &&
+        layer.find(".variance") == std::string::npos && layer != "variance")
+      layers.push_back(layer);
+  }
+  return layers;
+}
+
+LayerChoice chooseLayer(const Image& candidate, const Image& reference, const std::string& name,
+                        const std::string& candidateName) {
+  auto missing = [](const Image& image, const std::string& which, const std::string& layerName) {
+    std::string known;
+    for (const std::string& layer : colourLayers(image)) known += (known.empty() ? "" : ", ") + layer;
+    return std::invalid_argument("the " + which + " has no layer '" + layerName + "' (its layers: " +
+                                 (known.empty() ? "none" : known) + ")");
+  };
+  LayerChoice choice;
+  std::optional<Image> r = layerImage(reference, name, &choice.referenceLayer);
+  if (!r) throw missing(reference, "reference", name);
+  choice.reference = std::move(*r);
+  std::optional<Image> c = layerImage(candidate, candidateName.empty() ? name : candidateName, &choice.candidateLayer);
+  if (!c && !candidateName.empty()) throw missing(candidate, "image", candidateName);
+  if (!c) {
+    // The candidate whole: its R, G, B and, where it has them, its variance channels.
+    std::vector<std::string> channels;
+    for (const char* channel : {"R", "G", "B", "variance.R", "variance.G", "variance.B"})
+      if (candidate.channelIndex(channel) >= 0) channels.push_back(channel);
+    c = Image(candidate.width(), candidate.height(), channels);
+    for (int y = 0; y < candidate.height(); ++y)
+      for (int x = 0; x < candidate.width(); ++x)
+        for (size_t k = 0; k < channels.size(); ++k) c->at(x, y, int(k)) = candidate.at(x, y, candidate.channelIndex(channels[k]));
+  }
+  choice.candidate = std::move(*c);
+  return choice;
+}
+
 void checkComparable(const ImageHeader& image, const ImageHeader& reference, bool rgbOnly) {
   requireSameSize(image.width, image.height, reference.width, reference.height);
   if (!rgbOnly) return requireSameChannels(image.channels, reference.channels);

@@ -16,6 +16,30 @@ namespace {
 constexpr size_t kPointChunk = 8192;  // shading points per task when they are added
 }  // namespace
 
+const std::vector<PathLayer>& pathLayers() {
+  using P = PathParts;
+  static const std::vector<PathLayer> layers = {
+      {"emission", {P::emission()}},
+      {"direct", {P::part(P::Direct, false), P::part(P::Direct, true)}},
+      {"direct.diffuse", {P::part(P::Direct, false)}},
+      {"direct.glossy", {P::part(P::Direct, true)}},
+      {"indirect.1", {P::part(P::Indirect1, false), P::part(P::Indirect1, true)}},
+      {"indirect.1.diffuse", {P::part(P::Indirect1, false)}},
+      {"indirect.1.glossy", {P::part(P::Indirect1, true)}},
+      {"indirect.2", {P::part(P::Indirect2, false), P::part(P::Indirect2, true)}},
+      {"indirect.2.diffuse", {P::part(P::Indirect2, false)}},
+      {"indirect.2.glossy", {P::part(P::Indirect2, true)}},
+      {"indirect.3+", {P::part(P::Indirect3Plus, false), P::part(P::Indirect3Plus, true)}},
+      {"indirect.3+.diffuse", {P::part(P::Indirect3Plus, false)}},
+      {"indirect.3+.glossy", {P::part(P::Indirect3Plus, true)}},
+      {"diffuse", {P::part(P::Direct, false), P::part(P::Indirect1, false), P::part(P::Indirect2, false),
+                   P::part(P::Indirect3Plus, false)}},
+      {"glossy", {P::part(P::Direct, true), P::part(P::Indirect1, true), P::part(P::Indirect2, true),
+                  P::part(P::Indirect3Plus, true)}},
+  };
+  return layers;
+}
+
 PointRadiance::PointRadiance(size_t n) {
   for (UninitializedVector<Rgb>* part : {&direct, &indirect, &caustic}) {
     part->resize(n);
@@ -36,6 +60,8 @@ Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers
   auto reserve = [&](int& offset, int channels) { offset = stride_, stride_ += channels; };
   if (layers.variance && sums != Sums::PerSample)
     throw std::invalid_argument("film: a variance layer needs each camera sample's total (Sums::PerSample)");
+  if (layers.paths && sums != Sums::PerSample)
+    throw std::invalid_argument("film: light split by path needs each camera sample's parts (Sums::PerSample)");
   // Without layers the parts need not be kept apart: the exact sum of every part's terms in one
   // total is the sum of the parts' exact sums, bit for bit, in a third of the memory.
   if (sums == Sums::PerSample || !layers.features) reserve(total_, 3);
@@ -43,6 +69,8 @@ Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers
   if (layers.features) reserve(direct_, 3), reserve(indirect_, 3);
   if (sums == Sums::PerPart && layers.features) reserve(caustic_, 3);
   if (layers.features) reserve(features_, 7);
+  if (layers.paths) reserve(pathParts_, 3 * PathParts::kCount);
+  if (layers.paths && layers.variance) reserve(pathSquares_, 3 * int(pathLayers().size()));
   const uint64_t pixels = region.pixelCount();
   // The sums and sample counts, and the image made of them (about as many channels, in floats).
   requireMemory(pixels * (uint64_t(stride_) * (sizeof(ExactSum) + sizeof(float)) + 2 * sizeof(uint32_t)), "the film",
@@ -55,7 +83,8 @@ Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers
   taken_.assign(pixels, 0);
 }
 
-void Film::addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 normal, float depth) {
+void Film::addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 normal, float depth,
+                     const PathParts& paths) {
   const size_t p = local(pixel);
   ExactSum* sum = &sums_[p * size_t(stride_)];
   ++samples_[p];
@@ -64,6 +93,19 @@ void Film::addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 
   for (int c = 0; c < 3; ++c) sum[total_ + c].add(total[c]);
   if (layers_.variance)
     for (int c = 0; c < 3; ++c) sum[squares_ + c].add(std::min(total[c] * total[c], ExactSum::kMaxTerm));
+  if (layers_.paths) {
+    for (int k = 0; k < PathParts::kCount; ++k)
+      for (int c = 0; c < 3; ++c) sum[pathParts_ + 3 * k + c].add(paths.light[size_t(k)][c]);
+    if (layers_.variance) {
+      const std::vector<PathLayer>& layers = pathLayers();
+      for (size_t l = 0; l < layers.size(); ++l) {
+        Rgb light(0.0f);
+        for (const int k : layers[l].parts) light += paths.light[size_t(k)];
+        for (int c = 0; c < 3; ++c)
+          sum[pathSquares_ + 3 * int(l) + c].add(std::min(light[c] * light[c], ExactSum::kMaxTerm));
+      }
+    }
+  }
   if (!layers_.features) return;
   const float features[7] = {albedo.r, albedo.g, albedo.b, normal.x, normal.y, normal.z, depth};
   for (int c = 0; c < 7; ++c) sum[features_ + c].add(features[c]);
@@ -142,6 +184,15 @@ Image Film::image() const {
   const size_t varianceAt = channels.size();
   if (layers_.variance)
     for (const char* name : {"variance.R", "variance.G", "variance.B"}) channels.push_back(name);
+  const size_t pathsAt = channels.size();
+  const std::vector<PathLayer>& layers = pathLayers();
+  if (layers_.paths)
+    for (const PathLayer& layer : layers) {
+      for (const char* c : {".R", ".G", ".B"}) channels.push_back(std::string("paths.") + layer.name + c);
+      if (layers_.variance)
+        for (const char* c : {".variance.R", ".variance.G", ".variance.B"})
+          channels.push_back(std::string("paths.") + layer.name + c);
+    }
   const size_t nc = channels.size(), pixels = region_.pixelCount();
   Image image(region_.width(), region_.height(), channels);
   float* out = image.pixels().data();
@@ -162,6 +213,23 @@ Image Film::image() const {
           const double variance = (sum[squares_ + c].value() / n - mean * mean) * n / (n - 1);
           o[varianceAt + size_t(c)] = samples_[p] < 2 ? kInf : float(std::max(0.0, variance) / n);
         }
+      if (layers_.paths) {
+        float* to = o + pathsAt;
+        for (size_t l = 0; l < layers.size(); ++l) {
+          for (int c = 0; c < 3; ++c) {
+            // A layer's sum is the exact sum of its parts' sums.
+            ExactSum light;
+            for (const int k : layers[l].parts) light.add(sum[pathParts_ + 3 * k + c]);
+            const double mean = light.value() / n;
+            *to++ = float(mean);
+            if (layers_.variance) {
+              const double variance = (sum[pathSquares_ + 3 * int(l) + c].value() / n - mean * mean) * n / (n - 1);
+              to[2] = samples_[p] < 2 ? kInf : float(std::max(0.0, variance) / n);
+            }
+          }
+          if (layers_.variance) to += 3;
+        }
+      }
       if (!layers_.features) continue;
       for (int c = 0; c < 7; ++c) o[3 + c] = float(sum[features_ + c].value() / n);
       for (int c = 0; c < 3; ++c)

@@ -63,7 +63,7 @@ FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileIn
   header["complete"] = info.complete;
   header["sums"] = film.sums() == Film::Sums::PerSample ? "per_sample" : "per_part";
   header["layers"] = {{"features", film.layers().features}, {"caustic", film.layers().caustic},
-                      {"variance", film.layers().variance}};
+                      {"variance", film.layers().variance}, {"paths", film.layers().paths}};
   header["sums_per_pixel"] = film.sumsPerPixel();
   header["counters"] = nlohmann::ordered_json::object();
   for (const auto& [name, value] : info.counters) header["counters"][name] = value;
@@ -180,8 +180,11 @@ FilmFile readFilmFile(const std::string& path) {
     layers.features = header.at("layers").at("features").get<bool>();
     layers.caustic = header.at("layers").at("caustic").get<bool>();
     layers.variance = header.at("layers").at("variance").get<bool>();
+    // Files from before the light split by path have no "paths".
+    layers.paths = header.at("layers").contains("paths") && header.at("layers").at("paths").get<bool>();
     if (layers.variance && sums != Film::Sums::PerSample) throw fail("a 'variance' layer needs 'per_sample' sums");
-    sumsPerPixel = integer(header.at("sums_per_pixel"), "sums_per_pixel", 1, 64);
+    if (layers.paths && sums != Film::Sums::PerSample) throw fail("a 'paths' layer needs 'per_sample' sums");
+    sumsPerPixel = integer(header.at("sums_per_pixel"), "sums_per_pixel", 1, 256);
   } catch (const nlohmann::json::exception& e) {
     throw fail(std::string("header: ") + e.what());
   }

@@ -60,6 +60,7 @@ TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "
   PathTraceOptions opt;
   opt.common.spp = 8;
   opt.common.layers = true;
+  opt.paths = true;
   opt.common.seed = 5;
   for (const SamplerKind sampler : {SamplerKind::Independent, SamplerKind::Sobol}) {
     opt.sampler = sampler;

@@ -94,6 +94,7 @@ TEST_CASE("A render split by crops and sample ranges merges into the single rend
                                          {kGlass, "pt --spp 5"},
                                          {kGlass, "pt --spp 5 --sampler sobol"},
                                          {kCornell, "pt --spp 5 --sampler independent --variance"},
+                                         {kCornell, "pt --spp 5 --sampler independent --variance --paths"},
                                          {kGlass, "purcell --spp 5 --photons 20000 --caustic-photons 20000 --layers"},
                                          {kCornell, "pmfg --spp 5 --gather-rays 16 --photons 5000"},
                                          {kGlass, "micro --spp 5 --points 4096"},

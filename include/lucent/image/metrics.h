@@ -1,5 +1,6 @@
 // Image error metrics for comparing renders against references.
 #pragma once
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -108,6 +109,24 @@ EquivalenceTest testEquivalence(const Image& candidate, const Image& reference, 
 double normalUpperQuantile(double alpha);
 // The R, G, B channels of an image.
 Image rgbChannels(const Image& image);
+// The layer `name` of an image as an image of its own (lucent compare --layer): the channels
+// name.R, .G, .B as R, G, B, and name.variance.R, .G, .B as variance.R, .G, .B where present. A
+// name that is not a layer of the image is looked up as paths.name (the path tracer's --paths
+// layers). Returns nullopt when the image has neither; throws std::invalid_argument when it has both.
+std::optional<Image> layerImage(const Image& image, const std::string& name, std::string* resolvedName = nullptr);
+// The layers of an image that have R, G and B channels ("" for the image's own), for messages.
+std::vector<std::string> colourLayers(const Image& image);
+// lucent compare's and report's --layer and --image-layer: the reference's layer `name` and the
+// candidate's layer `candidateName` (default: `name`), each as an image of its own (layerImage); a
+// candidate without a layer of that default name (another renderer's image of that part alone) is
+// compared whole, its R, G, B and variance. Throws std::invalid_argument when the reference has no
+// such layer or the candidate no layer `candidateName`, naming the layers it has.
+struct LayerChoice {
+  Image candidate, reference;
+  std::string candidateLayer, referenceLayer;  // "" for an image's own R, G, B
+};
+LayerChoice chooseLayer(const Image& candidate, const Image& reference, const std::string& name,
+                        const std::string& candidateName = "");
 // False colour (viridis) of an image's first channel from 0 to `top`, magenta where not finite:
 // testWithinNoise's statistic |z| to 5, a FLIP map to 1.
 Image valueHeatmap(const Image& values, double top);

@@ -24,6 +24,7 @@ struct PathTraceOptions {
   double timeBudget = 0;       // seconds; 0 for none. At least one sample per pixel is taken
   int tileSize = 16;           // pixels; does not change the image
   bool variance = false;       // add each pixel mean's variance (variance.R, .G, .B), from 2 spp on
+  bool paths = false;          // add the light split by path as layers (PathParts, pathLayers)
   PathStrategy strategy = PathStrategy::Mis;
   // Every camera ray through its pixel's centre instead of uniformly over the pixel: the reference
   // for renderers that sample pixel centres (purcell, pmfg and micro at one sample per pixel), whose

@@ -5,6 +5,7 @@
 // tiles nor on how a render was split into regions and sample ranges, resumed and merged. A film
 // covers a region of the image (a crop), all of it by default.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -25,8 +26,43 @@ struct FilmLayers {
   bool features = false;  // albedo, normal, depth, direct, indirect
   bool caustic = false;   // and caustic (only with features)
   bool variance = false;  // Sums::PerSample: the variance of each pixel's mean, from its samples' squares
+  bool paths = false;     // Sums::PerSample: the light split by path (PathParts), each part with its variance
   bool operator==(const FilmLayers&) const = default;
 };
+
+// A camera sample's light split by the path that brought it: emission seen directly (also through
+// mirrors and glass), then direct light (gathered at the path's first non-specular vertex) and
+// indirect light by bounce (at its second, third, and fourth or later), each of these split by how
+// the first non-specular vertex reflected it, diffusely or glossily (by the diffuse lobe's share of
+// the BSDF's value in the direction the path left it: unbiased per part, whichever lobe was sampled).
+// The parts add up to the sample's light.
+struct PathParts {
+  enum Bounce { Direct, Indirect1, Indirect2, Indirect3Plus };
+  static constexpr int kCount = 9;
+  std::array<Rgb, kCount> light{};  // emission, then per bounce its diffuse and glossy part
+  static constexpr int emission() { return 0; }
+  static constexpr int part(Bounce bounce, bool glossy) { return 1 + 2 * int(bounce) + int(glossy); }
+  // Light gathered after `verticesBefore` non-specular vertices (0: emission seen directly), with
+  // the first vertex's diffuse share.
+  void gather(int verticesBefore, Rgb contribution, Rgb diffuseShare) {
+    if (verticesBefore == 0) {
+      light[emission()] += contribution;
+      return;
+    }
+    const Bounce bounce = Bounce(std::min(verticesBefore, 4) - 1);
+    const Rgb diffuse = contribution * diffuseShare;
+    light[size_t(part(bounce, false))] += diffuse;
+    light[size_t(part(bounce, true))] += contribution - diffuse;
+  }
+};
+
+// The layers of FilmLayers::paths, each a sum of PathParts: channels "paths.NAME.R", .G, .B and,
+// with variance, "paths.NAME.variance.R", .G, .B.
+struct PathLayer {
+  const char* name;
+  std::vector<int> parts;
+};
+const std::vector<PathLayer>& pathLayers();
 
 // Per shading point, the light each part of the estimate sends towards the camera (before the
 // point's camera-path weight).
@@ -47,8 +83,10 @@ class Film {
   Film(int width, int height, Sums sums, FilmLayers layers) : Film(width, height, {0, 0, width, height}, sums, layers) {}
 
   // Sums::PerSample: one camera sample of `pixel` (an index in the whole image), its light split
-  // into direct and indirect, both summable().
-  void addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 normal, float depth);
+  // into direct and indirect, both summable(), and by path (read with layers().paths; each part
+  // summable()).
+  void addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 normal, float depth,
+                 const PathParts& paths = {});
   // Sums::PerPart: a band of camera samples, then the light of its shading points (each times its
   // camera-path weight). A point whose light is not summable() is left out and counted.
   void add(const EyePaths& band, const PointRadiance& light);
@@ -95,6 +133,8 @@ class Film {
   // Offsets into a pixel's sums: the total (PerSample, or PerPart without layers), the parts, the
   // features; -1 where absent.
   int total_ = -1, squares_ = -1, direct_ = -1, indirect_ = -1, caustic_ = -1, features_ = -1, stride_ = 0;
+  // With paths: the parts' sums (3 per part), and with variance each path layer's squares (3 per layer).
+  int pathParts_ = -1, pathSquares_ = -1;
   UninitializedVector<ExactSum> sums_;  // zeroed in parallel: a film can be hundreds of megabytes
   std::vector<uint32_t> samples_;  // valid camera samples per pixel
   std::vector<uint32_t> taken_;    // camera samples taken per pixel

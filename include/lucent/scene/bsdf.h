@@ -142,6 +142,21 @@ inline BsdfValue evalBsdfAndPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
   return v;
 }
 inline Rgb evalBsdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) { return evalBsdfAndPdf(b, wo, wi).f; }
+// The share of f(wo, wi) that is the diffuse lobe's, per channel (0 where f is): how light
+// scattered from wo to wi splits into diffuse and glossy reflection. The diffuse lobe is the
+// Lambertian term: kd / pi (Phong), kd (1 - F_dielectric) / pi (glTF).
+inline Rgb diffuseShare(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
+  if (b.type == MaterialType::Diffuse) return Rgb(1.0f);
+  const Rgb f = evalBsdf(b, wo, wi);
+  if (f.isBlack()) return Rgb(0.0f);
+  Rgb diffuse = lambertianValue(b.kd, wo.z, wi.z).f;
+  if (isGltf(b.type)) {
+    const float w = schlickWeight(dot(wo, normalize(wo + wi)));
+    diffuse = diffuse * (1.0f - (b.dielectricF0 + (b.dielectricF90 - b.dielectricF0) * w));
+  }
+  return {f.r > 0 ? std::min(1.0f, diffuse.r / f.r) : 0.0f, f.g > 0 ? std::min(1.0f, diffuse.g / f.g) : 0.0f,
+          f.b > 0 ? std::min(1.0f, diffuse.b / f.b) : 0.0f};
+}
 inline float bsdfPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) { return evalBsdfAndPdf(b, wo, wi).pdf; }
 
 // A direction wi drawn from one lobe of a mixture (Phong's, a glTF material's), weighed by the whole

@@ -36,6 +36,10 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
              : o.sampler != SamplerKind::Independent      ? "needs --sampler independent (a Sobol pixel's samples are not independent)"
                                                           : "";
     });
+    t.flag("paths", &O::paths,
+           "add the light split by path as layers paths.NAME: emission, direct, indirect.1, .2, .3+ (third and "
+           "later bounces), each also .diffuse and .glossy by the first non-specular vertex's reflection, and "
+           "diffuse and glossy; with --variance each with its variance");
     t.flag("pixel_centres", &O::pixelCentres,
            "every camera ray through its pixel's centre (the reference for methods at one sample per pixel)");
     return t;

@@ -28,6 +28,7 @@ struct PathResult {
   Rgb albedo;
   Vec3 normal;
   float depth = 0;
+  PathParts paths;    // with --paths
   bool valid = true;  // false when a ray became non-finite (the sample is dropped and counted)
 };
 
@@ -49,12 +50,17 @@ struct Path {
   Vec3 lastPosition;
   int gatheringVertices = 0;  // non-specular vertices the path has scattered from so far
   int bounce = 0;
+  bool splitsPaths = false;   // --paths: the light is also split into result.paths
+  Rgb firstDiffuseShare{1.0f};  // the diffuse share of the BSDF at the first non-specular vertex, the way the path left it
   PathResult result;
 
   // Light arriving at the vertex the path came from is direct if that vertex was the first
-  // non-specular one.
-  void gather(int verticesBefore, Rgb contribution) {
+  // non-specular one. `diffuseShare`: the first vertex's, towards the light the path sampled there
+  // when that light is the contribution's (next-event estimation at the first vertex).
+  void gather(int verticesBefore, Rgb contribution) { gather(verticesBefore, contribution, firstDiffuseShare); }
+  void gather(int verticesBefore, Rgb contribution, Rgb diffuseShare) {
     (verticesBefore <= 1 ? result.direct : result.indirect) += contribution;
+    if (splitsPaths) result.paths.gather(verticesBefore, contribution, diffuseShare);
   }
   // The auxiliary layers' features, at the first hit.
   void recordFirstHit(Rgb albedo, Vec3 normal, float depth) {
@@ -67,6 +73,7 @@ struct Path {
 struct ShadowQuery {
   Ray ray;
   Rgb contribution;
+  Rgb diffuseShare{1.0f};  // of the first non-specular vertex's BSDF, for the split by path
   uint32_t path = 0;
   int verticesBefore = 0;
 };
@@ -144,11 +151,15 @@ class PathTracer {
       queued = sampleDirect(sp, bsdf, frame, woLocal, path.sampler, path.bounce, shadow);
       shadow.contribution *= path.beta;
       shadow.verticesBefore = ++path.gatheringVertices;
+      if (path.gatheringVertices > 1) shadow.diffuseShare = path.firstDiffuseShare;
     }
 
     const float uLobe = path.sampler.uniform(path.bounce, SampleUse::Lobe);
     const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, path.sampler.uniform2(path.bounce, SampleUse::BsdfDirection));
     if (!bs.valid) return false;
+    // Leaving the first non-specular vertex: the rest of the path's light splits as this direction's BSDF value does.
+    if (path.splitsPaths && !bsdf.isDelta() && path.gatheringVertices == 1)
+      path.firstDiffuseShare = diffuseShare(bsdf, woLocal, bs.wi);
     const Vec3 wi = frame.toWorld(bs.wi);
     if (leaksThroughSurface(wo, wi, sp.geometricNormal, bs.wi.z * woLocal.z < 0)) return false;
     return continuePath(path, bs.weight, bs.pdf, bs.delta, sp.position,
@@ -247,7 +258,7 @@ class PathTracer {
         vis_, w.shadows.size(), [&](size_t i) -> const Ray& { return w.shadows[i].ray; },
         [&](size_t i, bool blocked) {
           const ShadowQuery& shadow = w.shadows[i];
-          if (!blocked) w.paths[shadow.path].gather(shadow.verticesBefore, shadow.contribution);
+          if (!blocked) w.paths[shadow.path].gather(shadow.verticesBefore, shadow.contribution, shadow.diffuseShare);
         });
   }
 
@@ -406,12 +417,14 @@ class PathTracer {
         path.recordFirstHit(Rgb(l.kdR[k], l.kdG[k], l.kdB[k]) + material(hit.triangle).ks, {l.snX[k], l.snY[k], l.snZ[k]},
                             hit.t);
       const int verticesBefore = ++path.gatheringVertices;
+      if (verticesBefore == 1) path.firstDiffuseShare = Rgb(1.0f);  // a Lambertian surface reflects only diffusely
       if (l.shadowQueued[k]) {
         ShadowQuery& shadow = w.shadows.emplace_back();
         shadow.ray = {{l.shadowOx[k], l.shadowOy[k], l.shadowOz[k]}, {l.shadowDx[k], l.shadowDy[k], l.shadowDz[k]}};
         shadow.ray.tMax = l.shadowTMax[k];
         shadow.contribution = Rgb(l.directR[k], l.directG[k], l.directB[k]) * path.beta;
         shadow.verticesBefore = verticesBefore;
+        shadow.diffuseShare = path.firstDiffuseShare;
         shadow.path = i;
       }
       if (l.scattered[k] &&
@@ -478,6 +491,7 @@ class PathTracer {
     if (!sample.queued) return false;
     shadow.ray = shadowRay(sp.position, sp.geometricNormal, ls);
     shadow.contribution = sample.contribution;
+    if (opt_.paths) shadow.diffuseShare = diffuseShare(bsdf, woLocal, wiLocal);
     return true;
   }
 
@@ -530,15 +544,17 @@ void PathTracer::renderTile(const PixelRect& tile, int sampleBegin, int sampleEn
       path.sampler = start.sampler[k];
       path.ray = {camera_.eye(), {start.dirX[k], start.dirY[k], start.dirZ[k]}};
       path.lastPosition = path.ray.origin;
+      path.splitsPaths = opt_.paths;
     }
     traceWave(wave, counters);
     for (const Path& path : wave.paths) {
       const PathResult& p = path.result;
-      if (!p.valid || !summable(p.direct) || !summable(p.indirect) || !summable(p.direct + p.indirect)) {
+      if (!p.valid || !summable(p.direct) || !summable(p.indirect) || !summable(p.direct + p.indirect) ||
+          !std::all_of(p.paths.light.begin(), p.paths.light.end(), [](Rgb part) { return summable(part); })) {
         ++counters.invalidSamples;
         continue;
       }
-      film.addSample(path.pixel, p.direct, p.indirect, p.albedo, p.normal, p.depth);
+      film.addSample(path.pixel, p.direct, p.indirect, p.albedo, p.normal, p.depth, p.paths);
     }
   }
   for (int py = tile.y0; py < tile.y1; ++py)
@@ -574,7 +590,7 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
                       "--time-budget: a render with a time budget takes as many samples as time allows, so it cannot "
                       "be split (--crop, --samples), checkpointed or resumed");
   // Every pixel is owned by one tile, and its samples are added in sample order.
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, {options.common.layers, false, options.variance}));
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, {options.common.layers, false, options.variance, options.paths}));
   const PathTracer tracer(scene, visibility, options);
   // Tiles of the image's grid, cut to the part's region.
   const PixelRect& region = part.region;
