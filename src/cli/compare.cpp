@@ -193,8 +193,7 @@ void addCompareCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("reference", opt->reference, "Reference image")->required();
   cmd->add_option("--metric", opt->metric, "Metric tested against --max-error (default relmse)")
       ->check(CLI::IsMember({"rmse", "relmse", "smape", "mae", "flip"}));
-  cmd->add_option("--max-error", opt->maxError, "Fail (exit 1) when the metric exceeds this")
-;
+  cmd->add_option("--max-error", opt->maxError, "Fail (exit 1) when the metric exceeds this");
   cmd->add_option("--heatmap", opt->heatmap,
                   "Write a false-colour PNG of the per-pixel error (with --test: of |z|, 0 to 5; with --metric "
                   "flip: of FLIP, 0 to 1)");

@@ -9,7 +9,7 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "lucent/core/srgb.h"
+#include "lucent/core/memory.h"
 
 namespace lucent {
 
@@ -387,6 +387,9 @@ FlipResult computeFlip(const Image& candidate, const Image& reference, const Fli
   if (!(options.pixelsPerDegree >= 1 && options.pixelsPerDegree <= 1000))
     throw std::invalid_argument("FLIP's pixels per degree must lie in [1, 1000]");
   const int w = reference.width(), h = reference.height();
+  // At the peak: both images' inputs and tone-mapped copies, one image's stages being prepared
+  // (17 planes) and the other's results (5), the errors and their sorted copy: 40 floats a pixel.
+  requireMemory(uint64_t(w) * uint64_t(h) * 40 * sizeof(float), "FLIP", "compare crops of the images");
   std::vector<Triple> candidateRgb, referenceRgb;
   FlipResult result;
   result.hdr = options.hdr;
