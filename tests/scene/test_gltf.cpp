@@ -502,6 +502,26 @@ TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read
   CHECK(uvAt(both, m.kdTexture, {1, 0, 0}).y == Approx(1).margin(1e-6));
   CHECK(uvAt(both, m.metallicRoughnessTexture, {1, 0, 0}).x == Approx(0.5).margin(1e-6));
   CHECK(uvAt(both, m.metallicRoughnessTexture, {1, 0, 0}).y == Approx(1).margin(1e-6));
+  // An OBJ mesh beside the file, read after it or before: its vertices have set 1 coordinates of
+  // zero, and the glTF vertices keep theirs.
+  {
+    std::ofstream(dir.path / "triangle.obj") << "v 5 0 0\nv 6 0 0\nv 5 1 0\nf 1 2 3\n";
+    const std::string model = writeFile(dir.path, "mixed.gltf", mixed);
+    const json camera = {{"eye", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"up", {0, 1, 0}}, {"fov_y", 40}, {"resolution", {8, 8}}};
+    for (const bool objFirst : {false, true}) {
+      json meshes = {{{"gltf", model}}};
+      meshes.insert(objFirst ? meshes.begin() : meshes.end(), json{{"obj", (dir.path / "triangle.obj").string()}});
+      const Scene withObj = loadScene(writeFile(dir.path, "with-obj.json", {{"camera", camera}, {"meshes", meshes}}), LoadOptions(true));
+      INFO("OBJ first: " << objFirst);
+      REQUIRE(withObj.texcoords1.size() == withObj.positions.size());
+      const int32_t mr = withObj.materials[objFirst ? 1 : 0].metallicRoughnessTexture;
+      REQUIRE(mr >= 0);
+      CHECK(uvAt(withObj, mr, {1, 0, 0}).x == Approx(0.5).margin(1e-6));
+      CHECK(uvAt(withObj, mr, {1, 0, 0}).y == Approx(1).margin(1e-6));
+      for (size_t v = 0; v < withObj.positions.size(); ++v)
+        if (withObj.positions[v].x >= 5) CHECK((withObj.texcoords1[v].x == 0 && withObj.texcoords1[v].y == 0));
+    }
+  }
   second["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 2;
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, second), Catch::Contains("baseColorTexture.texCoord: TEXCOORD_2 is not read"));
 }
