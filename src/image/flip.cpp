@@ -324,18 +324,21 @@ void ldrFlip(const std::vector<Triple>& candidate, const std::vector<Triple>& re
   });
 }
 
-uint64_t readRgb(const Image& image, std::vector<Triple>& out) {
+// An image's R, G, B per pixel, black where a value is NaN or infinite; those pixels' indices are
+// returned.
+std::vector<size_t> readRgb(const Image& image, std::vector<Triple>& out) {
   const int r = image.channelIndex("R"), g = image.channelIndex("G"), b = image.channelIndex("B");
-  uint64_t nonFinite = 0;
+  std::vector<size_t> nonFinite;
   out.resize(size_t(image.width()) * size_t(image.height()));
   for (int y = 0; y < image.height(); ++y)
     for (int x = 0; x < image.width(); ++x) {
+      const size_t i = size_t(y) * size_t(image.width()) + size_t(x);
       Triple rgb = {image.at(x, y, r), image.at(x, y, g), image.at(x, y, b)};
       if (!(std::isfinite(rgb[0]) && std::isfinite(rgb[1]) && std::isfinite(rgb[2]))) {
-        ++nonFinite;
+        nonFinite.push_back(i);
         rgb = {0, 0, 0};
       }
-      out[size_t(y) * size_t(image.width()) + size_t(x)] = rgb;
+      out[i] = rgb;
     }
   return nonFinite;
 }
@@ -393,8 +396,9 @@ FlipResult computeFlip(const Image& candidate, const Image& reference, const Fli
   std::vector<Triple> candidateRgb, referenceRgb;
   FlipResult result;
   result.hdr = options.hdr;
-  result.nonFinite = readRgb(candidate, candidateRgb);
-  if (readRgb(reference, referenceRgb) > 0)
+  const std::vector<size_t> nonFinite = readRgb(candidate, candidateRgb);
+  result.nonFinite = nonFinite.size();
+  if (!readRgb(reference, referenceRgb).empty())
     throw std::invalid_argument("the reference has NaN or infinite values");
   const Filters filters{flip::csfFilters(options.pixelsPerDegree), flip::featureFilters(options.pixelsPerDegree)};
   std::vector<float> errors(referenceRgb.size(), 0.0f);
@@ -424,16 +428,9 @@ FlipResult computeFlip(const Image& candidate, const Image& reference, const Fli
       ldrFlip(toneMapped(hdrCandidate), toneMapped(hdrReference), w, h, filters, errors);
     }
   }
+  for (const size_t i : nonFinite) errors[i] = 1;
   result.map = Image(w, h, {"flip"});
-  const int cr = candidate.channelIndex("R"), cg = candidate.channelIndex("G"), cb = candidate.channelIndex("B");
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      float& e = errors[size_t(y) * size_t(w) + size_t(x)];
-      if (!(std::isfinite(candidate.at(x, y, cr)) && std::isfinite(candidate.at(x, y, cg)) &&
-            std::isfinite(candidate.at(x, y, cb))))
-        e = 1;
-      result.map.at(x, y, 0) = e;
-    }
+  result.map.pixels() = errors;
   // Pooling (FLIP Section 5): the mean and percentiles weighted by the errors themselves.
   std::vector<float> sorted = errors;
   std::sort(sorted.begin(), sorted.end());
