@@ -8,6 +8,7 @@
 #include "lucent/image/metrics.h"
 #include "lucent/methods/pathtrace.h"
 #include "lucent/scene/loader.h"
+#include "test_scenes.h"
 #include "test_support.h"
 
 using namespace lucent;
@@ -195,4 +196,35 @@ TEST_CASE("lucent compare --layer compares a layer, or a layer with a whole imag
   CHECK(missing.status == 2);
   CHECK(missing.output.find("the reference has no layer 'indirect.9' (its layers: paths.diffuse, paths.direct,") !=
         std::string::npos);
+}
+
+TEST_CASE("Light split by path: a layer holding all the light has the image's values and variance",
+          "[pathtrace][paths]") {
+  // An emitting enclosure seen directly and through a mirror box: every contribution is emission
+  // seen directly, so the emission layer sums the very terms the image sums.
+  Scene scene;
+  Material emitter, mirror;
+  emitter.kd = Rgb(0.0f);
+  emitter.ke = Rgb(1.0f, 2.0f, 3.0f);
+  mirror.type = MaterialType::Mirror;
+  mirror.ks = Rgb(0.6f);
+  test::addBox(scene, {-5, -5, -5}, {5, 5, 5}, test::addMaterial(scene, emitter, "emitter"), true);
+  test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, test::addMaterial(scene, mirror, "mirror"), false);
+  scene.camera = test::testCamera({0, 0.5f, 4}, {0, 0, 0}, 16, 16, 60);
+  finalizeScene(scene);
+  const Visibility vis(scene);
+  PathTraceOptions opt;
+  opt.common.spp = 8;
+  opt.sampler = SamplerKind::Independent;
+  opt.variance = true;
+  opt.paths = true;
+  const Image image = renderPathTraced(scene, vis, opt).image;
+  for (const char* c : {"R", "G", "B"})
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 16; ++x) {
+        REQUIRE(channel(image, std::string("paths.emission.") + c, x, y) == channel(image, c, x, y));
+        REQUIRE(channel(image, std::string("paths.emission.variance.") + c, x, y) ==
+                channel(image, std::string("variance.") + c, x, y));
+        REQUIRE(channel(image, std::string("paths.direct.") + c, x, y) == 0);
+      }
 }
