@@ -16,6 +16,7 @@
 #include <optional>
 
 #include "cli/commands.h"
+#include "cli/comparison_options.h"
 #include "cli/output_paths.h"
 #include "lucent/core/text.h"
 #include "lucent/image/flip.h"
@@ -93,8 +94,7 @@ int runCompare(const CompareOptions& opt) {
   if (opt.block < 1 || opt.block > 4096) throw std::invalid_argument("--block must lie in [1, 4096]");
   if (opt.within && !(std::isfinite(*opt.within) && *opt.within > 0 && *opt.within <= 10))
     throw std::invalid_argument("--within must lie in (0, 10]");
-  if (!(opt.pixelsPerDegree >= 1 && opt.pixelsPerDegree <= 1000))
-    throw std::invalid_argument("--ppd must lie in [1, 1000]");
+  checkPixelsPerDegree(opt.pixelsPerDegree);
   for (const auto& [name, value] : {std::pair{"--start-exposure", opt.startExposure}, {"--stop-exposure", opt.stopExposure}})
     if (value && !(std::abs(*value) <= 100)) throw std::invalid_argument(std::string(name) + " must lie in [-100, 100]");
   if (opt.startExposure && opt.stopExposure && *opt.startExposure > *opt.stopExposure)
@@ -131,12 +131,11 @@ int runCompare(const CompareOptions& opt) {
   std::optional<FlipResult> flipResult;
   try {
     if (flip) {
-      FlipOptions flipOptions;
-      flipOptions.pixelsPerDegree = opt.pixelsPerDegree;
-      flipOptions.hdr = !(isSrgbEncoded(opt.image, candidateMetadata) && isSrgbEncoded(opt.reference, referenceMetadata));
-      flipOptions.startExposure = opt.startExposure;
-      flipOptions.stopExposure = opt.stopExposure;
-      flipResult = computeFlip(candidateFile, referenceFile, flipOptions);
+      FlipOptions options = flipOptions(isSrgbEncoded(opt.image, candidateMetadata),
+                                        isSrgbEncoded(opt.reference, referenceMetadata), opt.pixelsPerDegree);
+      options.startExposure = opt.startExposure;
+      options.stopExposure = opt.stopExposure;
+      flipResult = computeFlip(candidateFile, referenceFile, options);
     }
     if (opt.test) test = testWithinNoise(candidateFile, referenceFile, opt.alpha, 4, opt.block);
     if (opt.within) equivalence = testEquivalence(candidateFile, referenceFile, *opt.within, opt.alpha);
@@ -197,15 +196,8 @@ void addCompareCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("--heatmap", opt->heatmap,
                   "Write a false-colour PNG of the per-pixel error (with --test: of |z|, 0 to 5; with --metric "
                   "flip: of FLIP, 0 to 1)");
-  CLI::Option* layerOption = cmd->add_option(
-      "--layer", opt->layer,
-      "Compare the reference's layer NAME (or paths.NAME: render --paths) with the image's layer of that name, or "
-      "with the whole image where it has none");
-  cmd->add_option("--image-layer", opt->imageLayer, "With --layer: the image's layer to compare, by its own name")
-      ->needs(layerOption);
-  CLI::Option* ppd = cmd->add_option("--ppd", opt->pixelsPerDegree,
-                                     "With --metric flip: the observer's pixels per degree of visual angle, in [1, 1000] "
-                                     "(default 67.02: a 0.7 m wide 4K display seen from 0.7 m)");
+  addLayerOptions(cmd, opt->layer, opt->imageLayer, "the image");
+  CLI::Option* ppd = cmd->add_option("--ppd", opt->pixelsPerDegree, std::string("With --metric flip: ") + kPixelsPerDegreeHelp);
   CLI::Option* startExposure = cmd->add_option(
       "--start-exposure", opt->startExposure,
       "With --metric flip on HDR images: the first exposure in stops (default from the reference's largest luminance)");

@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "cli/commands.h"
+#include "cli/comparison_options.h"
 #include "cli/output_paths.h"
 #include "lucent/core/text.h"
 #include "lucent/core/files.h"
@@ -431,7 +432,7 @@ int runReport(const ReportOptions& opt) {
   if (opt.within && !(std::isfinite(*opt.within) && *opt.within > 0 && *opt.within <= 10))
     throw std::invalid_argument("--within must lie in (0, 10]");
   if (!(opt.exposure >= -30 && opt.exposure <= 30)) throw std::invalid_argument("--exposure must lie in [-30, 30]");
-  if (!(opt.pixelsPerDegree >= 1 && opt.pixelsPerDegree <= 1000)) throw std::invalid_argument("--ppd must lie in [1, 1000]");
+  checkPixelsPerDegree(opt.pixelsPerDegree);
   for (const double s : opt.seconds)
     if (!(std::isfinite(s) && s > 0)) throw std::invalid_argument("--seconds must be positive and finite");
   if (!opt.labels.empty() && opt.labels.size() != opt.candidates.size())
@@ -487,10 +488,8 @@ int runReport(const ReportOptions& opt) {
       if (tested && opt.within) c.equivalence = testEquivalence(file, referenceFile, *opt.within, opt.alpha);
       c.error = compareImages(image, reference);
       // As lucent compare --metric flip: LDR-FLIP between 8-bit files, HDR-FLIP otherwise.
-      FlipOptions flipOptions;
-      flipOptions.pixelsPerDegree = opt.pixelsPerDegree;
-      flipOptions.hdr = !(referenceIsSrgb && isSrgbEncoded(c.path, c.metadata));
-      c.flip = computeFlip(image, reference, flipOptions);
+      c.flip = computeFlip(image, reference,
+                           flipOptions(isSrgbEncoded(c.path, c.metadata), referenceIsSrgb, opt.pixelsPerDegree));
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("'" + c.path + "' vs '" + opt.reference + "': " + e.what());
     }
@@ -543,15 +542,8 @@ void addReportCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("--within", opt->within,
                   "Also show compare --within D's verdict: each region's relative difference with its interval");
   cmd->add_option("--exposure", opt->exposure, "Exposure of the shown images, in stops, in [-30, 30] (default 0)");
-  CLI::Option* layerOption = cmd->add_option(
-      "--layer", opt->layer,
-      "Compare the reference's layer NAME (or paths.NAME: render --paths) with each candidate's layer of that name, "
-      "or with the whole candidate where it has none");
-  cmd->add_option("--image-layer", opt->imageLayer, "With --layer: the candidates' layer to compare, by its own name")
-      ->needs(layerOption);
-  cmd->add_option("--ppd", opt->pixelsPerDegree,
-                  "FLIP's observer: pixels per degree of visual angle, in [1, 1000] (default 67.02: a 0.7 m wide 4K "
-                  "display seen from 0.7 m)");
+  addLayerOptions(cmd, opt->layer, opt->imageLayer, "each candidate");
+  cmd->add_option("--ppd", opt->pixelsPerDegree, kPixelsPerDegreeHelp);
   cmd->callback([opt, &exitCode] {
     try {
       exitCode = runReport(*opt);

@@ -211,13 +211,22 @@ Image errorHeatmap(const Image& image, const Image& reference, ErrorMetric metri
   return heatmap;
 }
 
-Image rgbChannels(const Image& image) {
-  const std::array<int, 3> at = rgbIndices(image, "", "the image");
-  Image rgb(image.width(), image.height(), {"R", "G", "B"});
+namespace {
+
+// An image of some of another's channels: channel k named names[k], copied from channel from[k].
+Image copyChannels(const Image& image, std::vector<std::string> names, const std::vector<int>& from) {
+  Image out(image.width(), image.height(), std::move(names));
   for (int y = 0; y < image.height(); ++y)
     for (int x = 0; x < image.width(); ++x)
-      for (int c = 0; c < 3; ++c) rgb.at(x, y, c) = image.at(x, y, at[size_t(c)]);
-  return rgb;
+      for (size_t k = 0; k < from.size(); ++k) out.at(x, y, int(k)) = image.at(x, y, from[k]);
+  return out;
+}
+
+}  // namespace
+
+Image rgbChannels(const Image& image) {
+  const std::array<int, 3> at = rgbIndices(image, "", "the image");
+  return copyChannels(image, {"R", "G", "B"}, {at[0], at[1], at[2]});
 }
 
 namespace {
@@ -431,11 +440,7 @@ std::optional<Image> layerImage(const Image& image, const std::string& name, std
     channels.insert(channels.end(), {"variance.R", "variance.G", "variance.B"});
     from.insert(from.end(), variance.begin(), variance.end());
   }
-  Image out(image.width(), image.height(), channels);
-  for (int y = 0; y < image.height(); ++y)
-    for (int x = 0; x < image.width(); ++x)
-      for (size_t c = 0; c < from.size(); ++c) out.at(x, y, int(c)) = image.at(x, y, from[c]);
-  return out;
+  return copyChannels(image, std::move(channels), from);
 }
 
 std::vector<std::string> colourLayers(const Image& image) {
@@ -467,12 +472,10 @@ LayerChoice chooseLayer(const Image& candidate, const Image& reference, const st
   if (!c) {
     // The candidate whole: its R, G, B and, where it has them, its variance channels.
     std::vector<std::string> channels;
+    std::vector<int> from;
     for (const char* channel : {"R", "G", "B", "variance.R", "variance.G", "variance.B"})
-      if (candidate.channelIndex(channel) >= 0) channels.push_back(channel);
-    c = Image(candidate.width(), candidate.height(), channels);
-    for (int y = 0; y < candidate.height(); ++y)
-      for (int x = 0; x < candidate.width(); ++x)
-        for (size_t k = 0; k < channels.size(); ++k) c->at(x, y, int(k)) = candidate.at(x, y, candidate.channelIndex(channels[k]));
+      if (candidate.channelIndex(channel) >= 0) channels.push_back(channel), from.push_back(candidate.channelIndex(channel));
+    c = copyChannels(candidate, std::move(channels), from);
   }
   choice.candidate = std::move(*c);
   return choice;
