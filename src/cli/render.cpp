@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -455,6 +456,11 @@ int runRender(const RenderArgs& a) {
   ImageMetadata meta = filmMetadata(info, *out.film);
   meta.emplace_back("lucent:render_seconds", std::to_string(total.seconds()));
   meta.emplace_back("lucent:threads", std::to_string(parallel.threads()));
+  // Whole numbers (samples) as integers.
+  auto measuredJson = [](double value) {
+    return value == std::floor(value) && std::abs(value) < 0x1p53 ? nlohmann::json(int64_t(value)) : nlohmann::json(value);
+  };
+  for (const auto& [name, value] : out.measured) meta.emplace_back("lucent:" + name, measuredJson(value).dump());
   // What the scene's files hold that this render leaves out: a reference says how it differs.
   if (!scene.ignored.empty()) meta.emplace_back("lucent:ignored", nlohmann::json(scene.ignored).dump());
   // A part of a split render and an interrupted render keep their film (merged later, or resumed);
@@ -492,6 +498,7 @@ int runRender(const RenderArgs& a) {
   for (const auto& [name, seconds] : stats.stageSeconds) summary["stages"][name] = seconds;
   for (const auto& [name, value] : stats.counters) summary["counters"][name] = value;
   summary["derived"] = derived;
+  for (const auto& [name, value] : out.measured) summary[name] = measuredJson(value);
   summary["output"] = a.output;
   if (!a.png.empty()) summary["png"] = a.png;
   if (keepFilm) summary["film"] = filmPath;

@@ -22,6 +22,9 @@ struct PathTraceOptions {
                                // high enough by default that Russian roulette, not the cut, ends paths
   int rouletteDepth = 3;       // Russian roulette from this bounce on
   double timeBudget = 0;       // seconds; 0 for none. At least one sample per pixel is taken
+  // The relMSE against the converged image to stop at, estimated from the image (error_target.h),
+  // with samples spent where the pixels' estimated errors are largest; 0 for none.
+  double targetError = 0;
   int tileSize = 16;           // pixels; does not change the image
   bool variance = false;       // add each pixel mean's variance (variance.R, .G, .B), from 2 spp on
   bool paths = false;          // add the light split by path as layers (PathParts, pathLayers)
@@ -37,7 +40,7 @@ struct PathTraceOptions {
   // A padded Owen-scrambled Sobol sequence (lower error at equal samples), or independent random
   // numbers for validation (include/lucent/core/path_sampler.h).
   SamplerKind sampler = SamplerKind::Sobol;
-  CommonOptions common{.spp = 64};  // spp: the most taken when a time budget is set
+  CommonOptions common{.spp = 64};  // spp: the most any pixel takes with a time budget or an error target
 };
 
 const OptionTable<PathTraceOptions>& pathTraceOptionTable();

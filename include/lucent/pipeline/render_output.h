@@ -2,6 +2,9 @@
 #pragma once
 #include <functional>
 #include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "lucent/core/stats.h"
 #include "lucent/image/image.h"
@@ -21,6 +24,9 @@ struct RenderOutput {
   // every sample of the part (false after a stop request).
   std::shared_ptr<const Film> film;
   bool complete = true;
+  // What the method measured of its own render, recorded in the image's header as lucent:NAME and
+  // in the summary (the path tracer's estimated_relmse and samples_spent with an error target).
+  std::vector<std::pair<std::string, double>> measured;
 };
 
 }  // namespace lucent

@@ -19,7 +19,7 @@ LUCENT_LANE_LOOP(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32
     // The pixels' keys and the camera's pair in lanes (PathSampler's arithmetic), the rays, then
     // the samplers.
     alignas(64) float jitterX[kLaneSlots], jitterY[kLaneSlots];
-    sobolCameraPairs(seed, l.pixel + first, l.sample + first, last - first, l.pixelKey + first, jitterX + first,
+    sobolCameraPairs(seed, l.streamPixel + first, l.sample + first, last - first, l.pixelKey + first, jitterX + first,
                      jitterY + first);
     for (uint32_t k = first; k < last; ++k) {
       const float jx = pixelCentres ? 0.5f : jitterX[k], jy = pixelCentres ? 0.5f : jitterY[k];
@@ -30,7 +30,7 @@ LUCENT_LANE_LOOP(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32
     return;
   }
   for (uint32_t k = first; k < last; ++k) {
-    PathSampler s(sampler, seed, l.pixel[k], l.sample[k]);
+    PathSampler s(sampler, seed, l.streamPixel[k], l.sample[k]);
     const Vec2 uniform = s.camera();  // drawn either way: the path's later numbers do not move
     const Vec2 jitter = pixelCentres ? Vec2{0.5f, 0.5f} : uniform;
     const Vec3 direction = camera.generate(l.x[k] + jitter.x, l.y[k] + jitter.y).direction;

@@ -63,12 +63,16 @@ struct DiffuseLanes {
       nextDy[kLaneSlots], nextDz[kLaneSlots];
 };
 
-// The camera samples of a wave: pixel, sample index and pixel corner in; each path's keyed
-// sampler (the independent one after the two jitter numbers) and camera ray direction out. The same numbers as
-// keying a PathSampler and calling PinholeCamera::generate one sample at a time.
+// The camera samples of a wave: pixel, the key and index of its sample's stream and pixel corner
+// in; each path's keyed sampler (the independent one after the two jitter numbers) and camera ray
+// direction out. The same numbers as keying a PathSampler by (streamPixel, sample) and calling
+// PinholeCamera::generate one sample at a time.
 struct CameraLanes {
   uint32_t count = 0;
-  alignas(64) uint64_t pixel[kLaneSlots], sample[kLaneSlots];
+  alignas(64) uint64_t pixel[kLaneSlots];
+  // What the sampler is keyed by: the pixel, or with --target-error the pixel's stream
+  // (error_target.h), and the sample's index in it.
+  alignas(64) uint64_t streamPixel[kLaneSlots], sample[kLaneSlots];
   alignas(64) float x[kLaneSlots], y[kLaneSlots];
   alignas(64) uint64_t pixelKey[kLaneSlots];  // the Sobol sampler's (PathSampler::sobolPixelKey)
   alignas(64) PathSampler sampler[kLaneSlots];

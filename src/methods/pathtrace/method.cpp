@@ -8,13 +8,20 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
   static const OptionTable<PathTraceOptions> table = [] {
     using O = PathTraceOptions;
     OptionTable<O> t;
-    t.include(&O::common, commonOptionTable("samples per pixel (the most taken when a time budget is set)"));
+    t.include(&O::common, commonOptionTable("samples per pixel (the most any pixel takes with a time budget or an error target)"));
     t.integer("max_depth", &O::maxDepth, 0, 1 << 24, "bounces",
               "path length: 1 is direct light alone, 2 adds one indirect bounce");
     t.integer("roulette_depth", &O::rouletteDepth, 1, 1 << 16, "bounces",
               "Russian roulette from this bounce on");
     t.real("time_budget", &O::timeBudget, 0, 1e9, "s",
            "stop sampling within this many seconds (at least one sample per pixel); 0: no budget");
+    t.real("target_error", &O::targetError, 0, 1, "relMSE",
+           "render until the image's estimated relMSE against the converged image is at most this, spending samples "
+           "where the pixels' errors are largest (with --spp the most a pixel takes, --time-budget a limit); 0: no target");
+    t.rule("target_error", [](const O& o) {
+      // Each pixel's samples alternate between two streams, a pair per pass.
+      return o.targetError > 0 && o.common.spp < 8 ? "needs at least 8 samples per pixel (--spp), its first pass" : "";
+    });
     t.integer("tile_size", &O::tileSize, 1, 4096, "pixels",
               "side of the tiles the image is rendered in (does not change the image)");
     t.imageNeutral("tile_size");

@@ -3,7 +3,10 @@
 #include <tbb/parallel_for.h>
 
 #include <atomic>
+#include <iostream>
 #include <memory>
+#include <span>
+#include <utility>
 
 #include "lucent/core/parallel.h"
 #include "lucent/core/path_sampler.h"
@@ -14,6 +17,7 @@
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"
 #include "methods/pathtrace/diffuse_lanes.h"
+#include "methods/pathtrace/error_target.h"
 #include "methods/pathtrace/shading_steps.h"
 
 namespace lucent {
@@ -103,6 +107,15 @@ size_t sceneArrayBytes(const Scene& s) {
          s.faceNormals.size() * sizeof(Vec3);
 }
 
+// The samples a pass takes at each pixel: from sampleBegin plus the samples the film has taken
+// there, to sampleEnd, or where pixelEnds is given (an error-targeted render of the whole image) to
+// sampleBegin + pixelEnds[pixel].
+struct PassSamples {
+  int sampleBegin = 0, sampleEnd = 0;
+  std::span<const uint32_t> pixelEnds;
+  int end(uint64_t pixel) const { return pixelEnds.empty() ? sampleEnd : sampleBegin + int(pixelEnds[pixel]); }
+};
+
 class PathTracer {
  public:
   PathTracer(const Scene& scene, const Visibility& vis, const PathTraceOptions& opt)
@@ -185,10 +198,11 @@ class PathTracer {
     } sobol;
   };
 
-  // The samples [sampleBegin, sampleEnd) of the tile's pixels, in pixel order, then sample order,
-  // in waves; added to the film in that order, so that every pixel sums its samples in sample order.
-  void renderTile(const PixelRect& tile, int sampleBegin, int sampleEnd, Wave& wave, Counters& counters,
-                  Film& film) const;
+  // The pass's samples of the tile's pixels, in pixel order, then sample order, in waves; added to
+  // the film (and with --target-error to the streams' sums) in that order.
+  // Returns the number of samples taken.
+  uint64_t renderTile(const PixelRect& tile, const PassSamples& pass, StreamSums* streams, Wave& wave, Counters& counters,
+                      Film& film) const;
 
   // Advances every path of the wave to its end: closest hits for all live paths, then shading,
   // then the queued shadow rays, bounce after bounce. Each path sees the same random numbers and the
@@ -507,19 +521,23 @@ class PathTracer {
 };
 
 // The samples of the tile's pixels from each pixel's next (sampleBegin plus the samples the film
-// has taken there) to sampleEnd, in order (row, pixel, sample); then the film takes them all.
-void PathTracer::renderTile(const PixelRect& tile, int sampleBegin, int sampleEnd, Wave& wave, Counters& counters,
-                            Film& film) const {
+// has taken there) to the pass's end, in order (row, pixel, sample); then the film takes them all.
+// With streams, sample s of a pixel is sample s / 2 of its stream s % 2.
+uint64_t PathTracer::renderTile(const PixelRect& tile, const PassSamples& pass, StreamSums* streams, Wave& wave,
+                                Counters& counters, Film& film) const {
+  uint64_t taken = 0;
   const uint64_t width = uint64_t(scene_.camera.width);
   auto pixelOf = [&](int x, int y) { return uint64_t(y) * width + uint64_t(x); };
   int x = tile.x0, y = tile.y0;
-  int sample = sampleBegin + int(film.taken(pixelOf(x, y)));
+  int sample = pass.sampleBegin + int(film.taken(pixelOf(x, y)));
+  int sampleEnd = pass.end(pixelOf(x, y));
   // Moves (x, y, sample) to the next sample to take, if any; false at the end of the tile.
   auto settle = [&] {
     while (sample >= sampleEnd) {
       if (++x == tile.x1) x = tile.x0, ++y;
       if (y == tile.y1) return false;
-      sample = sampleBegin + int(film.taken(pixelOf(x, y)));
+      sample = pass.sampleBegin + int(film.taken(pixelOf(x, y)));
+      sampleEnd = pass.end(pixelOf(x, y));
     }
     return true;
   };
@@ -528,7 +546,10 @@ void PathTracer::renderTile(const PixelRect& tile, int sampleBegin, int sampleEn
     start.count = 0;
     for (; more && start.count < uint32_t(kWaveSize); more = settle()) {
       const uint32_t k = start.count++;
-      start.pixel[k] = pixelOf(x, y), start.sample[k] = uint64_t(sample);
+      const uint64_t pixel = pixelOf(x, y);
+      start.pixel[k] = pixel;
+      start.streamPixel[k] = streams && sample % 2 == 1 ? pixel | kSecondStream : pixel;
+      start.sample[k] = uint64_t(streams ? sample / 2 : sample);
       start.x[k] = float(x), start.y[k] = float(y);
       ++sample;
     }
@@ -547,7 +568,9 @@ void PathTracer::renderTile(const PixelRect& tile, int sampleBegin, int sampleEn
       path.splitsPaths = opt_.paths;
     }
     traceWave(wave, counters);
-    for (const Path& path : wave.paths) {
+    taken += start.count;
+    for (uint32_t k = 0; k < start.count; ++k) {
+      const Path& path = wave.paths[k];
       const PathResult& p = path.result;
       if (!p.valid || !summable(p.direct) || !summable(p.indirect) || !summable(p.direct + p.indirect) ||
           !std::all_of(p.paths.light.begin(), p.paths.light.end(), [](Rgb part) { return summable(part); })) {
@@ -555,13 +578,15 @@ void PathTracer::renderTile(const PixelRect& tile, int sampleBegin, int sampleEn
         continue;
       }
       film.addSample(path.pixel, p.direct, p.indirect, p.albedo, p.normal, p.depth, p.paths);
+      if (streams) streams->add(path.pixel, start.streamPixel[k] != path.pixel, p.direct + p.indirect);
     }
   }
   for (int py = tile.y0; py < tile.y1; ++py)
     for (int px = tile.x0; px < tile.x1; ++px) {
       const uint64_t pixel = pixelOf(px, py);
-      film.setTaken(pixel, std::max(film.taken(pixel), uint32_t(sampleEnd - sampleBegin)));
+      film.setTaken(pixel, std::max(film.taken(pixel), uint32_t(pass.end(pixel) - pass.sampleBegin)));
     }
+  return taken;
 }
 
 // The end of the next pass of samples, counted from the part's first. With a time budget, the
@@ -585,10 +610,14 @@ int nextPassEnd(const PathTraceOptions& options, int samples, int done, double e
 RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, const PathTraceOptions& options,
                               const RenderControl& control) {
   const RenderPart part = beginRender(pathTraceOptionTable(), options, control, scene);
-  if (options.timeBudget > 0 && (control.isPart() || control.resume || control.checkpointSeconds > 0))
-    throw OptionError("time_budget",
-                      "--time-budget: a render with a time budget takes as many samples as time allows, so it cannot "
-                      "be split (--crop, --samples), checkpointed or resumed");
+  const bool targeted = options.targetError > 0;
+  if ((options.timeBudget > 0 || targeted) && (control.isPart() || control.resume || control.checkpointSeconds > 0)) {
+    const char* flag = targeted ? "--target-error" : "--time-budget";
+    throw OptionError(targeted ? "target_error" : "time_budget",
+                      std::string(flag) + ": a render " + (targeted ? "to an error target" : "with a time budget") +
+                          " takes as many samples as it needs, so it cannot be split (--crop, --samples), "
+                          "checkpointed or resumed");
+  }
   // Every pixel is owned by one tile, and its samples are added in sample order.
   auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, {options.common.layers, false, options.variance, options.paths}));
   const PathTracer tracer(scene, visibility, options);
@@ -599,20 +628,22 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
   const int tilesX = (region.x1 + tile - 1) / tile - tileX0, tilesY = (region.y1 + tile - 1) / tile - tileY0;
   tbb::enumerable_thread_specific<Counters> counters;
   tbb::enumerable_thread_specific<PathTracer::Wave> waves;
-  uint64_t resumedSamples = 0;
-  for (uint32_t taken : film->samplesTaken()) resumedSamples += taken;
+  auto samplesTaken = [&] {
+    uint64_t sum = 0;
+    for (uint32_t taken : film->samplesTaken()) sum += taken;
+    return sum;
+  };
+  const uint64_t resumedSamples = samplesTaken();
   std::atomic<uint64_t> pixelSamplesDone{resumedSamples};
-  const double totalPixelSamples = double(region.pixelCount()) * part.samples();
+  double expectedSamples = double(region.pixelCount()) * part.samples();  // for progress
   CheckpointClock checkpoints(control);
+  const std::unique_ptr<StreamSums> streams = targeted ? std::make_unique<StreamSums>(region.pixelCount()) : nullptr;
 
   beginStage("trace_paths");
   Stopwatch clock;
-  // A resumed render goes on from the fewest samples any pixel has (pixels with more skip them).
-  int done = int(*std::min_element(film->samplesTaken().begin(), film->samplesTaken().end()));
   std::atomic<bool> stopped{false};
-  for (int passEnd; done < part.samples() && !stopped &&
-                    (passEnd = nextPassEnd(options, part.samples(), done, clock.seconds())) > done;
-       done = passEnd) {
+  // Every tile's samples of the pass, in parallel, unless a stop request ends it.
+  auto renderPass = [&](const PassSamples& pass) {
     tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& r) {
       flushDenormals();  // every thread computes alike, whoever created it
       for (int t = r.begin(); t != r.end(); ++t) {
@@ -623,17 +654,65 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
         const int tx = tileX0 + t % tilesX, ty = tileY0 + t / tilesX;
         const PixelRect cut{std::max(region.x0, tx * tile), std::max(region.y0, ty * tile),
                             std::min(region.x1, (tx + 1) * tile), std::min(region.y1, (ty + 1) * tile)};
-        tracer.renderTile(cut, part.sampleBegin, part.sampleBegin + passEnd, waves.local(), counters.local(), *film);
-        const uint64_t samples = pixelSamplesDone += cut.pixelCount() * uint64_t(passEnd - done);
-        if (control.progress) control.progress(std::min(1.0, double(samples) / totalPixelSamples));
+        const uint64_t samples = pixelSamplesDone += tracer.renderTile(cut, pass, streams.get(), waves.local(), counters.local(), *film);
+        if (control.progress) control.progress(std::min(1.0, double(samples) / expectedSamples));
       }
     });
     if (!stopped) checkpoints.reached(*film);
-  }
+  };
 
   RenderOutput out;
-  // A render that its time budget ended is whole; one that a stop request ended is not.
-  out.complete = options.timeBudget > 0 ? !stopped.load() : filmComplete(*film, part);
+  if (targeted) {
+    // The first pass: kFirstPass samples everywhere; then passes planned from the pixels' estimated
+    // errors, until the image's is at most the target (or the time budget or --spp stops it).
+    constexpr uint32_t kFirstPass = 8;
+    std::vector<uint32_t> ends(region.pixelCount(), kFirstPass);
+    expectedSamples = double(region.pixelCount()) * kFirstPass;
+    double estimate = 0, rate = 1;
+    uint64_t taken = 0;
+    int passes = 0;
+    for (;;) {
+      renderPass({0, 0, ends});
+      ++passes;
+      if (stopped) break;
+      const std::vector<float> pixelError = streams->pixelRelMse();
+      const uint64_t takenBefore = std::exchange(taken, samplesTaken());
+      const double estimateBefore = std::exchange(estimate, meanRelMse(pixelError));
+      if (estimate <= options.targetError) break;
+      if (passes > 1) rate = errorRate(estimateBefore, takenBefore, estimate, taken);
+      uint64_t allowed = taken;  // a pass at most doubles the samples: its plan comes from theirs
+      bool budgetLimits = false;
+      if (options.timeBudget > 0) {
+        const double elapsed = clock.seconds();
+        const double affordable = std::max(0.0, (options.timeBudget - elapsed) / (elapsed / double(taken)));
+        budgetLimits = affordable < double(allowed);
+        if (budgetLimits) allowed = uint64_t(affordable);
+      }
+      // Aimed a little below the target, so that noise in the prediction seldom costs another pass.
+      const PassPlan plan = planNextPass(pixelError, film->samplesTaken(), region.width(), region.height(),
+                                         0.95 * options.targetError, rate, allowed, uint32_t(part.samples()));
+      if (plan.total == taken) {
+        std::cerr << "lucent: warning: --target-error " << options.targetError << " not reached: the estimated relMSE is "
+                  << estimate << " (";
+        if (budgetLimits) std::cerr << "the time budget of " << options.timeBudget << " s ended the render)\n";
+        else std::cerr << "the pixels that need more samples have --spp " << part.samples() << ", the most a pixel takes)\n";
+        break;
+      }
+      ends = plan.samples;
+      expectedSamples = double(std::max(plan.totalForAim, plan.total));
+    }
+    out.measured = {{"estimated_relmse", estimate}, {"samples_spent", double(samplesTaken())}, {"passes", double(passes)}};
+  } else {
+    // A resumed render goes on from the fewest samples any pixel has (pixels with more skip them).
+    int done = int(*std::min_element(film->samplesTaken().begin(), film->samplesTaken().end()));
+    for (int passEnd; done < part.samples() && !stopped &&
+                      (passEnd = nextPassEnd(options, part.samples(), done, clock.seconds())) > done;
+         done = passEnd)
+      renderPass({part.sampleBegin, part.sampleBegin + passEnd, {}});
+  }
+
+  // A render that its time budget or error target ended is whole; one that a stop request ended is not.
+  out.complete = options.timeBudget > 0 || targeted ? !stopped.load() : filmComplete(*film, part);
   out.sppDone = int(*std::min_element(film->samplesTaken().begin(), film->samplesTaken().end()));
   out.image = film->image();
   out.film = film;
@@ -643,12 +722,10 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
     total.laneShadedHits += c.laneShadedHits;
     total.invalidSamples += c.invalidSamples;
   }
-  uint64_t samples = 0;
-  for (uint32_t taken : film->samplesTaken()) samples += taken;
   out.stats.addStage("trace_paths", clock.seconds());
   out.stats.addCounter("rays", total.rays);
   out.stats.addCounter("lane_shaded_hits", total.laneShadedHits);
-  out.stats.addCounter("samples", samples - resumedSamples);
+  out.stats.addCounter("samples", samplesTaken() - resumedSamples);
   out.stats.addCounter("invalid_samples", total.invalidSamples);
   return out;
 }
