@@ -126,6 +126,22 @@ void finalizeScene(Scene& scene) {
       weights[i] = power[i] > 0 ? std::max(float(power[i] * scale), FLT_MIN) : 0.0f;
     scene.lightDistribution = Distribution1D(weights);
   }
+  scene.nearbyLights.clear(), scene.farLights.clear();
+  scene.nearbyLightShare = 0;
+  scene.farLightDistribution = {};
+  std::vector<uint32_t> nearby, far;
+  for (uint32_t i = 0; i < uint32_t(scene.lights.size()); ++i)
+    (scene.lights[i].type == LightType::Point || scene.lights[i].type == LightType::Spot ? nearby : far).push_back(i);
+  if (nearby.size() >= 2 && nearby.size() <= kMostNearbyLights) {
+    scene.nearbyLights = nearby;
+    scene.farLights = far;
+    double share = 0;
+    std::vector<float> farWeights;
+    for (const uint32_t i : nearby) share += scene.lightDistribution.pmf(i);
+    for (const uint32_t i : far) farWeights.push_back(scene.lightDistribution.pmf(i));
+    scene.nearbyLightShare = far.empty() ? 1.0f : float(share);
+    if (!far.empty()) scene.farLightDistribution = Distribution1D(farWeights);
+  }
 
   scene.contentHash = sceneContentHash(scene);
 }

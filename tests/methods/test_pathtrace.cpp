@@ -442,6 +442,57 @@ TEST_CASE("A spot light on a diffuse plane gives rho I falloff cos(theta) / (pi 
   CHECK(dark > 50);
 }
 
+TEST_CASE("Two point lights chosen by distance light a diffuse plane as rho sum I cos(theta) / (pi d^2), in lanes "
+          "and one by one", "[pathtrace]") {
+  // Each light sample picks one of the lights, the nearer more often (chooseLight): the pixel's
+  // mean must still be both lights' light. Independent samples, each pixel's centre, against the
+  // analytic value: all pixels together within 4 standard deviations. (A pixel alone is not
+  // tested by its variance alone: near a light, where the other is picked for 3% of the samples,
+  // all of a pixel's samples may pick the near one, and its variance is then zero; each pixel is
+  // within 5 standard deviations or 5% of its value, the other light's share.)
+  Scene scene;
+  Material grey;
+  grey.kd = Rgb(0.6f);
+  test::addBox(scene, {-50, -1, -50}, {50, 0, 50}, test::addMaterial(scene, grey, "grey"), false);
+  const Light a{LightType::Point, 0, {-1.5f, 0.5f, 0.3f}, Rgb(1.0f, 2.0f, 3.0f)};
+  const Light b{LightType::Point, 0, {1.0f, 1.5f, -0.5f}, Rgb(3.0f, 2.0f, 1.0f)};
+  scene.lights = {a, b};
+  scene.camera = test::testCamera({0, 5, 0}, {0, 0, 0.001f}, 24, 24, 60);
+  finalizeScene(scene);
+  REQUIRE(scene.nearbyLights.size() == 2);
+  const Visibility vis(scene);
+  const PinholeCamera camera(scene.camera);
+  for (const bool lanes : {true, false}) {
+    PathTraceOptions opt;
+    opt.common.spp = 256;
+    opt.maxDepth = 1;
+    opt.pixelCentres = true;
+    opt.sampler = SamplerKind::Independent;
+    opt.variance = true;
+    opt.laneShading = lanes;
+    const Image image = renderPathTraced(scene, vis, opt).image;
+    double difference = 0, variance = 0;
+    for (int y = 0; y < 24; ++y)
+      for (int x = 0; x < 24; ++x) {
+        const Ray ray = camera.generate(x + 0.5f, y + 0.5f);
+        const Vec3 p = ray.origin + ray.direction * (-ray.origin.y / ray.direction.y);
+        Rgb expected(0.0f);
+        for (const Light& light : {a, b}) {
+          const Vec3 toLight = light.vector - p;
+          const float d2 = dot(toLight, toLight);
+          expected += light.value * (0.6f * kInvPi * (toLight.y / std::sqrt(d2)) / d2);
+        }
+        for (int c = 0; c < 3; ++c) {
+          const double v = image.at(x, y, c), var = image.at(x, y, image.channelIndex(std::string("variance.") + "RGB"[c]));
+          INFO("pixel " << x << "," << y << " channel " << c << " lanes " << lanes);
+          CHECK(std::abs(v - expected[c]) <= std::max(5 * std::sqrt(var), 0.05 * double(expected[c])));
+          difference += v - expected[c], variance += var;
+        }
+      }
+    CHECK(std::abs(difference) <= 4 * std::sqrt(variance));
+  }
+}
+
 namespace {
 
 // The form factor from a point to a rectangle parallel to its surface, one of whose corners lies

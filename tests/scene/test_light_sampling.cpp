@@ -530,7 +530,8 @@ uint32_t sampledLight(const Scene& scene, Vec3 receiver, const LightSample& s) {
 
 }  // namespace
 
-TEST_CASE("Light choice: each light as often as its share of the estimated power", "[lights][chi2]") {
+TEST_CASE("Light choice: each light as often as its share of the estimated power, point lights among themselves "
+          "by power over squared distance", "[lights][chi2]") {
   const Scene scene = mixedLightScene();
   const auto n = uint32_t(scene.lights.size());
   REQUIRE(n == 8);
@@ -553,7 +554,13 @@ TEST_CASE("Light choice: each light as often as its share of the estimated power
   for (uint32_t i = 0; i < n; ++i) CHECK(scene.lightDistribution.pmf(i) == Approx(power[i] / total).epsilon(1e-4));
 
   const Vec3 receiver{0, 0, 0};
-  auto pmf = [&](uint32_t i) { return scene.lightDistribution.pmf(i); };
+  // The two point lights (4 and 5, at squared distances 1.5 and 5 from the receiver) keep their
+  // share of the power; between them, power over squared distance decides.
+  const double near4 = power[4] / 1.5, near5 = power[5] / 5.0, pointShare = (power[4] + power[5]) / total;
+  REQUIRE(scene.nearbyLights == std::vector<uint32_t>{4, 5});
+  auto pmf = [&](uint32_t i) {
+    return float(i == 4 ? pointShare * near4 / (near4 + near5) : i == 5 ? pointShare * near5 / (near4 + near5) : power[i] / total);
+  };
   auto sampler = [&](const Scene& sampled) {
     return [&, sampledScene = &sampled](Rng& rng) {
       const float uLight = rng.uniform();
@@ -568,6 +575,11 @@ TEST_CASE("Light choice: each light as often as its share of the estimated power
   auto visiblePmf = [&](uint32_t i) { return i == away ? 0.0f : pmf(i); };
   SECTION("by power") {
     CHECK_CHI2_PASS(chi2::testDiscrete(sampler(scene), visiblePmf, n, {.seed = 4, .mass = 1 - pmf(away)}));
+  }
+  SECTION("negative control: the point lights by power alone") {
+    Scene wrong = scene;
+    wrong.nearbyLights.clear();
+    CHECK_CHI2_REJECT(chi2::testDiscrete(sampler(wrong), visiblePmf, n, {.seed = 6, .mass = std::nullopt}));
   }
   SECTION("negative control: the first point light's weight 5% too high") {
     Scene wrong = scene;

@@ -40,6 +40,14 @@ inline LightSample deltaLightSample(const Light& light, Vec3 receiver) {
   return s;
 }
 
+// The squared distance from a receiver to a point or spot light, at least 1e-12 of the light's
+// position's scale squared (a receiver at the light).
+inline double nearbyWeightDistance2(const Light& light, Vec3 receiver) {
+  const Vec3 d = light.vector - receiver;
+  const double scale = std::max({1.0f, std::abs(light.vector.x), std::abs(light.vector.y), std::abs(light.vector.z)});
+  return std::max(double(dot(d, d)), 1e-12 * scale * scale);
+}
+
 inline bool isDeltaLight(const Light& light) {
   return light.type == LightType::Point || light.type == LightType::Directional || light.type == LightType::Spot;
 }
@@ -111,11 +119,49 @@ inline LightSample sampleChosenLight(const Scene& scene, uint32_t li, float pmf,
   return s;
 }
 
-// A light chosen by the scene's light distribution (by power), and a sample of it.
+// A light for a receiver, and the probability of choosing it.
+struct LightChoice {
+  uint32_t light = 0;
+  float pmf = 0;
+};
+
+// Whether chooseLight chooses among the nearby lights (point and spot lights: never a triangle).
+inline bool choosesNearbyLight(const Scene& scene, float u) { return !scene.nearbyLights.empty() && u < scene.nearbyLightShare; }
+
+// The light a receiver samples (of a scene with lights), by the scene's light distribution (by
+// power). Where the scene has two or more point and spot lights (Scene::nearbyLights), those
+// together keep their share of it, but among them a light is chosen in proportion to its power over
+// its squared distance from the receiver, its unoccluded light's share there: in the maze, the
+// light beyond a corridor's wall takes most of the samples where it is near, not half everywhere.
+// The other lights keep their probabilities, which MIS reads back at emitter hits
+// (triangleLightPdf, environmentLightPdf), so their weights do not change.
+inline LightChoice chooseLight(const Scene& scene, Vec3 receiver, float u) {
+  if (scene.nearbyLights.empty()) {
+    const uint32_t li = scene.lightDistribution.pick(u);
+    return {li, scene.lightDistribution.pmf(li)};
+  }
+  const float share = scene.nearbyLightShare;
+  if (choosesNearbyLight(scene, u)) {
+    double total = 0;
+    for (const uint32_t i : scene.nearbyLights) total += scene.lightDistribution.pmf(i) / nearbyWeightDistance2(scene.lights[i], receiver);
+    const double target = double(u / share) * total;
+    double sum = 0;
+    for (const uint32_t i : scene.nearbyLights) {
+      const double w = scene.lightDistribution.pmf(i) / nearbyWeightDistance2(scene.lights[i], receiver);
+      sum += w;
+      if (target < sum || i == scene.nearbyLights.back()) return {i, float(share * (w / total))};
+    }
+  }
+  const float v = std::min((u - share) / (1 - share), 0x1.fffffep-1f);
+  const uint32_t li = scene.farLights[scene.farLightDistribution.pick(v)];
+  return {li, scene.lightDistribution.pmf(li)};
+}
+
+// A light chosen for the receiver (chooseLight), and a sample of it.
 inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, Vec2 u) {
   if (scene.lights.empty()) return {};
-  const uint32_t li = scene.lightDistribution.pick(uLight);
-  return sampleChosenLight(scene, li, scene.lightDistribution.pmf(li), receiver, u);
+  const LightChoice choice = chooseLight(scene, receiver, uLight);
+  return sampleChosenLight(scene, choice.light, choice.pmf, receiver, u);
 }
 
 // A shadow ray from receiver p (geometric normal ng) towards a light sample. Towards a point on a

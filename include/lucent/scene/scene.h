@@ -150,6 +150,8 @@ struct Tangent {
 };
 static_assert(sizeof(Tangent) == 16);
 
+inline constexpr size_t kMostNearbyLights = 64;
+
 struct Scene {
   // Vertices (one entry per unique position/normal/uv combination).
   std::vector<Vec3> positions;
@@ -169,6 +171,14 @@ struct Scene {
   // Lights: one per emissive triangle, then point and directional lights, then the environment.
   std::vector<Light> lights;
   Distribution1D lightDistribution;       // proportional to each light's estimated power
+  // Where a scene has from two to kMostNearbyLights point and spot lights, the path tracer chooses
+  // among them by power over squared distance from the receiver, within their share of
+  // lightDistribution (chooseLight, which weighs each of them per choice): these lights, their
+  // share, and the others' distribution by power.
+  std::vector<uint32_t> nearbyLights;
+  float nearbyLightShare = 0;
+  std::vector<uint32_t> farLights;
+  Distribution1D farLightDistribution;
   std::vector<int32_t> triangleLight;     // light index of each triangle, -1 if not emissive
   Environment environment;
   Camera camera;

@@ -390,7 +390,8 @@ class PathTracer {
     // The light: an emitting triangle's data for the lanes' own sampling; any other light is
     // sampled whole once the lane's surface point is known (sampleOtherLights), as is the no light
     // of a scene without one (sampleLight gives no sample then).
-    const TriangleLightRecord* light = s.lights.empty() ? nullptr : &lightRecords_[s.lightDistribution.pick(l.uLight[k])];
+    const bool farLight = !s.lights.empty() && !choosesNearbyLight(s, l.uLight[k]);
+    const TriangleLightRecord* light = farLight ? &lightRecords_[chooseLight(s, position, l.uLight[k]).light] : nullptr;
     l.lightIsTriangle[k] = light && light->isTriangle;
     l.lightDelta[k] = false;  // set by sampleOtherLights for the others
     if (!l.lightIsTriangle[k]) {
