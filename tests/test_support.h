@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include "lucent/image/image.h"
 
@@ -65,6 +66,19 @@ inline CliRun runLucent(const std::string& args) {
   const int status = ::pclose(pipe);
   run.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return run;
+}
+
+// `lucent compare IMAGE REFERENCE --test` (both with variance layers): no block of 8 x 8 pixels
+// and no region (the whole image, a 4 x 4 grid) rejected at alpha 0.01, and the whole image's
+// relative difference within 1%.
+inline void checkAgreesWithinNoise(const std::string& image, const std::string& reference) {
+  const CliRun compare = runLucent("compare " + quoted(image) + " " + quoted(reference) + " --test");
+  INFO(compare.output);
+  REQUIRE(compare.status != 2);
+  const nlohmann::json test = nlohmann::json::parse(compare.output)["test"];
+  CHECK(test["blocks_rejected"] == 0);
+  for (const auto& region : test["regions"]) CHECK(region["rejected"] == false);
+  CHECK(std::abs(test["regions"][0]["relative_difference"].get<double>()) < 0.01);
 }
 
 // An R,G,B image whose pixel (x, y) is colourAt(x, y).
