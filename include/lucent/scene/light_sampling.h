@@ -142,14 +142,18 @@ inline LightChoice chooseLight(const Scene& scene, Vec3 receiver, float u) {
   }
   const float share = scene.nearbyLightShare;
   if (choosesNearbyLight(scene, u)) {
-    double total = 0;
-    for (const uint32_t i : scene.nearbyLights) total += scene.lightDistribution.pmf(i) / nearbyWeightDistance2(scene.lights[i], receiver);
+    // Each weight once (at most kMostNearbyLights), then the pick along their running sum.
+    double weights[kMostNearbyLights], total = 0;
+    const size_t count = scene.nearbyLights.size();
+    for (size_t k = 0; k < count; ++k) {
+      const uint32_t i = scene.nearbyLights[k];
+      total += weights[k] = scene.lightDistribution.pmf(i) / nearbyWeightDistance2(scene.lights[i], receiver);
+    }
     const double target = double(u / share) * total;
     double sum = 0;
-    for (const uint32_t i : scene.nearbyLights) {
-      const double w = scene.lightDistribution.pmf(i) / nearbyWeightDistance2(scene.lights[i], receiver);
-      sum += w;
-      if (target < sum || i == scene.nearbyLights.back()) return {i, float(share * (w / total))};
+    for (size_t k = 0; k < count; ++k) {
+      sum += weights[k];
+      if (target < sum || k + 1 == count) return {scene.nearbyLights[k], float(share * (weights[k] / total))};
     }
   }
   const float v = std::min((u - share) / (1 - share), 0x1.fffffep-1f);
