@@ -265,7 +265,11 @@ class EnvPbgiRender {
       std::iota(all.begin(), all.end(), 0u);
       shadeFromOwnBuffers(eye, all);
     }
-    if (!o_.dumpDirectory.empty()) dumpShadingPoints(o_.dumpDirectory, "", eye, bandShading_, false);
+    if (!o_.dumpDirectory.empty()) {
+      dumpShadingPoints(o_.dumpDirectory, "", eye, bandShading_, false);
+      if (o_.pixelIrradiance == PixelIrradiance::Caches)
+        writeDump(o_.dumpDirectory, "envpbgi.receiver_tiles", "uint32", std::span(tileOfPoint_));
+    }
     eyeRays_ += eye.rays, shadingPoints_ += n, invalidSamples_ += eye.invalid;
     return eye;
   }

@@ -1,0 +1,238 @@
+#include "dump_kernels.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <stdexcept>
+
+#include "lucent/core/dump.h"
+#include "lucent/pipeline/shading_points.h"
+#include "lucent/techniques/photons/photon.h"
+#include "methods/envpbgi/radiance_cache.h"
+#include "methods/particles/area_particles.h"
+#include "methods/photonmap/uniform_grid.h"
+#include "record_fields.h"
+
+namespace lucent::opencl {
+
+std::vector<FieldLayout> cppRecordLayout() {
+  std::vector<FieldLayout> layout;
+#define LUCENT_CPP_RECORD(T) layout.push_back({#T, "", 0, uint32_t(sizeof(lucent::T))});
+#define LUCENT_CPP_FIELD(T, f) \
+  layout.push_back({#T, #f, uint32_t(offsetof(lucent::T, f)), uint32_t(sizeof(std::declval<lucent::T&>().f))});
+  LUCENT_RECORD_FIELDS(LUCENT_CPP_RECORD, LUCENT_CPP_FIELD)
+#undef LUCENT_CPP_RECORD
+#undef LUCENT_CPP_FIELD
+  return layout;
+}
+
+std::vector<FieldLayout> openclRecordLayout(const Device& device, const std::string& recordsSource) {
+  std::vector<FieldLayout> layout = cppRecordLayout();  // the names; offsets and sizes from the device
+  const Program program = device.build({recordsSource, "record_fields.h", "layout.cl"});
+  const Kernel kernel = device.kernel(program, "recordLayout");
+  const Buffer out = device.output(layout.size() * 2 * sizeof(uint32_t));
+  setArgs(kernel, out);
+  device.run(kernel, 1);
+  const std::vector<uint32_t> values = device.read<uint32_t>(out, layout.size() * 2);
+  for (size_t i = 0; i < layout.size(); ++i) layout[i].offset = values[2 * i], layout[i].size = values[2 * i + 1];
+  return layout;
+}
+
+std::vector<std::string> layoutDifferences(const std::vector<FieldLayout>& cpp, const std::vector<FieldLayout>& cl) {
+  std::vector<std::string> lines;
+  if (cpp.size() != cl.size()) lines.push_back("the two lists differ in length");
+  for (size_t i = 0; i < std::min(cpp.size(), cl.size()); ++i) {
+    const FieldLayout &a = cpp[i], &b = cl[i];
+    const std::string name = a.field.empty() ? a.record : a.record + "." + a.field;
+    if (a.offset != b.offset)
+      lines.push_back(name + ": offset " + std::to_string(a.offset) + " in C++, " + std::to_string(b.offset) + " in OpenCL C");
+    if (a.size != b.size)
+      lines.push_back(name + ": " + std::to_string(a.size) + " bytes in C++, " + std::to_string(b.size) + " in OpenCL C");
+  }
+  return lines;
+}
+
+namespace {
+
+std::string file(const std::string& dir, const std::string& name) { return dir + "/" + name + ".bin"; }
+
+// The largest relative difference between two colours' channels (0 where both are 0).
+double relativeDifference(Rgb a, Rgb b) {
+  double worst = 0;
+  for (int c = 0; c < 3; ++c) {
+    const double x = a[c], y = b[c], scale = std::max(std::abs(x), std::abs(y));
+    if (!(x == y)) worst = std::max(worst, scale > 0 ? std::abs(x - y) / scale : INFINITY);
+  }
+  return worst;
+}
+
+void compareAt(StageCheck& check, size_t index, Rgb candidate, Rgb reference, double tolerance) {
+  const double d = relativeDifference(candidate, reference);
+  ++check.compared;
+  check.worstRelative = std::max(check.worstRelative, d);
+  if (!(d <= tolerance)) {
+    ++check.differing;
+    check.firstDiffering = std::min(check.firstDiffering, index);
+  }
+}
+
+}  // namespace
+
+KnnGridRun runKnnGridEstimate(const Device& device, const std::string& dumpDir, const std::string& map,
+                              const std::string& band, uint32_t k, float maxRadius, uint32_t capacity) {
+  const auto photons = readDump<Photon>(file(dumpDir, map + ".photons"), "Photon");
+  const auto grid = readDump<UniformGrid>(file(dumpDir, map + ".grid"), "UniformGrid");
+  const auto list = readDump<uint32_t>(file(dumpDir, map + ".photon_list"), "uint32");
+  const auto first = readDump<uint32_t>(file(dumpDir, map + ".first_photon"), "uint32");
+  const auto points = readDump<ShadingPoint>(file(dumpDir, band + ".shading_points"), "ShadingPoint");
+  if (grid.size() != 1) throw std::runtime_error(file(dumpDir, map + ".grid") + ": holds " + std::to_string(grid.size()) + " grids, not 1");
+  if (first.size() != grid[0].cellCount() + 1)
+    throw std::runtime_error(file(dumpDir, map + ".first_photon") + ": not one entry per cell and one more (a --map sort dump?)");
+
+  const Program program = device.build({"records.cl", "knn_grid.cl"});
+  const Kernel kernel = device.kernel(program, "knnGridEstimate");
+  const size_t n = points.size();
+  const Buffer photonBuffer = device.input(photons), listBuffer = device.input(list);
+  const Buffer firstBuffer = device.input(first), gridBuffer = device.input(grid);
+  const Buffer pointBuffer = device.input(points);
+  const Buffer radiance = device.output(n * sizeof(Rgb)), radius2 = device.output(n * sizeof(float));
+  const Buffer found = device.output(n * sizeof(uint32_t)), status = device.output(n * sizeof(uint32_t));
+  const Buffer neighbours = device.output(n * capacity * sizeof(uint32_t));
+  setArgs(kernel, photonBuffer, listBuffer, firstBuffer, gridBuffer, pointBuffer, uint32_t(n), k, maxRadius, capacity,
+          radiance, radius2, found, neighbours, status);
+  device.run(kernel, n);
+  KnnGridRun run;
+  run.capacity = capacity;
+  run.radiance = device.read<Rgb>(radiance, n);
+  run.radius2 = device.read<float>(radius2, n);
+  run.found = device.read<uint32_t>(found, n);
+  run.status = device.read<uint32_t>(status, n);
+  run.neighbours = device.read<uint32_t>(neighbours, n * capacity);
+  return run;
+}
+
+StageCheck checkKnnGridEstimate(const KnnGridRun& run, const std::string& dumpDir, const std::string& map,
+                                const std::string& band, double tolerance) {
+  const std::string name = band + (map == "caustic" ? ".caustic" : ".indirect");
+  const auto reference = readDump<Rgb>(file(dumpDir, name), "Rgb");
+  StageCheck check;
+  check.stage = name + " (kNN-grid estimate of the " + map + " map)";
+  if (reference.size() != run.radiance.size())
+    throw std::runtime_error(file(dumpDir, name) + ": " + std::to_string(reference.size()) + " estimates for " +
+                             std::to_string(run.radiance.size()) + " shading points");
+  size_t notLambertian = 0, tied = 0, overflow = 0;
+  for (size_t i = 0; i < reference.size(); ++i) {
+    notLambertian += run.status[i] == 1, overflow += run.status[i] == 2, tied += run.status[i] == 3;
+    if (run.status[i] == 0 || run.status[i] == 2) compareAt(check, i, run.radiance[i], reference[i], tolerance);
+  }
+  check.note = std::to_string(notLambertian) + " points not Lambertian and " + std::to_string(tied) +
+               " with photons tied at the radius not compared; " + std::to_string(overflow) +
+               " found more photons than the neighbour list holds";
+  return check;
+}
+
+CacheInterpolationRun runCacheInterpolation(const Device& device, const std::string& dumpDir, float maxAngleDegrees) {
+  const auto caches = readDump<RadianceCache>(file(dumpDir, "envpbgi.caches"), "RadianceCache");
+  const auto begin = readDump<uint32_t>(file(dumpDir, "envpbgi.grid_begin"), "uint32");
+  const auto listed = readDump<uint32_t>(file(dumpDir, "envpbgi.grid_caches"), "uint32");
+  const auto points = readDump<ShadingPoint>(file(dumpDir, "shading_points"), "ShadingPoint");
+  const auto tiles = readDump<uint32_t>(file(dumpDir, "envpbgi.receiver_tiles"), "uint32");
+  if (tiles.size() != points.size())
+    throw std::runtime_error(file(dumpDir, "envpbgi.receiver_tiles") + ": not one tile per shading point");
+  for (uint32_t t : tiles)
+    if (size_t(t) + 1 >= begin.size()) throw std::runtime_error(file(dumpDir, "envpbgi.receiver_tiles") + ": a tile beyond the grid");
+  const Program program = device.build({"records.cl", "radiance_cache.cl"});
+  const Kernel kernel = device.kernel(program, "interpolateCaches");
+  const size_t n = points.size();
+  const Buffer cacheBuffer = device.input(caches), beginBuffer = device.input(begin);
+  const Buffer listBuffer = device.input(listed), pointBuffer = device.input(points);
+  const Buffer tileBuffer = device.input(tiles);
+  const Buffer indirect = device.output(n * sizeof(Rgb)), reached = device.output(n * sizeof(uint32_t));
+  const float cosMax = std::cos(maxAngleDegrees * kPi / 180.0f);  // as the renderer computes it
+  setArgs(kernel, cacheBuffer, beginBuffer, listBuffer, pointBuffer, tileBuffer, uint32_t(n), cosMax, indirect, reached);
+  device.run(kernel, n);
+  return {device.read<Rgb>(indirect, n), device.read<uint32_t>(reached, n)};
+}
+
+StageCheck checkCacheInterpolation(const CacheInterpolationRun& run, const std::string& dumpDir, double tolerance) {
+  const auto reference = readDump<Rgb>(file(dumpDir, "indirect"), "Rgb");
+  if (reference.size() != run.indirect.size())
+    throw std::runtime_error(file(dumpDir, "indirect") + ": not one value per shading point");
+  StageCheck check;
+  check.stage = "indirect (radiance-cache interpolation, Eq. 5)";
+  size_t unreached = 0;
+  for (size_t i = 0; i < reference.size(); ++i) {
+    if (run.reached[i]) compareAt(check, i, run.indirect[i], reference[i], tolerance);
+    else ++unreached;
+  }
+  check.note = std::to_string(unreached) + " receivers no cache reaches (shaded from their own micro-buffers) not compared";
+  return check;
+}
+
+ParticleGatheringRun runParticleGathering(const Device& device, const std::string& dumpDir) {
+  const auto particles = readDump<AreaParticle>(file(dumpDir, "particles.area_particles"), "AreaParticle");
+  const auto links = readDump<uint32_t>(file(dumpDir, "particles.gather_links"), "uint32");
+  const auto linkParticles = readDump<uint32_t>(file(dumpDir, "particles.gather_link_particles"), "uint32");
+  const auto radiance = readDump<Rgb>(file(dumpDir, "particles.radiance"), "Rgb");
+  const auto offsets = readDump<uint64_t>(file(dumpDir, "particles.list_offsets"), "uint64");
+  const auto listed = readDump<uint32_t>(file(dumpDir, "particles.list_particles"), "uint32");
+  const auto found = readDump<uint32_t>(file(dumpDir, "particles.found_radiance_particles"), "uint32");
+
+  // --geometry all: a row per area particle, a list per radiance particle; --geometry frame: the
+  // rows of gather_link_particles, a list per found radiance particle.
+  const bool everyParticle = linkParticles.empty();
+  ParticleGatheringRun run;
+  run.rowParticle = linkParticles;
+  if (everyParticle)
+    for (uint32_t m = 0; m < particles.size(); ++m) run.rowParticle.push_back(m);
+  const size_t rows = run.rowParticle.size();
+  if (rows == 0 || links.size() % rows != 0)
+    throw std::runtime_error(file(dumpDir, "particles.gather_links") + ": not a whole number of links per row");
+  const uint32_t perRow = uint32_t(links.size() / rows);
+  std::vector<uint32_t> listOf = found;
+  if (!everyParticle)
+    for (uint32_t j = 0; j < found.size(); ++j) listOf[j] = j;
+  if (offsets.empty() || *std::max_element(listOf.begin(), listOf.end()) + 1 >= offsets.size())
+    throw std::runtime_error(file(dumpDir, "particles.list_offsets") + ": fewer lists than radiance particles");
+
+  const Program program = device.build({"records.cl", "particle_gathering.cl"});
+  const Kernel r3 = device.kernel(program, "gatherOverLinks");
+  const Buffer linkBuffer = device.input(links), radianceBuffer = device.input(radiance);
+  const Buffer gathered = device.output(rows * sizeof(Rgb));
+  setArgs(r3, linkBuffer, perRow, uint32_t(rows), radianceBuffer, gathered);
+  device.run(r3, rows);
+  run.gathered = device.read<Rgb>(gathered, rows);
+
+  run.byParticle.assign(particles.size(), Rgb());
+  for (size_t r = 0; r < rows; ++r) run.byParticle[run.rowParticle[r]] = run.gathered[r];
+  const Kernel r4 = device.kernel(program, "estimateFromLists");
+  const Buffer offsetBuffer = device.input(offsets), listedBuffer = device.input(listed);
+  const Buffer particleBuffer = device.input(particles);
+  const Buffer byParticle = device.input(run.byParticle);
+  const Buffer listOfBuffer = device.input(listOf);
+  const Buffer irradiance = device.output(found.size() * sizeof(Rgb));
+  setArgs(r4, offsetBuffer, listedBuffer, particleBuffer, byParticle, listOfBuffer, uint32_t(found.size()), irradiance);
+  device.run(r4, found.size());
+  run.irradiance = device.read<Rgb>(irradiance, found.size());
+  return run;
+}
+
+std::vector<StageCheck> checkParticleGathering(const ParticleGatheringRun& run, const std::string& dumpDir,
+                                               double tolerance) {
+  const auto gathered = readDump<Rgb>(file(dumpDir, "particles.gathered_irradiance"), "Rgb");
+  const auto used = readDump<uint32_t>(file(dumpDir, "particles.used_area_particles"), "uint32");
+  const auto irradiance = readDump<Rgb>(file(dumpDir, "particles.radiance_particle_irradiance"), "Rgb");
+  StageCheck r3, r4;
+  r3.stage = "particles.gathered_irradiance (R3, gathering over links)";
+  if (gathered.size() != run.byParticle.size())
+    throw std::runtime_error(file(dumpDir, "particles.gathered_irradiance") + ": not one entry per area particle");
+  for (uint32_t m : used) compareAt(r3, m, run.byParticle.at(m), gathered[m], tolerance);
+  r3.note = "at the " + std::to_string(used.size()) + " used area particles";
+  r4.stage = "particles.radiance_particle_irradiance (R4, estimation lists)";
+  if (irradiance.size() != run.irradiance.size())
+    throw std::runtime_error(file(dumpDir, "particles.radiance_particle_irradiance") + ": not one entry per found radiance particle");
+  for (size_t j = 0; j < irradiance.size(); ++j) compareAt(r4, j, run.irradiance[j], irradiance[j], tolerance);
+  return {r3, r4};
+}
+
+}  // namespace lucent::opencl

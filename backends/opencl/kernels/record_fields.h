@@ -1,0 +1,22 @@
+/* Every dump record a kernel reads, field by field: one list for the C++ host and for OpenCL C, so
+   that both report the offset and size of the same fields (layout.cl; the host's
+   checkRecordLayout). RECORD(type) stands for the whole record (its size), FIELD(type, member) for
+   one member, nested members with a dot. Valid C++ and OpenCL C alike. */
+#define LUCENT_RECORD_FIELDS(RECORD, FIELD)                                                          \
+  RECORD(Vec3) FIELD(Vec3, x) FIELD(Vec3, y) FIELD(Vec3, z)                                          \
+  RECORD(Rgb) FIELD(Rgb, r) FIELD(Rgb, g) FIELD(Rgb, b)                                              \
+  RECORD(Photon) FIELD(Photon, position) FIELD(Photon, power) FIELD(Photon, direction)               \
+  FIELD(Photon, flags)                                                                               \
+  RECORD(UniformGrid) FIELD(UniformGrid, lo) FIELD(UniformGrid, hi) FIELD(UniformGrid, cellSize)     \
+  FIELD(UniformGrid, invCellSize) FIELD(UniformGrid, res) FIELD(UniformGrid, slack)                  \
+  RECORD(ShadingPoint) FIELD(ShadingPoint, position) FIELD(ShadingPoint, geometricNormal)            \
+  FIELD(ShadingPoint, normal) FIELD(ShadingPoint, wo) FIELD(ShadingPoint, weight)                    \
+  FIELD(ShadingPoint, bsdf.type) FIELD(ShadingPoint, bsdf.kd) FIELD(ShadingPoint, bsdf.ks)           \
+  FIELD(ShadingPoint, bsdf.ns) FIELD(ShadingPoint, bsdf.ni) FIELD(ShadingPoint, bsdf.alpha)          \
+  FIELD(ShadingPoint, bsdf.f90) FIELD(ShadingPoint, bsdf.dielectricF0)                               \
+  FIELD(ShadingPoint, bsdf.dielectricF90) FIELD(ShadingPoint, pixel) FIELD(ShadingPoint, sample)     \
+  FIELD(ShadingPoint, branch) FIELD(ShadingPoint, triangle)                                          \
+  RECORD(RadianceCache) FIELD(RadianceCache, position) FIELD(RadianceCache, normal)                  \
+  FIELD(RadianceCache, radius) FIELD(RadianceCache, environment) FIELD(RadianceCache, indirect)      \
+  RECORD(AreaParticle) FIELD(AreaParticle, position) FIELD(AreaParticle, normal)                     \
+  FIELD(AreaParticle, area) FIELD(AreaParticle, reflectance) FIELD(AreaParticle, triangle)

@@ -1,0 +1,63 @@
+// Lucent's dump records (docs/dump-format.md) as OpenCL C reads them: the same fields, in the same
+// order, with the same names as the C++ structs. Only scalars and arrays of scalars: no
+// 3-component vector types (float3 is 16 bytes in OpenCL C and std430, 12 in CUDA), every record a
+// multiple of 4 bytes with no padding. record_fields.h lists every field; the layout kernel
+// (layout.cl) reports where this compiler puts each one, and the host compares that with the C++
+// offsets, so a record declared differently here fails before any kernel reads it.
+#pragma OPENCL FP_CONTRACT OFF
+
+typedef struct {
+  float x, y, z;
+} Vec3;
+
+typedef struct {
+  float r, g, b;
+} Rgb;
+
+typedef struct {
+  Vec3 position;
+  Rgb power;       // W
+  uint direction;  // octahedral, 2 x 16 bits, towards where the photon came from
+  uint flags;      // bits 0-7 bounces, 8-9 kd-tree axis, 10 caustic, 11-30 facing normal (2 x 10 bits)
+} Photon;
+
+typedef struct {
+  Vec3 lo, hi, cellSize, invCellSize;
+  int res[3];
+  float slack;
+} UniformGrid;
+
+typedef struct {
+  uint type;  // 0 diffuse, 1 Phong, 4 and 5 glTF
+  Rgb kd, ks;
+  float ns, ni, alpha, f90, dielectricF0, dielectricF90;
+} SurfaceBsdf;
+
+typedef struct {
+  Vec3 position, geometricNormal, normal, wo;
+  Rgb weight;
+  SurfaceBsdf bsdf;
+  uint pixel, sample, branch, triangle;
+} ShadingPoint;
+
+typedef struct {
+  Vec3 position, normal;
+  float radius;
+  Rgb environment[25], indirect[25];
+} RadianceCache;
+
+typedef struct {
+  Vec3 position, normal;
+  float area;
+  Rgb reflectance;
+  uint triangle;
+} AreaParticle;
+
+// Vector helpers on the records' own types (no float3).
+inline Vec3 vec3(float x, float y, float z) { Vec3 v = {x, y, z}; return v; }
+inline Vec3 sub3(Vec3 a, Vec3 b) { return vec3(a.x - b.x, a.y - b.y, a.z - b.z); }
+inline float dot3(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline Rgb rgb(float r, float g, float b) { Rgb c = {r, g, b}; return c; }
+inline Rgb addRgb(Rgb a, Rgb b) { return rgb(a.r + b.r, a.g + b.g, a.b + b.b); }
+inline Rgb scaleRgb(Rgb a, float s) { return rgb(a.r * s, a.g * s, a.b * s); }
+inline Rgb mulRgb(Rgb a, Rgb b) { return rgb(a.r * b.r, a.g * b.g, a.b * b.b); }
