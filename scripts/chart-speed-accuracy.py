@@ -33,6 +33,11 @@ def pt_samples(extra=()):
     return [(f"{n} spp", ["--spp", str(n)] + list(extra)) for n in (4, 16, 64, 256, 1024)]
 
 
+def pt_targets(targets):
+    """The path tracer rendering to an error target (adaptive sampling), no pixel capped below 65,536 spp."""
+    return [(f"E {e:g}", ["--target-error", str(e), "--spp", "65536"]) for e in targets]
+
+
 def gather_rays(*counts):
     """pmfg's gather rays, with Purcell's 65,000 photons (pmfg's default before it rose to 130,000)."""
     return [(f"{n} gather rays", ["--gather-rays", str(n), "--photons", "65000"]) for n in counts]
@@ -57,8 +62,9 @@ def particle_knobs(particles, counts):
             "particles (tessellation)": [(f"{t} spacings", base + ["--tessellation", str(t)]) for t in (1, 2, 3, 6)]}
 
 
-def scene(resolution, light_samples, rays, purcell, sides, particles=None):
+def scene(resolution, light_samples, rays, purcell, sides, particles=None, targets=(1e-2, 3e-3, 1e-3, 3e-4)):
     methods = {"pt": pt_samples(), "pt (independent)": pt_samples(["--sampler", "independent"]),
+               "pt (target error)": pt_targets(targets),
                "pmfg": gather_rays(*rays), "purcell": purcell, "micro (vpl)": buffers(*sides)}
     if particles:
         methods.update(particle_knobs(*particles))
@@ -101,9 +107,9 @@ SCENES = {
     "ring-area": scene("128x96", 256, (16, 64, 256),
                        photons(["--caustic-photons"], "caustic photons", *MILLION), (8, 16, 24)),
     "sponza": scene("160x100", 1024, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
-                    (8, 16, 24), (150000, (37500, 75000, 150000, 300000))),
+                    (8, 16, 24), (150000, (37500, 75000, 150000, 300000)), (3e-2, 1e-2, 3e-3)),
     "maze": scene("128x128", 64, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
-                  (8, 16), (150000, (37500, 75000, 150000, 300000))),
+                  (8, 16), (150000, (37500, 75000, 150000, 300000)), (1e-1, 3e-2, 1e-2)),
     # glTF scenes (scenes/gltf): Sponza as Blender's exporter wrote it (normal textures, the sun) under
     # the sky, and glTF's metals and rough dielectrics with a spot light and the sun.
     "gltf/sponza-sky": scene("160x100", 1024, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
@@ -116,8 +122,8 @@ SCENES = {
 REFERENCE_SPP = 16384
 
 
-def run(args):
-    done = subprocess.run([LUCENT] + args, capture_output=True, text=True)
+def run(args, lucent=LUCENT):
+    done = subprocess.run([lucent] + args, capture_output=True, text=True)
     if done.returncode != 0:
         sys.exit(f"chart-speed-accuracy: lucent {' '.join(args)} failed:\n{done.stderr}")
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -144,11 +150,11 @@ def reference(scene, resolution, centres, max_depth):
     return path
 
 
-def measure(scene, resolution, method, options, threads, ref):
+def measure(scene, resolution, method, options, threads, ref, lucent=LUCENT):
     image = os.path.join(CACHE, f"point-{os.getpid()}.exr")
     name = method.split(" ")[0]
     summary = run(["render", scene_path(scene), "--method", name, "--resolution", resolution, "--threads",
-                   str(threads), "--quiet", "-o", image] + options)
+                   str(threads), "--quiet", "-o", image] + options, lucent)
     error = run(["compare", image, ref, "--metric", "relmse"])["value"]
     return summary["seconds"], error
 
@@ -161,7 +167,9 @@ def chart(scene, results, out):
     for method, points in results.items():
         xs = [p["seconds"] for p in points]
         ys = [p["relmse"] for p in points]
-        ax.plot(xs, ys, marker="o", label=method)
+        # Another build's curve (--pt-build) dashed in black: the colours cycle after ten curves.
+        other = {} if method in SCENES[scene]["methods"] else {"linestyle": "--", "color": "black"}
+        ax.plot(xs, ys, marker="o", label=method, **other)
         for p in points:
             ax.annotate(p["setting"], (p["seconds"], p["relmse"]), fontsize=6, textcoords="offset points",
                         xytext=(4, 3))
@@ -189,6 +197,9 @@ def main():
     parser.add_argument("--methods", nargs="+", metavar="NAME",
                         help="measure only these methods (pt, pmfg, particles, ...: every curve of the method); "
                              "the others keep the points of the last run")
+    parser.add_argument("--pt-build", nargs=2, metavar=("LABEL", "LUCENT"),
+                        help="also draw the path tracer's curve as another build renders it (an older commit's "
+                             "build/lucent), labelled 'pt (LABEL)'")
     args = parser.parse_args()
     try:
         import matplotlib  # noqa: F401 (checked before anything is rendered)
@@ -206,23 +217,28 @@ def main():
         setup = SCENES[scene]
         print(f"== {scene}, {setup['resolution']}, {args.threads} threads", flush=True)
         depth = setup["max_depth"]
-        box, centres = reference(scene, setup["resolution"], False, depth), reference(scene, setup["resolution"], True, depth)
         results = {}
-        for method, settings in setup["methods"].items():
+        curves = dict(setup["methods"])
+        if args.pt_build:
+            curves[f"pt ({args.pt_build[0]})"] = pt_samples()
+        for method, settings in curves.items():
             if args.methods and method.split(" ")[0] not in args.methods:
                 if method in everything.get(scene, {}):
                     results[method] = everything[scene][method]
                 continue
             results[method] = []
-            ref = box if method.startswith("pt") else centres
+            ref = reference(scene, setup["resolution"], not method.startswith("pt"), depth)
             # Many shadow rays where the method samples its direct light (envpbgi traces one per light).
             common = (["--light-samples", str(setup["light_samples"])]
                       if method.split(" ")[0] in ("pmfg", "purcell", "micro", "particles") else [])
             for label, options in settings:
                 options = options + common
-                seconds, error = measure(scene, setup["resolution"], method, options, args.threads, ref)
+                lucent = args.pt_build[1] if args.pt_build and method == f"pt ({args.pt_build[0]})" else LUCENT
+                seconds, error = measure(scene, setup["resolution"], method, options, args.threads, ref, lucent)
                 results[method].append({"setting": label, "options": options, "seconds": seconds, "relmse": error})
                 print(f"  {method:12s} {label:22s} {seconds:8.2f} s  relMSE {error:.5f}", flush=True)
+        for method, points in everything.get(scene, {}).items():
+            results.setdefault(method, points)  # curves of other builds (--pt-build) drawn before
         print(f"  chart: {chart(scene, results, args.out)}", flush=True)
         everything[scene] = results
     with open(data, "w") as f:
