@@ -21,6 +21,7 @@ DTYPES = {
     "uint64": np.dtype("<u8"),
     "Rgb": np.dtype([("rgb",) + F3]),
     "Photon": np.dtype([("position",) + F3, ("power",) + F3, ("direction", "<u4"), ("flags", "<u4")]),
+    "PhotonDistance": np.dtype([("d2", "<f4"), ("index", "<u4")]),
     "UniformGrid": np.dtype([("lo",) + F3, ("hi",) + F3, ("cell_size",) + F3, ("inv_cell_size",) + F3,
                              ("res", "<i4", (3,)), ("slack", "<f4")]),
     "float": np.dtype("<f4"),

@@ -9,4 +9,5 @@ void addCompareCommand(CLI::App& app, int& exitCode);
 void addMethodsCommand(CLI::App& app, int& exitCode);
 void addMergeCommand(CLI::App& app, int& exitCode);
 void addReportCommand(CLI::App& app, int& exitCode);
+void addCheckDumpCommand(CLI::App& app, int& exitCode);
 }  // namespace lucent::cli

@@ -10,6 +10,7 @@
 
 #include "dump_kernels.h"
 #include "lucent/core/dump.h"
+#include "lucent/pipeline/dump_compare.h"
 #include "lucent/methods/envpbgi.h"
 #include "lucent/methods/particles.h"
 #include "lucent/methods/photonmap.h"
@@ -30,6 +31,14 @@ namespace {
 const Device& device() {
   static const Device d;  // throws, failing the test, where there is no OpenCL device
   return d;
+}
+
+// The candidate's arrays against the dump's, as lucent check-dump compares them.
+const ArrayComparison& array(const DumpComparison& c, const std::string& name) {
+  for (const ArrayComparison& a : c.arrays)
+    if (a.name == name) return a;
+  FAIL("no array " << name << " compared");
+  return c.arrays.front();
 }
 
 bool differenceNamed(const std::vector<std::string>& lines, const std::string& text) {
@@ -78,11 +87,14 @@ TEST_CASE("The OpenCL kNN-grid estimate equals a purcell dump's, with the same n
   const EstimateSettings settings = estimateSettingsFor(scene, opt).global;
 
   const KnnGridRun run = runKnnGridEstimate(device(), dir.path.string(), "global", "band0", settings.k, settings.maxRadius);
-  const StageCheck check = checkKnnGridEstimate(run, dir.path.string(), "global", "band0", 1e-5);
-  INFO(check.note << "; worst relative difference " << check.worstRelative);
-  CHECK(check.compared > 2000);
-  CHECK(check.differing == 0);
-  CHECK(check.passed());
+  TempDir candidate("opencl-purcell-candidate");
+  CHECK(writeKnnGridDumps(run, dir.path.string(), "global", "band0", candidate.path.string()) == 0);
+  const DumpComparison c = compareDumpDirectories(dir.path.string(), candidate.path.string());
+  INFO(dumpComparisonReport(c));
+  CHECK(c.passed());
+  CHECK(array(c, "band0.indirect").referenceRecords > 2000);
+  CHECK(array(c, "band0.global.neighbours").rule == "neighbour sets");
+  CHECK(c.arrays.size() == 2);
 
   // The neighbour sets against Lucent's own search on the map rebuilt from the dumped photons. Ties
   // at the radius cannot change a set (every photon within it is accepted), only which photon the
@@ -99,8 +111,8 @@ TEST_CASE("The OpenCL kNN-grid estimate equals a purcell dump's, with the same n
       ++overflow;
       continue;
     }
-    const uint32_t* ids = run.neighbours.data() + i * run.capacity;
-    const std::set<uint32_t> kernel(ids, ids + run.found[i]);
+    std::set<uint32_t> kernel;
+    for (uint32_t j = 0; j < run.found[i]; ++j) kernel.insert(run.neighbours[i * run.capacity + j].index);
     sameSets += kernel == lucent && kernel.size() == run.found[i] && run.radius2[i] == knnGridRadius2(s);
   }
   CHECK(overflow == 0);
@@ -109,7 +121,10 @@ TEST_CASE("The OpenCL kNN-grid estimate equals a purcell dump's, with the same n
   // The comparison can fail: one photon more per search changes the estimates where the search
   // found k (the others, with fewer than k within the maximum radius, keep every photon there).
   const KnnGridRun other = runKnnGridEstimate(device(), dir.path.string(), "global", "band0", settings.k + 1, settings.maxRadius);
-  CHECK(checkKnnGridEstimate(other, dir.path.string(), "global", "band0", 1e-5).differing > 50);
+  writeKnnGridDumps(other, dir.path.string(), "global", "band0", candidate.path.string());
+  const DumpComparison d = compareDumpDirectories(dir.path.string(), candidate.path.string());
+  CHECK(array(d, "band0.indirect").differing > 50);
+  CHECK(array(d, "band0.global.neighbours").differing > 50);
 }
 
 TEST_CASE("The OpenCL radiance-cache interpolation equals an envpbgi dump's indirect light", "[opencl][dump]") {
@@ -123,18 +138,21 @@ TEST_CASE("The OpenCL radiance-cache interpolation equals an envpbgi dump's indi
   const RenderOutput out = renderEnvPbgi(scene, vis, o);
 
   const CacheInterpolationRun run = runCacheInterpolation(device(), dir.path.string(), o.cacheMaxAngle);
-  const StageCheck check = checkCacheInterpolation(run, dir.path.string(), 1e-5);
-  INFO(check.note << "; worst relative difference " << check.worstRelative);
-  CHECK(check.compared > 3000);
-  CHECK(check.passed());
+  TempDir candidate("opencl-envpbgi-candidate");
+  const size_t unreached = writeCacheDumps(run, dir.path.string(), candidate.path.string());
+  const DumpComparison c = compareDumpDirectories(dir.path.string(), candidate.path.string());
+  INFO(dumpComparisonReport(c));
+  CHECK(c.passed());
+  CHECK(array(c, "indirect").referenceRecords > 3000);
   // The receivers no cache reaches are those the render shaded from their own buffers.
   const auto fallbacks = std::find_if(out.stats.counters.begin(), out.stats.counters.end(),
-                                      [](const auto& c) { return c.first == "cache_fallbacks"; });
+                                      [](const auto& counter) { return counter.first == "cache_fallbacks"; });
   REQUIRE(fallbacks != out.stats.counters.end());
-  CHECK(size_t(std::count(run.reached.begin(), run.reached.end(), 0u)) == fallbacks->second);
+  CHECK(unreached == fallbacks->second);
+  CHECK(unreached < 100);
   // The comparison can fail: a wider angle lets caches facing other ways lend their light.
-  const CacheInterpolationRun wider = runCacheInterpolation(device(), dir.path.string(), 60);
-  CHECK(checkCacheInterpolation(wider, dir.path.string(), 1e-5).differing > 0);
+  writeCacheDumps(runCacheInterpolation(device(), dir.path.string(), 60), dir.path.string(), candidate.path.string());
+  CHECK(array(compareDumpDirectories(dir.path.string(), candidate.path.string()), "indirect").differing > 0);
 }
 
 TEST_CASE("The OpenCL particle gathering equals a particles dump's gathered and estimated irradiance", "[opencl][dump]") {
@@ -154,13 +172,13 @@ TEST_CASE("The OpenCL particle gathering equals a particles dump's gathered and 
     INFO("geometry " << (geometry == ParticleGeometry::All ? "all" : "frame"));
 
     const ParticleGatheringRun run = runParticleGathering(device(), dir.path.string());
-    const std::vector<StageCheck> checks = checkParticleGathering(run, dir.path.string(), 1e-6);
-    REQUIRE(checks.size() == 2);
-    for (const StageCheck& c : checks) {
-      INFO(c.stage << ": " << c.differing << " of " << c.compared << " differ, worst " << c.worstRelative);
-      CHECK(c.compared > 500);
-      CHECK(c.passed());
-    }
+    TempDir candidate("opencl-particles-candidate");
+    writeParticleDumps(run, candidate.path.string());
+    const DumpComparison c = compareDumpDirectories(dir.path.string(), candidate.path.string());
+    INFO(dumpComparisonReport(c));
+    CHECK(c.passed());
+    CHECK(c.arrays.size() == 2);
+    CHECK(array(c, "particles.radiance_particle_irradiance").referenceRecords > 500);
 
     // One link of one used particle that reaches a lit particle cut: that particle's gathered
     // irradiance is no longer the dump's.
@@ -176,9 +194,11 @@ TEST_CASE("The OpenCL particle gathering equals a particles dump's gathered and 
     REQUIRE(cut < links.size());
     links[cut] = kNoParticle;
     writeDump(dir.path.string(), "particles.gather_links", "uint32", std::span(links));
-    const std::vector<StageCheck> broken = checkParticleGathering(runParticleGathering(device(), dir.path.string()),
-                                                                  dir.path.string(), 1e-6);
-    CHECK(broken[0].differing == 1);
-    CHECK(broken[0].firstDiffering == run.rowParticle[cut / perRow]);
+    writeParticleDumps(runParticleGathering(device(), dir.path.string()), candidate.path.string());
+    const ArrayComparison broken =
+        array(compareDumpDirectories(dir.path.string(), candidate.path.string()), "particles.gathered_irradiance");
+    CHECK(broken.differing == 1);
+    REQUIRE(broken.first.size() == 1);
+    CHECK(broken.first[0].index == run.rowParticle[cut / perRow]);
   }
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 #include <cstddef>
 #include <stdexcept>
 
@@ -56,26 +57,6 @@ namespace {
 
 std::string file(const std::string& dir, const std::string& name) { return dir + "/" + name + ".bin"; }
 
-// The largest relative difference between two colours' channels (0 where both are 0).
-double relativeDifference(Rgb a, Rgb b) {
-  double worst = 0;
-  for (int c = 0; c < 3; ++c) {
-    const double x = a[c], y = b[c], scale = std::max(std::abs(x), std::abs(y));
-    if (!(x == y)) worst = std::max(worst, scale > 0 ? std::abs(x - y) / scale : INFINITY);
-  }
-  return worst;
-}
-
-void compareAt(StageCheck& check, size_t index, Rgb candidate, Rgb reference, double tolerance) {
-  const double d = relativeDifference(candidate, reference);
-  ++check.compared;
-  check.worstRelative = std::max(check.worstRelative, d);
-  if (!(d <= tolerance)) {
-    ++check.differing;
-    check.firstDiffering = std::min(check.firstDiffering, index);
-  }
-}
-
 }  // namespace
 
 KnnGridRun runKnnGridEstimate(const Device& device, const std::string& dumpDir, const std::string& map,
@@ -97,7 +78,7 @@ KnnGridRun runKnnGridEstimate(const Device& device, const std::string& dumpDir, 
   const Buffer pointBuffer = device.input(points);
   const Buffer radiance = device.output(n * sizeof(Rgb)), radius2 = device.output(n * sizeof(float));
   const Buffer found = device.output(n * sizeof(uint32_t)), status = device.output(n * sizeof(uint32_t));
-  const Buffer neighbours = device.output(n * capacity * sizeof(uint32_t));
+  const Buffer neighbours = device.output(n * capacity * sizeof(PhotonDistance));
   setArgs(kernel, photonBuffer, listBuffer, firstBuffer, gridBuffer, pointBuffer, uint32_t(n), k, maxRadius, capacity,
           radiance, radius2, found, neighbours, status);
   device.run(kernel, n);
@@ -107,28 +88,34 @@ KnnGridRun runKnnGridEstimate(const Device& device, const std::string& dumpDir, 
   run.radius2 = device.read<float>(radius2, n);
   run.found = device.read<uint32_t>(found, n);
   run.status = device.read<uint32_t>(status, n);
-  run.neighbours = device.read<uint32_t>(neighbours, n * capacity);
+  run.neighbours = device.read<PhotonDistance>(neighbours, n * capacity);
   return run;
 }
 
-StageCheck checkKnnGridEstimate(const KnnGridRun& run, const std::string& dumpDir, const std::string& map,
-                                const std::string& band, double tolerance) {
+size_t writeKnnGridDumps(const KnnGridRun& run, const std::string& dumpDir, const std::string& map,
+                         const std::string& band, const std::string& outDir) {
   const std::string name = band + (map == "caustic" ? ".caustic" : ".indirect");
   const auto reference = readDump<Rgb>(file(dumpDir, name), "Rgb");
-  StageCheck check;
-  check.stage = name + " (kNN-grid estimate of the " + map + " map)";
   if (reference.size() != run.radiance.size())
     throw std::runtime_error(file(dumpDir, name) + ": " + std::to_string(reference.size()) + " estimates for " +
                              std::to_string(run.radiance.size()) + " shading points");
-  size_t notLambertian = 0, tied = 0, overflow = 0;
-  for (size_t i = 0; i < reference.size(); ++i) {
-    notLambertian += run.status[i] == 1, overflow += run.status[i] == 2, tied += run.status[i] == 3;
-    if (run.status[i] == 0 || run.status[i] == 2) compareAt(check, i, run.radiance[i], reference[i], tolerance);
+  std::vector<Rgb> estimates = run.radiance;
+  std::vector<uint64_t> offsets = {0};
+  std::vector<PhotonDistance> neighbours;
+  size_t kept = 0;
+  for (size_t i = 0; i < estimates.size(); ++i) {
+    if (run.status[i] == 1 || run.status[i] == 3) estimates[i] = reference[i], ++kept;
+    if (run.found[i] > run.capacity)
+      throw std::runtime_error("a search found " + std::to_string(run.found[i]) + " photons, more than the " +
+                               std::to_string(run.capacity) + " the kernel keeps");
+    const PhotonDistance* first = run.neighbours.data() + i * run.capacity;
+    neighbours.insert(neighbours.end(), first, first + run.found[i]);
+    offsets.push_back(neighbours.size());
   }
-  check.note = std::to_string(notLambertian) + " points not Lambertian and " + std::to_string(tied) +
-               " with photons tied at the radius not compared; " + std::to_string(overflow) +
-               " found more photons than the neighbour list holds";
-  return check;
+  writeDump(outDir, name, "Rgb", std::span(estimates));
+  writeDump(outDir, band + "." + map + ".neighbour_offsets", "uint64", std::span(offsets));
+  writeDump(outDir, band + "." + map + ".neighbours", "PhotonDistance", std::span(neighbours));
+  return kept;
 }
 
 CacheInterpolationRun runCacheInterpolation(const Device& device, const std::string& dumpDir, float maxAngleDegrees) {
@@ -154,19 +141,17 @@ CacheInterpolationRun runCacheInterpolation(const Device& device, const std::str
   return {device.read<Rgb>(indirect, n), device.read<uint32_t>(reached, n)};
 }
 
-StageCheck checkCacheInterpolation(const CacheInterpolationRun& run, const std::string& dumpDir, double tolerance) {
-  const auto reference = readDump<Rgb>(file(dumpDir, "indirect"), "Rgb");
-  if (reference.size() != run.indirect.size())
+size_t writeCacheDumps(const CacheInterpolationRun& run, const std::string& dumpDir, const std::string& outDir) {
+  std::vector<Rgb> indirect = readDump<Rgb>(file(dumpDir, "indirect"), "Rgb");
+  if (indirect.size() != run.indirect.size())
     throw std::runtime_error(file(dumpDir, "indirect") + ": not one value per shading point");
-  StageCheck check;
-  check.stage = "indirect (radiance-cache interpolation, Eq. 5)";
-  size_t unreached = 0;
-  for (size_t i = 0; i < reference.size(); ++i) {
-    if (run.reached[i]) compareAt(check, i, run.indirect[i], reference[i], tolerance);
-    else ++unreached;
+  size_t kept = 0;
+  for (size_t i = 0; i < indirect.size(); ++i) {
+    if (run.reached[i]) indirect[i] = run.indirect[i];
+    else ++kept;
   }
-  check.note = std::to_string(unreached) + " receivers no cache reaches (shaded from their own micro-buffers) not compared";
-  return check;
+  writeDump(outDir, "indirect", "Rgb", std::span(indirect));
+  return kept;
 }
 
 ParticleGatheringRun runParticleGathering(const Device& device, const std::string& dumpDir) {
@@ -177,6 +162,7 @@ ParticleGatheringRun runParticleGathering(const Device& device, const std::strin
   const auto offsets = readDump<uint64_t>(file(dumpDir, "particles.list_offsets"), "uint64");
   const auto listed = readDump<uint32_t>(file(dumpDir, "particles.list_particles"), "uint32");
   const auto found = readDump<uint32_t>(file(dumpDir, "particles.found_radiance_particles"), "uint32");
+  const auto used = readDump<uint32_t>(file(dumpDir, "particles.used_area_particles"), "uint32");
 
   // --geometry all: a row per area particle, a list per radiance particle; --geometry frame: the
   // rows of gather_link_particles, a list per found radiance particle.
@@ -203,8 +189,12 @@ ParticleGatheringRun runParticleGathering(const Device& device, const std::strin
   device.run(r3, rows);
   run.gathered = device.read<Rgb>(gathered, rows);
 
+  // Gathered at the used particles only, as the render does (with --geometry all every particle
+  // has a row).
+  std::vector<Rgb> atRow(particles.size());
+  for (size_t r = 0; r < rows; ++r) atRow.at(run.rowParticle[r]) = run.gathered[r];
   run.byParticle.assign(particles.size(), Rgb());
-  for (size_t r = 0; r < rows; ++r) run.byParticle[run.rowParticle[r]] = run.gathered[r];
+  for (uint32_t m : used) run.byParticle.at(m) = atRow.at(m);
   const Kernel r4 = device.kernel(program, "estimateFromLists");
   const Buffer offsetBuffer = device.input(offsets), listedBuffer = device.input(listed);
   const Buffer particleBuffer = device.input(particles);
@@ -217,22 +207,9 @@ ParticleGatheringRun runParticleGathering(const Device& device, const std::strin
   return run;
 }
 
-std::vector<StageCheck> checkParticleGathering(const ParticleGatheringRun& run, const std::string& dumpDir,
-                                               double tolerance) {
-  const auto gathered = readDump<Rgb>(file(dumpDir, "particles.gathered_irradiance"), "Rgb");
-  const auto used = readDump<uint32_t>(file(dumpDir, "particles.used_area_particles"), "uint32");
-  const auto irradiance = readDump<Rgb>(file(dumpDir, "particles.radiance_particle_irradiance"), "Rgb");
-  StageCheck r3, r4;
-  r3.stage = "particles.gathered_irradiance (R3, gathering over links)";
-  if (gathered.size() != run.byParticle.size())
-    throw std::runtime_error(file(dumpDir, "particles.gathered_irradiance") + ": not one entry per area particle");
-  for (uint32_t m : used) compareAt(r3, m, run.byParticle.at(m), gathered[m], tolerance);
-  r3.note = "at the " + std::to_string(used.size()) + " used area particles";
-  r4.stage = "particles.radiance_particle_irradiance (R4, estimation lists)";
-  if (irradiance.size() != run.irradiance.size())
-    throw std::runtime_error(file(dumpDir, "particles.radiance_particle_irradiance") + ": not one entry per found radiance particle");
-  for (size_t j = 0; j < irradiance.size(); ++j) compareAt(r4, j, run.irradiance[j], irradiance[j], tolerance);
-  return {r3, r4};
+void writeParticleDumps(const ParticleGatheringRun& run, const std::string& outDir) {
+  writeDump(outDir, "particles.gathered_irradiance", "Rgb", std::span(run.byParticle));
+  writeDump(outDir, "particles.radiance_particle_irradiance", "Rgb", std::span(run.irradiance));
 }
 
 }  // namespace lucent::opencl

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lucent/core/math.h"
+#include "lucent/techniques/photons/kd_tree.h"
 #include "opencl_device.h"
 
 namespace lucent::opencl {
@@ -26,33 +27,28 @@ std::vector<FieldLayout> openclRecordLayout(const Device& device, const std::str
 // C++, 32 in OpenCL C"); empty when they agree.
 std::vector<std::string> layoutDifferences(const std::vector<FieldLayout>& cpp, const std::vector<FieldLayout>& cl);
 
-// One stage's results compared with the dump's array.
-struct StageCheck {
-  std::string stage;
-  size_t compared = 0, differing = 0;
-  size_t firstDiffering = SIZE_MAX;  // index into the stage's array
-  double worstRelative = 0;          // the largest relative difference of the values compared
-  std::string note;                  // what was not compared, and why
-  bool passed() const { return compared > 0 && differing == 0; }
-};
+// Each kernel's results are written as dump arrays of the same names as the reference's into a
+// candidate directory, which `lucent check-dump` (compareDumpDirectories) compares with it. Values
+// a kernel does not compute (the CPU's part of a stage) are copied from the reference and counted.
 
 // Purcell's kNN-grid estimate (knn_grid.cl) at the shading points of `band` ("band0") from the
 // sorted grid map `map` ("global", "caustic") of a purcell or pmfg dump made with --map sort; k
-// and the maximum radius are the render's (its JSON summary's options). Up to `capacity` neighbour
-// indices per point are kept.
+// and the maximum radius are the render's (its JSON summary's options.k and derived.max_radius).
+// Up to `capacity` neighbours per point are kept.
 struct KnnGridRun {
   std::vector<Rgb> radiance;
   std::vector<float> radius2;
-  std::vector<uint32_t> found, status;  // status: knn_grid.cl's
-  std::vector<uint32_t> neighbours;     // point i's at [i * capacity, i * capacity + min(found, capacity))
+  std::vector<uint32_t> found, status;      // status: knn_grid.cl's
+  std::vector<PhotonDistance> neighbours;  // point i's at [i * capacity, i * capacity + min(found, capacity))
   uint32_t capacity = 0;
 };
 KnnGridRun runKnnGridEstimate(const Device& device, const std::string& dumpDir, const std::string& map,
                               const std::string& band, uint32_t k, float maxRadius, uint32_t capacity = 1024);
-// Against the dump's estimates (`<band>.indirect` for the global map, `<band>.caustic` for the
-// caustic one), channel by channel within `tolerance` relative, at the Lambertian points.
-StageCheck checkKnnGridEstimate(const KnnGridRun& run, const std::string& dumpDir, const std::string& map,
-                                const std::string& band, double tolerance);
+// Writes `<band>.indirect` (global map) or `<band>.caustic`, and `<band>.<map>.neighbours` with its
+// offsets. Points the kernel leaves to the host (not Lambertian; photons tied at the radius, where
+// the photon left out depends on the order met) keep the reference's estimate. Returns how many.
+size_t writeKnnGridDumps(const KnnGridRun& run, const std::string& dumpDir, const std::string& map,
+                         const std::string& band, const std::string& outDir);
 
 // The environment-lighting paper's radiance-cache interpolation (radiance_cache.cl, Eq. 5) at the
 // receivers of an envpbgi dump; the maximum angle is the render's cache_max_angle (degrees).
@@ -61,21 +57,19 @@ struct CacheInterpolationRun {
   std::vector<uint32_t> reached;  // 0 where no cache qualifies (the CPU renders a buffer there)
 };
 CacheInterpolationRun runCacheInterpolation(const Device& device, const std::string& dumpDir, float maxAngleDegrees);
-// Against the dump's `indirect` at the receivers some cache reached.
-StageCheck checkCacheInterpolation(const CacheInterpolationRun& run, const std::string& dumpDir, double tolerance);
+// Writes `indirect`; receivers no cache reaches keep the reference's value. Returns how many.
+size_t writeCacheDumps(const CacheInterpolationRun& run, const std::string& dumpDir, const std::string& outDir);
 
 // The particle-space paper's gathering (particle_gathering.cl) from a particles dump: R3 per row of
 // gathering links, then R4 per found radiance particle from R3's results.
 struct ParticleGatheringRun {
   std::vector<uint32_t> rowParticle;  // the area particle of each row of gathering links
   std::vector<Rgb> gathered;          // R3, per row
-  std::vector<Rgb> byParticle;        // R3 per area particle (0 for those without a row)
+  std::vector<Rgb> byParticle;        // R3 at the used area particles, 0 elsewhere (as dumped)
   std::vector<Rgb> irradiance;        // R4, per found radiance particle
 };
 ParticleGatheringRun runParticleGathering(const Device& device, const std::string& dumpDir);
-// R3 against `particles.gathered_irradiance` at the used area particles, R4 against
-// `particles.radiance_particle_irradiance`.
-std::vector<StageCheck> checkParticleGathering(const ParticleGatheringRun& run, const std::string& dumpDir,
-                                               double tolerance);
+// Writes `particles.gathered_irradiance` and `particles.radiance_particle_irradiance`.
+void writeParticleDumps(const ParticleGatheringRun& run, const std::string& outDir);
 
 }  // namespace lucent::opencl

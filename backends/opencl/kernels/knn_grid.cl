@@ -76,7 +76,7 @@ typedef struct {
 
 inline void visitCell(Search* s, __global const Photon* photons, __global const uint* photonList,
                       __global const uint* firstPhoton, __global const UniformGrid* g, int x, int y, int z,
-                      __global uint* neighbours) {
+                      __global PhotonDistance* neighbours) {
   const uint cell = (uint)(x + g->res[0] * (y + g->res[1] * z));
   const uint begin = firstPhoton[cell], end = firstPhoton[cell + 1];
   if (begin == end) return;
@@ -94,7 +94,7 @@ inline void visitCell(Search* s, __global const Photon* photons, __global const 
     } else if (!(d2 <= s->radius2)) {
       continue;
     }
-    if (s->found < s->capacity) neighbours[s->found] = id;
+    if (s->found < s->capacity) neighbours[s->found].d2 = d2, neighbours[s->found].index = id;
     ++s->found;
     const bool front = photonLights(p, s->shadingNormal, s->facingNormal, offset, d2);
     const Rgb share = front ? p.power : rgb(0.0f, 0.0f, 0.0f);
@@ -106,7 +106,7 @@ inline void visitCell(Search* s, __global const Photon* photons, __global const 
 }
 
 // Per shading point: radiance (0 where not estimated), the estimate's squared radius, the photons
-// accepted (found), their indices (the first `capacity`, in search order) and a status: 0 estimated,
+// accepted (found), their indices and squared distances (the first `capacity`, in search order) and a status: 0 estimated,
 // 1 not a Lambertian surface (left to the host), 2 more photons found than `capacity`, 3 estimated
 // with two or more photons at exactly the radius (which of them is left out depends on the order
 // the search meets them: another search may leave out another).
@@ -114,7 +114,7 @@ __kernel void knnGridEstimate(__global const Photon* photons, __global const uin
                               __global const uint* firstPhoton, __global const UniformGrid* grid,
                               __global const ShadingPoint* points, uint pointCount, uint k, float maxRadius,
                               uint capacity, __global Rgb* radiance, __global float* radius2Out,
-                              __global uint* foundOut, __global uint* neighbours, __global uint* status) {
+                              __global uint* foundOut, __global PhotonDistance* neighbours, __global uint* status) {
   const uint i = get_global_id(0);
   if (i >= pointCount) return;
   const ShadingPoint sp = points[i];
@@ -126,7 +126,7 @@ __kernel void knnGridEstimate(__global const Photon* photons, __global const uin
   s.k = k, s.found = 0, s.used = 0, s.capacity = capacity, s.farthestCount = 0;
   s.maxRadius2 = maxRadius * maxRadius, s.radius2 = 0, s.farthestD2 = -1;
   s.sum = rgb(0.0f, 0.0f, 0.0f), s.farthest = s.sum;
-  __global uint* ids = neighbours + (size_t)i * capacity;
+  __global PhotonDistance* ids = neighbours + (size_t)i * capacity;
 
   __global const UniformGrid* g = grid;
   const int c[3] = {cellAlong(g, s.q.x, 0), cellAlong(g, s.q.y, 1), cellAlong(g, s.q.z, 2)};

@@ -7,6 +7,7 @@
   RECORD(Rgb) FIELD(Rgb, r) FIELD(Rgb, g) FIELD(Rgb, b)                                              \
   RECORD(Photon) FIELD(Photon, position) FIELD(Photon, power) FIELD(Photon, direction)               \
   FIELD(Photon, flags)                                                                               \
+  RECORD(PhotonDistance) FIELD(PhotonDistance, d2) FIELD(PhotonDistance, index)                      \
   RECORD(UniformGrid) FIELD(UniformGrid, lo) FIELD(UniformGrid, hi) FIELD(UniformGrid, cellSize)     \
   FIELD(UniformGrid, invCellSize) FIELD(UniformGrid, res) FIELD(UniformGrid, slack)                  \
   RECORD(ShadingPoint) FIELD(ShadingPoint, position) FIELD(ShadingPoint, geometricNormal)            \

@@ -22,6 +22,11 @@ typedef struct {
 } Photon;
 
 typedef struct {
+  float d2;    // squared distance from the query
+  uint index;  // the photon's index in the map's photons
+} PhotonDistance;
+
+typedef struct {
   Vec3 lo, hi, cellSize, invCellSize;
   int res[3];
   float slack;

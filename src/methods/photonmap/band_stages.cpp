@@ -1,13 +1,23 @@
 #include "methods/photonmap/band_stages.h"
 
+#include "lucent/core/dump.h"
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 
 namespace lucent {
 
-void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance) {
-  if (options.shading.dumpDirectory.empty()) return;
-  dumpShadingPoints(options.shading.dumpDirectory, "band" + std::to_string(band) + ".", eye, radiance, true);
+void dumpBand(const PhotonMapOptions& options, size_t band, const BandShadingPoints& traced) {
+  const std::string& dir = options.shading.dumpDirectory;
+  if (dir.empty()) return;
+  const std::string prefix = "band" + std::to_string(band) + ".";
+  dumpShadingPoints(dir, prefix, traced.eye, traced.radiance, true);
+  const char* maps[2] = {"global", "caustic"};
+  for (int m = 0; m < 2; ++m) {
+    const NeighbourLists& n = traced.neighbours[m];
+    if (n.offsets.empty()) continue;
+    writeDump(dir, prefix + maps[m] + ".neighbour_offsets", "uint64", std::span(n.offsets));
+    writeDump(dir, prefix + maps[m] + ".neighbours", "PhotonDistance", std::span(n.entries));
+  }
 }
 
 void addEstimateCounters(RenderStats& stats, const std::string& prefix, const EstimateCounters& c) {
@@ -22,7 +32,7 @@ BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const Pho
                             const PixelRect& band, const RenderPart& part, uint64_t& shadowRays) {
   EyePathSettings eyeSettings = eyePathSettings(options.common, options.shading.maxSpecularDepth, part);
   eyeSettings.region = band;
-  BandShadingPoints out{traceEyePaths(scene, vis, eyeSettings), PointRadiance(0)};
+  BandShadingPoints out{traceEyePaths(scene, vis, eyeSettings), PointRadiance(0), {}};
   out.radiance = PointRadiance(out.eye.points.size());
   if (options.shading.lightSamples > 0)
     estimateDirectLight(scene, vis, out.eye.points, options.shading.lightSamples, options.common.seed, out.radiance.direct, shadowRays);
@@ -43,7 +53,7 @@ bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptio
     BandShadingPoints traced = traceBand(scene, vis, options, band, part, bandShadowRays);
     totals.traceSeconds += rayClock.seconds();
     estimate(traced, progress);
-    dumpBand(options, index, traced.eye, traced.radiance);
+    dumpBand(options, index, traced);
     addBand(film, traced.eye, traced.radiance, scene.camera.width, part);
     totals.shadowRays += bandShadowRays;
     totals.addBand(traced.eye);

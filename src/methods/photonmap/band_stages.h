@@ -11,15 +11,23 @@
 #include "lucent/pipeline/film.h"
 #include "lucent/pipeline/render_stages.h"
 #include "lucent/pipeline/shading_points.h"
+#include "lucent/techniques/photons/kd_tree.h"
 #include "lucent/techniques/photons/photon_estimate.h"
 
 namespace lucent {
 
 // The first stage of both renderers for one band of rows: eye rays through mirrors and glass to
 // their shading points, and the direct light at those points by shadow rays.
+// A map's kNN search at every shading point, for dumps: point i's photons (indices into the map's
+// photons) with their squared distances at [offsets[i], offsets[i + 1]).
+struct NeighbourLists {
+  std::vector<uint64_t> offsets;
+  std::vector<PhotonDistance> entries;
+};
 struct BandShadingPoints {
   EyePaths eye;
   PointRadiance radiance;
+  NeighbourLists neighbours[2];  // purcell's global and caustic searches, with a dump only
 };
 BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                             const PixelRect& band, const RenderPart& part, uint64_t& shadowRays);
@@ -28,7 +36,8 @@ void addEstimateCounters(RenderStats& stats, const std::string& prefix, const Es
 
 // Dumps (docs/dump-format.md) a band's shading points and the radiance each part of the estimate
 // gives them as "band<N>.<array>" into options.dumpDirectory, when it is set.
-void dumpBand(const PhotonMapOptions& options, size_t band, const EyePaths& eye, const PointRadiance& radiance);
+// With the neighbour lists there are, as "band<N>.<map>.neighbours" and ".neighbour_offsets".
+void dumpBand(const PhotonMapOptions& options, size_t band, const BandShadingPoints& traced);
 
 // The band loop of both renderers: the part's rows in bands (RowBands: at most
 // options.bandSamples camera samples, and about two seconds of work unless stages are dumped), from

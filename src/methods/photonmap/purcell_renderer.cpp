@@ -5,13 +5,47 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include <atomic>
+#include <type_traits>
 
 #include "lucent/core/parallel.h"
 #include "estimate_by_cell.h"
+#include "knn_grid.h"
 #include "band_stages.h"
 #include "photon_maps.h"
 
 namespace lucent {
+
+namespace {
+
+// What the kNN search finds at every point, for the dump: the whole search (a map's `shells`
+// setting is ignored), the photons it accepts with their squared distances. Grid maps accept every
+// photon within the final radius (knn_grid.h), the kd-tree the k nearest.
+template <class Map>
+NeighbourLists searchNeighbours(const Map* map, std::span<const ShadingPoint> points, const EstimateSettings& settings) {
+  NeighbourLists lists;
+  if (!map) return lists;
+  std::vector<std::vector<PhotonDistance>> found(points.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<PhotonDistance> heap(settings.k);
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      if constexpr (std::is_same_v<Map, PhotonKdTree>) {
+        const KdTreeResult result = kdTreeNearest(*map, points[i].position, settings.k, settings.maxRadius, heap.data());
+        found[i].assign(heap.begin(), heap.begin() + result.found);
+      } else {
+        knnGrid(*map, points[i].position, settings.k, settings.maxRadius,
+                [&](uint32_t id, const Photon&, float d2) { found[i].push_back({d2, id}); });
+      }
+    }
+  });
+  lists.offsets.push_back(0);
+  for (const std::vector<PhotonDistance>& f : found) {
+    lists.entries.insert(lists.entries.end(), f.begin(), f.end());
+    lists.offsets.push_back(lists.entries.size());
+  }
+  return lists;
+}
+
+}  // namespace
 
 RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                            const RenderControl& control) {
@@ -34,6 +68,10 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
     withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
       estimateAtPoints(global, band.eye.points, maps.globalSettings, band.radiance.indirect, globalCounters, reportDone);
       estimateAtPoints(caustic, band.eye.points, maps.causticSettings, band.radiance.caustic, causticCounters, reportDone);
+      if (!options.shading.dumpDirectory.empty()) {
+        band.neighbours[0] = searchNeighbours(global, band.eye.points, maps.globalSettings);
+        band.neighbours[1] = searchNeighbours(caustic, band.eye.points, maps.causticSettings);
+      }
     });
     totals.estimateSeconds += estimateClock.seconds();
   });

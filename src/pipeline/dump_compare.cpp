@@ -1,0 +1,401 @@
+#include "lucent/pipeline/dump_compare.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <numeric>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "lucent/core/dump.h"
+
+namespace lucent {
+
+bool DumpComparison::passed() const {
+  return !arrays.empty() && std::all_of(arrays.begin(), arrays.end(), [](const ArrayComparison& a) { return a.passed(); });
+}
+
+namespace {
+
+// The fields of every record type of docs/dump-format.md, in order.
+enum class Kind { F32, F16, U32, I32, U16, U64 };
+struct Field {
+  const char* name;
+  Kind kind;
+  uint32_t count;
+};
+struct RecordType {
+  uint32_t bytes;
+  std::vector<Field> fields;
+  bool exact;  // compared bit for bit: integers, and the grids whose floats decide cells
+};
+
+uint32_t kindBytes(Kind k) {
+  switch (k) {
+    case Kind::F16: case Kind::U16: return 2;
+    case Kind::U64: return 8;
+    default: return 4;
+  }
+}
+
+const std::map<std::string, RecordType>& recordTypes() {
+  using K = Kind;
+  static const std::map<std::string, RecordType> types = [] {
+    std::map<std::string, RecordType> t = {
+        {"uint32", {4, {{"value", K::U32, 1}}, true}},
+        {"uint64", {8, {{"value", K::U64, 1}}, true}},
+        {"float", {4, {{"value", K::F32, 1}}, false}},
+        {"Rgb", {12, {{"rgb", K::F32, 3}}, false}},
+        {"HalfRgb", {6, {{"rgb", K::F16, 3}}, false}},
+        {"Photon", {32, {{"position", K::F32, 3}, {"power", K::F32, 3}, {"direction", K::U32, 1}, {"flags", K::U32, 1}}, false}},
+        {"PhotonDistance", {8, {{"d2", K::F32, 1}, {"index", K::U32, 1}}, false}},
+        {"UniformGrid", {64, {{"lo", K::F32, 3}, {"hi", K::F32, 3}, {"cell_size", K::F32, 3}, {"inv_cell_size", K::F32, 3},
+                              {"res", K::I32, 3}, {"slack", K::F32, 1}}, true}},
+        {"DirectionalRadiance", {96, {{"shown", K::F32, 18}, {"area", K::F32, 6}}, false}},
+        {"PointSample", {12, {{"triangle", K::U32, 1}, {"b1", K::F32, 1}, {"b2", K::F32, 1}}, false}},
+        {"FloatNode", {44, {{"center", K::F32, 3}, {"radius", K::F32, 1}, {"cone_axis", K::F32, 3}, {"cone_angle", K::F32, 1},
+                            {"albedo", K::F32, 3}}, false}},
+        {"PackedNode", {16, {{"position", K::U16, 3}, {"radius", K::U16, 1}, {"normal_albedo", K::U32, 1}, {"cone", K::U32, 1}}, true}},
+        {"NodeQuantization", {28, {{"origin", K::F32, 3}, {"step", K::F32, 3}, {"radius_step", K::F32, 1}}, false}},
+        {"EnvPointNode", {48, {{"position", K::F32, 3}, {"radius", K::F32, 1}, {"normal", K::F32, 3}, {"cone_angle", K::F32, 1},
+                               {"child", K::U32, 2}, {"skip", K::U32, 1}, {"selection", K::U32, 1}}, false}},
+        {"Surfel", {24, {{"position", K::F32, 3}, {"normal", K::F32, 3}}, false}},
+        {"RadianceCache", {628, {{"position", K::F32, 3}, {"normal", K::F32, 3}, {"radius", K::F32, 1},
+                                 {"environment", K::F32, 75}, {"indirect", K::F32, 75}}, false}},
+        {"AreaParticle", {44, {{"position", K::F32, 3}, {"normal", K::F32, 3}, {"area", K::F32, 1}, {"reflectance", K::F32, 3},
+                               {"triangle", K::U32, 1}}, false}},
+        {"TriangleTessellation", {8, {{"first", K::U32, 1}, {"segments", K::U32, 1}}, true}},
+        {"ShadingPoint", {128, {{"position", K::F32, 3}, {"geometric_normal", K::F32, 3}, {"normal", K::F32, 3}, {"wo", K::F32, 3},
+                                {"weight", K::F32, 3}, {"material", K::U32, 1}, {"kd", K::F32, 3}, {"ks", K::F32, 3},
+                                {"ns", K::F32, 1}, {"ni", K::F32, 1}, {"alpha", K::F32, 1}, {"f90", K::F32, 1},
+                                {"dielectric_f0", K::F32, 1}, {"dielectric_f90", K::F32, 1}, {"pixel", K::U32, 1},
+                                {"sample", K::U32, 1}, {"branch", K::U32, 1}, {"triangle", K::U32, 1}}, false}},
+    };
+    for (const auto& [name, type] : t) {
+      uint32_t bytes = 0;
+      for (const Field& f : type.fields) bytes += kindBytes(f.kind) * f.count;
+      if (bytes != type.bytes) throw std::logic_error("dump_compare: the fields of " + name + " do not add up to its size");
+    }
+    return t;
+  }();
+  return types;
+}
+
+struct Array {
+  std::string type;
+  uint32_t recordBytes = 0;
+  uint64_t count = 0;
+  std::vector<std::byte> bytes;
+  const std::byte* record(uint64_t i) const { return bytes.data() + i * recordBytes; }
+};
+
+Array readArray(const std::filesystem::path& path) {
+  Array a;
+  const DumpHeader h = readDumpHeader(path.string());
+  a.type = std::string(h.type, strnlen(h.type, sizeof h.type));
+  a.recordBytes = h.recordBytes;
+  readDumpRecords(path.string(), a.type, a.recordBytes, [&](uint64_t count) {
+    a.count = count;
+    a.bytes.resize(count * a.recordBytes);
+    return static_cast<void*>(a.bytes.data());
+  });
+  return a;
+}
+
+template <class T>
+T load(const std::byte* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+// Floats on a line of integers: adjacent floats differ by one.
+int64_t ordered(uint32_t bits) { return (bits & 0x80000000u) ? -int64_t(bits & 0x7fffffffu) : int64_t(bits); }
+int64_t ordered16(uint16_t bits) { return (bits & 0x8000u) ? -int64_t(bits & 0x7fffu) : int64_t(bits); }
+
+bool floatsAgree(float a, float b, const DumpCompareOptions& o) {
+  if (std::bit_cast<uint32_t>(a) == std::bit_cast<uint32_t>(b) || (std::isnan(a) && std::isnan(b))) return true;
+  if (std::isnan(a) || std::isnan(b)) return false;
+  if (std::abs(double(a) - double(b)) <= o.relative * std::max(std::abs(double(a)), std::abs(double(b)))) return true;
+  return std::abs(ordered(std::bit_cast<uint32_t>(a)) - ordered(std::bit_cast<uint32_t>(b))) <= int64_t(o.ulps);
+}
+
+std::string valueText(Kind k, const std::byte* p) {
+  std::ostringstream s;
+  s.precision(9);
+  switch (k) {
+    case Kind::F32: s << load<float>(p); break;
+    case Kind::F16: s << "0x" << std::hex << load<uint16_t>(p) << " (binary16)"; break;
+    case Kind::U32: s << load<uint32_t>(p); break;
+    case Kind::I32: s << load<int32_t>(p); break;
+    case Kind::U16: s << load<uint16_t>(p); break;
+    case Kind::U64: s << load<uint64_t>(p); break;
+  }
+  return s.str();
+}
+
+// The first field of two records that differs, or false; `skip` names fields not compared.
+bool firstDifference(const RecordType* type, uint32_t recordBytes, const std::byte* a, const std::byte* b,
+                     const DumpCompareOptions& o, RecordDifference& d, const std::set<std::string>& skip = {}) {
+  if (!type) {  // a type this Lucent does not know: bytes
+    if (std::memcmp(a, b, recordBytes) == 0) return false;
+    d.field = "bytes";
+    d.reference = d.candidate = "(differ)";
+    return true;
+  }
+  uint32_t offset = 0;
+  for (const Field& f : type->fields) {
+    const uint32_t size = kindBytes(f.kind);
+    for (uint32_t i = 0; i < f.count; ++i, offset += size) {
+      if (skip.count(f.name)) continue;
+      const std::byte *x = a + offset, *y = b + offset;
+      bool same = std::memcmp(x, y, size) == 0;
+      if (!same && !type->exact) {
+        if (f.kind == Kind::F32) same = floatsAgree(load<float>(x), load<float>(y), o);
+        if (f.kind == Kind::F16) same = std::abs(ordered16(load<uint16_t>(x)) - ordered16(load<uint16_t>(y))) <= int64_t(o.ulps);
+      }
+      if (!same) {
+        d.field = f.count > 1 ? std::string(f.name) + "[" + std::to_string(i) + "]" : std::string(f.name);
+        d.reference = valueText(f.kind, x);
+        d.candidate = valueText(f.kind, y);
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+void note(ArrayComparison& c, const DumpCompareOptions& o, RecordDifference d) {
+  ++c.differing;
+  if (c.first.size() < o.reported) c.first.push_back(std::move(d));
+}
+
+void compareElementwise(const Array& r, const Array& c, const RecordType* type, const DumpCompareOptions& o,
+                        ArrayComparison& out, const std::vector<uint64_t>* order = nullptr,
+                        const std::vector<uint64_t>* candidateOrder = nullptr) {
+  for (uint64_t i = 0; i < r.count; ++i) {
+    const uint64_t ri = order ? (*order)[i] : i, ci = candidateOrder ? (*candidateOrder)[i] : i;
+    RecordDifference d;
+    if (firstDifference(type, r.recordBytes, r.record(ri), c.record(ci), o, d)) {
+      d.index = i;
+      if (order) d.field += " (reference record " + std::to_string(ri) + ", candidate record " + std::to_string(ci) + ")";
+      note(out, o, std::move(d));
+    }
+  }
+}
+
+// Photons in any order: both sorted by position, then by every byte.
+std::vector<uint64_t> photonOrder(const Array& a) {
+  std::vector<uint64_t> order(a.count);
+  std::iota(order.begin(), order.end(), uint64_t(0));
+  std::sort(order.begin(), order.end(), [&](uint64_t i, uint64_t j) {
+    for (int k = 0; k < 3; ++k) {
+      const float x = load<float>(a.record(i) + 4 * k), y = load<float>(a.record(j) + 4 * k);
+      if (x != y) return x < y;
+    }
+    return std::memcmp(a.record(i), a.record(j), a.recordBytes) < 0;
+  });
+  return order;
+}
+
+struct Neighbour {  // a PhotonDistance record
+  float d2;
+  uint32_t photon;
+};
+
+// Per query the photons of the reference's search and the candidate's: those strictly inside the
+// reference's farthest distance must be the same photons at the same distances; the candidate's
+// others must lie at that distance (ties: an exact-k search may keep other photons of a tie, or
+// fewer of them) and be among the reference's tied ones, at least one of them where there are any.
+void compareNeighbours(const Array& r, const Array& c, const std::vector<uint64_t>& ro, const std::vector<uint64_t>& co,
+                       const DumpCompareOptions& o, ArrayComparison& out) {
+  const uint64_t queries = ro.size() - 1;
+  for (uint64_t q = 0; q < queries; ++q) {
+    auto entries = [](const Array& a, uint64_t begin, uint64_t end) {
+      std::vector<Neighbour> v;
+      for (uint64_t i = begin; i < end && i < a.count; ++i) v.push_back(load<Neighbour>(a.record(i)));
+      std::sort(v.begin(), v.end(), [](Neighbour x, Neighbour y) { return x.d2 != y.d2 ? x.d2 < y.d2 : x.photon < y.photon; });
+      return v;
+    };
+    const std::vector<Neighbour> R = entries(r, ro[q], ro[q + 1]), C = entries(c, co[q], co[q + 1]);
+    bool same = R.empty() == C.empty();
+    if (same && !R.empty()) {
+      const float farthest = R.back().d2;
+      std::map<uint32_t, float> inside;
+      std::set<uint32_t> tied;
+      for (const Neighbour& n : R) {
+        if (floatsAgree(n.d2, farthest, o)) tied.insert(n.photon);
+        else inside[n.photon] = n.d2;
+      }
+      size_t insideMatched = 0, tiedMatched = 0;
+      for (const Neighbour& n : C) {
+        const auto at = inside.find(n.photon);
+        if (at != inside.end() && floatsAgree(at->second, n.d2, o)) ++insideMatched;
+        else if (tied.count(n.photon) && floatsAgree(n.d2, farthest, o)) ++tiedMatched;
+        else same = false;
+      }
+      same &= insideMatched == inside.size() && (tied.empty() || tiedMatched > 0);
+    }
+    if (!same) {
+      RecordDifference d;
+      d.index = q;
+      d.field = "neighbour set";
+      auto text = [](const std::vector<Neighbour>& v) {
+        std::ostringstream s;
+        s.precision(9);
+        s << v.size() << " photons";
+        if (!v.empty()) s << ", farthest d2 " << v.back().d2;
+        return s.str();
+      };
+      d.reference = text(R), d.candidate = text(C);
+      note(out, o, std::move(d));
+    }
+  }
+}
+
+// The environment paper's tree, walked from the root in both: the same shape, the same nodes (within
+// the tolerance) and the same selection bits at every place in it, whatever the nodes' numbering.
+void compareTrees(const Array& r, const Array& c, const RecordType* type, const DumpCompareOptions& o, ArrayComparison& out) {
+  const uint32_t root = 1;
+  if (r.count <= root || c.count <= root) {
+    if (r.count != c.count) out.problem = "one of the trees is empty";
+    return;
+  }
+  std::vector<std::pair<uint32_t, uint32_t>> stack = {{root, root}};
+  while (!stack.empty()) {
+    const auto [a, b] = stack.back();
+    stack.pop_back();
+    if (a >= r.count || b >= c.count) {
+      out.problem = "a child index beyond the array";
+      return;
+    }
+    RecordDifference d;
+    d.index = a;
+    // child[2] at byte 32 of the 48-byte node.
+    const uint32_t ca0 = load<uint32_t>(r.record(a) + 32), ca1 = load<uint32_t>(r.record(a) + 36);
+    const uint32_t cb0 = load<uint32_t>(c.record(b) + 32), cb1 = load<uint32_t>(c.record(b) + 36);
+    const bool leafA = ca0 == 0, leafB = cb0 == 0;
+    if (leafA != leafB) {
+      d.field = "child";
+      d.reference = leafA ? "leaf" : "interior", d.candidate = leafB ? "leaf" : "interior";
+      note(out, o, std::move(d));
+      continue;
+    }
+    if (firstDifference(type, r.recordBytes, r.record(a), c.record(b), o, d, {"child", "skip"})) note(out, o, std::move(d));
+    if (!leafA) {
+      stack.push_back({ca1, cb1});
+      stack.push_back({ca0, cb0});
+    }
+  }
+}
+
+std::vector<uint64_t> offsetsOf(const Array& a) {
+  std::vector<uint64_t> v(a.count);
+  std::memcpy(v.data(), a.bytes.data(), a.bytes.size());
+  return v;
+}
+
+bool endsWith(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+}  // namespace
+
+DumpComparison compareDumpDirectories(const std::string& reference, const std::string& candidate,
+                                      const DumpCompareOptions& options) {
+  namespace fs = std::filesystem;
+  auto names = [](const std::string& dir) {
+    if (!fs::is_directory(dir)) throw std::runtime_error("'" + dir + "' is not a directory");
+    std::set<std::string> n;
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.is_regular_file() && e.path().extension() == ".bin") n.insert(e.path().stem().string());
+    return n;
+  };
+  const std::set<std::string> ref = names(reference), cand = names(candidate);
+  DumpComparison out;
+  for (const std::string& n : ref)
+    if (!cand.count(n)) out.onlyInReference.push_back(n);
+  for (const std::string& n : cand)
+    if (!ref.count(n)) out.onlyInCandidate.push_back(n);
+  for (const std::string& name : ref) {
+    if (!cand.count(name)) continue;
+    // A kNN search's offsets are compared with its neighbours, as one array.
+    if (endsWith(name, ".neighbour_offsets") && ref.count(name.substr(0, name.size() - 18) + ".neighbours")) continue;
+    const Array r = readArray(fs::path(reference) / (name + ".bin")), c = readArray(fs::path(candidate) / (name + ".bin"));
+    ArrayComparison a;
+    a.name = name, a.type = r.type, a.referenceRecords = r.count, a.candidateRecords = c.count;
+    const auto known = recordTypes().find(r.type);
+    const RecordType* type = known == recordTypes().end() ? nullptr : &known->second;
+    if (c.type != r.type || c.recordBytes != r.recordBytes) {
+      a.problem = "record type " + c.type + " (" + std::to_string(c.recordBytes) + " bytes) in the candidate, " + r.type +
+                  " (" + std::to_string(r.recordBytes) + " bytes) in the reference";
+    } else if (type && type->bytes != r.recordBytes) {
+      a.problem = r.type + " records of " + std::to_string(r.recordBytes) + " bytes, not " + std::to_string(type->bytes);
+    } else if (r.type == "PhotonDistance" && endsWith(name, ".neighbours")) {
+      a.rule = "neighbour sets";
+      const std::string offsets = name.substr(0, name.size() - 11) + ".neighbour_offsets";
+      if (!ref.count(offsets) || !cand.count(offsets)) {
+        a.problem = "no " + offsets + " beside it in both directories";
+      } else {
+        const std::vector<uint64_t> ro = offsetsOf(readArray(fs::path(reference) / (offsets + ".bin")));
+        const std::vector<uint64_t> co = offsetsOf(readArray(fs::path(candidate) / (offsets + ".bin")));
+        if (ro.size() != co.size() || ro.empty()) a.problem = "the searches' counts differ";
+        else compareNeighbours(r, c, ro, co, options, a);
+      }
+    } else if (r.count != c.count) {
+      a.problem = std::to_string(r.count) + " records in the reference, " + std::to_string(c.count) + " in the candidate";
+    } else if (r.type == "Photon") {
+      a.rule = "multiset";
+      const std::vector<uint64_t> ro = photonOrder(r), co = photonOrder(c);
+      compareElementwise(r, c, type, options, a, &ro, &co);
+    } else if (r.type == "EnvPointNode") {
+      a.rule = "tree";
+      compareTrees(r, c, type, options, a);
+    } else {
+      a.rule = !type || type->exact ? "exact" : "elementwise";
+      compareElementwise(r, c, type, options, a);
+    }
+    out.arrays.push_back(std::move(a));
+  }
+  return out;
+}
+
+std::string dumpComparisonJson(const DumpComparison& c) {
+  nlohmann::json arrays = nlohmann::json::array();
+  for (const ArrayComparison& a : c.arrays) {
+    nlohmann::json j = {{"name", a.name}, {"type", a.type}, {"rule", a.rule}, {"reference_records", a.referenceRecords},
+                        {"candidate_records", a.candidateRecords}, {"differing", a.differing}, {"passed", a.passed()}};
+    if (!a.problem.empty()) j["problem"] = a.problem;
+    nlohmann::json first = nlohmann::json::array();
+    for (const RecordDifference& d : a.first)
+      first.push_back({{"index", d.index}, {"field", d.field}, {"reference", d.reference}, {"candidate", d.candidate}});
+    if (!first.empty()) j["first_differing"] = first;
+    arrays.push_back(j);
+  }
+  const nlohmann::json out = {{"passed", c.passed()}, {"arrays", arrays}, {"only_in_reference", c.onlyInReference},
+                              {"only_in_candidate", c.onlyInCandidate}};
+  return out.dump();
+}
+
+std::string dumpComparisonReport(const DumpComparison& c) {
+  std::ostringstream s;
+  for (const ArrayComparison& a : c.arrays) {
+    if (a.passed()) continue;
+    s << a.name << " (" << a.type << ", " << (a.rule.empty() ? "not compared" : a.rule) << "): ";
+    if (a.problem.empty()) s << a.differing << " of " << a.referenceRecords << " records differ\n";
+    else s << a.problem << "\n";
+    for (const RecordDifference& d : a.first)
+      s << "  record " << d.index << " " << d.field << ": " << d.reference << " in the reference, " << d.candidate
+        << " in the candidate\n";
+  }
+  return s.str();
+}
+
+}  // namespace lucent

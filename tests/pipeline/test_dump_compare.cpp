@@ -1,0 +1,215 @@
+// lucent check-dump's rules (lucent/pipeline/dump_compare.h): each array kind finds a one-record
+// difference, naming the record and field, and lets through what its rule allows (photons
+// reordered, a float within the tolerance, ties at a search's radius, a tree numbered otherwise).
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "lucent/core/dump.h"
+#include "lucent/pipeline/dump_compare.h"
+#include "lucent/techniques/photons/kd_tree.h"
+#include "lucent/techniques/photons/photon.h"
+#include "methods/envpbgi/env_points.h"
+#include "methods/photonmap/uniform_grid.h"
+#include "test_support.h"
+
+using namespace lucent;
+using lucent::test::TempDir;
+
+namespace {
+
+struct Dirs {
+  TempDir reference{"check-dump-reference"}, candidate{"check-dump-candidate"};
+  template <class T>
+  void write(const std::string& name, const std::string& type, const std::vector<T>& r, const std::vector<T>& c) {
+    writeDump(reference.path.string(), name, type, std::span(r));
+    writeDump(candidate.path.string(), name, type, std::span(c));
+  }
+  ArrayComparison compare(const std::string& name) const {
+    const DumpComparison all = compareDumpDirectories(reference.path.string(), candidate.path.string());
+    for (const ArrayComparison& a : all.arrays)
+      if (a.name == name) return a;
+    FAIL("no comparison of " << name);
+    return {};
+  }
+};
+
+float nextFloat(float x) { return std::nextafter(x, INFINITY); }
+
+}  // namespace
+
+TEST_CASE("check-dump compares photons as multisets, allowing for order and rounding", "[dump]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<Photon> photons(200);
+  for (uint32_t i = 0; i < photons.size(); ++i)
+    photons[i] = {Vec3(u(rng), u(rng), u(rng)), Rgb(u(rng), u(rng), u(rng)), uint32_t(rng()), i};
+  Dirs d;
+  std::vector<Photon> shuffled = photons;
+  std::shuffle(shuffled.begin(), shuffled.end(), rng);
+  shuffled[3].power.g = nextFloat(shuffled[3].power.g);  // one ulp: rounding
+  d.write("global.photons", "Photon", photons, shuffled);
+  ArrayComparison a = d.compare("global.photons");
+  CHECK(a.rule == "multiset");
+  CHECK(a.passed());
+
+  // One photon's power 0.1% off: one record differs, named by its field.
+  std::vector<Photon> changed = shuffled;
+  changed[17].power.b *= 1.001f;
+  d.write("global.photons", "Photon", photons, changed);
+  a = d.compare("global.photons");
+  CHECK(a.differing == 1);
+  REQUIRE(a.first.size() == 1);
+  CHECK(a.first[0].field.find("power[2]") == 0);
+  // One photon fewer: the counts differ.
+  changed.pop_back();
+  d.write("global.photons", "Photon", photons, changed);
+  CHECK_FALSE(d.compare("global.photons").passed());
+  CHECK(d.compare("global.photons").problem.find("200 records in the reference, 199") != std::string::npos);
+}
+
+TEST_CASE("check-dump compares grids and index arrays exactly, and float arrays within the tolerance", "[dump]") {
+  Dirs d;
+  std::vector<uint32_t> list(64);
+  for (uint32_t i = 0; i < list.size(); ++i) list[i] = i * 3;
+  std::vector<uint32_t> other = list;
+  other[41] = 7;
+  d.write("global.photon_list", "uint32", list, other);
+  ArrayComparison a = d.compare("global.photon_list");
+  CHECK(a.rule == "exact");
+  CHECK(a.differing == 1);
+  REQUIRE(a.first.size() == 1);
+  CHECK(a.first[0].index == 41);
+  CHECK(a.first[0].reference == "123");
+  CHECK(a.first[0].candidate == "7");
+
+  UniformGrid g;
+  g.lo = Vec3(0.5f), g.hi = Vec3(2.0f), g.cellSize = Vec3(0.25f), g.invCellSize = Vec3(4.0f), g.res = {6, 6, 6};
+  g.slack = 1e-6f;
+  UniformGrid h = g;
+  h.slack = nextFloat(g.slack);  // within any float tolerance, but a grid is exact
+  d.write("global.grid", "UniformGrid", std::vector<UniformGrid>{g}, std::vector<UniformGrid>{h});
+  a = d.compare("global.grid");
+  CHECK(a.differing == 1);
+  REQUIRE(a.first.size() == 1);
+  CHECK(a.first[0].field == "slack");
+
+  std::vector<Rgb> light(100, Rgb(0.25f, 0.5f, 0.75f));
+  std::vector<Rgb> close = light;
+  close[5].g = nextFloat(nextFloat(close[5].g));
+  close[6].r *= 1.000001f;
+  d.write("band0.indirect", "Rgb", light, close);
+  CHECK(d.compare("band0.indirect").rule == "elementwise");
+  CHECK(d.compare("band0.indirect").passed());
+  close[60].g *= 1.0001f;
+  d.write("band0.indirect", "Rgb", light, close);
+  a = d.compare("band0.indirect");
+  CHECK(a.differing == 1);
+  REQUIRE(a.first.size() == 1);
+  CHECK(a.first[0].index == 60);
+  CHECK(a.first[0].field == "rgb[1]");
+
+  // Another record type under the same name is not compared record by record.
+  d.write("band0.direct", "Rgb", light, light);
+  const std::vector<float> floats(300, 0.5f);
+  writeDump(d.candidate.path.string(), "band0.direct", "float", std::span(floats));
+  CHECK(d.compare("band0.direct").problem.find("record type float") == 0);
+  // An array only one side holds is listed, not compared.
+  writeDump(d.reference.path.string(), "caustic.photon_list", "uint32", std::span(list));
+  const DumpComparison all = compareDumpDirectories(d.reference.path.string(), d.candidate.path.string());
+  CHECK(all.onlyInReference == std::vector<std::string>{"caustic.photon_list"});
+  CHECK_FALSE(all.passed());
+}
+
+TEST_CASE("check-dump compares kNN results as sets, allowing for ties at the radius", "[dump]") {
+  // Query 0: photons 4, 9, 2 inside, 5 and 8 tied at the farthest distance; query 1: none.
+  const std::vector<PhotonDistance> reference = {{0.1f, 4}, {0.3f, 9}, {0.2f, 2}, {0.5f, 5}, {0.5f, 8}};
+  const std::vector<uint64_t> offsets = {0, 5, 5};
+  Dirs d;
+  auto write = [&](const std::vector<PhotonDistance>& candidate, const std::vector<uint64_t>& candidateOffsets) {
+    d.write("band0.global.neighbours", "PhotonDistance", reference, candidate);
+    d.write("band0.global.neighbour_offsets", "uint64", offsets, candidateOffsets);
+    return d.compare("band0.global.neighbours");
+  };
+  // In another order: the same set.
+  ArrayComparison a = write({{0.5f, 8}, {0.2f, 2}, {0.1f, 4}, {0.5f, 5}, {0.3f, 9}}, offsets);
+  CHECK(a.rule == "neighbour sets");
+  CHECK(a.passed());
+  // An exact-k search that kept one of the tied photons: allowed.
+  CHECK(write({{0.1f, 4}, {0.2f, 2}, {0.3f, 9}, {0.5f, 8}}, {0, 4, 4}).passed());
+  // A photon inside the radius missing, or another photon in its place: query 0 differs.
+  for (const auto& candidate : {std::vector<PhotonDistance>{{0.1f, 4}, {0.2f, 2}, {0.5f, 5}, {0.5f, 8}},
+                                std::vector<PhotonDistance>{{0.1f, 4}, {0.2f, 2}, {0.3f, 11}, {0.5f, 5}, {0.5f, 8}}}) {
+    a = write(candidate, {0, candidate.size(), candidate.size()});
+    CHECK(a.differing == 1);
+    REQUIRE(a.first.size() == 1);
+    CHECK(a.first[0].index == 0);
+  }
+  // A photon where the reference found none: query 1 differs.
+  a = write({{0.1f, 4}, {0.3f, 9}, {0.2f, 2}, {0.5f, 5}, {0.5f, 8}, {0.7f, 1}}, {0, 5, 6});
+  CHECK(a.differing == 1);
+  REQUIRE(a.first.size() == 1);
+  CHECK(a.first[0].index == 1);
+}
+
+TEST_CASE("check-dump compares the environment paper's node tree by its structure, whatever its numbering", "[dump]") {
+  // Root 1 with children 2 (leaf) and 3, whose children 4 and 5 are leaves; the candidate numbers
+  // the same tree 1, 5, 4, 3, 2.
+  auto node = [](float x, uint32_t c0, uint32_t c1, uint32_t selection) {
+    EnvPointNode n;
+    n.position = Vec3(x, 0, 0), n.radius = 1, n.normal = Vec3(0, 0, 1), n.coneAngle = 0.5f;
+    n.child[0] = c0, n.child[1] = c1, n.selection = selection;
+    return n;
+  };
+  const std::vector<EnvPointNode> reference = {node(0, 0, 0, 0), node(1, 2, 3, 0), node(2, 0, 0, 1), node(3, 4, 5, 2),
+                                               node(4, 0, 0, 4), node(5, 0, 0, 4)};
+  std::vector<EnvPointNode> candidate = {node(0, 0, 0, 0), node(1, 5, 4, 0), node(5, 0, 0, 4), node(4, 0, 0, 4),
+                                         node(3, 3, 2, 2), node(2, 0, 0, 1)};
+  Dirs d;
+  d.write("envpbgi.nodes", "EnvPointNode", reference, candidate);
+  ArrayComparison a = d.compare("envpbgi.nodes");
+  CHECK(a.rule == "tree");
+  CHECK(a.passed());
+  // Another cut: node 4 (the candidate's 3) selected otherwise.
+  candidate[3].selection = 1;
+  d.write("envpbgi.nodes", "EnvPointNode", reference, candidate);
+  a = d.compare("envpbgi.nodes");
+  CHECK(a.differing == 1);
+  REQUIRE(a.first.size() == 1);
+  CHECK(a.first[0].index == 4);
+  CHECK(a.first[0].field == "selection");
+  // Another shape: the candidate's leaf 5 given children.
+  candidate[3].selection = 4;
+  candidate[5].child[0] = 2, candidate[5].child[1] = 3;
+  d.write("envpbgi.nodes", "EnvPointNode", reference, candidate);
+  a = d.compare("envpbgi.nodes");
+  CHECK(a.differing == 1);
+  REQUIRE(a.first.size() == 1);
+  CHECK(a.first[0].index == 2);
+  CHECK(a.first[0].field == "child");
+}
+
+TEST_CASE("lucent check-dump passes a render's dump against another thread count's and fails a changed one",
+          "[dump][cli]") {
+  TempDir a("check-dump-a"), b("check-dump-b");
+  const std::string render = "render " LUCENT_SOURCE_DIR "/scenes/cornell-box.json --method purcell --map sort "
+                             "--resolution 32x32 --photons 4000 --quiet --dump ";
+  REQUIRE(test::runLucent(render + a.path.string() + " -o " + (a / "image.exr")).status == 0);
+  REQUIRE(test::runLucent(render + b.path.string() + " --threads 1 -o " + (b / "image.exr")).status == 0);
+  test::CliRun run = test::runLucent("check-dump " + a.path.string() + " " + b.path.string());
+  CHECK(run.status == 0);
+  CHECK(run.output.find("\"passed\":true") != std::string::npos);
+  CHECK(run.output.find("band0.global.neighbours") != std::string::npos);
+
+  auto indirect = readDump<Rgb>(b / "band0.indirect.bin", "Rgb");
+  indirect[10].r += 1;
+  writeDump(b.path.string(), "band0.indirect", "Rgb", std::span(indirect));
+  run = test::runLucent("check-dump " + a.path.string() + " " + b.path.string());
+  CHECK(run.status == 1);
+  CHECK(run.output.find("band0.indirect (Rgb, elementwise): 1 of") != std::string::npos);
+  CHECK(run.output.find("record 10 rgb[0]") != std::string::npos);
+
+  CHECK(test::runLucent("check-dump " + a.path.string() + " " + (a / "missing")).status == 2);
+}
