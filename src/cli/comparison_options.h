@@ -1,11 +1,11 @@
-// What lucent compare and lucent report share: the layer options, FLIP's observer and the choice
-// between LDR-FLIP and HDR-FLIP.
+// What lucent compare and lucent report share: the layer options and FLIP's observer's help
+// (lucent/image/comparison.h checks it and chooses between LDR-FLIP and HDR-FLIP).
 #pragma once
 #include <CLI/CLI.hpp>
 #include <stdexcept>
 #include <string>
 
-#include "lucent/image/flip.h"
+#include "lucent/image/comparison.h"
 
 namespace lucent::cli {
 
@@ -23,18 +23,5 @@ inline void addLayerOptions(CLI::App* cmd, std::string& layer, std::string& imag
 inline constexpr const char* kPixelsPerDegreeHelp =
     "FLIP's observer: pixels per degree of visual angle, in [1, 1000] (default 67.02: a 0.7 m wide 4K display seen "
     "from 0.7 m)";
-
-// Checked here, not by CLI11, whose range checks let NaN through.
-inline void checkPixelsPerDegree(double ppd) {
-  if (!(ppd >= 1 && ppd <= 1000)) throw std::invalid_argument("--ppd must lie in [1, 1000]");
-}
-
-// LDR-FLIP between two 8-bit sRGB files (display images), HDR-FLIP otherwise.
-inline FlipOptions flipOptions(bool candidateIsSrgb, bool referenceIsSrgb, double ppd) {
-  FlipOptions options;
-  options.pixelsPerDegree = ppd;
-  options.hdr = !(candidateIsSrgb && referenceIsSrgb);
-  return options;
-}
 
 }  // namespace lucent::cli

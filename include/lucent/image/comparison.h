@@ -1,0 +1,45 @@
+// What `lucent compare` computes of a candidate image against a reference, for any caller (the CLI
+// reads files; the Python module passes arrays): the metrics, FLIP, the within-noise test and the
+// equivalence verdict, as compare's JSON, so that every caller reports the same numbers.
+#pragma once
+#include <optional>
+#include <string>
+
+#include "lucent/image/flip.h"
+#include "lucent/image/image.h"
+
+namespace lucent {
+
+struct ComparisonSettings {
+  std::string metric = "relmse";  // rmse, relmse, smape, mae or flip
+  std::optional<double> maxError;  // fail when the metric exceeds it
+  bool test = false;               // the within-noise test (the reference needs variance layers)
+  int block = 8;
+  std::optional<double> within;    // the equivalence verdict: within +-D of the reference
+  double alpha = 0.01;
+  std::string layer, imageLayer;   // compare the reference's layer (and the candidate's, by its name)
+  double pixelsPerDegree = kFlipPixelsPerDegree;
+  std::optional<double> startExposure, stopExposure;  // HDR-FLIP's range (default: from the reference)
+  bool heatmap = false;            // also make the heatmap compare --heatmap writes
+};
+
+// Throws std::invalid_argument, naming the option as the command line spells it, for a setting out
+// of its range.
+void checkComparisonSettings(const ComparisonSettings& settings);
+// FLIP's observer, in [1, 1000] pixels per degree; throws std::invalid_argument naming --ppd.
+void checkPixelsPerDegree(double ppd);
+// LDR-FLIP between two 8-bit sRGB images (display images), HDR-FLIP otherwise.
+FlipOptions flipOptions(bool candidateIsSrgb, bool referenceIsSrgb, double ppd);
+
+struct ImageComparison {
+  bool passed = false;
+  std::string json;  // compare's JSON from "width" on (the caller names the files before it)
+  Image heatmap;     // with settings.heatmap
+};
+
+// Compares the candidate with the reference (linear images; *IsSrgb: decoded from 8-bit sRGB files,
+// which makes FLIP LDR-FLIP). Throws std::invalid_argument for images that cannot be compared.
+ImageComparison compareImagePair(Image candidate, Image reference, const ComparisonSettings& settings,
+                                 bool candidateIsSrgb = false, bool referenceIsSrgb = false);
+
+}  // namespace lucent

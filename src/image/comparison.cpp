@@ -1,0 +1,149 @@
+#include "lucent/image/comparison.h"
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "lucent/image/metrics.h"
+
+namespace lucent {
+
+namespace {
+
+nlohmann::ordered_json testJson(const NoiseTest& t) {
+  nlohmann::ordered_json out;
+  out["alpha"] = t.alpha;
+  out["passed"] = t.passed;
+  out["candidate_variance"] = t.candidateHasVariance;
+  out["block"] = t.block;
+  out["blocks"] = t.blocks;
+  out["fraction_rejected_at_alpha"] = double(t.blocksRejectedAtAlpha) / double(t.blocks);
+  out["blocks_rejected"] = t.blocksRejected;
+  out["min_block_p_value"] = t.minBlockPValue;
+  out["regions"] = nlohmann::ordered_json::array();
+  for (const RegionTest& r : t.regions)
+    out["regions"].push_back({{"region", {r.x0, r.y0, r.x1, r.y1}},
+                              {"relative_difference", r.relativeDifference},
+                              {"z", r.z},
+                              {"p_value", r.pValue},
+                              {"rejected", r.rejected}});
+  return out;
+}
+
+nlohmann::ordered_json equivalenceJson(const EquivalenceTest& t) {
+  nlohmann::ordered_json out;
+  out["within"] = t.within;
+  out["alpha"] = t.alpha;
+  out["passed"] = t.passed;
+  out["candidate_variance"] = t.candidateHasVariance;
+  out["regions"] = nlohmann::ordered_json::array();
+  for (const EquivalenceRegion& r : t.regions)
+    out["regions"].push_back({{"region", {r.x0, r.y0, r.x1, r.y1}},
+                              {"relative_difference", r.relativeDifference},
+                              {"interval", {r.low, r.high}},
+                              {"equivalent", r.equivalent}});
+  return out;
+}
+
+nlohmann::ordered_json metricsJson(const ChannelError& e) {
+  return {{"rmse", e.rmse}, {"mae", e.mae}, {"relmse", e.relmse}, {"smape", e.smape}};
+}
+
+nlohmann::ordered_json flipJson(const FlipResult& f, double pixelsPerDegree) {
+  nlohmann::ordered_json out;
+  out["mean"] = f.mean;
+  out["weighted_median"] = f.weightedMedian;
+  out["weighted_quartiles"] = {f.weightedQuartile1, f.weightedQuartile3};
+  out["range"] = f.hdr ? "hdr" : "ldr";
+  out["pixels_per_degree"] = pixelsPerDegree;
+  if (f.hdr) out["exposures"] = {{"start", f.startExposure}, {"stop", f.stopExposure}, {"count", f.exposures}};
+  return out;
+}
+
+}  // namespace
+
+void checkPixelsPerDegree(double ppd) {
+  if (!(ppd >= 1 && ppd <= 1000)) throw std::invalid_argument("--ppd must lie in [1, 1000]");
+}
+
+FlipOptions flipOptions(bool candidateIsSrgb, bool referenceIsSrgb, double ppd) {
+  FlipOptions options;
+  options.pixelsPerDegree = ppd;
+  options.hdr = !(candidateIsSrgb && referenceIsSrgb);
+  return options;
+}
+
+void checkComparisonSettings(const ComparisonSettings& opt) {
+  // Ranges checked here (CLI11's range checks print their bounds with 309 digits and let NaN
+  // through, which no error would ever exceed).
+  if (opt.metric != "flip") parseErrorMetric(opt.metric);
+  if (opt.maxError && !(std::isfinite(*opt.maxError) && *opt.maxError >= 0))
+    throw std::invalid_argument("--max-error must be a finite number of at least 0");
+  if (!(opt.alpha >= 1e-12 && opt.alpha <= 0.25)) throw std::invalid_argument("--alpha must lie in [1e-12, 0.25]");
+  if (opt.block < 1 || opt.block > 4096) throw std::invalid_argument("--block must lie in [1, 4096]");
+  if (opt.within && !(std::isfinite(*opt.within) && *opt.within > 0 && *opt.within <= 10))
+    throw std::invalid_argument("--within must lie in (0, 10]");
+  checkPixelsPerDegree(opt.pixelsPerDegree);
+  for (const auto& [name, value] : {std::pair{"--start-exposure", opt.startExposure}, {"--stop-exposure", opt.stopExposure}})
+    if (value && !(std::abs(*value) <= 100)) throw std::invalid_argument(std::string(name) + " must lie in [-100, 100]");
+  if (opt.startExposure && opt.stopExposure && *opt.startExposure > *opt.stopExposure)
+    throw std::invalid_argument("--start-exposure must not exceed --stop-exposure");
+}
+
+ImageComparison compareImagePair(Image candidateFile, Image referenceFile, const ComparisonSettings& opt,
+                                 bool candidateIsSrgb, bool referenceIsSrgb) {
+  checkComparisonSettings(opt);
+  const bool statistical = opt.test || opt.within.has_value();
+  const bool flip = opt.metric == "flip";
+  const ErrorMetric metric = flip ? ErrorMetric::RelMse : parseErrorMetric(opt.metric);
+  std::optional<LayerChoice> layer;
+  if (!opt.layer.empty()) {
+    layer = chooseLayer(candidateFile, referenceFile, opt.layer, opt.imageLayer);
+    candidateFile = std::move(layer->candidate);
+    referenceFile = std::move(layer->reference);
+  }
+  // The test reads the variance layers; the metrics compare the colours.
+  std::optional<NoiseTest> test;
+  std::optional<EquivalenceTest> equivalence;
+  std::optional<FlipResult> flipResult;
+  if (flip) {
+    FlipOptions options = flipOptions(candidateIsSrgb, referenceIsSrgb, opt.pixelsPerDegree);
+    options.startExposure = opt.startExposure;
+    options.stopExposure = opt.stopExposure;
+    flipResult = computeFlip(candidateFile, referenceFile, options);
+  }
+  if (opt.test) test = testWithinNoise(candidateFile, referenceFile, opt.alpha, 4, opt.block);
+  if (opt.within) equivalence = testEquivalence(candidateFile, referenceFile, *opt.within, opt.alpha);
+  const Image image = statistical ? rgbChannels(candidateFile) : candidateFile;
+  const Image reference = statistical ? rgbChannels(referenceFile) : referenceFile;
+  const ImageError error = compareImages(image, reference);
+
+  nlohmann::ordered_json out;
+  out["width"] = image.width();
+  out["height"] = image.height();
+  out["metric"] = opt.metric;
+  if (layer) out["layer"] = {{"image", layer->candidateLayer}, {"reference", layer->referenceLayer}};
+  const double value = flipResult ? flipResult->mean : errorValue(error.overall, metric);
+  out["value"] = value;
+  out["overall"] = metricsJson(error.overall);
+  out["channels"] = nlohmann::ordered_json::object();
+  for (const ChannelError& c : error.perChannel) out["channels"][c.channel] = metricsJson(c);
+  out["non_finite"] = error.nonFinite;
+  ImageComparison result;
+  // A NaN error must fail, hence "<=" rather than "not >".
+  result.passed = error.nonFinite == 0 && (!opt.maxError || value <= *opt.maxError) && (!test || test->passed) &&
+                  (!equivalence || equivalence->passed);
+  if (opt.maxError) out["max_error"] = *opt.maxError;
+  if (test) out["test"] = testJson(*test);
+  if (equivalence) out["equivalence"] = equivalenceJson(*equivalence);
+  if (flipResult) out["flip"] = flipJson(*flipResult, opt.pixelsPerDegree);
+  out["passed"] = result.passed;
+  if (opt.heatmap)
+    result.heatmap = flipResult ? valueHeatmap(flipResult->map, 1)
+                     : test     ? valueHeatmap(test->statistic, 5)
+                                : errorHeatmap(image, reference, metric);
+  result.json = out.dump();
+  return result;
+}
+
+}  // namespace lucent
