@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lucent/core/dump.h"
+#include "lucent/core/dump_records.h"
 
 namespace lucent {
 
@@ -23,70 +24,6 @@ bool DumpComparison::passed() const {
 }
 
 namespace {
-
-// The fields of every record type of docs/dump-format.md, in order.
-enum class Kind { F32, F16, U32, I32, U16, U64 };
-struct Field {
-  const char* name;
-  Kind kind;
-  uint32_t count;
-};
-struct RecordType {
-  uint32_t bytes;
-  std::vector<Field> fields;
-  bool exact;  // compared bit for bit: integers, and the grids whose floats decide cells
-};
-
-uint32_t kindBytes(Kind k) {
-  switch (k) {
-    case Kind::F16: case Kind::U16: return 2;
-    case Kind::U64: return 8;
-    default: return 4;
-  }
-}
-
-const std::map<std::string, RecordType>& recordTypes() {
-  using K = Kind;
-  static const std::map<std::string, RecordType> types = [] {
-    std::map<std::string, RecordType> t = {
-        {"uint32", {4, {{"value", K::U32, 1}}, true}},
-        {"uint64", {8, {{"value", K::U64, 1}}, true}},
-        {"float", {4, {{"value", K::F32, 1}}, false}},
-        {"Rgb", {12, {{"rgb", K::F32, 3}}, false}},
-        {"HalfRgb", {6, {{"rgb", K::F16, 3}}, false}},
-        {"Photon", {32, {{"position", K::F32, 3}, {"power", K::F32, 3}, {"direction", K::U32, 1}, {"flags", K::U32, 1}}, false}},
-        {"PhotonDistance", {8, {{"d2", K::F32, 1}, {"index", K::U32, 1}}, false}},
-        {"UniformGrid", {64, {{"lo", K::F32, 3}, {"hi", K::F32, 3}, {"cell_size", K::F32, 3}, {"inv_cell_size", K::F32, 3},
-                              {"res", K::I32, 3}, {"slack", K::F32, 1}}, true}},
-        {"DirectionalRadiance", {96, {{"shown", K::F32, 18}, {"area", K::F32, 6}}, false}},
-        {"PointSample", {12, {{"triangle", K::U32, 1}, {"b1", K::F32, 1}, {"b2", K::F32, 1}}, false}},
-        {"FloatNode", {44, {{"center", K::F32, 3}, {"radius", K::F32, 1}, {"cone_axis", K::F32, 3}, {"cone_angle", K::F32, 1},
-                            {"albedo", K::F32, 3}}, false}},
-        {"PackedNode", {16, {{"position", K::U16, 3}, {"radius", K::U16, 1}, {"normal_albedo", K::U32, 1}, {"cone", K::U32, 1}}, true}},
-        {"NodeQuantization", {28, {{"origin", K::F32, 3}, {"step", K::F32, 3}, {"radius_step", K::F32, 1}}, false}},
-        {"EnvPointNode", {48, {{"position", K::F32, 3}, {"radius", K::F32, 1}, {"normal", K::F32, 3}, {"cone_angle", K::F32, 1},
-                               {"child", K::U32, 2}, {"skip", K::U32, 1}, {"selection", K::U32, 1}}, false}},
-        {"Surfel", {24, {{"position", K::F32, 3}, {"normal", K::F32, 3}}, false}},
-        {"RadianceCache", {628, {{"position", K::F32, 3}, {"normal", K::F32, 3}, {"radius", K::F32, 1},
-                                 {"environment", K::F32, 75}, {"indirect", K::F32, 75}}, false}},
-        {"AreaParticle", {44, {{"position", K::F32, 3}, {"normal", K::F32, 3}, {"area", K::F32, 1}, {"reflectance", K::F32, 3},
-                               {"triangle", K::U32, 1}}, false}},
-        {"TriangleTessellation", {8, {{"first", K::U32, 1}, {"segments", K::U32, 1}}, true}},
-        {"ShadingPoint", {128, {{"position", K::F32, 3}, {"geometric_normal", K::F32, 3}, {"normal", K::F32, 3}, {"wo", K::F32, 3},
-                                {"weight", K::F32, 3}, {"material", K::U32, 1}, {"kd", K::F32, 3}, {"ks", K::F32, 3},
-                                {"ns", K::F32, 1}, {"ni", K::F32, 1}, {"alpha", K::F32, 1}, {"f90", K::F32, 1},
-                                {"dielectric_f0", K::F32, 1}, {"dielectric_f90", K::F32, 1}, {"pixel", K::U32, 1},
-                                {"sample", K::U32, 1}, {"branch", K::U32, 1}, {"triangle", K::U32, 1}}, false}},
-    };
-    for (const auto& [name, type] : t) {
-      uint32_t bytes = 0;
-      for (const Field& f : type.fields) bytes += kindBytes(f.kind) * f.count;
-      if (bytes != type.bytes) throw std::logic_error("dump_compare: the fields of " + name + " do not add up to its size");
-    }
-    return t;
-  }();
-  return types;
-}
 
 struct Array {
   std::string type;
@@ -127,22 +64,22 @@ bool floatsAgree(float a, float b, const DumpCompareOptions& o) {
   return std::abs(ordered(std::bit_cast<uint32_t>(a)) - ordered(std::bit_cast<uint32_t>(b))) <= int64_t(o.ulps);
 }
 
-std::string valueText(Kind k, const std::byte* p) {
+std::string valueText(DumpFieldKind k, const std::byte* p) {
   std::ostringstream s;
   s.precision(9);
   switch (k) {
-    case Kind::F32: s << load<float>(p); break;
-    case Kind::F16: s << "0x" << std::hex << load<uint16_t>(p) << " (binary16)"; break;
-    case Kind::U32: s << load<uint32_t>(p); break;
-    case Kind::I32: s << load<int32_t>(p); break;
-    case Kind::U16: s << load<uint16_t>(p); break;
-    case Kind::U64: s << load<uint64_t>(p); break;
+    case DumpFieldKind::F32: s << load<float>(p); break;
+    case DumpFieldKind::F16: s << "0x" << std::hex << load<uint16_t>(p) << " (binary16)"; break;
+    case DumpFieldKind::U32: s << load<uint32_t>(p); break;
+    case DumpFieldKind::I32: s << load<int32_t>(p); break;
+    case DumpFieldKind::U16: s << load<uint16_t>(p); break;
+    case DumpFieldKind::U64: s << load<uint64_t>(p); break;
   }
   return s.str();
 }
 
 // The first field of two records that differs, or false; `skip` names fields not compared.
-bool firstDifference(const RecordType* type, uint32_t recordBytes, const std::byte* a, const std::byte* b,
+bool firstDifference(const DumpRecordType* type, uint32_t recordBytes, const std::byte* a, const std::byte* b,
                      const DumpCompareOptions& o, RecordDifference& d, const std::set<std::string>& skip = {}) {
   if (!type) {  // a type this Lucent does not know: bytes
     if (std::memcmp(a, b, recordBytes) == 0) return false;
@@ -151,15 +88,15 @@ bool firstDifference(const RecordType* type, uint32_t recordBytes, const std::by
     return true;
   }
   uint32_t offset = 0;
-  for (const Field& f : type->fields) {
-    const uint32_t size = kindBytes(f.kind);
+  for (const DumpField& f : type->fields) {
+    const uint32_t size = dumpFieldBytes(f.kind);
     for (uint32_t i = 0; i < f.count; ++i, offset += size) {
       if (skip.count(f.name)) continue;
       const std::byte *x = a + offset, *y = b + offset;
       bool same = std::memcmp(x, y, size) == 0;
       if (!same && !type->exact) {
-        if (f.kind == Kind::F32) same = floatsAgree(load<float>(x), load<float>(y), o);
-        if (f.kind == Kind::F16) same = std::abs(ordered16(load<uint16_t>(x)) - ordered16(load<uint16_t>(y))) <= int64_t(o.ulps);
+        if (f.kind == DumpFieldKind::F32) same = floatsAgree(load<float>(x), load<float>(y), o);
+        if (f.kind == DumpFieldKind::F16) same = std::abs(ordered16(load<uint16_t>(x)) - ordered16(load<uint16_t>(y))) <= int64_t(o.ulps);
       }
       if (!same) {
         d.field = f.count > 1 ? std::string(f.name) + "[" + std::to_string(i) + "]" : std::string(f.name);
@@ -177,7 +114,7 @@ void note(ArrayComparison& c, const DumpCompareOptions& o, RecordDifference d) {
   if (c.first.size() < o.reported) c.first.push_back(std::move(d));
 }
 
-void compareElementwise(const Array& r, const Array& c, const RecordType* type, const DumpCompareOptions& o,
+void compareElementwise(const Array& r, const Array& c, const DumpRecordType* type, const DumpCompareOptions& o,
                         ArrayComparison& out, const std::vector<uint64_t>* order = nullptr,
                         const std::vector<uint64_t>* candidateOrder = nullptr) {
   for (uint64_t i = 0; i < r.count; ++i) {
@@ -262,7 +199,7 @@ void compareNeighbours(const Array& r, const Array& c, const std::vector<uint64_
 
 // The environment paper's tree, walked from the root in both: the same shape, the same nodes (within
 // the tolerance) and the same selection bits at every place in it, whatever the nodes' numbering.
-void compareTrees(const Array& r, const Array& c, const RecordType* type, const DumpCompareOptions& o, ArrayComparison& out) {
+void compareTrees(const Array& r, const Array& c, const DumpRecordType* type, const DumpCompareOptions& o, ArrayComparison& out) {
   const uint32_t root = 1;
   if (r.count <= root || c.count <= root) {
     if (r.count != c.count) out.problem = "one of the trees is empty";
@@ -331,8 +268,8 @@ DumpComparison compareDumpDirectories(const std::string& reference, const std::s
     const Array r = readArray(fs::path(reference) / (name + ".bin")), c = readArray(fs::path(candidate) / (name + ".bin"));
     ArrayComparison a;
     a.name = name, a.type = r.type, a.referenceRecords = r.count, a.candidateRecords = c.count;
-    const auto known = recordTypes().find(r.type);
-    const RecordType* type = known == recordTypes().end() ? nullptr : &known->second;
+    const auto known = dumpRecordTypes().find(r.type);
+    const DumpRecordType* type = known == dumpRecordTypes().end() ? nullptr : &known->second;
     if (c.type != r.type || c.recordBytes != r.recordBytes) {
       a.problem = "record type " + c.type + " (" + std::to_string(c.recordBytes) + " bytes) in the candidate, " + r.type +
                   " (" + std::to_string(r.recordBytes) + " bytes) in the reference";

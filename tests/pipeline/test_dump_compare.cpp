@@ -4,10 +4,20 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cstddef>
+#include <map>
 #include <cmath>
 #include <random>
 
 #include "lucent/core/dump.h"
+#include "lucent/core/dump_records.h"
+#include "lucent/pipeline/shading_points.h"
+#include "lucent/techniques/points/point_hierarchy.h"
+#include "lucent/techniques/points/point_nodes.h"
+#include "lucent/techniques/points/point_radiance.h"
+#include "methods/envpbgi/radiance_cache.h"
+#include "methods/particles/area_particles.h"
+#include "methods/particles/radiance_particles.h"
 #include "lucent/pipeline/dump_compare.h"
 #include "lucent/techniques/photons/kd_tree.h"
 #include "lucent/techniques/photons/photon.h"
@@ -39,6 +49,58 @@ struct Dirs {
 float nextFloat(float x) { return std::nextafter(x, INFINITY); }
 
 }  // namespace
+
+TEST_CASE("The dump record table gives every field at the C++ struct's offset and every record its size", "[dump]") {
+  // Per type, the C++ offset of each field of the table, in the table's order, and the struct's size.
+#define AT(T, f) uint32_t(offsetof(T, f))
+  const std::map<std::string, std::pair<std::vector<uint32_t>, size_t>> cpp = {
+      {"uint32", {{0}, 4}},
+      {"uint64", {{0}, 8}},
+      {"float", {{0}, 4}},
+      {"Rgb", {{AT(Rgb, r)}, sizeof(Rgb)}},
+      {"HalfRgb", {{AT(HalfRgb, r)}, sizeof(HalfRgb)}},
+      {"Photon", {{AT(Photon, position), AT(Photon, power), AT(Photon, direction), AT(Photon, flags)}, sizeof(Photon)}},
+      {"PhotonDistance", {{AT(PhotonDistance, d2), AT(PhotonDistance, index)}, sizeof(PhotonDistance)}},
+      {"UniformGrid", {{AT(UniformGrid, lo), AT(UniformGrid, hi), AT(UniformGrid, cellSize), AT(UniformGrid, invCellSize),
+                        AT(UniformGrid, res), AT(UniformGrid, slack)}, sizeof(UniformGrid)}},
+      {"DirectionalRadiance", {{AT(DirectionalRadiance, shown), AT(DirectionalRadiance, area)}, sizeof(DirectionalRadiance)}},
+      {"PointSample", {{AT(PointSample, triangle), AT(PointSample, b1), AT(PointSample, b2)}, sizeof(PointSample)}},
+      {"FloatNode", {{AT(FloatNode, sphere.center), AT(FloatNode, sphere.radius), AT(FloatNode, cone.axis),
+                      AT(FloatNode, cone.angle), AT(FloatNode, albedo)}, sizeof(FloatNode)}},
+      {"PackedNode", {{AT(PackedNode, position), AT(PackedNode, radius), AT(PackedNode, normalAlbedo), AT(PackedNode, coneFree)},
+                      sizeof(PackedNode)}},
+      {"NodeQuantization", {{AT(NodeQuantization, origin), AT(NodeQuantization, step), AT(NodeQuantization, radiusStep)},
+                            sizeof(NodeQuantization)}},
+      {"EnvPointNode", {{AT(EnvPointNode, position), AT(EnvPointNode, radius), AT(EnvPointNode, normal), AT(EnvPointNode, coneAngle),
+                         AT(EnvPointNode, child), AT(EnvPointNode, skip), AT(EnvPointNode, selection)}, sizeof(EnvPointNode)}},
+      {"Surfel", {{AT(Surfel, position), AT(Surfel, normal)}, sizeof(Surfel)}},
+      {"RadianceCache", {{AT(RadianceCache, position), AT(RadianceCache, normal), AT(RadianceCache, radius),
+                          AT(RadianceCache, environment), AT(RadianceCache, indirect)}, sizeof(RadianceCache)}},
+      {"AreaParticle", {{AT(AreaParticle, position), AT(AreaParticle, normal), AT(AreaParticle, area), AT(AreaParticle, reflectance),
+                         AT(AreaParticle, triangle)}, sizeof(AreaParticle)}},
+      {"TriangleTessellation", {{AT(TriangleTessellation, first), AT(TriangleTessellation, segments)}, sizeof(TriangleTessellation)}},
+      {"ShadingPoint", {{AT(ShadingPoint, position), AT(ShadingPoint, geometricNormal), AT(ShadingPoint, normal), AT(ShadingPoint, wo),
+                         AT(ShadingPoint, weight), AT(ShadingPoint, bsdf.type), AT(ShadingPoint, bsdf.kd), AT(ShadingPoint, bsdf.ks),
+                         AT(ShadingPoint, bsdf.ns), AT(ShadingPoint, bsdf.ni), AT(ShadingPoint, bsdf.alpha), AT(ShadingPoint, bsdf.f90),
+                         AT(ShadingPoint, bsdf.dielectricF0), AT(ShadingPoint, bsdf.dielectricF90), AT(ShadingPoint, pixel),
+                         AT(ShadingPoint, sample), AT(ShadingPoint, branch), AT(ShadingPoint, triangle)}, sizeof(ShadingPoint)}},
+  };
+#undef AT
+  REQUIRE(cpp.size() == dumpRecordTypes().size());
+  for (const auto& [name, type] : dumpRecordTypes()) {
+    INFO(name);
+    REQUIRE(cpp.count(name));
+    const auto& [offsets, size] = cpp.at(name);
+    CHECK(type.bytes == size);
+    REQUIRE(type.fields.size() == offsets.size());
+    uint32_t offset = 0;
+    for (size_t i = 0; i < offsets.size(); ++i) {
+      INFO(type.fields[i].name);
+      CHECK(offset == offsets[i]);
+      offset += dumpFieldBytes(type.fields[i].kind) * type.fields[i].count;
+    }
+  }
+}
 
 TEST_CASE("check-dump compares photons as multisets, allowing for order and rounding", "[dump]") {
   std::mt19937 rng(7);

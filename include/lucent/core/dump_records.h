@@ -1,0 +1,29 @@
+// The fields of every dump record type of docs/dump-format.md, by type name: what check-dump
+// compares field by field and the Python module turns into NumPy dtypes. tests/pipeline/
+// test_dump_compare.cpp checks every field's offset against the C++ struct's.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace lucent {
+
+enum class DumpFieldKind { F32, F16, U32, I32, U16, U64 };
+uint32_t dumpFieldBytes(DumpFieldKind kind);
+
+struct DumpField {
+  const char* name;
+  DumpFieldKind kind;
+  uint32_t count;  // elements: 3 for a position, 1 for a scalar
+};
+
+struct DumpRecordType {
+  uint32_t bytes;
+  std::vector<DumpField> fields;  // in order, without padding
+  bool exact;                     // compared bit for bit: integers, and the grids whose floats decide cells
+};
+
+const std::map<std::string, DumpRecordType>& dumpRecordTypes();
+
+}  // namespace lucent
