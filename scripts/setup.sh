@@ -4,7 +4,8 @@
 set -euo pipefail
 packages=(build-essential cmake libembree-dev libtbb-dev libopenimageio-dev openimageio-tools
           libopenexr-dev libcli11-dev catch2 nlohmann-json3-dev libtinygltf-dev python3-imath
-          python3-numpy ocl-icd-opencl-dev opencl-c-headers pocl-opencl-icd "$@")
+          python3-numpy ocl-icd-opencl-dev opencl-c-headers pocl-opencl-icd
+          pybind11-dev python3-dev python3-pytest "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

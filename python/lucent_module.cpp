@@ -1,0 +1,266 @@
+// The `lucent` Python module: scenes, renders with any method and its options to NumPy arrays (the
+// GIL released while rendering), compare's metrics and tests on arrays in memory, and dumps as
+// NumPy structured arrays. python/README.md documents it; tests/python/test_module.py tests it.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <vector>
+
+#include "lucent/core/dump.h"
+#include "lucent/core/dump_records.h"
+#include "lucent/core/parallel.h"
+#include "lucent/image/comparison.h"
+#include "lucent/image/image.h"
+#include "lucent/methods/methods.h"
+#include "lucent/scene/loader.h"
+#include "lucent/trace/visibility.h"
+
+namespace py = pybind11;
+using namespace lucent;
+
+namespace {
+
+// A scene and its Embree visibility, built once for any number of renders.
+struct LoadedScene {
+  Scene scene;
+  std::unique_ptr<Visibility> visibility;
+  std::string path;
+};
+
+std::shared_ptr<LoadedScene> loadSceneFile(const std::string& path, std::optional<std::pair<int, int>> resolution) {
+  auto s = std::make_shared<LoadedScene>();
+  s->path = path;
+  s->scene = loadScene(path, LoadOptions(true));
+  if (resolution) {
+    if (resolution->first < 1 || resolution->second < 1) throw std::invalid_argument("resolution must be at least 1 x 1");
+    s->scene.camera.width = resolution->first, s->scene.camera.height = resolution->second;
+  }
+  s->visibility = std::make_unique<Visibility>(s->scene);
+  return s;
+}
+
+// Text for a method option from a Python value: booleans as true/false, the rest as str() gives it.
+std::string optionText(const py::handle& value) {
+  if (py::isinstance<py::bool_>(value)) return value.cast<bool>() ? "true" : "false";
+  return py::str(value).cast<std::string>();
+}
+
+// Channels [first, first + count) of an image as an (height, width, count) float32 array.
+py::array_t<float> channelsArray(const Image& image, int first, int count) {
+  py::array_t<float> a({image.height(), image.width(), count});
+  auto m = a.mutable_unchecked<3>();
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x)
+      for (int c = 0; c < count; ++c) m(y, x, c) = image.at(x, y, first + c);
+  return a;
+}
+
+// An image's channels grouped by layer: "R", "G", "B" the image, "variance.R" ... the variance,
+// "paths.direct.R" ... the layer "paths.direct".
+py::dict imageArrays(const Image& image) {
+  std::vector<std::pair<std::string, std::pair<int, int>>> groups;  // layer, first channel and count
+  for (int c = 0; c < image.channelCount(); ++c) {
+    const std::string& name = image.channels()[size_t(c)];
+    const size_t dot = name.rfind('.');
+    const std::string layer = dot == std::string::npos ? "" : name.substr(0, dot);
+    if (!groups.empty() && groups.back().first == layer) ++groups.back().second.second;
+    else groups.push_back({layer, {c, 1}});
+  }
+  py::dict out, layers;
+  for (const auto& [layer, range] : groups) {
+    py::array_t<float> a = channelsArray(image, range.first, range.second);
+    if (layer.empty()) out["image"] = a;
+    else if (layer == "variance") out["variance"] = a;
+    else layers[py::str(layer)] = a;
+  }
+  if (!out.contains("variance")) out["variance"] = py::none();
+  out["layers"] = layers;
+  return out;
+}
+
+py::dict render(const LoadedScene& s, std::optional<std::string> methodName, std::optional<int> threads, const py::kwargs& kwargs) {
+  const std::string name = methodName ? *methodName : !s.scene.render.method.empty() ? s.scene.render.method : "pt";
+  const Method& method = renderingMethod(name);
+  OptionValues values;
+  // The scene's render block applies when it names this method (or none), as with `lucent render`.
+  if (s.scene.render.present && (s.scene.render.method.empty() || s.scene.render.method == method.name()))
+    for (const auto& [option, text] : s.scene.render.options) values.emplace_back(option, text);
+  for (const auto& [key, value] : kwargs) values.emplace_back(key.cast<std::string>(), optionText(value));
+  std::unique_ptr<MethodOptions> resolved;
+  try {
+    resolved = method.resolve(values);
+  } catch (const OptionError& e) {
+    throw OptionError(e.option(), name + " option " + e.option() + ": " + e.what());  // named as Python spells it
+  }
+  RenderOutput out;
+  {
+    py::gil_scoped_release release;
+    ParallelScope scope(threads.value_or(0));
+    out = method.render(s.scene, *s.visibility, *resolved);
+  }
+  py::dict result = imageArrays(out.image);
+  py::dict stats, counters, stages, measured;
+  for (const auto& [stage, seconds] : out.stats.stageSeconds) stages[py::str(stage)] = seconds;
+  for (const auto& [counter, value] : out.stats.counters) counters[py::str(counter)] = value;
+  for (const auto& [key, value] : out.measured) measured[py::str(key)] = value;
+  result["method"] = method.name();
+  result["spp"] = out.sppDone;
+  result["complete"] = out.complete;
+  result["stages"] = stages;
+  result["counters"] = counters;
+  result["measured"] = measured;
+  return result;
+}
+
+// An (height, width, 3) array, or a dict of one with its variance and layers (render's, read_image's),
+// as an Image with compare's channel names.
+Image imageFrom(const py::handle& value, const std::string& what) {
+  py::object array = py::reinterpret_borrow<py::object>(value), variance = py::none();
+  py::dict layers;
+  if (py::isinstance<py::dict>(value)) {
+    const py::dict d = value.cast<py::dict>();
+    array = d["image"];
+    if (d.contains("variance")) variance = d["variance"];
+    if (d.contains("layers")) layers = d["layers"].cast<py::dict>();
+  }
+  std::vector<std::pair<std::string, py::array_t<float, py::array::c_style | py::array::forcecast>>> parts;
+  parts.push_back({"", py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(array)});
+  if (!variance.is_none()) parts.push_back({"variance", py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(variance)});
+  for (const auto& [key, layer] : layers)
+    parts.push_back({key.cast<std::string>(), py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(layer)});
+  // In the order an EXR file's channels are read (R, G, B, then the layers by name), so that the
+  // metrics sum in the order `lucent compare` does and give its numbers to the last bit.
+  std::sort(parts.begin() + 1, parts.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  const auto& first = parts.front().second;
+  if (!first || first.ndim() != 3 || first.shape(2) != 3)
+    throw std::invalid_argument(what + ": needs an array of shape (height, width, 3)");
+  const int height = int(first.shape(0)), width = int(first.shape(1));
+  std::vector<std::string> channels;
+  for (const auto& [layer, a] : parts) {
+    if (!a || a.ndim() != 3 || a.shape(0) != height || a.shape(1) != width || a.shape(2) != 3)
+      throw std::invalid_argument(what + ": layer '" + (layer.empty() ? "image" : layer) + "' is not of shape (" +
+                                  std::to_string(height) + ", " + std::to_string(width) + ", 3)");
+    for (const char* c : {"R", "G", "B"}) channels.push_back(layer.empty() ? std::string(c) : layer + "." + c);
+  }
+  Image image(width, height, channels);
+  const size_t stride = channels.size();
+  for (size_t p = 0; p < parts.size(); ++p) {
+    const float* data = parts[p].second.data();
+    for (size_t i = 0; i < size_t(width) * size_t(height); ++i)
+      for (size_t c = 0; c < 3; ++c) image.pixels()[i * stride + 3 * p + c] = data[3 * i + c];
+  }
+  return image;
+}
+
+py::object compare(const py::handle& image, const py::handle& reference, const std::string& metric,
+                   std::optional<double> maxError, bool test, int block, std::optional<double> within, double alpha,
+                   const std::string& layer, const std::string& imageLayer, double ppd,
+                   std::optional<double> startExposure, std::optional<double> stopExposure, bool imageSrgb,
+                   bool referenceSrgb) {
+  ComparisonSettings settings;
+  settings.metric = metric, settings.maxError = maxError, settings.test = test, settings.block = block;
+  settings.within = within, settings.alpha = alpha, settings.layer = layer, settings.imageLayer = imageLayer;
+  settings.pixelsPerDegree = ppd, settings.startExposure = startExposure, settings.stopExposure = stopExposure;
+  Image a = imageFrom(image, "image"), b = imageFrom(reference, "reference");
+  ImageComparison result;
+  {
+    py::gil_scoped_release release;
+    result = compareImagePair(std::move(a), std::move(b), settings, imageSrgb, referenceSrgb);
+  }
+  return py::module_::import("json").attr("loads")(result.json);
+}
+
+// The NumPy dtype of a dump record type, from the record table (lucent/core/dump_records.h, whose
+// offsets a test checks against the C++ structs).
+py::dtype recordDtype(const std::string& type) {
+  const auto found = dumpRecordTypes().find(type);
+  if (found == dumpRecordTypes().end()) throw std::invalid_argument("no dump record type '" + type + "'");
+  const DumpRecordType& record = found->second;
+  if (record.fields.size() == 1 && record.fields[0].count == 1 && std::string(record.fields[0].name) == "value")
+    return py::dtype(record.fields[0].kind == DumpFieldKind::F32 ? "<f4" : record.fields[0].kind == DumpFieldKind::U64 ? "<u8" : "<u4");
+  py::list names, formats, offsets;
+  uint32_t offset = 0;
+  for (const DumpField& f : found->second.fields) {
+    const char* base = "";
+    switch (f.kind) {
+      case DumpFieldKind::F32: base = "<f4"; break;
+      case DumpFieldKind::F16: base = "<f2"; break;
+      case DumpFieldKind::U32: base = "<u4"; break;
+      case DumpFieldKind::I32: base = "<i4"; break;
+      case DumpFieldKind::U16: base = "<u2"; break;
+      case DumpFieldKind::U64: base = "<u8"; break;
+    }
+    names.append(f.name);
+    formats.append(f.count > 1 ? py::str("(" + std::to_string(f.count) + ",)" + base) : py::str(base));
+    offsets.append(offset);
+    offset += dumpFieldBytes(f.kind) * f.count;
+  }
+  py::dict spec;
+  spec["names"] = names, spec["formats"] = formats, spec["offsets"] = offsets, spec["itemsize"] = found->second.bytes;
+  return py::dtype::from_args(spec);
+}
+
+py::array readDumpArray(const std::string& path) {
+  const DumpHeader header = readDumpHeader(path);
+  const std::string type(header.type, strnlen(header.type, sizeof header.type));
+  const py::dtype dtype = recordDtype(type);
+  if (uint32_t(dtype.itemsize()) != header.recordBytes)
+    throw std::runtime_error("'" + path + "': " + type + " records of " + std::to_string(header.recordBytes) +
+                             " bytes, not " + std::to_string(dtype.itemsize()));
+  py::array out;
+  readDumpRecords(path, type, header.recordBytes, [&](uint64_t count) {
+    out = py::array(dtype, std::vector<py::ssize_t>{py::ssize_t(count)});
+    return out.mutable_data();
+  });
+  return out;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(lucent, m) {
+  m.doc() = "Lucent, a CPU reference renderer for global illumination: scenes, renders to NumPy arrays, "
+            "lucent compare's metrics and tests on arrays, and stage dumps as structured arrays";
+  py::register_exception<OptionError>(m, "OptionError", PyExc_ValueError);
+  py::class_<LoadedScene, std::shared_ptr<LoadedScene>>(m, "Scene", "A loaded scene with its Embree visibility")
+      .def_property_readonly("path", [](const LoadedScene& s) { return s.path; })
+      .def_property_readonly("width", [](const LoadedScene& s) { return s.scene.camera.width; })
+      .def_property_readonly("height", [](const LoadedScene& s) { return s.scene.camera.height; })
+      .def_property_readonly("triangles", [](const LoadedScene& s) { return s.scene.indices.size() / 3; });
+  m.def("load_scene", &loadSceneFile, py::arg("path"), py::arg("resolution") = py::none(),
+        "Loads a scene file or a glTF file; resolution=(width, height) overrides the camera's");
+  m.def("methods", [] {
+    std::vector<std::string> names;
+    for (const Method* method : renderingMethods()) names.push_back(method->name());
+    return names;
+  }, "The rendering methods' names");
+  m.def("render", &render, py::arg("scene"), py::arg("method") = py::none(), py::arg("threads") = py::none(),
+        "Renders the scene with a method (default: the scene's render block's, else pt) and its options as keyword "
+        "arguments (spp=64, variance=True, ...: the names of `lucent render --method M --help` with _ for -). Returns "
+        "a dict: image and variance (height x width x 3 float32, variance None unless asked for), layers (name -> "
+        "array), method, spp, complete, stages, counters, measured.");
+  m.def("compare", &compare, py::arg("image"), py::arg("reference"), py::arg("metric") = "relmse",
+        py::arg("max_error") = py::none(), py::arg("test") = false, py::arg("block") = 8, py::arg("within") = py::none(),
+        py::arg("alpha") = 0.01, py::arg("layer") = "", py::arg("image_layer") = "", py::arg("ppd") = kFlipPixelsPerDegree,
+        py::arg("start_exposure") = py::none(), py::arg("stop_exposure") = py::none(), py::arg("image_srgb") = false,
+        py::arg("reference_srgb") = false,
+        "lucent compare on arrays in memory: each of image and reference is a (height, width, 3) array or a dict "
+        "like render's (image, variance, layers). Returns compare's JSON as a dict (without the file names).");
+  m.def("read_image", [](const std::string& path) {
+    ImageMetadata metadata;
+    const Image image = readLinearImage(path, &metadata);
+    py::dict out = imageArrays(image);
+    out["srgb"] = isSrgbEncoded(path, metadata);  // pass as compare's image_srgb / reference_srgb
+    out["channels"] = image.channels();
+    return out;
+  }, py::arg("path"), "An image file (EXR, HDR, PNG, ...) as a dict like render's: image, variance, layers, and "
+                      "srgb (an 8-bit sRGB file, decoded to linear)");
+  m.def("record_dtype", &recordDtype, py::arg("type"), "The NumPy dtype of a dump record type (docs/dump-format.md)");
+  m.def("read_dump", &readDumpArray, py::arg("path"), "A dump file as a NumPy structured array of its records");
+}

@@ -1,0 +1,131 @@
+"""The `lucent` Python module (python/README.md): renders to NumPy arrays equal to `lucent render`'s
+files, compares arrays in memory with exactly `lucent compare`'s numbers, releases the GIL while it
+renders, and reads dumps as structured arrays whose dtypes are those of scripts/read-dump.py.
+
+Run by ctest with PYTHONPATH=build/python, LUCENT_CLI and LUCENT_SOURCE set:
+    /usr/bin/python3 -m pytest -q -p no:cacheprovider tests/python/test_module.py
+"""
+import importlib.util
+import json
+import os
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+
+import lucent
+
+CLI = os.environ["LUCENT_CLI"]
+SOURCE = os.environ["LUCENT_SOURCE"]
+CORNELL = os.path.join(SOURCE, "scenes", "cornell-box.json")
+
+
+def cli(*args):
+    done = subprocess.run([CLI, *map(str, args)], capture_output=True, text=True)
+    return done.returncode, done.stdout, done.stderr
+
+
+@pytest.fixture(scope="module")
+def renders(tmp_path_factory):
+    """The Cornell box at 32 x 32 by the CLI (a candidate at 16 spp and a reference at 256, both with
+    variance) and the candidate again by the module."""
+    work = tmp_path_factory.mktemp("module")
+    common = ["--resolution", "32x32", "--sampler", "independent", "--variance", "--paths", "--quiet"]
+    for name, spp, seed in (("candidate", 16, 1), ("reference", 256, 2)):
+        code, _, err = cli("render", CORNELL, "--spp", spp, "--seed", seed, *common, "-o", work / f"{name}.exr")
+        assert code == 0, err
+    scene = lucent.load_scene(CORNELL, resolution=(32, 32))
+    module = lucent.render(scene, method="pt", threads=2, spp=16, seed=1, sampler="independent", variance=True,
+                           paths=True)
+    return work, module
+
+
+def test_the_module_renders_what_lucent_render_writes(renders):
+    work, module = renders
+    written = lucent.read_image(str(work / "candidate.exr"))
+    assert module["image"].shape == (32, 32, 3) and module["image"].dtype == np.float32
+    assert np.array_equal(module["image"], written["image"])
+    assert np.array_equal(module["variance"], written["variance"])
+    assert sorted(module["layers"]) == sorted(written["layers"])
+    assert "paths.indirect.1" in module["layers"]
+    for name, layer in module["layers"].items():
+        assert np.array_equal(layer, written["layers"][name]), name
+    assert module["spp"] == 16 and module["complete"]
+    assert module["counters"]["invalid_samples"] == 0
+
+
+@pytest.mark.parametrize("flags", [["--metric", "relmse"], ["--metric", "rmse", "--max-error", "0.01"],
+                                   ["--metric", "smape"], ["--metric", "mae"], ["--metric", "flip"],
+                                   ["--test"], ["--test", "--block", "4", "--alpha", "0.05"], ["--within", "0.05"],
+                                   ["--layer", "indirect.1", "--test"]])
+def test_compare_on_arrays_gives_lucent_compares_numbers(renders, flags):
+    work, module = renders
+    code, out, err = cli("compare", work / "candidate.exr", work / "reference.exr", *flags)
+    assert code in (0, 1), err
+    expected = json.loads(out)
+    del expected["image"], expected["reference"]
+    keywords = {}
+    for i, flag in enumerate(flags):
+        if not flag.startswith("--"):
+            continue
+        value = flags[i + 1] if i + 1 < len(flags) and not flags[i + 1].startswith("--") else True
+        name = flag[2:].replace("-", "_")
+        keywords[name] = (float(value) if name in ("max_error", "within", "alpha") else
+                          int(value) if name == "block" else value)
+    reference = lucent.read_image(str(work / "reference.exr"))
+    assert lucent.compare(module, reference, **keywords) == expected
+    assert expected["passed"] == (code == 0)
+
+
+def test_compare_refuses_what_lucent_compare_refuses(renders):
+    _, module = renders
+    with pytest.raises(ValueError, match="shape"):
+        lucent.compare(module["image"][:, :, :2], module["image"])
+    with pytest.raises(ValueError, match="--within"):
+        lucent.compare(module, module, within=20.0)
+    with pytest.raises(ValueError):
+        lucent.compare(module["image"], module["image"], metric="psnr")
+    with pytest.raises(lucent.OptionError, match="sampler"):
+        lucent.render(lucent.load_scene(CORNELL, resolution=(8, 8)), spp=4, variance=True)
+    with pytest.raises(ValueError, match="no_such_option"):
+        lucent.render(lucent.load_scene(CORNELL, resolution=(8, 8)), no_such_option=1)
+
+
+def test_a_render_releases_the_gil():
+    scene = lucent.load_scene(CORNELL, resolution=(64, 64))
+    result = {}
+    thread = threading.Thread(target=lambda: result.update(lucent.render(scene, spp=256, threads=1)))
+    ticks = 0
+    thread.start()
+    while thread.is_alive():
+        ticks += 1
+    thread.join()
+    assert result["spp"] == 256
+    # Held through the render, the GIL would leave this loop a handful of turns; released, it runs
+    # throughout (the render takes tenths of a second).
+    assert ticks > 10000
+
+
+def test_dumps_read_as_structured_arrays_with_read_dump_pys_dtypes(tmp_path):
+    code, _, err = cli("render", CORNELL, "--method", "purcell", "--map", "sort", "--resolution", "24x24",
+                       "--photons", "4000", "--quiet", "--dump", tmp_path, "-o", tmp_path / "image.exr")
+    assert code == 0, err
+    spec = importlib.util.spec_from_file_location("read_dump", os.path.join(SOURCE, "scripts", "read-dump.py"))
+    read_dump = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(read_dump)
+    files = sorted(p for p in os.listdir(tmp_path) if p.endswith(".bin"))
+    assert "global.photons.bin" in files and "band0.global.neighbours.bin" in files
+    for name in files:
+        ours = lucent.read_dump(str(tmp_path / name))
+        theirs, _ = read_dump.read_dump(str(tmp_path / name))
+        assert ours.dtype == theirs.dtype, name
+        assert ours.tobytes() == theirs.tobytes(), name
+    photons = lucent.read_dump(str(tmp_path / "global.photons.bin"))
+    assert lucent.record_dtype("Photon").fields["flags"][1] == 28
+    assert photons["position"].shape == (len(photons), 3)
+    # A damaged dump is refused, naming the file.
+    damaged = tmp_path / "damaged.bin"
+    damaged.write_bytes((tmp_path / "global.photons.bin").read_bytes()[:100])
+    with pytest.raises(RuntimeError, match="damaged.bin"):
+        lucent.read_dump(str(damaged))
