@@ -206,6 +206,7 @@ void compareTrees(const Array& r, const Array& c, const DumpRecordType* type, co
     return;
   }
   std::vector<std::pair<uint32_t, uint32_t>> stack = {{root, root}};
+  std::vector<bool> seenA(r.count), seenB(c.count);
   while (!stack.empty()) {
     const auto [a, b] = stack.back();
     stack.pop_back();
@@ -213,6 +214,11 @@ void compareTrees(const Array& r, const Array& c, const DumpRecordType* type, co
       out.problem = "a child index beyond the array";
       return;
     }
+    if (seenA[a] || seenB[b]) {  // a cycle, or a node with two parents
+      out.problem = "not a tree: a node is reached twice";
+      return;
+    }
+    seenA[a] = seenB[b] = true;
     RecordDifference d;
     d.index = a;
     // child[2] at byte 32 of the 48-byte node.
@@ -283,7 +289,13 @@ DumpComparison compareDumpDirectories(const std::string& reference, const std::s
       } else {
         const std::vector<uint64_t> ro = offsetsOf(readArray(fs::path(reference) / (offsets + ".bin")));
         const std::vector<uint64_t> co = offsetsOf(readArray(fs::path(candidate) / (offsets + ".bin")));
+        auto cuts = [](const std::vector<uint64_t>& o, uint64_t total) {
+          bool ok = !o.empty() && o.front() == 0 && o.back() == total;
+          for (size_t i = 1; ok && i < o.size(); ++i) ok = o[i - 1] <= o[i];
+          return ok;
+        };
         if (ro.size() != co.size() || ro.empty()) a.problem = "the searches' counts differ";
+        else if (!cuts(ro, r.count) || !cuts(co, c.count)) a.problem = offsets + " are not offsets from 0 to the neighbours' count";
         else compareNeighbours(r, c, ro, co, options, a);
       }
     } else if (r.count != c.count) {

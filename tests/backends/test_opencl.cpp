@@ -118,6 +118,16 @@ TEST_CASE("The OpenCL kNN-grid estimate equals a purcell dump's, with the same n
   CHECK(overflow == 0);
   CHECK(sameSets == points.size());
 
+  // A damaged photon list is refused before a kernel follows it.
+  auto list = readDump<uint32_t>(dir / "global.photon_list.bin", "uint32");
+  const uint32_t kept = list[7];
+  list[7] = uint32_t(photons.size());
+  writeDump(dir.path.string(), "global.photon_list", "uint32", std::span(list));
+  CHECK_THROWS_WITH(runKnnGridEstimate(device(), dir.path.string(), "global", "band0", settings.k, settings.maxRadius),
+                    Catch::Contains("global.photon_list.bin: entry 7"));
+  list[7] = kept;
+  writeDump(dir.path.string(), "global.photon_list", "uint32", std::span(list));
+
   // The comparison can fail: one photon more per search changes the estimates where the search
   // found k (the others, with fewer than k within the maximum radius, keep every photon there).
   const KnnGridRun other = runKnnGridEstimate(device(), dir.path.string(), "global", "band0", settings.k + 1, settings.maxRadius);

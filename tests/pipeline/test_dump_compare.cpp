@@ -209,6 +209,8 @@ TEST_CASE("check-dump compares kNN results as sets, allowing for ties at the rad
     REQUIRE(a.first.size() == 1);
     CHECK(a.first[0].index == 0);
   }
+  // Offsets that do not cut the neighbours: refused.
+  CHECK(write(reference, {0, 9, 5}).problem.find("are not offsets") != std::string::npos);
   // A photon where the reference found none: query 1 differs.
   a = write({{0.1f, 4}, {0.3f, 9}, {0.2f, 2}, {0.5f, 5}, {0.5f, 8}, {0.7f, 1}}, {0, 5, 6});
   CHECK(a.differing == 1);
@@ -251,6 +253,11 @@ TEST_CASE("check-dump compares the environment paper's node tree by its structur
   REQUIRE(a.first.size() == 1);
   CHECK(a.first[0].index == 2);
   CHECK(a.first[0].field == "child");
+  // A damaged candidate whose leaf points back at the root: refused, not walked for ever.
+  candidate[5].child[0] = 1, candidate[5].child[1] = 2;
+  candidate[4].child[0] = 5, candidate[4].child[1] = 3;
+  d.write("envpbgi.nodes", "EnvPointNode", reference, candidate);
+  CHECK(d.compare("envpbgi.nodes").problem == "not a tree: a node is reached twice");
 }
 
 TEST_CASE("lucent check-dump passes a render's dump against another thread count's and fails a changed one",

@@ -57,6 +57,23 @@ namespace {
 
 std::string file(const std::string& dir, const std::string& name) { return dir + "/" + name + ".bin"; }
 
+// A dump is input: every index a kernel follows is checked before it reaches the device.
+template <class Index>
+void checkIndices(const std::vector<Index>& indices, size_t bound, const std::string& path, bool noneAllowed = false) {
+  for (size_t i = 0; i < indices.size(); ++i)
+    if (indices[i] >= bound && !(noneAllowed && indices[i] == Index(0xffffffffu)))
+      throw std::runtime_error(path + ": entry " + std::to_string(i) + " is " + std::to_string(indices[i]) +
+                               ", beyond the " + std::to_string(bound) + " it indexes");
+}
+
+// Offsets that cut `total` entries into runs: non-decreasing from 0 to total.
+template <class Offset>
+void checkOffsets(const std::vector<Offset>& offsets, size_t total, const std::string& path) {
+  bool ok = !offsets.empty() && offsets.front() == 0 && offsets.back() == total;
+  for (size_t i = 1; ok && i < offsets.size(); ++i) ok = offsets[i - 1] <= offsets[i];
+  if (!ok) throw std::runtime_error(path + ": not offsets from 0 to the " + std::to_string(total) + " entries they cut");
+}
+
 }  // namespace
 
 KnnGridRun runKnnGridEstimate(const Device& device, const std::string& dumpDir, const std::string& map,
@@ -69,6 +86,8 @@ KnnGridRun runKnnGridEstimate(const Device& device, const std::string& dumpDir, 
   if (grid.size() != 1) throw std::runtime_error(file(dumpDir, map + ".grid") + ": holds " + std::to_string(grid.size()) + " grids, not 1");
   if (first.size() != grid[0].cellCount() + 1)
     throw std::runtime_error(file(dumpDir, map + ".first_photon") + ": not one entry per cell and one more (a --map sort dump?)");
+  checkOffsets(first, list.size(), file(dumpDir, map + ".first_photon"));
+  checkIndices(list, photons.size(), file(dumpDir, map + ".photon_list"));
 
   const Program program = device.build({"records.cl", "knn_grid.cl"});
   const Kernel kernel = device.kernel(program, "knnGridEstimate");
@@ -126,8 +145,9 @@ CacheInterpolationRun runCacheInterpolation(const Device& device, const std::str
   const auto tiles = readDump<uint32_t>(file(dumpDir, "envpbgi.receiver_tiles"), "uint32");
   if (tiles.size() != points.size())
     throw std::runtime_error(file(dumpDir, "envpbgi.receiver_tiles") + ": not one tile per shading point");
-  for (uint32_t t : tiles)
-    if (size_t(t) + 1 >= begin.size()) throw std::runtime_error(file(dumpDir, "envpbgi.receiver_tiles") + ": a tile beyond the grid");
+  checkOffsets(begin, listed.size(), file(dumpDir, "envpbgi.grid_begin"));
+  checkIndices(listed, caches.size(), file(dumpDir, "envpbgi.grid_caches"));
+  checkIndices(tiles, begin.size() - 1, file(dumpDir, "envpbgi.receiver_tiles"));
   const Program program = device.build({"records.cl", "radiance_cache.cl"});
   const Kernel kernel = device.kernel(program, "interpolateCaches");
   const size_t n = points.size();
@@ -178,8 +198,14 @@ ParticleGatheringRun runParticleGathering(const Device& device, const std::strin
   std::vector<uint32_t> listOf = found;
   if (!everyParticle)
     for (uint32_t j = 0; j < found.size(); ++j) listOf[j] = j;
-  if (offsets.empty() || *std::max_element(listOf.begin(), listOf.end()) + 1 >= offsets.size())
-    throw std::runtime_error(file(dumpDir, "particles.list_offsets") + ": fewer lists than radiance particles");
+  checkOffsets(offsets, listed.size(), file(dumpDir, "particles.list_offsets"));
+  checkIndices(listOf, offsets.size() - 1, file(dumpDir, "particles.found_radiance_particles"));
+  checkIndices(listed, particles.size(), file(dumpDir, "particles.list_particles"));
+  checkIndices(run.rowParticle, particles.size(), file(dumpDir, "particles.gather_link_particles"));
+  checkIndices(used, particles.size(), file(dumpDir, "particles.used_area_particles"));
+  if (radiance.size() != particles.size())
+    throw std::runtime_error(file(dumpDir, "particles.radiance") + ": not one value per area particle");
+  checkIndices(links, particles.size(), file(dumpDir, "particles.gather_links"), true);
 
   const Program program = device.build({"records.cl", "particle_gathering.cl"});
   const Kernel r3 = device.kernel(program, "gatherOverLinks");
