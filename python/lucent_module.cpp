@@ -6,6 +6,9 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
 #include <cstring>
 #include <map>
 #include <memory>
@@ -27,6 +30,19 @@ using namespace lucent;
 
 namespace {
 
+// Lucent's threads flush denormals (flushDenormals, for speed); the interpreter's thread that loads
+// or renders keeps its own floating-point mode, or NumPy on it would flush them too.
+class KeepFloatingPointMode {
+ public:
+#if defined(__SSE__)
+  KeepFloatingPointMode() : mode_(_mm_getcsr()) {}
+  ~KeepFloatingPointMode() { _mm_setcsr(mode_); }
+
+ private:
+  unsigned mode_;
+#endif
+};
+
 // A scene and its Embree visibility, built once for any number of renders.
 struct LoadedScene {
   Scene scene;
@@ -35,6 +51,7 @@ struct LoadedScene {
 };
 
 std::shared_ptr<LoadedScene> loadSceneFile(const std::string& path, std::optional<std::pair<int, int>> resolution) {
+  const KeepFloatingPointMode keep;
   auto s = std::make_shared<LoadedScene>();
   s->path = path;
   s->scene = loadScene(path, LoadOptions(true));
@@ -73,15 +90,21 @@ py::dict imageArrays(const Image& image) {
     if (!groups.empty() && groups.back().first == layer) ++groups.back().second.second;
     else groups.push_back({layer, {c, 1}});
   }
-  py::dict out, layers;
+  py::dict out, layers, layerChannels;
   for (const auto& [layer, range] : groups) {
     py::array_t<float> a = channelsArray(image, range.first, range.second);
+    py::list suffixes;  // the channels' own names: R, G, B; X, Y, Z for normals; Z for depth
+    for (int c = range.first; c < range.first + range.second; ++c) {
+      const std::string& name = image.channels()[size_t(c)];
+      suffixes.append(layer.empty() ? name : name.substr(layer.size() + 1));
+    }
     if (layer.empty()) out["image"] = a;
     else if (layer == "variance") out["variance"] = a;
-    else layers[py::str(layer)] = a;
+    else layers[py::str(layer)] = a, layerChannels[py::str(layer)] = suffixes;
   }
   if (!out.contains("variance")) out["variance"] = py::none();
   out["layers"] = layers;
+  out["layer_channels"] = layerChannels;
   return out;
 }
 
@@ -102,6 +125,7 @@ py::dict render(const LoadedScene& s, std::optional<std::string> methodName, std
   RenderOutput out;
   {
     py::gil_scoped_release release;
+    const KeepFloatingPointMode keep;
     ParallelScope scope(threads.value_or(0));
     out = method.render(s.scene, *s.visibility, *resolved);
   }
@@ -123,12 +147,13 @@ py::dict render(const LoadedScene& s, std::optional<std::string> methodName, std
 // as an Image with compare's channel names.
 Image imageFrom(const py::handle& value, const std::string& what) {
   py::object array = py::reinterpret_borrow<py::object>(value), variance = py::none();
-  py::dict layers;
+  py::dict layers, layerChannels;
   if (py::isinstance<py::dict>(value)) {
     const py::dict d = value.cast<py::dict>();
     array = d["image"];
     if (d.contains("variance")) variance = d["variance"];
     if (d.contains("layers")) layers = d["layers"].cast<py::dict>();
+    if (d.contains("layer_channels")) layerChannels = d["layer_channels"].cast<py::dict>();
   }
   std::vector<std::pair<std::string, py::array_t<float, py::array::c_style | py::array::forcecast>>> parts;
   parts.push_back({"", py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(array)});
@@ -143,18 +168,24 @@ Image imageFrom(const py::handle& value, const std::string& what) {
     throw std::invalid_argument(what + ": needs an array of shape (height, width, 3)");
   const int height = int(first.shape(0)), width = int(first.shape(1));
   std::vector<std::string> channels;
+  std::vector<size_t> firstChannel;
   for (const auto& [layer, a] : parts) {
-    if (!a || a.ndim() != 3 || a.shape(0) != height || a.shape(1) != width || a.shape(2) != 3)
-      throw std::invalid_argument(what + ": layer '" + (layer.empty() ? "image" : layer) + "' is not of shape (" +
-                                  std::to_string(height) + ", " + std::to_string(width) + ", 3)");
-    for (const char* c : {"R", "G", "B"}) channels.push_back(layer.empty() ? std::string(c) : layer + "." + c);
+    // A layer's channels by the names layer_channels gives (render's and read_image's), else R, G, B.
+    std::vector<std::string> suffixes = {"R", "G", "B"};
+    if (!layer.empty() && layerChannels.contains(layer)) suffixes = layerChannels[py::str(layer)].cast<std::vector<std::string>>();
+    const std::string shape = "(" + std::to_string(height) + ", " + std::to_string(width) + ", " + std::to_string(suffixes.size()) + ")";
+    if (!a || a.ndim() != 3 || a.shape(0) != height || a.shape(1) != width || a.shape(2) != py::ssize_t(suffixes.size()))
+      throw std::invalid_argument(what + ": layer '" + (layer.empty() ? "image" : layer) + "' is not of shape " + shape);
+    firstChannel.push_back(channels.size());
+    for (const std::string& c : suffixes) channels.push_back(layer.empty() ? c : layer + "." + c);
   }
   Image image(width, height, channels);
   const size_t stride = channels.size();
   for (size_t p = 0; p < parts.size(); ++p) {
     const float* data = parts[p].second.data();
+    const size_t count = size_t(parts[p].second.shape(2));
     for (size_t i = 0; i < size_t(width) * size_t(height); ++i)
-      for (size_t c = 0; c < 3; ++c) image.pixels()[i * stride + 3 * p + c] = data[3 * i + c];
+      for (size_t c = 0; c < count; ++c) image.pixels()[i * stride + firstChannel[p] + c] = data[count * i + c];
   }
   return image;
 }
@@ -172,6 +203,7 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
   ImageComparison result;
   {
     py::gil_scoped_release release;
+    const KeepFloatingPointMode keep;
     result = compareImagePair(std::move(a), std::move(b), settings, imageSrgb, referenceSrgb);
   }
   return py::module_::import("json").attr("loads")(result.json);
@@ -198,7 +230,9 @@ py::dtype recordDtype(const std::string& type) {
       case DumpFieldKind::U64: base = "<u8"; break;
     }
     names.append(f.name);
-    formats.append(f.count > 1 ? py::str("(" + std::to_string(f.count) + ",)" + base) : py::str(base));
+    const std::string shape = f.columns > 0 ? "(" + std::to_string(f.count / f.columns) + "," + std::to_string(f.columns) + ")"
+                                            : "(" + std::to_string(f.count) + ",)";
+    formats.append(f.count > 1 ? py::str(shape + base) : py::str(base));
     offsets.append(offset);
     offset += dumpFieldBytes(f.kind) * f.count;
   }
@@ -210,6 +244,7 @@ py::dtype recordDtype(const std::string& type) {
 py::array readDumpArray(const std::string& path) {
   const DumpHeader header = readDumpHeader(path);
   const std::string type(header.type, strnlen(header.type, sizeof header.type));
+  if (!dumpRecordTypes().count(type)) throw std::runtime_error("'" + path + "': unknown record type '" + type + "'");
   const py::dtype dtype = recordDtype(type);
   if (uint32_t(dtype.itemsize()) != header.recordBytes)
     throw std::runtime_error("'" + path + "': " + type + " records of " + std::to_string(header.recordBytes) +

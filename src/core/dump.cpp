@@ -66,6 +66,8 @@ void readDumpRecords(const std::string& path, const std::string& type, uint32_t 
   std::ifstream in(path, std::ios::binary);
   const DumpHeader header = readHeader(in, path);
   const std::string stored(header.type, strnlen(header.type, sizeof header.type));
+  if (recordBytes == 0 || header.recordBytes == 0)
+    throw std::runtime_error("dump '" + path + "' announces records of 0 bytes");
   if (stored != type || header.recordBytes != recordBytes)
     throw std::runtime_error("dump '" + path + "' holds " + stored + " records of " +
                              std::to_string(header.recordBytes) + " bytes, not " + type + " of " +

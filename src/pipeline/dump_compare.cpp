@@ -59,7 +59,7 @@ int64_t ordered16(uint16_t bits) { return (bits & 0x8000u) ? -int64_t(bits & 0x7
 
 bool floatsAgree(float a, float b, const DumpCompareOptions& o) {
   if (std::bit_cast<uint32_t>(a) == std::bit_cast<uint32_t>(b) || (std::isnan(a) && std::isnan(b))) return true;
-  if (std::isnan(a) || std::isnan(b)) return false;
+  if (std::isnan(a) || std::isnan(b) || std::isinf(a) || std::isinf(b)) return false;  // an infinity only equals itself
   if (std::abs(double(a) - double(b)) <= o.relative * std::max(std::abs(double(a)), std::abs(double(b)))) return true;
   return std::abs(ordered(std::bit_cast<uint32_t>(a)) - ordered(std::bit_cast<uint32_t>(b))) <= int64_t(o.ulps);
 }
@@ -96,7 +96,11 @@ bool firstDifference(const DumpRecordType* type, uint32_t recordBytes, const std
       bool same = std::memcmp(x, y, size) == 0;
       if (!same && !type->exact) {
         if (f.kind == DumpFieldKind::F32) same = floatsAgree(load<float>(x), load<float>(y), o);
-        if (f.kind == DumpFieldKind::F16) same = std::abs(ordered16(load<uint16_t>(x)) - ordered16(load<uint16_t>(y))) <= int64_t(o.ulps);
+        if (f.kind == DumpFieldKind::F16) {
+          const uint16_t hx = load<uint16_t>(x), hy = load<uint16_t>(y);
+          const bool special = (hx & 0x7c00u) == 0x7c00u || (hy & 0x7c00u) == 0x7c00u;  // infinities and NaNs
+          same = !special && std::abs(ordered16(hx) - ordered16(hy)) <= int64_t(o.ulps);
+        }
       }
       if (!same) {
         d.field = f.count > 1 ? std::string(f.name) + "[" + std::to_string(i) + "]" : std::string(f.name);
@@ -133,8 +137,8 @@ std::vector<uint64_t> photonOrder(const Array& a) {
   std::vector<uint64_t> order(a.count);
   std::iota(order.begin(), order.end(), uint64_t(0));
   std::sort(order.begin(), order.end(), [&](uint64_t i, uint64_t j) {
-    for (int k = 0; k < 3; ++k) {
-      const float x = load<float>(a.record(i) + 4 * k), y = load<float>(a.record(j) + 4 * k);
+    for (int k = 0; k < 3; ++k) {  // by the floats' bits on the ordered line: a strict order even with NaNs
+      const int64_t x = ordered(load<uint32_t>(a.record(i) + 4 * k)), y = ordered(load<uint32_t>(a.record(j) + 4 * k));
       if (x != y) return x < y;
     }
     return std::memcmp(a.record(i), a.record(j), a.recordBytes) < 0;
@@ -158,7 +162,10 @@ void compareNeighbours(const Array& r, const Array& c, const std::vector<uint64_
     auto entries = [](const Array& a, uint64_t begin, uint64_t end) {
       std::vector<Neighbour> v;
       for (uint64_t i = begin; i < end && i < a.count; ++i) v.push_back(load<Neighbour>(a.record(i)));
-      std::sort(v.begin(), v.end(), [](Neighbour x, Neighbour y) { return x.d2 != y.d2 ? x.d2 < y.d2 : x.photon < y.photon; });
+      std::sort(v.begin(), v.end(), [](Neighbour x, Neighbour y) {
+        const int64_t dx = ordered(std::bit_cast<uint32_t>(x.d2)), dy = ordered(std::bit_cast<uint32_t>(y.d2));
+        return dx != dy ? dx < dy : x.photon < y.photon;
+      });
       return v;
     };
     const std::vector<Neighbour> R = entries(r, ro[q], ro[q + 1]), C = entries(c, co[q], co[q + 1]);
@@ -171,14 +178,15 @@ void compareNeighbours(const Array& r, const Array& c, const std::vector<uint64_
         if (floatsAgree(n.d2, farthest, o)) tied.insert(n.photon);
         else inside[n.photon] = n.d2;
       }
-      size_t insideMatched = 0, tiedMatched = 0;
-      for (const Neighbour& n : C) {
+      const bool hadTied = !tied.empty();
+      size_t tiedMatched = 0;
+      for (const Neighbour& n : C) {  // each photon matched once: a repeated one is not matched again
         const auto at = inside.find(n.photon);
-        if (at != inside.end() && floatsAgree(at->second, n.d2, o)) ++insideMatched;
-        else if (tied.count(n.photon) && floatsAgree(n.d2, farthest, o)) ++tiedMatched;
+        if (at != inside.end() && floatsAgree(at->second, n.d2, o)) inside.erase(at);
+        else if (tied.erase(n.photon) && floatsAgree(n.d2, farthest, o)) ++tiedMatched;
         else same = false;
       }
-      same &= insideMatched == inside.size() && (tied.empty() || tiedMatched > 0);
+      same &= inside.empty() && (!hadTied || tiedMatched > 0);
     }
     if (!same) {
       RecordDifference d;
@@ -287,14 +295,19 @@ DumpComparison compareDumpDirectories(const std::string& reference, const std::s
       if (!ref.count(offsets) || !cand.count(offsets)) {
         a.problem = "no " + offsets + " beside it in both directories";
       } else {
-        const std::vector<uint64_t> ro = offsetsOf(readArray(fs::path(reference) / (offsets + ".bin")));
-        const std::vector<uint64_t> co = offsetsOf(readArray(fs::path(candidate) / (offsets + ".bin")));
+        const Array rOffsets = readArray(fs::path(reference) / (offsets + ".bin"));
+        const Array cOffsets = readArray(fs::path(candidate) / (offsets + ".bin"));
+        const bool uint64s = rOffsets.type == "uint64" && rOffsets.recordBytes == 8 && cOffsets.type == "uint64" &&
+                             cOffsets.recordBytes == 8;
+        const std::vector<uint64_t> ro = uint64s ? offsetsOf(rOffsets) : std::vector<uint64_t>();
+        const std::vector<uint64_t> co = uint64s ? offsetsOf(cOffsets) : std::vector<uint64_t>();
         auto cuts = [](const std::vector<uint64_t>& o, uint64_t total) {
           bool ok = !o.empty() && o.front() == 0 && o.back() == total;
           for (size_t i = 1; ok && i < o.size(); ++i) ok = o[i - 1] <= o[i];
           return ok;
         };
-        if (ro.size() != co.size() || ro.empty()) a.problem = "the searches' counts differ";
+        if (!uint64s) a.problem = offsets + " is not a uint64 array";
+        else if (ro.size() != co.size() || ro.empty()) a.problem = "the searches' counts differ";
         else if (!cuts(ro, r.count) || !cuts(co, c.count)) a.problem = offsets + " are not offsets from 0 to the neighbours' count";
         else compareNeighbours(r, c, ro, co, options, a);
       }

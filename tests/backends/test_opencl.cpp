@@ -128,6 +128,14 @@ TEST_CASE("The OpenCL kNN-grid estimate equals a purcell dump's, with the same n
   list[7] = kept;
   writeDump(dir.path.string(), "global.photon_list", "uint32", std::span(list));
 
+  // Without the dump's neighbours (a pmfg dump, whose indirect light is final gathering) the global
+  // map's estimate has nothing to be compared with: refused.
+  TempDir copy("opencl-purcell-copy");
+  std::filesystem::copy(dir.path, copy.path, std::filesystem::copy_options::overwrite_existing);
+  std::filesystem::remove(copy / "band0.global.neighbours.bin");
+  CHECK_THROWS_WITH(writeKnnGridDumps(run, copy.path.string(), "global", "band0", candidate.path.string()),
+                    Catch::Contains("band0.global.neighbours.bin is missing"));
+
   // The comparison can fail: one photon more per search changes the estimates where the search
   // found k (the others, with fewer than k within the maximum radius, keep every photon there).
   const KnnGridRun other = runKnnGridEstimate(device(), dir.path.string(), "global", "band0", settings.k + 1, settings.maxRadius);

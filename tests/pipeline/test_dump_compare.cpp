@@ -173,6 +173,19 @@ TEST_CASE("check-dump compares grids and index arrays exactly, and float arrays 
   CHECK(a.first[0].index == 60);
   CHECK(a.first[0].field == "rgb[1]");
 
+  // An infinity agrees only with itself, whatever the relative tolerance.
+  std::vector<Rgb> infinite = light;
+  infinite[9].b = INFINITY;
+  d.write("band0.indirect", "Rgb", light, infinite);
+  CHECK(d.compare("band0.indirect").differing == 1);
+  d.write("band0.indirect", "Rgb", infinite, infinite);
+  CHECK(d.compare("band0.indirect").passed());
+  // A header announcing records of 0 bytes is refused, not divided by.
+  writeDump(d.candidate.path.string(), "band0.indirect", "Rgb", light.data(), 0, 5);
+  CHECK_THROWS_WITH(compareDumpDirectories(d.reference.path.string(), d.candidate.path.string()),
+                    Catch::Contains("records of 0 bytes"));
+  d.write("band0.indirect", "Rgb", light, light);
+
   // Another record type under the same name is not compared record by record.
   d.write("band0.direct", "Rgb", light, light);
   const std::vector<float> floats(300, 0.5f);
@@ -209,7 +222,12 @@ TEST_CASE("check-dump compares kNN results as sets, allowing for ties at the rad
     REQUIRE(a.first.size() == 1);
     CHECK(a.first[0].index == 0);
   }
-  // Offsets that do not cut the neighbours: refused.
+  // A photon inside listed twice in place of another: query 0 differs.
+  a = write({{0.1f, 4}, {0.1f, 4}, {0.3f, 9}, {0.5f, 5}, {0.5f, 8}}, offsets);
+  CHECK(a.differing == 1);
+  // Offsets that are not uint64, or do not cut the neighbours: refused.
+  d.write("band0.global.neighbour_offsets", "float", std::vector<float>{0, 5, 5}, std::vector<float>{0, 5, 5});
+  CHECK(d.compare("band0.global.neighbours").problem.find("not a uint64 array") != std::string::npos);
   CHECK(write(reference, {0, 9, 5}).problem.find("are not offsets") != std::string::npos);
   // A photon where the reference found none: query 1 differs.
   a = write({{0.1f, 4}, {0.3f, 9}, {0.2f, 2}, {0.5f, 5}, {0.5f, 8}, {0.7f, 1}}, {0, 5, 6});

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <filesystem>
 #include <span>
 #include <cstddef>
 #include <stdexcept>
@@ -84,6 +86,24 @@ KnnGridRun runKnnGridEstimate(const Device& device, const std::string& dumpDir, 
   const auto first = readDump<uint32_t>(file(dumpDir, map + ".first_photon"), "uint32");
   const auto points = readDump<ShadingPoint>(file(dumpDir, band + ".shading_points"), "ShadingPoint");
   if (grid.size() != 1) throw std::runtime_error(file(dumpDir, map + ".grid") + ": holds " + std::to_string(grid.size()) + " grids, not 1");
+  // A grid the kernel can walk: a resolution within the packed keys' bounds and int32 cell indices,
+  // finite bounds and cells, a finite slack (a NaN would keep the search going for ever).
+  const UniformGrid& g = grid[0];
+  bool walkable = std::isfinite(g.slack) && g.slack >= 0;
+  uint64_t cells = 1;
+  for (int a = 0; a < 3; ++a) {
+    walkable &= g.res[a] >= 1 && g.res[a] <= UniformGrid::kMaxResolution && std::isfinite(g.lo[a]) &&
+                std::isfinite(g.hi[a]) && g.cellSize[a] > 0 && std::isfinite(g.cellSize[a]) && g.invCellSize[a] > 0 &&
+                std::isfinite(g.invCellSize[a]);
+    if (walkable) cells *= uint64_t(g.res[a]);
+  }
+  if (!walkable || cells > uint64_t(INT32_MAX))
+    throw std::runtime_error(file(dumpDir, map + ".grid") + ": not a grid a search can walk (resolution, bounds, cells or slack out of range)");
+  if (std::filesystem::exists(file(dumpDir, map + ".cell_keys")))
+    throw std::runtime_error(file(dumpDir, map + ".grid") + ": a hashed grid's; the kernel reads a sorted grid (--map sort)");
+  for (size_t i = 0; i < points.size(); ++i)
+    if (!(std::isfinite(points[i].position.x) && std::isfinite(points[i].position.y) && std::isfinite(points[i].position.z)))
+      throw std::runtime_error(file(dumpDir, band + ".shading_points") + ": point " + std::to_string(i) + " is not finite");
   if (first.size() != grid[0].cellCount() + 1)
     throw std::runtime_error(file(dumpDir, map + ".first_photon") + ": not one entry per cell and one more (a --map sort dump?)");
   checkOffsets(first, list.size(), file(dumpDir, map + ".first_photon"));
@@ -114,6 +134,11 @@ KnnGridRun runKnnGridEstimate(const Device& device, const std::string& dumpDir, 
 size_t writeKnnGridDumps(const KnnGridRun& run, const std::string& dumpDir, const std::string& map,
                          const std::string& band, const std::string& outDir) {
   const std::string name = band + (map == "caustic" ? ".caustic" : ".indirect");
+  // Only purcell's indirect light is the global map's estimate (pmfg's is final gathering); only
+  // purcell writes the searches' neighbours.
+  if (!std::filesystem::exists(file(dumpDir, band + "." + map + ".neighbours")))
+    throw std::runtime_error(file(dumpDir, band + "." + map + ".neighbours") + " is missing: " + name +
+                             " is the " + map + " map's estimate in a purcell dump only (for pmfg, --map caustic)");
   const auto reference = readDump<Rgb>(file(dumpDir, name), "Rgb");
   if (reference.size() != run.radiance.size())
     throw std::runtime_error(file(dumpDir, name) + ": " + std::to_string(reference.size()) + " estimates for " +

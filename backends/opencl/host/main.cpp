@@ -25,11 +25,12 @@ using namespace lucent::opencl;
 int main(int argc, char** argv) {
   CLI::App app{"Runs Lucent's OpenCL kernels on a dump and compares their results with the dump's arrays"};
   std::string deviceName, dir, out, map = "global", band = "band0";
-  uint32_t k = 50;
+  uint32_t k = 50, capacity = 1024;
   float maxRadius = 0, maxAngle = 20;
   DumpCompareOptions compare;
   app.add_option("--device", deviceName, "an OpenCL device whose name contains this (default: a GPU if any)");
-  app.add_option("--relative", compare.relative, "relative difference allowed between two floats")->capture_default_str();
+  app.add_option("--relative", compare.relative, "relative difference allowed between two floats")
+      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   app.add_option("--ulps", compare.ulps, "or this many units in the last place")->capture_default_str();
   app.require_subcommand(1);
   app.add_subcommand("layout", "compare the OpenCL C record layout with the C++ one");
@@ -38,6 +39,8 @@ int main(int argc, char** argv) {
   knn->add_option("--max-radius", maxRadius, "the maximum search radius (the render summary's derived.max_radius)")->required();
   knn->add_option("--map", map, "global or caustic")->check(CLI::IsMember({"global", "caustic"}))->capture_default_str();
   knn->add_option("--band", band, "the band of shading points")->capture_default_str();
+  knn->add_option("--capacity", capacity, "neighbours kept per point (the device holds points x capacity x 8 bytes)")
+      ->capture_default_str()->check(CLI::Range(1u, 1u << 20));
   CLI::App* cache = app.add_subcommand("radiance-cache", "the environment-lighting paper's cache interpolation (Eq. 5) from an envpbgi dump");
   cache->add_option("--max-angle", maxAngle, "the render's cache_max_angle, degrees")->capture_default_str();
   CLI::App* particles = app.add_subcommand("particles", "the particle-space paper's gathering (R3, R4) from a particles dump");
@@ -59,12 +62,14 @@ int main(int argc, char** argv) {
     bool passed = differences.empty();
     if (!dir.empty()) {
       if (out.empty()) {
-        temporary = std::filesystem::temp_directory_path() / ("lucent-opencl-" + std::to_string(std::random_device{}()));
-        std::filesystem::create_directory(temporary);
+        // A new directory of its own (create_directory is false for one that exists: another name).
+        std::random_device random;
+        do temporary = std::filesystem::temp_directory_path() / ("lucent-opencl-" + std::to_string(random()));
+        while (!std::filesystem::create_directory(temporary));
         out = temporary.string();
       }
       size_t leftToHost = 0;
-      if (*knn) leftToHost = writeKnnGridDumps(runKnnGridEstimate(device, dir, map, band, k, maxRadius), dir, map, band, out);
+      if (*knn) leftToHost = writeKnnGridDumps(runKnnGridEstimate(device, dir, map, band, k, maxRadius, capacity), dir, map, band, out);
       if (*cache) leftToHost = writeCacheDumps(runCacheInterpolation(device, dir, maxAngle), dir, out);
       if (*particles) writeParticleDumps(runParticleGathering(device, dir), out);
       const DumpComparison c = compareDumpDirectories(dir, out, compare);
@@ -75,10 +80,12 @@ int main(int argc, char** argv) {
     }
     result["passed"] = passed;
     std::cout << result.dump() << "\n";
-    if (!temporary.empty()) std::filesystem::remove_all(temporary);
+    std::error_code ignored;
+    if (!temporary.empty()) std::filesystem::remove_all(temporary, ignored);
     return passed ? 0 : 1;
   } catch (const std::exception& e) {
-    if (!temporary.empty()) std::filesystem::remove_all(temporary);
+    std::error_code ignored;
+    if (!temporary.empty()) std::filesystem::remove_all(temporary, ignored);
     std::cerr << "lucent-opencl: " << e.what() << "\n";
     return 2;
   }

@@ -72,6 +72,7 @@ Device::Device(const std::string& wanted) {
   context_ = clCreateContext(nullptr, 1, &device_, nullptr, nullptr, &status);
   check(status, "clCreateContext");
   queue_ = clCreateCommandQueue(context_, device_, 0, &status);
+  if (status != CL_SUCCESS) clReleaseContext(context_);  // the destructor does not run for a throwing constructor
   check(status, "clCreateCommandQueue");
 }
 
@@ -92,7 +93,13 @@ Program Device::build(const std::vector<std::string>& sources) const {
   cl_int status = CL_SUCCESS;
   Program program(clCreateProgramWithSource(context_, cl_uint(pointers.size()), pointers.data(), nullptr, &status));
   check(status, "clCreateProgramWithSource");
-  status = clBuildProgram(program.get(), 1, &device_, "-cl-std=CL1.2", nullptr, nullptr);
+  // Division and square root rounded as the C++ build rounds them, where the device can: the kernels'
+  // yes-or-no tests (a photon's side, a cache within its radius) would otherwise differ by an ulp.
+  cl_device_fp_config fp = 0;
+  check(clGetDeviceInfo(device_, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, nullptr), "clGetDeviceInfo");
+  const char* options = (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) ? "-cl-std=CL1.2 -cl-fp32-correctly-rounded-divide-sqrt"
+                                                                  : "-cl-std=CL1.2";
+  status = clBuildProgram(program.get(), 1, &device_, options, nullptr, nullptr);
   if (status != CL_SUCCESS) {
     size_t n = 0;
     clGetProgramBuildInfo(program.get(), device_, CL_PROGRAM_BUILD_LOG, 0, nullptr, &n);

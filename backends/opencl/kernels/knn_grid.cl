@@ -131,7 +131,9 @@ __kernel void knnGridEstimate(__global const Photon* photons, __global const uin
   __global const UniformGrid* g = grid;
   const int c[3] = {cellAlong(g, s.q.x, 0), cellAlong(g, s.q.y, 1), cellAlong(g, s.q.z, 2)};
   bool done = false;
-  for (int shell = 0; !done; ++shell) {
+  // After max(res) shells every cell is explored (a backstop: the host checks the grid is finite).
+  const int lastShell = max(g->res[0], max(g->res[1], g->res[2]));
+  for (int shell = 0; !done && shell <= lastShell; ++shell) {
     for (int z = max(c[2] - shell, 0); z <= min(c[2] + shell, g->res[2] - 1); ++z)
       for (int y = max(c[1] - shell, 0); y <= min(c[1] + shell, g->res[1] - 1); ++y) {
         if (abs(z - c[2]) == shell || abs(y - c[1]) == shell) {

@@ -15,7 +15,8 @@ uint32_t dumpFieldBytes(DumpFieldKind kind);
 struct DumpField {
   const char* name;
   DumpFieldKind kind;
-  uint32_t count;  // elements: 3 for a position, 1 for a scalar
+  uint32_t count;        // elements: 3 for a position, 1 for a scalar
+  uint32_t columns = 0;  // a table of count / columns rows (per cache texel an RGB triple), 0: a vector
 };
 
 struct DumpRecordType {

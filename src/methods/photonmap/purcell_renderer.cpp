@@ -68,12 +68,13 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
     withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
       estimateAtPoints(global, band.eye.points, maps.globalSettings, band.radiance.indirect, globalCounters, reportDone);
       estimateAtPoints(caustic, band.eye.points, maps.causticSettings, band.radiance.caustic, causticCounters, reportDone);
-      if (!options.shading.dumpDirectory.empty()) {
-        band.neighbours[0] = searchNeighbours(global, band.eye.points, maps.globalSettings);
-        band.neighbours[1] = searchNeighbours(caustic, band.eye.points, maps.causticSettings);
-      }
     });
     totals.estimateSeconds += estimateClock.seconds();
+    if (!options.shading.dumpDirectory.empty())  // not timed: a dump's own work
+      withPhotonMaps(maps, options.map, [&](const auto* global, const auto* caustic) {
+        band.neighbours[0] = searchNeighbours(global, band.eye.points, maps.globalSettings);
+        band.neighbours[1] = searchNeighbours(caustic, band.eye.points, maps.causticSettings);
+      });
   });
 
   out.complete = filmComplete(*film, part);
