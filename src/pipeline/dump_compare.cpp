@@ -301,14 +301,9 @@ DumpComparison compareDumpDirectories(const std::string& reference, const std::s
                              cOffsets.recordBytes == 8;
         const std::vector<uint64_t> ro = uint64s ? offsetsOf(rOffsets) : std::vector<uint64_t>();
         const std::vector<uint64_t> co = uint64s ? offsetsOf(cOffsets) : std::vector<uint64_t>();
-        auto cuts = [](const std::vector<uint64_t>& o, uint64_t total) {
-          bool ok = !o.empty() && o.front() == 0 && o.back() == total;
-          for (size_t i = 1; ok && i < o.size(); ++i) ok = o[i - 1] <= o[i];
-          return ok;
-        };
         if (!uint64s) a.problem = offsets + " is not a uint64 array";
         else if (ro.size() != co.size() || ro.empty()) a.problem = "the searches' counts differ";
-        else if (!cuts(ro, r.count) || !cuts(co, c.count)) a.problem = offsets + " are not offsets from 0 to the neighbours' count";
+        else if (!offsetsCutRuns(ro, r.count) || !offsetsCutRuns(co, c.count)) a.problem = offsets + " are not offsets from 0 to the neighbours' count";
         else compareNeighbours(r, c, ro, co, options, a);
       }
     } else if (r.count != c.count) {

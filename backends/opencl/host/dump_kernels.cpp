@@ -68,12 +68,9 @@ void checkIndices(const std::vector<Index>& indices, size_t bound, const std::st
                                ", beyond the " + std::to_string(bound) + " it indexes");
 }
 
-// Offsets that cut `total` entries into runs: non-decreasing from 0 to total.
 template <class Offset>
 void checkOffsets(const std::vector<Offset>& offsets, size_t total, const std::string& path) {
-  bool ok = !offsets.empty() && offsets.front() == 0 && offsets.back() == total;
-  for (size_t i = 1; ok && i < offsets.size(); ++i) ok = offsets[i - 1] <= offsets[i];
-  if (!ok) throw std::runtime_error(path + ": not offsets from 0 to the " + std::to_string(total) + " entries they cut");
+  if (!offsetsCutRuns(offsets, total)) throw std::runtime_error(path + ": not offsets from 0 to the " + std::to_string(total) + " entries they cut");
 }
 
 }  // namespace

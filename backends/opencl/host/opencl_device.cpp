@@ -1,6 +1,7 @@
 #include "opencl_device.h"
 
 #include <stdexcept>
+#include <type_traits>
 
 namespace lucent::opencl {
 
@@ -10,20 +11,13 @@ void check(cl_int status, const char* what) {
 
 namespace {
 
-std::string infoString(cl_platform_id platform, cl_platform_info what) {
+// A string property of a platform or device (clGetPlatformInfo, clGetDeviceInfo), without its NUL.
+template <class Object, class Info>
+std::string infoString(cl_int (*get)(Object, Info, size_t, void*, size_t*), Object object, std::type_identity_t<Info> what) {
   size_t n = 0;
-  check(clGetPlatformInfo(platform, what, 0, nullptr, &n), "clGetPlatformInfo");
+  check(get(object, what, 0, nullptr, &n), "clGet*Info");
   std::string s(n, '\0');
-  check(clGetPlatformInfo(platform, what, n, s.data(), nullptr), "clGetPlatformInfo");
-  while (!s.empty() && s.back() == '\0') s.pop_back();
-  return s;
-}
-
-std::string infoString(cl_device_id device, cl_device_info what) {
-  size_t n = 0;
-  check(clGetDeviceInfo(device, what, 0, nullptr, &n), "clGetDeviceInfo");
-  std::string s(n, '\0');
-  check(clGetDeviceInfo(device, what, n, s.data(), nullptr), "clGetDeviceInfo");
+  check(get(object, what, n, s.data(), nullptr), "clGet*Info");
   while (!s.empty() && s.back() == '\0') s.pop_back();
   return s;
 }
@@ -51,7 +45,7 @@ Device::Device(const std::string& wanted) {
     for (cl_device_id d : devices) {
       cl_device_type type = 0;
       check(clGetDeviceInfo(d, CL_DEVICE_TYPE, sizeof type, &type, nullptr), "clGetDeviceInfo");
-      const std::string name = infoString(d, CL_DEVICE_NAME);
+      const std::string name = infoString(clGetDeviceInfo, d, CL_DEVICE_NAME);
       seen += (seen.empty() ? "" : ", ") + name;
       if (wanted.empty() || name.find(wanted) != std::string::npos) candidates.push_back({p, d, (type & CL_DEVICE_TYPE_GPU) != 0});
     }
@@ -66,8 +60,8 @@ Device::Device(const std::string& wanted) {
       break;
     }
   device_ = chosen.device;
-  name_ = infoString(device_, CL_DEVICE_NAME);
-  platform_ = infoString(chosen.platform, CL_PLATFORM_NAME);
+  name_ = infoString(clGetDeviceInfo, device_, CL_DEVICE_NAME);
+  platform_ = infoString(clGetPlatformInfo, chosen.platform, CL_PLATFORM_NAME);
   cl_int status = CL_SUCCESS;
   context_ = clCreateContext(nullptr, 1, &device_, nullptr, nullptr, &status);
   check(status, "clCreateContext");

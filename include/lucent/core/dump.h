@@ -36,6 +36,16 @@ void writeDump(const std::string& directory, const std::string& name, const std:
   writeDump(directory, name, type, records.data(), uint32_t(sizeof(T)), records.size());
 }
 
+// Whether `offsets` cut `total` entries into runs (a CSR array's offsets: run i is entries
+// [offsets[i], offsets[i + 1])): non-decreasing from 0 to total. Dumps are input; whoever follows
+// dumped offsets checks them first.
+template <class Offset>
+bool offsetsCutRuns(const std::vector<Offset>& offsets, uint64_t total) {
+  bool ok = !offsets.empty() && offsets.front() == 0 && uint64_t(offsets.back()) == total;
+  for (size_t i = 1; ok && i < offsets.size(); ++i) ok = offsets[i - 1] <= offsets[i];
+  return ok;
+}
+
 // Why `directory` cannot take dumps, or "" if it can (or is "": no dumps): it must exist.
 std::string dumpDirectoryProblem(const std::string& directory);
 
