@@ -58,7 +58,7 @@ TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "
   small.camera.width = 48;
   small.camera.height = 40;
   PathTraceOptions opt;
-  opt.common.spp = 8;
+  opt.common.spp = 12;  // contribution roulette from the ninth sample on
   opt.common.layers = true;
   opt.paths = true;
   opt.common.seed = 5;
@@ -118,7 +118,7 @@ TEST_CASE("Camera rays and Lambertian hits in lanes give the image of shade(), b
   for (const PathStrategy strategy : {PathStrategy::Mis, PathStrategy::LightSampling, PathStrategy::BsdfSampling})
     for (const int maxDepth : {1024, 2}) {
       PathTraceOptions opt;
-      opt.common.spp = 6;
+      opt.common.spp = 10;  // contribution roulette from the ninth sample on
       opt.common.layers = true;
       opt.common.seed = 9;
       opt.maxDepth = maxDepth;

@@ -126,6 +126,32 @@ TEST_CASE("A render split by crops and sample ranges merges into the single rend
   }
 }
 
+TEST_CASE("Parts that start before, inside and after contribution roulette's pilot merge into the single render",
+          "[splits][cli]") {
+  // The first 8 samples are the pilot; a crop or a later range traces the pilot's pixels itself.
+  const test::TempDir dir("roulette-splits");
+  for (const std::string options : {"--spp 14", "--spp 14 --sampler independent --variance --paths"}) {
+    CAPTURE(options);
+    const std::string args = quoted(kCornell) + " --method pt " + options + " --resolution 40x30";
+    renderPart(args, dir / "single.exr");
+    std::string films;
+    int part = 0;
+    for (const char* crop : {"0,0,23,11", "23,0,40,11", "0,11,40,30"})
+      for (const char* samples : {"0:5", "5:6", "11:3"}) {
+        const std::string out = dir / ("part" + std::to_string(part++) + ".exr");
+        renderPart(args + " --crop " + crop + " --samples " + samples, out);
+        films.append(" ").append(quoted(fs::path(out).replace_extension(".film").string()));
+      }
+    const test::CliRun merge = runLucent("merge" + films + " -o " + quoted(dir / "merged.exr"));
+    INFO(merge.output);
+    REQUIRE(merge.status == 0);
+    CHECK(samePixels(dir / "merged.exr", dir / "single.exr"));
+    // Not vacuous: throughput roulette gives another image.
+    renderPart(args + " --roulette throughput", dir / "throughput.exr");
+    CHECK_FALSE(samePixels(dir / "throughput.exr", dir / "single.exr"));
+  }
+}
+
 TEST_CASE("render --part divides rows and samples into N parts that merge into the single render", "[splits][cli]") {
   const test::TempDir dir("splits");
   const std::string args = quoted(kCornell) + " --spp 7 --resolution 24x17";

@@ -86,10 +86,12 @@ inline Vec2 stratifiedSample2D(uint32_t i, uint32_t n, Vec2 u) {
           std::min((float(i / nx) + u.y) / float(ny), 0x1.fffffep-1f)};
 }
 
-// Russian roulette on a path's throughput: the path survives with probability min(1, the
-// throughput's largest component), u uniform in [0, 1), and the survivor is scaled up by as much.
-inline bool survivesRussianRoulette(Rgb& beta, float u) {
-  const float survive = std::min(1.0f, beta.maxComponent());
+// Russian roulette: the path survives with probability min(1, the largest component of its
+// throughput times `scale`), u uniform in [0, 1), and the survivor is scaled up by as much. Scale 1
+// is roulette on the throughput alone; the path tracer's contribution roulette scales it by the
+// pixel (RouletteScales).
+inline bool survivesRussianRoulette(Rgb& beta, float u, Rgb scale = Rgb(1.0f)) {
+  const float survive = std::min(1.0f, (beta * scale).maxComponent());
   if (u >= survive) return false;
   beta *= 1.0f / survive;
   return true;

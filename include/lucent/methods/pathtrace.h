@@ -17,10 +17,16 @@ namespace lucent {
 // validating the other two (all three converge to the same image).
 enum class PathStrategy { Mis, LightSampling, BsdfSampling };
 
+// How Russian roulette chooses the paths that go on: by what each is expected to add to its
+// pixel's relative error (the default; src/methods/pathtrace/contribution_roulette.h), or by its
+// throughput alone.
+enum class RouletteKind { Contribution, Throughput };
+
 struct PathTraceOptions {
   int maxDepth = 1024;         // path length in bounces: 1 is direct light, 2 adds one indirect bounce;
                                // high enough by default that Russian roulette, not the cut, ends paths
   int rouletteDepth = 3;       // Russian roulette from this bounce on
+  RouletteKind roulette = RouletteKind::Contribution;
   double timeBudget = 0;       // seconds; 0 for none. At least one sample per pixel is taken
   // The relMSE against the converged image to stop at, estimated from the image (error_target.h),
   // with samples spent where the pixels' estimated errors are largest; 0 for none.

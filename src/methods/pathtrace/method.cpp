@@ -13,6 +13,11 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
               "path length: 1 is direct light alone, 2 adds one indirect bounce");
     t.integer("roulette_depth", &O::rouletteDepth, 1, 1 << 16, "bounces",
               "Russian roulette from this bounce on");
+    t.choice("roulette", &O::roulette,
+             std::vector<std::pair<std::string, RouletteKind>>{{"contribution", RouletteKind::Contribution},
+                                                               {"throughput", RouletteKind::Throughput}},
+             "contribution: paths go on by what they are expected to add to their pixel's relative error, from the "
+             "first 8 samples per pixel on; throughput: by their throughput alone");
     t.real("time_budget", &O::timeBudget, 0, 1e9, "s",
            "stop sampling within this many seconds (at least one sample per pixel); 0: no budget");
     t.real("target_error", &O::targetError, 0, 1, "relMSE",

@@ -16,6 +16,7 @@
 #include "lucent/scene/camera.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"
+#include "methods/pathtrace/contribution_roulette.h"
 #include "methods/pathtrace/diffuse_lanes.h"
 #include "methods/pathtrace/error_target.h"
 #include "methods/pathtrace/shading_steps.h"
@@ -179,6 +180,9 @@ class PathTracer {
     return continuePath(path, bs.weight, bs.pdf, bs.delta, sp.position,
                         {offsetOrigin(sp.position, sp.geometricNormal, wi), wi});
   }
+
+  // Contribution roulette's scales from here on (set between passes).
+  void useRoulette(RouletteScales scales) { roulette_ = std::move(scales); }
 
   // The paths of one wave and the queries between its stages; one per thread, reused.
   struct Wave {
@@ -477,10 +481,13 @@ class PathTracer {
   }
 
   // Counts the bounce just taken; from the roulette depth on, ends the path with probability one
-  // minus its throughput's largest component, and scales the survivors up by as much.
+  // minus its throughput's largest component, scaled by its pixel's roulette scale where contribution
+  // roulette has one, and scales the survivors up by as much.
   bool survivesRoulette(Path& path) const {
     ++path.bounce;
-    return path.bounce < opt_.rouletteDepth || survivesRussianRoulette(path.beta, path.sampler.uniform(path.bounce, SampleUse::Roulette));
+    return path.bounce < opt_.rouletteDepth ||
+           survivesRussianRoulette(path.beta, path.sampler.uniform(path.bounce, SampleUse::Roulette),
+                                   roulette_.empty() ? Rgb(1.0f) : roulette_.at(path.pixel));
   }
 
   // Weight of emission found by BSDF sampling, against light sampling of the same light.
@@ -521,6 +528,7 @@ class PathTracer {
   // second-level cache (1 MiB here): Sponza's shading reads then wait on memory (its fetch stage
   // is 1.5x slower without), while the Cornell box's stay cached and prefetching costs it 1%.
   const bool prefetchSceneData_ = sceneArrayBytes(scene_) > (size_t(1) << 20);
+  RouletteScales roulette_;  // empty: throughput roulette
 };
 
 // The samples of the tile's pixels from each pixel's next (sampleBegin plus the samples the film
@@ -597,16 +605,20 @@ uint64_t PathTracer::renderTile(const PixelRect& tile, const PassSamples& pass, 
 // first pass takes one sample per pixel and each later pass as many as the remaining time allows at
 // the measured rate (no more: the returned end is done). Otherwise passes double (1, 2, 4, ...
 // samples) up to 64 samples each, so that a tile's work in a pass stays short (a stop request waits
-// for the tiles in flight) and checkpoints come between passes. The image depends only on the
+// for the tiles in flight) and checkpoints come between passes. A pass ends at pilotEnd, where
+// contribution roulette's pilot is read from the film (0: none). The image depends only on the
 // samples taken, never on how they were split into passes.
-int nextPassEnd(const PathTraceOptions& options, int samples, int done, double elapsed) {
-  if (options.timeBudget > 0) {
-    if (done == 0) return 1;
-    const double affordable = (options.timeBudget - elapsed) / (elapsed / done);
-    if (affordable < 1) return done;
-    return int(std::min<double>(samples, done + std::min<double>(affordable, 2.0 * done + 1)));
-  }
-  return std::min(samples, done + std::clamp(done, 1, 64));
+int nextPassEnd(const PathTraceOptions& options, int samples, int done, double elapsed, int pilotEnd) {
+  const int end = [&] {
+    if (options.timeBudget > 0) {
+      if (done == 0) return 1;
+      const double affordable = (options.timeBudget - elapsed) / (elapsed / done);
+      if (affordable < 1) return done;
+      return int(std::min<double>(samples, done + std::min<double>(affordable, 2.0 * done + 1)));
+    }
+    return std::min(samples, done + std::clamp(done, 1, 64));
+  }();
+  return done < pilotEnd ? std::min(end, pilotEnd) : end;
 }
 
 }  // namespace
@@ -623,13 +635,12 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
                           "checkpointed or resumed");
   }
   // Every pixel is owned by one tile, and its samples are added in sample order.
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, {options.common.layers, false, options.variance, options.paths}));
-  const PathTracer tracer(scene, visibility, options);
-  // Tiles of the image's grid, cut to the part's region.
+  const FilmLayers layers{options.common.layers, false, options.variance, options.paths};
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, layers));
+  PathTracer tracer(scene, visibility, options);
   const PixelRect& region = part.region;
+  const int width = scene.camera.width, height = scene.camera.height;
   const int tile = options.tileSize;
-  const int tileX0 = region.x0 / tile, tileY0 = region.y0 / tile;
-  const int tilesX = (region.x1 + tile - 1) / tile - tileX0, tilesY = (region.y1 + tile - 1) / tile - tileY0;
   tbb::enumerable_thread_specific<Counters> counters;
   tbb::enumerable_thread_specific<PathTracer::Wave> waves;
   auto samplesTaken = [&] {
@@ -646,8 +657,13 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
   beginStage("trace_paths");
   Stopwatch clock;
   std::atomic<bool> stopped{false};
-  // Every tile's samples of the pass, in parallel, unless a stop request ends it.
-  auto renderPass = [&](const PassSamples& pass) {
+  // Every tile's samples of the pass on `target` (the film of the image's tiles in `area`), in
+  // parallel, unless a stop request ends it.
+  auto renderPassOn = [&](const PassSamples& pass, Film& target, const PixelRect& area) {
+    // Tiles of the image's grid, cut to the area.
+    const int tileX0 = area.x0 / tile, tileY0 = area.y0 / tile;
+    const int tilesX = (area.x1 + tile - 1) / tile - tileX0, tilesY = (area.y1 + tile - 1) / tile - tileY0;
+    const bool image = &target == film.get();
     tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& r) {
       flushDenormals();  // every thread computes alike, whoever created it
       for (int t = r.begin(); t != r.end(); ++t) {
@@ -656,13 +672,35 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
           return;
         }
         const int tx = tileX0 + t % tilesX, ty = tileY0 + t / tilesX;
-        const PixelRect cut{std::max(region.x0, tx * tile), std::max(region.y0, ty * tile),
-                            std::min(region.x1, (tx + 1) * tile), std::min(region.y1, (ty + 1) * tile)};
-        const uint64_t samples = pixelSamplesDone += tracer.renderTile(cut, pass, streams.get(), waves.local(), counters.local(), *film);
+        const PixelRect cut{std::max(area.x0, tx * tile), std::max(area.y0, ty * tile),
+                            std::min(area.x1, (tx + 1) * tile), std::min(area.y1, (ty + 1) * tile)};
+        const uint64_t taken = tracer.renderTile(cut, pass, image ? streams.get() : nullptr, waves.local(), counters.local(), target);
+        if (!image) continue;
+        const uint64_t samples = pixelSamplesDone += taken;
         if (control.progress) control.progress(std::min(1.0, double(samples) / expectedSamples));
       }
     });
+  };
+  auto renderPass = [&](const PassSamples& pass) {
+    renderPassOn(pass, *film, region);
     if (!stopped) checkpoints.reached(*film);
+  };
+
+  // Contribution roulette (contribution_roulette.h) from sample kPilotSamples on, the samples
+  // before it taken with throughput roulette. Its pilot is the image's own first samples where the
+  // render starts there and covers the whole image; a crop, a later sample range or a resumed render
+  // traces the pilot's pixels first, on a film of its own.
+  const int pilotSamples = int(kPilotSamples);
+  const bool contribution = options.roulette == RouletteKind::Contribution && part.sampleEnd > pilotSamples;
+  const bool pilotInFilm = region == PixelRect{0, 0, width, height} && part.sampleBegin == 0 && resumedSamples == 0;
+  RouletteScales tracedPilot;
+  if (contribution && !pilotInFilm) {
+    Film pilot(width, height, Film::Sums::PerSample, layers);
+    renderPassOn({0, 0, pilotPixels(width, height, region)}, pilot, {0, 0, width, height});
+    tracedPilot = RouletteScales(pilot.image(), region);
+  }
+  auto startContributionRoulette = [&] {
+    tracer.useRoulette(pilotInFilm ? RouletteScales(film->image(), region) : std::move(tracedPilot));
   };
 
   RenderOutput out;
@@ -679,6 +717,8 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
       renderPass({0, 0, ends});
       ++passes;
       if (stopped) break;
+      static_assert(kFirstPass == kPilotSamples, "contribution roulette's pilot is the first pass");
+      if (contribution && passes == 1) startContributionRoulette();
       const std::vector<float> pixelError = streams->pixelRelMse();
       const uint64_t takenBefore = std::exchange(taken, samplesTaken());
       const double estimateBefore = std::exchange(estimate, meanRelMse(pixelError));
@@ -709,10 +749,15 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
   } else {
     // A resumed render goes on from the fewest samples any pixel has (pixels with more skip them).
     int done = int(*std::min_element(film->samplesTaken().begin(), film->samplesTaken().end()));
+    // Where contribution roulette starts, counted from the part's first sample.
+    const int pilotEnd = contribution ? std::max(0, pilotSamples - part.sampleBegin) : 0;
+    if (contribution && done >= pilotEnd && !stopped) startContributionRoulette();
     for (int passEnd; done < part.samples() && !stopped &&
-                      (passEnd = nextPassEnd(options, part.samples(), done, clock.seconds())) > done;
-         done = passEnd)
+                      (passEnd = nextPassEnd(options, part.samples(), done, clock.seconds(), pilotEnd)) > done;
+         done = passEnd) {
       renderPass({part.sampleBegin, part.sampleBegin + passEnd, {}});
+      if (contribution && passEnd == pilotEnd && !stopped) startContributionRoulette();
+    }
   }
 
   // A render that its time budget or error target ended is whole; one that a stop request ended is not.

@@ -1,0 +1,117 @@
+// Contribution roulette (src/methods/pathtrace/contribution_roulette.h): its scales, its pilot's
+// pixels, and that the path tracer's image with it is the image of throughput roulette, noise apart.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+#include "lucent/methods/pathtrace.h"
+#include "lucent/scene/loader.h"
+#include "methods/pathtrace/contribution_roulette.h"
+#include "test_support.h"
+
+using namespace lucent;
+
+namespace {
+
+// A pilot of width x height pixels whose R, G, B are value(x, y).
+template <class Value>
+Image pilotImage(int width, int height, Value value) {
+  Image image(width, height, {"R", "G", "B"});
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const Rgb v = value(x, y);
+      image.at(x, y, 0) = v.r, image.at(x, y, 1) = v.g, image.at(x, y, 2) = v.b;
+    }
+  return image;
+}
+
+}  // namespace
+
+TEST_CASE("Roulette scales are K M / (I + 0.01), I over the pixel's 5 x 5 neighbourhood, M over the lattice",
+          "[pathtrace][roulette]") {
+  // Left half dark (0.01, with a dim blue), right half bright (1), 24 x 16 pixels.
+  const Image pilot = pilotImage(24, 16, [](int x, int) { return x < 12 ? Rgb(0.01f, 0.01f, 0.002f) : Rgb(1.0f); });
+  const RouletteScales scales(pilot, {0, 0, 24, 16});
+  // The lattice (every fourth pixel of every fourth row) is half dark, half bright.
+  const float mean = (3 * (0.01f + 0.01f + 0.002f) / 3 + 3 * 1.0f) / 6;
+  auto at = [&](int x, int y) { return scales.at(uint64_t(y) * 24 + uint64_t(x)); };
+  // Away from the edge between the halves, the neighbourhood is the pixel's value.
+  CHECK(at(3, 8).r == Approx(2 * mean / (0.01f + 0.01f)).epsilon(1e-5));
+  CHECK(at(3, 8).b == Approx(2 * mean / (0.002f + 0.01f)).epsilon(1e-5));
+  CHECK(at(20, 8).g == Approx(2 * mean / (1.0f + 0.01f)).epsilon(1e-5));
+  // Two pixels from the edge, the neighbourhood holds one bright column of five: (4 x 0.01 + 1) / 5.
+  CHECK(at(10, 8).r == Approx(2 * mean / ((4 * 0.01f + 1.0f) / 5 + 0.01f)).epsilon(1e-5));
+  // At the image's corner, the neighbourhood is the 3 x 3 pixels inside it.
+  CHECK(at(0, 0).r == Approx(2 * mean / (0.01f + 0.01f)).epsilon(1e-5));
+
+  // A crop's scales are the whole image's at the same pixels.
+  const RouletteScales crop(pilot, {8, 3, 15, 9});
+  for (int y = 3; y < 9; ++y)
+    for (int x = 8; x < 15; ++x) {
+      CAPTURE(x, y);
+      CHECK(crop.at(uint64_t(y) * 24 + uint64_t(x)).g == at(x, y).g);
+    }
+
+  // A pilot that met no light gives throughput roulette.
+  const RouletteScales dark(pilotImage(8, 8, [](int, int) { return Rgb(0.0f); }), {0, 0, 8, 8});
+  CHECK(dark.at(27).r == 1.0f);
+  CHECK(dark.at(27).b == 1.0f);
+}
+
+TEST_CASE("The pilot's pixels: the region, two pixels around it, and the lattice", "[pathtrace][roulette]") {
+  const std::vector<uint32_t> samples = pilotPixels(20, 12, {5, 4, 9, 6});
+  for (int y = 0; y < 12; ++y)
+    for (int x = 0; x < 20; ++x) {
+      CAPTURE(x, y);
+      const bool wanted = (x >= 3 && x < 11 && y >= 2 && y < 8) || (x % 4 == 0 && y % 4 == 0);
+      CHECK(samples[size_t(y) * 20 + size_t(x)] == (wanted ? kPilotSamples : 0u));
+    }
+}
+
+TEST_CASE("Contribution roulette converges to throughput roulette's image", "[pathtrace][roulette]") {
+  // Contribution roulette keeps dark pixels' paths longer and ends bright pixels' sooner: a
+  // survivor scaled by another probability than its own survival's (throughput roulette's: z near
+  // -17 on the Cornell box) would brighten or darken the image, most in the dark pixels, which are
+  // also tested alone.
+  for (const char* file : {"/scenes/cornell-box.json", "/scenes/cornell-box-glossy.json"}) {
+    Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + file, {true});
+    scene.camera.width = 48;
+    scene.camera.height = 48;
+    const Visibility vis(scene);
+    PathTraceOptions opt;
+    opt.common.spp = 256;
+    opt.sampler = SamplerKind::Independent;
+    opt.roulette = RouletteKind::Throughput;
+    opt.common.seed = 1;
+    const RenderOutput throughput = renderPathTraced(scene, vis, opt);
+    opt.roulette = RouletteKind::Contribution;
+    opt.common.seed = 2;
+    const RenderOutput contribution = renderPathTraced(scene, vis, opt);
+    // Not vacuous: contribution roulette traced paths of other lengths.
+    CHECK(contribution.stats.counter("rays") != throughput.stats.counter("rays"));
+    // The darkest third of the pixels, where paths go on longest, chosen by a third image: chosen by
+    // one of the two, they would be those where its noise happened to be low.
+    opt.common.spp = 64;
+    opt.common.seed = 3;
+    const Image chooser = renderPathTraced(scene, vis, opt).image;
+    std::vector<float> values;
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 48; ++x) values.push_back(chooser.at(x, y, 0) + chooser.at(x, y, 1));
+    std::vector<float> sorted = values;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 3, sorted.end());
+    const float darkBelow = sorted[sorted.size() / 3];
+    Image darkA(48, 48, {"R", "G", "B"}), darkB = darkA;
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 48; ++x)
+        if (values[size_t(y) * 48 + size_t(x)] < darkBelow)
+          for (int c = 0; c < 3; ++c) darkA.at(x, y, c) = throughput.image.at(x, y, c), darkB.at(x, y, c) = contribution.image.at(x, y, c);
+    for (int c = 0; c < 3; ++c) {
+      const double z = test::agreementZ(throughput.image, contribution.image, c);
+      const double zDark = test::agreementZ(darkA, darkB, c);
+      INFO(file << ", channel " << c << ": z = " << z << ", dark pixels' z = " << zDark);
+      CHECK(std::abs(z) < 4.5);
+      CHECK(std::abs(zDark) < 4.5);
+    }
+  }
+}
