@@ -24,7 +24,7 @@ struct IsaRender {
   const char* scene = "cornell-box-spheres";
 };
 const std::vector<IsaRender> kRenders = {
-    {"pt", {{"spp", "4"}}},
+    {"pt", {{"spp", "12"}}},  // contribution roulette from the ninth sample
     {"purcell", {{"photons", "20000"}, {"caustic_photons", "20000"}, {"light_samples", "2"}, {"map", "sort"}}},
     {"purcell", {{"photons", "20000"}, {"caustic_photons", "20000"}, {"light_samples", "2"}, {"map", "stencil"}}},
     {"pmfg", {{"photons", "20000"}, {"caustic_photons", "20000"}, {"gather_rays", "8"}, {"light_samples", "2"}}},
