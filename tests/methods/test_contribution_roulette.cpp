@@ -115,3 +115,56 @@ TEST_CASE("Contribution roulette converges to throughput roulette's image", "[pa
     }
   }
 }
+
+TEST_CASE("The learnt light choice: groups by the root of their samples' second moments, a tenth by power",
+          "[pathtrace][roulette]") {
+  // The primitives under the sun and the sky: two groups, the sky's by power about a sixth.
+  const Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/primitives.json", {true});
+  REQUIRE(scene.lights.size() == 2);
+  REQUIRE(learnsLightChoice(scene));
+  const uint32_t sun = scene.lights[0].type == LightType::Directional ? 0 : 1, sky = 1 - sun;
+  const float sunPower = scene.lightDistribution.pmf(sun), skyPower = scene.lightDistribution.pmf(sky);
+  LightMoments moments;
+  for (int i = 0; i < 3; ++i) moments.add(LightType::Directional, Rgb(2.0f, 1.0f, 3.0f));  // c = 2, c^2 = 4
+  moments.add(LightType::Environment, Rgb(0.5f));                                          // c^2 = 0.25
+  const Distribution1D choice = learntLightChoice(scene, moments);
+  const double sunLearnt = std::sqrt(sunPower * 12.0), skyLearnt = std::sqrt(skyPower * 0.25);
+  CHECK(choice.pmf(sun) == Approx(0.9 * sunLearnt / (sunLearnt + skyLearnt) + 0.1 * sunPower).epsilon(1e-5));
+  CHECK(choice.pmf(sky) == Approx(0.9 * skyLearnt / (sunLearnt + skyLearnt) + 0.1 * skyPower).epsilon(1e-5));
+  // Moments gathered in two parts add up to the same choice, bit for bit.
+  LightMoments first, second;
+  for (int i = 0; i < 3; ++i) first.add(LightType::Directional, Rgb(2.0f, 1.0f, 3.0f));
+  second.add(LightType::Environment, Rgb(0.5f));
+  first.add(second);
+  CHECK(learntLightChoice(scene, first).pmf(sky) == choice.pmf(sky));
+  // No light brought anything: by power.
+  CHECK(learntLightChoice(scene, LightMoments{}).pmf(sky) == skyPower);
+  // The Cornell box has one kind of light, the maze two point lights chosen by distance: nothing to learn.
+  CHECK_FALSE(learnsLightChoice(loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true})));
+}
+
+TEST_CASE("The learnt light choice converges to the image of the choice by power", "[pathtrace][roulette]") {
+  // Sun and sky on the primitives, and sun and sky through Sponza's courtyard: a light chosen with
+  // one probability and weighted by another (in next-event estimation, or in MIS at a BSDF-sampled
+  // hit of the sky) would brighten or darken the image.
+  for (const char* file : {"/scenes/primitives.json", "/scenes/sponza.json"}) {
+    Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + file, {true});
+    scene.camera.width = 40;
+    scene.camera.height = 24;
+    const Visibility vis(scene);
+    PathTraceOptions opt;
+    opt.common.spp = 128;
+    opt.sampler = SamplerKind::Independent;
+    opt.lightChoice = LightChoiceKind::Power;
+    opt.common.seed = 1;
+    const Image power = renderPathTraced(scene, vis, opt).image;
+    opt.lightChoice = LightChoiceKind::Learned;
+    opt.common.seed = 2;
+    const Image learnt = renderPathTraced(scene, vis, opt).image;
+    for (int c = 0; c < 3; ++c) {
+      const double z = test::agreementZ(power, learnt, c);
+      INFO(file << ", channel " << c << ": z = " << z);
+      CHECK(std::abs(z) < 4.5);
+    }
+  }
+}

@@ -130,9 +130,11 @@ TEST_CASE("Parts that start before, inside and after contribution roulette's pil
           "[splits][cli]") {
   // The first 8 samples are the pilot; a crop or a later range traces the pilot's pixels itself.
   const test::TempDir dir("roulette-splits");
-  for (const std::string options : {"--spp 14", "--spp 14 --sampler independent --variance --paths"}) {
-    CAPTURE(options);
-    const std::string args = quoted(kCornell) + " --method pt " + options + " --resolution 40x30";
+  // The primitives under sun and sky: the pilot learns the light choice too.
+  for (const auto& [scene, options] : std::vector<std::pair<std::string, std::string>>{
+           {kCornell, "--spp 14"}, {kCornell, "--spp 14 --sampler independent --variance --paths"}, {kPrimitives, "--spp 14"}}) {
+    CAPTURE(scene, options);
+    const std::string args = quoted(scene) + " --method pt " + options + " --resolution 40x30";
     renderPart(args, dir / "single.exr");
     std::string films;
     int part = 0;

@@ -22,11 +22,16 @@ enum class PathStrategy { Mis, LightSampling, BsdfSampling };
 // throughput alone.
 enum class RouletteKind { Contribution, Throughput };
 
+// How next-event estimation chooses a light: learnt from contribution roulette's pilot, per kind of
+// light (the default; src/methods/pathtrace/contribution_roulette.h), or by the lights' power.
+enum class LightChoiceKind { Learned, Power };
+
 struct PathTraceOptions {
   int maxDepth = 1024;         // path length in bounces: 1 is direct light, 2 adds one indirect bounce;
                                // high enough by default that Russian roulette, not the cut, ends paths
   int rouletteDepth = 3;       // Russian roulette from this bounce on
   RouletteKind roulette = RouletteKind::Contribution;
+  LightChoiceKind lightChoice = LightChoiceKind::Learned;
   double timeBudget = 0;       // seconds; 0 for none. At least one sample per pixel is taken
   // The relMSE against the converged image to stop at, estimated from the image (error_target.h),
   // with samples spent where the pixels' estimated errors are largest; 0 for none.

@@ -161,6 +161,14 @@ inline LightChoice chooseLight(const Scene& scene, Vec3 receiver, float u) {
   return {li, scene.lightDistribution.pmf(li)};
 }
 
+// chooseLight by the distribution `choice` over the scene's lights (the path tracer's learnt one,
+// PathTracer::useLightChoice) where the scene has no nearby lights; by the scene's where it has.
+inline LightChoice chooseLight(const Scene& scene, const Distribution1D& choice, Vec3 receiver, float u) {
+  if (!scene.nearbyLights.empty()) return chooseLight(scene, receiver, u);
+  const uint32_t li = choice.pick(u);
+  return {li, choice.pmf(li)};
+}
+
 // A light chosen for the receiver (chooseLight), and a sample of it.
 inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, Vec2 u) {
   if (scene.lights.empty()) return {};
@@ -185,19 +193,22 @@ inline Ray shadowRay(Vec3 p, Vec3 ng, const LightSample& ls) { return shadowRay(
 
 // Density (solid angle, with selection probability) of choosing direction wi towards emissive
 // triangle `tri`, hit at distance `dist`.
-inline float triangleLightPdf(const Scene& scene, uint32_t tri, Vec3 wi, float dist) {
+inline float triangleLightPdf(const Scene& scene, const Distribution1D& choice, uint32_t tri, Vec3 wi, float dist) {
   const int32_t li = scene.triangleLight[tri];
   if (li < 0) return 0.0f;
   const float facing = -dot(wi, scene.geometricNormal(tri));
   const float cosLight = scene.materials[scene.materialIds[tri]].emitsBackFace != 0 ? std::abs(facing) : facing;
   if (cosLight <= 0) return 0.0f;
-  return scene.lightDistribution.pmf(uint32_t(li)) * dist * dist / (cosLight * scene.triangleArea(tri));
+  return choice.pmf(uint32_t(li)) * dist * dist / (cosLight * scene.triangleArea(tri));
+}
+inline float triangleLightPdf(const Scene& scene, uint32_t tri, Vec3 wi, float dist) {
+  return triangleLightPdf(scene, scene.lightDistribution, tri, wi, dist);
 }
 
-inline float environmentLightPdf(const Scene& scene, Vec3 wi) {
+inline float environmentLightPdf(const Scene& scene, const Distribution1D& choice, Vec3 wi) {
   const Environment& env = scene.environment;
   if (!env.present) return 0.0f;
-  const float pmf = scene.lightDistribution.pmf(scene.lightDistribution.size() - 1);
+  const float pmf = choice.pmf(choice.size() - 1);
   if (env.texels.empty()) return pmf * kUniformSpherePdf;
   const Vec2 uv = directionToLatLong(wi);
   // Not sqrt(1 - y^2): near the poles it loses the digits that sampleLight's sin(pi v) keeps, and y
@@ -205,6 +216,9 @@ inline float environmentLightPdf(const Scene& scene, Vec3 wi) {
   const float sinTheta = std::sqrt(wi.x * wi.x + wi.z * wi.z);
   if (!(sinTheta > 0)) return 0.0f;
   return pmf * env.distribution.pdf(uv) / (2.0f * kPi * kPi * sinTheta);
+}
+inline float environmentLightPdf(const Scene& scene, Vec3 wi) {
+  return environmentLightPdf(scene, scene.lightDistribution, wi);
 }
 
 // Emission: a ray leaving a light, for photon tracing and virtual point lights.

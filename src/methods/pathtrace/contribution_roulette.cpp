@@ -1,6 +1,8 @@
 #include "methods/pathtrace/contribution_roulette.h"
 
 #include <algorithm>
+#include <cmath>
+#include <vector>
 
 namespace lucent {
 namespace {
@@ -20,9 +22,15 @@ float meanOfChannels(const Image& image, int x, int y) {
   return (image.at(x, y, 0) + image.at(x, y, 1) + image.at(x, y, 2)) / 3.0f;
 }
 
-bool onLattice(int x, int y) { return x % kLattice == 0 && y % kLattice == 0; }
+// The group of a light in the learnt light choice.
+int lightGroup(LightType type) { return type == LightType::Triangle ? 0 : type == LightType::Environment ? 1 : 2; }
+
+// The share of the light choice that stays by power.
+constexpr float kPowerShare = 0.1f;
 
 }  // namespace
+
+bool onPilotLattice(int x, int y) { return x % kLattice == 0 && y % kLattice == 0; }
 
 RouletteScales::RouletteScales(const Image& pilotMeans, const PixelRect& region)
     : region_(region), imageWidth_(pilotMeans.width()), scale_(region.pixelCount()) {
@@ -57,8 +65,39 @@ std::vector<uint32_t> pilotPixels(int width, int height, const PixelRect& region
                          std::min(width, region.x1 + kNeighbourhood), std::min(height, region.y1 + kNeighbourhood)};
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x)
-      if (around.contains(x, y) || onLattice(x, y)) samples[size_t(y) * size_t(width) + size_t(x)] = kPilotSamples;
+      if (around.contains(x, y) || onPilotLattice(x, y)) samples[size_t(y) * size_t(width) + size_t(x)] = kPilotSamples;
   return samples;
+}
+
+void LightMoments::add(LightType type, Rgb contribution) {
+  const float c = (contribution.r + contribution.g + contribution.b) / 3.0f;
+  if (ExactSum::accepts(c * c)) squares_[lightGroup(type)].add(c * c);
+}
+
+void LightMoments::add(const LightMoments& other) {
+  for (int g = 0; g < kGroups; ++g) squares_[g].add(other.squares_[g]);
+}
+
+bool learnsLightChoice(const Scene& scene) {
+  bool present[3] = {false, false, false};
+  for (uint32_t i = 0; i < scene.lights.size(); ++i)
+    if (scene.lightDistribution.pmf(i) > 0) present[lightGroup(scene.lights[i].type)] = true;
+  return scene.nearbyLights.empty() && int(present[0]) + int(present[1]) + int(present[2]) >= 2;
+}
+
+Distribution1D learntLightChoice(const Scene& scene, const LightMoments& moments) {
+  const Distribution1D& power = scene.lightDistribution;
+  double share[LightMoments::kGroups] = {0, 0, 0}, learnt[LightMoments::kGroups], total = 0;
+  for (uint32_t i = 0; i < scene.lights.size(); ++i) share[lightGroup(scene.lights[i].type)] += power.pmf(i);
+  for (int g = 0; g < LightMoments::kGroups; ++g) total += learnt[g] = std::sqrt(share[g] * moments.squares_[g].value());
+  if (!(total > 0)) return power;  // the pilot's light samples brought nothing: by power
+  std::vector<float> weights(scene.lights.size());
+  for (uint32_t i = 0; i < scene.lights.size(); ++i) {
+    const int g = lightGroup(scene.lights[i].type);
+    const double groupShare = (1 - kPowerShare) * learnt[g] / total + kPowerShare * share[g];
+    weights[i] = share[g] > 0 ? float(power.pmf(i) * groupShare / share[g]) : 0.0f;
+  }
+  return Distribution1D(weights);
 }
 
 }  // namespace lucent

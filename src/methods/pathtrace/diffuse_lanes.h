@@ -36,6 +36,7 @@ struct DiffuseLanes {
   alignas(64) int32_t emits[kLaneSlots];  // Ke not black: only then is gatherEmission called
   alignas(64) float uLight[kLaneSlots], uLightX[kLaneSlots], uLightY[kLaneSlots], uBsdfX[kLaneSlots], uBsdfY[kLaneSlots];
   alignas(64) uint32_t path[kLaneSlots];  // the wave's path in this lane
+  alignas(64) uint32_t light[kLaneSlots];  // the light sampled (for the pilot's light moments)
 
   // The light sample. Triangle lights (fetchDiffuseLane): vertices q*, normal, area and pmf; the
   // lanes sample the point. Other lights (sampleOtherLights): the finished sample, wi* to lightDelta.

@@ -18,6 +18,12 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
                                                                {"throughput", RouletteKind::Throughput}},
              "contribution: paths go on by what they are expected to add to their pixel's relative error, from the "
              "first 8 samples per pixel on; throughput: by their throughput alone");
+    t.choice("light_choice", &O::lightChoice,
+             std::vector<std::pair<std::string, LightChoiceKind>>{{"learned", LightChoiceKind::Learned},
+                                                                  {"power", LightChoiceKind::Power}},
+             "learned: next-event estimation chooses among kinds of light (emitters, environment, point and "
+             "directional lights) by what their samples brought in the first 8 samples per pixel (with "
+             "--roulette contribution); power: by the lights' power");
     t.real("time_budget", &O::timeBudget, 0, 1e9, "s",
            "stop sampling within this many seconds (at least one sample per pixel); 0: no budget");
     t.real("target_error", &O::targetError, 0, 1, "relMSE",

@@ -81,6 +81,7 @@ struct ShadowQuery {
   Rgb contribution;
   Rgb diffuseShare{1.0f};  // of the first non-specular vertex's BSDF, for the split by path
   uint32_t path = 0;
+  uint32_t light = 0;  // the light sampled
   int verticesBefore = 0;
 };
 
@@ -121,7 +122,8 @@ struct PassSamples {
 class PathTracer {
  public:
   PathTracer(const Scene& scene, const Visibility& vis, const PathTraceOptions& opt)
-      : scene_(scene), vis_(vis), opt_(opt), camera_(scene.camera), lightRecords_(scene.lights.size()) {
+      : scene_(scene), vis_(vis), opt_(opt), camera_(scene.camera), lightRecords_(scene.lights.size()),
+        lightChoice_(scene.lightDistribution) {
     for (uint32_t li = 0; li < scene.lights.size(); ++li) {
       const Light& light = scene.lights[li];
       if (light.type != LightType::Triangle) continue;
@@ -129,7 +131,7 @@ class PathTracer {
       // The lanes sample one-sided emitters of constant radiance; the others as other lights are.
       const Material& m = scene.materials[scene.materialIds[t]];
       lightRecords_[li] = {scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), scene.geometricNormal(t),
-                           scene.triangleArea(t), scene.lightDistribution.pmf(li), m.ke,
+                           scene.triangleArea(t), lightChoice_.pmf(li), m.ke,
                            m.emitsBackFace == 0 && m.emissiveTexture < 0};
     }
   }
@@ -144,7 +146,7 @@ class PathTracer {
         const Rgb le = environmentRadiance(scene_.environment, ray.direction);
         path.gather(path.gatheringVertices,
                     path.beta * le *
-                        emissionWeight(path.lastDelta, path.lastPdf, environmentLightPdf(scene_, ray.direction)));
+                        emissionWeight(path.lastDelta, path.lastPdf, environmentLightPdf(scene_, lightChoice_, ray.direction)));
       }
       return false;
     }
@@ -183,6 +185,13 @@ class PathTracer {
 
   // Contribution roulette's scales from here on (set between passes).
   void useRoulette(RouletteScales scales) { roulette_ = std::move(scales); }
+  // Whether the light samples of the pilot's lattice pixels are added to the waves' LightMoments
+  // (between passes); and the choice of light from here on.
+  void learnLightChoice(bool learn) { learningLightChoice_ = learn; }
+  void useLightChoice(Distribution1D choice) {
+    lightChoice_ = std::move(choice);
+    for (uint32_t li = 0; li < scene_.lights.size(); ++li) lightRecords_[li].pmf = lightChoice_.pmf(li);
+  }
 
   // The paths of one wave and the queries between its stages; one per thread, reused.
   struct Wave {
@@ -195,6 +204,7 @@ class PathTracer {
     std::unique_ptr<CameraLanes> camera = std::make_unique<CameraLanes>();
     std::vector<TexturedLane> textured;
     std::vector<uint32_t> otherLights;  // lanes whose light is not a triangle
+    LightMoments lightMoments;          // while the pilot learns the light choice
     // The Sobol sampler's numbers of a bounce's Lambertian hits, drawn together in lanes before the
     // hits are fetched: per hit, its light choice's, light point's and BSDF direction's pairs.
     struct SobolRequests {
@@ -278,7 +288,11 @@ class PathTracer {
         vis_, w.shadows.size(), [&](size_t i) -> const Ray& { return w.shadows[i].ray; },
         [&](size_t i, bool blocked) {
           const ShadowQuery& shadow = w.shadows[i];
-          if (!blocked) w.paths[shadow.path].gather(shadow.verticesBefore, shadow.contribution, shadow.diffuseShare);
+          if (blocked) return;
+          Path& path = w.paths[shadow.path];
+          path.gather(shadow.verticesBefore, shadow.contribution, shadow.diffuseShare);
+          if (learningLightChoice_ && onPilotLattice(int(path.pixel % imageWidth_), int(path.pixel / imageWidth_)))
+            w.lightMoments.add(scene_.lights[shadow.light].type, shadow.contribution);
         });
   }
 
@@ -397,7 +411,8 @@ class PathTracer {
     // sampled whole once the lane's surface point is known (sampleOtherLights), as is the no light
     // of a scene without one (sampleLight gives no sample then).
     const bool farLight = !s.lights.empty() && !choosesNearbyLight(s, l.uLight[k]);
-    const TriangleLightRecord* light = farLight ? &lightRecords_[chooseLight(s, position, l.uLight[k]).light] : nullptr;
+    l.light[k] = farLight ? chooseLight(s, lightChoice_, position, l.uLight[k]).light : 0;
+    const TriangleLightRecord* light = farLight ? &lightRecords_[l.light[k]] : nullptr;
     l.lightIsTriangle[k] = light && light->isTriangle;
     l.lightDelta[k] = false;  // set by sampleOtherLights for the others
     if (!l.lightIsTriangle[k]) {
@@ -416,7 +431,7 @@ class PathTracer {
   // Point, directional and environment lights, sampled by sampleLight at the lanes' surface points.
   void sampleOtherLights(DiffuseLanes& l, const std::vector<uint32_t>& lanes) const {
     for (const uint32_t k : lanes) {
-      const LightSample ls = sampleLight(scene_, {l.posX[k], l.posY[k], l.posZ[k]}, l.uLight[k], {l.uLightX[k], l.uLightY[k]});
+      const LightSample ls = sampleLight({l.posX[k], l.posY[k], l.posZ[k]}, l.uLight[k], {l.uLightX[k], l.uLightY[k]}, l.light[k]);
       l.wiX[k] = ls.wi.x, l.wiY[k] = ls.wi.y, l.wiZ[k] = ls.wi.z, l.lightDistance[k] = ls.distance;
       l.pointX[k] = ls.point.x, l.pointY[k] = ls.point.y, l.pointZ[k] = ls.point.z;
       l.leR[k] = ls.radiance.r, l.leG[k] = ls.radiance.g, l.leB[k] = ls.radiance.b;
@@ -447,6 +462,7 @@ class PathTracer {
         shadow.verticesBefore = verticesBefore;
         shadow.diffuseShare = path.firstDiffuseShare;
         shadow.path = i;
+        shadow.light = l.light[k];
       }
       if (l.scattered[k] &&
           continuePath(path, {l.weightR[k], l.weightG[k], l.weightB[k]}, l.scatterPdf[k], false, position,
@@ -463,7 +479,7 @@ class PathTracer {
     const Rgb le = emittedRadiance(scene_, hit.triangle, hit.b1, hit.b2, frontFace);
     if (le.isBlack()) return;
     const float lightPdf = path.lastDelta ? 0.0f
-                                          : triangleLightPdf(scene_, hit.triangle, path.ray.direction,
+                                          : triangleLightPdf(scene_, lightChoice_, hit.triangle, path.ray.direction,
                                                              length(position - path.lastPosition));
     path.gather(path.gatheringVertices, path.beta * le * emissionWeight(path.lastDelta, path.lastPdf, lightPdf));
   }
@@ -490,6 +506,15 @@ class PathTracer {
                                    roulette_.empty() ? Rgb(1.0f) : roulette_.at(path.pixel));
   }
 
+  // A light chosen for the receiver by the tracer's light choice, and a sample of it; `light` is set
+  // to the light chosen.
+  LightSample sampleLight(Vec3 receiver, float uLight, Vec2 u, uint32_t& light) const {
+    if (scene_.lights.empty()) return {};
+    const LightChoice choice = chooseLight(scene_, lightChoice_, receiver, uLight);
+    light = choice.light;
+    return sampleChosenLight(scene_, choice.light, choice.pmf, receiver, u);
+  }
+
   // Weight of emission found by BSDF sampling, against light sampling of the same light.
   float emissionWeight(bool lastDelta, float bsdfPdf, float lightPdf) const {
     if (lastDelta) return 1.0f;
@@ -508,7 +533,7 @@ class PathTracer {
                     PathSampler& sampler, int bounce,
                     ShadowQuery& shadow) const {
     const float uLight = sampler.uniform(bounce, SampleUse::LightChoice);
-    const LightSample ls = sampleLight(scene_, sp.position, uLight, sampler.uniform2(bounce, SampleUse::LightPoint));
+    const LightSample ls = sampleLight(sp.position, uLight, sampler.uniform2(bounce, SampleUse::LightPoint), shadow.light);
     const Vec3 wiLocal = frame.toLocal(ls.wi);
     const NextEventSample sample = weighLightSample(opt_.strategy, ls.pdf, ls.delta, ls.radiance, ls.wi, wiLocal,
                                                     frame.n, sp.geometricNormal, evalBsdfAndPdf(bsdf, woLocal, wiLocal));
@@ -529,6 +554,9 @@ class PathTracer {
   // is 1.5x slower without), while the Cornell box's stay cached and prefetching costs it 1%.
   const bool prefetchSceneData_ = sceneArrayBytes(scene_) > (size_t(1) << 20);
   RouletteScales roulette_;  // empty: throughput roulette
+  Distribution1D lightChoice_;  // over the scene's lights: by power, or learnt from the pilot
+  bool learningLightChoice_ = false;
+  const uint64_t imageWidth_ = uint64_t(scene_.camera.width);
 };
 
 // The samples of the tile's pixels from each pixel's next (sampleBegin plus the samples the film
@@ -693,14 +721,26 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
   const int pilotSamples = int(kPilotSamples);
   const bool contribution = options.roulette == RouletteKind::Contribution && part.sampleEnd > pilotSamples;
   const bool pilotInFilm = region == PixelRect{0, 0, width, height} && part.sampleBegin == 0 && resumedSamples == 0;
-  RouletteScales tracedPilot;
+  // The light choice is learnt from the pilot's light samples too (LightMoments).
+  const bool learnLightChoice = contribution && options.lightChoice == LightChoiceKind::Learned && learnsLightChoice(scene);
+  auto learntChoice = [&] {  // the waves' light moments, summed exactly and cleared
+    LightMoments moments;
+    for (PathTracer::Wave& w : waves) moments.add(std::exchange(w.lightMoments, {}));
+    tracer.learnLightChoice(false);
+    return learnLightChoice ? learntLightChoice(scene, moments) : scene.lightDistribution;
+  };
+  tracer.learnLightChoice(learnLightChoice);
+  RouletteScales tracedScales;
+  Distribution1D tracedChoice;
   if (contribution && !pilotInFilm) {
     Film pilot(width, height, Film::Sums::PerSample, layers);
     renderPassOn({0, 0, pilotPixels(width, height, region)}, pilot, {0, 0, width, height});
-    tracedPilot = RouletteScales(pilot.image(), region);
+    tracedScales = RouletteScales(pilot.image(), region);
+    tracedChoice = learntChoice();
   }
   auto startContributionRoulette = [&] {
-    tracer.useRoulette(pilotInFilm ? RouletteScales(film->image(), region) : std::move(tracedPilot));
+    tracer.useRoulette(pilotInFilm ? RouletteScales(film->image(), region) : std::move(tracedScales));
+    tracer.useLightChoice(pilotInFilm ? learntChoice() : std::move(tracedChoice));
   };
 
   RenderOutput out;
