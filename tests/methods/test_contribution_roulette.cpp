@@ -1,5 +1,7 @@
-// Contribution roulette (src/methods/pathtrace/contribution_roulette.h): its scales, its pilot's
-// pixels, and that the path tracer's image with it is the image of throughput roulette, noise apart.
+// Contribution roulette and the light choice learnt from its pilot
+// (src/methods/pathtrace/contribution_roulette.h): the scales, the pilot's pixels, the choice's
+// arithmetic, and that the path tracer's images with them are those of throughput roulette and of the
+// choice by power, noise apart.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -12,26 +14,10 @@
 
 using namespace lucent;
 
-namespace {
-
-// A pilot of width x height pixels whose R, G, B are value(x, y).
-template <class Value>
-Image pilotImage(int width, int height, Value value) {
-  Image image(width, height, {"R", "G", "B"});
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const Rgb v = value(x, y);
-      image.at(x, y, 0) = v.r, image.at(x, y, 1) = v.g, image.at(x, y, 2) = v.b;
-    }
-  return image;
-}
-
-}  // namespace
-
 TEST_CASE("Roulette scales are K M / (I + 0.01), I over the pixel's 5 x 5 neighbourhood, M over the lattice",
           "[pathtrace][roulette]") {
   // Left half dark (0.01, with a dim blue), right half bright (1), 24 x 16 pixels.
-  const Image pilot = pilotImage(24, 16, [](int x, int) { return x < 12 ? Rgb(0.01f, 0.01f, 0.002f) : Rgb(1.0f); });
+  const Image pilot = test::rgbImage(24, 16, [](int x, int) { return x < 12 ? Rgb(0.01f, 0.01f, 0.002f) : Rgb(1.0f); });
   const RouletteScales scales(pilot, {0, 0, 24, 16});
   // The lattice (every fourth pixel of every fourth row) is half dark, half bright.
   const float mean = (3 * (0.01f + 0.01f + 0.002f) / 3 + 3 * 1.0f) / 6;
@@ -54,7 +40,7 @@ TEST_CASE("Roulette scales are K M / (I + 0.01), I over the pixel's 5 x 5 neighb
     }
 
   // A pilot that met no light gives throughput roulette.
-  const RouletteScales dark(pilotImage(8, 8, [](int, int) { return Rgb(0.0f); }), {0, 0, 8, 8});
+  const RouletteScales dark(test::rgbImage(8, 8, [](int, int) { return Rgb(0.0f); }), {0, 0, 8, 8});
   CHECK(dark.at(27).r == 1.0f);
   CHECK(dark.at(27).b == 1.0f);
 }
@@ -139,7 +125,7 @@ TEST_CASE("The learnt light choice: groups by the root of their samples' second 
   CHECK(learntLightChoice(scene, first).pmf(sky) == choice.pmf(sky));
   // No light brought anything: by power.
   CHECK(learntLightChoice(scene, LightMoments{}).pmf(sky) == skyPower);
-  // The Cornell box has one kind of light, the maze two point lights chosen by distance: nothing to learn.
+  // The Cornell box has one kind of light: nothing to learn.
   CHECK_FALSE(learnsLightChoice(loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true})));
 }
 
