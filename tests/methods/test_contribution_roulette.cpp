@@ -14,6 +14,27 @@
 
 using namespace lucent;
 
+namespace {
+
+// A scene of the repository at width x height pixels.
+Scene sceneAt(const char* file, int width, int height) {
+  Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + file, {true});
+  scene.camera.width = width;
+  scene.camera.height = height;
+  return scene;
+}
+
+// The path tracer with independent samples (so that the images' pixels are independent for the
+// agreement tests), spp of them.
+PathTraceOptions independentSamples(int spp) {
+  PathTraceOptions opt;
+  opt.common.spp = spp;
+  opt.sampler = SamplerKind::Independent;
+  return opt;
+}
+
+}  // namespace
+
 TEST_CASE("Roulette scales are K M / (I + 0.01), I over the pixel's 5 x 5 neighbourhood, M over the lattice",
           "[pathtrace][roulette]") {
   // Left half dark (0.01, with a dim blue), right half bright (1), 24 x 16 pixels.
@@ -61,13 +82,9 @@ TEST_CASE("Contribution roulette converges to throughput roulette's image", "[pa
   // -17 on the Cornell box) would brighten or darken the image, most in the dark pixels, which are
   // also tested alone.
   for (const char* file : {"/scenes/cornell-box.json", "/scenes/cornell-box-glossy.json"}) {
-    Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + file, {true});
-    scene.camera.width = 48;
-    scene.camera.height = 48;
+    const Scene scene = sceneAt(file, 48, 48);
     const Visibility vis(scene);
-    PathTraceOptions opt;
-    opt.common.spp = 256;
-    opt.sampler = SamplerKind::Independent;
+    PathTraceOptions opt = independentSamples(256);
     opt.roulette = RouletteKind::Throughput;
     opt.common.seed = 1;
     const RenderOutput throughput = renderPathTraced(scene, vis, opt);
@@ -134,13 +151,9 @@ TEST_CASE("The learnt light choice converges to the image of the choice by power
   // one probability and weighted by another (in next-event estimation, or in MIS at a BSDF-sampled
   // hit of the sky) would brighten or darken the image.
   for (const char* file : {"/scenes/primitives.json", "/scenes/sponza.json"}) {
-    Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + file, {true});
-    scene.camera.width = 40;
-    scene.camera.height = 24;
+    const Scene scene = sceneAt(file, 40, 24);
     const Visibility vis(scene);
-    PathTraceOptions opt;
-    opt.common.spp = 128;
-    opt.sampler = SamplerKind::Independent;
+    PathTraceOptions opt = independentSamples(128);
     opt.lightChoice = LightChoiceKind::Power;
     opt.common.seed = 1;
     const Image power = renderPathTraced(scene, vis, opt).image;

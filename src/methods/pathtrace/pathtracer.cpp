@@ -663,8 +663,8 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
                           "checkpointed or resumed");
   }
   // Every pixel is owned by one tile, and its samples are added in sample order.
-  const FilmLayers layers{options.common.layers, false, options.variance, options.paths};
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample, layers));
+  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample,
+                                               {options.common.layers, false, options.variance, options.paths}));
   PathTracer tracer(scene, visibility, options);
   const PixelRect& region = part.region;
   const int width = scene.camera.width, height = scene.camera.height;
@@ -733,7 +733,9 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
   RouletteScales tracedScales;
   Distribution1D tracedChoice;
   if (contribution && !pilotInFilm) {
-    Film pilot(width, height, Film::Sums::PerSample, layers);
+    // No layers: per-sample sums keep each sample's total, so R, G and B are the image film's, and a
+    // whole-image film with the --paths and --variance layers would take some thirty times the memory.
+    Film pilot(width, height, Film::Sums::PerSample, {});
     renderPassOn({0, 0, pilotPixels(width, height, region)}, pilot, {0, 0, width, height});
     tracedScales = RouletteScales(pilot.image(), region);
     tracedChoice = learntChoice();
