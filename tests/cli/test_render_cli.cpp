@@ -98,6 +98,21 @@ TEST_CASE("render: a time budget stops early and records the samples taken", "[c
   REQUIRE(found);
 }
 
+TEST_CASE("render: a time budget's image is the image of the samples it took", "[cli][render][roulette]") {
+  // Its passes end at contribution roulette's pilot (8 samples), so it continues with the scales of
+  // a render without a budget.
+  const test::TempDir dir("render-cli");
+  const std::string budget = dir / "budget.exr", fixed = dir / "fixed.exr";
+  const std::string args = "render " + kScene + " --resolution 16x12 --threads 2 --quiet";
+  const test::CliRun r = runLucent(args + " --spp 1000000 --time-budget 0.5 -o " + budget);
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  const int spp = nlohmann::json::parse(r.output)["spp"];
+  REQUIRE(spp > 8);  // past the pilot
+  REQUIRE(runLucent(args + " --spp " + std::to_string(spp) + " -o " + fixed).status == 0);
+  CHECK(readImage(budget).pixels() == readImage(fixed).pixels());
+}
+
 TEST_CASE("render --method purcell and pmfg: options, the paper's stages and metadata", "[cli][render][photonmap]") {
   const test::TempDir dir("render-cli");
   for (const std::string method : {"purcell", "pmfg"}) {

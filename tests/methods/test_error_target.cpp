@@ -194,6 +194,27 @@ TEST_CASE("Renders to an error target are bit-identical whatever the thread coun
   }
 }
 
+TEST_CASE("A render to an error target takes contribution roulette's pilot from its first pass", "[error-target][roulette]") {
+  // Its first pass (8 samples) is the pilot; from its second on, paths end by contribution
+  // roulette: the same passes with throughput roulette give another image.
+  Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box.json", {true});
+  scene.camera.width = 32, scene.camera.height = 24;
+  const Visibility vis(scene);
+  PathTraceOptions o;
+  o.targetError = 0.01;
+  o.common.spp = 4096;
+  const RenderOutput contribution = renderPathTraced(scene, vis, o);
+  REQUIRE(measured(contribution, "passes") > 1);
+  o.roulette = RouletteKind::Throughput;
+  const RenderOutput throughput = renderPathTraced(scene, vis, o);
+  CHECK(contribution.image.pixels() != throughput.image.pixels());
+  // One pass only (the target met at once): the pilot's samples alone, the same with either roulette.
+  o.targetError = 1;
+  const Image firstPass = renderPathTraced(scene, vis, o).image;
+  o.roulette = RouletteKind::Contribution;
+  CHECK(renderPathTraced(scene, vis, o).image.pixels() == firstPass.pixels());
+}
+
 TEST_CASE("render --target-error records its estimate and samples, and its image is unbiased", "[error-target][cli]") {
   // Independent samples with their variance, so that lucent compare --test can judge the image
   // against the reference: samples spent where a pixel's neighbours are noisy must not bias it.
