@@ -31,11 +31,7 @@ Distribution1D::Distribution1D(std::span<const float> weights) : func_(weights.b
 uint32_t Distribution1D::sampleDiscrete(float u, float* pmfOut, float* remapped) const {
   const uint32_t i = pick(u);
   if (pmfOut) *pmfOut = pmf(i);
-  if (remapped) {
-    const double width = cdf_[i + 1] - cdf_[i];
-    const double r = width > 0 ? (u - cdf_[i]) / width : 0.0;
-    *remapped = std::clamp(static_cast<float>(r), 0.0f, 0x1.fffffep-1f);
-  }
+  if (remapped) *remapped = remap(i, u);
   return i;
 }
 

@@ -633,12 +633,12 @@ bool stratified(const std::vector<Vec2>& points, int m) {
 }  // namespace
 
 TEST_CASE("PathSampler (Sobol): a pixel's first 2^m samples are stratified in every purpose's pair", "[sampling][sobol]") {
-  // Every pair of dimensions (the pixel position, and per bounce the light choice with the lobe, the
-  // light point, the BSDF direction, the roulette with its unused partner) of a pixel's first 2^m
+  // Every pair of dimensions (the pixel position, and per bounce the roulette with the lobe, the
+  // light choice with the light point, the BSDF direction) of a pixel's first 2^m
   // samples holds one point in every elementary box of area 2^-m: a (0, 2)-sequence in base 2.
   for (const uint64_t pixel : {0ull, 17ull, 123456ull})
     for (const int bounce : {0, 1, 7})
-      for (const SampleUse use : {SampleUse::LightChoice, SampleUse::LightPoint, SampleUse::BsdfDirection, SampleUse::Roulette}) {
+      for (const SampleUse use : {SampleUse::Roulette, SampleUse::LightPoint, SampleUse::BsdfDirection}) {
         const std::vector<Vec2> points = pixelPairs(3, pixel, bounce, use, 1024);
         for (int m = 0; m <= 10; ++m) {
           INFO("pixel " << pixel << ", bounce " << bounce << ", use " << uint32_t(use) << ", 2^" << m << " samples");
@@ -705,7 +705,7 @@ TEST_CASE("PathSampler (Sobol): unbiased, and a smooth integrand's variance far 
   const double exact = (std::exp(1.0) - 1.0) * 2.0 / kPi;
   auto f = [](Vec2 p) { return std::exp(double(p.x)) * std::sin(kPi * double(p.y)); };
   const double varF = (std::exp(2.0) - 1.0) / 2.0 * 0.5 - exact * exact;
-  for (const SampleUse use : {SampleUse::LightPoint, SampleUse::BsdfDirection, SampleUse::LightChoice}) {
+  for (const SampleUse use : {SampleUse::LightPoint, SampleUse::BsdfDirection, SampleUse::Roulette}) {
     std::vector<double> estimates;
     for (uint64_t pixel = 0; pixel < 4096; ++pixel) {
       double sum = 0;
@@ -747,7 +747,7 @@ TEST_CASE("PathSampler (Sobol): pairs and camera pairs drawn in lanes are the sa
   for (uint64_t pixel = 0; pixel < 7; ++pixel)
     for (uint64_t sample : {0ull, 1ull, 5ull, 1000ull, 123456789ull})
       for (int bounce = 0; bounce < 12; ++bounce)
-        for (const SampleUse use : {SampleUse::LightChoice, SampleUse::LightPoint, SampleUse::BsdfDirection, SampleUse::Roulette}) {
+        for (const SampleUse use : {SampleUse::Roulette, SampleUse::LightPoint, SampleUse::BsdfDirection}) {
           samplers.emplace_back(SamplerKind::Sobol, 11, pixel, sample);
           keys.push_back(samplers.back().pixelKey()), index.push_back(samplers.back().index());
           dimension.push_back(PathSampler::dimension(bounce, use));

@@ -35,6 +35,12 @@ class Distribution1D {
     const auto i = static_cast<uint32_t>(first - (cdf_.data() + 1)) + (first[0] <= double(u));
     return std::min(i, size() - 1);
   }
+  // u, picked as bin i, rescaled to [0,1) within the bin.
+  float remap(uint32_t i, float u) const {
+    const double width = cdf_[i + 1] - cdf_[i];
+    const double r = width > 0 ? (double(u) - cdf_[i]) / width : 0.0;
+    return std::clamp(static_cast<float>(r), 0.0f, 0x1.fffffep-1f);
+  }
   float pmf(uint32_t i) const { return weightedTotal_ > 0 ? func_[i] / weightedTotal_ : 1.0f / size(); }
 
   // Continuous position in [0,1) with density func(x) / integral; returns the bin in `bin`.

@@ -17,14 +17,13 @@ namespace lucent {
 
 // What a number is for, at one bounce. Two-dimensional purposes take a pair of dimensions.
 enum class SampleUse : uint32_t {
-  LightChoice = 0,    // which light (1D)
+  Roulette = 0,       // Russian roulette on arriving at the bounce (1D)
   Lobe = 1,           // which BSDF lobe (1D)
-  LightPoint = 2,     // the point on the light (2D)
+  LightPoint = 2,     // which light, and the point on it (2D: chooseLight rescales the first)
   BsdfDirection = 4,  // the scattered direction (2D)
-  Roulette = 6,       // Russian roulette (1D)
 };
 inline constexpr uint32_t kCameraDimensions = 2;   // the position in the pixel (2D)
-inline constexpr uint32_t kBounceDimensions = 8;
+inline constexpr uint32_t kBounceDimensions = 6;
 
 class PathSampler {
  public:
@@ -78,7 +77,7 @@ class PathSampler {
   }
 
  private:
-  // Dimensions d and d + 1 (d even). The last pair is kept: a bounce's light choice and lobe share one.
+  // Dimensions d and d + 1 (d even). The last pair is kept: a bounce's roulette and lobe share one.
   Vec2 pair(uint32_t d) {
     if (kind_ == SamplerKind::Independent) return rng_.uniform2();
     if (d != lastPair_) lastValues_ = sobolPair(pixelKey_, index_, d), lastPair_ = d;

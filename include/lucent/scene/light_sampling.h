@@ -1,6 +1,8 @@
 // Next-event estimation: sampling a point or direction on the scene's lights from a receiver, and
 // the density with which it would have been chosen (for multiple importance sampling).
 #pragma once
+#include <algorithm>
+
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
 #include "lucent/scene/scene.h"
@@ -134,10 +136,13 @@ inline bool choosesNearbyLight(const Scene& scene, float u) { return !scene.near
 // its squared distance from the receiver, its unoccluded light's share there: in the maze, the
 // light beyond a corridor's wall takes most of the samples where it is near, not half everywhere.
 // The other lights keep their probabilities, which MIS reads back at emitter hits
-// (triangleLightPdf, environmentLightPdf), so their weights do not change.
-inline LightChoice chooseLight(const Scene& scene, Vec3 receiver, float u) {
+// (triangleLightPdf, environmentLightPdf), so their weights do not change. `remapped`, if given,
+// receives u rescaled to [0, 1) within the chosen light's share of it: a number as uniform as u,
+// and independent of the choice.
+inline LightChoice chooseLight(const Scene& scene, Vec3 receiver, float u, float* remapped = nullptr) {
   if (scene.nearbyLights.empty()) {
     const uint32_t li = scene.lightDistribution.pick(u);
+    if (remapped) *remapped = scene.lightDistribution.remap(li, u);
     return {li, scene.lightDistribution.pmf(li)};
   }
   const float share = scene.nearbyLightShare;
@@ -153,19 +158,27 @@ inline LightChoice chooseLight(const Scene& scene, Vec3 receiver, float u) {
     double sum = 0;
     for (size_t k = 0; k < count; ++k) {
       sum += weights[k];
-      if (target < sum || k + 1 == count) return {scene.nearbyLights[k], float(share * (weights[k] / total))};
+      if (target < sum || k + 1 == count) {
+        if (remapped)
+          *remapped = std::clamp(float((target - (sum - weights[k])) / weights[k]), 0.0f, 0x1.fffffep-1f);
+        return {scene.nearbyLights[k], float(share * (weights[k] / total))};
+      }
     }
   }
   const float v = std::min((u - share) / (1 - share), 0x1.fffffep-1f);
-  const uint32_t li = scene.farLights[scene.farLightDistribution.pick(v)];
+  const uint32_t far = scene.farLightDistribution.pick(v);
+  if (remapped) *remapped = scene.farLightDistribution.remap(far, v);
+  const uint32_t li = scene.farLights[far];
   return {li, scene.lightDistribution.pmf(li)};
 }
 
 // chooseLight by the distribution `choice` over the scene's lights (the path tracer's learnt one,
 // PathTracer::useLightChoice) where the scene has no nearby lights; by the scene's where it has.
-inline LightChoice chooseLight(const Scene& scene, const Distribution1D& choice, Vec3 receiver, float u) {
-  if (!scene.nearbyLights.empty()) return chooseLight(scene, receiver, u);
+inline LightChoice chooseLight(const Scene& scene, const Distribution1D& choice, Vec3 receiver, float u,
+                               float* remapped = nullptr) {
+  if (!scene.nearbyLights.empty()) return chooseLight(scene, receiver, u, remapped);
   const uint32_t li = choice.pick(u);
+  if (remapped) *remapped = choice.remap(li, u);
   return {li, choice.pmf(li)};
 }
 

@@ -34,7 +34,8 @@ struct DiffuseLanes {
   alignas(64) float ngx[kLaneSlots], ngy[kLaneSlots], ngz[kLaneSlots];  // the triangle's geometric normal
   alignas(64) float kdR[kLaneSlots], kdG[kLaneSlots], kdB[kLaneSlots];  // textured albedo
   alignas(64) int32_t emits[kLaneSlots];  // Ke not black: only then is gatherEmission called
-  alignas(64) float uLight[kLaneSlots], uLightX[kLaneSlots], uLightY[kLaneSlots], uBsdfX[kLaneSlots], uBsdfY[kLaneSlots];
+  alignas(64) float uLightX[kLaneSlots], uLightY[kLaneSlots], uBsdfX[kLaneSlots], uBsdfY[kLaneSlots];
+  alignas(64) float uRoulette[kLaneSlots];  // the next bounce's, drawn with the others (Sobol), or kDrawLater
   alignas(64) uint32_t path[kLaneSlots];  // the wave's path in this lane
   alignas(64) uint32_t light[kLaneSlots];  // the light sampled (for the pilot's light moments)
 
