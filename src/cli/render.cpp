@@ -248,6 +248,9 @@ std::string hex(uint64_t v) {
 }
 
 // While alive: SIGINT and SIGTERM ask the render to stop; a second one ends the process as usual.
+// Once it is gone (the render returned, its outputs written) the process ignores both until it
+// exits: the render is done, and a signal in the process's teardown would otherwise report a
+// finished render as killed.
 class StopOnSignals {
  public:
   StopOnSignals() {
@@ -257,12 +260,15 @@ class StopOnSignals {
     action.sa_handler = &StopOnSignals::handle;
     action.sa_flags = SA_RESETHAND;
     sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, &previousInt_);
-    sigaction(SIGTERM, &action, &previousTerm_);
+    sigaction(SIGINT, &action, nullptr);
+    sigaction(SIGTERM, &action, nullptr);
   }
   ~StopOnSignals() {
-    sigaction(SIGINT, &previousInt_, nullptr);
-    sigaction(SIGTERM, &previousTerm_, nullptr);
+    struct sigaction ignore {};
+    ignore.sa_handler = SIG_IGN;
+    sigemptyset(&ignore.sa_mask);
+    sigaction(SIGINT, &ignore, nullptr);
+    sigaction(SIGTERM, &ignore, nullptr);
   }
   StopOnSignals(const StopOnSignals&) = delete;
   StopOnSignals& operator=(const StopOnSignals&) = delete;
@@ -276,7 +282,6 @@ class StopOnSignals {
   }
   static inline std::atomic<bool> requested_{false};
   static inline std::atomic<int> signal_{0};
-  struct sigaction previousInt_ {}, previousTerm_ {};
 };
 
 void printHelp(const Method& method) {
