@@ -9,7 +9,10 @@
 #if defined(__SSE__)
 #include <xmmintrin.h>
 #endif
+#include <chrono>
 #include <cstring>
+#include <future>
+#include <thread>
 #include <map>
 #include <memory>
 #include <optional>
@@ -56,7 +59,11 @@ std::shared_ptr<LoadedScene> loadSceneFile(const std::string& path, std::optiona
   s->path = path;
   s->scene = loadScene(path, LoadOptions(true));
   if (resolution) {
-    if (resolution->first < 1 || resolution->second < 1) throw std::invalid_argument("resolution must be at least 1 x 1");
+    const auto [width, height] = *resolution;
+    if (width < 1 || height < 1 || width > kMaxImageSide || height > kMaxImageSide ||
+        uint64_t(width) * uint64_t(height) > kMaxImagePixels)
+      throw std::invalid_argument("resolution=(" + std::to_string(width) + ", " + std::to_string(height) +
+                                  "): each side from 1 to " + std::to_string(kMaxImageSide) + ", at most 2^26 pixels");
     s->scene.camera.width = resolution->first, s->scene.camera.height = resolution->second;
   }
   s->visibility = std::make_unique<Visibility>(s->scene);
@@ -108,13 +115,48 @@ py::dict imageArrays(const Image& image) {
   return out;
 }
 
+// Runs `render` on a thread of its own while this one waits for it, taking Python's signals every
+// tenth of a second: Ctrl-C (KeyboardInterrupt, or whatever a handler raises) stops the render within
+// a fraction of a second through `stop`, and the exception is raised once the render has returned.
+RenderOutput renderInterruptibly(const std::function<RenderOutput(const std::atomic<bool>& stop)>& render) {
+  std::atomic<bool> stop{false};
+  std::packaged_task<RenderOutput()> task([&] { return render(stop); });
+  std::future<RenderOutput> done = task.get_future();
+  std::thread worker(std::move(task));
+  bool interrupted = false;
+  {
+    py::gil_scoped_release release;
+    while (done.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) {
+        interrupted = true;
+        stop = true;
+        break;
+      }
+    }
+    done.wait();
+    worker.join();
+  }
+  if (interrupted) {
+    try {
+      done.get();  // the render's own exception (RenderStopped) gives way to the signal's
+    } catch (...) {
+    }
+    throw py::error_already_set();
+  }
+  return done.get();
+}
+
 py::dict render(const LoadedScene& s, std::optional<std::string> methodName, std::optional<int> threads, const py::kwargs& kwargs) {
   const std::string name = methodName ? *methodName : !s.scene.render.method.empty() ? s.scene.render.method : "pt";
   const Method& method = renderingMethod(name);
-  OptionValues values;
-  // The scene's render block applies when it names this method (or none), as with `lucent render`.
-  if (s.scene.render.present && (s.scene.render.method.empty() || s.scene.render.method == method.name()))
-    for (const auto& [option, text] : s.scene.render.options) values.emplace_back(option, text);
+  if (threads && (*threads < 0 || *threads > kMaxThreads))
+    throw std::invalid_argument("threads=" + std::to_string(*threads) + ": expected 0 (all cores) to " +
+                                std::to_string(kMaxThreads));
+  // The scene's render block applies when it names this method (or none), under the rules
+  // `lucent render` applies (it cannot choose where Lucent writes).
+  std::vector<std::string> origins;
+  OptionValues values = sceneRenderBlockOptions(s.scene, method, origins);
   for (const auto& [key, value] : kwargs) values.emplace_back(key.cast<std::string>(), optionText(value));
   std::unique_ptr<MethodOptions> resolved;
   try {
@@ -122,13 +164,14 @@ py::dict render(const LoadedScene& s, std::optional<std::string> methodName, std
   } catch (const OptionError& e) {
     throw OptionError(e.option(), name + " option " + e.option() + ": " + e.what());  // named as Python spells it
   }
-  RenderOutput out;
-  {
-    py::gil_scoped_release release;
+  checkOutputDirectories(method, resolved->values(), s.scene);
+  const RenderOutput out = renderInterruptibly([&](const std::atomic<bool>& stop) {
     const KeepFloatingPointMode keep;
     ParallelScope scope(threads.value_or(0));
-    out = method.render(s.scene, *s.visibility, *resolved);
-  }
+    RenderControl control;
+    control.stop = &stop;
+    return method.render(s.scene, *s.visibility, *resolved, control);
+  });
   py::dict result = imageArrays(out.image);
   py::dict stats, counters, stages, measured;
   for (const auto& [stage, seconds] : out.stats.stageSeconds) stages[py::str(stage)] = seconds;
@@ -243,7 +286,7 @@ py::dtype recordDtype(const std::string& type) {
 
 py::array readDumpArray(const std::string& path) {
   const DumpHeader header = readDumpHeader(path);
-  const std::string type(header.type, strnlen(header.type, sizeof header.type));
+  const std::string type = recordTypeName(header);
   if (!dumpRecordTypes().count(type)) throw std::runtime_error("'" + path + "': unknown record type '" + type + "'");
   const py::dtype dtype = recordDtype(type);
   if (uint32_t(dtype.itemsize()) != header.recordBytes)

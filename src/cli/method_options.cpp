@@ -63,15 +63,6 @@ std::pair<std::string, std::string> methodOptionArg(const std::string& key, cons
   throw std::invalid_argument("unknown option " + key + " (lucent methods lists every method's options)");
 }
 
-void checkMethodOption(const Method& method, const std::string& name, const std::string& where) {
-  for (const OptionSpec& spec : method.options())
-    if (spec.name == name) return;
-  if (const Method* other = methodWithOption(name, &method))
-    throw std::invalid_argument(where + ": an option of --method " + other->name() + ", not of --method " +
-                                method.name());
-  throw std::invalid_argument(where + ": not an option of --method " + method.name());
-}
-
 std::unique_ptr<MethodOptions> resolveMethodOptions(const Method& method, const OptionValues& values,
                                                     const std::vector<std::string>& origins) {
   try {

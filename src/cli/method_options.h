@@ -22,10 +22,6 @@ std::pair<std::string, std::string> methodOptionArg(const std::string& key, cons
                                                     const std::optional<std::string>& next,
                                                     const std::function<std::string()>& takeNext);
 
-// Throws std::invalid_argument, `where` first, if `method` has no option `name` (naming the method
-// that has it, if one does).
-void checkMethodOption(const Method& method, const std::string& name, const std::string& where);
-
 // The method's typed options with `values` over its defaults. A value an option does not take throws
 // std::invalid_argument naming where it came from: origins[i] for values[i].
 std::unique_ptr<MethodOptions> resolveMethodOptions(const Method& method, const OptionValues& values,

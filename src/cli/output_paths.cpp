@@ -16,10 +16,8 @@ void checkOutputFile(const std::string& path, const std::string& extension, cons
   std::error_code ec;
   if (!fs::is_directory(dir, ec))
     throw std::invalid_argument(flag + ": directory '" + dir.string() + "' does not exist");
-  const fs::path out = fs::weakly_canonical(path, ec);
-  for (const std::string& input : inputs)
-    if (out == fs::weakly_canonical(input, ec))
-      throw std::invalid_argument(flag + " '" + path + "' is a file this command reads; choose another output");
+  if (const std::string clash = inputFileClash(path, inputs); !clash.empty())
+    throw std::invalid_argument(flag + " '" + path + "': " + clash + "; choose another output");
   try {
     checkWritable(path, flag);
   } catch (const std::runtime_error& e) {

@@ -7,7 +7,8 @@
 namespace lucent::cli {
 
 // Throws std::invalid_argument naming `flag` unless `path` ends in `extension`, its directory exists,
-// it is none of `inputs` (the files the command reads) and a file can be created beside it
+// it is none of `inputs` (the files the command reads, perhaps not read yet) nor of the files the
+// process has read (core/files.h's inputFileClash, by identity) and a file can be created beside it
 // (core/files.h's checkWritable: permissions, a read-only file system, a name too long, a directory
 // in its place).
 void checkOutputFile(const std::string& path, const std::string& extension, const std::string& flag,

@@ -100,12 +100,12 @@ void applyPart(const std::string& text, const Scene& scene, int spp, RenderContr
   else control.firstSample = first, control.sampleCount = end - first;
 }
 
-// "WIDTHxHEIGHT", each in [1, 65536], at most kMaxImagePixels in all.
+// "WIDTHxHEIGHT", each in [1, kMaxImageSide], at most kMaxImagePixels in all.
 std::pair<int, int> parseResolution(const std::string& text) {
   int w = 0, h = 0;
   char x = 0, rest = 0;
   std::istringstream in(text);
-  if (!(in >> w >> x >> h) || x != 'x' || (in >> rest) || w < 1 || h < 1 || w > 65536 || h > 65536)
+  if (!(in >> w >> x >> h) || x != 'x' || (in >> rest) || w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide)
     throw std::invalid_argument("--resolution '" + text + "': expected WIDTHxHEIGHT, e.g. 512x512");
   if (uint64_t(w) * h > kMaxImagePixels) throw std::invalid_argument("--resolution '" + text + "': more than 2^26 pixels");
   return {w, h};
@@ -142,7 +142,7 @@ const OptionTable<RenderArgs>& renderFlags() {
     t.placeholder("output", "FILE").shortFlag("output", "-o");
     t.text("png", &A::png, "", "also write an sRGB PNG");
     t.placeholder("png", "FILE");
-    t.integer("threads", &A::threads, 0, 4096, "threads", "worker threads (0: all cores)");
+    t.integer("threads", &A::threads, 0, kMaxThreads, "threads", "worker threads (0: all cores)");
     t.value<std::pair<int, int>>("resolution", &A::resolution, "WxH", parseResolution,
                                  [](const std::pair<int, int>& r) { return pairText(r, 'x'); },
                                  "override the camera's resolution");
@@ -336,25 +336,15 @@ int runRender(const RenderArgs& a) {
     return 0;
   }
   // The scene's render block applies when it names this method (or none).
-  OptionValues values;
   std::vector<std::string> origins;
-  if (scene.render.present && (scene.render.method.empty() || scene.render.method == method->name()))
-    for (const auto& [name, text] : scene.render.options) {
-      origins.push_back(a.scene + ": render." + name);
-      checkMethodOption(*method, name, origins.back());
-      // A scene file is data, perhaps downloaded: where Lucent writes comes from the command line.
-      for (const OptionSpec& spec : method->options())
-        if (spec.name == name && spec.kind == OptionKind::Text)
-          throw std::invalid_argument(origins.back() + ": a scene file cannot choose where Lucent writes; give " +
-                                      spec.flag() + " on the command line");
-      values.emplace_back(name, text);
-    }
+  OptionValues values = sceneRenderBlockOptions(scene, *method, origins);
   for (const auto& [name, text] : a.methodOptions) {
     origins.push_back(flagOf(name));
     checkMethodOption(*method, name, flagOf(name));
     values.emplace_back(name, text);
   }
   const std::unique_ptr<MethodOptions> resolved = resolveMethodOptions(*method, values, origins);
+  checkOutputDirectories(*method, resolved->values(), scene);
 
   if (a.resolution.second > 0) {
     scene.camera.width = a.resolution.first;

@@ -1,5 +1,6 @@
 #include "lucent/core/dump.h"
 
+#include <algorithm>
 #include <bit>
 #include <cstring>
 #include <filesystem>
@@ -7,6 +8,8 @@
 #include <stdexcept>
 
 #include "lucent/core/files.h"
+#include "lucent/core/memory.h"
+#include "lucent/core/text.h"
 
 namespace lucent {
 
@@ -43,6 +46,13 @@ std::string dumpDirectoryProblem(const std::string& directory) {
 }
 
 namespace {
+// The dump file opened for reading: a regular file (a FIFO would block for ever).
+std::ifstream openDump(const std::string& path) {
+  const std::string problem = regularFileProblem(path);
+  if (!problem.empty()) throw std::runtime_error("cannot read dump '" + path + "': " + problem);
+  return std::ifstream(path, std::ios::binary);
+}
+
 DumpHeader readHeader(std::ifstream& in, const std::string& path) {
   if (!in) throw std::runtime_error("cannot read dump '" + path + "'");
   DumpHeader header{};
@@ -52,20 +62,33 @@ DumpHeader readHeader(std::ifstream& in, const std::string& path) {
   if (header.version != kDumpVersion)
     throw std::runtime_error("dump '" + path + "' has format version " + std::to_string(header.version) +
                              "; this Lucent reads version " + std::to_string(kDumpVersion));
+  // A type name is an identifier: anything else in the field (a terminal's escape sequences) is
+  // never printed as it is.
+  const std::string type = recordTypeName(header);
+  const bool identifier = !type.empty() && std::all_of(type.begin(), type.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+  });
+  if (!identifier)
+    throw std::runtime_error("dump '" + path + "' has a record type name that is not ASCII letters, digits and _: '" +
+                             excerpt(std::string_view(header.type, sizeof header.type), 48) + "'");
   return header;
 }
 }  // namespace
 
+std::string recordTypeName(const DumpHeader& header) {
+  return std::string(header.type, strnlen(header.type, sizeof header.type));
+}
+
 DumpHeader readDumpHeader(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
+  std::ifstream in = openDump(path);
   return readHeader(in, path);
 }
 
 void readDumpRecords(const std::string& path, const std::string& type, uint32_t recordBytes,
                      const std::function<void*(uint64_t count)>& storage) {
-  std::ifstream in(path, std::ios::binary);
+  std::ifstream in = openDump(path);
   const DumpHeader header = readHeader(in, path);
-  const std::string stored(header.type, strnlen(header.type, sizeof header.type));
+  const std::string stored = recordTypeName(header);
   if (recordBytes == 0 || header.recordBytes == 0)
     throw std::runtime_error("dump '" + path + "' announces records of 0 bytes");
   if (stored != type || header.recordBytes != recordBytes)
@@ -84,6 +107,8 @@ void readDumpRecords(const std::string& path, const std::string& type, uint32_t 
     throw std::runtime_error("dump '" + path + "' has " + std::to_string(payload - header.count * recordBytes) +
                              " bytes after its " + std::to_string(header.count) + " records of " +
                              std::to_string(recordBytes) + " bytes");
+  // A sparse file can claim more than the machine holds.
+  requireMemory(header.count * recordBytes, "dump '" + path + "'", "read a smaller dump");
   void* records = storage(header.count);
   in.seekg(sizeof(DumpHeader));
   in.read(static_cast<char*>(records), std::streamsize(uint64_t(recordBytes) * header.count));

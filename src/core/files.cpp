@@ -12,6 +12,7 @@
 #include <cstring>
 #include <cstdio>
 #include <fstream>
+#include <mutex>
 #include <optional>
 #include <regex>
 #include <sstream>
@@ -123,7 +124,70 @@ std::optional<Writer> writerOf(const std::string& name) {
   return w;
 }
 
+// A file's identity: its device and inode.
+struct FileIdentity {
+  uint64_t device = 0, inode = 0;
+  bool operator==(const FileIdentity&) const = default;
+};
+
+// The identities `path` has: of the name itself (lstat: a symbolic link is its own) and of the file
+// it leads to (stat); none where it does not exist.
+std::vector<FileIdentity> identitiesOf(const std::filesystem::path& path) {
+  std::vector<FileIdentity> ids;
+  struct stat s {};
+  if (::lstat(path.c_str(), &s) == 0) ids.push_back({uint64_t(s.st_dev), uint64_t(s.st_ino)});
+  if (::stat(path.c_str(), &s) == 0) ids.push_back({uint64_t(s.st_dev), uint64_t(s.st_ino)});
+  return ids;
+}
+
+struct AdmittedInput {
+  std::string path;
+  std::vector<FileIdentity> identities;
+};
+
+// The process's inputs, as admitInputFile admitted them.
+struct InputRegistry {
+  std::mutex mutex;
+  std::vector<AdmittedInput> inputs;
+};
+InputRegistry& inputRegistry() {
+  static InputRegistry registry;
+  return registry;
+}
+
+bool shareAnIdentity(const std::vector<FileIdentity>& a, const std::vector<FileIdentity>& b) {
+  for (const FileIdentity& x : a)
+    for (const FileIdentity& y : b)
+      if (x == y) return true;
+  return false;
+}
+
 }  // namespace
+
+std::string admitInputFile(const std::filesystem::path& path) {
+  std::string problem = regularFileProblem(path);
+  if (!problem.empty()) return problem;
+  AdmittedInput input{path.string(), identitiesOf(path)};
+  InputRegistry& registry = inputRegistry();
+  const std::lock_guard lock(registry.mutex);
+  for (const AdmittedInput& known : registry.inputs)
+    if (known.identities == input.identities) return "";
+  registry.inputs.push_back(std::move(input));
+  return "";
+}
+
+std::string inputFileClash(const std::filesystem::path& path, const std::vector<std::string>& alsoInputs) {
+  const std::vector<FileIdentity> target = identitiesOf(path);
+  if (target.empty()) return "";  // nothing there: no input is
+  auto clash = [](const std::string& input) { return "it is '" + input + "', a file this process reads"; };
+  for (const std::string& input : alsoInputs)
+    if (shareAnIdentity(target, identitiesOf(input))) return clash(input);
+  InputRegistry& registry = inputRegistry();
+  const std::lock_guard lock(registry.mutex);
+  for (const AdmittedInput& input : registry.inputs)
+    if (shareAnIdentity(target, input.identities)) return clash(input.path);
+  return "";
+}
 
 std::filesystem::path temporaryPathFor(const std::filesystem::path& path) {
   static std::atomic<unsigned> counter{0};
@@ -169,6 +233,8 @@ void checkWritable(const std::filesystem::path& path, const std::string& what) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw std::runtime_error("cannot write " + what + " '" + path.string() + "': it is a directory");
+  if (const std::string clash = inputFileClash(path); !clash.empty())
+    throw std::runtime_error("cannot write " + what + " '" + path.string() + "': " + clash);
   const std::filesystem::path probe = temporaryPathFor(path);
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) {
@@ -192,6 +258,8 @@ void writeFilesAtomically(const std::vector<FileToWrite>& files) {
     std::error_code ec;
     if (std::filesystem::is_directory(f.path, ec))
       throw std::runtime_error("cannot write " + f.what + " '" + f.path.string() + "': it is a directory");
+    if (const std::string clash = inputFileClash(f.path); !clash.empty())
+      throw std::runtime_error("cannot write " + f.what + " '" + f.path.string() + "': " + clash);
   }
   std::vector<std::filesystem::path> temporary;
   auto removeAll = [&] {

@@ -93,6 +93,12 @@ void checkComparisonSettings(const ComparisonSettings& opt) {
 ImageComparison compareImagePair(Image candidateFile, Image referenceFile, const ComparisonSettings& opt,
                                  bool candidateIsSrgb, bool referenceIsSrgb) {
   checkComparisonSettings(opt);
+  // An image without pixels has no error to measure: "passed" would say nothing.
+  for (const Image* image : {&candidateFile, &referenceFile})
+    if (image->width() < 1 || image->height() < 1)
+      throw std::invalid_argument(std::string(image == &candidateFile ? "the image" : "the reference") +
+                                  " has no pixels (" + std::to_string(image->width()) + " x " +
+                                  std::to_string(image->height()) + ")");
   const bool statistical = opt.test || opt.within.has_value();
   const bool flip = opt.metric == "flip";
   const ErrorMetric metric = flip ? ErrorMetric::RelMse : parseErrorMetric(opt.metric);

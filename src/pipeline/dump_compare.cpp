@@ -36,7 +36,7 @@ struct Array {
 Array readArray(const std::filesystem::path& path) {
   Array a;
   const DumpHeader h = readDumpHeader(path.string());
-  a.type = std::string(h.type, strnlen(h.type, sizeof h.type));
+  a.type = recordTypeName(h);
   a.recordBytes = h.recordBytes;
   readDumpRecords(path.string(), a.type, a.recordBytes, [&](uint64_t count) {
     a.count = count;
@@ -259,14 +259,22 @@ bool endsWith(const std::string& s, const std::string& tail) {
 
 }  // namespace
 
+void checkDumpCompareOptions(const DumpCompareOptions& options) {
+  // CLI11's range check lets NaN through, and reads -1 as a huge count.
+  if (!(options.relative >= 0 && options.relative <= 1)) throw std::invalid_argument("--relative must lie in [0, 1]");
+  if (options.ulps > (1u << 24)) throw std::invalid_argument("--ulps must lie in [0, 2^24]");
+  if (options.reported > 1000000) throw std::invalid_argument("--report must lie in [0, 1000000]");
+}
+
 DumpComparison compareDumpDirectories(const std::string& reference, const std::string& candidate,
                                       const DumpCompareOptions& options) {
   namespace fs = std::filesystem;
+  checkDumpCompareOptions(options);
   auto names = [](const std::string& dir) {
     if (!fs::is_directory(dir)) throw std::runtime_error("'" + dir + "' is not a directory");
     std::set<std::string> n;
     for (const auto& e : fs::directory_iterator(dir))
-      if (e.is_regular_file() && e.path().extension() == ".bin") n.insert(e.path().stem().string());
+      if (!e.is_directory() && e.path().extension() == ".bin") n.insert(e.path().stem().string());  // a FIFO too: refused when read
     return n;
   };
   const std::set<std::string> ref = names(reference), cand = names(candidate);

@@ -101,6 +101,8 @@ void writeFilmFile(const std::string& path, const Film& film, const FilmFileInfo
 
 FilmFile readFilmFile(const std::string& path) {
   auto fail = [&](const std::string& why) { return std::runtime_error("film file '" + path + "': " + why); };
+  // Not admitted as an input (core/files.h): a film is a render's own state, which its checkpoints
+  // replace; merge names its parts as inputs itself.
   const std::string problem = regularFileProblem(path);
   if (!problem.empty()) throw fail(problem);
   std::ifstream in(path, std::ios::binary);

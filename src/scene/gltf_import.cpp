@@ -13,6 +13,7 @@
 #include <set>
 
 #include "lucent/core/files.h"
+#include "lucent/core/memory.h"
 #include "lucent/scene/loader.h"
 #include "lucent/scene/surface.h"
 
@@ -24,6 +25,9 @@ namespace {
 // The most elements an accessor may have, and the deepest node hierarchy followed.
 constexpr size_t kMaxAccessorElements = size_t(1) << 28;
 constexpr int kMaxNodeDepth = 1024;
+// What a vertex and a triangle take in the scene and its Embree geometry, at most (positions,
+// normals, texture coordinates and tangents; indices, material ids, Embree's build).
+constexpr uint64_t kSceneBytesPerVertex = 96, kSceneBytesPerTriangle = 96;
 
 // Extensions read, and those whose content is listed as left out rather than rendered.
 const std::set<std::string> kSupportedExtensions = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
@@ -39,6 +43,11 @@ struct Context {
 };
 
 std::string at(const std::string& array, size_t index) { return array + "[" + std::to_string(index) + "]"; }
+
+// Whether a transformed point or direction is finite as floats, as the scene keeps it.
+bool finiteFloats(const std::array<double, 3>& v) {
+  return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(float(x)); });
+}
 
 // Column-major, as glTF writes matrices, in double.
 struct Matrix4 {
@@ -207,10 +216,23 @@ std::vector<double> readAccessor(const Context& c, int index, const std::string&
     c.fail(path + ".count", std::to_string(a.count) + " is not in [1, 2^28]");
   const size_t n = size_t(tinygltf::GetNumComponentsInType(uint32_t(a.type)));
   const size_t bytes = size_t(componentBytes(a.componentType));
+  // What the elements would take is bounded by what the file holds before it is allocated: the
+  // elements of a buffer view lie in it; those without one (zeros, perhaps with sparse values) may be
+  // no more than its buffers could hold.
+  size_t stride = 0;
+  const unsigned char* p = a.bufferView >= 0 ? viewBytes(c, a.bufferView, path, a.byteOffset, a.count, n * bytes, &stride)
+                                             : nullptr;
+  if (a.bufferView < 0) {
+    uint64_t bufferBytes = 0;
+    for (const tinygltf::Buffer& buffer : c.model.buffers) bufferBytes += buffer.data.size();
+    if (uint64_t(a.count) * n * bytes > std::max<uint64_t>(bufferBytes, 4096))
+      c.fail(path + ".count", std::to_string(a.count) + " elements of " + std::to_string(n * bytes) +
+                                  " bytes without a bufferView: more than the file's buffers (" +
+                                  std::to_string(bufferBytes) + " bytes) could hold");
+  }
+  requireMemory(uint64_t(a.count) * n * sizeof(double), c.file + ": " + path, "render a smaller scene, or raise --memory-limit");
   std::vector<double> out(a.count * n, 0.0);
-  if (a.bufferView >= 0) {
-    size_t stride = 0;
-    const unsigned char* p = viewBytes(c, a.bufferView, path, a.byteOffset, a.count, n * bytes, &stride);
+  if (p) {
     for (size_t e = 0; e < a.count; ++e)
       for (size_t k = 0; k < n; ++k) out[e * n + k] = component(p + e * stride + k * bytes, a.componentType, a.normalized);
   }
@@ -592,6 +614,11 @@ struct NodeWalk {
       }
     }
 
+    // What the scene will hold, checked before it grows: a mesh named by many nodes is copied for each.
+    if (scene.positions.size() + vertices > (uint64_t(1) << 31))
+      c.fail(path, "the scene would have more than 2^31 vertices");
+    requireMemory(uint64_t(vertices) * kSceneBytesPerVertex + uint64_t(corners.size() / 3) * kSceneBytesPerTriangle,
+                  c.file + ": " + path + "'s triangles", "render a smaller scene, or raise --memory-limit");
     const bool mirrored = world.determinant3() < 0;  // the winding turns over
     const std::array<double, 9> normalMatrix = world.normalMatrix();
     const uint32_t first = uint32_t(scene.positions.size());
@@ -702,6 +729,11 @@ struct NodeWalk {
       }
     }
     if (!(l.intensity >= 0 && l.intensity <= 1e15)) c.fail(lightPath + ".intensity", "must be in [0, 1e15]");
+    // In watts the value must stay where the renderer's float arithmetic carries it: beyond, its
+    // light overflows to samples that are dropped, and the image is black.
+    if (!(l.intensity / lumensPerWatt <= kMaxInputMagnitude))
+      c.fail(lightPath + ".intensity", std::to_string(l.intensity) + " at " + std::to_string(lumensPerWatt) +
+                                           " lm/W exceeds 1e15 W");
     const Rgb value = colour * float(l.intensity / lumensPerWatt);
     if (l.range > 0) scene.ignored.push_back(c.file + ": " + lightPath + ".range (the light reaches every distance)");
     Light light;
@@ -716,6 +748,7 @@ struct NodeWalk {
     } else if (l.type == "point") {
       const double origin[3] = {0, 0, 0};
       const std::array<double, 3> p = world.point(origin);
+      if (!finiteFloats(p)) c.fail(path, "places the point light beyond float range");
       light.type = LightType::Point;
       light.vector = {float(p[0]), float(p[1]), float(p[2])};
     } else if (l.type == "spot") {
@@ -725,7 +758,8 @@ struct NodeWalk {
       const double origin[3] = {0, 0, 0}, down[3] = {0, 0, -1};
       const std::array<double, 3> p = world.point(origin), d = world.direction(down);
       const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      if (!(len > 0) || !std::isfinite(len)) c.fail(path, "places the spot light with a degenerate transform");
+      if (!(len > 0) || !std::isfinite(len) || !finiteFloats(p))
+        c.fail(path, "places the spot light with a degenerate transform");
       light.type = LightType::Spot;
       light.vector = {float(p[0]), float(p[1]), float(p[2])};
       light.axis = {float(d[0] / len), float(d[1] / len), float(d[2] / len)};
@@ -751,9 +785,18 @@ struct NodeWalk {
     const std::string camPath = at("cameras", size_t(index));
     if (cam.type != "perspective") c.fail(camPath + ".type", "'" + cam.type + "': only perspective cameras are rendered");
     const double yfov = cam.perspective.yfov;
-    if (!(yfov > 0 && yfov < kPi)) c.fail(camPath + ".perspective.yfov", "must be in (0, pi)");
+    // In degrees as a float too: a yfov a hair below pi rounds to 180, whose tangent is infinite.
+    if (!(yfov > 0 && yfov < kPi) || !(float(yfov * 180.0 / kPi) < 180.0f))
+      c.fail(camPath + ".perspective.yfov", "must be in (0, pi)");
     const double origin[3] = {0, 0, 0}, forward[3] = {0, 0, -1}, up[3] = {0, 1, 0};
     const std::array<double, 3> eye = world.point(origin), f = world.direction(forward), u = world.direction(up);
+    // A transform that scales the camera to nothing (or beyond float range) leaves it no direction:
+    // the directions are normalized in float, whose squares underflow below 1e-19.
+    const std::array<double, 3> side = {f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]};
+    const auto length = [](const std::array<double, 3>& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); };
+    if (!finiteFloats(eye) || !(length(f) > 1e-15 && length(u) > 1e-15 && length(side) > 1e-6 * length(f) * length(u)) ||
+        !finiteFloats(f) || !finiteFloats(u))
+      c.fail(path, "places camera " + std::to_string(index) + " with a degenerate transform (a scale of 0, or beyond float range)");
     Camera camera;
     camera.eye = {float(eye[0]), float(eye[1]), float(eye[2])};
     camera.lookAt = camera.eye + normalize(Vec3{float(f[0]), float(f[1]), float(f[2])});
@@ -766,12 +809,17 @@ struct NodeWalk {
     content.camera = camera;
   }
 
-  void node(int index, const Matrix4& parent, int depth, std::vector<bool>& onPath) {
+  // glTF's nodes form disjoint strict trees: a node has one parent at most, and a scene names a
+  // root once. A node reached twice (a cycle, a node shared by two parents, a root named twice) is
+  // refused: followed, a file of a few kilobytes could name 2^40 instances.
+  void node(int index, const Matrix4& parent, int depth, std::vector<bool>& reached) {
     const auto& nodes = c.model.nodes;
     if (index < 0 || size_t(index) >= nodes.size()) c.fail("nodes", "node " + std::to_string(index) + " does not exist");
-    if (onPath[size_t(index)] || depth > kMaxNodeDepth)
-      c.fail(at("nodes", size_t(index)), "its children lead back to it, or the hierarchy is deeper than 1024");
-    onPath[size_t(index)] = true;
+    if (reached[size_t(index)])
+      c.fail(at("nodes", size_t(index)), "is reached twice (its children lead back to it, it has two parents, or the "
+                                         "scene names it twice): glTF's nodes form disjoint trees");
+    if (depth > kMaxNodeDepth) c.fail(at("nodes", size_t(index)), "the hierarchy is deeper than 1024");
+    reached[size_t(index)] = true;
     const tinygltf::Node& n = nodes[size_t(index)];
     const std::string path = at("nodes", size_t(index));
     const Matrix4 world = parent * nodeMatrix(c, n, path);
@@ -785,18 +833,19 @@ struct NodeWalk {
     if (n.camera >= 0) camera(n.camera, path, n.name, world);
     if (const tinygltf::Value* e = extension(n.extensions, "KHR_lights_punctual"))
       light(int(number(*e, "light", -1)), path + ".extensions.KHR_lights_punctual.light", world);
-    for (const int child : n.children) node(child, world, depth + 1, onPath);
-    onPath[size_t(index)] = false;
+    for (const int child : n.children) node(child, world, depth + 1, reached);
   }
 };
 
-// The files TinyGLTF reads (the .gltf or .glb, and external buffers): regular files only, of at most
-// kMaxFileBytes, read whole; paths taken as they are written (no expansion); nothing written.
+// The files TinyGLTF reads (the .gltf or .glb, external buffers and images): regular files only, of
+// at most kMaxFileBytes, read whole; paths taken as they are written (no expansion); nothing
+// written. Each file read is added to the scene's inputs (`user`: its inputFiles) by the path
+// TinyGLTF opened, after its own decoding of the URI and joining it to the file's folder.
 constexpr uint64_t kMaxFileBytes = uint64_t(1) << 32;
 bool regularFileExists(const std::string& path, void*) { return regularFileProblem(path).empty(); }
 std::string pathAsWritten(const std::string& path, void*) { return path; }
-bool readRegularFile(std::vector<unsigned char>* out, std::string* error, const std::string& path, void*) {
-  const std::string problem = regularFileProblem(path);
+bool readRegularFile(std::vector<unsigned char>* out, std::string* error, const std::string& path, void* user) {
+  const std::string problem = admitInputFile(path);
   std::error_code ec;
   const uint64_t size = problem.empty() ? uint64_t(fs::file_size(path, ec)) : 0;
   if (!problem.empty() || ec || size > kMaxFileBytes) {
@@ -809,6 +858,7 @@ bool readRegularFile(std::vector<unsigned char>* out, std::string* error, const 
     if (error) *error += path + ": cannot be read\n";
     return false;
   }
+  static_cast<std::vector<std::string>*>(user)->push_back(path);
   return true;
 }
 bool writeNothing(std::string* error, const std::string&, const std::vector<unsigned char>&, void*) {
@@ -831,7 +881,7 @@ void importGltf(const std::string& path, const GltfOptions& options, Scene& scen
                 GltfContent& content) {
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keepImageBytes, nullptr);
-  loader.SetFsCallbacks({regularFileExists, pathAsWritten, readRegularFile, writeNothing, nullptr});
+  loader.SetFsCallbacks({regularFileExists, pathAsWritten, readRegularFile, writeNothing, &scene.inputFiles});
   tinygltf::Model model;
   std::string error, warning;
   const bool binary = fs::path(path).extension() == ".glb";
@@ -848,19 +898,13 @@ void importGltf(const std::string& path, const GltfOptions& options, Scene& scen
       c.fail("extensionsRequired", "names " + name + ", which Lucent does not render");
   for (const std::string& name : model.extensionsUsed)
     if (!kSupportedExtensions.count(name)) scene.ignored.push_back(path + ": extension " + name + " (not read)");
-  // The files beside it that it names (buffers and images), which no output may overwrite.
-  const auto named = [&](const std::string& uri) {
-    if (!uri.empty() && uri.rfind("data:", 0) != 0) scene.inputFiles.push_back((fs::path(path).parent_path() / uri).string());
-  };
-  for (const tinygltf::Buffer& buffer : model.buffers) named(buffer.uri);
-  for (const tinygltf::Image& image : model.images) named(image.uri);
 
   if (model.scenes.empty()) c.fail("scenes", "the file has no scene");
   const size_t sceneIndex = model.defaultScene >= 0 ? size_t(model.defaultScene) : 0;
   if (sceneIndex >= model.scenes.size()) c.fail("scene", "scene " + std::to_string(sceneIndex) + " does not exist");
   NodeWalk walk{c, scene, import, content, options.lumensPerWatt, options.camera, {}, options.heightCorrelated ? MaterialType::GltfHeightCorrelated : MaterialType::Gltf, {}, 0};
-  std::vector<bool> onPath(model.nodes.size(), false);
-  for (const int root : model.scenes[sceneIndex].nodes) walk.node(root, Matrix4{}, 0, onPath);
+  std::vector<bool> reached(model.nodes.size(), false);
+  for (const int root : model.scenes[sceneIndex].nodes) walk.node(root, Matrix4{}, 0, reached);
   if (!options.camera.empty() && !content.camera) {
     std::string names;
     for (const std::string& name : walk.cameraNames) names += (names.empty() ? "" : ", ") + ("'" + name + "'");

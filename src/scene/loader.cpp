@@ -152,7 +152,7 @@ std::string resolve(const fs::path& base, const std::string& relative) {
 
 // The file a JSON key names must exist and be a regular file (a directory opens, then reads as empty).
 void requireFile(const JsonFields& fields, const std::string& key, const std::string& path) {
-  const std::string problem = regularFileProblem(path);
+  const std::string problem = admitInputFile(path);
   if (!problem.empty()) fields.failKey(key, "file '" + path + "' " + problem);
 }
 
@@ -167,7 +167,7 @@ void loadCamera(JsonFields camera, Scene& scene) {
   if (!(length(cross(c.up, c.lookAt - c.eye)) > 0)) camera.failKey("up", "must not be parallel to the view direction");
   const auto& res = camera.raw("resolution");
   if (!res.is_array() || res.size() != 2 || !res[0].is_number_integer() || !res[1].is_number_integer() ||
-      res[0].get<long>() < 1 || res[1].get<long>() < 1 || res[0].get<long>() > 65536 || res[1].get<long>() > 65536)
+      res[0].get<long>() < 1 || res[1].get<long>() < 1 || res[0].get<long>() > kMaxImageSide || res[1].get<long>() > kMaxImageSide)
     camera.failKey("resolution", "expected [width, height], positive integers up to 65536");
   c.width = res[0].get<int>();
   c.height = res[1].get<int>();
@@ -441,11 +441,10 @@ bool isGltf(const std::string& path) {
 }
 
 Scene loadGltfScene(const std::string& path, const LoadOptions& options) {
-  const std::string problem = regularFileProblem(path);
+  const std::string problem = admitInputFile(path);
   if (!problem.empty()) throw SceneError(path + ": glTF file " + problem);
   Scene scene;
   scene.sourcePath = path;
-  scene.inputFiles.push_back(path);
   detail::ObjImport import;
   detail::GltfContent content;
   detail::importGltf(path, options.gltf, scene, import, content);
@@ -460,7 +459,7 @@ Scene loadGltfScene(const std::string& path, const LoadOptions& options) {
 
 Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
   if (isGltf(jsonPath)) return loadGltfScene(jsonPath, options);
-  const std::string problem = regularFileProblem(jsonPath);
+  const std::string problem = admitInputFile(jsonPath);
   if (!problem.empty()) throw SceneError(jsonPath + ": scene file " + problem);
   std::ifstream in(jsonPath, std::ios::binary);
   if (!in) throw SceneError(jsonPath + ": cannot open scene file");

@@ -55,7 +55,7 @@ bool parseInt(const std::string& s, long& out) {
 }
 
 std::vector<std::string> readLines(const std::string& path, const std::string& what) {
-  const std::string problem = regularFileProblem(path);
+  const std::string problem = admitInputFile(path);
   if (!problem.empty()) throw SceneError(path + ": " + what + " " + problem);
   std::ifstream in(path);
   if (!in) throw SceneError(path + ": cannot open " + what);
@@ -134,7 +134,7 @@ std::vector<MaterialSpec> readMtl(const std::string& path) {
     } else if (key == "map_Kd") {
       if (t.size() != 2) failAt(path, line, "'map_Kd' expects one file name (options are not supported)");
       const fs::path texture = fs::path(path).parent_path() / t[1];
-      const std::string problem = regularFileProblem(texture);
+      const std::string problem = admitInputFile(texture);
       if (!problem.empty()) failAt(path, line, "texture '" + excerpt(t[1], 160) + "' " + problem);
       spec.mapKd.path = fs::absolute(texture).lexically_normal().string();
       spec.mapKd.origin = path + ":" + std::to_string(line);
@@ -378,7 +378,7 @@ void importObj(const std::string& objPath, Scene& scene, ObjImport& import) {
       if (t.size() < 2) failAt(objPath, line, "'mtllib' expects a file name");
       for (size_t k = 1; k < t.size(); ++k) {
         const fs::path mtl = fs::path(objPath).parent_path() / t[k];
-        const std::string problem = regularFileProblem(mtl);
+        const std::string problem = admitInputFile(mtl);
         if (!problem.empty()) failAt(objPath, line, "material library '" + excerpt(t[k], 160) + "' " + problem);
         import.libraries.push_back(mtl.string());
         // The first definition of a name, in this file or an earlier one, is the material.

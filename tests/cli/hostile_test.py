@@ -285,15 +285,15 @@ def stages_of(work, scene, args):
     return list(dict.fromkeys(re.findall(r"^lucent: stage (\S+) at", run.err, re.M)))
 
 
-def stop_at_stage(work, scene, args, stage, signum):
-    """Renders until `stage` is announced, sends `signum` 50 ms later; the exit status, the seconds
-    from the signal to the exit, and stderr."""
+def stop_at_stage(work, scene, args, stage, signum, delay=0.05):
+    """Renders until `stage` is announced, sends `signum` `delay` seconds later; the exit status, the
+    seconds from the signal to the exit, and stderr."""
     p = subprocess.Popen([LUCENT, "render", scene, *args, "--log-stages", "-q", "-o", "out.exr"], cwd=work,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     sent = None
     for line in p.stderr:
         if line.startswith("lucent: stage %s at" % stage):
-            time.sleep(0.05)
+            time.sleep(delay)
             p.send_signal(signum)
             sent = time.monotonic()
             break
@@ -666,6 +666,13 @@ def accessor_count(count):
     return edit
 
 
+def node_chain_naming_each_next_twice(d):
+    """40 nodes, each naming the next twice, the last a mesh: 2^40 instances from a few kilobytes."""
+    first = len(d["nodes"])
+    d["nodes"] += [{"children": [first + k + 1] * 2} for k in range(40)] + [{"mesh": 0}]
+    d["scenes"][0]["nodes"] = [first]
+
+
 def buffer_uri(uri, length):
     def edit(d):
         d["buffers"] = [{"byteLength": length, "uri": uri}]
@@ -678,6 +685,17 @@ def buffer_uri(uri, length):
      "huge-chunk.glb: not a readable glTF file"),
     ("count.glb", lambda work: glb_with_json(accessor_count(1 << 31)), "accessors[0].count: 2147483648 is not in [1, 2^28]"),
     ("beyond.glb", lambda work: glb_with_json(accessor_count(100000)), "accessors[0]: 100000 elements"),
+    ("stride.glb", lambda work: glb_with_json(accessor_count(1 << 28)), "accessors[0]: 268435456 elements"),
+    ("no-view.glb", lambda work: glb_with_json(lambda d: (d["accessors"][0].pop("bufferView"),
+                                                          d["accessors"][0].update(count=1 << 28))),
+     "accessors[0].count: 268435456 elements of 12 bytes without a bufferView"),
+    ("sparse.glb", lambda work: glb_with_json(lambda d: (d["accessors"][0].pop("bufferView"), d["accessors"][0].update(
+        count=1 << 28, sparse={"count": 1, "indices": {"bufferView": 0, "componentType": 5125},
+                               "values": {"bufferView": 0}}))),
+     "without a bufferView"),
+    ("dag.glb", lambda work: glb_with_json(node_chain_naming_each_next_twice), "is reached twice"),
+    ("roots.glb", lambda work: glb_with_json(lambda d: d["scenes"][0].update(nodes=d["scenes"][0]["nodes"] * 1000)),
+     "is reached twice"),
     ("zero.gltf", lambda work: json.dumps({"asset": {"version": "2.0"}, "buffers": [{"byteLength": 100, "uri": "/dev/zero"}],
                                            "scenes": [{"nodes": []}]}), "zero.gltf: not a readable glTF file"),
     ("lying-uri.gltf", lambda work: json.dumps({"asset": {"version": "2.0"}, "scenes": [{"nodes": []}],
@@ -716,4 +734,221 @@ def test_a_gltf_buffer_that_is_a_fifo_is_refused_without_blocking(work):
                                                        "buffers": [{"byteLength": 8, "uri": "buffer.bin"}]}))
     run = lucent("render", "fifo.gltf", "-o", "out.exr", cwd=work, timeout=30)
     assert run.code == 1 and "fifo.gltf: not a readable glTF file" in run.err, run
+    assert not os.path.exists(os.path.join(work, "out.exr"))
+
+
+# --- files a scene reads, by whatever name they are reached; every front end -------------------
+
+PYTHON_ENV = dict(os.environ, PYTHONPATH=os.environ.get("LUCENT_PYTHONPATH", ""))
+
+
+def python_lucent(code, cwd, timeout=120):
+    """Runs `code` in Debian's Python with the lucent module; its exit status, stdout and stderr."""
+    start, cpu = time.monotonic(), children_cpu_seconds()
+    p = subprocess.run(["/usr/bin/python3", "-c", "import lucent\n" + code], cwd=cwd, capture_output=True,
+                       timeout=timeout, env=PYTHON_ENV)
+    return Run(p.returncode, p.stdout.decode(errors="replace"), p.stderr.decode(errors="replace"),
+               time.monotonic() - start, children_cpu_seconds() - cpu)
+
+
+def png_rgb(width, height, rgb):
+    """A PNG of one colour, 8 bits per channel."""
+    def chunk(kind, body):
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+    rows = b"".join(b"\0" + bytes(rgb) * width for _ in range(height))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
+            chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
+def textured_gltf(image_uri, buffer_uri=None):
+    """A glowing textured triangle before a camera; its buffer inline, or in the file `buffer_uri`
+    (whose bytes are returned as the second value)."""
+    import base64
+    data = struct.pack("<9f", -1, -1, 0, 1, -1, 0, 0, 1, 0) + struct.pack("<6f", 0, 0, 1, 0, 0.5, 1)
+    uri = buffer_uri or "data:application/octet-stream;base64," + base64.b64encode(data).decode()
+    document = {
+        "asset": {"version": "2.0"}, "scene": 0,
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"camera": 0, "translation": [0, 0, 3]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 1.0, "znear": 0.01}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
+        "materials": [{"emissiveFactor": [1, 1, 1], "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "textures": [{"source": 0}], "images": [{"uri": image_uri}],
+        "buffers": [{"byteLength": len(data), "uri": uri}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [-1, -1, 0], "max": [1, 1, 0]},
+                      {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}],
+    }
+    return json.dumps(document), data
+
+
+@pytest.mark.parametrize("uri, texture", [("tex%2Epng", "tex.png"), ("/sub/tex.png", "sub/tex.png"),
+                                          ("./sub/../tex.png", "tex.png")])
+def test_no_output_replaces_a_texture_whatever_uri_reached_it(work, uri, texture):
+    os.makedirs(os.path.join(work, "sub"), exist_ok=True)
+    write(os.path.join(work, texture), png_rgb(2, 2, (200, 100, 50)))
+    write(os.path.join(work, "scene.gltf"), textured_gltf(uri)[0])
+    assert lucent("render", "scene.gltf", "--spp", "1", "--resolution", "8x8", "-q", "-o", "ok.exr", cwd=work).code == 0
+    before = snapshot(work)
+    for args, flag in ((["-o", "out.exr", "--png", texture], "--png"), (["-o", texture[:-4] + ".exr"], None)):
+        if flag is None:  # the texture under an EXR's name: written over, it would be lost too
+            os.rename(os.path.join(work, texture), os.path.join(work, texture[:-4] + ".exr"))
+            write(os.path.join(work, "scene.gltf"), textured_gltf(uri.replace(".png", ".exr").replace("%2Epng", "%2Eexr"))[0])
+            before = snapshot(work)
+        run = lucent("render", "scene.gltf", "--spp", "1", "--resolution", "8x8", "-q", *args, cwd=work)
+        assert run.code == 1 and "a file this process reads" in run.err, run
+        assert changed(before, snapshot(work)) == [], run
+
+
+def test_a_dump_never_replaces_a_buffer_of_the_scene(work):
+    document, data = textured_gltf("tex.png", buffer_uri="shading_points.bin")
+    write(os.path.join(work, "tex.png"), png_rgb(2, 2, (200, 100, 50)))
+    write(os.path.join(work, "shading_points.bin"), data)
+    write(os.path.join(work, "scene.gltf"), document)
+    before = snapshot(work)
+    run = lucent("render", "scene.gltf", "--method", "pmfg", "--resolution", "8x8", "--dump", ".", "-q", "-o", "out.exr",
+                 cwd=work)
+    assert run.code == 1 and "--dump '.' holds" in run.err and "shading_points.bin" in run.err, run
+    assert run.cpu_seconds < 5
+    code = ("import sys\ns = lucent.load_scene('scene.gltf', resolution=(8, 8))\n"
+            "try:\n    lucent.render(s, method='pmfg', dump='.')\nexcept ValueError as e:\n    print(e); sys.exit(3)")
+    py = python_lucent(code, cwd=work)
+    assert py.code == 3 and "holds" in py.out and "shading_points.bin" in py.out, py
+    assert changed(before, snapshot(work)) == []
+
+
+def test_python_refuses_a_scene_file_that_chooses_where_lucent_writes(work):
+    os.mkdir(os.path.join(work, "elsewhere"))
+    scene = box_scene(work, extra={"render": {"method": "micro", "dump": "elsewhere", "points": 4096}})
+    before = snapshot(work)
+    code = ("import sys\ns = lucent.load_scene('%s')\n"
+            "try:\n    lucent.render(s)\nexcept ValueError as e:\n    print(e); sys.exit(3)" % scene)
+    py = python_lucent(code, cwd=work)
+    assert py.code == 3 and "scene.json: render.dump" in py.out and "cannot choose where Lucent writes" in py.out, py
+    assert changed(before, snapshot(work)) == []
+
+
+@pytest.mark.parametrize("call, words", [
+    ("lucent.render(lucent.load_scene(SCENE, resolution=(8, 8)), threads=-3)", "threads=-3"),
+    ("lucent.render(lucent.load_scene(SCENE, resolution=(8, 8)), threads=5000)", "threads=5000"),
+    ("lucent.load_scene(SCENE, resolution=(100000, 1))", "resolution=(100000, 1)"),
+    ("lucent.load_scene(SCENE, resolution=(16384, 16384))", "at most 2^26 pixels"),
+    ("lucent.compare(np.zeros((0, 0, 3)), np.zeros((0, 0, 3)))", "has no pixels"),
+])
+def test_python_refuses_what_the_command_line_refuses(work, call, words):
+    scene = box_scene(work)
+    code = "import sys\nimport numpy as np\nSCENE = '%s'\ntry:\n    %s\nexcept ValueError as e:\n    print(e); sys.exit(3)" % (
+        scene, call)
+    py = python_lucent(code, cwd=work)
+    assert py.code == 3 and words in py.out, py
+
+
+def test_ctrl_c_stops_a_python_render_within_a_second(work):
+    scene = box_scene(work, resolution=(256, 256))
+    code = ("import signal, threading, time, os, sys\ns = lucent.load_scene('%s')\n"
+            "threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()\n"
+            "start = time.monotonic()\ntry:\n    lucent.render(s, spp=100000)\nexcept KeyboardInterrupt:\n"
+            "    print('stopped %%.3f' %% (time.monotonic() - start)); sys.exit(3)" % scene)
+    py = python_lucent(code, cwd=work, timeout=60)
+    assert py.code == 3 and py.out.startswith("stopped"), py
+    assert float(py.out.split()[1]) < 2.0, py
+
+
+def test_a_dump_that_is_a_fifo_is_refused_without_blocking(work):
+    os.mkfifo(os.path.join(work, "photons.bin"))
+    py = python_lucent("import sys\ntry:\n    lucent.read_dump('photons.bin')\nexcept RuntimeError as e:\n"
+                       "    print(e); sys.exit(3)", cwd=work, timeout=30)
+    assert py.code == 3 and "is not a regular file" in py.out, py
+    os.mkdir(os.path.join(work, "mine"))
+    os.mkfifo(os.path.join(work, "mine", "photons.bin"))
+    run = lucent("check-dump", "mine", "mine", cwd=work, timeout=30)
+    assert run.code == 2 and "is not a regular file" in run.err, run
+
+
+def dump_file(type_name, records=b"", record_bytes=4, count=None):
+    name = type_name if isinstance(type_name, bytes) else type_name.encode()
+    count = len(records) // record_bytes if count is None else count
+    return b"LCNTDUMP" + struct.pack("<IIQ", 1, record_bytes, count) + name.ljust(40, b"\0") + records
+
+
+def test_a_dump_type_name_never_reaches_the_terminal_raw(work):
+    for d in ("a", "b"):
+        write(os.path.join(work, d, "x.bin"), dump_file(b"\x1b]0;owned\x07\x1b[2J", b"\0" * 8))
+    run = lucent("check-dump", "a", "b", cwd=work)
+    assert run.code == 2 and "\x1b" not in run.err and "\\x1b" in run.err and "x.bin" in run.err, run
+
+
+@pytest.mark.parametrize("flags, words", [(["--relative", "nan"], "--relative must lie in [0, 1]"),
+                                          (["--report", "-1"], "--report")])
+def test_check_dump_refuses_impossible_tolerances(work, flags, words):
+    for d in ("a", "b"):
+        write(os.path.join(work, d, "x.bin"), dump_file("uint32", b"\0" * 8))
+    run = lucent("check-dump", "a", "b", *flags, cwd=work)
+    assert run.code in (1, 2) and run.code != 0 and words in run.err, run
+
+
+def lucent_opencl(*args, cwd, timeout=60):
+    p = subprocess.run([os.environ["LUCENT_OPENCL"], *map(str, args)], cwd=cwd, capture_output=True, timeout=timeout)
+    return Run(p.returncode, p.stdout.decode(errors="replace"), p.stderr.decode(errors="replace"), 0, 0)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["knn-grid", "d", "--k", "8", "--max-radius", "1", "--out", "d"], "is the dump directory it reads"),
+    (["knn-grid", "d", "--k", "8", "--max-radius", "1", "--out", "./d/../d"], "is the dump directory it reads"),
+    (["radiance-cache", "d", "--max-angle", "nan"], "--max-angle must lie in [0.01, 90]"),
+    (["knn-grid", "d", "--k", "8", "--max-radius", "nan"], "--max-radius must be a finite number above 0"),
+    (["--relative", "nan", "particles", "d"], "--relative"),
+])
+def test_lucent_opencl_refuses_impossible_requests_before_any_work(work, args, words):
+    write(os.path.join(work, "d", "global.photons.bin"), dump_file("uint32", b"\0" * 4))
+    before = snapshot(work)
+    run = lucent_opencl(*args, cwd=work)
+    assert run.code == 2 and words in run.err, run
+    assert changed(before, snapshot(work)) == []
+
+
+def test_sigterm_inside_a_tile_of_slow_rays_ends_the_render_within_a_second(work):
+    # 3,000 coincident quads before the camera: every ray tests them all, so one tile's pass of 64
+    # samples takes many seconds; the stop must not wait for the tile.
+    quads = 3000
+    lines = ["v -2 -2 0", "v 2 -2 0", "v 2 2 0", "v -2 2 0"] * quads
+    lines += ["f %d %d %d %d" % (4 * q + 1, 4 * q + 2, 4 * q + 3, 4 * q + 4) for q in range(quads)]
+    write(os.path.join(work, "slow.obj"), "mtllib slow.mtl\nusemtl light\n" + "\n".join(lines) + "\n")
+    write(os.path.join(work, "slow.mtl"), "newmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\n")
+    write(os.path.join(work, "scene.json"), json.dumps({
+        "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov_y": 30, "resolution": [64, 64]},
+        "meshes": [{"obj": "slow.obj"}]}))
+    args = ["--spp", "4096", "--tile-size", "64", "--threads", "1"]
+    # Late enough to fall inside a pass of many samples (passes double: 1, 1, 2, 4, ... per pixel).
+    code, seconds, err = stop_at_stage(work, "scene.json", args, "trace_paths", signal.SIGTERM, delay=7.0)
+    assert code == 143, err
+    assert seconds is not None and seconds < 1.0, "%.2f s after SIGTERM" % seconds
+
+
+def camera_node_edit(**node):
+    def edit(d):
+        for n in d["nodes"]:
+            if "camera" in n:
+                n.pop("matrix", None)
+                n.update(node)
+    return edit
+
+
+@pytest.mark.parametrize("name, edit, words", [
+    ("scale0.glb", camera_node_edit(scale=[0, 0, 0]), "with a degenerate transform"),
+    ("flat.glb", camera_node_edit(scale=[1, 0, 1]), "with a degenerate transform"),
+    ("far.glb", camera_node_edit(translation=[1e300, 0, 0]), "with a degenerate transform"),
+    ("yfov.glb", lambda d: d["cameras"][0]["perspective"].update(yfov=3.14159265), "perspective.yfov: must be in (0, pi)"),
+    ("intensity.glb", lambda d: d.update(
+        extensionsUsed=d["extensionsUsed"] + ["KHR_lights_punctual"],
+        extensions={"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 1e15}]}},
+        nodes=d["nodes"] + [{"extensions": {"KHR_lights_punctual": {"light": 0}}}],
+        scenes=[{"nodes": d["scenes"][0]["nodes"] + [len(d["nodes"])]}]), "exceeds 1e15 W"),
+])
+def test_a_gltf_camera_or_light_that_would_render_black_is_refused(work, name, edit, words):
+    write(os.path.join(work, name), glb_with_json(edit))
+    args = ["--lumens-per-watt", "1e-3"] if name == "intensity.glb" else []
+    run = lucent("render", name, *args, "--spp", "1", "--resolution", "8x8", "-o", "out.exr", cwd=work, timeout=60)
+    assert run.code == 1 and words in run.err, run
     assert not os.path.exists(os.path.join(work, "out.exr"))

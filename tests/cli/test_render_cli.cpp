@@ -269,7 +269,7 @@ TEST_CASE("render writes its outputs as one and touches no other file", "[cli][r
   SECTION("an output that is one of the scene's files is refused") {
     const test::CliRun r = runLucent("render " + scene + " --spp 1 --quiet -o " + test::quoted(dir / "sky.exr"));
     CHECK(r.status == 1);
-    CHECK_THAT(r.output, Catch::Contains("is a file this command reads"));
+    CHECK_THAT(r.output, Catch::Contains("a file this process reads"));
     CHECK(fs::last_write_time(dir / "sky.exr") == skyBefore);
     const test::CliRun same = runLucent("render " + scene + " --spp 1 --quiet -o " + test::quoted(dir / "a.exr") +
                                         " --png " + test::quoted(dir / "scene.json"));

@@ -2,6 +2,7 @@
 // and only those whose writer is proven gone.
 #include <catch2/catch.hpp>
 
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -158,4 +159,47 @@ TEST_CASE("checkWritable says before any work what would fail a write") {
     CHECK_THROWS_WITH(checkWritable(dir.path / "locked" / "a.exr", "-o"), Catch::Contains("Permission denied"));
     fs::permissions(dir.path / "locked", fs::perms::owner_all);
   }
+}
+
+TEST_CASE("No write replaces a file the process read, by whatever name it is reached") {
+  TempDir dir;
+  fs::create_directory(dir.path / "sub");
+  std::ofstream(dir.path / "sub" / "texture.png") << "pixels";
+  auto write = [](const fs::path& path) {
+    writeFileAtomically(path, "an image", [](const fs::path& tmp) { std::ofstream(tmp) << "new"; });
+  };
+  fs::create_hard_link(dir.path / "sub" / "texture.png", dir.path / "hard.png");
+  fs::create_symlink(dir.path / "sub" / "texture.png", dir.path / "soft.png");
+  // Before it is read, it is any file.
+  CHECK(inputFileClash(dir.path / "sub" / "texture.png").empty());
+  REQUIRE(admitInputFile(dir.path / "sub" / ".." / "sub" / "texture.png").empty());
+  for (const fs::path& name : {dir.path / "sub" / "texture.png", dir.path / "sub" / ".." / "sub" / "texture.png",
+                               dir.path / "hard.png", dir.path / "soft.png"}) {
+    INFO(name);
+    CHECK_THAT(inputFileClash(name), Catch::Contains("a file this process reads"));
+    CHECK_THROWS_WITH(write(name), Catch::Contains("a file this process reads"));
+    CHECK_THROWS_WITH(checkWritable(name, "--png"), Catch::Contains("a file this process reads"));
+  }
+  std::ifstream in(dir.path / "sub" / "texture.png");
+  CHECK(std::string(std::istreambuf_iterator<char>(in), {}) == "pixels");
+  // A symbolic link read as input is protected as a name too: replacing it would cut the scene off
+  // from its file.
+  fs::create_symlink(dir.path / "elsewhere.png", dir.path / "link.png");
+  std::ofstream(dir.path / "elsewhere.png") << "x";
+  REQUIRE(admitInputFile(dir.path / "link.png").empty());
+  CHECK_THROWS_WITH(write(dir.path / "link.png"), Catch::Contains("a file this process reads"));
+  // Named by the caller before being read.
+  std::ofstream(dir.path / "later.exr") << "x";
+  CHECK_THAT(inputFileClash(dir.path / "later.exr", {(dir.path / "." / "later.exr").string()}),
+             Catch::Contains("a file this process reads"));
+  CHECK_NOTHROW(write(dir.path / "other.png"));
+}
+
+TEST_CASE("Only regular files are admitted as inputs") {
+  TempDir dir;
+  REQUIRE(::mkfifo((dir.path / "pipe.bin").c_str(), 0600) == 0);
+  CHECK(admitInputFile(dir.path / "pipe.bin") == "is not a regular file");
+  CHECK(admitInputFile(dir.path) == "is not a regular file");
+  CHECK(admitInputFile(dir.path / "missing") == "not found");
+  CHECK(admitInputFile("/dev/zero") == "is not a regular file");
 }

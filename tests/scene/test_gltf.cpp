@@ -329,7 +329,22 @@ TEST_CASE("Broken glTF files are refused with the file and the JSON path of what
   refused(f, "bufferViews[2]: bytes");
   f = good;
   f["nodes"][0]["children"] = {0};  // a cycle
-  refused(f, "nodes[0]: its children lead back to it");
+  refused(f, "nodes[0]: is reached twice (its children lead back to it");
+  f = good;
+  f["scenes"][0]["nodes"].push_back(f["scenes"][0]["nodes"][0]);  // a root named twice: two instances
+  refused(f, "is reached twice");
+  f = good;  // a chain of nodes each naming the next twice: 2^40 instances from a few kilobytes
+  for (int level = 0; level < 40; ++level) {
+    const int next = int(f["nodes"].size());
+    f["nodes"].push_back({{"children", {next + 1, next + 1}}});
+  }
+  f["nodes"].push_back({{"mesh", 0}});
+  f["scenes"][0]["nodes"] = {int(f["nodes"].size()) - 41};
+  refused(f, "is reached twice");
+  f = good;  // 2^28 zero vectors that no buffer holds
+  f["accessors"][0].erase("bufferView");
+  f["accessors"][0]["count"] = 1 << 28;
+  refused(f, "accessors[0].count: 268435456 elements of 12 bytes without a bufferView");
   f = good;
   f["extensionsRequired"] = {"KHR_draco_mesh_compression"};
   f["extensionsUsed"] = {"KHR_draco_mesh_compression", "KHR_lights_punctual"};
@@ -825,7 +840,7 @@ TEST_CASE("lucent render refuses to write over a glTF file's external buffer or 
                                            " --png " + (dir / "texture.png"));
   INFO(png.output);
   CHECK(png.status == 1);
-  CHECK_THAT(png.output, Catch::Contains("is a file this command reads"));
+  CHECK_THAT(png.output, Catch::Contains("a file this process reads"));
   CHECK(bytes(dir / "texture.png") == pngBefore);
   CHECK(!fs::exists(dir / "out.exr"));
   // The buffer: an output named as it (renamed to .exr to pass the extension check) is refused too.
@@ -836,7 +851,7 @@ TEST_CASE("lucent render refuses to write over a glTF file's external buffer or 
   const test::CliRun exr = test::runLucent("render " + file + " --spp 1 --resolution 8x8 -q -o " + (dir / "quad.exr"));
   INFO(exr.output);
   CHECK(exr.status == 1);
-  CHECK_THAT(exr.output, Catch::Contains("is a file this command reads"));
+  CHECK_THAT(exr.output, Catch::Contains("a file this process reads"));
   CHECK(bytes(dir / "quad.exr") == binBefore);
 }
 

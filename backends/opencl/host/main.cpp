@@ -12,11 +12,13 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <random>
 
 #include "dump_kernels.h"
+#include "lucent/core/files.h"
 #include "lucent/pipeline/dump_compare.h"
 
 using namespace lucent;
@@ -42,7 +44,7 @@ int main(int argc, char** argv) {
   knn->add_option("--capacity", capacity, "neighbours kept per point (the device holds points x capacity x 8 bytes)")
       ->capture_default_str()->check(CLI::Range(1u, 1u << 20));
   CLI::App* cache = app.add_subcommand("radiance-cache", "the environment-lighting paper's cache interpolation (Eq. 5) from an envpbgi dump");
-  cache->add_option("--max-angle", maxAngle, "the render's cache_max_angle, degrees")->capture_default_str();
+  cache->add_option("--max-angle", maxAngle, "the render's cache_max_angle, degrees, in [0.01, 90]")->capture_default_str();
   CLI::App* particles = app.add_subcommand("particles", "the particle-space paper's gathering (R3, R4) from a particles dump");
   for (CLI::App* stage : {knn, cache, particles}) {
     stage->add_option("dump", dir, "the dump directory")->required()->check(CLI::ExistingDirectory);
@@ -53,6 +55,18 @@ int main(int argc, char** argv) {
 
   std::filesystem::path temporary;
   try {
+    // Checked before any work; CLI11's range checks let NaN through.
+    checkDumpCompareOptions(compare);
+    if (*cache && !(maxAngle >= 0.01f && maxAngle <= 90)) throw std::invalid_argument("--max-angle must lie in [0.01, 90]");
+    if (*knn && !(maxRadius > 0 && std::isfinite(maxRadius))) throw std::invalid_argument("--max-radius must be a finite number above 0");
+    std::error_code ec;
+    if (!out.empty() && std::filesystem::equivalent(out, dir, ec))
+      throw std::invalid_argument("--out '" + out + "' is the dump directory it reads; the kernels' arrays would replace "
+                                  "the dump's: choose another directory");
+    // The dump's arrays are this run's inputs: no write of the kernels' arrays replaces one, by
+    // whatever name (a link in --out) it would reach it.
+    if (!dir.empty())
+      for (const auto& entry : std::filesystem::directory_iterator(dir)) admitInputFile(entry.path());
     const Device device(deviceName);
     nlohmann::json result = {{"device", device.name()}, {"platform", device.platform()}};
     // Every run checks the records first: a kernel reading a differently laid-out record is wrong.

@@ -49,12 +49,17 @@ bool offsetsCutRuns(const std::vector<Offset>& offsets, uint64_t total) {
 // Why `directory` cannot take dumps, or "" if it can (or is "": no dumps): it must exist.
 std::string dumpDirectoryProblem(const std::string& directory);
 
-// The header of a dump file; throws std::runtime_error naming the file if it is not one.
+// The header's record type name (its type field up to the first NUL).
+std::string recordTypeName(const DumpHeader& header);
+
+// The header of a dump file; throws std::runtime_error naming the file if it is not one (its type
+// name, too, must be letters, digits and _).
 DumpHeader readDumpHeader(const std::string& path);
 
-// The records of a dump file, checked against the expected type name and record size, and the
-// header's count against the file's length, then read into storage(count); throws
-// std::runtime_error naming the file otherwise. The file is opened once.
+// The records of a dump file, checked against the expected type name and record size, the
+// header's count against the file's length and the records against the memory limit
+// (core/memory.h: MemoryLimitError), then read into storage(count); throws std::runtime_error
+// naming the file otherwise. The file is opened once; it must be a regular file.
 void readDumpRecords(const std::string& path, const std::string& type, uint32_t recordBytes,
                      const std::function<void*(uint64_t count)>& storage);
 template <class T>

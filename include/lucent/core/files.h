@@ -27,13 +27,27 @@ struct FileToWrite {
   std::function<void(const std::filesystem::path& tmp)> write;
 };
 // Writes every file to its temporary name, then renames them all: if any fails to be written,
-// none is renamed and every temporary file is removed (a failed PNG leaves no EXR behind).
+// none is renamed and every temporary file is removed (a failed PNG leaves no EXR behind). A path
+// that is one of the process's inputs (inputFileClash) is refused before anything is written.
 void writeFilesAtomically(const std::vector<FileToWrite>& files);
 
 // Why `path` cannot be read as a regular file ("not found", "is not a regular file" for a
-// directory or device, or the system's reason such as a symbolic link loop), or "" if it can. Never
-// throws.
+// directory, FIFO or device, which would read as empty, block or read for ever, or the system's
+// reason such as a symbolic link loop), or "" if it can. Never throws.
 std::string regularFileProblem(const std::filesystem::path& path);
+
+// What every reader of a scene's files (JSON, OBJ, MTL, textures, environment maps, glTF files and
+// their buffers and images) asks before it opens one: regularFileProblem(path), and when that is "",
+// `path` becomes one of this process's inputs for the rest of its life. No write of Lucent's replaces
+// an input, whatever name reaches it: inputs are known by identity (device and inode), both of the
+// name given and of the file it leads to, so a link, another spelling or a URI that a loader decoded
+// cannot reach one. (Images to compare, films and dumps are named as inputs by the commands that
+// read them: a process may rewrite its own films and dumps.)
+std::string admitInputFile(const std::filesystem::path& path);
+
+// Why `path` must not be written: "it is 'INPUT', a file this process reads" when it is one of the
+// process's inputs (admitInputFile) or one of `alsoInputs` by identity; else "". Never throws.
+std::string inputFileClash(const std::filesystem::path& path, const std::vector<std::string>& alsoInputs = {});
 
 // The temporary name a write of `path` uses: ".<stem>.lucent-tmp.<boot>.<pid namespace>.<pid>.<start
 // time>.<n><extension>", beside `path`, naming the process that writes it (the kernel's boot id,
@@ -51,8 +65,8 @@ bool isAbandonedTemporaryFile(const std::string& name);
 void removeStaleTemporaryFiles(const std::filesystem::path& directory);
 
 // Throws std::runtime_error("cannot write <what> '<path>': <why>") unless a file can be created
-// beside `path` and `path` is not a directory: what would fail a write at the end of a render,
-// checked before it starts.
+// beside `path`, `path` is not a directory and it is none of the process's inputs (inputFileClash):
+// what would fail a write at the end of a render, checked before it starts.
 void checkWritable(const std::filesystem::path& path, const std::string& what);
 
 }  // namespace lucent

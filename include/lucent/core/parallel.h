@@ -12,6 +12,9 @@ void retainFreedMemory();
 // Flushes denormals to zero on the calling thread (Embree is slow and warns otherwise).
 void flushDenormals();
 
+// The most worker threads a render may ask for.
+inline constexpr int kMaxThreads = 4096;
+
 // While alive: limits oneTBB to `threads` workers (0: all cores) and flushes denormals on every
 // worker thread as it joins the arena.
 class ParallelScope {

@@ -14,6 +14,8 @@ namespace lucent {
 // Largest image Lucent reads, and a camera may ask for (the path tracer keeps about 40 bytes per
 // pixel).
 inline constexpr uint64_t kMaxImagePixels = uint64_t(1) << 26;
+// Widest and tallest image a camera may ask for.
+inline constexpr int kMaxImageSide = 65536;
 
 class Image {
  public:

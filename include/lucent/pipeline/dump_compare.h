@@ -37,8 +37,13 @@ struct DumpComparison {
   bool passed() const;
 };
 
+// Throws std::invalid_argument naming the option (as the command line spells it) for a tolerance or
+// count out of range (NaN included).
+void checkDumpCompareOptions(const DumpCompareOptions& options);
+
 // Every dump file (*.bin) both directories hold, compared; throws std::runtime_error naming the
-// directory or file when a directory cannot be read or a file is not a dump.
+// directory or file when a directory cannot be read or a file is not a dump (a FIFO or device
+// named *.bin included), and std::invalid_argument as checkDumpCompareOptions.
 DumpComparison compareDumpDirectories(const std::string& reference, const std::string& candidate,
                                       const DumpCompareOptions& options = {});
 

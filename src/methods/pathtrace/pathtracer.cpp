@@ -657,40 +657,43 @@ uint64_t PathTracer::renderTile(const PixelRect& tile, const PassSamples& pass, 
   };
   // Each pixel's samples from its next (sampleBegin plus the samples the film has taken there) to
   // the pass's end, in order, in whole runs (with --target-error's two streams, one sample a run).
-  for (int y = tile.y0; y < tile.y1; ++y)
-    for (int x = tile.x0; x < tile.x1; ++x) {
-      const uint64_t pixel = pixelOf(x, y);
-      const int first = pass.sampleBegin + int(film.taken(pixel)), end = pass.end(pixel);
-      for (int sample = first; sample < end;) {
-        const int begin = streams ? sample : runBegin(sample), finish = streams ? sample + 1 : runEnd(sample);
-        if (start.count + uint32_t(finish - begin) > uint32_t(kWaveSize)) traceQueued();
-        for (int s = begin; s < finish; ++s) {
-          const uint32_t k = start.count++;
-          start.pixel[k] = pixel;
-          start.streamPixel[k] = streams && s % 2 == 1 ? pixel | kSecondStream : pixel;
-          start.sample[k] = uint64_t(streams ? s / 2 : s);
-          start.x[k] = float(x), start.y[k] = float(y);
-          wave.run[k] = runs;
-          wave.ghost[k] = s < first || s >= end;
-        }
-        ++runs;
-        sample = finish;
+  // A stop request ends the tile between two pixels: the pixels queued are traced and counted, the
+  // rest keep the samples they had (a tile of slow rays would otherwise hold a stop for seconds).
+  const uint64_t tileWidth = uint64_t(tile.x1 - tile.x0), tilePixels = tileWidth * uint64_t(tile.y1 - tile.y0);
+  uint64_t queuedPixels = 0;  // in row order
+  for (; queuedPixels < tilePixels && !stopRequested(); ++queuedPixels) {
+    const int x = tile.x0 + int(queuedPixels % tileWidth), y = tile.y0 + int(queuedPixels / tileWidth);
+    const uint64_t pixel = pixelOf(x, y);
+    const int first = pass.sampleBegin + int(film.taken(pixel)), end = pass.end(pixel);
+    for (int sample = first; sample < end;) {
+      const int begin = streams ? sample : runBegin(sample), finish = streams ? sample + 1 : runEnd(sample);
+      if (start.count + uint32_t(finish - begin) > uint32_t(kWaveSize)) traceQueued();
+      for (int s = begin; s < finish; ++s) {
+        const uint32_t k = start.count++;
+        start.pixel[k] = pixel;
+        start.streamPixel[k] = streams && s % 2 == 1 ? pixel | kSecondStream : pixel;
+        start.sample[k] = uint64_t(streams ? s / 2 : s);
+        start.x[k] = float(x), start.y[k] = float(y);
+        wave.run[k] = runs;
+        wave.ghost[k] = s < first || s >= end;
       }
+      ++runs;
+      sample = finish;
     }
+  }
   if (start.count > 0) traceQueued();
-  for (int py = tile.y0; py < tile.y1; ++py)
-    for (int px = tile.x0; px < tile.x1; ++px) {
-      const uint64_t pixel = pixelOf(px, py);
-      film.setTaken(pixel, std::max(film.taken(pixel), uint32_t(pass.end(pixel) - pass.sampleBegin)));
-    }
+  for (uint64_t i = 0; i < queuedPixels; ++i) {
+    const uint64_t pixel = pixelOf(tile.x0 + int(i % tileWidth), tile.y0 + int(i / tileWidth));
+    film.setTaken(pixel, std::max(film.taken(pixel), uint32_t(pass.end(pixel) - pass.sampleBegin)));
+  }
   return taken;
 }
 
 // The end of the next pass of samples, counted from the part's first. With a time budget, the
 // first pass takes one sample per pixel and each later pass as many as the remaining time allows at
 // the measured rate (no more: the returned end is done). Otherwise passes double (1, 2, 4, ...
-// samples) up to 64 samples each, so that a tile's work in a pass stays short (a stop request waits
-// for the tiles in flight) and checkpoints come between passes. A pass ends at pilotEnd, where
+// samples) up to 64 samples each, so that checkpoints come often (a stop request ends a tile
+// between two of its pixels). A pass ends at pilotEnd, where
 // contribution roulette's pilot is read from the film (0: none). The image depends only on the
 // samples taken, never on how they were split into passes.
 int nextPassEnd(const PathTraceOptions& options, int first, int samples, int done, double elapsed, int pilotEnd) {
@@ -767,6 +770,7 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
         const PixelRect cut{std::max(area.x0, tx * tile), std::max(area.y0, ty * tile),
                             std::min(area.x1, (tx + 1) * tile), std::min(area.y1, (ty + 1) * tile)};
         const uint64_t taken = tracer.renderTile(cut, pass, image ? streams.get() : nullptr, waves.local(), counters.local(), target);
+        if (control.stopRequested()) stopped = true;  // the tile may have ended before its last pixel
         if (!image) continue;
         const uint64_t samples = pixelSamplesDone += taken;
         if (control.progress) control.progress(std::min(1.0, double(samples) / expectedSamples));
