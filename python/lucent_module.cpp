@@ -165,8 +165,8 @@ py::dict render(const LoadedScene& s, std::optional<std::string> methodName, std
     throw OptionError(e.option(), name + " option " + e.option() + ": " + e.what());  // named as Python spells it
   }
   checkOutputDirectories(method, resolved->values(), s.scene);
+  // On a thread of its own: the interpreter's floating-point mode is not touched.
   const RenderOutput out = renderInterruptibly([&](const std::atomic<bool>& stop) {
-    const KeepFloatingPointMode keep;
     ParallelScope scope(threads.value_or(0));
     RenderControl control;
     control.stop = &stop;

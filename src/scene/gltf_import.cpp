@@ -28,6 +28,10 @@ constexpr int kMaxNodeDepth = 1024;
 // What a vertex and a triangle take in the scene and its Embree geometry, at most (positions,
 // normals, texture coordinates and tangents; indices, material ids, Embree's build).
 constexpr uint64_t kSceneBytesPerVertex = 96, kSceneBytesPerTriangle = 96;
+// A memory check reads /proc (about 8 us): one is made for an accessor of this many bytes or more,
+// and for a mesh instance once the scene has grown by this much since the last; a file of many small
+// instances may pass the limit by at most this much before it is refused.
+constexpr uint64_t kMemoryCheckBytes = uint64_t(1) << 24;
 
 // Extensions read, and those whose content is listed as left out rather than rendered.
 const std::set<std::string> kSupportedExtensions = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
@@ -230,7 +234,8 @@ std::vector<double> readAccessor(const Context& c, int index, const std::string&
                                   " bytes without a bufferView: more than the file's buffers (" +
                                   std::to_string(bufferBytes) + " bytes) could hold");
   }
-  requireMemory(uint64_t(a.count) * n * sizeof(double), c.file + ": " + path, "render a smaller scene, or raise --memory-limit");
+  if (uint64_t(a.count) * n * sizeof(double) >= kMemoryCheckBytes)
+    requireMemory(uint64_t(a.count) * n * sizeof(double), c.file + ": " + path, "render a smaller scene, or raise --memory-limit");
   std::vector<double> out(a.count * n, 0.0);
   if (p) {
     for (size_t e = 0; e < a.count; ++e)
@@ -518,6 +523,7 @@ struct NodeWalk {
   MaterialType materialType;               // Gltf or GltfHeightCorrelated
   std::map<int, uint32_t> materialOf;      // glTF material (-1: the default) -> spec
   uint64_t skippedPrimitives = 0;      // points and lines
+  uint64_t grownSinceMemoryCheck = 0;  // bytes the scene took since the last memory check
 
   uint32_t material(int index, const std::string& user) {
     if (const auto it = materialOf.find(index); it != materialOf.end()) return it->second;
@@ -617,8 +623,11 @@ struct NodeWalk {
     // What the scene will hold, checked before it grows: a mesh named by many nodes is copied for each.
     if (scene.positions.size() + vertices > (uint64_t(1) << 31))
       c.fail(path, "the scene would have more than 2^31 vertices");
-    requireMemory(uint64_t(vertices) * kSceneBytesPerVertex + uint64_t(corners.size() / 3) * kSceneBytesPerTriangle,
-                  c.file + ": " + path + "'s triangles", "render a smaller scene, or raise --memory-limit");
+    const uint64_t growth = uint64_t(vertices) * kSceneBytesPerVertex + uint64_t(corners.size() / 3) * kSceneBytesPerTriangle;
+    if ((grownSinceMemoryCheck += growth) >= kMemoryCheckBytes) {
+      requireMemory(growth, c.file + ": " + path + "'s triangles", "render a smaller scene, or raise --memory-limit");
+      grownSinceMemoryCheck = 0;
+    }
     const bool mirrored = world.determinant3() < 0;  // the winding turns over
     const std::array<double, 9> normalMatrix = world.normalMatrix();
     const uint32_t first = uint32_t(scene.positions.size());

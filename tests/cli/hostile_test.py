@@ -751,13 +751,13 @@ def python_lucent(code, cwd, timeout=120):
                time.monotonic() - start, children_cpu_seconds() - cpu)
 
 
-def png_rgb(width, height, rgb):
-    """A PNG of one colour, 8 bits per channel."""
-    def chunk(kind, body):
-        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
-    rows = b"".join(b"\0" + bytes(rgb) * width for _ in range(height))
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
-            chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+def fuzz_corpus():
+    """scripts/fuzz-corpus.py as a module: the seed files it writes, made by its functions."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("fuzz_corpus", os.path.join(SOURCE, "scripts", "fuzz-corpus.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def textured_gltf(image_uri, buffer_uri=None):
@@ -787,7 +787,7 @@ def textured_gltf(image_uri, buffer_uri=None):
                                           ("./sub/../tex.png", "tex.png")])
 def test_no_output_replaces_a_texture_whatever_uri_reached_it(work, uri, texture):
     os.makedirs(os.path.join(work, "sub"), exist_ok=True)
-    write(os.path.join(work, texture), png_rgb(2, 2, (200, 100, 50)))
+    write(os.path.join(work, texture), fuzz_corpus().png(2, 2, (200, 100, 50)))
     write(os.path.join(work, "scene.gltf"), textured_gltf(uri)[0])
     assert lucent("render", "scene.gltf", "--spp", "1", "--resolution", "8x8", "-q", "-o", "ok.exr", cwd=work).code == 0
     before = snapshot(work)
@@ -803,7 +803,7 @@ def test_no_output_replaces_a_texture_whatever_uri_reached_it(work, uri, texture
 
 def test_a_dump_never_replaces_a_buffer_of_the_scene(work):
     document, data = textured_gltf("tex.png", buffer_uri="shading_points.bin")
-    write(os.path.join(work, "tex.png"), png_rgb(2, 2, (200, 100, 50)))
+    write(os.path.join(work, "tex.png"), fuzz_corpus().png(2, 2, (200, 100, 50)))
     write(os.path.join(work, "shading_points.bin"), data)
     write(os.path.join(work, "scene.gltf"), document)
     before = snapshot(work)
