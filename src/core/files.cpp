@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <cctype>
 #include <cerrno>
@@ -162,6 +163,54 @@ bool shareAnIdentity(const std::vector<FileIdentity>& a, const std::vector<FileI
   return false;
 }
 
+// While any write is under way (in any thread), SIGINT, SIGTERM and SIGHUP wait for it: each is
+// recorded, and once the last write has renamed or removed its files the dispositions before the
+// first write are restored and the recorded signals raised again, so that they act as they would
+// have (end the process, set Python's or a render's stop flag, or nothing where ignored) with no
+// temporary file left behind. Dispositions are process-wide, so this covers every thread, which
+// blocking signals in the writing thread alone would not. SIGKILL still ends a write at once.
+class SignalsWaitForWrites {
+ public:
+  SignalsWaitForWrites() {
+    const std::lock_guard lock(mutex());
+    if (depth()++ > 0) return;
+    struct sigaction record {};
+    record.sa_handler = &SignalsWaitForWrites::record;
+    sigemptyset(&record.sa_mask);
+    for (size_t i = 0; i < kSignals.size(); ++i) sigaction(kSignals[i], &record, &previous()[i]);
+  }
+  ~SignalsWaitForWrites() {
+    const std::lock_guard lock(mutex());
+    if (--depth() > 0) return;
+    for (size_t i = 0; i < kSignals.size(); ++i) sigaction(kSignals[i], &previous()[i], nullptr);
+    const unsigned pending = pending_.exchange(0);
+    for (size_t i = 0; i < kSignals.size(); ++i)
+      if (pending & (1u << i)) ::raise(kSignals[i]);
+  }
+  SignalsWaitForWrites(const SignalsWaitForWrites&) = delete;
+  SignalsWaitForWrites& operator=(const SignalsWaitForWrites&) = delete;
+
+ private:
+  static constexpr std::array<int, 3> kSignals{SIGINT, SIGTERM, SIGHUP};
+  static void record(int signal) {
+    for (size_t i = 0; i < kSignals.size(); ++i)
+      if (kSignals[i] == signal) pending_.fetch_or(1u << i);
+  }
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  static int& depth() {
+    static int d = 0;
+    return d;
+  }
+  static std::array<struct sigaction, kSignals.size()>& previous() {
+    static std::array<struct sigaction, kSignals.size()> p{};
+    return p;
+  }
+  static inline std::atomic<unsigned> pending_{0};
+};
+
 }  // namespace
 
 std::string admitInputFile(const std::filesystem::path& path) {
@@ -253,6 +302,7 @@ void checkWritable(const std::filesystem::path& path, const std::string& what) {
 }
 
 void writeFilesAtomically(const std::vector<FileToWrite>& files) {
+  const SignalsWaitForWrites signalsWait;
   // What would stop a rename, checked before anything is written or renamed.
   for (const FileToWrite& f : files) {
     std::error_code ec;

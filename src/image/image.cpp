@@ -10,11 +10,14 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
 #include <stdexcept>
+#include <span>
 #include <string_view>
+#include <vector>
 
 #include "lucent/core/files.h"
 #include "lucent/core/memory.h"
@@ -261,6 +264,35 @@ std::string exrHeaderProblem(std::ifstream& in, uint64_t fileBytes) {
   return "";
 }
 
+// Why a JPEG stream is cut short, or "" where it reaches its end-of-image marker. libjpeg reads a
+// truncated file with a warning that OpenImageIO drops, and fills what is missing with grey: a
+// texture cut in half would render without a word. Walks the markers (each segment's length, the
+// entropy-coded data after each start-of-scan up to the next marker that is neither a stuffed
+// 0xFF00 nor a restart) to EOI; what follows EOI is not read.
+std::string jpegStreamProblem(std::span<const unsigned char> b) {
+  if (b.size() < 2 || b[0] != 0xFF || b[1] != 0xD8) return "not a JPEG stream (no start-of-image marker)";
+  size_t at = 2;
+  while (true) {
+    while (at < b.size() && b[at] != 0xFF) ++at;  // libjpeg too skips bytes between segments
+    while (at < b.size() && b[at] == 0xFF) ++at;  // fill bytes
+    if (at >= b.size()) break;
+    const unsigned char marker = b[at++];
+    if (marker == 0xD9) return "";
+    if ((marker >= 0xD0 && marker <= 0xD7) || marker == 0x01) continue;
+    if (at + 2 > b.size()) break;
+    const size_t length = size_t(b[at]) << 8 | b[at + 1];
+    if (length < 2) return "a segment's length is below 2";
+    if (at + length > b.size()) break;
+    at += length;
+    if (marker != 0xDA) continue;
+    // Entropy-coded data: up to a marker.
+    while (at + 1 < b.size() && !(b[at] == 0xFF && b[at + 1] != 0x00 && !(b[at + 1] >= 0xD0 && b[at + 1] <= 0xD7)))
+      at += b[at] == 0xFF ? 2 : 1;
+    if (at + 1 >= b.size()) break;
+  }
+  return "the file ends before the image does (no end-of-image marker): truncated";
+}
+
 std::string lowercase(std::string text) {
   for (char& c : text) c = char(std::tolower(static_cast<unsigned char>(c)));
   return text;
@@ -342,7 +374,14 @@ OpenedImage openChecked(const std::string& path) {
       if (!why.empty()) throw std::runtime_error("cannot read image '" + path + "': a damaged EXR header: " + why);
     }
   }
-  return openWithReader(path, lowercase(std::filesystem::path(path).extension().string()),
+  const std::string extension = lowercase(std::filesystem::path(path).extension().string());
+  if (extension == ".jpg" || extension == ".jpeg") {
+    std::ifstream file(path, std::ios::binary);
+    const std::vector<unsigned char> bytes{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
+    if (const std::string why = jpegStreamProblem(bytes); !why.empty())
+      throw std::runtime_error("cannot read image '" + path + "': " + why);
+  }
+  return openWithReader(path, extension,
                         ec ? std::numeric_limits<uint64_t>::max() / kMostDecodedPerByte : fileBytes, nullptr);
 }
 
@@ -396,6 +435,9 @@ Image readImageFromMemory(const std::string& name, const std::string& extension,
                           ImageMetadata* metadata) {
   if (extension != ".png" && extension != ".jpg")
     throw std::runtime_error("cannot read image '" + name + "': only PNG and JPEG are read from memory");
+  if (extension == ".jpg")
+    if (const std::string why = jpegStreamProblem(bytes); !why.empty())
+      throw std::runtime_error("cannot read image '" + name + "': " + why);
   auto memory = std::make_unique<OIIO::Filesystem::IOMemReader>(bytes.data(), bytes.size());
   return readOpened(openWithReader(name, extension, bytes.size(), std::move(memory)), name, metadata);
 }

@@ -380,6 +380,38 @@ def test_sigkill_leaves_no_output_and_the_next_render_writes_cleanly(work):
     assert [n for n in os.listdir(work) if "lucent-tmp" in n] == []
 
 
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP])
+def test_a_signal_while_merge_writes_leaves_no_temporary_file(work, signum):
+    # Merge has no render to stop: a signal ends it, but only once the files it is writing are
+    # renamed or removed. Signals are sent at 16 moments spread over a merge's run, writes included
+    # (before: 2-3 of 7 probes left `.m.lucent-tmp...exr`).
+    scene = box_scene(work, resolution=(768, 768))
+    for k, samples in enumerate(["0:1", "1:1"]):
+        run = lucent("render", scene, "--spp", "2", "--samples", samples, "-q", "-o", "p%d.exr" % k, cwd=work)
+        assert run.code == 0, run
+    merge = [LUCENT, "merge", "p0.film", "p1.film", "-o", "m.exr", "--png", "m.png"]
+    start = time.monotonic()
+    assert subprocess.run(merge, cwd=work, capture_output=True).returncode == 0
+    whole = time.monotonic() - start
+    outcomes = set()
+    for i in range(16):
+        for name in ("m.exr", "m.png"):
+            if os.path.exists(os.path.join(work, name)):
+                os.remove(os.path.join(work, name))
+        p = subprocess.Popen(merge, cwd=work, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        time.sleep(whole * i / 16)
+        p.send_signal(signum)
+        err = p.communicate(timeout=60)[1].decode(errors="replace")
+        assert p.returncode in (0, -signum), "probe %d: exit %d: %s" % (i, p.returncode, err)
+        outcomes.add(p.returncode)
+        left = [n for n in os.listdir(work) if "lucent-tmp" in n]
+        assert left == [], "probe %d, %.3f s in: %s" % (i, whole * i / 16, left)
+        # Written as a set: both outputs or neither.
+        assert os.path.exists(os.path.join(work, "m.exr")) == os.path.exists(os.path.join(work, "m.png")), i
+    assert -signum in outcomes, "no probe ended the merge: %s" % outcomes
+
+
 # --- crafted film and checkpoint files -----------------------------------------------------------
 
 @pytest.fixture

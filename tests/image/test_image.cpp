@@ -151,6 +151,27 @@ TEST_CASE("Reading a missing or broken file names it") {
   CHECK_THROWS_WITH(readImage(dir / "broken.exr"), Catch::Contains(dir / "broken.exr"));
 }
 
+TEST_CASE("A truncated JPEG is refused, not read with grey where its data stops") {
+  // libjpeg fills a cut stream with grey and warns; OpenImageIO drops the warning.
+  const fs::path whole = LUCENT_SOURCE_DIR "/scenes/ring/wood-floorboards-texture.jpg";
+  std::string bytes;
+  {
+    std::ifstream in(whole, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  REQUIRE(readImage(whole).width() > 0);
+  TempDir dir;
+  for (const size_t keep : {bytes.size() / 2, bytes.size() - 2, size_t(3), size_t(600)}) {
+    std::ofstream(dir / "cut.jpg", std::ios::binary) << bytes.substr(0, keep);
+    CHECK_THROWS_WITH(readImage(dir / "cut.jpg"), Catch::Contains("cut.jpg") && Catch::Contains("truncated"));
+    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+    CHECK_THROWS_WITH(readImageFromMemory("cut.jpg", ".jpg", {data, keep}), Catch::Contains("truncated"));
+  }
+  // What follows the end-of-image marker is not the image's (cameras append data there).
+  std::ofstream(dir / "tail.jpg", std::ios::binary) << bytes << "trailing bytes";
+  CHECK(readImage(dir / "tail.jpg").width() == readImage(whole).width());
+}
+
 TEST_CASE("An image header claiming more than 2^26 pixels is refused before its pixels are allocated") {
   // A valid 1 x 1 PNG whose header is then made to claim 20,000 x 20,000: 69 bytes.
   TempDir dir;

@@ -29,6 +29,8 @@ struct FileToWrite {
 // Writes every file to its temporary name, then renames them all: if any fails to be written,
 // none is renamed and every temporary file is removed (a failed PNG leaves no EXR behind). A path
 // that is one of the process's inputs (inputFileClash) is refused before anything is written.
+// SIGINT, SIGTERM and SIGHUP that come while files are written act once they are renamed or removed,
+// as they would have acted then: a signal never leaves a temporary file or a part of a set.
 void writeFilesAtomically(const std::vector<FileToWrite>& files);
 
 // Why `path` cannot be read as a regular file ("not found", "is not a regular file" for a
