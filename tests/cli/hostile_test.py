@@ -940,6 +940,67 @@ def test_lucent_opencl_refuses_impossible_requests_before_any_work(work, args, w
     assert changed(before, snapshot(work)) == []
 
 
+
+def knn_grid_dump(directory, res):
+    """A purcell dump of one photon and one shading point on a grid of `res` cells over the unit
+    cube: the photon at the centre, the point a quarter below it along z, with no normal (so the
+    photon does not light it: its estimate is 0) and the photon as its one neighbour."""
+    cells = res[0] * res[1] * res[2]
+    photon_cell = (res[0] // 2) + res[0] * ((res[1] // 2) + res[1] * (res[2] // 2))
+    write(os.path.join(directory, "global.photons.bin"),
+          dump_file("Photon", struct.pack("<6f2I", 0.5, 0.5, 0.5, 1, 1, 1, 0, 0), 32))
+    size, res_inverse = [1.0 / r for r in res], [float(r) for r in res]
+    write(os.path.join(directory, "global.grid.bin"), dump_file(
+        "UniformGrid", struct.pack("<12f3if", 0, 0, 0, 1, 1, 1, *size, *res_inverse, *res, 0), 64))
+    write(os.path.join(directory, "global.photon_list.bin"), dump_file("uint32", struct.pack("<I", 0)))
+    first = struct.pack("<I", 0) * (photon_cell + 1) + struct.pack("<I", 1) * (cells - photon_cell)
+    write(os.path.join(directory, "global.first_photon.bin"), dump_file("uint32", first))
+    point = struct.pack("<15fI6f6f4I", 0.5, 0.5, 0.25, *[0.0] * 12, 0, 0.5, 0.5, 0.5, *[0.0] * 3,
+                        *[0.0] * 6, 0, 0, 0, 0)
+    write(os.path.join(directory, "band0.shading_points.bin"), dump_file("ShadingPoint", point, 128))
+    write(os.path.join(directory, "band0.indirect.bin"), dump_file("Rgb", struct.pack("<3f", 0, 0, 0), 12))
+    write(os.path.join(directory, "band0.global.neighbour_offsets.bin"), dump_file("uint64", struct.pack("<2Q", 0, 1), 8))
+    write(os.path.join(directory, "band0.global.neighbours.bin"),
+          dump_file("PhotonDistance", struct.pack("<fI", 0.0625, 0), 8))
+
+
+@pytest.mark.parametrize("res", [(1, 1, 1 << 21), (1 << 21, 1, 1), (1, 1 << 21, 1), (128, 1, 16384)])
+def test_lucent_opencl_walks_a_long_thin_grid_in_time(work, res):
+    # A search that must explore every cell of 1 x 1 x 2^21 cells once walked the empty rows inside
+    # every shell too: work growing with the square of the shells, hours for one point.
+    knn_grid_dump(os.path.join(work, "d"), res)
+    start = time.monotonic()
+    run = lucent_opencl("knn-grid", "d", "--k", "8", "--max-radius", "2", cwd=work, timeout=120)
+    seconds = time.monotonic() - start
+    assert run.code == 0 and json.loads(run.out)["passed"] is True, run
+    assert seconds < 30, "%.1f s" % seconds
+
+
+
+def test_a_signal_to_lucent_opencl_removes_its_temporary_directory(work):
+    # 4,096 points on the long grid: a kernel of many seconds. The signal comes while it runs.
+    knn_grid_dump(os.path.join(work, "d"), (1, 1, 1 << 21))
+    points = os.path.join(work, "d", "band0.shading_points.bin")
+    with open(points, "rb") as f:
+        data = f.read()
+    write(points, data[:16] + struct.pack("<Q", 4096) + data[24:64] + data[64:] * 4096)
+    os.mkdir(os.path.join(work, "tmp"))
+    p = subprocess.Popen([os.environ["LUCENT_OPENCL"], "knn-grid", "d", "--k", "8", "--max-radius", "2"], cwd=work,
+                         env=dict(os.environ, TMPDIR=os.path.join(work, "tmp")), stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 30
+    while not os.listdir(os.path.join(work, "tmp")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert os.listdir(os.path.join(work, "tmp")), "no temporary directory made"
+    time.sleep(1.0)
+    p.send_signal(signal.SIGTERM)
+    sent = time.monotonic()
+    _, err = p.communicate(timeout=30)
+    assert p.returncode == -signal.SIGTERM and "stopped by SIGTERM" in err, (p.returncode, err)
+    assert time.monotonic() - sent < 2.0
+    assert os.listdir(os.path.join(work, "tmp")) == []
+
+
 def test_sigterm_inside_a_tile_of_slow_rays_ends_the_render_within_a_second(work):
     # 3,000 coincident quads before the camera: every ray tests them all, so one tile's pass of 64
     # samples takes many seconds; the stop must not wait for the tile.

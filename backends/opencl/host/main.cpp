@@ -12,10 +12,18 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <mutex>
 #include <random>
+#include <thread>
 
 #include "dump_kernels.h"
 #include "lucent/core/files.h"
@@ -23,6 +31,72 @@
 
 using namespace lucent;
 using namespace lucent::opencl;
+
+namespace {
+
+// A directory of the run's own in the temporary directory, removed however the run ends: by its
+// end, an error, or SIGINT, SIGTERM or SIGHUP, which may come while a kernel runs for minutes.
+// The signals' handler only writes the signal to a pipe (what a handler may do); a thread of its
+// own reads it, removes the directory and ends the process by the signal, as its default action
+// would have. A signal that comes while a file is written waits for the write (writeFilesAtomically).
+class RunDirectory {
+ public:
+  RunDirectory() {
+    if (::pipe2(pipe_, O_CLOEXEC) != 0) throw std::runtime_error(std::string("cannot create a pipe: ") + std::strerror(errno));
+    struct sigaction action {};
+    action.sa_handler = &RunDirectory::handle;
+    sigemptyset(&action.sa_mask);
+    for (int signal : {SIGINT, SIGTERM, SIGHUP}) sigaction(signal, &action, nullptr);
+    std::thread(&RunDirectory::removeOnSignal).detach();
+  }
+  RunDirectory(const RunDirectory&) = delete;
+  RunDirectory& operator=(const RunDirectory&) = delete;
+  ~RunDirectory() { remove(); }
+
+  // A new directory (create_directory is false for one that exists: another name).
+  std::string create() {
+    State& s = state();
+    const std::lock_guard lock(s.mutex);
+    std::random_device random;
+    do s.path = std::filesystem::temp_directory_path() / ("lucent-opencl-" + std::to_string(random()));
+    while (!std::filesystem::create_directory(s.path));
+    return s.path.string();
+  }
+
+ private:
+  static void handle(int signal) {
+    const unsigned char byte = static_cast<unsigned char>(signal);
+    [[maybe_unused]] const ssize_t written = ::write(pipe_[1], &byte, 1);
+  }
+  static void removeOnSignal() {
+    unsigned char byte = 0;
+    while (::read(pipe_[0], &byte, 1) != 1)
+      if (errno != EINTR) return;
+    remove();
+    std::cerr << "lucent-opencl: stopped by " << (byte == SIGINT ? "SIGINT" : byte == SIGHUP ? "SIGHUP" : "SIGTERM") << "\n";
+    ::signal(byte, SIG_DFL);
+    ::raise(byte);
+  }
+  static void remove() {
+    State& s = state();
+    const std::lock_guard lock(s.mutex);
+    std::error_code ignored;
+    if (!s.path.empty()) std::filesystem::remove_all(s.path, ignored);
+    s.path.clear();
+  }
+  // Never destroyed: the thread may read it while the process exits.
+  struct State {
+    std::mutex mutex;
+    std::filesystem::path path;
+  };
+  static State& state() {
+    static State* s = new State;
+    return *s;
+  }
+  static inline int pipe_[2] = {-1, -1};
+};
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Runs Lucent's OpenCL kernels on a dump and compares their results with the dump's arrays"};
@@ -53,7 +127,7 @@ int main(int argc, char** argv) {
   }
   CLI11_PARSE(app, argc, argv);
 
-  std::filesystem::path temporary;
+  RunDirectory temporary;
   try {
     // Checked before any work; CLI11's range checks let NaN through.
     checkDumpCompareOptions(compare);
@@ -75,13 +149,7 @@ int main(int argc, char** argv) {
     result["layout_differences"] = differences;
     bool passed = differences.empty();
     if (!dir.empty()) {
-      if (out.empty()) {
-        // A new directory of its own (create_directory is false for one that exists: another name).
-        std::random_device random;
-        do temporary = std::filesystem::temp_directory_path() / ("lucent-opencl-" + std::to_string(random()));
-        while (!std::filesystem::create_directory(temporary));
-        out = temporary.string();
-      }
+      if (out.empty()) out = temporary.create();
       size_t leftToHost = 0;
       if (*knn) leftToHost = writeKnnGridDumps(runKnnGridEstimate(device, dir, map, band, k, maxRadius, capacity), dir, map, band, out);
       if (*cache) leftToHost = writeCacheDumps(runCacheInterpolation(device, dir, maxAngle), dir, out);
@@ -94,12 +162,8 @@ int main(int argc, char** argv) {
     }
     result["passed"] = passed;
     std::cout << result.dump() << "\n";
-    std::error_code ignored;
-    if (!temporary.empty()) std::filesystem::remove_all(temporary, ignored);
     return passed ? 0 : 1;
   } catch (const std::exception& e) {
-    std::error_code ignored;
-    if (!temporary.empty()) std::filesystem::remove_all(temporary, ignored);
     std::cerr << "lucent-opencl: " << e.what() << "\n";
     return 2;
   }

@@ -134,16 +134,31 @@ __kernel void knnGridEstimate(__global const Photon* photons, __global const uin
   // After max(res) shells every cell is explored (a backstop: the host checks the grid is finite).
   const int lastShell = max(g->res[0], max(g->res[1], g->res[2]));
   for (int shell = 0; !done && shell <= lastShell; ++shell) {
-    for (int z = max(c[2] - shell, 0); z <= min(c[2] + shell, g->res[2] - 1); ++z)
-      for (int y = max(c[1] - shell, 0); y <= min(c[1] + shell, g->res[1] - 1); ++y) {
-        if (abs(z - c[2]) == shell || abs(y - c[1]) == shell) {
+    // The shell's cells in z, y, x order. A row strictly inside the shell holds only its two x ends
+    // and a slab strictly inside it only its y faces and x ends: where those lie outside the grid,
+    // the rows and slabs are stepped over, not walked (on a grid of 1 x 1 x 2^21 cells, walking
+    // them made a search's work grow with the square of its shells).
+    const bool xEnds = c[0] - shell >= 0 || c[0] + shell < g->res[0];
+    const bool yFaces = c[1] - shell >= 0 || c[1] + shell < g->res[1];
+    const int y0 = max(c[1] - shell, 0), y1 = min(c[1] + shell, g->res[1] - 1);
+    for (int z = max(c[2] - shell, 0); z <= min(c[2] + shell, g->res[2] - 1); ++z) {
+      const bool zFace = abs(z - c[2]) == shell;
+      if (!zFace && !xEnds && !yFaces) {
+        z = c[2] + shell - 1;  // on to the far z face
+        continue;
+      }
+      for (int y = y0; y <= y1; ++y) {
+        if (zFace || abs(y - c[1]) == shell) {
           for (int x = max(c[0] - shell, 0); x <= min(c[0] + shell, g->res[0] - 1); ++x)
             visitCell(&s, photons, photonList, firstPhoton, g, x, y, z, ids);
-        } else {
+        } else if (xEnds) {
           if (c[0] - shell >= 0) visitCell(&s, photons, photonList, firstPhoton, g, c[0] - shell, y, z, ids);
           if (c[0] + shell < g->res[0]) visitCell(&s, photons, photonList, firstPhoton, g, c[0] + shell, y, z, ids);
+        } else {
+          y = c[1] + shell - 1;  // on to the far y face
         }
       }
+    }
     const float beyond = distanceBeyondShell(g, s.q, c, shell);
     const float beyond2 = beyond > 0 ? beyond * beyond : 0;
     done = beyond == INFINITY || beyond2 > s.maxRadius2 || (s.found >= s.k && beyond2 > s.radius2);
