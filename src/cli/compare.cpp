@@ -18,6 +18,7 @@
 #include "cli/commands.h"
 #include "cli/comparison_options.h"
 #include "cli/output_paths.h"
+#include "core/json_text.h"
 #include "lucent/core/text.h"
 #include "lucent/image/comparison.h"
 #include "lucent/image/metrics.h"
@@ -67,7 +68,7 @@ int runCompare(const CompareOptions& opt) {
     writePng(result.heatmap, opt.heatmap);
     out["heatmap"] = opt.heatmap;
   }
-  std::cout << out.dump() << std::endl;
+  std::cout << jsonText(out) << std::endl;
   return result.passed ? 0 : 1;
 }
 

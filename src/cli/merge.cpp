@@ -14,6 +14,7 @@
 #include "cli/film_merge.h"
 #include "cli/film_outputs.h"
 #include "cli/output_paths.h"
+#include "core/json_text.h"
 
 namespace lucent::cli {
 
@@ -55,7 +56,7 @@ int runMerge(const MergeArgs& a) {
   if (!a.png.empty()) summary["png"] = a.png;
   if (!whole) summary["film"] = filmPath;
   summary["scene_hash"] = info.sceneHash;
-  std::cout << summary.dump() << std::endl;
+  std::cout << jsonText(summary) << std::endl;
   return 0;
 }
 

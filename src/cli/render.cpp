@@ -21,6 +21,7 @@
 #include "cli/method_options.h"
 #include "cli/output_paths.h"
 #include "cli/progress.h"
+#include "core/json_text.h"
 #include "lucent/core/lane_clones.h"
 #include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
@@ -385,7 +386,7 @@ int runRender(const RenderArgs& a) {
   const nlohmann::ordered_json options = methodOptionsJson(*method, resolved->values());
   FilmFileInfo info;
   info.method = method->name();
-  info.options = options.dump();
+  info.options = jsonText(options);
   info.scene = fs::absolute(a.scene).lexically_normal().string();
   info.sceneHash = hex(scene.contentHash);
   info.version = LUCENT_VERSION;
@@ -445,7 +446,7 @@ int runRender(const RenderArgs& a) {
 
   nlohmann::ordered_json derived = nlohmann::ordered_json::object();
   for (const auto& [name, value] : out.stats.derived) derived[name] = value;
-  info.derived = derived.dump();
+  info.derived = jsonText(derived);
   info.complete = out.complete;
   info.counters = out.stats.counters;
   ImageMetadata meta = filmMetadata(info, *out.film);
@@ -499,7 +500,7 @@ int runRender(const RenderArgs& a) {
   if (keepFilm) summary["film"] = filmPath;
   summary["scene_hash"] = hex(scene.contentHash);
   if (!scene.ignored.empty()) summary["ignored"] = scene.ignored;
-  std::cout << summary.dump() << std::endl;
+  std::cout << jsonText(summary) << std::endl;
   // Interrupted: the status a shell gives a process that the signal ended.
   return out.complete ? 0 : 128 + (stopSignal > 0 ? stopSignal : SIGTERM);
 }

@@ -20,6 +20,7 @@
 #include "cli/commands.h"
 #include "cli/comparison_options.h"
 #include "cli/output_paths.h"
+#include "core/json_text.h"
 #include "lucent/core/text.h"
 #include "lucent/core/files.h"
 #include "lucent/image/flip.h"
@@ -519,7 +520,7 @@ int runReport(const ReportOptions& opt) {
     if (c.equivalence) entry["equivalent"] = c.equivalence->passed;
     line["candidates"].push_back(entry);
   }
-  std::cout << line.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << std::endl;
+  std::cout << jsonText(line) << std::endl;
   return 0;
 }
 

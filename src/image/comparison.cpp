@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "core/json_text.h"
 #include "lucent/image/metrics.h"
 
 namespace lucent {
@@ -148,7 +149,7 @@ ImageComparison compareImagePair(Image candidateFile, Image referenceFile, const
     result.heatmap = flipResult ? valueHeatmap(flipResult->map, 1)
                      : test     ? valueHeatmap(test->statistic, 5)
                                 : errorHeatmap(image, reference, metric);
-  result.json = out.dump();
+  result.json = jsonText(out);
   return result;
 }
 

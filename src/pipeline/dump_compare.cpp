@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/json_text.h"
 #include "lucent/core/dump.h"
 #include "lucent/core/dump_records.h"
 
@@ -346,7 +347,7 @@ std::string dumpComparisonJson(const DumpComparison& c) {
   }
   const nlohmann::json out = {{"passed", c.passed()}, {"arrays", arrays}, {"only_in_reference", c.onlyInReference},
                               {"only_in_candidate", c.onlyInCandidate}};
-  return out.dump();
+  return jsonText(out);
 }
 
 std::string dumpComparisonReport(const DumpComparison& c) {

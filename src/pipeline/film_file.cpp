@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "core/json_text.h"
 #include "lucent/core/files.h"
 #include "lucent/core/memory.h"
 
@@ -67,7 +68,7 @@ FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileIn
   header["sums_per_pixel"] = film.sumsPerPixel();
   header["counters"] = nlohmann::ordered_json::object();
   for (const auto& [name, value] : info.counters) header["counters"][name] = value;
-  std::string text = header.dump();
+  std::string text = jsonText(header);
   text.resize(padded(text.size()), ' ');
   DataHash hash;
   hash.add(text.data(), text.size());

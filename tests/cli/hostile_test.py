@@ -44,8 +44,8 @@ def lucent(*args, cwd, timeout=120, preexec=None):
     """Runs lucent; its exit status, outputs, wall-clock seconds, and CPU seconds (what a check of
     work done reads: unlike the wall clock, it does not grow on a loaded machine)."""
     start, cpu = time.monotonic(), children_cpu_seconds()
-    p = subprocess.run([LUCENT, *map(str, args)], cwd=cwd, capture_output=True, timeout=timeout,
-                       preexec_fn=preexec)
+    p = subprocess.run([LUCENT, *(a if isinstance(a, bytes) else str(a) for a in args)], cwd=cwd,
+                       capture_output=True, timeout=timeout, preexec_fn=preexec)
     return Run(p.returncode, p.stdout.decode(errors="replace"), p.stderr.decode(errors="replace"),
                time.monotonic() - start, children_cpu_seconds() - cpu)
 
@@ -410,6 +410,22 @@ def test_a_signal_while_merge_writes_leaves_no_temporary_file(work, signum):
         # Written as a set: both outputs or neither.
         assert os.path.exists(os.path.join(work, "m.exr")) == os.path.exists(os.path.join(work, "m.png")), i
     assert -signum in outcomes, "no probe ended the merge: %s" % outcomes
+
+
+
+def test_file_names_that_are_not_utf8_are_written_and_reported(work):
+    # Linux file names are bytes. The JSON line (and a film's JSON header) once threw after the
+    # images were written, exiting 1; now the name's invalid bytes read as U+FFFD in the JSON only.
+    scene = box_scene(work, name="s\udcfe.json")
+    for k, samples in enumerate(["0:1", "1:1"]):
+        run = lucent("render", os.fsencode(scene), "--spp", "2", "--samples", samples, "-q", "-o",
+                     os.fsencode("p%d\udcff.exr" % k), cwd=work)
+        assert run.code == 0 and json.loads(run.out)["output"] == "p%d\ufffd.exr" % k, run
+    run = lucent("merge", b"p0\xff.film", b"p1\xff.film", "-o", b"m\xff.exr", cwd=work)
+    assert run.code == 0 and json.loads(run.out)["output"] == "m\ufffd.exr", run
+    assert os.path.exists(os.path.join(os.fsencode(work), b"m\xff.exr"))
+    run = lucent("compare", b"m\xff.exr", b"m\xff.exr", cwd=work)
+    assert run.code == 0 and json.loads(run.out)["passed"] is True, run
 
 
 # --- crafted film and checkpoint files -----------------------------------------------------------

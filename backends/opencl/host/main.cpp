@@ -25,6 +25,7 @@
 #include <random>
 #include <thread>
 
+#include "core/json_text.h"
 #include "dump_kernels.h"
 #include "lucent/core/files.h"
 #include "lucent/pipeline/dump_compare.h"
@@ -161,7 +162,7 @@ int main(int argc, char** argv) {
       passed = passed && c.passed();
     }
     result["passed"] = passed;
-    std::cout << result.dump() << "\n";
+    std::cout << jsonText(result) << "\n";
     return passed ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "lucent-opencl: " << e.what() << "\n";
