@@ -48,6 +48,14 @@ struct Context {
 
 std::string at(const std::string& array, size_t index) { return array + "[" + std::to_string(index) + "]"; }
 
+// A number of the file's as a message quotes it: 2, 0.5, 1e+300 (a cast to an integer would print
+// 1e300 as -9223372036854775808).
+std::string quoted(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.15g", value);
+  return text;
+}
+
 // Whether a transformed point or direction is finite as floats, as the scene keeps it.
 bool finiteFloats(const std::array<double, 3>& v) {
   return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(float(x)); });
@@ -295,7 +303,7 @@ struct TextureCoordinates {
 };
 
 int coordinateSet(const Context& c, double set, const std::string& path) {
-  if (set != 0 && set != 1) c.fail(path, "TEXCOORD_" + std::to_string(int64_t(set)) + " is not read (TEXCOORD_0 and _1 are)");
+  if (set != 0 && set != 1) c.fail(path, "TEXCOORD_" + quoted(set) + " is not read (TEXCOORD_0 and _1 are)");
   return int(set);
 }
 
@@ -741,7 +749,7 @@ struct NodeWalk {
     // In watts the value must stay where the renderer's float arithmetic carries it: beyond, its
     // light overflows to samples that are dropped, and the image is black.
     if (!(l.intensity / lumensPerWatt <= kMaxInputMagnitude))
-      c.fail(lightPath + ".intensity", std::to_string(l.intensity) + " at " + std::to_string(lumensPerWatt) +
+      c.fail(lightPath + ".intensity", quoted(l.intensity) + " at " + quoted(lumensPerWatt) +
                                            " lm/W exceeds 1e15 W");
     const Rgb value = colour * float(l.intensity / lumensPerWatt);
     if (l.range > 0) scene.ignored.push_back(c.file + ": " + lightPath + ".range (the light reaches every distance)");

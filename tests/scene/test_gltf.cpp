@@ -539,6 +539,10 @@ TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read
   }
   second["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 2;
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, second), Catch::Contains("baseColorTexture.texCoord: TEXCOORD_2 is not read"));
+  // A set too large for an integer is quoted as written, not as a cast would print it.
+  second["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {
+      {"index", 0}, {"extensions", {{"KHR_texture_transform", {{"texCoord", 1e300}}}}}};
+  REQUIRE_THROWS_WITH(loadWrapped(dir.path, second), Catch::Contains("TEXCOORD_1e+300 is not read"));
 }
 
 TEST_CASE("glTF normal and metallic-roughness textures are read as linear data, the normal tilts in the tangent frame",
