@@ -11,7 +11,10 @@ different sizes. gltf_loader: the exported Cornell box (scenes/gltf/cornell-box.
 .gltf files with embedded buffers: a quad as a triangle strip with interleaved attributes and a
 point light, the same with a sparse accessor, with node transforms, with a base colour texture, and
 with every material feature (textures on both sets, texture transforms, normal, emissive and specular
-textures, a doubleSided emitter, alpha masking) and a spot light.
+textures, a doubleSided emitter, alpha masking) and a spot light; and files that claim more than they
+hold (counts of 2^28 and 3e9, accessors without a bufferView, a node DAG, repeated roots). dump:
+reference and candidate dump files of each rule check-dump applies. command_line: the arguments of
+every command and method.
 
 Usage: scripts/fuzz-corpus.py TARGET OUT_DIR
 """
@@ -276,12 +279,88 @@ def gltf_seeds():
     materials["nodes"].append({"translation": [0, 0, 3], "extensions": {"KHR_lights_punctual": {"light": 1}}})
     materials["scenes"][0]["nodes"].append(2)
     seeds["materials.gltf"] = json.dumps(materials).encode()
+    # What a file may claim beyond what it holds: counts far above its bytes, an accessor without a
+    # bufferView (zeros, or a sparse one over zeros), and instancing: a node DAG that names its
+    # children twice, and a mesh under many roots.
+    large = json.loads(json.dumps(quad))
+    large["accessors"][0]["count"] = 1 << 28
+    large["accessors"][3]["count"] = 3000000000
+    seeds["large-counts.gltf"] = json.dumps(large).encode()
+    viewless = json.loads(json.dumps(with_sparse))
+    del viewless["accessors"][1]["bufferView"]
+    del viewless["accessors"][0]["bufferView"]
+    viewless["accessors"][0]["count"] = 1 << 20
+    seeds["no-buffer-view.gltf"] = json.dumps(viewless).encode()
+    dag = json.loads(json.dumps(quad))
+    first = len(dag["nodes"])
+    dag["nodes"] += [{"children": [first + k + 1] * 2} for k in range(8)] + [{"mesh": 0}]
+    dag["scenes"][0]["nodes"].append(first)
+    seeds["node-dag.gltf"] = json.dumps(dag).encode()
+    roots = json.loads(json.dumps(quad))
+    roots["scenes"][0]["nodes"] += [0] * 16
+    seeds["repeated-roots.gltf"] = json.dumps(roots).encode()
     return seeds
+
+
+def dump_file(type_name, record_bytes, records, count=None):
+    """A dump (docs/dump-format.md): its 64-byte header, then the records."""
+    count = len(records) // record_bytes if count is None else count
+    return b"LCNTDUMP" + struct.pack("<IIQ", 1, record_bytes, count) + type_name.encode().ljust(40, b"\0") + records
+
+
+def dump_seeds():
+    """Reference and candidate files in turn (fuzz/dump_fuzzer.cpp), after 8 bytes of tolerances:
+    a plain array (a.bin), the neighbour sets and their offsets."""
+    tolerances = struct.pack("<fI", 1e-5, 4)
+    separator = b"\n--file--\n"
+    floats = dump_file("float", 4, struct.pack("<4f", 1, 2, 3, float("inf")))
+    rgb = dump_file("Rgb", 12, struct.pack("<6f", 0.1, 0.2, 0.3, 0.4, 0.5, 0.6))
+    photons = dump_file("Photon", 32, struct.pack("<6f2I", 1, 2, 3, 0.5, 0.5, 0.5, 7, 9) +
+                        struct.pack("<6f2I", 0, 0, 0, 1, 1, 1, 3, 4))
+    nodes = dump_file("EnvPointNode", 48, struct.pack("<8f4I", 0, 0, 0, 1, 0, 0, 1, 0.5, 1, 2, 3, 0) +
+                      struct.pack("<8f4I", 0, 0, 0, 1, 0, 0, 1, 0.5, 0xFFFFFFFF, 0xFFFFFFFF, 3, 1) * 2)
+    neighbours = dump_file("PhotonDistance", 8, struct.pack("<fIfI", 0.25, 0, 0.5, 1))
+    offsets = dump_file("uint64", 8, struct.pack("<3Q", 0, 1, 2))
+    seeds = {}
+    for name, array in (("float", floats), ("rgb", rgb), ("photons", photons), ("tree", nodes)):
+        seeds[name] = tolerances + separator.join([array, array])
+    seeds["neighbours"] = tolerances + separator.join([floats, floats, neighbours, neighbours, offsets, offsets])
+    seeds["differing"] = tolerances + separator.join([rgb, dump_file("Rgb", 12, struct.pack("<6f", 0.1, 0.2, 0.3, 0.4,
+                                                                                            0.5, 0.7))])
+    seeds["huge-count"] = tolerances + separator.join([dump_file("uint32", 4, b"\0" * 8, count=1 << 40), floats])
+    return seeds
+
+
+def command_line_seeds():
+    """Arguments after `lucent`, NUL-separated (fuzz/command_line_fuzzer.cpp): every command, every
+    method with its options, the render flags with their values."""
+    lines = [
+        ["render", "scene.json", "-o", "out.exr", "--spp", "16", "--png", "out.png", "--threads", "2"],
+        ["render", "scene.json", "-o", "out.exr", "--resolution", "64x48", "--crop", "0,0,8,8", "--samples", "0:4"],
+        ["render", "scene.json", "-o", "out.exr", "--part", "rows:1/4", "--memory-limit", "512M", "--isa", "avx2"],
+        ["render", "scene.json", "-o=out.exr", "--checkpoint=30", "--resume", "--strict", "--gltf-masking",
+         "height-correlated", "--lumens-per-watt", "683", "--gltf-camera", "Camera", "-q", "--log-stages"],
+        ["render", "scene.json", "-o", "out.exr", "--target-error", "0.01", "--time-budget", "10", "--variance",
+         "--layers", "--no-layers", "--sampler", "independent", "--strategy", "bsdf"],
+        ["compare", "a.exr", "b.exr", "--metric", "relmse", "--threshold", "0.01", "--test", "--within", "0.05"],
+        ["merge", "a.film", "b.film", "-o", "m.exr", "--png", "m.png"],
+        ["report", "a.exr", "b.exr", "-o", "report.html"],
+        ["check-dump", "ref", "cand", "--relative", "1e-5", "--ulps", "4", "--report", "3"],
+        ["methods"], ["methods", "--json"], ["render", "--help"], ["--help"],
+    ]
+    for method, options in (("purcell", ["--photons", "100000", "--k", "50", "--map", "stencil", "--shells", "3"]),
+                            ("pmfg", ["--photons", "10000", "--gather-rays", "64", "--caustic-k", "20"]),
+                            ("micro", ["--points", "4096", "--lighting", "radiosity", "--buffer-side", "8"]),
+                            ("envpbgi", ["--points", "65536", "--mapping", "nusselt", "--splat-reach", "1"]),
+                            ("particles", ["--area-particles", "4000", "--sides", "front"])):
+        lines.append(["render", "scene.json", "--method", method, "-o", "out.exr", *options])
+    return {"args-%02d" % i: b"\0".join(a.encode() for a in line) for i, line in enumerate(lines)}
 
 
 def main():
     targets = {"scene_loader": scene_loader_seeds, "gltf_loader": gltf_seeds, "film_reader": film_seeds,
-               "merge": merge_seeds, "image_header": image_seeds}
+               "merge": merge_seeds, "image_header": image_seeds, "dump": dump_seeds,
+               "command_line": command_line_seeds}
     if len(sys.argv) != 3 or sys.argv[1] not in targets:
         sys.exit(__doc__)
     out = pathlib.Path(sys.argv[2])

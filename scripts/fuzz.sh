@@ -2,7 +2,8 @@
 # Fuzzes one of Lucent's readers with libFuzzer for SECONDS on JOBS cores, from the seeds
 # scripts/fuzz-corpus.py writes and the corpus of earlier runs (build-fuzz/corpus-TARGET). Targets
 # (fuzz/): scene_loader (JSON, OBJ, MTL, textures), gltf_loader (.gltf and .glb), film_reader (film and checkpoint files), merge
-# (lucent merge's part checks) and image_header (the images compare and report read). Builds with
+# (lucent merge's part checks), image_header (the images compare and report read), dump (dump files
+# and check-dump's comparison) and command_line (every command's arguments). Builds with
 # Debian's Clang, the library instrumented by AddressSanitizer and UndefinedBehaviorSanitizer.
 # Prints the executions done; exits 1 if any run found a crash, a sanitizer report, a leak, a hang
 # over 10 s or an allocation over 1 GiB (the input is then in build-fuzz/artifacts-TARGET/, the
@@ -12,11 +13,11 @@
 # With RUNS, each job stops after that many executions if SECONDS have not run out first.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-target=${1:?usage: scripts/fuzz.sh scene_loader|gltf_loader|film_reader|merge|image_header [SECONDS] [JOBS]}
+target=${1:?usage: scripts/fuzz.sh scene_loader|gltf_loader|film_reader|merge|image_header|dump|command_line [SECONDS] [JOBS] [RUNS]}
 seconds=${2:-600}
 jobs=${3:-$(nproc)}
 runs=${4:--1}
-case "$target" in scene_loader|gltf_loader|film_reader|merge|image_header) ;; *) echo "fuzz: unknown target $target" >&2; exit 2;; esac
+case "$target" in scene_loader|gltf_loader|film_reader|merge|image_header|dump|command_line) ;; *) echo "fuzz: unknown target $target" >&2; exit 2;; esac
 scripts/setup.sh clang libclang-rt-dev
 CXX=clang++ cmake -S . -B build-fuzz -DLUCENT_FUZZ=ON -DLUCENT_BUILD_TESTS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo > /dev/null
 cmake --build build-fuzz -j "$(nproc)" --target "lucent_fuzz_$target"

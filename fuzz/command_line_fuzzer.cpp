@@ -1,0 +1,54 @@
+// libFuzzer target for the command line (src/cli/): one input is the arguments after `lucent`,
+// separated by NUL bytes (at most 64). They are parsed as the lucent program parses them, every
+// command registered, with each command's work left out: CLI11's parsing and checks for compare,
+// merge, report, methods and check-dump; for render, its own flags (parseRenderArgs) and the chosen
+// method's options resolved and checked (renderMethodOptions) against a scene without a render
+// block. Every rejection must be a CLI::ParseError, std::invalid_argument or std::runtime_error;
+// anything else, a crash, a sanitizer report, a hang or a large allocation is a defect. Seeds:
+// scripts/fuzz-corpus.py command_line.
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cli/commands.h"
+#include "cli/render_args.h"
+#include "lucent/methods/methods.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  std::string_view input(reinterpret_cast<const char*>(data), size);
+  std::vector<std::string> args = {"lucent"};
+  while (!input.empty() && args.size() <= 64) {
+    const size_t end = std::min(input.find('\0'), input.size());
+    args.emplace_back(input.substr(0, end));
+    input.remove_prefix(std::min(input.size(), end + 1));
+  }
+  CLI::App app{"lucent"};
+  app.require_subcommand(1);
+  int exitCode = 0;
+  lucent::cli::addRenderCommand(app, exitCode);
+  lucent::cli::addCompareCommand(app, exitCode);
+  lucent::cli::addMethodsCommand(app, exitCode);
+  lucent::cli::addMergeCommand(app, exitCode);
+  lucent::cli::addReportCommand(app, exitCode);
+  lucent::cli::addCheckDumpCommand(app, exitCode);
+  for (CLI::App* command : app.get_subcommands({})) command->callback(std::function<void()>());
+  std::vector<const char*> argv;
+  for (const std::string& a : args) argv.push_back(a.c_str());
+  try {
+    app.parse(int(argv.size()), argv.data());
+    CLI::App* render = app.get_subcommand("render");
+    if (render->parsed()) {
+      const lucent::cli::RenderArgs parsed = lucent::cli::parseRenderArgs(render->remaining());
+      const lucent::Method& method = lucent::renderingMethod(parsed.method.empty() ? "pt" : parsed.method);
+      (void)lucent::cli::renderMethodOptions(parsed, lucent::Scene{}, method);
+    }
+  } catch (const CLI::ParseError&) {
+  } catch (const std::invalid_argument&) {
+  } catch (const std::runtime_error&) {
+  }
+  return 0;
+}
