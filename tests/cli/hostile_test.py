@@ -776,6 +776,25 @@ def test_a_broken_gltf_file_is_refused_at_once_and_nothing_is_written(work, name
     assert changed(before, snapshot(work)) == []
 
 
+
+def test_many_small_instances_are_refused_by_the_memory_limit_at_load(work):
+    # 300,000 nodes naming one mesh: a few megabytes of JSON that would expand to gigabytes of
+    # triangles. The load stops at --memory-limit, naming the file, not the film after it.
+    def edit(d):
+        first = len(d["nodes"])
+        d["nodes"] += [{"mesh": 0, "translation": [k % 97, k // 97 % 89, k // 8633]} for k in range(300000)]
+        d["scenes"][0]["nodes"] += list(range(first, len(d["nodes"])))
+    write(os.path.join(work, "many.glb"), glb_with_json(edit))
+    measure = ("import resource, subprocess, sys\nsubprocess.run(sys.argv[1:])\n"
+               "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, file=sys.stderr)")
+    p = subprocess.run([sys.executable, "-c", measure, LUCENT, "render", "many.glb", "--memory-limit", "400M", "-q",
+                        "-o", "out.exr"], cwd=work, capture_output=True, text=True, timeout=120)
+    peak_kib = int(p.stderr.strip().splitlines()[-1])
+    assert "many.glb" in p.stderr and "--memory-limit" in p.stderr and "film" not in p.stderr, p.stderr
+    assert peak_kib < 800 * 1024, "peak %d MiB" % (peak_kib // 1024)
+    assert not os.path.exists(os.path.join(work, "out.exr"))
+
+
 def test_a_gltf_buffer_that_is_a_fifo_is_refused_without_blocking(work):
     os.mkfifo(os.path.join(work, "buffer.bin"))
     write(os.path.join(work, "fifo.gltf"), json.dumps({"asset": {"version": "2.0"}, "scenes": [{"nodes": []}],
