@@ -64,9 +64,10 @@ OptionValues sceneRenderBlockOptions(const Scene& scene, const Method& method, s
 
 void checkOutputDirectories(const Method& method, const OptionValues& resolved, const Scene& scene) {
   namespace fs = std::filesystem;
-  for (const auto& [name, directory] : resolved) {
+  for (const auto& value : resolved) {
+    const std::string& directory = value.second;
     const auto spec = std::find_if(method.options().begin(), method.options().end(),
-                                   [&](const OptionSpec& s) { return s.name == name; });
+                                   [&](const OptionSpec& s) { return s.name == value.first; });
     if (directory.empty() || spec == method.options().end() || spec->kind != OptionKind::Text) continue;
     for (const std::string& input : scene.inputFiles) {
       std::error_code ec;

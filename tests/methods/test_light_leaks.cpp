@@ -236,6 +236,29 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
   }
 }
 
+TEST_CASE("envpbgi's leak into a closed box shrinks as its points grow denser", "[leaks]") {
+  // Point-based occlusion: where two walls meet, a receiver's micro-buffer sees the environment
+  // between the other wall's discs at grazing angles, through gaps that scale with the point
+  // spacing (envpbgi README, "Limits"). The leak must shrink with every fourfold of the points and
+  // be below a thousandth of the environment's radiance at the hierarchy's usual density.
+  for (Walls faces : {Walls::Inward, Walls::Outward}) {
+    Scene scene = closedBox(Outside::Environment, faces);
+    scene.camera = test::testCamera({0, 0, 0}, {0.7f, 0.4f, -1}, 32, 32, 90);
+    const Visibility vis(scene);
+    double previous = 1e30;
+    for (uint32_t points : {1u << 10, 1u << 14, 1u << 18}) {
+      EnvPbgiOptions env;
+      env.points = points;
+      env.common.layers = true;
+      const double mean = lightInside(renderEnvPbgi(scene, vis, env).image).mean;
+      INFO(name(faces) << ", " << points << " points: mean " << mean << " under a radiance of 2");
+      CHECK(mean < previous);
+      previous = mean;
+    }
+    CHECK(previous <= 1e-3 * 2.0);
+  }
+}
+
 namespace {
 
 // Shading normals (vertex normals, glTF normal textures) tilt a surface's shading hemisphere into
