@@ -4,6 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
 #if defined(__SSE__)
@@ -11,6 +12,7 @@
 #endif
 #include <chrono>
 #include <cstring>
+#include <filesystem>
 #include <future>
 #include <thread>
 #include <map>
@@ -53,8 +55,11 @@ struct LoadedScene {
   std::string path;
 };
 
-std::shared_ptr<LoadedScene> loadSceneFile(const std::string& path, std::optional<std::pair<int, int>> resolution) {
+// Paths arrive as str, bytes or os.PathLike (pybind11's std::filesystem::path: a str goes through
+// os.fsencode, so a file name that is not UTF-8 reaches its file).
+std::shared_ptr<LoadedScene> loadSceneFile(const std::filesystem::path& file, std::optional<std::pair<int, int>> resolution) {
   const KeepFloatingPointMode keep;
+  const std::string path = file.string();
   auto s = std::make_shared<LoadedScene>();
   s->path = path;
   s->scene = loadScene(path, LoadOptions(true));
@@ -284,7 +289,8 @@ py::dtype recordDtype(const std::string& type) {
   return py::dtype::from_args(spec);
 }
 
-py::array readDumpArray(const std::string& path) {
+py::array readDumpArray(const std::filesystem::path& file) {
+  const std::string path = file.string();
   const DumpHeader header = readDumpHeader(path);
   const std::string type = recordTypeName(header);
   if (!dumpRecordTypes().count(type)) throw std::runtime_error("'" + path + "': unknown record type '" + type + "'");
@@ -305,9 +311,25 @@ py::array readDumpArray(const std::string& path) {
 PYBIND11_MODULE(lucent, m) {
   m.doc() = "Lucent, a CPU reference renderer for global illumination: scenes, renders to NumPy arrays, "
             "lucent compare's metrics and tests on arrays, and stage dumps as structured arrays";
+  // Messages quote file names, which need not be UTF-8: their bytes that are not are shown as U+FFFD
+  // (pybind11's own translation drops such a message). Registered first, so tried after OptionError's.
+  py::register_exception_translator([](std::exception_ptr thrown) {
+    const auto raise = [](PyObject* type, const char* what) {
+      PyObject* message = PyUnicode_DecodeUTF8(what, Py_ssize_t(std::strlen(what)), "replace");
+      PyErr_SetObject(type, message);
+      Py_XDECREF(message);
+    };
+    try {
+      if (thrown) std::rethrow_exception(thrown);
+    } catch (const std::invalid_argument& e) {
+      raise(PyExc_ValueError, e.what());
+    } catch (const std::runtime_error& e) {
+      raise(PyExc_RuntimeError, e.what());
+    }
+  });
   py::register_exception<OptionError>(m, "OptionError", PyExc_ValueError);
   py::class_<LoadedScene, std::shared_ptr<LoadedScene>>(m, "Scene", "A loaded scene with its Embree visibility")
-      .def_property_readonly("path", [](const LoadedScene& s) { return s.path; })
+      .def_property_readonly("path", [](const LoadedScene& s) { return py::module_::import("os").attr("fsdecode")(py::bytes(s.path)); })
       .def_property_readonly("width", [](const LoadedScene& s) { return s.scene.camera.width; })
       .def_property_readonly("height", [](const LoadedScene& s) { return s.scene.camera.height; })
       .def_property_readonly("triangles", [](const LoadedScene& s) { return s.scene.indices.size() / 3; });
@@ -330,7 +352,8 @@ PYBIND11_MODULE(lucent, m) {
         py::arg("reference_srgb") = false,
         "lucent compare on arrays in memory: each of image and reference is a (height, width, 3) array or a dict "
         "like render's (image, variance, layers). Returns compare's JSON as a dict (without the file names).");
-  m.def("read_image", [](const std::string& path) {
+  m.def("read_image", [](const std::filesystem::path& file) {
+    const std::string path = file.string();
     ImageMetadata metadata;
     const Image image = readLinearImage(path, &metadata);
     py::dict out = imageArrays(image);

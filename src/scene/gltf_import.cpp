@@ -381,6 +381,8 @@ TextureFile textureImage(const Context& c, const tinygltf::TextureInfo& info, co
   if (!png && !jpeg) c.fail(imagePath, "is neither a PNG nor a JPEG image");
   file.path = c.file + "#" + imagePath + (png ? ".png" : ".jpg");
   file.origin = c.file + ": " + path;
+  // An image from a file of its own: named too, as the URI gives it.
+  if (image.bufferView < 0 && image.uri.rfind("data:", 0) != 0) file.origin += " (" + imagePath + ": '" + image.uri + "')";
   return file;
 }
 

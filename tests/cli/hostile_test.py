@@ -868,6 +868,35 @@ def test_no_output_replaces_a_texture_whatever_uri_reached_it(work, uri, texture
         assert changed(before, snapshot(work)) == [], run
 
 
+
+def test_a_truncated_jpeg_texture_is_refused_by_every_front_end(work):
+    # libjpeg reads a cut stream as grey with a warning that OpenImageIO drops: the render looked fine.
+    with open(os.path.join(SOURCE, "scenes", "ring", "wood-floorboards-texture.jpg"), "rb") as f:
+        jpeg = f.read()
+    write(os.path.join(work, "tex.jpg"), jpeg[:len(jpeg) // 2])
+    write(os.path.join(work, "scene.gltf"), textured_gltf("tex.jpg")[0])
+    run = lucent("render", "scene.gltf", "--spp", "1", "--resolution", "8x8", "-q", "-o", "out.exr", cwd=work)
+    assert run.code == 1 and "tex.jpg" in run.err and "truncated" in run.err, run
+    assert not os.path.exists(os.path.join(work, "out.exr"))
+    py = python_lucent("import sys\ntry:\n    lucent.load_scene('scene.gltf')\nexcept RuntimeError as e:\n"
+                       "    print(e); sys.exit(3)", cwd=work)
+    assert py.code == 3 and "tex.jpg" in py.out and "truncated" in py.out, py
+
+
+def test_python_takes_any_file_name_and_quotes_it_in_messages(work):
+    # Paths as str (a name that is not UTF-8 arrives with surrogates), bytes or pathlib.Path; a
+    # message that quotes such a name is kept, its odd bytes as U+FFFD (pybind11 had emptied it).
+    box_scene(work, name="s\udcfe.json", resolution=(8, 8))
+    py = python_lucent("import pathlib, sys\n"
+                       "for name in ('s\\udcfe.json', b's\\xfe.json', pathlib.Path('s\\udcfe.json')):\n"
+                       "    s = lucent.load_scene(name)\n"
+                       "    assert s.path == 's\\udcfe.json', repr(s.path)\n"
+                       "    assert lucent.render(s, spp=1)['image'].shape == (8, 8, 3)\n"
+                       "try:\n    lucent.load_scene('missing\\udcfe.json')\nexcept RuntimeError as e:\n"
+                       "    print(e); sys.exit(3)", cwd=work)
+    assert py.code == 3 and "missing\ufffd.json" in py.out, py
+
+
 def test_a_dump_never_replaces_a_buffer_of_the_scene(work):
     document, data = textured_gltf("tex.png", buffer_uri="shading_points.bin")
     write(os.path.join(work, "tex.png"), fuzz_corpus().png(2, 2, (200, 100, 50)))
