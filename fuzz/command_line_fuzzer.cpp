@@ -1,6 +1,6 @@
 // libFuzzer target for the command line (src/cli/): one input is the arguments after `lucent`,
 // separated by NUL bytes (at most 64). They are parsed as the lucent program parses them, every
-// command registered, with each command's work left out: CLI11's parsing and checks for compare,
+// command registered, up to where each command's work would start: CLI11's parsing and checks for compare,
 // merge, report, methods and check-dump; for render, its own flags (parseRenderArgs) and the chosen
 // method's options resolved and checked (renderMethodOptions) against a scene without a render
 // block. Every rejection must be a CLI::ParseError, std::invalid_argument or std::runtime_error;
@@ -35,11 +35,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   lucent::cli::addMergeCommand(app, exitCode);
   lucent::cli::addReportCommand(app, exitCode);
   lucent::cli::addCheckDumpCommand(app, exitCode);
-  for (CLI::App* command : app.get_subcommands({})) command->callback(std::function<void()>());
+  // Once everything is parsed and checked, before any command's callback runs its work (the app's
+  // own parse-complete callback runs first; each command's state lives in its callback, so the
+  // callbacks stay as they are).
+  struct Parsed {};
+  app.parse_complete_callback([] { throw Parsed(); });
   std::vector<const char*> argv;
   for (const std::string& a : args) argv.push_back(a.c_str());
   try {
-    app.parse(int(argv.size()), argv.data());
+    try {
+      app.parse(int(argv.size()), argv.data());
+      return 0;  // no command: --help (CLI::CallForHelp) or nothing
+    } catch (const Parsed&) {
+    }
     CLI::App* render = app.get_subcommand("render");
     if (render->parsed()) {
       const lucent::cli::RenderArgs parsed = lucent::cli::parseRenderArgs(render->remaining());
