@@ -29,12 +29,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   CLI::App app{"lucent"};
   app.require_subcommand(1);
   int exitCode = 0;
-  lucent::cli::addRenderCommand(app, exitCode);
-  lucent::cli::addCompareCommand(app, exitCode);
-  lucent::cli::addMethodsCommand(app, exitCode);
-  lucent::cli::addMergeCommand(app, exitCode);
-  lucent::cli::addReportCommand(app, exitCode);
-  lucent::cli::addCheckDumpCommand(app, exitCode);
+  lucent::cli::addCommands(app, exitCode);
   // Once everything is parsed and checked, before any command's callback runs its work (the app's
   // own parse-complete callback runs first; each command's state lives in its callback, so the
   // callbacks stay as they are).

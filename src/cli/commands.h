@@ -10,4 +10,14 @@ void addMethodsCommand(CLI::App& app, int& exitCode);
 void addMergeCommand(CLI::App& app, int& exitCode);
 void addReportCommand(CLI::App& app, int& exitCode);
 void addCheckDumpCommand(CLI::App& app, int& exitCode);
+
+// Every command of the lucent program, in the order its help lists them.
+inline void addCommands(CLI::App& app, int& exitCode) {
+  addRenderCommand(app, exitCode);
+  addCompareCommand(app, exitCode);
+  addMethodsCommand(app, exitCode);
+  addMergeCommand(app, exitCode);
+  addReportCommand(app, exitCode);
+  addCheckDumpCommand(app, exitCode);
+}
 }  // namespace lucent::cli

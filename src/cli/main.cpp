@@ -11,12 +11,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Lucent: a CPU reference renderer for global illumination"};
   app.require_subcommand(1);
   int exitCode = 0;
-  lucent::cli::addRenderCommand(app, exitCode);
-  lucent::cli::addCompareCommand(app, exitCode);
-  lucent::cli::addMethodsCommand(app, exitCode);
-  lucent::cli::addMergeCommand(app, exitCode);
-  lucent::cli::addReportCommand(app, exitCode);
-  lucent::cli::addCheckDumpCommand(app, exitCode);
+  lucent::cli::addCommands(app, exitCode);
   // An unknown command word, named (CLI11 would say only that a subcommand is required).
   if (argc > 1 && argv[1][0] != '-') {
     const std::string command = argv[1];
