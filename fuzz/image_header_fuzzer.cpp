@@ -15,8 +15,8 @@
 #include "lucent/image/metrics.h"
 
 namespace {
-// The formats Lucent reads (and two it refuses by their name).
-constexpr const char* kExtensions[] = {".exr", ".png", ".hdr", ".jpg", ".tif", ".jpeg", ".tiff", ".tga"};
+// The formats Lucent reads (and one it refuses by its name).
+constexpr const char* kExtensions[] = {".exr", ".png", ".hdr", ".jpg", ".tif", ".jpeg", ".pfm", ".tga"};
 }
 
 // 16 MiB beside what the fuzzer holds: an image that would need more is refused with a

@@ -6,7 +6,7 @@ fuzzer's order (fuzz/scene_loader_fuzzer.cpp: scene.json, mesh.obj, mesh.mtl, th
 texture.png and as sky.hdr) and renamed to the fuzzer's names, plus scenes with a texture and with an
 environment map written here. film_reader and merge: film files of whole renders, parts, checkpoints
 and layered films, in fuzz/film_fuzz_input.h's two forms; merge's joined as parts. image_header:
-pairs of small EXR, PNG and Radiance images (and a TGA, which Lucent refuses), of equal and of
+pairs of small EXR, PNG, Radiance and PFM (colour and grey) images (and a TGA, which Lucent refuses), of equal and of
 different sizes. gltf_loader: the exported Cornell box (scenes/gltf/cornell-box.glb) and small
 .gltf files with embedded buffers: a quad as a triangle strip with interleaved attributes and a
 point light, the same with a sparse accessor, with node transforms, with a base colour texture, and
@@ -164,6 +164,8 @@ def image_seeds():
         "exr": (0, exr(4, 4, ["R", "G", "B"])),
         "png": (1, png(4, 4, (200, 120, 40))),
         "hdr": (2, radiance_hdr(4, 4, (128, 128, 160, 129))),
+        "pfm": (6, b"PF\n4 4\n-1.0\n" + struct.pack("<48f", *([0.5] * 48))),
+        "pfm-grey": (6, b"Pf\n4 4\n1.0\n" + struct.pack(">16f", *([2.0] * 16))),
         "tga": (7, b"\0\0\2" + bytes(9) + struct.pack("<HHBB", 4, 4, 24, 0) + bytes(48)),
     }
     seeds = {}

@@ -299,7 +299,7 @@ std::string lowercase(std::string text) {
 }
 
 // The formats Lucent reads, by extension (docs/scene-format.md, map_Kd).
-constexpr std::string_view kReadableExtensions[] = {".exr", ".hdr", ".png", ".jpg", ".jpeg", ".tif", ".tiff"};
+constexpr std::string_view kReadableExtensions[] = {".exr", ".hdr", ".pfm", ".png", ".jpg", ".jpeg", ".tif", ".tiff"};
 
 // An opened image: its reader, and the bytes it reads where they are in memory.
 struct OpenedImage {
@@ -317,7 +317,7 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
   if (std::find(std::begin(kReadableExtensions), std::end(kReadableExtensions), extension) ==
       std::end(kReadableExtensions))
     throw std::runtime_error("cannot read image '" + name +
-                             "': not a format Lucent reads (.exr, .hdr, .png, .jpg or .jpeg, .tif or .tiff)");
+                             "': not a format Lucent reads (.exr, .hdr, .pfm, .png, .jpg or .jpeg, .tif or .tiff)");
   // Created by the format's name: given the path, create() also tries every other reader when the
   // file is not valid for its own.
   OpenedImage opened{std::move(memory), OIIO::ImageInput::create(extension.substr(1), false)};
@@ -347,7 +347,9 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
   for (int c = 0; c < spec.nchannels; ++c) pixelBytes += spec.channelformat(c).size();
   const uint64_t stored = uint64_t(spec.width) * uint64_t(spec.height) * pixelBytes;
   const std::string compression = spec.get_string_attribute("compression", "");
-  const uint64_t most = compression == "none" ? sourceBytes : sourceBytes * kMostDecodedPerByte;
+  // A PFM's floats are stored as they are.
+  const bool raw = compression == "none" || extension == ".pfm";
+  const uint64_t most = raw ? sourceBytes : sourceBytes * kMostDecodedPerByte;
   if (stored > most)
     throw std::runtime_error("cannot read image '" + name + "': its header claims " + std::to_string(spec.width) +
                              " x " + std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
@@ -392,13 +394,22 @@ std::vector<std::string> channelNames(const OIIO::ImageSpec& spec) {
   return names;
 }
 
+// A grey PFM ("Pf") is read as the same value in R, G and B: compared as a colour image.
+bool isGreyPfm(const OIIO::ImageInput& in) {
+  return std::string_view(in.format_name()) == "pnm" && in.spec().nchannels == 1 && in.spec().format == OIIO::TypeDesc::FLOAT;
+}
+
+std::vector<std::string> channelsAsRead(const OIIO::ImageInput& in) {
+  return isGreyPfm(in) ? std::vector<std::string>{"R", "G", "B"} : channelNames(in.spec());
+}
+
 }  // namespace
 
 ImageHeader readImageHeader(const std::string& path) {
   const OpenedImage opened = openChecked(path);
   const auto& in = opened.in;
   const OIIO::ImageSpec& spec = in->spec();
-  ImageHeader header{spec.width, spec.height, channelNames(spec)};
+  ImageHeader header{spec.width, spec.height, channelsAsRead(*in)};
   in->close();
   return header;
 }
@@ -412,11 +423,18 @@ Image readOpened(OpenedImage opened, const std::string& name, ImageMetadata* met
   // their stored format (up to 8 bytes a channel): for a Radiance header claiming 19,854,521 x 2
   // pixels it asked for 61 GB (found by fuzzing).
   const uint64_t floats = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels);
-  requireMemory(floats * sizeof(float) + 256 * uint64_t(spec.width) * uint64_t(spec.nchannels) * 8,
+  requireMemory(floats * sizeof(float) * (isGreyPfm(*in) ? 4 : 1) + 256 * uint64_t(spec.width) * uint64_t(spec.nchannels) * 8,
                 "the image '" + name + "'", "raise --memory-limit if the machine has the memory");
   Image image(spec.width, spec.height, channelNames(spec));
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels().data()))
     throw std::runtime_error("cannot read image '" + name + "': " + in->geterror());
+  if (isGreyPfm(*in)) {
+    Image rgb(spec.width, spec.height, {"R", "G", "B"});
+    for (int y = 0; y < spec.height; ++y)
+      for (int x = 0; x < spec.width; ++x)
+        for (int c = 0; c < 3; ++c) rgb.at(x, y, c) = image.at(x, y, 0);
+    image = std::move(rgb);
+  }
   if (metadata) {
     metadata->clear();
     for (const OIIO::ParamValue& p : spec.extra_attribs)

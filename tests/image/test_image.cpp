@@ -151,6 +151,44 @@ TEST_CASE("Reading a missing or broken file names it") {
   CHECK_THROWS_WITH(readImage(dir / "broken.exr"), Catch::Contains(dir / "broken.exr"));
 }
 
+TEST_CASE("PFM, as GPU programs dump it: colour and grey, both byte orders, rows from the bottom") {
+  // Rows are stored bottom to top; a negative scale means little-endian floats.
+  const auto pfm = [](bool colour, bool littleEndian, int width, int height, const std::vector<float>& topDown) {
+    std::string bytes = std::string(colour ? "PF" : "Pf") + "\n" + std::to_string(width) + " " + std::to_string(height) +
+                        "\n" + (littleEndian ? "-1.0" : "1.0") + "\n";
+    const int channels = colour ? 3 : 1;
+    for (int y = height - 1; y >= 0; --y)
+      for (int i = 0; i < width * channels; ++i) {
+        uint32_t u = bits(topDown[size_t(y * width * channels + i)]);
+        for (int b = 0; b < 4; ++b) bytes += char(littleEndian ? (u >> (8 * b)) & 0xff : (u >> (8 * (3 - b))) & 0xff);
+      }
+    return bytes;
+  };
+  TempDir dir;
+  const std::vector<float> colour = {1, 10, 100, 2, 20, 200, 3, 30, 300, 4, 40, 400, 5, 50, 500, 6, 60, 600};
+  for (const bool little : {true, false}) {
+    std::ofstream(dir / "c.pfm", std::ios::binary) << pfm(true, little, 3, 2, colour);
+    const Image c = readImage(dir / "c.pfm");
+    REQUIRE(c.width() == 3);
+    REQUIRE(c.height() == 2);
+    REQUIRE(c.channels() == std::vector<std::string>{"R", "G", "B"});
+    CHECK(c.pixels() == colour);
+    // Grey: the same value in R, G and B.
+    std::ofstream(dir / "g.pfm", std::ios::binary) << pfm(false, little, 3, 2, {1, 2, 3, 4, 5, 6.5f});
+    const Image g = readImage(dir / "g.pfm");
+    REQUIRE(g.channels() == std::vector<std::string>{"R", "G", "B"});
+    CHECK(g.at(2, 1, 0) == 6.5f);
+    CHECK(g.at(2, 1, 2) == 6.5f);
+    CHECK(g.at(0, 0, 1) == 1.0f);
+  }
+  // Cut short, and a header claiming far more than the file holds: refused, naming the file.
+  const std::string whole = pfm(true, true, 3, 2, colour);
+  std::ofstream(dir / "cut.pfm", std::ios::binary) << whole.substr(0, whole.size() - 8);
+  CHECK_THROWS_WITH(readImage(dir / "cut.pfm"), Catch::Contains("cut.pfm"));
+  std::ofstream(dir / "huge.pfm", std::ios::binary) << "PF\n4000 4000\n-1.0\n" << whole.substr(whole.find("-1.0\n") + 5);
+  CHECK_THROWS_WITH(readImage(dir / "huge.pfm"), Catch::Contains("huge.pfm") && Catch::Contains("more than its"));
+}
+
 TEST_CASE("A truncated JPEG is refused, not read with grey where its data stops") {
   // libjpeg fills a cut stream with grey and warns; OpenImageIO drops the warning.
   const fs::path whole = LUCENT_SOURCE_DIR "/scenes/ring/wood-floorboards-texture.jpg";
