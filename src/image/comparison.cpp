@@ -135,6 +135,8 @@ ImageComparison compareImagePair(Image candidateFile, Image referenceFile, const
   out["overall"] = metricsJson(error.overall);
   out["channels"] = nlohmann::ordered_json::object();
   for (const ChannelError& c : error.perChannel) out["channels"][c.channel] = metricsJson(c);
+  if (!error.notCompared.image.empty() || !error.notCompared.reference.empty())
+    out["not_compared"] = {{"image", error.notCompared.image}, {"reference", error.notCompared.reference}};
   out["non_finite"] = error.nonFinite;
   ImageComparison result;
   // A NaN error must fail, hence "<=" rather than "not >".

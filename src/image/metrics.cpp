@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 
 #include "lucent/core/srgb.h"
@@ -45,10 +46,7 @@ std::array<int, 3> rgbIndices(const Image& image, const std::string& prefix, con
 // estimate, not part of the image, so that an image compares with a reference that has them.
 bool isVarianceChannel(const std::string& name) { return name.rfind("variance.", 0) == 0; }
 
-// For each channel of `image`, the index of the same-named channel of `reference`; -1 for the
-// variance channels, which are not compared.
-// The channels that are compared (all but the variance channels), sorted; an error where two
-// images' differ.
+// The channels that are compared (all but the variance channels), sorted.
 std::vector<std::string> comparedChannels(const std::vector<std::string>& channels) {
   std::vector<std::string> names;
   for (const std::string& name : channels)
@@ -56,17 +54,37 @@ std::vector<std::string> comparedChannels(const std::vector<std::string>& channe
   std::sort(names.begin(), names.end());
   return names;
 }
-void requireSameChannels(const std::vector<std::string>& image, const std::vector<std::string>& reference) {
-  if (comparedChannels(image) != comparedChannels(reference))
-    throw std::invalid_argument("image channels differ: " + joinNames(image) + " vs reference " + joinNames(reference));
+
+bool hasRgb(const std::vector<std::string>& channels) {
+  for (const char* name : {"R", "G", "B"})
+    if (std::find(channels.begin(), channels.end(), name) == channels.end()) return false;
+  return true;
 }
 
-std::vector<int> matchChannels(const Image& image, const Image& reference) {
+// The channels one image has and the other has not (variance channels aside), or an error where
+// the two cannot be compared: their sets may differ only where both hold R, G and B (another
+// renderer's RGBA against a reference with layers), and then their common channels are compared.
+ChannelsLeftOut channelsLeftOut(const std::vector<std::string>& image, const std::vector<std::string>& reference) {
+  const std::vector<std::string> a = comparedChannels(image), b = comparedChannels(reference);
+  ChannelsLeftOut out;
+  if (a == b) return out;
+  if (!hasRgb(a) || !hasRgb(b))
+    throw std::invalid_argument("image channels differ: " + joinNames(image) + " vs reference " + joinNames(reference) +
+                                " (images whose channels differ are compared by their R, G and B, which both need)");
+  std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out.image));
+  std::set_difference(b.begin(), b.end(), a.begin(), a.end(), std::back_inserter(out.reference));
+  return out;
+}
+
+// For each channel of `image`, the index of the same-named channel of `reference`; -1 for the
+// variance channels and those the reference lacks, which are not compared.
+std::vector<int> matchChannels(const Image& image, const Image& reference, ChannelsLeftOut* leftOut = nullptr) {
   requireSameSize(image, reference);
-  requireSameChannels(image.channels(), reference.channels());
+  const ChannelsLeftOut left = channelsLeftOut(image.channels(), reference.channels());
   std::vector<int> map;
   for (const std::string& name : image.channels())
     map.push_back(isVarianceChannel(name) ? -1 : reference.channelIndex(name));
+  if (leftOut) *leftOut = left;
   return map;
 }
 
@@ -112,13 +130,13 @@ std::array<float, 3> viridis(double t) {
 }  // namespace
 
 ImageError compareImages(const Image& image, const Image& reference) {
-  const std::vector<int> map = matchChannels(image, reference);
+  ImageError result;
+  const std::vector<int> map = matchChannels(image, reference, &result.notCompared);
   for (const float v : reference.pixels())
     if (!std::isfinite(v)) throw std::invalid_argument("the reference has NaN or infinite values");
   const int channels = image.channelCount();
   std::vector<ErrorSums> sums(channels);
   std::vector<double> counted(channels, 0.0);
-  ImageError result;
   for (int y = 0; y < image.height(); ++y)
     for (int x = 0; x < image.width(); ++x)
       for (int c = 0; c < channels; ++c) {
@@ -483,7 +501,10 @@ LayerChoice chooseLayer(const Image& candidate, const Image& reference, const st
 
 void checkComparable(const ImageHeader& image, const ImageHeader& reference, bool rgbOnly) {
   requireSameSize(image.width, image.height, reference.width, reference.height);
-  if (!rgbOnly) return requireSameChannels(image.channels, reference.channels);
+  if (!rgbOnly) {
+    channelsLeftOut(image.channels, reference.channels);
+    return;
+  }
   for (const auto& [channels, role] : {std::pair(&image.channels, "the image"), std::pair(&reference.channels, "the reference")})
     for (const char* name : {"R", "G", "B"})
       if (std::find(channels->begin(), channels->end(), name) == channels->end())

@@ -279,6 +279,24 @@ TEST_CASE("Metrics reject different sizes and channel sets") {
                   std::invalid_argument);
 }
 
+TEST_CASE("Another renderer's RGBA compares with a reference that has layers, by the channels both have") {
+  // Blender writes RGBA; Lucent's references carry layers. Both hold R, G and B: those are compared,
+  // and what one image has alone is named, not compared.
+  const Image rgba = makeImage(2, 1, {"R", "G", "B", "A"}, {1, 2, 3, 1, 2, 2, 2, 1});
+  const Image reference = makeImage(2, 1, {"R", "G", "B", "albedo.R", "variance.R"}, {1, 2, 3, 0.5f, 0, 2, 2, 4, 0.5f, 0});
+  const ImageError e = compareImages(rgba, reference);
+  REQUIRE(e.perChannel.size() == 3);
+  CHECK(e.notCompared.image == std::vector<std::string>{"A"});
+  CHECK(e.notCompared.reference == std::vector<std::string>{"albedo.R"});
+  CHECK(e.perChannel[2].channel == "B");
+  CHECK(e.perChannel[2].mae == Approx(1.0));  // |3 - 3| and |2 - 4| over two pixels
+  CHECK(e.overall.mae == Approx(2.0 / 6));
+  CHECK_NOTHROW(checkComparable({2, 1, rgba.channels()}, {2, 1, reference.channels()}, false));
+  // Without R, G and B in both, differing channels are still refused.
+  CHECK_THROWS_WITH(compareImages(makeImage(2, 1, {"R", "G", "A"}, {0, 0, 0, 0, 0, 0}), reference),
+                    Catch::Contains("need"));
+}
+
 TEST_CASE("Metrics leave out a reference's variance channels, so any render compares with a reference") {
   const Image image = makeImage(2, 1, {"R", "G", "B"}, {1, 1, 1, 2, 2, 2});
   const Image reference = makeImage(2, 1, {"R", "G", "B", "variance.R", "variance.G", "variance.B"},

@@ -13,8 +13,14 @@ struct ChannelError {
   double rmse = 0, mae = 0, relmse = 0, smape = 0;
 };
 
+// The channels of one image that the other lacks (variance channels aside): not compared.
+struct ChannelsLeftOut {
+  std::vector<std::string> image, reference;
+};
+
 struct ImageError {
   std::vector<ChannelError> perChannel;
+  ChannelsLeftOut notCompared;
   ChannelError overall;  // over all pixels and the compared channels
   // Values of the image that are NaN or infinite: an error of the image, however small the
   // metrics over its other values are (they leave these out).
@@ -22,9 +28,11 @@ struct ImageError {
 };
 
 // relMSE = mean((v - r)^2 / (r + 0.01)^2); SMAPE = mean(2|v - r| / (|v| + |r|)), 0 where both are 0.
-// Compares the channels both images have in common only if the sets are equal; throws
-// std::invalid_argument with a clear message for different sizes or channel sets, or for a
-// reference with a non-finite value.
+// Compares the channels both images have (variance channels aside): every one where their sets
+// are equal; where they differ, both must hold R, G and B (another renderer's RGB or RGBA against
+// a reference with layers), and the channels one has alone are listed in notCompared. Throws
+// std::invalid_argument with a clear message for different sizes, channel sets that differ
+// without R, G and B in both, or a reference with a non-finite value.
 ImageError compareImages(const Image& image, const Image& reference);
 // What compareImages (rgbOnly false) or the R, G, B comparisons of testWithinNoise and a report
 // (rgbOnly true) would refuse of two images' sizes and channels, from their headers alone: throws
