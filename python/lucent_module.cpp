@@ -242,8 +242,9 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
                    std::optional<double> maxError, bool test, int block, std::optional<double> within, double alpha,
                    const std::string& layer, const std::string& imageLayer, double ppd,
                    std::optional<double> startExposure, std::optional<double> stopExposure, bool imageSrgb,
-                   bool referenceSrgb) {
+                   bool referenceSrgb, bool ldr) {
   ComparisonSettings settings;
+  settings.ldr = ldr;
   settings.metric = metric, settings.maxError = maxError, settings.test = test, settings.block = block;
   settings.within = within, settings.alpha = alpha, settings.layer = layer, settings.imageLayer = imageLayer;
   settings.pixelsPerDegree = ppd, settings.startExposure = startExposure, settings.stopExposure = stopExposure;
@@ -349,7 +350,7 @@ PYBIND11_MODULE(lucent, m) {
         py::arg("max_error") = py::none(), py::arg("test") = false, py::arg("block") = 8, py::arg("within") = py::none(),
         py::arg("alpha") = 0.01, py::arg("layer") = "", py::arg("image_layer") = "", py::arg("ppd") = kFlipPixelsPerDegree,
         py::arg("start_exposure") = py::none(), py::arg("stop_exposure") = py::none(), py::arg("image_srgb") = false,
-        py::arg("reference_srgb") = false,
+        py::arg("reference_srgb") = false, py::arg("ldr") = false,
         "lucent compare on arrays in memory: each of image and reference is a (height, width, 3) array or a dict "
         "like render's (image, variance, layers). Returns compare's JSON as a dict (without the file names).");
   m.def("read_image", [](const std::filesystem::path& file) {

@@ -93,6 +93,9 @@ void addCompareCommand(CLI::App& app, int& exitCode) {
   CLI::Option* stopExposure = cmd->add_option(
       "--stop-exposure", opt->settings.stopExposure,
       "With --metric flip on HDR images: the last exposure in stops (default from the reference's median luminance)");
+  cmd->add_flag("--ldr", opt->settings.ldr,
+                "The image is an 8-bit display image: compare it with the reference clipped to [0, 1] (without it, "
+                "an 8-bit image against a reference brighter than 1 is refused)");
   CLI::Option* testFlag = cmd->add_flag("--test", opt->settings.test,
                 "Test whether the image differs from the reference by more than both images' noise "
                 "(the reference needs variance layers: render it with --variance)");

@@ -36,6 +36,7 @@ struct ReportOptions {
   std::vector<double> seconds;
   double alpha = 0.01, exposure = 0, pixelsPerDegree = kFlipPixelsPerDegree;
   std::optional<double> within;
+  bool ldr = false;
 };
 
 std::string escapeHtml(const std::string& text) {
@@ -484,18 +485,27 @@ int runReport(const ReportOptions& opt) {
     if (!opt.layer.empty()) file = chosen(file, c.path).candidate;
     c.seconds = opt.seconds.empty() ? renderSeconds(c.metadata) : std::optional<double>(opt.seconds[i]);
     const Image image = rgbChannels(file);
+    const bool candidateIsSrgb = isSrgbEncoded(c.path, c.metadata);
+    // An 8-bit candidate against the reference clipped to [0, 1] (--ldr), as lucent compare does.
+    std::optional<Image> clippedFile, clipped;
     try {
-      if (tested) c.test = testWithinNoise(file, referenceFile, opt.alpha);
-      if (tested && opt.within) c.equivalence = testEquivalence(file, referenceFile, *opt.within, opt.alpha);
-      c.error = compareImages(image, reference);
+      if (candidateIsSrgb && !referenceIsSrgb) {
+        clippedFile = referenceFile;
+        if (matchDisplayRange(candidateIsSrgb, referenceIsSrgb, *clippedFile, opt.ldr) > 0) clipped = rgbChannels(*clippedFile);
+        else clippedFile.reset();
+      }
+      const Image& referenceFor = clipped ? *clipped : reference;
+      const Image& referenceFileFor = clippedFile ? *clippedFile : referenceFile;
+      if (tested) c.test = testWithinNoise(file, referenceFileFor, opt.alpha);
+      if (tested && opt.within) c.equivalence = testEquivalence(file, referenceFileFor, *opt.within, opt.alpha);
+      c.error = compareImages(image, referenceFor);
       // As lucent compare --metric flip: LDR-FLIP between 8-bit files, HDR-FLIP otherwise.
-      c.flip = computeFlip(image, reference,
-                           flipOptions(isSrgbEncoded(c.path, c.metadata), referenceIsSrgb, opt.pixelsPerDegree));
+      c.flip = computeFlip(image, referenceFor, flipOptions(candidateIsSrgb, referenceIsSrgb, opt.pixelsPerDegree));
+      c.errorUri = pngDataUri(errorHeatmap(image, referenceFor, ErrorMetric::RelMse, 0, &c.errorScale));
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("'" + c.path + "' vs '" + opt.reference + "': " + e.what());
     }
     c.imageUri = pngDataUri(exposed(image, opt.exposure));
-    c.errorUri = pngDataUri(errorHeatmap(image, reference, ErrorMetric::RelMse, 0, &c.errorScale));
     c.flipUri = pngDataUri(valueHeatmap(c.flip.map, 1));
     if (c.test) c.statisticUri = pngDataUri(valueHeatmap(c.test->statistic, 5));
     candidates.push_back(std::move(c));
@@ -545,6 +555,9 @@ void addReportCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("--exposure", opt->exposure, "Exposure of the shown images, in stops, in [-30, 30] (default 0)");
   addLayerOptions(cmd, opt->layer, opt->imageLayer, "each candidate");
   cmd->add_option("--ppd", opt->pixelsPerDegree, kPixelsPerDegreeHelp);
+  cmd->add_flag("--ldr", opt->ldr,
+                "8-bit candidates are display images: compare each with the reference clipped to [0, 1] (without "
+                "it, an 8-bit candidate against a reference brighter than 1 is refused)");
   cmd->callback([opt, &exitCode] {
     try {
       exitCode = runReport(*opt);

@@ -91,6 +91,26 @@ void checkComparisonSettings(const ComparisonSettings& opt) {
     throw std::invalid_argument("--start-exposure must not exceed --stop-exposure");
 }
 
+uint64_t matchDisplayRange(bool candidateIsSrgb, bool referenceIsSrgb, Image& reference, bool ldr) {
+  if (!candidateIsSrgb || referenceIsSrgb) return 0;
+  uint64_t above = 0;
+  for (const char* name : {"R", "G", "B"}) {
+    const int c = reference.channelIndex(name);
+    if (c < 0) continue;
+    for (int y = 0; y < reference.height(); ++y)
+      for (int x = 0; x < reference.width(); ++x)
+        if (reference.at(x, y, c) > 1.0f) {
+          ++above;
+          if (ldr) reference.at(x, y, c) = 1.0f;
+        }
+  }
+  if (above > 0 && !ldr)
+    throw std::invalid_argument("the image is 8-bit (at most 1 once decoded) and the reference exceeds 1 in " +
+                                std::to_string(above) + " values: compare an HDR image (EXR, PFM, HDR), or give --ldr "
+                                "to compare it with the reference clipped to [0, 1]");
+  return above;
+}
+
 ImageComparison compareImagePair(Image candidateFile, Image referenceFile, const ComparisonSettings& opt,
                                  bool candidateIsSrgb, bool referenceIsSrgb) {
   checkComparisonSettings(opt);
@@ -101,6 +121,7 @@ ImageComparison compareImagePair(Image candidateFile, Image referenceFile, const
                                   " has no pixels (" + std::to_string(image->width()) + " x " +
                                   std::to_string(image->height()) + ")");
   const bool statistical = opt.test || opt.within.has_value();
+  const uint64_t clipped = matchDisplayRange(candidateIsSrgb, referenceIsSrgb, referenceFile, opt.ldr);
   const bool flip = opt.metric == "flip";
   const ErrorMetric metric = flip ? ErrorMetric::RelMse : parseErrorMetric(opt.metric);
   std::optional<LayerChoice> layer;
@@ -138,6 +159,7 @@ ImageComparison compareImagePair(Image candidateFile, Image referenceFile, const
   if (!error.notCompared.image.empty() || !error.notCompared.reference.empty())
     out["not_compared"] = {{"image", error.notCompared.image}, {"reference", error.notCompared.reference}};
   out["non_finite"] = error.nonFinite;
+  if (opt.ldr) out["ldr"] = {{"reference_values_clipped", clipped}};
   ImageComparison result;
   // A NaN error must fail, hence "<=" rather than "not >".
   result.passed = error.nonFinite == 0 && (!opt.maxError || value <= *opt.maxError) && (!test || test->passed) &&

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "lucent/image/comparison.h"
 #include "lucent/image/image.h"
 #include "lucent/image/metrics.h"
 #include "test_support.h"
@@ -295,6 +296,23 @@ TEST_CASE("Another renderer's RGBA compares with a reference that has layers, by
   // Without R, G and B in both, differing channels are still refused.
   CHECK_THROWS_WITH(compareImages(makeImage(2, 1, {"R", "G", "A"}, {0, 0, 0, 0, 0, 0}), reference),
                     Catch::Contains("need"));
+}
+
+TEST_CASE("An 8-bit image against a reference brighter than 1 is refused, or compared clipped with --ldr") {
+  // The reference's lamp is 2.5: an 8-bit image stops at 1, and the difference would read as a bias.
+  const Image reference = makeImage(2, 1, {"R", "G", "B"}, {2.5f, 0.5f, 0.25f, 0.5f, 0.5f, 0.5f});
+  const Image display = makeImage(2, 1, {"R", "G", "B"}, {1.0f, 0.5f, 0.25f, 0.5f, 0.5f, 0.5f});
+  CHECK_THROWS_WITH(compareImagePair(display, reference, {}, true, false),
+                    Catch::Contains("8-bit") && Catch::Contains("exceeds 1 in 1 values") && Catch::Contains("--ldr"));
+  ComparisonSettings ldr;
+  ldr.ldr = true;
+  ldr.maxError = 0.0;
+  const ImageComparison c = compareImagePair(display, reference, ldr, true, false);
+  CHECK(c.passed);
+  CHECK(nlohmann::json::parse(c.json)["ldr"]["reference_values_clipped"] == 1);
+  // An HDR candidate, or an 8-bit reference, is compared as it is.
+  CHECK_FALSE(compareImagePair(display, reference, ldr, false, false).passed);
+  CHECK_NOTHROW(compareImagePair(display, reference, {}, true, true));
 }
 
 TEST_CASE("Metrics leave out a reference's variance channels, so any render compares with a reference") {

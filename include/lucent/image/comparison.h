@@ -21,7 +21,15 @@ struct ComparisonSettings {
   double pixelsPerDegree = kFlipPixelsPerDegree;
   std::optional<double> startExposure, stopExposure;  // HDR-FLIP's range (default: from the reference)
   bool heatmap = false;            // also make the heatmap compare --heatmap writes
+  bool ldr = false;                // an 8-bit candidate against the reference clipped to [0, 1]
 };
+
+// An 8-bit (display) image holds at most 1 once decoded: against a reference brighter than that
+// (its lights), the clipped light would read as a bias (-51% on a lamp). Where the candidate is
+// 8-bit sRGB, the reference is not and some of its R, G, B values exceed 1, throws
+// std::invalid_argument saying so, unless `ldr`: then those values of `reference` are clipped to 1,
+// and their count is returned (0 where nothing applies).
+uint64_t matchDisplayRange(bool candidateIsSrgb, bool referenceIsSrgb, Image& reference, bool ldr);
 
 // Throws std::invalid_argument, naming the option as the command line spells it, for a setting out
 // of its range.
