@@ -303,6 +303,7 @@ constexpr std::string_view kReadableExtensions[] = {".exr", ".hdr", ".pfm", ".pn
 
 // An opened image: its reader, and the bytes it reads where they are in memory.
 struct OpenedImage {
+  std::vector<unsigned char> bytes;  // what `memory` reads, where the file was read whole first
   std::unique_ptr<OIIO::Filesystem::IOMemReader> memory;
   std::unique_ptr<OIIO::ImageInput> in;
 };
@@ -320,7 +321,7 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
                              "': not a format Lucent reads (.exr, .hdr, .pfm, .png, .jpg or .jpeg, .tif or .tiff)");
   // Created by the format's name: given the path, create() also tries every other reader when the
   // file is not valid for its own.
-  OpenedImage opened{std::move(memory), OIIO::ImageInput::create(extension.substr(1), false)};
+  OpenedImage opened{.memory = std::move(memory), .in = OIIO::ImageInput::create(extension.substr(1), false)};
   auto& in = opened.in;
   OIIO::ImageSpec header;
   if (in && opened.memory && !in->set_ioproxy(opened.memory.get()))
@@ -378,10 +379,15 @@ OpenedImage openChecked(const std::string& path) {
   }
   const std::string extension = lowercase(std::filesystem::path(path).extension().string());
   if (extension == ".jpg" || extension == ".jpeg") {
+    // Read once: checked to its end, then decoded from memory.
     std::ifstream file(path, std::ios::binary);
-    const std::vector<unsigned char> bytes{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
+    std::vector<unsigned char> bytes{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
     if (const std::string why = jpegStreamProblem(bytes); !why.empty())
       throw std::runtime_error("cannot read image '" + path + "': " + why);
+    auto memory = std::make_unique<OIIO::Filesystem::IOMemReader>(bytes.data(), bytes.size());
+    OpenedImage opened = openWithReader(path, extension, bytes.size(), std::move(memory));
+    opened.bytes = std::move(bytes);  // the buffer `memory` reads moves with it
+    return opened;
   }
   return openWithReader(path, extension,
                         ec ? std::numeric_limits<uint64_t>::max() / kMostDecodedPerByte : fileBytes, nullptr);

@@ -128,8 +128,8 @@ int main(int argc, char** argv) {
   }
   CLI11_PARSE(app, argc, argv);
 
-  RunDirectory temporary;
   try {
+    RunDirectory temporary;  // removed when this block ends, by a return or an exception
     // Checked before any work; CLI11's range checks let NaN through.
     checkDumpCompareOptions(compare);
     if (*cache && !(maxAngle >= 0.01f && maxAngle <= 90)) throw std::invalid_argument("--max-angle must lie in [0.01, 90]");
