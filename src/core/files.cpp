@@ -219,8 +219,16 @@ std::string admitInputFile(const std::filesystem::path& path) {
   AdmittedInput input{path.string(), identitiesOf(path)};
   InputRegistry& registry = inputRegistry();
   const std::lock_guard lock(registry.mutex);
-  for (const AdmittedInput& known : registry.inputs)
+  for (AdmittedInput& known : registry.inputs) {
     if (known.identities == input.identities) return "";
+    // Read again after it was replaced (an editor saving by rename, a script rewriting it): the
+    // file it was is no longer the one that name leads to, so the registry keeps one entry per name
+    // and does not grow with every reload.
+    if (known.path == input.path) {
+      known.identities = std::move(input.identities);
+      return "";
+    }
+  }
   registry.inputs.push_back(std::move(input));
   return "";
 }

@@ -195,6 +195,21 @@ TEST_CASE("No write replaces a file the process read, by whatever name it is rea
   CHECK_NOTHROW(write(dir.path / "other.png"));
 }
 
+TEST_CASE("A name read again after its file was replaced protects the file it now leads to, not both") {
+  // One entry per name: a process that reloads a scene thousands of times (a script, a fuzzer)
+  // keeps a registry of its names, not of every file they ever led to.
+  TempDir dir;
+  std::ofstream(dir.path / "scene.json") << "first";
+  REQUIRE(admitInputFile(dir.path / "scene.json").empty());
+  fs::create_hard_link(dir.path / "scene.json", dir.path / "first.json");  // keeps the first file alive
+  CHECK_THAT(inputFileClash(dir.path / "first.json"), Catch::Contains("a file this process reads"));
+  fs::remove(dir.path / "scene.json");
+  std::ofstream(dir.path / "scene.json") << "second";
+  REQUIRE(admitInputFile(dir.path / "scene.json").empty());
+  CHECK_THAT(inputFileClash(dir.path / "scene.json"), Catch::Contains("a file this process reads"));
+  CHECK(inputFileClash(dir.path / "first.json").empty());
+}
+
 TEST_CASE("Only regular files are admitted as inputs") {
   TempDir dir;
   REQUIRE(::mkfifo((dir.path / "pipe.bin").c_str(), 0600) == 0);

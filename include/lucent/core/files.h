@@ -40,7 +40,8 @@ std::string regularFileProblem(const std::filesystem::path& path);
 
 // What every reader of a scene's files (JSON, OBJ, MTL, textures, environment maps, glTF files and
 // their buffers and images) asks before it opens one: regularFileProblem(path), and when that is "",
-// `path` becomes one of this process's inputs for the rest of its life. No write of Lucent's replaces
+// `path` becomes one of this process's inputs for the rest of its life (read again under the same
+// name after the file was replaced, the file the name now leads to takes its place). No write of Lucent's replaces
 // an input, whatever name reaches it: inputs are known by identity (device and inode), both of the
 // name given and of the file it leads to, so a link, another spelling or a URI that a loader decoded
 // cannot reach one. (Images to compare, films and dumps are named as inputs by the commands that
