@@ -248,12 +248,21 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
   settings.metric = metric, settings.maxError = maxError, settings.test = test, settings.block = block;
   settings.within = within, settings.alpha = alpha, settings.layer = layer, settings.imageLayer = imageLayer;
   settings.pixelsPerDegree = ppd, settings.startExposure = startExposure, settings.stopExposure = stopExposure;
-  Image a = imageFrom(image, "image"), b = imageFrom(reference, "reference");
+  // A list or tuple of arrays: independent runs of one renderer.
+  std::vector<Image> runs;
+  if (py::isinstance<py::list>(image) || py::isinstance<py::tuple>(image)) {
+    for (const py::handle run : image) runs.push_back(imageFrom(run, "run " + std::to_string(runs.size() + 1)));
+    if (runs.size() < 2) throw std::invalid_argument("runs: give two or more arrays, or one array");
+  } else {
+    runs.push_back(imageFrom(image, "image"));
+  }
+  Image b = imageFrom(reference, "reference");
   ImageComparison result;
   {
     py::gil_scoped_release release;
     const KeepFloatingPointMode keep;
-    result = compareImagePair(std::move(a), std::move(b), settings, imageSrgb, referenceSrgb);
+    Candidate candidate = runs.size() == 1 ? Candidate(std::move(runs[0])) : Candidate(std::move(runs));
+    result = compareImagePair(std::move(candidate), std::move(b), settings, imageSrgb, referenceSrgb);
   }
   return py::module_::import("json").attr("loads")(result.json);
 }
@@ -352,7 +361,9 @@ PYBIND11_MODULE(lucent, m) {
         py::arg("start_exposure") = py::none(), py::arg("stop_exposure") = py::none(), py::arg("image_srgb") = false,
         py::arg("reference_srgb") = false, py::arg("ldr") = false,
         "lucent compare on arrays in memory: each of image and reference is a (height, width, 3) array or a dict "
-        "like render's (image, variance, layers). Returns compare's JSON as a dict (without the file names).");
+        "like render's (image, variance, layers); image may be a list of two or more such runs (renders with other "
+        "seeds), whose spread is the noise of test and within. Returns compare's JSON as a dict (without the file "
+        "names): its 'verdict' is 'pass', 'fail' or 'inconclusive'.");
   m.def("read_image", [](const std::filesystem::path& file) {
     const std::string path = file.string();
     ImageMetadata metadata;

@@ -56,10 +56,10 @@ struct CliRun {
   std::string output;  // stdout and stderr together
 };
 
-// Runs the built `lucent` executable with ARGS (already shell-quoted where needed).
-inline CliRun runLucent(const std::string& args) {
+// Runs a shell command line, its stdout and stderr captured together.
+inline CliRun runCommand(const std::string& command) {
   CliRun run;
-  FILE* pipe = ::popen((quoted(LUCENT_CLI) + " " + args + " 2>&1").c_str(), "r");
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
   if (!pipe) return run;
   char buffer[4096];
   for (size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) run.output.append(buffer, n);
@@ -67,6 +67,9 @@ inline CliRun runLucent(const std::string& args) {
   run.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return run;
 }
+
+// Runs the built `lucent` executable with ARGS (already shell-quoted where needed).
+inline CliRun runLucent(const std::string& args) { return runCommand(quoted(LUCENT_CLI) + " " + args); }
 
 // `lucent compare IMAGE REFERENCE --test` (both with variance layers): no block of 8 x 8 pixels
 // and no region (the whole image, a 4 x 4 grid) rejected at alpha 0.01, and the whole image's

@@ -1,19 +1,27 @@
-// lucent compare IMAGE REFERENCE [--metric rmse|relmse|smape|mae|flip] [--max-error X]
-//                [--test [--block N]] [--within D] [--alpha A] [--heatmap OUT.png]
+// lucent compare IMAGE... REFERENCE [--metric rmse|relmse|smape|mae|flip] [--max-error X]
+//                [--test [--block N]] [--within D] [--alpha A] [--heatmap OUT.png] [--json]
 //                [--ppd P] [--start-exposure S] [--stop-exposure S]
-//                [--layer NAME [--image-layer NAME]]
-// Exit status: 0 passed (or no threshold), 1 the chosen metric exceeds --max-error, the image
+//                [--layer NAME [--image-layer NAME]] [--ldr]
+// Two or more images before the reference are independent runs of one renderer (other seeds):
+// their mean is compared, and their spread is the noise --test and --within use.
+// Exit status: 0 pass (or no threshold); 1 fail: the chosen metric exceeds --max-error, the image
 // has NaN or infinite values, --test finds it differs from the reference by more than their
-// noise, or --within cannot show it within D of the reference; 2 error (the reference's NaN or
-// infinite values among them).
-// 8-bit images (PNG, JPEG) are decoded from sRGB to linear before they are compared. FLIP is
-// LDR-FLIP where both images are 8-bit sRGB files, HDR-FLIP otherwise.
+// noise, or --within shows it outside +-D; 2 bad input (the reference's NaN or infinite values
+// among them); 3 inconclusive: the candidate's noise is unknown (one image without variance
+// layers, or with half-float ones) or a --within interval reaches across +-D.
+// Prints the verdict in words when stdout is a terminal, compare's JSON line otherwise or with
+// --json. 8-bit images (PNG, JPEG) are decoded from sRGB to linear before they are compared. FLIP
+// is LDR-FLIP where both images are 8-bit sRGB files, HDR-FLIP otherwise.
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <sstream>
 
 #include "cli/commands.h"
 #include "cli/comparison_options.h"
@@ -28,48 +36,79 @@ namespace lucent::cli {
 namespace {
 
 struct CompareOptions {
-  std::string image, reference, heatmap;
+  std::vector<std::string> images;  // the candidate's runs, then the reference
+  std::string heatmap;
   ComparisonSettings settings;
+  bool json = false;
 };
+
+// Whether any of the variance channels (variance.R, or LAYER.variance.R) was stored as half floats.
+bool hasHalfVariance(const ImageHeader& header) {
+  return std::any_of(header.halfChannels.begin(), header.halfChannels.end(),
+                     [](const std::string& name) { return name.find("variance.") != std::string::npos; });
+}
 
 int runCompare(const CompareOptions& opt) {
   checkComparisonSettings(opt.settings);
   const ComparisonSettings& s = opt.settings;
-  if (!opt.heatmap.empty()) checkOutputFile(opt.heatmap, ".png", "--heatmap", {opt.image, opt.reference});
+  if (opt.images.size() < 2) throw std::invalid_argument("give an image (or its runs) and the reference");
+  const std::vector<std::string> runs(opt.images.begin(), opt.images.end() - 1);
+  const std::string& referencePath = opt.images.back();
+  if (runs.size() > 1 && !(s.test || s.within))
+    throw std::invalid_argument("several images before the reference are runs for --test or --within: give one of them");
+  if (!opt.heatmap.empty()) checkOutputFile(opt.heatmap, ".png", "--heatmap", opt.images);
   // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
   const bool statistical = s.test || s.within.has_value();
-  const std::string pair = "'" + opt.image + "' vs '" + opt.reference + "': ";
+  const std::string pair = "'" + runs[0] + (runs.size() > 1 ? "' (and its other runs)" : "'") + " vs '" + referencePath + "': ";
+  bool halfVariance = false;
   {
-    const ImageHeader image = readImageHeader(opt.image), reference = readImageHeader(opt.reference);
-    try {
-      checkComparable(image, reference, statistical || !s.layer.empty());
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(pair + e.what());
+    const ImageHeader reference = readImageHeader(referencePath);
+    for (const std::string& path : runs) {
+      const ImageHeader image = readImageHeader(path);
+      halfVariance = halfVariance || hasHalfVariance(image);
+      try {
+        checkComparable(image, reference, statistical || !s.layer.empty());
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument("'" + path + "' vs '" + referencePath + "': " + e.what());
+      }
     }
   }
   ImageMetadata candidateMetadata, referenceMetadata;
-  Image candidate = readLinearImage(opt.image, &candidateMetadata);
-  Image reference = readLinearImage(opt.reference, &referenceMetadata);
+  std::vector<Image> images;
+  bool candidateIsSrgb = false;
+  for (const std::string& path : runs) {
+    images.push_back(readLinearImage(path, &candidateMetadata));
+    candidateIsSrgb = candidateIsSrgb || isSrgbEncoded(path, candidateMetadata);
+  }
+  Image reference = readLinearImage(referencePath, &referenceMetadata);
+  Candidate candidate = images.size() == 1 ? Candidate(std::move(images[0]), halfVariance) : Candidate(std::move(images));
   ComparisonSettings settings = s;
   settings.heatmap = !opt.heatmap.empty();
   ImageComparison result;
   try {
-    result = compareImagePair(std::move(candidate), std::move(reference), settings,
-                              isSrgbEncoded(opt.image, candidateMetadata), isSrgbEncoded(opt.reference, referenceMetadata));
+    result = compareImagePair(std::move(candidate), std::move(reference), settings, candidateIsSrgb,
+                              isSrgbEncoded(referencePath, referenceMetadata));
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(pair + e.what());
   }
   nlohmann::ordered_json out;
-  out["image"] = opt.image;
-  out["reference"] = opt.reference;
+  out["image"] = runs[0];
+  if (runs.size() > 1) out["runs"] = runs;
+  out["reference"] = referencePath;
   const nlohmann::ordered_json computed = nlohmann::ordered_json::parse(result.json);
   for (const auto& [key, value] : computed.items()) out[key] = value;
   if (!opt.heatmap.empty()) {
     writePng(result.heatmap, opt.heatmap);
     out["heatmap"] = opt.heatmap;
   }
-  std::cout << jsonText(out) << std::endl;
-  return result.passed ? 0 : 1;
+  if (opt.json || !::isatty(STDOUT_FILENO)) std::cout << jsonText(out) << std::endl;
+  else {
+    // File names in the words may hold anything: each line is made printable on its own.
+    std::istringstream lines(result.words);
+    for (std::string line; std::getline(lines, line);) std::cout << printable(line) << "\n";
+    std::cout << std::flush;
+  }
+  return verdictExitStatus(result.verdict);
 }
 
 }  // namespace
@@ -77,8 +116,11 @@ int runCompare(const CompareOptions& opt) {
 void addCompareCommand(CLI::App& app, int& exitCode) {
   auto opt = std::make_shared<CompareOptions>();
   CLI::App* cmd = app.add_subcommand("compare", "Compare an image against a reference");
-  cmd->add_option("image", opt->image, "Image to evaluate")->required();
-  cmd->add_option("reference", opt->reference, "Reference image")->required();
+  cmd->add_option("images", opt->images,
+                  "The image to evaluate (or two or more independent runs of it, renders with other seeds, whose "
+                  "spread is the noise of --test and --within), then the reference image")
+      ->required();
+  cmd->add_flag("--json", opt->json, "Print compare's JSON line (the default where stdout is not a terminal)");
   cmd->add_option("--metric", opt->settings.metric, "Metric tested against --max-error (default relmse)")
       ->check(CLI::IsMember({"rmse", "relmse", "smape", "mae", "flip"}));
   cmd->add_option("--max-error", opt->settings.maxError, "Fail (exit 1) when the metric exceeds this");

@@ -7,6 +7,7 @@
 // layers) and of `lucent compare --metric flip`, the bias per region, and relMSE against seconds where the candidates' times are known
 // (--seconds, or the lucent:render_seconds a Lucent render stores). Prints one JSON line; exits 0
 // when the page is written, 1 on bad input (no page is written then).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -25,6 +26,7 @@
 #include "lucent/core/files.h"
 #include "lucent/image/flip.h"
 #include "lucent/image/metrics.h"
+#include "lucent/image/noise_tests.h"
 
 namespace lucent::cli {
 
@@ -117,7 +119,7 @@ Image exposed(Image image, double stops) {
   return image;
 }
 
-struct Candidate {
+struct ReportEntry {
   std::string path, label;
   std::optional<double> seconds;
   ImageMetadata metadata;
@@ -128,6 +130,16 @@ struct Candidate {
   double errorScale = 0;
   std::string imageUri, errorUri, statisticUri, flipUri;
 };
+
+// The CSS class of a verdict: passed, failed, inconclusive.
+const char* verdictClass(Verdict verdict) {
+  return verdict == Verdict::Pass ? "passed" : verdict == Verdict::Fail ? "failed" : "inconclusive";
+}
+
+std::string verdictCell(const std::string& key, Verdict verdict) {
+  return "<td data-key=\"" + key + "\" class=\"" + verdictClass(verdict) + "\">" +
+         (verdict == Verdict::Pass ? "passed" : verdict == Verdict::Fail ? "failed" : "inconclusive") + "</td>";
+}
 
 bool hasVarianceLayers(const Image& image) {
   for (const char* c : {"variance.R", "variance.G", "variance.B"})
@@ -147,13 +159,13 @@ std::string cell(const std::string& key, const std::string& text) {
 }
 
 // relMSE against seconds on log-log axes, one labelled point per timed candidate.
-std::string speedAccuracyChart(const std::vector<Candidate>& candidates) {
+std::string speedAccuracyChart(const std::vector<ReportEntry>& candidates) {
   struct Point {
     double seconds, relmse;
     std::string label;
   };
   std::vector<Point> points;
-  for (const Candidate& c : candidates)
+  for (const ReportEntry& c : candidates)
     if (c.seconds && c.error.overall.relmse > 0 && std::isfinite(c.error.overall.relmse))
       points.push_back({*c.seconds, c.error.overall.relmse, c.label});
   if (points.empty()) return "";
@@ -221,6 +233,7 @@ h1 { font-size: 22px; } h2 { font-size: 18px; margin-top: 32px; border-top: 1px 
 table { border-collapse: collapse; margin: 8px 0; } td, th { border: 1px solid #ccc; padding: 3px 8px; text-align: right; }
 th { background: #eee; } td:first-child { text-align: left; }
 .passed { color: #176b1b; font-weight: bold; } .failed { color: #b3261e; font-weight: bold; }
+.inconclusive { color: #8a5a00; font-weight: bold; }
 .images { display: flex; flex-wrap: wrap; gap: 16px; align-items: flex-start; }
 figure { margin: 0; } figcaption { font-size: 12px; color: #555; max-width: 512px; }
 .pixelated { image-rendering: pixelated; width: calc(var(--zoom) * var(--w)); max-width: 100%; }
@@ -301,7 +314,7 @@ selfCheck();
 )";
 
 std::string reportPage(const ReportOptions& opt, const Image& reference, const ImageMetadata& referenceMetadata,
-                       const std::vector<Candidate>& candidates, bool tested) {
+                       const std::vector<ReportEntry>& candidates, bool tested) {
   const int w = reference.width(), h = reference.height();
   // Small images are shown enlarged by a whole factor, so that their pixels stay square.
   const int zoom = std::max(1, 384 / std::max(w, h));
@@ -332,14 +345,14 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
     html << "<th>Within ±" << number(*opt.within) << "</th><th>Interval (whole image)</th>";
   html << "</tr>\n";
   for (size_t i = 0; i < candidates.size(); ++i) {
-    const Candidate& c = candidates[i];
+    const ReportEntry& c = candidates[i];
     html << "<tr data-candidate=\"" << i << "\"><td><a href=\"#candidate-" << i << "\">" << escapeHtml(c.label)
          << "</a></td>" << cell("seconds", c.seconds ? number(*c.seconds) : "–") << cell("relmse", number(c.error.overall.relmse))
          << cell("rmse", number(c.error.overall.rmse)) << cell("mae", number(c.error.overall.mae))
          << cell("smape", number(c.error.overall.smape)) << cell("flip", number(c.flip.mean)) << cell("non_finite", std::to_string(c.error.nonFinite));
     if (c.test) {
       const NoiseTest& t = *c.test;
-      html << "<td data-key=\"passed\" class=\"" << (t.passed ? "passed\">passed" : "failed\">failed") << "</td>"
+      html << verdictCell("passed", t.verdict)
            << cell("blocks_rejected", std::to_string(t.blocksRejected))
            << cell("fraction_rejected_at_alpha", number(double(t.blocksRejectedAtAlpha) / double(t.blocks)))
            << cell("relative_difference", number(t.regions[0].relativeDifference))
@@ -347,7 +360,7 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
     }
     if (c.equivalence) {
       const EquivalenceTest& e = *c.equivalence;
-      html << "<td data-key=\"equivalent\" class=\"" << (e.passed ? "passed\">passed" : "failed\">failed") << "</td><td>"
+      html << verdictCell("equivalent", e.verdict) << "<td>"
            << "<span data-key=\"interval_low\">" << number(e.regions[0].low) << "</span> to <span data-key=\"interval_high\">"
            << number(e.regions[0].high) << "</span></td>";
     }
@@ -366,7 +379,7 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
        << "<figcaption>" << escapeHtml(opt.reference) << "</figcaption></figure>\n";
 
   for (size_t i = 0; i < candidates.size(); ++i) {
-    const Candidate& c = candidates[i];
+    const ReportEntry& c = candidates[i];
     html << "<section id=\"candidate-" << i << "\"><h2>" << escapeHtml(c.label) << "</h2>\n<p class=\"note\"><code>"
          << escapeHtml(c.path) << "</code>: " << provenance(c.metadata) << "</p>\n";
     html << "<div class=\"flip-box\"><div class=\"controls\">Zoom <button data-zoom=\"1\">1x</button><button "
@@ -399,8 +412,13 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
            << (c.equivalence ? "; with --within, its (1 − 2α) interval, red where it leaves ±" + number(*opt.within) : "")
            << ". Blocks of "
            << t.block << " x " << t.block << " pixels rejected: " << t.blocksRejected << " of " << t.blocks
-           << "; least block p-value " << number(t.minBlockPValue)
-           << ".</p>\n<table class=\"regions\">";
+           << "; least block p-value " << number(t.minBlockPValue) << ".</p>\n";
+      const std::string undecided = !t.noise.undecided.empty() ? t.noise.undecided
+                                    : c.equivalence          ? c.equivalence->noise.undecided
+                                                             : "";
+      if (!undecided.empty())
+        html << "<p class=\"inconclusive\" data-key=\"undecided\">Inconclusive: " << escapeHtml(undecided) << ".</p>\n";
+      html << "<table class=\"regions\">";
       const int grid = int(std::lround(std::sqrt(double(t.regions.size() - 1))));
       for (int row = 0; row < grid; ++row) {
         html << "<tr>";
@@ -412,7 +430,7 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
                << "</span><br>z <span data-key=\"region-" << k << "-z\">" << number(r.z) << "</span>";
           if (c.equivalence) {
             const EquivalenceRegion& e = c.equivalence->regions[k];
-            html << "<br><span class=\"" << (e.equivalent ? "passed" : "failed") << "\">[<span data-key=\"region-" << k
+            html << "<br><span class=\"" << verdictClass(e.verdict) << "\">[<span data-key=\"region-" << k
                  << "-interval_low\">" << number(e.low) << "</span>, <span data-key=\"region-" << k
                  << "-interval_high\">" << number(e.high) << "</span>]</span>";
           }
@@ -448,9 +466,13 @@ int runReport(const ReportOptions& opt) {
   checkOutputFile(opt.output, ".html", "-o", inputs);
   // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
   const ImageHeader referenceHeader = readImageHeader(opt.reference);
+  std::vector<bool> halfVariance;
   for (const std::string& path : opt.candidates) {
+    const ImageHeader header = readImageHeader(path);
+    halfVariance.push_back(std::any_of(header.halfChannels.begin(), header.halfChannels.end(),
+                                       [](const std::string& name) { return name.find("variance.") != std::string::npos; }));
     try {
-      checkComparable(readImageHeader(path), referenceHeader, true);
+      checkComparable(header, referenceHeader, true);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument("'" + path + "' vs '" + opt.reference + "': " + e.what());
     }
@@ -476,9 +498,9 @@ int runReport(const ReportOptions& opt) {
   const bool referenceIsSrgb = isSrgbEncoded(opt.reference, referenceMetadata);
   const bool tested = hasVarianceLayers(referenceFile);
   const Image reference = rgbChannels(referenceFile);
-  std::vector<Candidate> candidates;
+  std::vector<ReportEntry> candidates;
   for (size_t i = 0; i < opt.candidates.size(); ++i) {
-    Candidate c;
+    ReportEntry c;
     c.path = opt.candidates[i];
     c.label = opt.labels.empty() ? std::filesystem::path(c.path).filename().string() : opt.labels[i];
     Image file = readLinearImage(c.path, &c.metadata);
@@ -496,8 +518,9 @@ int runReport(const ReportOptions& opt) {
       }
       const Image& referenceFor = clipped ? *clipped : reference;
       const Image& referenceFileFor = clippedFile ? *clippedFile : referenceFile;
-      if (tested) c.test = testWithinNoise(file, referenceFileFor, opt.alpha);
-      if (tested && opt.within) c.equivalence = testEquivalence(file, referenceFileFor, *opt.within, opt.alpha);
+      const Candidate candidate(file, halfVariance[i]);
+      if (tested) c.test = testWithinNoise(candidate, referenceFileFor, opt.alpha);
+      if (tested && opt.within) c.equivalence = testEquivalence(candidate, referenceFileFor, *opt.within, opt.alpha);
       c.error = compareImages(image, referenceFor);
       // As lucent compare --metric flip: LDR-FLIP between 8-bit files, HDR-FLIP otherwise.
       c.flip = computeFlip(image, referenceFor, flipOptions(candidateIsSrgb, referenceIsSrgb, opt.pixelsPerDegree));
@@ -523,11 +546,12 @@ int runReport(const ReportOptions& opt) {
   line["reference"] = opt.reference;
   line["tested"] = tested;
   line["candidates"] = nlohmann::ordered_json::array();
-  for (const Candidate& c : candidates) {
+  for (const ReportEntry& c : candidates) {
     nlohmann::ordered_json entry = {{"label", c.label}, {"image", c.path}, {"relmse", c.error.overall.relmse}, {"flip", c.flip.mean}};
     if (c.seconds) entry["seconds"] = *c.seconds;
-    if (c.test) entry["passed"] = c.test->passed;
-    if (c.equivalence) entry["equivalent"] = c.equivalence->passed;
+    if (c.test) entry["passed"] = c.test->verdict == Verdict::Pass, entry["test"] = verdictName(c.test->verdict);
+    if (c.equivalence)
+      entry["equivalent"] = c.equivalence->verdict == Verdict::Pass, entry["within"] = verdictName(c.equivalence->verdict);
     line["candidates"].push_back(entry);
   }
   std::cout << jsonText(line) << std::endl;

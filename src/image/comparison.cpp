@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/json_text.h"
@@ -11,16 +13,30 @@ namespace lucent {
 
 namespace {
 
+nlohmann::ordered_json noiseJson(const CandidateNoise& noise) {
+  nlohmann::ordered_json out;
+  out["source"] = noiseSourceName(noise.source);
+  out["runs"] = noise.runs;
+  if (noise.ignoredVarianceLayers) out["variance_layers"] = "ignored: the runs' spread was used";
+  if (noise.source == NoiseSource::Runs)
+    for (const CandidateNoise::Scale& scale : noise.scales)
+      out["correlation"][scale.name] = {{"factor", scale.correlation}, {"degrees_of_freedom", scale.degreesOfFreedom}};
+  if (!noise.undecided.empty()) out["undecided"] = noise.undecided;
+  return out;
+}
+
 nlohmann::ordered_json testJson(const NoiseTest& t) {
   nlohmann::ordered_json out;
   out["alpha"] = t.alpha;
-  out["passed"] = t.passed;
-  out["candidate_variance"] = t.candidateHasVariance;
+  out["verdict"] = verdictName(t.verdict);
+  out["passed"] = t.verdict == Verdict::Pass;
+  out["candidate_noise"] = noiseJson(t.noise);
   out["block"] = t.block;
   out["blocks"] = t.blocks;
   out["fraction_rejected_at_alpha"] = double(t.blocksRejectedAtAlpha) / double(t.blocks);
   out["blocks_rejected"] = t.blocksRejected;
   out["min_block_p_value"] = t.minBlockPValue;
+  out["min_block_at"] = {t.minBlockX, t.minBlockY};
   out["regions"] = nlohmann::ordered_json::array();
   for (const RegionTest& r : t.regions)
     out["regions"].push_back({{"region", {r.x0, r.y0, r.x1, r.y1}},
@@ -35,15 +51,73 @@ nlohmann::ordered_json equivalenceJson(const EquivalenceTest& t) {
   nlohmann::ordered_json out;
   out["within"] = t.within;
   out["alpha"] = t.alpha;
-  out["passed"] = t.passed;
-  out["candidate_variance"] = t.candidateHasVariance;
+  out["verdict"] = verdictName(t.verdict);
+  out["passed"] = t.verdict == Verdict::Pass;
+  out["candidate_noise"] = noiseJson(t.noise);
+  if (t.samplesToDecide > 0) out["samples_to_decide"] = t.samplesToDecide;
   out["regions"] = nlohmann::ordered_json::array();
   for (const EquivalenceRegion& r : t.regions)
     out["regions"].push_back({{"region", {r.x0, r.y0, r.x1, r.y1}},
                               {"relative_difference", r.relativeDifference},
                               {"interval", {r.low, r.high}},
-                              {"equivalent", r.equivalent}});
+                              {"verdict", verdictName(r.verdict)}});
   return out;
+}
+
+std::string percent(double value) {
+  std::ostringstream s;
+  s << std::showpos << std::setprecision(2) << std::fixed << 100 * value << "%";
+  return s.str();
+}
+
+std::string regionName(int x0, int y0, int x1, int y1, int width, int height) {
+  if (x0 == 0 && y0 == 0 && x1 == width && y1 == height) return "the whole image";
+  return "pixels x " + std::to_string(x0) + "-" + std::to_string(x1 - 1) + ", y " + std::to_string(y0) + "-" +
+         std::to_string(y1 - 1);
+}
+
+// The verdict in words: what was tested, what failed or is undecided, where and by how much.
+std::string verdictWords(Verdict verdict, int width, int height, uint64_t nonFinite,
+                         const ComparisonSettings& opt, double value, const std::optional<NoiseTest>& test,
+                         const std::optional<EquivalenceTest>& equivalence) {
+  std::ostringstream s;
+  s << verdictName(verdict) << "\n";
+  if (nonFinite > 0) s << "  the image has " << nonFinite << " NaN or infinite values\n";
+  if (opt.maxError)
+    s << "  " << opt.metric << " " << value << (value <= *opt.maxError ? " <= " : " > ") << *opt.maxError
+      << " (--max-error)\n";
+  const CandidateNoise* noise = test ? &test->noise : equivalence ? &equivalence->noise : nullptr;
+  if (noise) {
+    s << "  candidate noise: ";
+    if (noise->source == NoiseSource::Runs) {
+      s << "the spread of " << noise->runs << " runs";
+      for (const CandidateNoise::Scale& scale : noise->scales)
+        s << "; " << scale.name << ": sums vary " << std::setprecision(3) << scale.correlation
+          << " x their pixels' variances";
+      s << "\n";
+    } else {
+      s << noiseSourceName(noise->source) << "\n";
+    }
+  }
+  if (test) {
+    s << "  --test: " << verdictName(test->verdict) << ", " << test->blocksRejected << " of " << test->blocks
+      << " blocks of " << test->block << " x " << test->block << " rejected (least p-value "
+      << std::setprecision(3) << test->minBlockPValue << " at x " << test->minBlockX << ", y " << test->minBlockY
+      << ")\n";
+    for (const RegionTest& r : test->regions)
+      if (r.rejected)
+        s << "    " << regionName(r.x0, r.y0, r.x1, r.y1, width, height) << ": " << percent(r.relativeDifference)
+          << " (p-value " << std::setprecision(3) << r.pValue << ")\n";
+  }
+  if (equivalence) {
+    s << "  --within " << equivalence->within << ": " << verdictName(equivalence->verdict) << "\n";
+    for (const EquivalenceRegion& r : equivalence->regions)
+      if (r.verdict != Verdict::Pass || &r == &equivalence->regions.front())
+        s << "    " << regionName(r.x0, r.y0, r.x1, r.y1, width, height) << ": " << percent(r.relativeDifference)
+          << " [" << percent(r.low) << ", " << percent(r.high) << "] " << verdictName(r.verdict) << "\n";
+  }
+  if (noise && !noise->undecided.empty() && verdict == Verdict::Inconclusive) s << "  undecided: " << noise->undecided << "\n";
+  return s.str();
 }
 
 nlohmann::ordered_json metricsJson(const ChannelError& e) {
@@ -111,13 +185,14 @@ uint64_t matchDisplayRange(bool candidateIsSrgb, bool referenceIsSrgb, Image& re
   return above;
 }
 
-ImageComparison compareImagePair(Image candidateFile, Image referenceFile, const ComparisonSettings& opt,
+ImageComparison compareImagePair(Candidate candidate, Image referenceFile, const ComparisonSettings& opt,
                                  bool candidateIsSrgb, bool referenceIsSrgb) {
   checkComparisonSettings(opt);
+  if (candidate.runs.empty()) throw std::invalid_argument("no image to compare");
   // An image without pixels has no error to measure: "passed" would say nothing.
-  for (const Image* image : {&candidateFile, &referenceFile})
+  for (const Image* image : {&candidate.runs[0], &referenceFile})
     if (image->width() < 1 || image->height() < 1)
-      throw std::invalid_argument(std::string(image == &candidateFile ? "the image" : "the reference") +
+      throw std::invalid_argument(std::string(image == &referenceFile ? "the reference" : "the image") +
                                   " has no pixels (" + std::to_string(image->width()) + " x " +
                                   std::to_string(image->height()) + ")");
   const bool statistical = opt.test || opt.within.has_value();
@@ -126,22 +201,26 @@ ImageComparison compareImagePair(Image candidateFile, Image referenceFile, const
   const ErrorMetric metric = flip ? ErrorMetric::RelMse : parseErrorMetric(opt.metric);
   std::optional<LayerChoice> layer;
   if (!opt.layer.empty()) {
-    layer = chooseLayer(candidateFile, referenceFile, opt.layer, opt.imageLayer);
-    candidateFile = std::move(layer->candidate);
-    referenceFile = std::move(layer->reference);
+    const Image reference = std::move(referenceFile);
+    for (Image& run : candidate.runs) {
+      layer = chooseLayer(run, reference, opt.layer, opt.imageLayer);
+      run = std::move(layer->candidate);
+      referenceFile = std::move(layer->reference);
+    }
   }
-  // The test reads the variance layers; the metrics compare the colours.
+  // The tests read the variance layers or the runs; the metrics compare the colours (of the runs' mean).
   std::optional<NoiseTest> test;
   std::optional<EquivalenceTest> equivalence;
   std::optional<FlipResult> flipResult;
+  if (opt.test) test = testWithinNoise(candidate, referenceFile, opt.alpha, 4, opt.block);
+  if (opt.within) equivalence = testEquivalence(candidate, referenceFile, *opt.within, opt.alpha);
+  const Image candidateFile = candidateImage(candidate);
   if (flip) {
     FlipOptions options = flipOptions(candidateIsSrgb, referenceIsSrgb, opt.pixelsPerDegree);
     options.startExposure = opt.startExposure;
     options.stopExposure = opt.stopExposure;
     flipResult = computeFlip(candidateFile, referenceFile, options);
   }
-  if (opt.test) test = testWithinNoise(candidateFile, referenceFile, opt.alpha, 4, opt.block);
-  if (opt.within) equivalence = testEquivalence(candidateFile, referenceFile, *opt.within, opt.alpha);
   const Image image = statistical ? rgbChannels(candidateFile) : candidateFile;
   const Image reference = statistical ? rgbChannels(referenceFile) : referenceFile;
   const ImageError error = compareImages(image, reference);
@@ -162,18 +241,23 @@ ImageComparison compareImagePair(Image candidateFile, Image referenceFile, const
   if (opt.ldr) out["ldr"] = {{"reference_values_clipped", clipped}};
   ImageComparison result;
   // A NaN error must fail, hence "<=" rather than "not >".
-  result.passed = error.nonFinite == 0 && (!opt.maxError || value <= *opt.maxError) && (!test || test->passed) &&
-                  (!equivalence || equivalence->passed);
+  const bool measuredFail = error.nonFinite > 0 || (opt.maxError && !(value <= *opt.maxError));
+  result.verdict = measuredFail ? Verdict::Fail : Verdict::Pass;
+  if (test) result.verdict = combineVerdicts(result.verdict, test->verdict);
+  if (equivalence) result.verdict = combineVerdicts(result.verdict, equivalence->verdict);
   if (opt.maxError) out["max_error"] = *opt.maxError;
   if (test) out["test"] = testJson(*test);
   if (equivalence) out["equivalence"] = equivalenceJson(*equivalence);
   if (flipResult) out["flip"] = flipJson(*flipResult, opt.pixelsPerDegree);
-  out["passed"] = result.passed;
+  out["verdict"] = verdictName(result.verdict);
+  out["passed"] = result.verdict == Verdict::Pass;
   if (opt.heatmap)
     result.heatmap = flipResult ? valueHeatmap(flipResult->map, 1)
                      : test     ? valueHeatmap(test->statistic, 5)
                                 : errorHeatmap(image, reference, metric);
   result.json = jsonText(out);
+  result.words = verdictWords(result.verdict, image.width(), image.height(), error.nonFinite, opt, value, test,
+                              equivalence);
   return result;
 }
 

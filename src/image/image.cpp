@@ -321,7 +321,7 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
                              "': not a format Lucent reads (.exr, .hdr, .pfm, .png, .jpg or .jpeg, .tif or .tiff)");
   // Created by the format's name: given the path, create() also tries every other reader when the
   // file is not valid for its own.
-  OpenedImage opened{.memory = std::move(memory), .in = OIIO::ImageInput::create(extension.substr(1), false)};
+  OpenedImage opened{.bytes = {}, .memory = std::move(memory), .in = OIIO::ImageInput::create(extension.substr(1), false)};
   auto& in = opened.in;
   OIIO::ImageSpec header;
   if (in && opened.memory && !in->set_ioproxy(opened.memory.get()))
@@ -415,7 +415,9 @@ ImageHeader readImageHeader(const std::string& path) {
   const OpenedImage opened = openChecked(path);
   const auto& in = opened.in;
   const OIIO::ImageSpec& spec = in->spec();
-  ImageHeader header{spec.width, spec.height, channelsAsRead(*in)};
+  ImageHeader header{spec.width, spec.height, channelsAsRead(*in), {}};
+  for (int c = 0; c < spec.nchannels && size_t(c) < header.channels.size(); ++c)
+    if (spec.channelformat(c) == OIIO::TypeDesc::HALF) header.halfChannels.push_back(header.channels[size_t(c)]);
   in->close();
   return header;
 }

@@ -6,6 +6,7 @@
 #include <iterator>
 #include <stdexcept>
 
+#include "image/channel_indices.h"
 #include "lucent/core/srgb.h"
 
 namespace lucent {
@@ -16,30 +17,6 @@ std::string joinNames(const std::vector<std::string>& names) {
   std::string s = "[";
   for (size_t i = 0; i < names.size(); ++i) s += (i ? ", " : "") + names[i];
   return s + "]";
-}
-
-void requireSameSize(int width, int height, int referenceWidth, int referenceHeight) {
-  if (width != referenceWidth || height != referenceHeight)
-    throw std::invalid_argument("image sizes differ: " + std::to_string(width) + "x" + std::to_string(height) +
-                                " vs reference " + std::to_string(referenceWidth) + "x" +
-                                std::to_string(referenceHeight));
-}
-void requireSameSize(const Image& image, const Image& reference) {
-  requireSameSize(image.width(), image.height(), reference.width(), reference.height());
-}
-
-// The indices of the channels prefix + "R", "G", "B"; -1 where absent, or, when `role` names the
-// image ("the reference"), an error naming the missing channel.
-std::array<int, 3> rgbIndices(const Image& image, const std::string& prefix, const std::string& role,
-                              const std::string& remedy = "") {
-  std::array<int, 3> at{};
-  for (int c = 0; c < 3; ++c) {
-    const std::string name = prefix + std::string(1, "RGB"[c]);
-    at[size_t(c)] = image.channelIndex(name);
-    if (at[size_t(c)] < 0 && !role.empty())
-      throw std::invalid_argument(role + " has no " + name + " channel" + remedy);
-  }
-  return at;
 }
 
 // Whether a channel is the variance of another (render --variance): a statistic of the pixel's
@@ -245,176 +222,6 @@ Image copyChannels(const Image& image, std::vector<std::string> names, const std
 Image rgbChannels(const Image& image) {
   const std::array<int, 3> at = rgbIndices(image, "", "the image");
   return copyChannels(image, {"R", "G", "B"}, {at[0], at[1], at[2]});
-}
-
-namespace {
-
-// The region a tile index stands for: 0 the whole image, k > 0 the grid's tile k - 1, row by row.
-void regionBounds(size_t k, int tiles, int w, int h, int& x0, int& y0, int& x1, int& y1) {
-  if (k == 0) {
-    x0 = 0, y0 = 0, x1 = w, y1 = h;
-    return;
-  }
-  const int tx = int(k - 1) % tiles, ty = int(k - 1) / tiles;
-  x0 = tx * w / tiles, y0 = ty * h / tiles, x1 = (tx + 1) * w / tiles, y1 = (ty + 1) * h / tiles;
-}
-
-size_t tileOf(int x, int y, int tiles, int w, int h) { return size_t(1 + (y * tiles / h) * tiles + (x * tiles / w)); }
-
-// The statistical tests' channels: each image's R, G, B and variance layers, the reference's
-// required (a candidate without them counts as exact).
-struct TestChannels {
-  std::array<int, 3> candidate, reference, candidateVariance, referenceVariance;
-  bool candidateHasVariance = false;
-};
-TestChannels testChannels(const Image& candidate, const Image& reference) {
-  requireSameSize(candidate, reference);
-  TestChannels c;
-  c.candidate = rgbIndices(candidate, "", "the image");
-  c.reference = rgbIndices(reference, "", "the reference");
-  c.referenceVariance = rgbIndices(reference, "variance.", "the reference", " (render it with --variance)");
-  c.candidateVariance = rgbIndices(candidate, "variance.", "");
-  c.candidateHasVariance = c.candidateVariance[0] >= 0 && c.candidateVariance[1] >= 0 && c.candidateVariance[2] >= 0;
-  return c;
-}
-
-}  // namespace
-
-NoiseTest testWithinNoise(const Image& candidate, const Image& reference, double alpha, int grid, int block) {
-  if (!(alpha > 0 && alpha < 1)) throw std::invalid_argument("the significance must be in (0, 1)");
-  if (block < 1) throw std::invalid_argument("the block side must be at least 1 pixel");
-  const TestChannels channels = testChannels(candidate, reference);
-  const auto &cv = channels.candidate, &rv = channels.reference;
-  const auto &cVar = channels.candidateVariance, &rVar = channels.referenceVariance;
-  NoiseTest t;
-  t.alpha = alpha;
-  t.block = block;
-  t.candidateHasVariance = channels.candidateHasVariance;
-  const int w = candidate.width(), h = candidate.height();
-  const int blocksX = (w + block - 1) / block, blocksY = (h + block - 1) / block;
-  t.pixels = uint64_t(w) * uint64_t(h);
-  t.blocks = uint64_t(blocksX) * uint64_t(blocksY);
-  t.statistic = Image(w, h, {"z"});
-  auto pValue = [](double z) { return std::isfinite(z) ? std::erfc(std::abs(z) / std::sqrt(2.0)) : 0.0; };
-  auto statistic = [](double difference, double variance) {
-    if (variance > 0) return difference / std::sqrt(variance);
-    return difference == 0 ? 0.0 : std::copysign(double(kInf), difference);
-  };
-  // Sums per channel: difference, variance, reference.
-  struct Sums {
-    std::array<double, 3> difference{}, variance{}, reference{};
-  };
-  const int tiles = std::max(1, grid);
-  std::vector<Sums> regionSums(size_t(1 + tiles * tiles));
-  const double blockThreshold = alpha / (2.0 * 3.0 * double(t.blocks));
-  for (int by = 0; by < blocksY; ++by)
-    for (int bx = 0; bx < blocksX; ++bx) {
-      Sums sums;
-      const int x0 = bx * block, y0 = by * block, x1 = std::min(w, x0 + block), y1 = std::min(h, y0 + block);
-      for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x) {
-          Sums& tile = regionSums[tileOf(x, y, tiles, w, h)];
-          for (int c = 0; c < 3; ++c) {
-            const double d = double(candidate.at(x, y, cv[size_t(c)])) - reference.at(x, y, rv[size_t(c)]);
-            const double v = double(reference.at(x, y, rVar[size_t(c)])) +
-                             (t.candidateHasVariance ? double(candidate.at(x, y, cVar[size_t(c)])) : 0.0);
-            for (Sums* s : {&regionSums[0], &tile, &sums}) {
-              s->difference[size_t(c)] += d, s->variance[size_t(c)] += v;
-              s->reference[size_t(c)] += reference.at(x, y, rv[size_t(c)]);
-            }
-          }
-        }
-      double largest = 0, minP = 1;
-      for (int c = 0; c < 3; ++c) {
-        const double z = statistic(sums.difference[size_t(c)], sums.variance[size_t(c)]);
-        largest = std::max(largest, std::abs(z));
-        minP = std::min(minP, pValue(z));
-      }
-      for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x) t.statistic.at(x, y, 0) = float(largest);
-      t.minBlockPValue = std::min(t.minBlockPValue, minP);
-      t.blocksRejectedAtAlpha += std::min(1.0, 3.0 * minP) < alpha;
-      t.blocksRejected += minP < blockThreshold;
-    }
-  const double regionThreshold = alpha / (2.0 * 3.0 * double(regionSums.size()));
-  bool regionsPass = true;
-  for (size_t k = 0; k < regionSums.size(); ++k) {
-    RegionTest r;
-    regionBounds(k, tiles, w, h, r.x0, r.y0, r.x1, r.y1);
-    const Sums& s = regionSums[k];
-    double difference = 0, total = 0;
-    for (int c = 0; c < 3; ++c) {
-      const double z = statistic(s.difference[size_t(c)], s.variance[size_t(c)]);
-      if (pValue(z) <= r.pValue) r.pValue = pValue(z), r.z = z;
-      difference += s.difference[size_t(c)], total += s.reference[size_t(c)];
-    }
-    r.relativeDifference = total != 0 ? difference / total : 0;
-    r.rejected = r.pValue < regionThreshold;
-    regionsPass = regionsPass && !r.rejected;
-    t.regions.push_back(r);
-  }
-  t.passed = t.blocksRejected == 0 && regionsPass;
-  return t;
-}
-
-double normalUpperQuantile(double alpha) {
-  if (!(alpha > 0 && alpha < 1)) throw std::invalid_argument("a quantile's probability must be in (0, 1)");
-  // Bisection on the upper tail 0.5 erfc(z / sqrt 2), decreasing in z: to double precision.
-  double lo = -40, hi = 40;
-  for (int i = 0; i < 200 && hi - lo > 1e-15 * std::max(1.0, std::abs(lo)); ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (0.5 * std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
-
-EquivalenceTest testEquivalence(const Image& candidate, const Image& reference, double within, double alpha, int grid) {
-  if (!(alpha > 0 && alpha < 0.5)) throw std::invalid_argument("the significance must be in (0, 0.5)");
-  if (!(within > 0) || !std::isfinite(within)) throw std::invalid_argument("the equivalence margin must be positive");
-  const TestChannels channels = testChannels(candidate, reference);
-  const auto &cv = channels.candidate, &rv = channels.reference;
-  const auto &cVar = channels.candidateVariance, &rVar = channels.referenceVariance;
-  EquivalenceTest t;
-  t.within = within;
-  t.alpha = alpha;
-  t.candidateHasVariance = channels.candidateHasVariance;
-  const int w = candidate.width(), h = candidate.height(), tiles = std::max(1, grid);
-  struct Sums {
-    double candidate = 0, reference = 0, candidateVariance = 0, referenceVariance = 0;
-  };
-  std::vector<Sums> sums(size_t(1 + tiles * tiles));
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      double c = 0, r = 0, cs = 0, rs = 0;
-      for (int k = 0; k < 3; ++k) {
-        c += candidate.at(x, y, cv[size_t(k)]), r += reference.at(x, y, rv[size_t(k)]);
-        rs += std::sqrt(std::max(0.0, double(reference.at(x, y, rVar[size_t(k)]))));
-        if (t.candidateHasVariance) cs += std::sqrt(std::max(0.0, double(candidate.at(x, y, cVar[size_t(k)]))));
-      }
-      for (Sums* s : {&sums[0], &sums[tileOf(x, y, tiles, w, h)]})
-        s->candidate += c, s->reference += r, s->candidateVariance += cs * cs, s->referenceVariance += rs * rs;
-    }
-  const double z = normalUpperQuantile(alpha);
-  t.passed = true;
-  for (size_t k = 0; k < sums.size(); ++k) {
-    EquivalenceRegion e;
-    regionBounds(k, tiles, w, h, e.x0, e.y0, e.x1, e.y1);
-    const Sums& s = sums[k];
-    if (s.reference > 0) {
-      // d = C / R - 1; var(d) = var(C) / R^2 + C^2 var(R) / R^4 (the delta method).
-      const double ratio = s.candidate / s.reference;
-      const double se = std::sqrt(s.candidateVariance + ratio * ratio * s.referenceVariance) / s.reference;
-      e.relativeDifference = ratio - 1;
-      e.low = e.relativeDifference - z * se, e.high = e.relativeDifference + z * se;
-      e.equivalent = std::isfinite(se) && e.low > -within && e.high < within;
-    } else {
-      // A black reference region: equivalent only to a black candidate.
-      e.equivalent = s.candidate == 0;
-    }
-    t.passed = t.passed && e.equivalent;
-    t.regions.push_back(e);
-  }
-  return t;
 }
 
 Image heatmapColourBar(int width, int height) {

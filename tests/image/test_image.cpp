@@ -12,9 +12,12 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include <OpenImageIO/imageio.h>
+
 #include "lucent/image/comparison.h"
 #include "lucent/image/image.h"
 #include "lucent/image/metrics.h"
+#include "lucent/image/noise_tests.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;
@@ -292,7 +295,7 @@ TEST_CASE("Another renderer's RGBA compares with a reference that has layers, by
   CHECK(e.perChannel[2].channel == "B");
   CHECK(e.perChannel[2].mae == Approx(1.0));  // |3 - 3| and |2 - 4| over two pixels
   CHECK(e.overall.mae == Approx(2.0 / 6));
-  CHECK_NOTHROW(checkComparable({2, 1, rgba.channels()}, {2, 1, reference.channels()}, false));
+  CHECK_NOTHROW(checkComparable({2, 1, rgba.channels(), {}}, {2, 1, reference.channels(), {}}, false));
   // Without R, G and B in both, differing channels are still refused.
   CHECK_THROWS_WITH(compareImages(makeImage(2, 1, {"R", "G", "A"}, {0, 0, 0, 0, 0, 0}), reference),
                     Catch::Contains("need"));
@@ -308,10 +311,10 @@ TEST_CASE("An 8-bit image against a reference brighter than 1 is refused, or com
   ldr.ldr = true;
   ldr.maxError = 0.0;
   const ImageComparison c = compareImagePair(display, reference, ldr, true, false);
-  CHECK(c.passed);
+  CHECK(c.verdict == Verdict::Pass);
   CHECK(nlohmann::json::parse(c.json)["ldr"]["reference_values_clipped"] == 1);
   // An HDR candidate, or an 8-bit reference, is compared as it is.
-  CHECK_FALSE(compareImagePair(display, reference, ldr, false, false).passed);
+  CHECK(compareImagePair(display, reference, ldr, false, false).verdict == Verdict::Fail);
   CHECK_NOTHROW(compareImagePair(display, reference, {}, true, true));
 }
 
@@ -477,14 +480,14 @@ TEST_CASE("testWithinNoise: the reference plus noise passes, a bias below a pixe
   const Image candidate = noisyImage(w, h, mean, 0.005f, 2);
   const NoiseTest same = testWithinNoise(candidate, reference, 0.01, 4, 1);
   INFO("rejected at alpha: " << same.blocksRejectedAtAlpha << ", whole image z " << same.regions[0].z);
-  CHECK(same.passed);
+  CHECK(same.verdict == Verdict::Pass);
   CHECK(same.blocks == same.pixels);
   CHECK(same.blocksRejected == 0);
   CHECK(same.blocksRejectedAtAlpha > 164 - 4 * 13);
   CHECK(same.blocksRejectedAtAlpha < 164 + 4 * 13);
   // Blocks of 8 x 8 (the default): 256 blocks, about 2.6 below alpha (standard deviation 1.6).
   const NoiseTest blocks = testWithinNoise(candidate, reference, 0.01);
-  CHECK(blocks.passed);
+  CHECK(blocks.verdict == Verdict::Pass);
   CHECK(blocks.blocks == 256);
   CHECK(blocks.blocksRejectedAtAlpha < 2.6 + 4 * 1.6);
   REQUIRE(same.regions.size() == 17);
@@ -493,14 +496,15 @@ TEST_CASE("testWithinNoise: the reference plus noise passes, a bias below a pixe
   CHECK(std::abs(same.regions[0].relativeDifference) < 0.001);
   const Image biased = noisyImage(w, h, [&](int x, int y, int c) { return 1.03f * mean(x, y, c); }, 0.005f, 2);
   const NoiseTest off = testWithinNoise(biased, reference, 0.01, 4, 1);
-  CHECK_FALSE(off.passed);
+  CHECK(off.verdict == Verdict::Fail);
   CHECK(off.blocksRejected == 0);  // no single pixel shows it
   CHECK(off.regions[0].rejected);
   CHECK(off.regions[0].relativeDifference == Approx(0.03).margin(0.003));
   // The candidate's own variance counts: without it the same candidate's z grow by sqrt(2).
   CHECK_THROWS_WITH(testWithinNoise(candidate, rgbChannels(reference), 0.01), Catch::Contains("--variance"));
   const NoiseTest withoutVariance = testWithinNoise(rgbChannels(candidate), reference, 0.01, 4, 1);
-  CHECK_FALSE(withoutVariance.candidateHasVariance);
+  CHECK(withoutVariance.noise.source == NoiseSource::Unknown);
+  CHECK(withoutVariance.verdict == Verdict::Inconclusive);
   CHECK(withoutVariance.blocksRejectedAtAlpha > same.blocksRejectedAtAlpha);
 }
 
@@ -517,7 +521,7 @@ TEST_CASE("testEquivalence: per region, an interval from both images' variance i
   auto scaled = [&](int x, int y, int c) { return 1.01f * mean(x, y, c); };
   const Image reference = noisyImage(w, h, mean, 0.001f, 1);
   const EquivalenceTest same = testEquivalence(noisyImage(w, h, mean, 0.001f, 2), reference, 0.02, 0.01);
-  CHECK(same.passed);
+  CHECK(same.verdict == Verdict::Pass);
   REQUIRE(same.regions.size() == 17);
   CHECK(same.regions[16].x0 == 96);
   int covered = 0, intervals = 0;
@@ -528,8 +532,8 @@ TEST_CASE("testEquivalence: per region, an interval from both images' variance i
     const EquivalenceTest loose = testEquivalence(candidate, reference, 0.02, 0.01);
     INFO("seed " << seed << ": whole image " << loose.regions[0].relativeDifference << " in [" << loose.regions[0].low
                  << ", " << loose.regions[0].high << "]");
-    CHECK_FALSE(tight.passed);
-    CHECK(loose.passed);
+    CHECK(tight.verdict != Verdict::Pass);
+    CHECK(loose.verdict == Verdict::Pass);
     for (const EquivalenceRegion& r : loose.regions) {
       covered += r.low < 0.01 && 0.01 < r.high;
       ++intervals;
@@ -545,6 +549,66 @@ TEST_CASE("testEquivalence: per region, an interval from both images' variance i
   CHECK_THROWS(testEquivalence(reference, reference, 0.02, 0.5));
   CHECK(normalUpperQuantile(0.01) == Approx(2.3263478740).epsilon(1e-9));
   CHECK(normalUpperQuantile(0.5) == Approx(0).margin(1e-12));
+}
+
+TEST_CASE("lucent compare: a candidate whose noise is unknown is inconclusive (exit 3), runs decide, a terminal gets words",
+          "[compare][cli]") {
+  test::TempDir dir;
+  auto mean = [](int x, int y, int c) { return 1.0f + 0.5f * std::sin(0.1f * float(x + 2 * y + c)); };
+  writeExr(noisyImage(64, 64, mean, 0.01f, 1), dir / "reference.exr");
+  const Image candidate = noisyImage(64, 64, mean, 0.01f, 2);
+  writeExr(candidate, dir / "float.exr");
+  writeExr(rgbChannels(candidate), dir / "bare.exr");
+  // The same candidate with its variance layers stored as half floats, as an RGBA-and-AOV writer might.
+  {
+    OIIO::ImageSpec spec(64, 64, 6, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = candidate.channels();
+    spec.channelformats = {OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::FLOAT, OIIO::TypeDesc::FLOAT,
+                           OIIO::TypeDesc::HALF,  OIIO::TypeDesc::HALF,  OIIO::TypeDesc::HALF};
+    auto out = OIIO::ImageOutput::create(dir / "half.exr");
+    REQUIRE(out);
+    REQUIRE(out->open(dir / "half.exr", spec));
+    REQUIRE(out->write_image(OIIO::TypeDesc::FLOAT, candidate.pixels().data()));
+    out->close();
+  }
+  for (int seed = 3; seed < 7; ++seed) writeExr(rgbChannels(noisyImage(64, 64, mean, 0.01f, uint64_t(seed))), dir / ("run" + std::to_string(seed) + ".exr"));
+  const std::string reference = " " + quoted(dir / "reference.exr");
+  const test::CliRun withLayer = runLucent("compare " + quoted(dir / "float.exr") + reference + " --test --within 0.05");
+  INFO(withLayer.output);
+  CHECK(withLayer.status == 0);
+  for (const char* name : {"bare.exr", "half.exr"}) {
+    const test::CliRun r = runLucent("compare " + quoted(dir / name) + reference + " --test --within 0.05");
+    INFO(r.output);
+    CHECK(r.status == 3);
+    const auto out = nlohmann::json::parse(r.output);
+    CHECK(out["verdict"] == "inconclusive");
+    CHECK(out["test"]["verdict"] == "inconclusive");
+    CHECK(out["equivalence"]["verdict"] == "inconclusive");
+    CHECK_THAT(out["test"]["candidate_noise"]["undecided"].get<std::string>(),
+               Catch::Contains(std::string(name) == "half.exr" ? "half floats" : "no variance layers"));
+  }
+  // --max-error alone needs no noise; a failed threshold outweighs an undecided test.
+  CHECK(runLucent("compare " + quoted(dir / "bare.exr") + reference + " --max-error 1").status == 0);
+  CHECK(runLucent("compare " + quoted(dir / "bare.exr") + reference + " --max-error 1e-9 --test").status == 1);
+  // Four runs without variance layers: their spread decides.
+  std::string runs;
+  for (int seed = 3; seed < 7; ++seed) runs += quoted(dir / ("run" + std::to_string(seed) + ".exr")) + " ";
+  const test::CliRun fromRuns = runLucent("compare " + runs + reference.substr(1) + " --test --within 0.05");
+  INFO(fromRuns.output);
+  CHECK(fromRuns.status == 0);
+  const auto out = nlohmann::json::parse(fromRuns.output);
+  CHECK(out["runs"].size() == 4);
+  CHECK(out["test"]["candidate_noise"]["source"] == "runs");
+  CHECK(out["test"]["candidate_noise"]["correlation"]["blocks"]["degrees_of_freedom"] == 3 * 64);
+  CHECK(out["test"]["candidate_noise"]["correlation"]["image"]["degrees_of_freedom"] == 3);
+  CHECK(runLucent("compare " + runs + reference.substr(1)).status == 2);  // runs need --test or --within
+  // At a terminal: the verdict in words (script(1) gives the command a terminal); --json keeps JSON.
+  const test::CliRun words = test::runCommand("script -qec " +
+                                              quoted(quoted(LUCENT_CLI) + " compare " + quoted(dir / "bare.exr") + reference + " --test") +
+                                              " /dev/null");
+  INFO(words.output);
+  CHECK(words.status == 3);
+  CHECK_THAT(words.output, Catch::StartsWith("inconclusive") && Catch::Contains("undecided: the image has no variance layers"));
 }
 
 TEST_CASE("lucent compare --test: a path-traced candidate passes its reference, scaled by 1.01 it fails", "[compare][cli]") {
@@ -596,23 +660,36 @@ TEST_CASE("lucent compare --test: a path-traced candidate passes its reference, 
   // standard error of 0.56% per image), the scaled one not within 0.005; a photon map is biased
   // by design: it fails --test, and --within tells by how much (the whole image 4.4% dark, the
   // shadow of the tall block 16% bright): within 0.2, not within 0.1.
-  const auto within = [&](const std::string& image, const char* margin) {
-    const test::CliRun r = runLucent("compare " + quoted(image) + " " + quoted(dir / "reference.exr") + " --within " + margin);
+  // A photon map has no variance layer: one render alone is inconclusive (exit 3), its runs (other
+  // seeds) decide.
+  const auto within = [&](const std::string& images, const char* margin) {
+    const test::CliRun r = runLucent("compare " + images + " " + quoted(dir / "reference.exr") + " --within " + margin);
     INFO(r.output);
-    REQUIRE(r.status <= 1);
+    REQUIRE(r.status != 2);
     const auto out = nlohmann::json::parse(r.output);
-    CHECK(out["equivalence"]["passed"] == (r.status == 0));
+    CHECK(out["equivalence"]["verdict"] == std::vector<std::string>{"pass", "fail", "", "inconclusive"}[size_t(r.status)]);
     CHECK(out["equivalence"]["regions"].size() == 17);
-    return r.status == 0;
+    return r.status;
   };
-  CHECK(within(dir / "candidate.exr", "0.03"));
-  CHECK_FALSE(within(dir / "scaled.exr", "0.005"));
-  const test::CliRun pmfg = runLucent("render " + quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json") +
-                                      " --method pmfg --resolution 64x64 --quiet -o " + quoted(dir / "pmfg.exr"));
-  REQUIRE(pmfg.status == 0);
-  CHECK(runLucent("compare " + quoted(dir / "pmfg.exr") + " " + quoted(dir / "reference.exr") + " --test").status == 1);
-  CHECK(within(dir / "pmfg.exr", "0.2"));
-  CHECK_FALSE(within(dir / "pmfg.exr", "0.1"));
+  CHECK(within(quoted(dir / "candidate.exr"), "0.03") == 0);
+  CHECK(within(quoted(dir / "scaled.exr"), "0.005") == 1);
+  std::string pmfgRuns;
+  for (int seed = 1; seed <= 4; ++seed) {
+    const std::string out = dir / ("pmfg" + std::to_string(seed) + ".exr");
+    const test::CliRun pmfg = runLucent("render " + quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json") +
+                                        " --method pmfg --resolution 64x64 --quiet --seed " + std::to_string(seed) +
+                                        " -o " + quoted(out));
+    REQUIRE(pmfg.status == 0);
+    pmfgRuns += " " + quoted(out);
+  }
+  const std::string pmfgOne = quoted(dir / "pmfg1.exr");
+  const test::CliRun alone = runLucent("compare " + pmfgOne + " " + quoted(dir / "reference.exr") + " --test");
+  CHECK(alone.status == 3);
+  CHECK_THAT(alone.output, Catch::Contains("no variance layers") && Catch::Contains("runs"));
+  CHECK(within(pmfgOne, "0.2") == 3);
+  CHECK(runLucent("compare" + pmfgRuns + " " + quoted(dir / "reference.exr") + " --test").status == 1);
+  CHECK(within(pmfgRuns, "0.2") == 0);
+  CHECK(within(pmfgRuns, "0.1") == 1);
   // A reference without variance layers is bad input (exit 2); --alpha needs --test or --within.
   CHECK(runLucent("compare " + quoted(dir / "candidate.exr") + " " + quoted(dir / "z.png") + " --test").status == 2);
   CHECK(runLucent("compare " + quoted(dir / "candidate.exr") + " " + quoted(dir / "reference.exr") + " --alpha 0.05").status != 0);

@@ -7,6 +7,7 @@
 
 #include "lucent/image/flip.h"
 #include "lucent/image/image.h"
+#include "lucent/image/noise_tests.h"
 
 namespace lucent {
 
@@ -40,14 +41,19 @@ void checkPixelsPerDegree(double ppd);
 FlipOptions flipOptions(bool candidateIsSrgb, bool referenceIsSrgb, double ppd);
 
 struct ImageComparison {
-  bool passed = false;
-  std::string json;  // compare's JSON from "width" on (the caller names the files before it)
-  Image heatmap;     // with settings.heatmap
+  // Fail where --max-error is exceeded, the image has NaN or infinite values, or a statistical test
+  // fails; else inconclusive where a statistical test is (the candidate's noise unknown, or an
+  // interval across the margin); else pass.
+  Verdict verdict = Verdict::Inconclusive;
+  std::string json;   // compare's JSON from "width" on (the caller names the files before it)
+  std::string words;  // the verdict for a person: what failed or is undecided, where, by how much
+  Image heatmap;      // with settings.heatmap
 };
 
-// Compares the candidate with the reference (linear images; *IsSrgb: decoded from 8-bit sRGB files,
-// which makes FLIP LDR-FLIP). Throws std::invalid_argument for images that cannot be compared.
-ImageComparison compareImagePair(Image candidate, Image reference, const ComparisonSettings& settings,
+// Compares the candidate (one image, or two or more runs: the metrics and FLIP of their mean) with
+// the reference (linear images; *IsSrgb: decoded from 8-bit sRGB files, which makes FLIP LDR-FLIP).
+// Throws std::invalid_argument for images that cannot be compared.
+ImageComparison compareImagePair(Candidate candidate, Image reference, const ComparisonSettings& settings,
                                  bool candidateIsSrgb = false, bool referenceIsSrgb = false);
 
 }  // namespace lucent

@@ -61,6 +61,7 @@ void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageM
 struct ImageHeader {
   int width = 0, height = 0;
   std::vector<std::string> channels;
+  std::vector<std::string> halfChannels;  // those stored as 16-bit floats (EXR half)
 };
 // The header of an image in a format Lucent reads (EXR, Radiance HDR, PNG, JPEG, TIFF, by the
 // extension; its content must be that format), checked as readImage checks it (a regular file, at most

@@ -54,67 +54,6 @@ Image errorHeatmap(const Image& image, const Image& reference, ErrorMetric metri
 // The heatmaps' colour map from 0 (left) to its top (right), for a colour bar.
 Image heatmapColourBar(int width, int height);
 
-// A candidate against a reference within both images' noise (lucent compare --test): per block of
-// block x block pixels (smaller at the right and bottom edges) and channel the Welch statistic
-// z = (c - r) / sqrt(var_c + var_r) of the block's sums, from the variance of each pixel's mean (the
-// channels variance.R, .G, .B that --variance writes; the reference must have them, a candidate
-// without them counts as exact), its two-sided p-value from the normal distribution; and per region
-// (the whole image, then a grid x grid of tiles) the same statistic of the region's sums, which
-// finds a bias far below one pixel's noise. Blocks, not pixels: a pixel's few samples of a
-// heavy-tailed integrand (rare paths at low sample counts) give a variance far below the true one
-// when they miss the rare paths, and single pixels are rejected by chance; a block's sums draw on
-// block^2 times the samples. The Cornell box at 128 x 128 against 1,024 samples per pixel, path
-// traced with independent samples, two seeds each: at 64 samples, blocks of 1 reject 50 and 60
-// pixels of 16,384 (4.5 times alpha's share below alpha), of 4 x 4 0 and 1 (1.6 times), of 8 x 8
-// none (0.8 times); at 16 samples 8 x 8 rejects none (2 times alpha's share below alpha), 4 x 4
-// 2 and 4; at 256 samples both none. Hence 8 x 8 by default. The image passes at
-// significance alpha when no block's p-value is below alpha / (2 * 3 * blocks) and no region's
-// below alpha / (2 * 3 * regions) (Bonferroni over the channels, the blocks and the regions, alpha
-// split between the two families).
-struct RegionTest {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  double relativeDifference = 0;  // sum(c - r) / sum(r) over the region's R, G, B: its bias
-  double z = 0, pValue = 1;       // of the channel with the least p-value
-  bool rejected = false;
-};
-struct NoiseTest {
-  double alpha = 0.01;
-  int block = 8;
-  bool candidateHasVariance = false;
-  uint64_t pixels = 0, blocks = 0;
-  uint64_t blocksRejectedAtAlpha = 0;  // p-value (Bonferroni over the channels) below alpha: about alpha of them by chance
-  uint64_t blocksRejected = 0;         // below the corrected threshold
-  double minBlockPValue = 1;
-  std::vector<RegionTest> regions;     // the whole image, then the grid row by row
-  bool passed = false;
-  Image statistic;                     // one channel "z": per pixel its block's largest |z| of the channels
-};
-NoiseTest testWithinNoise(const Image& candidate, const Image& reference, double alpha, int grid = 4, int block = 8);
-
-// An equivalence verdict for a biased candidate (lucent compare --within D): per region (the whole
-// image, then a grid x grid of tiles) its relative difference from the reference,
-// d = sum(c) / sum(r) - 1 over the region's R, G and B, and the (1 - 2 alpha) confidence interval
-// d +- z_(1 - alpha) se, se from both images' variance layers by the delta method (each pixel's
-// channels taken as fully correlated, (sum of the channels' standard deviations)^2, which bounds
-// their sum's variance whatever their correlation; a candidate without variance layers counts as
-// exact). A region is equivalent when its interval lies inside (-within, within): two one-sided
-// tests at level alpha; the image passes when every region is (an intersection-union test, at
-// level alpha without correction).
-struct EquivalenceRegion {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  double relativeDifference = 0, low = 0, high = 0;
-  bool equivalent = false;
-};
-struct EquivalenceTest {
-  double within = 0, alpha = 0.01;
-  bool candidateHasVariance = false;
-  std::vector<EquivalenceRegion> regions;  // the whole image, then the grid row by row
-  bool passed = false;
-};
-EquivalenceTest testEquivalence(const Image& candidate, const Image& reference, double within, double alpha,
-                                int grid = 4);
-// The z with probability alpha above it under the standard normal distribution, alpha in (0, 1).
-double normalUpperQuantile(double alpha);
 // The R, G, B channels of an image.
 Image rgbChannels(const Image& image);
 // The layer `name` of an image as an image of its own (lucent compare --layer): the channels

@@ -1,0 +1,141 @@
+// The statistical verdicts of lucent compare and report: whether a candidate differs from a
+// reference by more than their noise (--test), and whether it lies within +-D of it (--within).
+//
+// The candidate's noise is known in one of two ways. One image carries it in its variance layers
+// (variance.R, .G, .B: the variance of each pixel's mean, as render --variance writes), which
+// count pixels as independent. Two or more runs (independent renders of the same thing with other
+// seeds) carry it in their spread, which holds for noise correlated between pixels (another
+// renderer's shared random sequences, its pixel filter) and for biased methods. One image without
+// variance layers, or with layers stored as half floats (whose small values become 0), leaves it
+// unknown: the verdict is then inconclusive, never pass or fail.
+//
+// With runs, the variance of a sum over pixels (a block, a region, the image) is taken from the
+// spread of the runs' sums. n runs give each sum's spread n - 1 degrees of freedom, too few to
+// find a bias of a few percent, so the spread is pooled over the sums of one size: the
+// correlation factor kappa = sum_k spread_k / sum_k v_k, v_k the sum of the pixels' own variances
+// (from the runs' spread per pixel), is shared by the blocks (and by the 4 x 4 regions), with
+// (n - 1) x (their count) degrees of freedom, and a sum's variance is max(kappa v_k, spread_k): the
+// pooled model where it holds, the sum's own spread where it is larger (kappa not uniform over the
+// image). The image as a whole is one sum: its own spread, n - 1 degrees of freedom, Student's t.
+// Where the reference's variance adds in, the degrees of freedom are Welch-Satterthwaite's.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+#include <utility>
+
+#include "lucent/image/image.h"
+
+namespace lucent {
+
+enum class Verdict { Pass, Fail, Inconclusive };
+// "pass", "fail", "inconclusive".
+const char* verdictName(Verdict verdict);
+// The exit status of compare for a verdict: 0 pass, 1 fail, 3 inconclusive (2 is bad input).
+int verdictExitStatus(Verdict verdict);
+// The verdict of two verdicts together: fail over inconclusive over pass.
+Verdict combineVerdicts(Verdict a, Verdict b);
+
+// What is compared with the reference: one image, or two or more runs (same size; their R, G, B).
+struct Candidate {
+  Candidate(Image image, bool halfVariance = false) : runs{std::move(image)}, halfVariance(halfVariance) {}
+  explicit Candidate(std::vector<Image> runs) : runs(std::move(runs)) {}
+  std::vector<Image> runs;
+  bool halfVariance = false;  // the one image's variance layers were stored as half floats
+};
+
+enum class NoiseSource { VarianceLayer, Runs, Unknown };
+// "variance layer", "runs", "unknown".
+const char* noiseSourceName(NoiseSource source);
+
+// How a candidate's noise was measured, and at each scale how much the sums' spread exceeds their
+// pixels' own variances (kappa; 1 where pixels are independent) with its degrees of freedom
+// (infinite where the noise comes from variance layers).
+struct CandidateNoise {
+  NoiseSource source = NoiseSource::Unknown;
+  int runs = 1;
+  bool ignoredVarianceLayers = false;  // runs that also had variance layers: their spread was used
+  struct Scale {
+    std::string name;  // "blocks", "regions", "image"
+    double correlation = 1, degreesOfFreedom = 0;
+  };
+  std::vector<Scale> scales;
+  std::string undecided;  // why the verdict cannot be pass or fail, and what would decide it
+};
+
+// The mean of the runs' R, G, B (the one image's R, G, B and variance layers where there is one run).
+Image candidateImage(const Candidate& candidate);
+
+// A candidate against a reference within both images' noise (lucent compare --test): per block of
+// block x block pixels (smaller at the right and bottom edges) and channel the statistic
+// t = (c - r) / sqrt(var_c + var_r) of the block's sums, its two-sided p-value (normal with
+// variance layers, Student's t with runs); and per region (the whole image, then a grid x grid of
+// tiles) the same statistic of the region's sums, which finds a bias far below one pixel's noise.
+// The reference must have variance layers. Blocks, not pixels: a pixel's few samples of a
+// heavy-tailed integrand (rare paths at low sample counts) give a variance far below the true one
+// when they miss the rare paths, and single pixels are rejected by chance; a block's sums draw on
+// block^2 times the samples. The Cornell box at 128 x 128 against 1,024 samples per pixel, path
+// traced with independent samples, two seeds each: at 64 samples, blocks of 1 reject 50 and 60
+// pixels of 16,384 (4.5 times alpha's share below alpha), of 4 x 4 0 and 1 (1.6 times), of 8 x 8
+// none (0.8 times); at 16 samples 8 x 8 rejects none (2 times alpha's share below alpha), 4 x 4
+// 2 and 4; at 256 samples both none. Hence 8 x 8 by default. A block or region is rejected when its
+// p-value is below alpha / (2 * 3 * blocks) or alpha / (2 * 3 * regions) (Bonferroni over the
+// channels, the blocks and the regions, alpha split between the two families). Verdict: fail when
+// one is rejected, pass when none is, inconclusive when the candidate's noise is unknown.
+struct RegionTest {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  double relativeDifference = 0;  // sum(c - r) / sum(r) over the region's R, G, B: its bias
+  double z = 0, pValue = 1;       // of the channel with the least p-value
+  bool rejected = false;
+};
+struct NoiseTest {
+  double alpha = 0.01;
+  int block = 8;
+  CandidateNoise noise;
+  uint64_t pixels = 0, blocks = 0;
+  uint64_t blocksRejectedAtAlpha = 0;  // p-value (Bonferroni over the channels) below alpha: about alpha of them by chance
+  uint64_t blocksRejected = 0;         // below the corrected threshold
+  double minBlockPValue = 1;
+  int minBlockX = 0, minBlockY = 0;    // the top left pixel of the block with the least p-value
+  std::vector<RegionTest> regions;     // the whole image, then the grid row by row
+  Verdict verdict = Verdict::Inconclusive;
+  Image statistic;                     // one channel "z": per pixel its block's largest |t| of the channels
+};
+NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, double alpha, int grid = 4, int block = 8);
+
+// An equivalence verdict for a biased candidate (lucent compare --within D): per region (the whole
+// image, then a grid x grid of tiles) its relative difference from the reference,
+// d = sum(c) / sum(r) - 1 over the region's R, G and B, and the (1 - 2 alpha) confidence interval
+// d +- q se (q the normal quantile with variance layers, Student's t with runs), se by the delta
+// method from both images' noise (a variance layer's channels taken as fully correlated,
+// (sum of the channels' standard deviations)^2, which bounds their sum's variance whatever their
+// correlation; runs give the sum's spread itself). Verdict: pass when every interval lies inside
+// (-D, D) (two one-sided tests per region at level alpha, intersection-union over the regions),
+// fail when an interval lies wholly outside it (a bias beyond D shown at level alpha), else
+// inconclusive, with the factor of samples that would decide it; inconclusive too when the
+// candidate's noise is unknown.
+struct EquivalenceRegion {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  double relativeDifference = 0, low = 0, high = 0;
+  Verdict verdict = Verdict::Inconclusive;  // pass: inside +-D; fail: wholly outside
+};
+struct EquivalenceTest {
+  double within = 0, alpha = 0.01;
+  CandidateNoise noise;
+  std::vector<EquivalenceRegion> regions;  // the whole image, then the grid row by row
+  // Where the verdict is inconclusive for want of samples: about this many times the candidate's
+  // samples (or runs) would narrow every undecided interval enough to decide it.
+  double samplesToDecide = 0;
+  Verdict verdict = Verdict::Inconclusive;
+};
+EquivalenceTest testEquivalence(const Candidate& candidate, const Image& reference, double within, double alpha,
+                                int grid = 4);
+
+// The z with probability alpha above it under the standard normal distribution, alpha in (0, 1).
+double normalUpperQuantile(double alpha);
+// The two-sided p-value of t under Student's t with `dof` degrees of freedom (the normal
+// distribution where dof is infinite), and the t with two-sided p-value p.
+double studentTwoSidedP(double t, double dof);
+double studentTwoSidedQuantile(double p, double dof);
+
+}  // namespace lucent

@@ -1,0 +1,492 @@
+#include "lucent/image/noise_tests.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "image/channel_indices.h"
+#include "lucent/core/memory.h"
+
+namespace lucent {
+
+const char* verdictName(Verdict verdict) {
+  switch (verdict) {
+    case Verdict::Pass: return "pass";
+    case Verdict::Fail: return "fail";
+    case Verdict::Inconclusive: return "inconclusive";
+  }
+  return "inconclusive";
+}
+
+int verdictExitStatus(Verdict verdict) {
+  switch (verdict) {
+    case Verdict::Pass: return 0;
+    case Verdict::Fail: return 1;
+    case Verdict::Inconclusive: return 3;
+  }
+  return 3;
+}
+
+Verdict combineVerdicts(Verdict a, Verdict b) {
+  if (a == Verdict::Fail || b == Verdict::Fail) return Verdict::Fail;
+  if (a == Verdict::Inconclusive || b == Verdict::Inconclusive) return Verdict::Inconclusive;
+  return Verdict::Pass;
+}
+
+const char* noiseSourceName(NoiseSource source) {
+  switch (source) {
+    case NoiseSource::VarianceLayer: return "variance layer";
+    case NoiseSource::Runs: return "runs";
+    case NoiseSource::Unknown: return "unknown";
+  }
+  return "unknown";
+}
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// The regularized incomplete beta function I_x(a, b), by its continued fraction (DLMF 8.17.22)
+// evaluated with Lentz's method, on the side of x where it converges fast.
+double incompleteBeta(double a, double b, double x) {
+  if (x <= 0) return 0;
+  if (x >= 1) return 1;
+  if (x > (a + 1) / (a + b + 2)) return 1 - incompleteBeta(b, a, 1 - x);
+  const double front = std::exp(a * std::log(x) + b * std::log1p(-x) - std::lgamma(a) - std::lgamma(b) + std::lgamma(a + b)) / a;
+  constexpr double kTiny = 1e-300;
+  double f = 1, c = 1, d = 0;
+  for (int i = 0; i <= 1000; ++i) {
+    const double m = double(i / 2);
+    double numerator = 1;
+    if (i > 0)
+      numerator = i % 2 == 0 ? m * (b - m) * x / ((a + 2 * m - 1) * (a + 2 * m))
+                             : -(a + m) * (a + b + m) * x / ((a + 2 * m) * (a + 2 * m + 1));
+    d = 1 + numerator * d;
+    d = 1 / (std::abs(d) < kTiny ? kTiny : d);
+    c = 1 + numerator / c;
+    if (std::abs(c) < kTiny) c = kTiny;
+    f *= c * d;
+    if (std::abs(1 - c * d) < 1e-15) break;
+  }
+  return front * (f - 1);
+}
+
+}  // namespace
+
+double studentTwoSidedP(double t, double dof) {
+  if (std::isnan(t)) return 0;
+  if (!std::isfinite(t)) return 0;
+  if (!(dof < 1e7)) return std::erfc(std::abs(t) / std::sqrt(2.0));
+  return incompleteBeta(0.5 * dof, 0.5, dof / (dof + t * t));
+}
+
+double studentTwoSidedQuantile(double p, double dof) {
+  if (!(p > 0 && p < 1)) throw std::invalid_argument("a quantile's probability must be in (0, 1)");
+  double lo = 0, hi = 1;
+  while (studentTwoSidedP(hi, dof) > p && hi < 1e300) hi *= 2;
+  // Bisection on the p-value, decreasing in t: to double precision.
+  for (int i = 0; i < 2000 && hi - lo > 1e-14 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (studentTwoSidedP(mid, dof) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+double normalUpperQuantile(double alpha) {
+  if (!(alpha > 0 && alpha < 1)) throw std::invalid_argument("a quantile's probability must be in (0, 1)");
+  // Bisection on the upper tail 0.5 erfc(z / sqrt 2), decreasing in z: to double precision.
+  double lo = -40, hi = 40;
+  for (int i = 0; i < 200 && hi - lo > 1e-15 * std::max(1.0, std::abs(lo)); ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+namespace {
+
+// R, G, B and their sum (the equivalence test's quantity).
+constexpr int kSum = 3;
+using Quad = std::array<double, 4>;
+
+// The candidate and the reference as the tests read them, pixel by pixel.
+class TestPixels {
+ public:
+  TestPixels(const Candidate& candidate, const Image& reference) : candidate_(candidate), reference_(reference) {
+    if (candidate.runs.empty()) throw std::invalid_argument("no image to compare");
+    for (const Image& run : candidate.runs) requireSameSize(run, reference);
+    referenceValue_ = rgbIndices(reference, "", "the reference");
+    referenceVariance_ = rgbIndices(reference, "variance.", "the reference", " (render it with --variance)");
+    const bool runs = candidate.runs.size() > 1;
+    for (size_t i = 0; i < candidate.runs.size(); ++i) {
+      const std::string role = runs ? "run " + std::to_string(i + 1) : "the image";
+      runs_.push_back({rgbIndices(candidate.runs[i], "", role), rgbIndices(candidate.runs[i], "variance.", "")});
+    }
+    const auto hasVariance = [](const Channels& c) { return c.variance[0] >= 0 && c.variance[1] >= 0 && c.variance[2] >= 0; };
+    noise_.runs = int(candidate.runs.size());
+    if (runs) {
+      noise_.source = NoiseSource::Runs;
+      noise_.ignoredVarianceLayers = std::any_of(runs_.begin(), runs_.end(), hasVariance);
+    } else if (hasVariance(runs_[0])) {
+      noise_.source = NoiseSource::VarianceLayer;
+      if (candidate.halfVariance)
+        noise_.undecided = "the image's variance layers are stored as half floats, which turn variances below 6e-8 "
+                           "into 0: write them as 32-bit floats, or give two or more runs (renders with other seeds)";
+    } else {
+      noise_.undecided = "the image has no variance layers, so its noise is unknown: give two or more runs (renders "
+                         "with other seeds), or an image with variance layers (render --variance)";
+    }
+    values_.resize(candidate.runs.size());
+    if (runs) floorPixelVariances();
+  }
+
+  const CandidateNoise& noise() const { return noise_; }
+  CandidateNoise& noise() { return noise_; }
+  int width() const { return reference_.width(); }
+  int height() const { return reference_.height(); }
+
+  // Pixel (x, y): the candidate's mean and the variance of that mean (0 where unknown), the
+  // reference's value and variance, and each run's values (values()).
+  void read(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance) {
+    double deviations = 0;
+    for (int c = 0; c < 3; ++c) {
+      reference[size_t(c)] = reference_.at(x, y, referenceValue_[size_t(c)]);
+      referenceVariance[size_t(c)] = std::max(0.0f, reference_.at(x, y, referenceVariance_[size_t(c)]));
+      deviations += std::sqrt(referenceVariance[size_t(c)]);
+    }
+    reference[kSum] = reference[0] + reference[1] + reference[2];
+    // The channels' variances summed as if fully correlated: a bound whatever their correlation.
+    referenceVariance[kSum] = deviations * deviations;
+    const size_t n = candidate_.runs.size();
+    for (size_t i = 0; i < n; ++i) {
+      const Image& run = candidate_.runs[i];
+      for (int c = 0; c < 3; ++c) values_[i][size_t(c)] = run.at(x, y, runs_[i].value[size_t(c)]);
+      values_[i][kSum] = values_[i][0] + values_[i][1] + values_[i][2];
+    }
+    if (n == 1) {
+      mean = values_[0];
+      variance = {};
+      if (noise_.source == NoiseSource::VarianceLayer) {
+        double sum = 0;
+        for (int c = 0; c < 3; ++c) {
+          variance[size_t(c)] = std::max(0.0f, candidate_.runs[0].at(x, y, runs_[0].variance[size_t(c)]));
+          sum += std::sqrt(variance[size_t(c)]);
+        }
+        variance[kSum] = sum * sum;
+      }
+      return;
+    }
+    spreadOfRuns(mean, variance);
+    for (size_t c = 0; c < 4; ++c) variance[c] = std::max(variance[c], floor_[c] * referenceVariance[c]);
+  }
+  const std::vector<Quad>& values() const { return values_; }
+
+ private:
+  // The runs' mean at the pixel last read, and the variance of that mean from their spread.
+  void spreadOfRuns(Quad& mean, Quad& variance) const {
+    const size_t n = values_.size();
+    for (size_t c = 0; c < 4; ++c) {
+      double m = 0;
+      for (size_t i = 0; i < n; ++i) m += values_[i][c];
+      m /= double(n);
+      double squares = 0;
+      for (size_t i = 0; i < n; ++i) squares += (values_[i][c] - m) * (values_[i][c] - m);
+      mean[c] = m;
+      variance[c] = squares / double(n - 1) / double(n);
+    }
+  }
+
+  // A pixel's spread over a few runs of a heavy-tailed estimator is mostly too small (the runs
+  // missed its rare large values) and now and then far too large: a block whose pixels all missed
+  // them looks both dark and quiet, and would be rejected (2 to 8 runs of a Pareto-tailed
+  // estimator: 12-16% false rejections at alpha 0.05). So each pixel's variance is at least the
+  // reference's (whose many samples see the tail) times the ratio of the two over the image.
+  void floorPixelVariances() {
+    Quad mean, variance, reference, referenceVariance, spreads{}, references{};
+    floor_ = {};
+    for (int y = 0; y < height(); ++y)
+      for (int x = 0; x < width(); ++x) {
+        read(x, y, mean, variance, reference, referenceVariance);
+        for (size_t c = 0; c < 4; ++c) spreads[c] += variance[c], references[c] += referenceVariance[c];
+      }
+    for (size_t c = 0; c < 4; ++c) floor_[c] = references[c] > 0 ? spreads[c] / references[c] : 0.0;
+  }
+
+  struct Channels {
+    std::array<int, 3> value, variance;
+  };
+  const Candidate& candidate_;
+  const Image& reference_;
+  std::array<int, 3> referenceValue_{}, referenceVariance_{};
+  std::vector<Channels> runs_;
+  std::vector<Quad> values_;
+  Quad floor_{};  // the runs' pixel variances over the reference's, over the image
+  CandidateNoise noise_;
+};
+
+// The sums over a set of pixels (a block, a region, the image) that the tests need.
+struct UnitSums {
+  Quad difference{}, reference{}, candidate{}, pixelVariance{}, referenceVariance{};
+  std::vector<Quad> runs;  // each run's sum, where there are runs
+
+  void add(const Quad& mean, const Quad& variance, const Quad& ref, const Quad& refVariance, const std::vector<Quad>& values) {
+    for (size_t c = 0; c < 4; ++c) {
+      difference[c] += mean[c] - ref[c];
+      reference[c] += ref[c];
+      candidate[c] += mean[c];
+      pixelVariance[c] += variance[c];
+      referenceVariance[c] += refVariance[c];
+    }
+    if (values.size() < 2) return;
+    runs.resize(values.size());
+    for (size_t i = 0; i < values.size(); ++i)
+      for (size_t c = 0; c < 4; ++c) runs[i][c] += values[i][c];
+  }
+  // The variance of the runs' mean sum from the runs' spread (0 without runs).
+  double spread(size_t c) const {
+    const size_t n = runs.size();
+    if (n < 2) return 0;
+    double m = 0;
+    for (const Quad& r : runs) m += r[c];
+    m /= double(n);
+    double squares = 0;
+    for (const Quad& r : runs) squares += (r[c] - m) * (r[c] - m);
+    return squares / double(n - 1) / double(n);
+  }
+};
+
+// What a block keeps for the test once its pixels are summed.
+struct BlockSums {
+  std::array<double, 3> difference{}, pixelVariance{}, referenceVariance{}, spread{};
+};
+
+// The region a tile index stands for: 0 the whole image, k > 0 the grid's tile k - 1, row by row.
+void regionBounds(size_t k, int tiles, int w, int h, int& x0, int& y0, int& x1, int& y1) {
+  if (k == 0) {
+    x0 = 0, y0 = 0, x1 = w, y1 = h;
+    return;
+  }
+  const int tx = int(k - 1) % tiles, ty = int(k - 1) / tiles;
+  x0 = tx * w / tiles, y0 = ty * h / tiles, x1 = (tx + 1) * w / tiles, y1 = (ty + 1) * h / tiles;
+}
+
+size_t tileOf(int x, int y, int tiles, int w, int h) { return size_t(1 + (y * tiles / h) * tiles + (x * tiles / w)); }
+
+// Sums every pixel into the regions (the whole image, then the tiles) and, with block > 0, into
+// blocks of block x block pixels (row by row).
+void sumImage(TestPixels& pixels, int tiles, int block, std::vector<UnitSums>& regions, std::vector<BlockSums>& blocks) {
+  const int w = pixels.width(), h = pixels.height();
+  regions.assign(size_t(1 + tiles * tiles), UnitSums{});
+  const int side = block > 0 ? block : std::max(w, h);
+  const int blocksX = (w + side - 1) / side, blocksY = (h + side - 1) / side;
+  if (block > 0) {
+    requireMemory(uint64_t(blocksX) * uint64_t(blocksY) * sizeof(BlockSums), "the test's blocks",
+                  "use larger blocks (--block) or raise --memory-limit");
+    blocks.assign(size_t(blocksX) * size_t(blocksY), BlockSums{});
+  }
+  Quad mean, variance, reference, referenceVariance;
+  for (int by = 0; by < blocksY; ++by)
+    for (int bx = 0; bx < blocksX; ++bx) {
+      UnitSums sums;
+      const int x0 = bx * side, y0 = by * side, x1 = std::min(w, x0 + side), y1 = std::min(h, y0 + side);
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+          pixels.read(x, y, mean, variance, reference, referenceVariance);
+          for (UnitSums* s : {&regions[0], &regions[tileOf(x, y, tiles, w, h)], &sums})
+            s->add(mean, variance, reference, referenceVariance, pixels.values());
+        }
+      if (block <= 0) continue;
+      BlockSums& b = blocks[size_t(by) * size_t(blocksX) + size_t(bx)];
+      for (size_t c = 0; c < 3; ++c) {
+        b.difference[c] = sums.difference[c], b.pixelVariance[c] = sums.pixelVariance[c];
+        b.referenceVariance[c] = sums.referenceVariance[c], b.spread[c] = sums.spread(c);
+      }
+    }
+}
+
+// A scale's correlation factor, pooled over its units and the given channels, and its degrees of
+// freedom (see noise_tests.h). Without runs: 1, and infinite degrees of freedom.
+CandidateNoise::Scale poolScale(const std::string& name, double spread, double pixelVariance, size_t units, int runs) {
+  CandidateNoise::Scale scale{name, 1.0, kInfinity};
+  if (runs < 2) return scale;
+  scale.correlation = pixelVariance > 0 ? spread / pixelVariance : 1.0;
+  scale.degreesOfFreedom = double(runs - 1) * double(units);
+  return scale;
+}
+
+double candidateVariance(NoiseSource source, const CandidateNoise::Scale& scale, double pixelVariance, double spread) {
+  switch (source) {
+    case NoiseSource::Runs: return std::max(scale.correlation * pixelVariance, spread);
+    case NoiseSource::VarianceLayer: return pixelVariance;
+    case NoiseSource::Unknown: return 0;
+  }
+  return 0;
+}
+
+// The degrees of freedom of a variance `total` of which `candidate` was estimated with `dof`
+// (Welch-Satterthwaite; the reference's share counts as known).
+double welchDegreesOfFreedom(double candidate, double total, double dof) {
+  if (!(candidate > 0) || !std::isfinite(dof)) return kInfinity;
+  return dof * (total / candidate) * (total / candidate);
+}
+
+double statistic(double difference, double variance) {
+  if (variance > 0) return difference / std::sqrt(variance);
+  return difference == 0 ? 0.0 : std::copysign(kInfinity, difference);
+}
+
+}  // namespace
+
+Image candidateImage(const Candidate& candidate) {
+  if (candidate.runs.empty()) throw std::invalid_argument("no image to compare");
+  if (candidate.runs.size() == 1) return candidate.runs[0];
+  const Image& first = candidate.runs[0];
+  Image mean(first.width(), first.height(), {"R", "G", "B"});
+  for (size_t i = 0; i < candidate.runs.size(); ++i) {
+    const Image& run = candidate.runs[i];
+    requireSameSize(run, first);
+    const std::array<int, 3> at = rgbIndices(run, "", "run " + std::to_string(i + 1));
+    for (int y = 0; y < run.height(); ++y)
+      for (int x = 0; x < run.width(); ++x)
+        for (int c = 0; c < 3; ++c) mean.at(x, y, c) += run.at(x, y, at[size_t(c)]) / float(candidate.runs.size());
+  }
+  return mean;
+}
+
+NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, double alpha, int grid, int block) {
+  if (!(alpha > 0 && alpha < 1)) throw std::invalid_argument("the significance must be in (0, 1)");
+  if (block < 1) throw std::invalid_argument("the block side must be at least 1 pixel");
+  TestPixels pixels(candidate, reference);
+  NoiseTest t;
+  t.alpha = alpha;
+  t.block = block;
+  const int w = pixels.width(), h = pixels.height(), tiles = std::max(1, grid);
+  const int blocksX = (w + block - 1) / block;
+  std::vector<UnitSums> regions;
+  std::vector<BlockSums> blocks;
+  sumImage(pixels, tiles, block, regions, blocks);
+  t.pixels = uint64_t(w) * uint64_t(h);
+  t.blocks = blocks.size();
+  CandidateNoise& noise = pixels.noise();
+  const int runs = noise.runs;
+  double blockSpread = 0, blockPixels = 0, tileSpread = 0, tilePixels = 0;
+  for (const BlockSums& b : blocks)
+    for (size_t c = 0; c < 3; ++c) blockSpread += b.spread[c], blockPixels += b.pixelVariance[c];
+  for (size_t k = 1; k < regions.size(); ++k)
+    for (size_t c = 0; c < 3; ++c) tileSpread += regions[k].spread(c), tilePixels += regions[k].pixelVariance[c];
+  double imageSpread = 0, imagePixels = 0;
+  for (size_t c = 0; c < 3; ++c) imageSpread += regions[0].spread(c), imagePixels += regions[0].pixelVariance[c];
+  noise.scales = {poolScale("blocks", blockSpread, blockPixels, blocks.size(), runs),
+                  poolScale("regions", tileSpread, tilePixels, regions.size() - 1, runs),
+                  poolScale("image", imageSpread, imagePixels, 1, runs)};
+
+  t.statistic = Image(w, h, {"z"});
+  const double blockThreshold = alpha / (2.0 * 3.0 * double(t.blocks));
+  for (size_t k = 0; k < blocks.size(); ++k) {
+    const BlockSums& b = blocks[k];
+    double largest = 0, minP = 1;
+    for (size_t c = 0; c < 3; ++c) {
+      const double cv = candidateVariance(noise.source, noise.scales[0], b.pixelVariance[c], b.spread[c]);
+      const double total = cv + b.referenceVariance[c];
+      const double z = statistic(b.difference[c], total);
+      largest = std::max(largest, std::abs(z));
+      minP = std::min(minP, studentTwoSidedP(z, welchDegreesOfFreedom(cv, total, noise.scales[0].degreesOfFreedom)));
+    }
+    const int x0 = int(k % size_t(blocksX)) * block, y0 = int(k / size_t(blocksX)) * block;
+    for (int y = y0; y < std::min(h, y0 + block); ++y)
+      for (int x = x0; x < std::min(w, x0 + block); ++x) t.statistic.at(x, y, 0) = float(largest);
+    if (minP < t.minBlockPValue) t.minBlockPValue = minP, t.minBlockX = x0, t.minBlockY = y0;
+    t.blocksRejectedAtAlpha += std::min(1.0, 3.0 * minP) < alpha;
+    t.blocksRejected += minP < blockThreshold;
+  }
+  const double regionThreshold = alpha / (2.0 * 3.0 * double(regions.size()));
+  bool rejected = t.blocksRejected > 0;
+  for (size_t k = 0; k < regions.size(); ++k) {
+    const CandidateNoise::Scale& scale = noise.scales[k == 0 ? 2 : 1];
+    RegionTest r;
+    regionBounds(k, tiles, w, h, r.x0, r.y0, r.x1, r.y1);
+    const UnitSums& s = regions[k];
+    for (size_t c = 0; c < 3; ++c) {
+      const double cv = candidateVariance(noise.source, scale, s.pixelVariance[c], s.spread(c));
+      const double total = cv + s.referenceVariance[c];
+      const double z = statistic(s.difference[c], total);
+      const double p = studentTwoSidedP(z, welchDegreesOfFreedom(cv, total, scale.degreesOfFreedom));
+      if (p <= r.pValue) r.pValue = p, r.z = z;
+    }
+    r.relativeDifference = s.reference[kSum] != 0 ? s.difference[kSum] / s.reference[kSum] : 0;
+    r.rejected = r.pValue < regionThreshold;
+    rejected = rejected || r.rejected;
+    t.regions.push_back(r);
+  }
+  t.noise = noise;
+  t.verdict = !noise.undecided.empty() ? Verdict::Inconclusive : rejected ? Verdict::Fail : Verdict::Pass;
+  return t;
+}
+
+EquivalenceTest testEquivalence(const Candidate& candidate, const Image& reference, double within, double alpha, int grid) {
+  if (!(alpha > 0 && alpha < 0.5)) throw std::invalid_argument("the significance must be in (0, 0.5)");
+  if (!(within > 0) || !std::isfinite(within)) throw std::invalid_argument("the equivalence margin must be positive");
+  TestPixels pixels(candidate, reference);
+  EquivalenceTest t;
+  t.within = within;
+  t.alpha = alpha;
+  const int w = pixels.width(), h = pixels.height(), tiles = std::max(1, grid);
+  std::vector<UnitSums> regions;
+  std::vector<BlockSums> noBlocks;
+  sumImage(pixels, tiles, 0, regions, noBlocks);
+  CandidateNoise& noise = pixels.noise();
+  double tileSpread = 0, tilePixels = 0;
+  for (size_t k = 1; k < regions.size(); ++k) tileSpread += regions[k].spread(kSum), tilePixels += regions[k].pixelVariance[kSum];
+  noise.scales = {poolScale("regions", tileSpread, tilePixels, regions.size() - 1, noise.runs),
+                  poolScale("image", regions[0].spread(kSum), regions[0].pixelVariance[kSum], 1, noise.runs)};
+  t.verdict = Verdict::Pass;
+  for (size_t k = 0; k < regions.size(); ++k) {
+    const CandidateNoise::Scale& scale = noise.scales[k == 0 ? 1 : 0];
+    EquivalenceRegion e;
+    regionBounds(k, tiles, w, h, e.x0, e.y0, e.x1, e.y1);
+    const UnitSums& s = regions[k];
+    const double c = s.candidate[kSum], r = s.reference[kSum];
+    if (r > 0) {
+      // d = C / R - 1; var(d) = var(C) / R^2 + C^2 var(R) / R^4 (the delta method).
+      const double ratio = c / r;
+      const double cv = candidateVariance(noise.source, scale, s.pixelVariance[kSum], s.spread(kSum));
+      const double total = cv + ratio * ratio * s.referenceVariance[kSum];
+      const double se = std::sqrt(total) / r;
+      const double q = studentTwoSidedQuantile(2 * alpha, welchDegreesOfFreedom(cv, total, scale.degreesOfFreedom));
+      e.relativeDifference = ratio - 1;
+      e.low = e.relativeDifference - q * se, e.high = e.relativeDifference + q * se;
+      if (!std::isfinite(se)) e.verdict = Verdict::Inconclusive;
+      else if (e.low > -within && e.high < within) e.verdict = Verdict::Pass;
+      else if (e.low >= within || e.high <= -within) e.verdict = Verdict::Fail;
+      else {
+        e.verdict = Verdict::Inconclusive;
+        // The candidate's share of the interval must narrow to the margin between d and +-D.
+        const double margin = std::abs(std::abs(e.relativeDifference) - within);
+        const double candidateHalfWidth = q * std::sqrt(cv) / r;
+        t.samplesToDecide = std::max(t.samplesToDecide, margin > 0 ? std::pow(candidateHalfWidth / margin, 2) : kInfinity);
+      }
+    } else {
+      // A black reference region: equivalent only to a black candidate.
+      e.verdict = c == 0 ? Verdict::Pass : Verdict::Fail;
+    }
+    t.verdict = combineVerdicts(t.verdict, e.verdict);
+    t.regions.push_back(e);
+  }
+  if (!noise.undecided.empty()) t.verdict = Verdict::Inconclusive;
+  else if (t.verdict == Verdict::Inconclusive) {
+    std::ostringstream why;
+    why << "an interval reaches across +-" << within << ": ";
+    if (std::isfinite(t.samplesToDecide) && t.samplesToDecide < 1e9)
+      why << "about " << std::ceil(t.samplesToDecide) << " times the candidate's samples (or runs) would decide it";
+    else
+      why << "its difference lies on the margin itself; no number of samples would decide it";
+    noise.undecided = why.str();
+  }
+  t.noise = noise;
+  return t;
+}
+
+}  // namespace lucent

@@ -1,0 +1,186 @@
+// Calibration of compare's verdicts on simulated renders whose truth is known: the false rejections
+// of --test and false failures of --within under no difference stay at most 1.5 alpha, runs find a
+// 2% bias in one region of sixteen, and a bias beyond the margin is not passed. Three noise models,
+// written here: pixels independent (Lucent's own renders); noise shared between neighbours (a
+// tent pixel filter whose samples land in three pixels a side) plus a per-run offset of the whole
+// image (a renderer's random sequence shared by every pixel); and heavy tails (each pixel the mean
+// of 4 Pareto samples of shape 2.5: finite variance, rare large values, like fireflies). Trials run
+// in parallel, each from its own seed, so the counts do not depend on the threads.
+// The tables are printed (docs/validation.md records them).
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <tbb/parallel_for.h>
+#include <vector>
+
+#include "lucent/image/noise_tests.h"
+
+using namespace lucent;
+
+namespace {
+
+// SplitMix64 (Steele, Lea and Flood 2014): fast and good enough to simulate noise.
+struct Random {
+  using result_type = uint64_t;
+  uint64_t state;
+  static constexpr uint64_t min() { return 0; }
+  static constexpr uint64_t max() { return ~uint64_t(0); }
+  uint64_t operator()() {
+    uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  }
+};
+
+enum class Model { Independent, Correlated, HeavyTailed };
+const char* modelName(Model m) {
+  return m == Model::Independent ? "independent" : m == Model::Correlated ? "correlated" : "heavy-tailed";
+}
+
+constexpr int kSide = 64;  // 64 blocks of 8 x 8, 16 regions of 16 x 16
+constexpr int kBiasedTile = 6;  // the region (1-based, row by row) that a bias is put into
+
+double trueMean(int x, int y, int c) { return 0.6 + 0.3 * std::sin(0.15 * (x + 2 * y)) + 0.1 * c; }
+
+bool inBiasedTile(int x, int y) {
+  const int tile = 1 + (y * 4 / kSide) * 4 + (x * 4 / kSide);
+  return tile == kBiasedTile;
+}
+
+// One run of a renderer: the true mean (times 1 + bias in the biased tile, or everywhere with
+// `whole`) plus noise of the model. Per-pixel relative noise about 10%.
+Image simulatedRun(Model model, double bias, bool whole, Random& rng) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  Image run(kSide, kSide, {"R", "G", "B"});
+  std::vector<double> field(size_t(kSide + 2) * size_t(kSide + 2));
+  if (model == Model::Correlated)
+    for (double& e : field) e = normal(rng);
+  const double offset = model == Model::Correlated ? 0.01 * normal(rng) : 0.0;
+  for (int y = 0; y < kSide; ++y)
+    for (int x = 0; x < kSide; ++x) {
+      const double shared = [&] {
+        if (model != Model::Correlated) return 0.0;
+        // A separable tent of radius 1 pixel over a field of white noise, shared by the channels.
+        double s = 0;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx)
+            s += (dx == 0 ? 0.5 : 0.25) * (dy == 0 ? 0.5 : 0.25) * field[size_t(y + 1 + dy) * size_t(kSide + 2) + size_t(x + 1 + dx)];
+        return s;
+      }();
+      for (int c = 0; c < 3; ++c) {
+        const double mean = trueMean(x, y, c) * (1 + ((whole || inBiasedTile(x, y)) ? bias : 0.0));
+        double value = 0;
+        switch (model) {
+          case Model::Independent: value = mean * (1 + 0.1 * normal(rng)); break;
+          case Model::Correlated: value = mean * (1 + 0.16 * shared + 0.05 * normal(rng) + offset); break;
+          case Model::HeavyTailed: {
+            // Pareto of shape 2.5 scaled to mean 1: standard deviation 0.89, so the mean of 4 has 45%.
+            constexpr double shape = 2.5, scale = (shape - 1) / shape;
+            double sum = 0;
+            for (int k = 0; k < 4; ++k) sum += scale * std::exp(-std::log(1 - uniform(rng)) / shape);
+            value = mean * sum / 4;
+            break;
+          }
+        }
+        run.at(x, y, c) = float(value);
+      }
+    }
+  return run;
+}
+
+// A reference of 64 times the samples, with its exact variance layer (pixels independent).
+Image simulatedReference(Random& rng) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Image reference(kSide, kSide, {"R", "G", "B", "variance.R", "variance.G", "variance.B"});
+  for (int y = 0; y < kSide; ++y)
+    for (int x = 0; x < kSide; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const double sd = 0.1 / 8 * trueMean(x, y, c);
+        reference.at(x, y, c) = float(trueMean(x, y, c) + sd * normal(rng));
+        reference.at(x, y, 3 + c) = float(sd * sd);
+      }
+  return reference;
+}
+
+struct Rates {
+  int trials = 0, testFailed = 0, withinFailed = 0, withinPassed = 0;
+};
+
+Rates simulate(Model model, int runs, double bias, bool whole, double alpha, double within, int trials, uint64_t seed) {
+  std::vector<Verdict> tests(static_cast<size_t>(trials), Verdict::Pass), equivalences = tests;
+  tbb::parallel_for(0, trials, [&](int t) {
+    Random rng{seed * 100003 + uint64_t(t)};
+    const Image reference = simulatedReference(rng);
+    std::vector<Image> images;
+    for (int i = 0; i < runs; ++i) images.push_back(simulatedRun(model, bias, whole, rng));
+    const Candidate candidate(std::move(images));
+    tests[size_t(t)] = testWithinNoise(candidate, reference, alpha).verdict;
+    equivalences[size_t(t)] = testEquivalence(candidate, reference, within, alpha).verdict;
+  });
+  Rates rates;
+  rates.trials = trials;
+  for (int t = 0; t < trials; ++t) {
+    rates.testFailed += tests[size_t(t)] == Verdict::Fail;
+    rates.withinFailed += equivalences[size_t(t)] == Verdict::Fail;
+    rates.withinPassed += equivalences[size_t(t)] == Verdict::Pass;
+  }
+  return rates;
+}
+
+}  // namespace
+
+TEST_CASE("Runs: false rejections at most 1.5 alpha for 2, 4 and 8 runs of three noise models", "[compare][calibration]") {
+  constexpr double alpha = 0.05, within = 0.05;
+  constexpr int trials = 200;
+  std::printf("noise model     runs  --test false rejections  --within 0.05 false failures  --within passes\n");
+  for (Model model : {Model::Independent, Model::Correlated, Model::HeavyTailed})
+    for (int runs : {2, 4, 8}) {
+      const Rates r = simulate(model, runs, 0.0, false, alpha, within, trials, 1000 + uint64_t(runs) + 10 * uint64_t(model));
+      std::printf("%-14s %5d  %23d  %28d  %15d   (of %d)\n", modelName(model), runs, r.testFailed, r.withinFailed,
+                  r.withinPassed, r.trials);
+      INFO(modelName(model) << ", " << runs << " runs: --test failed " << r.testFailed << ", --within failed "
+                            << r.withinFailed << " of " << trials);
+      CHECK(r.testFailed <= 1.5 * alpha * trials);
+      CHECK(r.withinFailed <= 1.5 * alpha * trials);
+    }
+}
+
+TEST_CASE("Runs: a 2% bias in one region of sixteen is found, a bias beyond the margin is not passed", "[compare][calibration]") {
+  constexpr double alpha = 0.01;
+  constexpr int trials = 200;
+  std::printf("noise model     runs  2%% bias in one region: --test fails   6%% over the image: --within 0.05 passes\n");
+  for (Model model : {Model::Independent, Model::Correlated, Model::HeavyTailed})
+    for (int runs : {2, 4, 8}) {
+      const Rates local = simulate(model, runs, 0.02, false, alpha, 0.05, trials, 5000 + uint64_t(runs) + 10 * uint64_t(model));
+      const Rates beyond = simulate(model, runs, 0.06, true, alpha, 0.05, trials, 9000 + uint64_t(runs) + 10 * uint64_t(model));
+      std::printf("%-14s %5d  %38d  %38d   (of %d)\n", modelName(model), runs, local.testFailed, beyond.withinPassed, trials);
+      INFO(modelName(model) << ", " << runs << " runs: the 2% bias found " << local.testFailed << " times; 6% passed "
+                            << beyond.withinPassed << " times, of " << trials);
+      // Size: a bias beyond the margin passes at most alpha of the time (with slack for 200 trials).
+      CHECK(beyond.withinPassed <= 1.5 * alpha * trials + 2);
+      // Power with 8 runs. Pixels independent: the region's relative standard error is 0.2%, the
+      // bias 10 of them, found always. Correlated: per run the region's sum varies 1.45% (the
+      // image's offset 1%, the shared field 1%, the pixels' own 0.3%), their mean of 8 0.51%, so
+      // the bias is 3.9 standard errors, at the threshold (z 3.9 for alpha / (2 x 3 x 17)): about
+      // half found. Heavy tails (45% noise per pixel, and the variance floor): rarely.
+      if (runs == 8 && model == Model::Independent) CHECK(local.testFailed >= 0.95 * trials);
+      if (runs == 8 && model == Model::Correlated) CHECK(local.testFailed >= 0.35 * trials);
+    }
+}
+
+TEST_CASE("Student's t: p-values and quantiles", "[compare]") {
+  // Known values: t = 12.706 has two-sided p 0.05 at 1 degree of freedom, 2.262 at 9, 1.960 for
+  // the normal distribution; t = 1 at 1 degree of freedom has p 0.5 (Cauchy).
+  CHECK(studentTwoSidedP(12.7062047, 1) == Approx(0.05).epsilon(1e-6));
+  CHECK(studentTwoSidedP(2.26215716, 9) == Approx(0.05).epsilon(1e-6));
+  CHECK(studentTwoSidedP(1.0, 1) == Approx(0.5).epsilon(1e-12));
+  CHECK(studentTwoSidedP(1.95996398, INFINITY) == Approx(0.05).epsilon(1e-6));
+  CHECK(studentTwoSidedP(0.0, 3) == Approx(1.0));
+  CHECK(studentTwoSidedQuantile(0.05, 9) == Approx(2.26215716).epsilon(1e-7));
+  CHECK(studentTwoSidedQuantile(0.01, 7) == Approx(3.49948329).epsilon(1e-7));
+  CHECK(studentTwoSidedQuantile(1e-6, 2) == Approx(std::sqrt(2 / (1e-6 * (2 - 1e-6)) - 2)).epsilon(1e-6));
+}
