@@ -5,7 +5,8 @@
 // pixel zoom, the relMSE, FLIP and noise test's |z| heatmaps with colour bars, the numbers of
 // `lucent compare --test` (of `lucent compare` on the colours where the reference has no variance
 // layers) and of `lucent compare --metric flip`, the bias per region, and relMSE against seconds where the candidates' times are known
-// (--seconds, or the lucent:render_seconds a Lucent render stores). Prints one JSON line; exits 0
+// (--seconds, a sidecar CANDIDATE.json's "seconds", or the lucent:render_seconds a Lucent render
+// stores; the sidecar's renderer, samples and device are shown too). Prints one JSON line; exits 0
 // when the page is written, 1 on bad input (no page is written then).
 #include <algorithm>
 #include <cmath>
@@ -119,8 +120,50 @@ Image exposed(Image image, double stops) {
   return image;
 }
 
+// What rendered a candidate, from its sidecar CANDIDATE.json (the image's file name with .json
+// appended: run1.exr.json, so that run1.exr and run1.png have their own), which any renderer can write: {"renderer": "...", "samples": N, "seconds": S,
+// "device": "..."}, every key optional. Other keys are listed, not read.
+struct Sidecar {
+  std::string path, renderer, device;
+  std::optional<double> samples, seconds;
+  std::vector<std::string> ignored;
+};
+
+std::optional<Sidecar> readSidecar(const std::string& imagePath) {
+  Sidecar sidecar;
+  sidecar.path = imagePath + ".json";
+  std::error_code ec;
+  if (!std::filesystem::exists(sidecar.path, ec)) return std::nullopt;
+  const auto bad = [&](const std::string& why) { return std::invalid_argument("sidecar '" + sidecar.path + "': " + why); };
+  if (const std::string problem = admitInputFile(sidecar.path); !problem.empty()) throw bad(problem);
+  std::ifstream in(sidecar.path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in && !in.eof()) throw bad("cannot be read");
+  nlohmann::json json;
+  try {
+    json = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw bad(std::string("not JSON (") + e.what() + ")");
+  }
+  if (!json.is_object()) throw bad("not a JSON object");
+  for (const auto& [key, value] : json.items()) {
+    if (key == "renderer" || key == "device") {
+      if (!value.is_string()) throw bad("'" + key + "' must be text");
+      (key == "renderer" ? sidecar.renderer : sidecar.device) = value.get<std::string>();
+    } else if (key == "samples" || key == "seconds") {
+      if (!value.is_number() || !(value.get<double>() > 0) || !std::isfinite(value.get<double>()))
+        throw bad("'" + key + "' must be a positive number");
+      (key == "samples" ? sidecar.samples : sidecar.seconds) = value.get<double>();
+    } else {
+      sidecar.ignored.push_back(key);
+    }
+  }
+  return sidecar;
+}
+
 struct ReportEntry {
   std::string path, label;
+  std::optional<Sidecar> sidecar;
   std::optional<double> seconds;
   ImageMetadata metadata;
   ImageError error;
@@ -381,7 +424,16 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
   for (size_t i = 0; i < candidates.size(); ++i) {
     const ReportEntry& c = candidates[i];
     html << "<section id=\"candidate-" << i << "\"><h2>" << escapeHtml(c.label) << "</h2>\n<p class=\"note\"><code>"
-         << escapeHtml(c.path) << "</code>: " << provenance(c.metadata) << "</p>\n";
+         << escapeHtml(c.path) << "</code>: " << provenance(c.metadata);
+    if (c.sidecar) {
+      html << " · <span data-key=\"sidecar\">" << escapeHtml(c.sidecar->path) << ":";
+      if (!c.sidecar->renderer.empty()) html << " renderer " << escapeHtml(c.sidecar->renderer);
+      if (c.sidecar->samples) html << " · samples " << number(*c.sidecar->samples);
+      if (c.sidecar->seconds) html << " · seconds " << number(*c.sidecar->seconds);
+      if (!c.sidecar->device.empty()) html << " · device " << escapeHtml(c.sidecar->device);
+      html << "</span>";
+    }
+    html << "</p>\n";
     html << "<div class=\"flip-box\"><div class=\"controls\">Zoom <button data-zoom=\"1\">1x</button><button "
             "data-zoom=\"2\">2x</button><button data-zoom=\"4\">4x</button><button data-zoom=\"8\">8x</button>"
             "<button data-zoom=\"16\">16x</button> <span class=\"zoom\">1x</span> · <button class=\"flip\">Flip "
@@ -502,10 +554,17 @@ int runReport(const ReportOptions& opt) {
   for (size_t i = 0; i < opt.candidates.size(); ++i) {
     ReportEntry c;
     c.path = opt.candidates[i];
-    c.label = opt.labels.empty() ? std::filesystem::path(c.path).filename().string() : opt.labels[i];
+    c.sidecar = readSidecar(c.path);
+    const std::string fileName = std::filesystem::path(c.path).filename().string();
+    c.label = !opt.labels.empty()                           ? opt.labels[i]
+              : c.sidecar && !c.sidecar->renderer.empty() ? c.sidecar->renderer + " · " + fileName
+                                                            : fileName;
     Image file = readLinearImage(c.path, &c.metadata);
     if (!opt.layer.empty()) file = chosen(file, c.path).candidate;
-    c.seconds = opt.seconds.empty() ? renderSeconds(c.metadata) : std::optional<double>(opt.seconds[i]);
+    // --seconds, else the sidecar's, else what a Lucent render stored.
+    c.seconds = !opt.seconds.empty()              ? std::optional<double>(opt.seconds[i])
+                : c.sidecar && c.sidecar->seconds ? c.sidecar->seconds
+                                                  : renderSeconds(c.metadata);
     const Image image = rgbChannels(file);
     const bool candidateIsSrgb = isSrgbEncoded(c.path, c.metadata);
     // An 8-bit candidate against the reference clipped to [0, 1] (--ldr), as lucent compare does.
@@ -549,6 +608,15 @@ int runReport(const ReportOptions& opt) {
   for (const ReportEntry& c : candidates) {
     nlohmann::ordered_json entry = {{"label", c.label}, {"image", c.path}, {"relmse", c.error.overall.relmse}, {"flip", c.flip.mean}};
     if (c.seconds) entry["seconds"] = *c.seconds;
+    if (c.sidecar) {
+      nlohmann::ordered_json sidecar = {{"path", c.sidecar->path}};
+      if (!c.sidecar->renderer.empty()) sidecar["renderer"] = c.sidecar->renderer;
+      if (c.sidecar->samples) sidecar["samples"] = *c.sidecar->samples;
+      if (c.sidecar->seconds) sidecar["seconds"] = *c.sidecar->seconds;
+      if (!c.sidecar->device.empty()) sidecar["device"] = c.sidecar->device;
+      if (!c.sidecar->ignored.empty()) sidecar["not_read"] = c.sidecar->ignored;
+      entry["sidecar"] = sidecar;
+    }
     if (c.test) entry["passed"] = c.test->verdict == Verdict::Pass, entry["test"] = verdictName(c.test->verdict);
     if (c.equivalence)
       entry["equivalent"] = c.equivalence->verdict == Verdict::Pass, entry["within"] = verdictName(c.equivalence->verdict);

@@ -135,6 +135,7 @@ bool renderRowBands(const RenderControl& control, const RenderPart& part, const 
 EyePathSettings eyePathSettings(const CommonOptions& common, int maxSpecularDepth, const RenderPart& part) {
   EyePathSettings s;
   s.spp = common.spp;
+  s.filter = {common.pixelFilter, common.filterRadius};
   s.maxSpecularDepth = maxSpecularDepth;
   s.seed = common.seed;
   s.layers = common.layers;

@@ -40,12 +40,12 @@ struct SampleResult {
 // Follows one camera ray, whose closest hit is given, through specular bounces; appends the shading
 // points it reaches.
 SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const EyePathSettings& settings, Ray ray,
-                               const Hit& cameraHit, uint32_t pixel, uint32_t sample, Rng& rng, FirstHit* firstHit,
-                               std::vector<ShadingPoint>& points, uint64_t& rays) {
+                               float filterWeight, const Hit& cameraHit, uint32_t pixel, uint32_t sample, Rng& rng,
+                               FirstHit* firstHit, std::vector<ShadingPoint>& points, uint64_t& rays) {
   SampleResult out;
   BranchSlot stack[kMaxBranchStack];
   int top = 0;
-  stack[top++].branch = {ray, Rgb(1.0f), 0};
+  stack[top++].branch = {ray, Rgb(filterWeight), 0};
   uint32_t branch = 0;
   bool fromCamera = true;
   while (top > 0) {
@@ -115,9 +115,11 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
   return out;
 }
 
-// A camera sample waiting for its packet: its ray and its generator after the pixel offset.
+// A camera sample waiting for its packet: its ray, its pixel filter's weight and its generator
+// after the pixel offset.
 struct CameraSample {
   Ray ray;
+  float filterWeight;
   Rng rng;
   uint32_t pixel, sample;
 };
@@ -136,6 +138,7 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
   const int tilesX = (region.x1 + tile - 1) / tile - tileX0, tilesY = (region.y1 + tile - 1) / tile - tileY0;
   const int tiles = tilesX * tilesY;
   const PinholeCamera camera(scene.camera);
+  const PixelFilter filter(settings.filter);
   const uint64_t seed = streamSeed(settings.seed, RenderStream::Eye);
 
   // Most camera samples end in one shading point, held per tile, then in the band's array, with the
@@ -178,7 +181,7 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
           const size_t index = pixelIndex(int(cs.pixel % uint32_t(width)), int(cs.pixel / uint32_t(width)));
           const size_t before = points.size();
           FirstHit first;
-          const SampleResult res = traceCameraSample(scene, vis, settings, cs.ray, hit, cs.pixel, cs.sample, cs.rng,
+          const SampleResult res = traceCameraSample(scene, vis, settings, cs.ray, cs.filterWeight, hit, cs.pixel, cs.sample, cs.rng,
                                                      settings.layers ? &first : nullptr, points, tileRays[t]);
           if (!res.valid || !summable(res.emitted)) {
             points.resize(before);
@@ -198,8 +201,13 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
           for (int s = sampleBegin; traced && s < sampleEnd; ++s) {
             CameraSample& cs = batch[queued];
             cs.rng = Rng(seed, pixel, uint64_t(s));
-            const Vec2 offset = settings.spp == 1 ? Vec2{0.5f, 0.5f}
-                                                  : stratifiedSample2D(uint32_t(s), uint32_t(settings.spp), cs.rng.uniform2());
+            // One box-filtered sample is the pixel's centre; others are stratified over the
+            // pixel and drawn through its filter.
+            const Vec2 offset = settings.spp == 1 && filter.isBox()
+                                    ? Vec2{0.5f, 0.5f}
+                                    : filter.position(stratifiedSample2D(uint32_t(s), uint32_t(settings.spp), cs.rng.uniform2()),
+                                                      cs.filterWeight);
+            if (settings.spp == 1 && filter.isBox()) cs.filterWeight = 1;
             cs.ray = camera.generate(float(x) + offset.x, float(y) + offset.y);
             cs.pixel = pixel, cs.sample = uint32_t(s);
             if (++queued == kWidestPacket) traceBatch();

@@ -150,12 +150,19 @@ try:
     render(p("pt.exr"), ["--method", "pt", "--variance", "--sampler", "independent", "--spp", "64", "--seed", "2",
                          "--png", p("pt.png")])
     render(p("micro.exr"), ["--method", "micro"])
+    # A sidecar such as a GPU renderer writes beside its image: what rendered it, and its time.
+    with open(p("pt.exr.json"), "w") as f:
+        json.dump({"renderer": "a GPU tracer", "samples": 64, "seconds": 1.5, "device": "test GPU", "build": "x"}, f)
     candidates = [p("pt.exr"), p("micro.exr"), p("pt.png")]
     labels = ["path tracer <64 spp>", "micro", "8-bit PNG"]
     r = run([lucent, "report", p("reference.exr")] + candidates + sum([["--label", l] for l in labels], []) +
             ["--within", "0.05", "--ldr", "-o", p("report.html")])  # the PNG against the clipped reference
     check(r.returncode == 0, "report failed: " + r.stderr)
     summary = json.loads(r.stdout)
+    side = summary["candidates"][0].get("sidecar", {})
+    check(side.get("renderer") == "a GPU tracer" and side.get("samples") == 64 and side.get("device") == "test GPU"
+          and side.get("not_read") == ["build"], "the sidecar was not read: %r" % side)
+    check(summary["candidates"][0].get("seconds") == 1.5, "the sidecar's seconds were not used")
     results = []
     for c in candidates:
         r = run([lucent, "compare", "--test", "--within", "0.05", "--metric", "flip", "--ldr", c, p("reference.exr")])

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "lucent/core/dump.h"
+#include "lucent/core/pixel_filter.h"
 #include "lucent/pipeline/options.h"
 
 namespace lucent {
@@ -18,6 +19,8 @@ inline constexpr uint64_t kReusableBandSamples = uint64_t(1) << 17;
 // Every method's: samples per pixel, the seed and the layers.
 struct CommonOptions {
   int spp = 1;
+  PixelFilterKind pixelFilter = PixelFilterKind::Box;
+  double filterRadius = 0;  // 0: the filter's own
   uint64_t seed = 0;
   bool layers = false;  // add the first hit's albedo, normal and depth and the light's parts as layers
 };
@@ -27,6 +30,16 @@ inline OptionTable<CommonOptions> commonOptionTable(std::string sppHelp) {
   using O = CommonOptions;
   OptionTable<O> t;
   t.integer("spp", &O::spp, 1, 1 << 24, "samples", std::move(sppHelp));
+  t.choice("pixel_filter", &O::pixelFilter,
+           {{"box", PixelFilterKind::Box},
+            {"tent", PixelFilterKind::Tent},
+            {"gaussian", PixelFilterKind::Gaussian},
+            {"blackman-harris", PixelFilterKind::BlackmanHarris},
+            {"mitchell", PixelFilterKind::Mitchell}},
+           "the pixel filter, sampled by filter importance so that pixels stay independent: box (radius 0.5), tent "
+           "(radius 1, as three.js-family GPU path tracers), gaussian (radius 1.5, sigma 0.5, as pbrt-v4), "
+           "blackman-harris (width 1.5, as Cycles), mitchell (radius 2, B = C = 1/3, as pbrt-v4)");
+  t.real("filter_radius", &O::filterRadius, 0, 16, "pixels", "the pixel filter's radius (0: the filter's own)");
   t.integer("seed", &O::seed, 0, 0x1p62, "", "random seed (the same seed gives the same image, whatever the threads)");
   t.flag("layers", &O::layers,
          "add the first hit's albedo, normal and depth and the light's parts as layers of the EXR");

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "lucent/core/exact_sum.h"
+#include "lucent/core/pixel_filter.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/uninitialized.h"
 #include "lucent/pipeline/pixel_rect.h"
@@ -39,7 +40,8 @@ struct ShadingPoint {
 static_assert(sizeof(ShadingPoint) == 128 && std::is_trivially_copyable_v<ShadingPoint>, "dumped as records");
 
 struct EyePathSettings {
-  int spp = 1;  // camera samples per pixel, stratified over the pixel
+  int spp = 1;  // camera samples per pixel, stratified over the pixel and drawn through its filter
+  PixelFilterSettings filter;
   int maxSpecularDepth = 10;
   uint64_t seed = 0;
   bool layers = false;

@@ -14,7 +14,7 @@ void store(Vec3 v, float* x, float* y, float* z, uint32_t k) { x[k] = v.x, y[k] 
 }  // namespace
 
 LUCENT_LANE_LOOP(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32_t last, SamplerKind sampler,
-                  uint64_t seed, const PinholeCamera& camera, bool pixelCentres)) {
+                  uint64_t seed, const PinholeCamera& camera, const PixelFilter& filter, bool pixelCentres)) {
   if (sampler == SamplerKind::Sobol) {
     // The pixels' keys and the camera's pair in lanes (PathSampler's arithmetic), the rays, then
     // the samplers.
@@ -22,8 +22,9 @@ LUCENT_LANE_LOOP(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32
     sobolCameraPairs(seed, l.streamPixel + first, l.sample + first, last - first, l.pixelKey + first, jitterX + first,
                      jitterY + first);
     for (uint32_t k = first; k < last; ++k) {
-      const float jx = pixelCentres ? 0.5f : jitterX[k], jy = pixelCentres ? 0.5f : jitterY[k];
-      const Vec3 direction = camera.generate(l.x[k] + jx, l.y[k] + jy).direction;
+      const Vec2 at = pixelCentres ? Vec2{0.5f, 0.5f} : filter.position({jitterX[k], jitterY[k]}, l.filterWeight[k]);
+      if (pixelCentres) l.filterWeight[k] = 1;
+      const Vec3 direction = camera.generate(l.x[k] + at.x, l.y[k] + at.y).direction;
       l.dirX[k] = direction.x, l.dirY[k] = direction.y, l.dirZ[k] = direction.z;
     }
     for (uint32_t k = first; k < last; ++k) l.sampler[k] = PathSampler::sobol(l.pixelKey[k], l.sample[k]);
@@ -32,15 +33,16 @@ LUCENT_LANE_LOOP(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32
   for (uint32_t k = first; k < last; ++k) {
     PathSampler s(sampler, seed, l.streamPixel[k], l.sample[k]);
     const Vec2 uniform = s.camera();  // drawn either way: the path's later numbers do not move
-    const Vec2 jitter = pixelCentres ? Vec2{0.5f, 0.5f} : uniform;
-    const Vec3 direction = camera.generate(l.x[k] + jitter.x, l.y[k] + jitter.y).direction;
+    const Vec2 at = pixelCentres ? Vec2{0.5f, 0.5f} : filter.position(uniform, l.filterWeight[k]);
+    if (pixelCentres) l.filterWeight[k] = 1;
+    const Vec3 direction = camera.generate(l.x[k] + at.x, l.y[k] + at.y).direction;
     l.sampler[k] = s;
     l.dirX[k] = direction.x, l.dirY[k] = direction.y, l.dirZ[k] = direction.z;
   }
 }
 LUCENT_LANE_VERSIONS(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32_t last, SamplerKind sampler,
-                  uint64_t seed, const PinholeCamera& camera, bool pixelCentres),
-                     (l, first, last, sampler, seed, camera, pixelCentres))
+                  uint64_t seed, const PinholeCamera& camera, const PixelFilter& filter, bool pixelCentres),
+                     (l, first, last, sampler, seed, camera, filter, pixelCentres))
 
 // What PathTracer::shade does at a Lambertian hit, with the functions it calls: the shading
 // normal (surfaceAt's) and frame, next-event estimation (sampleDirect, with sampleLight's triangle

@@ -79,10 +79,11 @@ struct CameraLanes {
   alignas(64) uint64_t pixelKey[kLaneSlots];  // the Sobol sampler's (PathSampler::sobolPixelKey)
   alignas(64) PathSampler sampler[kLaneSlots];
   alignas(64) float dirX[kLaneSlots], dirY[kLaneSlots], dirZ[kLaneSlots];
+  alignas(64) float filterWeight[kLaneSlots];  // the pixel filter's weight of the sample (1 but for negative lobes)
 };
-// Lanes [first, last).
+// Lanes [first, last): each sample's position in its pixel drawn through the pixel filter.
 void startCameraPaths(CameraLanes& lanes, uint32_t first, uint32_t last, SamplerKind sampler, uint64_t seed,
-                      const PinholeCamera& camera, bool pixelCentres);
+                      const PinholeCamera& camera, const PixelFilter& filter, bool pixelCentres);
 
 // Every lane's shading normal and frame, its light sample's shadow ray and what it brings, and the
 // cosine-distributed next direction.

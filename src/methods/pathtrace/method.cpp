@@ -60,6 +60,10 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
            "diffuse and glossy; with --variance each with its variance");
     t.flag("pixel_centres", &O::pixelCentres,
            "every camera ray through its pixel's centre (the reference for methods at one sample per pixel)");
+    t.rule("pixel_centres", [](const O& o) {
+      return o.pixelCentres && o.common.pixelFilter != PixelFilterKind::Box ? "samples no pixel filter: leave out --pixel-filter"
+                                                                              : "";
+    });
     return t;
   }();
   return table;

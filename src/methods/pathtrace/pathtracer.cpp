@@ -598,6 +598,7 @@ class PathTracer {
   const Visibility& vis_;
   const PathTraceOptions& opt_;
   const PinholeCamera camera_;
+  const PixelFilter filter_{{opt_.common.pixelFilter, opt_.common.filterRadius}};
   std::vector<TriangleLightRecord> lightRecords_;  // by light index
   // A hit's triangle and vertex records are prefetched when the scene's arrays outgrow a core's
   // second-level cache (1 MiB here): Sponza's shading reads then wait on memory (its fetch stage
@@ -624,9 +625,11 @@ uint64_t PathTracer::renderTile(const PixelRect& tile, const PassSamples& pass, 
   // The queued samples' paths, traced; then the film takes the pass's samples.
   auto traceQueued = [&] {
     // The camera rays, all lanes at once, or one path at a time.
-    if (opt_.laneShading) startCameraPaths(start, 0, start.count, opt_.sampler, opt_.common.seed, camera_, opt_.pixelCentres);
+    if (opt_.laneShading)
+      startCameraPaths(start, 0, start.count, opt_.sampler, opt_.common.seed, camera_, filter_, opt_.pixelCentres);
     else
-      for (uint32_t k = 0; k < start.count; ++k) startCameraPaths(start, k, k + 1, opt_.sampler, opt_.common.seed, camera_, opt_.pixelCentres);
+      for (uint32_t k = 0; k < start.count; ++k)
+        startCameraPaths(start, k, k + 1, opt_.sampler, opt_.common.seed, camera_, filter_, opt_.pixelCentres);
     wave.paths.resize(start.count);
     if (opt_.paths) wave.parts.assign(start.count, PathParts{});
     for (uint32_t k = 0; k < start.count; ++k) {
@@ -642,8 +645,15 @@ uint64_t PathTracer::renderTile(const PixelRect& tile, const PassSamples& pass, 
     for (uint32_t k = 0; k < start.count; ++k) {
       if (wave.ghost[k]) continue;
       ++taken;
-      const Path& path = wave.paths[k];
-      const PathResult& p = path.result;
+      Path& path = wave.paths[k];
+      PathResult& p = path.result;
+      if (start.filterWeight[k] != 1.0f) {
+        // A negative lobe of the pixel filter (Mitchell's): the sample's light counts with its weight.
+        const float w = start.filterWeight[k];
+        p.direct = p.direct * w, p.indirect = p.indirect * w;
+        if (path.parts)
+          for (Rgb& part : path.parts->light) part = part * w;
+      }
       if (!p.valid || !summable(p.direct) || !summable(p.indirect) || !summable(p.direct + p.indirect) ||
           (path.parts && !std::all_of(path.parts->light.begin(), path.parts->light.end(), [](Rgb part) { return summable(part); }))) {
         ++counters.invalidSamples;
