@@ -41,6 +41,31 @@ def renders(tmp_path_factory):
     return work, module
 
 
+def test_compare_of_runs_gives_lucent_compares_verdict(renders):
+    """Runs (a list of arrays) as `lucent compare RUN... REFERENCE`: the same numbers and verdict, and
+    one image without variance layers is inconclusive."""
+    work, _ = renders
+    runs = []
+    for seed in (3, 4, 5):
+        path = work / f"run{seed}.exr"
+        code, _, err = cli("render", CORNELL, "--resolution", "32x32", "--spp", 16, "--seed", seed, "--quiet", "-o", path)
+        assert code == 0, err
+        runs.append(path)
+    code, out, err = cli("compare", *runs, work / "reference.exr", "--test", "--within", "0.2", "--json")
+    assert code in (0, 1, 3), err
+    expected = json.loads(out)
+    del expected["image"], expected["runs"], expected["reference"]
+    reference = lucent.read_image(str(work / "reference.exr"))
+    arrays = [lucent.read_image(str(path))["image"] for path in runs]
+    assert lucent.compare(arrays, reference, test=True, within=0.2) == expected
+    assert expected["verdict"] == {0: "pass", 1: "fail", 3: "inconclusive"}[code]
+    assert expected["test"]["candidate_noise"]["source"] == "runs"
+    alone = lucent.compare(arrays[0], reference, test=True)
+    assert alone["verdict"] == "inconclusive" and "no variance layers" in alone["test"]["candidate_noise"]["undecided"]
+    with pytest.raises(ValueError, match="two or more"):
+        lucent.compare([arrays[0]], reference, test=True)
+
+
 def test_the_module_renders_what_lucent_render_writes(renders):
     work, module = renders
     written = lucent.read_image(str(work / "candidate.exr"))
