@@ -14,7 +14,6 @@
 // is LDR-FLIP where both images are 8-bit sRGB files, HDR-FLIP otherwise.
 #include <unistd.h>
 
-#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -42,11 +41,6 @@ struct CompareOptions {
   bool json = false;
 };
 
-// Whether any of the variance channels (variance.R, or LAYER.variance.R) was stored as half floats.
-bool hasHalfVariance(const ImageHeader& header) {
-  return std::any_of(header.halfChannels.begin(), header.halfChannels.end(),
-                     [](const std::string& name) { return name.find("variance.") != std::string::npos; });
-}
 
 int runCompare(const CompareOptions& opt) {
   checkComparisonSettings(opt.settings);
@@ -65,7 +59,7 @@ int runCompare(const CompareOptions& opt) {
     const ImageHeader reference = readImageHeader(referencePath);
     for (const std::string& path : runs) {
       const ImageHeader image = readImageHeader(path);
-      halfVariance = halfVariance || hasHalfVariance(image);
+      halfVariance = halfVariance || image.hasHalfVariance();
       try {
         checkComparable(image, reference, statistical || !s.layer.empty());
       } catch (const std::invalid_argument& e) {

@@ -521,8 +521,7 @@ int runReport(const ReportOptions& opt) {
   std::vector<bool> halfVariance;
   for (const std::string& path : opt.candidates) {
     const ImageHeader header = readImageHeader(path);
-    halfVariance.push_back(std::any_of(header.halfChannels.begin(), header.halfChannels.end(),
-                                       [](const std::string& name) { return name.find("variance.") != std::string::npos; }));
+    halfVariance.push_back(header.hasHalfVariance());
     try {
       checkComparable(header, referenceHeader, true);
     } catch (const std::invalid_argument& e) {

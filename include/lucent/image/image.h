@@ -62,6 +62,13 @@ struct ImageHeader {
   int width = 0, height = 0;
   std::vector<std::string> channels;
   std::vector<std::string> halfChannels;  // those stored as 16-bit floats (EXR half)
+  // Whether a variance channel (variance.R, LAYER.variance.R, ...) is among them: small variances
+  // are then 0, and the noise they describe unknown.
+  bool hasHalfVariance() const {
+    for (const std::string& name : halfChannels)
+      if (name.find("variance.") != std::string::npos) return true;
+    return false;
+  }
 };
 // The header of an image in a format Lucent reads (EXR, Radiance HDR, PNG, JPEG, TIFF, by the
 // extension; its content must be that format), checked as readImage checks it (a regular file, at most
