@@ -1,4 +1,4 @@
-// lucent report REFERENCE CANDIDATE... -o REPORT.html [--label NAME]... [--seconds S]...
+// lucent report REFERENCE CANDIDATE... -o REPORT.html [--runs K] [--label NAME]... [--seconds S]...
 //               [--alpha A] [--within D] [--exposure STOPS] [--ppd P] [--layer NAME [--image-layer NAME]]
 // Writes one self-contained HTML page (images embedded as PNG data, no outside resources)
 // comparing each candidate with the reference: the images side by side and as an A/B flip at
@@ -37,6 +37,7 @@ struct ReportOptions {
   std::string reference, output, layer, imageLayer;
   std::vector<std::string> candidates, labels;
   std::vector<double> seconds;
+  int runs = 1;  // images per candidate: independent runs of one renderer
   double alpha = 0.01, exposure = 0, pixelsPerDegree = kFlipPixelsPerDegree;
   std::optional<double> within;
   bool ldr = false;
@@ -162,7 +163,8 @@ std::optional<Sidecar> readSidecar(const std::string& imagePath) {
 }
 
 struct ReportEntry {
-  std::string path, label;
+  std::string path, label;  // path: its first run's
+  std::vector<std::string> runs;
   std::optional<Sidecar> sidecar;
   std::optional<double> seconds;
   ImageMetadata metadata;
@@ -424,7 +426,9 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
   for (size_t i = 0; i < candidates.size(); ++i) {
     const ReportEntry& c = candidates[i];
     html << "<section id=\"candidate-" << i << "\"><h2>" << escapeHtml(c.label) << "</h2>\n<p class=\"note\"><code>"
-         << escapeHtml(c.path) << "</code>: " << provenance(c.metadata);
+         << escapeHtml(c.path) << "</code>"
+         << (c.runs.size() > 1 ? " and " + std::to_string(c.runs.size() - 1) + " more runs (their mean is shown)" : "")
+         << ": " << provenance(c.metadata);
     if (c.sidecar) {
       html << " · <span data-key=\"sidecar\">" << escapeHtml(c.sidecar->path) << ":";
       if (!c.sidecar->renderer.empty()) html << " renderer " << escapeHtml(c.sidecar->renderer);
@@ -507,12 +511,16 @@ int runReport(const ReportOptions& opt) {
   checkPixelsPerDegree(opt.pixelsPerDegree);
   for (const double s : opt.seconds)
     if (!(std::isfinite(s) && s > 0)) throw std::invalid_argument("--seconds must be positive and finite");
-  if (!opt.labels.empty() && opt.labels.size() != opt.candidates.size())
+  if (opt.runs < 1 || opt.candidates.size() % size_t(opt.runs) != 0)
+    throw std::invalid_argument("--runs " + std::to_string(opt.runs) + ": " + std::to_string(opt.candidates.size()) +
+                                " images are not whole candidates of that many runs each");
+  const size_t count = opt.candidates.size() / size_t(opt.runs), runs = size_t(opt.runs);
+  if (!opt.labels.empty() && opt.labels.size() != count)
     throw std::invalid_argument("--label is given " + std::to_string(opt.labels.size()) + " times for " +
-                                std::to_string(opt.candidates.size()) + " candidates");
-  if (!opt.seconds.empty() && opt.seconds.size() != opt.candidates.size())
+                                std::to_string(count) + " candidates");
+  if (!opt.seconds.empty() && opt.seconds.size() != count)
     throw std::invalid_argument("--seconds is given " + std::to_string(opt.seconds.size()) + " times for " +
-                                std::to_string(opt.candidates.size()) + " candidates");
+                                std::to_string(count) + " candidates");
   std::vector<std::string> inputs = opt.candidates;
   inputs.push_back(opt.reference);
   checkOutputFile(opt.output, ".html", "-o", inputs);
@@ -550,20 +558,34 @@ int runReport(const ReportOptions& opt) {
   const bool tested = hasVarianceLayers(referenceFile);
   const Image reference = rgbChannels(referenceFile);
   std::vector<ReportEntry> candidates;
-  for (size_t i = 0; i < opt.candidates.size(); ++i) {
+  for (size_t i = 0; i < count; ++i) {
     ReportEntry c;
-    c.path = opt.candidates[i];
+    c.runs.assign(opt.candidates.begin() + ptrdiff_t(i * runs), opt.candidates.begin() + ptrdiff_t((i + 1) * runs));
+    c.path = c.runs[0];
     c.sidecar = readSidecar(c.path);
     const std::string fileName = std::filesystem::path(c.path).filename().string();
     c.label = !opt.labels.empty()                           ? opt.labels[i]
               : c.sidecar && !c.sidecar->renderer.empty() ? c.sidecar->renderer + " · " + fileName
                                                             : fileName;
-    Image file = readLinearImage(c.path, &c.metadata);
-    if (!opt.layer.empty()) file = chosen(file, c.path).candidate;
-    // --seconds, else the sidecar's, else what a Lucent render stored.
-    c.seconds = !opt.seconds.empty()              ? std::optional<double>(opt.seconds[i])
-                : c.sidecar && c.sidecar->seconds ? c.sidecar->seconds
-                                                  : renderSeconds(c.metadata);
+    // Each run's image (its layer with --layer); their mean is shown and measured, their spread is
+    // the noise of the tests. The seconds: --seconds, else the runs' sidecars' or Lucent's own
+    // records summed, where every run has one.
+    std::vector<Image> runImages;
+    std::optional<double> runSeconds = 0.0;
+    for (size_t k = 0; k < runs; ++k) {
+      ImageMetadata metadata;
+      Image run = readLinearImage(c.runs[k], &metadata);
+      if (!opt.layer.empty()) run = chosen(run, c.runs[k]).candidate;
+      const std::optional<Sidecar> sidecar = k == 0 ? c.sidecar : readSidecar(c.runs[k]);
+      const std::optional<double> seconds = sidecar && sidecar->seconds ? sidecar->seconds : renderSeconds(metadata);
+      runSeconds = runSeconds && seconds ? std::optional<double>(*runSeconds + *seconds) : std::nullopt;
+      if (k == 0) c.metadata = std::move(metadata);
+      runImages.push_back(std::move(run));
+    }
+    c.seconds = !opt.seconds.empty() ? std::optional<double>(opt.seconds[i]) : runSeconds;
+    const Candidate candidate = runs == 1 ? Candidate(std::move(runImages[0]), halfVariance[i])
+                                          : Candidate(std::move(runImages));
+    const Image file = candidateImage(candidate);
     const Image image = rgbChannels(file);
     const bool candidateIsSrgb = isSrgbEncoded(c.path, c.metadata);
     // An 8-bit candidate against the reference clipped to [0, 1] (--ldr), as lucent compare does.
@@ -576,7 +598,6 @@ int runReport(const ReportOptions& opt) {
       }
       const Image& referenceFor = clipped ? *clipped : reference;
       const Image& referenceFileFor = clippedFile ? *clippedFile : referenceFile;
-      const Candidate candidate(file, halfVariance[i]);
       if (tested) c.test = testWithinNoise(candidate, referenceFileFor, opt.alpha);
       if (tested && opt.within) c.equivalence = testEquivalence(candidate, referenceFileFor, *opt.within, opt.alpha);
       c.error = compareImages(image, referenceFor);
@@ -605,7 +626,9 @@ int runReport(const ReportOptions& opt) {
   line["tested"] = tested;
   line["candidates"] = nlohmann::ordered_json::array();
   for (const ReportEntry& c : candidates) {
-    nlohmann::ordered_json entry = {{"label", c.label}, {"image", c.path}, {"relmse", c.error.overall.relmse}, {"flip", c.flip.mean}};
+    nlohmann::ordered_json entry = {{"label", c.label}, {"image", c.path}};
+    if (c.runs.size() > 1) entry["runs"] = c.runs;
+    entry["relmse"] = c.error.overall.relmse, entry["flip"] = c.flip.mean;
     if (c.seconds) entry["seconds"] = *c.seconds;
     if (c.sidecar) {
       nlohmann::ordered_json sidecar = {{"path", c.sidecar->path}};
@@ -636,6 +659,9 @@ void addReportCommand(CLI::App& app, int& exitCode) {
   cmd->add_option("candidates", opt->candidates, "Images to compare with the reference")->required();
   cmd->add_option("-o,--output", opt->output, "The HTML page to write")->required();
   // --label and --seconds take every value up to the next option: --label a b names two candidates.
+  cmd->add_option("--runs", opt->runs,
+                  "Images per candidate (default 1): each candidate is that many consecutive images, independent "
+                  "runs of one renderer whose mean is shown and whose spread is the noise of the tests");
   cmd->add_option("--label", opt->labels, "A name per candidate, in order (default: the file name)");
   cmd->add_option("--seconds", opt->seconds,
                   "Seconds per candidate, in order, for the speed-accuracy chart (default: the "

@@ -182,6 +182,23 @@ try:
     check(not outside, "the page loads outside resources: %r" % outside[:3])
     check("<64 spp>" not in text, "a label reached the page unescaped")
 
+    # Runs: --runs 2 makes each two images one candidate, judged by their spread as compare judges them.
+    for seed in ("3", "4"):
+        render(p("run%s.exr" % seed), ["--method", "pt", "--spp", "64", "--seed", seed])
+    r = run([lucent, "report", p("reference.exr"), p("run3.exr"), p("run4.exr"), "--runs", "2", "--within", "0.05",
+             "-o", p("runs.html")])
+    check(r.returncode == 0, "report --runs failed: " + r.stderr)
+    entry = json.loads(r.stdout)["candidates"]
+    r = run([lucent, "compare", p("run3.exr"), p("run4.exr"), p("reference.exr"), "--test", "--within", "0.05", "--json"])
+    check(r.returncode in (0, 1, 3), "compare of runs failed: " + r.stderr)
+    runs = json.loads(r.stdout)
+    check(len(entry) == 1 and entry[0].get("runs") == [p("run3.exr"), p("run4.exr")]
+          and entry[0]["test"] == runs["test"]["verdict"] and entry[0]["within"] == runs["equivalence"]["verdict"]
+          and fmt(entry[0]["relmse"]) == fmt(runs["overall"]["relmse"]),
+          "report --runs differs from compare of the runs: %r" % entry)
+    check(run([lucent, "report", p("reference.exr"), p("run3.exr"), p("run4.exr"), p("pt.exr"), "--runs", "2",
+               "-o", p("odd.html")]).returncode == 1, "three images in runs of 2 were accepted")
+
     page = browse(p("report.html"))
     for problem in image_problems(page, len(candidates)):
         check(False, problem)
