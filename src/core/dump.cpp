@@ -24,6 +24,9 @@ void writeDump(const std::string& directory, const std::string& name, const std:
                const void* records, uint32_t recordBytes, uint64_t count) {
   const std::filesystem::path path = std::filesystem::path(directory) / (name + ".bin");
   if (type.size() >= sizeof(DumpHeader::type)) throw std::logic_error("dump type name too long: " + type);
+  std::error_code ec;
+  std::filesystem::create_directories(directory, ec);
+  if (ec) throw std::runtime_error("cannot create dump directory '" + directory + "': " + ec.message());
   DumpHeader header{};
   std::memcpy(header.magic, kMagic, sizeof kMagic);
   header.version = kDumpVersion;
@@ -41,8 +44,20 @@ void writeDump(const std::string& directory, const std::string& name, const std:
 }
 
 std::string dumpDirectoryProblem(const std::string& directory) {
-  if (directory.empty() || std::filesystem::is_directory(directory)) return "";
-  return "dump directory '" + directory + "' is not an existing directory";
+  if (directory.empty()) return "";
+  std::error_code ec;
+  std::filesystem::path at = std::filesystem::absolute(directory, ec);
+  if (ec) return "dump directory '" + directory + "': " + ec.message();
+  // The nearest part of the path that exists must be a directory: a file there would block it.
+  for (; !at.empty(); at = at.parent_path()) {
+    const std::filesystem::file_status status = std::filesystem::status(at, ec);
+    if (std::filesystem::exists(status)) {
+      if (std::filesystem::is_directory(status)) return "";
+      return "dump directory '" + directory + "': '" + at.string() + "' is not a directory";
+    }
+    if (at == at.parent_path()) break;
+  }
+  return "dump directory '" + directory + "' cannot be created";
 }
 
 namespace {

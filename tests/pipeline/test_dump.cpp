@@ -65,8 +65,12 @@ TEST_CASE("Dumps hold their records behind a header that names them", "[dump]") 
   damaged.count = uint64_t(1) << 60;
   rewriteHeader(damaged);
   CHECK_THROWS_WITH(readDump<uint32_t>(path, "uint32"), Catch::Contains("truncated"));
-  CHECK_THROWS_WITH(writeDump((dir.path / "missing").string(), "values", "uint32", std::span(values)),
-                    Catch::Contains("missing/values.bin"));
+  // A missing directory is created; a file where the directory would be is named.
+  CHECK_NOTHROW(writeDump((dir.path / "missing").string(), "values", "uint32", std::span(values)));
+  CHECK(readDump<uint32_t>((dir.path / "missing" / "values.bin").string(), "uint32") == values);
+  std::ofstream(dir.path / "blocked") << "x";
+  CHECK_THROWS_WITH(writeDump((dir.path / "blocked").string(), "values", "uint32", std::span(values)),
+                    Catch::Contains("blocked"));
 }
 
 TEST_CASE("A purcell dump recomputes its maps and its caustic estimates", "[dump][photonmap-render]") {
@@ -234,7 +238,7 @@ TEST_CASE("A micro dump's interior radiance pulls up from its leaves", "[dump][m
   CHECK(readDump<Rgb>(dir / "indirect.bin", "Rgb").size() == points.size());
 }
 
-TEST_CASE("The CLI dumps pmfg's and micro's stages into an existing directory only, and refuses --dump for pt",
+TEST_CASE("The CLI dumps pmfg's and micro's stages into a directory it creates, and refuses --dump for pt",
           "[dump][cli]") {
   TempDir dir("cli-dump");
   const std::string scene = lucent::test::quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json");
@@ -248,10 +252,17 @@ TEST_CASE("The CLI dumps pmfg's and micro's stages into an existing directory on
   CHECK(std::filesystem::exists(dir / "global.source_index.bin"));  // pmfg's kd-tree
   CHECK(std::filesystem::exists(dir / "band0.indirect.bin"));
 
+  // A missing directory is created, with its missing parents; a file in the way is refused.
   const auto missing = lucent::test::runLucent("render " + scene + " --method purcell --dump " +
-                                               lucent::test::quoted(dir / "nowhere") + common);
-  CHECK(missing.status != 0);
-  CHECK_THAT(missing.output, Catch::Contains("nowhere") && Catch::Contains("not an existing directory"));
+                                               lucent::test::quoted(dir / "new/dumps") + common);
+  INFO(missing.output);
+  CHECK(missing.status == 0);
+  CHECK(std::filesystem::exists(dir / "new/dumps/global.photons.bin"));
+  std::ofstream(dir / "file") << "x";
+  const auto blocked = lucent::test::runLucent("render " + scene + " --method purcell --dump " +
+                                               lucent::test::quoted(dir / "file/dumps") + common);
+  CHECK(blocked.status != 0);
+  CHECK_THAT(blocked.output, Catch::Contains("is not a directory"));
   // micro: the hierarchy, the points' radiance, the shading points and, lit by photons, the map.
   TempDir microDir("cli-micro-dump");
   const auto micro = lucent::test::runLucent(

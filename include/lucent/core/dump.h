@@ -46,7 +46,9 @@ bool offsetsCutRuns(const std::vector<Offset>& offsets, uint64_t total) {
   return ok;
 }
 
-// Why `directory` cannot take dumps, or "" if it can (or is "": no dumps): it must exist.
+// Why `directory` cannot take dumps, or "" if it can (or is "": no dumps): it is a directory, or
+// missing with a directory as its nearest existing ancestor (writeDump creates it and its missing
+// parents with the first file).
 std::string dumpDirectoryProblem(const std::string& directory);
 
 // The header's record type name (its type field up to the first NUL).

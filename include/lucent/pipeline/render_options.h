@@ -54,7 +54,7 @@ void declareMaxSpecularDepth(OptionTable<Options>& table, int Options::*field) {
 
 template <class Options>
 void declareDumpDirectory(OptionTable<Options>& table, std::string Options::*field) {
-  table.text("dump", field, "directory", "write every stage's arrays into this existing directory (docs/dump-format.md)");
+  table.text("dump", field, "directory", "write every stage's arrays into this directory, created where missing (docs/dump-format.md)");
   table.imageNeutral("dump");
   table.rule("dump", [field](const Options& o) { return dumpDirectoryProblem(o.*field); });
 }
