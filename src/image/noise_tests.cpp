@@ -77,8 +77,7 @@ double incompleteBeta(double a, double b, double x) {
 }  // namespace
 
 double studentTwoSidedP(double t, double dof) {
-  if (std::isnan(t)) return 0;
-  if (!std::isfinite(t)) return 0;
+  if (!std::isfinite(t)) return 0;  // NaN or infinite: a difference no noise explains
   if (!(dof < 1e7)) return std::erfc(std::abs(t) / std::sqrt(2.0));
   return incompleteBeta(0.5 * dof, 0.5, dof / (dof + t * t));
 }

@@ -203,11 +203,11 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
             cs.rng = Rng(seed, pixel, uint64_t(s));
             // One box-filtered sample is the pixel's centre; others are stratified over the
             // pixel and drawn through its filter.
-            const Vec2 offset = settings.spp == 1 && filter.isBox()
-                                    ? Vec2{0.5f, 0.5f}
-                                    : filter.position(stratifiedSample2D(uint32_t(s), uint32_t(settings.spp), cs.rng.uniform2()),
-                                                      cs.filterWeight);
-            if (settings.spp == 1 && filter.isBox()) cs.filterWeight = 1;
+            const bool centre = settings.spp == 1 && filter.isBox();
+            cs.filterWeight = 1;
+            const Vec2 offset = centre ? Vec2{0.5f, 0.5f}
+                                       : filter.position(stratifiedSample2D(uint32_t(s), uint32_t(settings.spp), cs.rng.uniform2()),
+                                                         cs.filterWeight);
             cs.ray = camera.generate(float(x) + offset.x, float(y) + offset.y);
             cs.pixel = pixel, cs.sample = uint32_t(s);
             if (++queued == kWidestPacket) traceBatch();
