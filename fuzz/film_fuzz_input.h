@@ -32,6 +32,7 @@ inline std::string filmFileFromInput(std::string_view input) {
   const std::string_view arrays = nul < input.size() ? input.substr(nul + 1) : std::string_view();
   // The arrays' sizes as the header gives them, where it gives them plausibly; else as they come.
   uint64_t pixels = 0, sums = 0;
+  bool features = false;  // a third array, the pixels' surfaces
   try {
     const auto j = nlohmann::json::parse(header);
     const auto& crop = j.at("crop");
@@ -45,14 +46,17 @@ inline std::string filmFileFromInput(std::string_view input) {
       const int64_t s = j["sums_per_pixel"].get<int64_t>();
       if (w > 0 && h > 0 && s > 0 && w * h <= (1 << 16) && s <= 64) pixels = uint64_t(w * h), sums = uint64_t(s);
     }
+    const auto& layers = j.at("layers");
+    features = layers.is_object() && layers.contains("features") && layers["features"] == true;
   } catch (const nlohmann::json::exception&) {
   }
   header.resize((header.size() + 7) / 8 * 8, ' ');
-  std::string sumBytes, valid, taken;
+  std::string sumBytes, valid, taken, surfaces;
   if (pixels > 0) {
     sumBytes.assign(pixels * sums * 24, '\0'), valid.assign(pixels * 4, '\0'), taken.assign(pixels * 4, '\0');
+    if (features) surfaces.assign(pixels * 4, '\0');
     size_t at = 0;
-    for (std::string* array : {&sumBytes, &valid, &taken}) {
+    for (std::string* array : {&sumBytes, &valid, &taken, &surfaces}) {
       const size_t n = std::min(array->size(), arrays.size() > at ? arrays.size() - at : 0);
       if (n > 0) std::memcpy(array->data(), arrays.data() + at, n);
       at += n;
@@ -61,14 +65,14 @@ inline std::string filmFileFromInput(std::string_view input) {
     sumBytes.assign(arrays);
   }
   Fnv1a hash;
-  hash.add(header), hash.add(sumBytes), hash.add(valid), hash.add(taken);
+  hash.add(header), hash.add(sumBytes), hash.add(valid), hash.add(taken), hash.add(surfaces);
   std::string file = "LCNTFILM";
-  const uint32_t version = 3, headerBytes = uint32_t(header.size());
+  const uint32_t version = 4, headerBytes = uint32_t(header.size());
   file.append(reinterpret_cast<const char*>(&version), 4);
   file.append(reinterpret_cast<const char*>(&headerBytes), 4);
   file.append(reinterpret_cast<const char*>(&hash.value), 8);
   file += header + sumBytes;
-  for (std::string* counts : {&valid, &taken}) {
+  for (std::string* counts : {&valid, &taken, &surfaces}) {
     counts->resize((counts->size() + 7) / 8 * 8, '\0');
     file += *counts;
   }

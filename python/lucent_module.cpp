@@ -27,6 +27,7 @@
 #include "lucent/image/comparison.h"
 #include "lucent/image/image.h"
 #include "lucent/methods/methods.h"
+#include "lucent/pipeline/film.h"
 #include "lucent/scene/loader.h"
 #include "lucent/trace/visibility.h"
 
@@ -178,6 +179,8 @@ py::dict render(const LoadedScene& s, std::optional<std::string> methodName, std
     return method.render(s.scene, *s.visibility, *resolved, control);
   });
   py::dict result = imageArrays(out.image);
+  // The names the layer surface's material indices stand for (with layers).
+  if (out.film && out.film->layers().features) result["materials"] = out.film->materialNames();
   py::dict stats, counters, stages, measured;
   for (const auto& [stage, seconds] : out.stats.stageSeconds) stages[py::str(stage)] = seconds;
   for (const auto& [counter, value] : out.stats.counters) counters[py::str(counter)] = value;
@@ -257,6 +260,9 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
     runs.push_back(imageFrom(image, "image"));
   }
   Image b = imageFrom(reference, "reference");
+  // A reference dict's material names (render's and read_image's "materials") name the breakdown by surface.
+  if (py::isinstance<py::dict>(reference) && reference.cast<py::dict>().contains("materials"))
+    settings.materialNames = reference.cast<py::dict>()["materials"].cast<std::vector<std::string>>();
   ImageComparison result;
   {
     py::gil_scoped_release release;
@@ -370,6 +376,8 @@ PYBIND11_MODULE(lucent, m) {
     const Image image = readLinearImage(path, &metadata);
     py::dict out = imageArrays(image);
     out["srgb"] = isSrgbEncoded(path, metadata);  // pass as compare's image_srgb / reference_srgb
+    const std::vector<std::string> materials = materialNamesOf(metadata);
+    if (!materials.empty()) out["materials"] = materials;
     out["channels"] = image.channels();
     return out;
   }, py::arg("path"), "An image file (EXR, HDR, PNG, ...) as a dict like render's: image, variance, layers, and "

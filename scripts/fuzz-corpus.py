@@ -101,6 +101,8 @@ def film_header(width=4, height=4, crop=None, first=0, count=2, spp=2, complete=
               "first_sample": first, "sample_count": count, "complete": complete, "sums": sums,
               "layers": {"features": features, "caustic": caustic, "variance": variance},
               "sums_per_pixel": per_pixel, "counters": {"rays": 100}}
+    if features:
+        header["materials"] = ["white", "light"]
     return header
 
 
@@ -111,7 +113,10 @@ def film_input(header, taken=None):
     count = header["sample_count"] if taken is None else taken
     sums = b"".join(struct.pack("<QQq", 1 << 90 >> 64 if k % 3 == 0 else 0, 0, 0) for k in range(pixels * header["sums_per_pixel"]))
     counts = struct.pack("<%dI" % pixels, *([count] * pixels))
-    return b"\x01" + json.dumps(header).encode() + b"\0" + sums + counts + counts
+    # With features, what each pixel shows: the first material, the second (an emitter), the background.
+    codes = [2, 3 | 1 << 31, 1]
+    surfaces = struct.pack("<%dI" % pixels, *(codes[k % 3] for k in range(pixels))) if header["layers"]["features"] else b""
+    return b"\x01" + json.dumps(header).encode() + b"\0" + sums + counts + counts + surfaces
 
 
 def film_seeds():

@@ -80,6 +80,7 @@ int runCompare(const CompareOptions& opt) {
   settings.heatmap = !opt.heatmap.empty();
   ImageComparison result;
   try {
+    settings.materialNames = materialNamesOf(referenceMetadata);
     result = compareImagePair(std::move(candidate), std::move(reference), settings, candidateIsSrgb,
                               isSrgbEncoded(referencePath, referenceMetadata));
   } catch (const std::invalid_argument& e) {

@@ -99,6 +99,7 @@ MergedFilm mergeFilmFiles(const std::vector<std::string>& parts) {
   const int width = model.imageWidth(), height = model.imageHeight();
   MergedFilm out{std::make_unique<Film>(width, height, box, model.sums(), model.layers()), films.front().info, false, box};
   Film& merged = *out.film;
+  merged.setMaterialNames(model.materialNames());
   FilmFileInfo& info = out.info;
   info.firstSample = firstSample;
   info.sampleCount = sampleCount;

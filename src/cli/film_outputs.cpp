@@ -65,6 +65,7 @@ ImageMetadata filmMetadata(const FilmFileInfo& info, const Film& film) {
   if (info.firstSample != 0 || info.sampleCount != info.spp)
     meta.emplace_back("lucent:samples", std::to_string(info.firstSample) + ":" + std::to_string(info.sampleCount));
   if (!info.complete) meta.emplace_back("lucent:partial", "true");
+  if (film.layers().features) meta.emplace_back("lucent:materials", nlohmann::json(film.materialNames()).dump());
   return meta;
 }
 

@@ -171,6 +171,7 @@ struct ReportEntry {
   ImageError error;
   std::optional<NoiseTest> test;
   std::optional<EquivalenceTest> equivalence;
+  std::vector<SurfaceDifference> surfaces;  // where the reference has surface layers
   FlipResult flip;
   double errorScale = 0;
   std::string imageUri, errorUri, statisticUri, flipUri;
@@ -496,6 +497,17 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
       }
       html << "</table>\n";
     }
+    if (!c.surfaces.empty()) {
+      html << "<p>By surface (what each pixel's centre shows in the reference): relative difference Σ(c − r) / Σr "
+              "with its (1 − 2α) interval.</p>\n<table class=\"surfaces\" data-key=\"by_surface\"><tr><th>surface</th>"
+              "<th>pixels</th><th>difference</th><th>interval</th></tr>";
+      for (const SurfaceDifference& d : c.surfaces) {
+        const bool known = std::isfinite(d.low) && std::isfinite(d.high);
+        html << "<tr><td>" << escapeHtml(d.name) << "</td><td>" << d.pixels << "</td><td>" << number(d.relativeDifference)
+             << "</td><td>" << (known ? number(d.low) + " to " + number(d.high) : std::string("unknown")) << "</td></tr>";
+      }
+      html << "</table>\n";
+    }
     html << "</section>\n";
   }
   html << "<script>" << kScript << "</script>\n</body></html>\n";
@@ -556,6 +568,12 @@ int runReport(const ReportOptions& opt) {
   }
   const bool referenceIsSrgb = isSrgbEncoded(opt.reference, referenceMetadata);
   const bool tested = hasVarianceLayers(referenceFile);
+  std::vector<std::string> materialNames;
+  try {
+    materialNames = materialNamesOf(referenceMetadata);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("'" + opt.reference + "': " + e.what());
+  }
   const Image reference = rgbChannels(referenceFile);
   std::vector<ReportEntry> candidates;
   for (size_t i = 0; i < count; ++i) {
@@ -600,6 +618,7 @@ int runReport(const ReportOptions& opt) {
       const Image& referenceFileFor = clippedFile ? *clippedFile : referenceFile;
       if (tested) c.test = testWithinNoise(candidate, referenceFileFor, opt.alpha);
       if (tested && opt.within) c.equivalence = testEquivalence(candidate, referenceFileFor, *opt.within, opt.alpha);
+      if (tested) c.surfaces = differenceBySurface(candidate, referenceFileFor, materialNames, opt.alpha);
       c.error = compareImages(image, referenceFor);
       // As lucent compare --metric flip: LDR-FLIP between 8-bit files, HDR-FLIP otherwise.
       c.flip = computeFlip(image, referenceFor, flipOptions(candidateIsSrgb, referenceIsSrgb, opt.pixelsPerDegree));
@@ -642,6 +661,12 @@ int runReport(const ReportOptions& opt) {
     if (c.test) entry["passed"] = c.test->verdict == Verdict::Pass, entry["test"] = verdictName(c.test->verdict);
     if (c.equivalence)
       entry["equivalent"] = c.equivalence->verdict == Verdict::Pass, entry["within"] = verdictName(c.equivalence->verdict);
+    if (!c.surfaces.empty()) {
+      entry["by_surface"] = nlohmann::ordered_json::array();
+      for (const SurfaceDifference& d : c.surfaces)
+        entry["by_surface"].push_back({{"name", d.name}, {"kind", surfaceKindName(d.kind)}, {"pixels", d.pixels},
+                                       {"relative_difference", d.relativeDifference}, {"interval", {d.low, d.high}}});
+    }
     line["candidates"].push_back(entry);
   }
   std::cout << jsonText(line) << std::endl;

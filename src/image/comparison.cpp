@@ -64,6 +64,23 @@ nlohmann::ordered_json equivalenceJson(const EquivalenceTest& t) {
   return out;
 }
 
+nlohmann::ordered_json surfacesJson(const std::vector<SurfaceDifference>& surfaces, double alpha) {
+  nlohmann::ordered_json out;
+  out["confidence"] = 1 - 2 * alpha;
+  out["surfaces"] = nlohmann::ordered_json::array();
+  for (const SurfaceDifference& d : surfaces) {
+    nlohmann::ordered_json entry = {{"kind", surfaceKindName(d.kind)}};
+    if (d.kind == SurfaceDifference::Kind::Material) entry["material"] = d.material;
+    entry["name"] = d.name;
+    entry["pixels"] = d.pixels;
+    entry["relative_difference"] = d.relativeDifference;
+    // null bounds: the candidate's noise is unknown
+    entry["interval"] = {d.low, d.high};
+    out["surfaces"].push_back(entry);
+  }
+  return out;
+}
+
 std::string percent(double value) {
   std::ostringstream s;
   s << std::showpos << std::setprecision(2) << std::fixed << 100 * value << "%";
@@ -79,7 +96,8 @@ std::string regionName(int x0, int y0, int x1, int y1, int width, int height) {
 // The verdict in words: what was tested, what failed or is undecided, where and by how much.
 std::string verdictWords(Verdict verdict, int width, int height, uint64_t nonFinite,
                          const ComparisonSettings& opt, double value, const std::optional<NoiseTest>& test,
-                         const std::optional<EquivalenceTest>& equivalence) {
+                         const std::optional<EquivalenceTest>& equivalence,
+                         const std::vector<SurfaceDifference>& surfaces) {
   std::ostringstream s;
   s << verdictName(verdict) << "\n";
   if (nonFinite > 0) s << "  the image has " << nonFinite << " NaN or infinite values\n";
@@ -116,6 +134,15 @@ std::string verdictWords(Verdict verdict, int width, int height, uint64_t nonFin
         s << "    " << regionName(r.x0, r.y0, r.x1, r.y1, width, height) << ": " << percent(r.relativeDifference)
           << " [" << percent(r.low) << ", " << percent(r.high) << "] " << verdictName(r.verdict) << "\n";
   }
+  if (!surfaces.empty()) {
+    s << "  by surface (what each pixel's centre shows in the reference; " << std::setprecision(3)
+      << 100 * (1 - 2 * opt.alpha) << "% intervals):\n";
+    for (const SurfaceDifference& d : surfaces) {
+      s << "    " << d.name << ": " << percent(d.relativeDifference);
+      if (std::isfinite(d.low) && std::isfinite(d.high)) s << " [" << percent(d.low) << ", " << percent(d.high) << "]";
+      s << " (" << d.pixels << " pixels)\n";
+    }
+  }
   if (noise && !noise->undecided.empty() && verdict == Verdict::Inconclusive) s << "  undecided: " << noise->undecided << "\n";
   return s.str();
 }
@@ -136,6 +163,23 @@ nlohmann::ordered_json flipJson(const FlipResult& f, double pixelsPerDegree) {
 }
 
 }  // namespace
+
+std::vector<std::string> materialNamesOf(const ImageMetadata& metadata) {
+  for (const auto& [key, value] : metadata) {
+    if (key != "lucent:materials") continue;
+    const nlohmann::json names = nlohmann::json::parse(value, nullptr, false);
+    std::vector<std::string> out;
+    if (names.is_array())
+      for (const nlohmann::json& name : names) {
+        if (!name.is_string()) break;
+        out.push_back(name.get<std::string>());
+      }
+    if (!names.is_array() || out.size() != names.size())
+      throw std::invalid_argument("the reference's lucent:materials is not a JSON array of names");
+    return out;
+  }
+  return {};
+}
 
 void checkPixelsPerDegree(double ppd) {
   if (!(ppd >= 1 && ppd <= 1000)) throw std::invalid_argument("--ppd must lie in [1, 1000]");
@@ -214,6 +258,12 @@ ImageComparison compareImagePair(Candidate candidate, Image referenceFile, const
   std::optional<FlipResult> flipResult;
   if (opt.test) test = testWithinNoise(candidate, referenceFile, opt.alpha, 4, opt.block);
   if (opt.within) equivalence = testEquivalence(candidate, referenceFile, *opt.within, opt.alpha);
+  // The breakdown by surface where the reference has the surface layers (and, as every interval
+  // needs, its variance).
+  std::vector<SurfaceDifference> surfaces;
+  if (referenceFile.channelIndex("surface.material") >= 0 && referenceFile.channelIndex("variance.R") >= 0 &&
+      referenceFile.channelIndex("variance.G") >= 0 && referenceFile.channelIndex("variance.B") >= 0)
+    surfaces = differenceBySurface(candidate, referenceFile, opt.materialNames, opt.alpha);
   const Image candidateFile = candidateImage(candidate);
   if (flip) {
     FlipOptions options = flipOptions(candidateIsSrgb, referenceIsSrgb, opt.pixelsPerDegree);
@@ -249,6 +299,7 @@ ImageComparison compareImagePair(Candidate candidate, Image referenceFile, const
   if (test) out["test"] = testJson(*test);
   if (equivalence) out["equivalence"] = equivalenceJson(*equivalence);
   if (flipResult) out["flip"] = flipJson(*flipResult, opt.pixelsPerDegree);
+  if (!surfaces.empty()) out["by_surface"] = surfacesJson(surfaces, opt.alpha);
   out["verdict"] = verdictName(result.verdict);
   out["passed"] = result.verdict == Verdict::Pass;
   if (opt.heatmap)
@@ -257,7 +308,7 @@ ImageComparison compareImagePair(Candidate candidate, Image referenceFile, const
                                 : errorHeatmap(image, reference, metric);
   result.json = jsonText(out);
   result.words = verdictWords(result.verdict, image.width(), image.height(), error.nonFinite, opt, value, test,
-                              equivalence);
+                              equivalence, surfaces);
   return result;
 }
 

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -332,6 +333,31 @@ double welchDegreesOfFreedom(double candidate, double total, double dof) {
   return dof * (total / candidate) * (total / candidate);
 }
 
+// A set of pixels' relative difference d = C / R - 1 over R + G + B, and its (1 - 2 alpha)
+// interval d +- q se, var(d) = var(C) / R^2 + C^2 var(R) / R^4 (the delta method); R > 0.
+struct RelativeInterval {
+  double difference = 0, low = 0, high = 0;
+  double candidateHalfWidth = 0;  // the candidate's noise's share of the half width
+};
+RelativeInterval relativeInterval(const UnitSums& s, NoiseSource source, const CandidateNoise::Scale& scale, double alpha) {
+  const double c = s.candidate[kSum], r = s.reference[kSum];
+  const double ratio = c / r;
+  const double cv = candidateVariance(source, scale, s.pixelVariance[kSum], s.spread(kSum));
+  const double total = cv + ratio * ratio * s.referenceVariance[kSum];
+  const double se = std::sqrt(total) / r;
+  const double q = studentTwoSidedQuantile(2 * alpha, welchDegreesOfFreedom(cv, total, scale.degreesOfFreedom));
+  return {ratio - 1, ratio - 1 - q * se, ratio - 1 + q * se, q * std::sqrt(cv) / r};
+}
+
+// The correlation of the noise of sums of regions' size over their pixels' own (see noise_tests.h),
+// pooled over a grid x grid of tiles, and of the image.
+std::array<CandidateNoise::Scale, 2> regionScales(const std::vector<UnitSums>& regions, int runs) {
+  double tileSpread = 0, tilePixels = 0;
+  for (size_t k = 1; k < regions.size(); ++k) tileSpread += regions[k].spread(kSum), tilePixels += regions[k].pixelVariance[kSum];
+  return {poolScale("regions", tileSpread, tilePixels, regions.size() - 1, runs),
+          poolScale("image", regions[0].spread(kSum), regions[0].pixelVariance[kSum], 1, runs)};
+}
+
 double statistic(double difference, double variance) {
   if (variance > 0) return difference / std::sqrt(variance);
   return difference == 0 ? 0.0 : std::copysign(kInfinity, difference);
@@ -437,10 +463,8 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
   std::vector<BlockSums> noBlocks;
   sumImage(pixels, tiles, 0, regions, noBlocks);
   CandidateNoise& noise = pixels.noise();
-  double tileSpread = 0, tilePixels = 0;
-  for (size_t k = 1; k < regions.size(); ++k) tileSpread += regions[k].spread(kSum), tilePixels += regions[k].pixelVariance[kSum];
-  noise.scales = {poolScale("regions", tileSpread, tilePixels, regions.size() - 1, noise.runs),
-                  poolScale("image", regions[0].spread(kSum), regions[0].pixelVariance[kSum], 1, noise.runs)};
+  const auto scales = regionScales(regions, noise.runs);
+  noise.scales = {scales[0], scales[1]};
   t.verdict = Verdict::Pass;
   for (size_t k = 0; k < regions.size(); ++k) {
     const CandidateNoise::Scale& scale = noise.scales[k == 0 ? 1 : 0];
@@ -449,22 +473,17 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
     const UnitSums& s = regions[k];
     const double c = s.candidate[kSum], r = s.reference[kSum];
     if (r > 0) {
-      // d = C / R - 1; var(d) = var(C) / R^2 + C^2 var(R) / R^4 (the delta method).
-      const double ratio = c / r;
-      const double cv = candidateVariance(noise.source, scale, s.pixelVariance[kSum], s.spread(kSum));
-      const double total = cv + ratio * ratio * s.referenceVariance[kSum];
-      const double se = std::sqrt(total) / r;
-      const double q = studentTwoSidedQuantile(2 * alpha, welchDegreesOfFreedom(cv, total, scale.degreesOfFreedom));
-      e.relativeDifference = ratio - 1;
-      e.low = e.relativeDifference - q * se, e.high = e.relativeDifference + q * se;
-      if (!std::isfinite(se)) e.verdict = Verdict::Inconclusive;
+      const RelativeInterval interval = relativeInterval(s, noise.source, scale, alpha);
+      e.relativeDifference = interval.difference;
+      e.low = interval.low, e.high = interval.high;
+      if (!std::isfinite(e.high - e.low)) e.verdict = Verdict::Inconclusive;
       else if (e.low > -within && e.high < within) e.verdict = Verdict::Pass;
       else if (e.low >= within || e.high <= -within) e.verdict = Verdict::Fail;
       else {
         e.verdict = Verdict::Inconclusive;
         // The candidate's share of the interval must narrow to the margin between d and +-D.
         const double margin = std::abs(std::abs(e.relativeDifference) - within);
-        const double candidateHalfWidth = q * std::sqrt(cv) / r;
+        const double candidateHalfWidth = interval.candidateHalfWidth;
         t.samplesToDecide = std::max(t.samplesToDecide, margin > 0 ? std::pow(candidateHalfWidth / margin, 2) : kInfinity);
       }
     } else {
@@ -486,6 +505,79 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
   }
   t.noise = noise;
   return t;
+}
+
+const char* surfaceKindName(SurfaceDifference::Kind kind) {
+  switch (kind) {
+    case SurfaceDifference::Kind::Material: return "material";
+    case SurfaceDifference::Kind::Background: return "background";
+    case SurfaceDifference::Kind::Emitters: return "emitters";
+    case SurfaceDifference::Kind::NonEmitters: return "non_emitters";
+  }
+  return "";
+}
+
+std::vector<SurfaceDifference> differenceBySurface(const Candidate& candidate, const Image& reference,
+                                                   const std::vector<std::string>& materialNames, double alpha) {
+  if (!(alpha > 0 && alpha < 0.5)) throw std::invalid_argument("the significance must be in (0, 0.5)");
+  const int materialAt = reference.channelIndex("surface.material"), emitterAt = reference.channelIndex("surface.emitter");
+  if (materialAt < 0 || emitterAt < 0) return {};
+  TestPixels pixels(candidate, reference);
+  const int w = pixels.width(), h = pixels.height();
+  const CandidateNoise& noise = pixels.noise();
+  // With runs, each surface's sum by its own spread (Student's t, n - 1 degrees of freedom): its
+  // pixels lie all over the image, and noise shared over long ranges (a per-run offset, a random
+  // sequence shared by every pixel) makes their sums vary more than a pool over tiles would say.
+  const CandidateNoise::Scale scale = noise.source == NoiseSource::Runs
+                                          ? CandidateNoise::Scale{"surfaces", 0.0, double(noise.runs - 1)}
+                                          : CandidateNoise::Scale{"surfaces", 1.0, kInfinity};
+  // Units: the materials present by index (those the names do not reach named by their index),
+  // then the background, the emitters, all but the emitters: keys past any material index.
+  constexpr uint64_t kBackground = uint64_t(1) << 32, kEmitters = kBackground + 1, kNonEmitters = kBackground + 2;
+  std::map<uint64_t, std::pair<UnitSums, uint64_t>> units;  // and each one's pixels
+  Quad mean, variance, value, referenceVariance;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float material = reference.at(x, y, materialAt);
+      const bool emits = reference.at(x, y, emitterAt) != 0;
+      pixels.read(x, y, mean, variance, value, referenceVariance);
+      auto add = [&](uint64_t unit) {
+        auto& [sums, count] = units[unit];
+        sums.add(mean, variance, value, referenceVariance, pixels.values());
+        ++count;
+      };
+      // A value that is no material index (another renderer's IDs, a pixel not traced) counts
+      // only as an emitter or not.
+      if (material >= 0 && material < 4294967296.0f && material == std::floor(material)) add(uint64_t(material));
+      if (material == -1) add(kBackground);
+      add(emits ? kEmitters : kNonEmitters);
+    }
+  std::vector<SurfaceDifference> out;
+  for (const auto& [unit, entry] : units) {
+    const auto& [s, count] = entry;
+    SurfaceDifference d;
+    d.pixels = count;
+    if (unit < kBackground) {
+      d.kind = SurfaceDifference::Kind::Material, d.material = int64_t(unit);
+      d.name = unit < materialNames.size() ? materialNames[unit] : "material " + std::to_string(unit);
+    } else if (unit == kBackground) {
+      d.kind = SurfaceDifference::Kind::Background, d.name = "background";
+    } else if (unit == kEmitters) {
+      d.kind = SurfaceDifference::Kind::Emitters, d.name = "emitters";
+    } else {
+      d.kind = SurfaceDifference::Kind::NonEmitters, d.name = "all but emitters";
+    }
+    if (s.reference[kSum] > 0) {
+      const RelativeInterval interval = relativeInterval(s, noise.source, scale, alpha);
+      d.relativeDifference = interval.difference, d.low = interval.low, d.high = interval.high;
+    } else {
+      // A black reference: no relative difference, only none or some light.
+      d.relativeDifference = s.candidate[kSum] == 0 ? 0.0 : kInfinity, d.low = d.high = d.relativeDifference;
+    }
+    if (noise.source == NoiseSource::Unknown) d.low = d.high = std::numeric_limits<double>::quiet_NaN();
+    out.push_back(d);
+  }
+  return out;
 }
 
 }  // namespace lucent

@@ -73,7 +73,7 @@ Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers
   if (layers.paths && layers.variance) reserve(pathSquares_, 3 * int(pathLayers().size()));
   const uint64_t pixels = region.pixelCount();
   // The sums and sample counts, and the image made of them (about as many channels, in floats).
-  requireMemory(pixels * (uint64_t(stride_) * (sizeof(ExactSum) + sizeof(float)) + 2 * sizeof(uint32_t)), "the film",
+  requireMemory(pixels * (uint64_t(stride_) * (sizeof(ExactSum) + sizeof(float)) + 3 * sizeof(uint32_t)), "the film",
                 "lower --resolution or render it in parts (--crop)");
   sums_.resize(pixels * size_t(stride_));
   tbb::parallel_for(tbb::blocked_range<size_t>(0, sums_.size(), size_t(1) << 16), [&](const tbb::blocked_range<size_t>& r) {
@@ -81,6 +81,14 @@ Film::Film(int width, int height, PixelRect region, Sums sums, FilmLayers layers
   });
   samples_.assign(pixels, 0);
   taken_.assign(pixels, 0);
+  if (layers.features) surfaces_.assign(pixels, PixelSurface::kUnknown);
+}
+
+void Film::setSurfaces(std::vector<uint32_t> codes, std::vector<std::string> materialNames) {
+  if (!layers_.features || codes.size() != surfaces_.size())
+    throw std::logic_error("film: pixel surfaces for a film without features, or of another region");
+  surfaces_ = std::move(codes);
+  materialNames_ = std::move(materialNames);
 }
 
 void Film::addSample(uint64_t pixel, Rgb direct, Rgb indirect, Rgb albedo, Vec3 normal, float depth,
@@ -161,6 +169,8 @@ void Film::add(const Film& part) {
   if (part.width_ != width_ || part.height_ != height_ || part.mode_ != mode_ || !(part.layers_ == layers_) ||
       part.stride_ != stride_ || !region_.contains(part.region_))
     throw std::invalid_argument("film: a part of another image, layout or region");
+  if (layers_.features && part.materialNames_ != materialNames_)
+    throw std::invalid_argument("film: a part of a scene with other materials");
   const PixelRect& r = part.region_;
   for (int y = r.y0; y < r.y1; ++y)
     for (int x = r.x0; x < r.x1; ++x) {
@@ -169,6 +179,11 @@ void Film::add(const Film& part) {
       for (int c = 0; c < stride_; ++c) sums_[to * stride_ + c].add(part.sums_[from * stride_ + c]);
       samples_[to] += part.samples_[from];
       taken_[to] += part.taken_[from];
+      if (!layers_.features || part.surfaces_[from] == PixelSurface::kUnknown) continue;
+      if (surfaces_[to] != PixelSurface::kUnknown && surfaces_[to] != part.surfaces_[from])
+        throw std::invalid_argument("film: a part whose pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                    ") shows another surface");
+      surfaces_[to] = part.surfaces_[from];
     }
   dropped_ += part.dropped_;
 }
@@ -193,6 +208,10 @@ Image Film::image() const {
         for (const char* c : {".variance.R", ".variance.G", ".variance.B"})
           channels.push_back(std::string("paths.") + layer.name + c);
     }
+  const size_t surfaceAt = channels.size();
+  // In the order an EXR file keeps them (by name), so that a read image has the film's layout.
+  if (layers_.features)
+    for (const char* name : {"surface.emitter", "surface.material"}) channels.push_back(name);
   const size_t nc = channels.size(), pixels = region_.pixelCount();
   Image image(region_.width(), region_.height(), channels);
   float* out = image.pixels().data();
@@ -231,6 +250,8 @@ Image Film::image() const {
         }
       }
       if (!layers_.features) continue;
+      o[surfaceAt] = PixelSurface::emits(surfaces_[p]) ? 1.0f : 0.0f;
+      o[surfaceAt + 1] = float(PixelSurface::material(surfaces_[p]));
       for (int c = 0; c < 7; ++c) o[3 + c] = float(sum[features_ + c].value() / n);
       for (int c = 0; c < 3; ++c)
         o[10 + c] = float(sum[direct_ + c].value() / n), o[13 + c] = float(sum[indirect_ + c].value() / n);

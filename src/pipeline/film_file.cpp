@@ -17,7 +17,7 @@ namespace lucent {
 namespace {
 
 constexpr char kMagic[8] = {'L', 'C', 'N', 'T', 'F', 'I', 'L', 'M'};
-constexpr uint32_t kFormatVersion = 3;
+constexpr uint32_t kFormatVersion = 4;
 constexpr uint32_t kPreambleBytes = 24;  // magic, version, header size, hash
 constexpr uint32_t kMaxHeaderBytes = 1 << 20;
 
@@ -42,7 +42,7 @@ size_t padded(size_t bytes) { return (bytes + 7) / 8 * 8; }
 
 FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileInfo& info) {
   const auto sums = film.pixelSums();
-  const auto valid = film.validSamples(), taken = film.samplesTaken();
+  const auto valid = film.validSamples(), taken = film.samplesTaken(), surfaces = film.pixelSurfaces();
   const size_t countBytes = padded(valid.size_bytes());
 
   nlohmann::ordered_json header;
@@ -66,6 +66,7 @@ FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileIn
   header["layers"] = {{"features", film.layers().features}, {"caustic", film.layers().caustic},
                       {"variance", film.layers().variance}, {"paths", film.layers().paths}};
   header["sums_per_pixel"] = film.sumsPerPixel();
+  if (film.layers().features) header["materials"] = film.materialNames();
   header["counters"] = nlohmann::ordered_json::object();
   for (const auto& [name, value] : info.counters) header["counters"][name] = value;
   std::string text = jsonText(header);
@@ -75,10 +76,11 @@ FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileIn
   hash.add(sums.data(), sums.size_bytes());
   hash.add(valid.data(), valid.size_bytes());
   hash.add(taken.data(), taken.size_bytes());
+  hash.add(surfaces.data(), surfaces.size_bytes());
 
   return {path, "film", [&film, text, countBytes, fileHash = hash.value](const std::filesystem::path& tmp) {
             const auto sums = film.pixelSums();
-            const auto valid = film.validSamples(), taken = film.samplesTaken();
+            const auto valid = film.validSamples(), taken = film.samplesTaken(), surfaces = film.pixelSurfaces();
             const uint64_t zeros = 0;
             std::ofstream out(tmp, std::ios::binary);
             const uint32_t version = kFormatVersion, headerBytes = uint32_t(text.size());
@@ -88,7 +90,8 @@ FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileIn
             out.write(reinterpret_cast<const char*>(&fileHash), 8);
             out.write(text.data(), std::streamsize(text.size()));
             out.write(reinterpret_cast<const char*>(sums.data()), std::streamsize(sums.size_bytes()));
-            for (const auto& counts : {valid, taken}) {
+            for (const auto& counts : {valid, taken, surfaces}) {
+              if (counts.empty()) continue;
               out.write(reinterpret_cast<const char*>(counts.data()), std::streamsize(counts.size_bytes()));
               out.write(reinterpret_cast<const char*>(&zeros), std::streamsize(countBytes - counts.size_bytes()));
             }
@@ -135,6 +138,7 @@ FilmFile readFilmFile(const std::string& path) {
   PixelRect region;
   Film::Sums sums;
   FilmLayers layers;
+  std::vector<std::string> materialNames;
   try {
     header = nlohmann::json::parse(text);
     if (!header.is_object()) throw fail("header: not a JSON object");
@@ -188,6 +192,11 @@ FilmFile readFilmFile(const std::string& path) {
     if (layers.variance && sums != Film::Sums::PerSample) throw fail("a 'variance' layer needs 'per_sample' sums");
     if (layers.paths && sums != Film::Sums::PerSample) throw fail("a 'paths' layer needs 'per_sample' sums");
     sumsPerPixel = integer(header.at("sums_per_pixel"), "sums_per_pixel", 1, 256);
+    if (layers.features) {
+      const nlohmann::json& names = header.at("materials");
+      if (!names.is_array()) throw fail("header: 'materials' is not an array of names");
+      for (const nlohmann::json& name : names) materialNames.push_back(name.get<std::string>());
+    }
   } catch (const nlohmann::json::exception& e) {
     throw fail(std::string("header: ") + e.what());
   }
@@ -204,7 +213,8 @@ FilmFile readFilmFile(const std::string& path) {
     throw fail("'sums_per_pixel' does not match its sums and layers");
   const uint64_t pixels = region.pixelCount();
   const uint64_t sumBytes = pixels * uint64_t(sumsPerPixel) * sizeof(ExactSum), countBytes = padded(pixels * 4);
-  const uint64_t expected = kPreambleBytes + uint64_t(headerBytes) + sumBytes + 2 * countBytes;
+  const uint64_t countArrays = layers.features ? 3 : 2;  // valid, taken, and with features the pixels' surfaces
+  const uint64_t expected = kPreambleBytes + uint64_t(headerBytes) + sumBytes + countArrays * countBytes;
   if (fileBytes != expected)
     throw fail("its size is not the " + std::to_string(expected) + " bytes its header makes (truncated or damaged)");
   requireMemory(pixels * (uint64_t(sumsPerPixel) * sizeof(ExactSum) + 8), "the film of '" + path + "'",
@@ -212,10 +222,12 @@ FilmFile readFilmFile(const std::string& path) {
   file.film = std::make_unique<Film>(width, height, region, sums, layers);
   Film& film = *file.film;
   const auto sumsData = film.pixelSums();
-  const auto valid = film.validSamples(), taken = film.samplesTaken();
+  if (layers.features) film.setMaterialNames(std::move(materialNames));
+  const auto valid = film.validSamples(), taken = film.samplesTaken(), surfaces = film.pixelSurfaces();
   in.read(reinterpret_cast<char*>(sumsData.data()), std::streamsize(sumsData.size_bytes()));
   std::vector<char> padding(8);
-  for (const auto& counts : {valid, taken}) {
+  for (const auto& counts : {valid, taken, surfaces}) {
+    if (counts.empty()) continue;
     in.read(reinterpret_cast<char*>(counts.data()), std::streamsize(counts.size_bytes()));
     in.read(padding.data(), std::streamsize(countBytes - counts.size_bytes()));
   }
@@ -225,6 +237,7 @@ FilmFile readFilmFile(const std::string& path) {
   hash.add(sumsData.data(), sumsData.size_bytes());
   hash.add(valid.data(), valid.size_bytes());
   hash.add(taken.data(), taken.size_bytes());
+  hash.add(surfaces.data(), surfaces.size_bytes());
   if (hash.value != fileHash) throw fail("its header or data does not match its hash (damaged)");
   for (uint32_t t : taken) {
     if (t > uint32_t(info.sampleCount)) throw fail("a pixel has taken more samples than the part has");
@@ -233,6 +246,11 @@ FilmFile readFilmFile(const std::string& path) {
   }
   for (size_t i = 0; i < valid.size(); ++i)
     if (valid[i] > taken[i]) throw fail("a pixel has more valid samples than it took");
+  // A render traces its pixels' surfaces before any sample: every film of one knows them all.
+  const int materials = int(film.materialNames().size());
+  for (uint32_t code : surfaces)
+    if (code == PixelSurface::kUnknown || PixelSurface::material(code) < -1 || PixelSurface::material(code) >= materials)
+      throw fail("a pixel's surface is not the background or one of its " + std::to_string(materials) + " materials");
   return file;
 }
 

@@ -33,9 +33,10 @@ void refuseResume(const RenderControl& control, std::string_view atOnce) {
                                 "--samples) to bound the work a kill loses");
 }
 
-Film startFilm(const RenderControl& control, const Scene& scene, const RenderPart& part, Film::Sums sums,
-               FilmLayers layers) {
+Film startFilm(const RenderControl& control, const Scene& scene, const Visibility& visibility, const RenderPart& part,
+               Film::Sums sums, FilmLayers layers) {
   Film film(scene.camera.width, scene.camera.height, part.region, sums, layers);
+  if (layers.features) film.setSurfaces(tracePixelSurfaces(scene, visibility, part.region), scene.materialNames);
   if (!control.resume) return film;
   const Film& from = *control.resume;
   if (from.imageWidth() != film.imageWidth() || from.imageHeight() != film.imageHeight() ||
@@ -53,10 +54,10 @@ void addBand(Film& film, const EyePaths& band, const PointRadiance& light, int i
   for (size_t i = 0; i < band.pixels.size(); ++i) film.setTaken(band.imagePixel(i, imageWidth), uint32_t(part.samples()));
 }
 
-void shadeImage(RenderOutput& out, const RenderControl& control, const Scene& scene, const RenderPart& part,
-                const EyePaths& eye, const PointRadiance& light, FilmLayers layers) {
+void shadeImage(RenderOutput& out, const RenderControl& control, const Scene& scene, const Visibility& visibility,
+                const RenderPart& part, const EyePaths& eye, const PointRadiance& light, FilmLayers layers) {
   Stopwatch clock;
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, layers));
+  auto film = std::make_shared<Film>(startFilm(control, scene, visibility, part, Film::Sums::PerPart, layers));
   addBand(*film, eye, light, scene.camera.width, part);
   out.image = film->image();
   out.film = film;

@@ -234,4 +234,25 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
   return out;
 }
 
+std::vector<uint32_t> tracePixelSurfaces(const Scene& scene, const Visibility& vis, const PixelRect& region) {
+  const PinholeCamera camera(scene.camera);
+  const bool environmentEmits = scene.environment.present;
+  std::vector<uint32_t> codes(size_t(region.pixelCount()));
+  tbb::parallel_for(tbb::blocked_range<int>(region.y0, region.y1), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y != rows.end(); ++y)
+      for (int x = region.x0; x < region.x1; ++x) {
+        const Ray ray = camera.generate(float(x) + 0.5f, float(y) + 0.5f);
+        const Hit hit = vis.intersect(ray);
+        uint32_t code = PixelSurface::code(-1, environmentEmits);
+        if (hit.found()) {
+          const bool front = dot(ray.direction, scene.geometricNormal(hit.triangle)) < 0;
+          const bool emits = !emittedRadiance(scene, hit.triangle, hit.b1, hit.b2, front).isBlack();
+          code = PixelSurface::code(int(scene.materialIds[hit.triangle]), emits);
+        }
+        codes[size_t(y - region.y0) * size_t(region.width()) + size_t(x - region.x0)] = code;
+      }
+  });
+  return codes;
+}
+
 }  // namespace lucent

@@ -132,8 +132,8 @@ def fnv(data, value=FNV_OFFSET):
 
 
 def read_film(path):
-    """A film file's header (JSON), its arrays' bytes and their sizes, as docs/film-format.md lays
-    them out."""
+    """A film file's header (JSON), its sums' bytes and its per-pixel arrays (valid, taken and, with
+    features, surfaces), as docs/film-format.md lays them out."""
     with open(path, "rb") as f:
         data = f.read()
     header_bytes = struct.unpack_from("<I", data, 12)[0]
@@ -143,15 +143,18 @@ def read_film(path):
     sums = data[24 + header_bytes:24 + header_bytes + pixels * header["sums_per_pixel"] * 24]
     counts = data[24 + header_bytes + len(sums):]
     padded = (pixels * 4 + 7) // 8 * 8
-    return header, sums, counts[:pixels * 4], counts[padded:padded + pixels * 4]
+    arrays = [counts[k * padded:k * padded + pixels * 4] for k in range(3 if header["layers"]["features"] else 2)]
+    return header, sums, arrays
 
 
-def write_film(path, header, sums, valid, taken, fix_hash=True):
+def write_film(path, header, sums, arrays, fix_hash=True):
     text = json.dumps(header).encode()
     text += b" " * (-len(text) % 8)
-    value = fnv(taken, fnv(valid, fnv(sums, fnv(text)))) if fix_hash else 12345
-    data = b"LCNTFILM" + struct.pack("<IIQ", 3, len(text), value) + text + sums
-    for counts in (valid, taken):
+    value = fnv(sums, fnv(text))
+    for counts in arrays:
+        value = fnv(counts, value)
+    data = b"LCNTFILM" + struct.pack("<IIQ", 4, len(text), value if fix_hash else 12345) + text + sums
+    for counts in arrays:
         data += counts + b"\0" * (-len(counts) % 8)
     write(path, data)
 
@@ -454,9 +457,9 @@ def parts(work):
     (lambda h: h["layers"].update(variance=True), "'sums_per_pixel' does not match"),
 ])
 def test_merge_refuses_a_film_whose_hashed_header_lies(parts, lie, words):
-    header, sums, valid, taken = read_film(os.path.join(parts, "p1.film"))
+    header, sums, arrays = read_film(os.path.join(parts, "p1.film"))
     lie(header)
-    write_film(os.path.join(parts, "p1.film"), header, sums, valid, taken)
+    write_film(os.path.join(parts, "p1.film"), header, sums, arrays)
     before = snapshot(parts)
     run = lucent("merge", "p0.film", "p1.film", "-o", "m.exr", cwd=parts)
     assert run.code == 1 and "p1.film" in run.err and words in run.err, run
@@ -464,29 +467,45 @@ def test_merge_refuses_a_film_whose_hashed_header_lies(parts, lie, words):
 
 
 def test_a_film_whose_header_changed_after_hashing_is_refused(parts):
-    header, sums, valid, taken = read_film(os.path.join(parts, "p1.film"))
+    header, sums, arrays = read_film(os.path.join(parts, "p1.film"))
     header["first_sample"] = 0
-    write_film(os.path.join(parts, "p1.film"), header, sums, valid, taken, fix_hash=False)
+    write_film(os.path.join(parts, "p1.film"), header, sums, arrays, fix_hash=False)
     run = lucent("merge", "p0.film", "p1.film", "-o", "m.exr", cwd=parts)
     assert run.code == 1 and "p1.film" in run.err and "does not match its hash" in run.err, run
 
 
 def test_a_film_that_says_it_is_complete_must_have_every_sample(parts):
-    header, sums, valid, taken = read_film(os.path.join(parts, "p1.film"))
-    taken = b"\0" * len(taken)
-    valid = b"\0" * len(valid)
-    write_film(os.path.join(parts, "p1.film"), header, sums, valid, taken)
+    header, sums, arrays = read_film(os.path.join(parts, "p1.film"))
+    arrays = [b"\0" * len(a) for a in arrays]  # no sample valid or taken
+    write_film(os.path.join(parts, "p1.film"), header, sums, arrays)
     run = lucent("merge", "p0.film", "p1.film", "-o", "m.exr", cwd=parts)
     assert run.code == 1 and "says it is complete" in run.err, run
+
+
+@pytest.mark.parametrize("code, words", [(0, "not the background or one of its"), (2 + 1000, "not the background or one of its"),
+                                         (0xFFFFFFFF, "not the background or one of its")])
+def test_a_film_whose_pixels_show_no_surface_it_names_is_refused(work, code, words):
+    scene = box_scene(work)
+    for k, samples in enumerate(["0:1", "1:1"]):
+        run = lucent("render", scene, "--spp", "2", "--samples", samples, "--layers", "-q", "-o", "p%d.exr" % k, cwd=work)
+        assert run.code == 0, run
+    header, sums, arrays = read_film(os.path.join(work, "p1.film"))
+    assert len(arrays) == 3 and header["materials"]
+    arrays[2] = struct.pack("<I", code) + arrays[2][4:]
+    write_film(os.path.join(work, "p1.film"), header, sums, arrays)
+    before = snapshot(work)
+    run = lucent("merge", "p0.film", "p1.film", "-o", "m.exr", cwd=work)
+    assert run.code == 1 and "p1.film" in run.err and words in run.err, run
+    assert changed(before, snapshot(work)) == []
 
 
 def test_a_resume_refuses_a_crafted_checkpoint_and_keeps_it(work):
     scene = box_scene(work, resolution=(32, 32))
     code, _, err = stop_at_stage(work, scene, ["--spp", "4096", "--checkpoint", "100"], "trace_paths", signal.SIGTERM)
     assert code == 143, err
-    header, sums, valid, taken = read_film(os.path.join(work, "out.film"))
+    header, sums, arrays = read_film(os.path.join(work, "out.film"))
     header["sample_count"] = 2147483647
-    write_film(os.path.join(work, "out.film"), header, sums, valid, taken)
+    write_film(os.path.join(work, "out.film"), header, sums, arrays)
     before = snapshot(work)
     run = lucent("render", scene, "--spp", "4096", "--resume", "-q", "-o", "out.exr", cwd=work)
     assert run.code == 1 and "out.film" in run.err and "sample_count" in run.err, run

@@ -143,10 +143,16 @@ def image_problems(page, candidates):
     return problems
 
 
+def text_of(path):
+    with open(path, encoding="utf-8") as f:
+        return f.read()
+
+
 work = tempfile.mkdtemp()
 try:
     p = lambda name: os.path.join(work, name)
-    render(p("reference.exr"), ["--method", "pt", "--variance", "--sampler", "independent", "--spp", "1024", "--seed", "1"])
+    render(p("reference.exr"), ["--method", "pt", "--variance", "--sampler", "independent", "--spp", "1024", "--seed", "1",
+                                "--layers"])
     render(p("pt.exr"), ["--method", "pt", "--variance", "--sampler", "independent", "--spp", "64", "--seed", "2",
                          "--png", p("pt.png")])
     render(p("micro.exr"), ["--method", "micro"])
@@ -172,12 +178,19 @@ try:
           "the report's JSON verdicts differ from compare's")
     check([c["within"] for c in summary["candidates"]] == [x["equivalence"]["verdict"] for x in results],
           "the report's JSON equivalence verdicts differ from compare's")
+    # The reference's layers say what each pixel shows: the report breaks each difference down as compare does.
+    for c, x in zip(summary["candidates"], results):
+        mine = [(e["name"], fmt(e["relative_difference"])) for e in c.get("by_surface", [])]
+        theirs = [(e["name"], fmt(e["relative_difference"])) for e in x["by_surface"]["surfaces"]]
+        check(mine == theirs and any(name == "light" for name, _ in mine),
+              "the report's breakdown by surface differs from compare's: %r vs %r" % (mine, theirs))
+    check(text_of(p("report.html")).count('data-key="by_surface"') == len(candidates),
+          "the page does not show each candidate's breakdown by surface")
     # micro and the PNG have no variance layers: neither passed nor failed.
     check([x["test"]["verdict"] for x in results][1:] == ["inconclusive", "inconclusive"],
           "candidates without variance layers are not inconclusive")
 
-    with open(p("report.html"), encoding="utf-8") as f:
-        text = f.read()
+    text = text_of(p("report.html"))
     outside = [m for m in re.findall(r'(?:src|href)="([^"]*)"', text) if m and not m.startswith(("data:", "#"))]
     check(not outside, "the page loads outside resources: %r" % outside[:3])
     check("<64 spp>" not in text, "a label reached the page unescaped")

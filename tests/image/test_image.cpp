@@ -1,6 +1,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +10,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <random>
 
@@ -696,4 +698,67 @@ TEST_CASE("lucent compare --test: a path-traced candidate passes its reference, 
   // --variance asks for independent samples.
   CHECK(runLucent("render " + quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json") + " --spp 4 --variance -o " +
                   quoted(dir / "x.exr")).status == 1);
+}
+
+TEST_CASE("lucent compare says where a difference lies: per material, for emitters and for the rest", "[compare][cli]") {
+  // The Cornell box's reference with --layers carries what each pixel's centre shows; four runs of
+  // the path tracer (other seeds) have their white walls made 6% dark, as a renderer that weights
+  // a diffuse lobe wrongly would: the breakdown finds the white walls -6%, the other walls and the
+  // light as they were.
+  const test::TempDir dir("compare-surfaces");
+  const std::string scene = quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json") + " --resolution 64x64 --quiet";
+  const test::CliRun reference = runLucent("render " + scene + " --spp 512 --variance --layers --sampler independent "
+                                           "--seed 1 -o " + quoted(dir / "reference.exr"));
+  INFO(reference.output);
+  REQUIRE(reference.status == 0);
+  ImageMetadata metadata;
+  const Image layers = readImage(dir / "reference.exr", &metadata);
+  const std::vector<std::string> names = materialNamesOf(metadata);
+  const auto index = [&](const std::string& name) { return float(std::find(names.begin(), names.end(), name) - names.begin()); };
+  REQUIRE(index("white") < float(names.size()));
+  REQUIRE(index("light") < float(names.size()));
+  const int material = layers.channelIndex("surface.material"), emitter = layers.channelIndex("surface.emitter");
+  REQUIRE(material >= 0);
+  REQUIRE(emitter >= 0);
+  int lightPixels = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const bool light = layers.at(x, y, material) == index("light");
+      CHECK((layers.at(x, y, emitter) == 1.0f) == light);  // the light, and only it, emits
+      lightPixels += light;
+    }
+  CHECK(lightPixels > 10);
+  std::string runs;
+  for (int seed = 2; seed < 6; ++seed) {
+    const std::string run = dir / ("run" + std::to_string(seed) + ".exr");
+    REQUIRE(runLucent("render " + scene + " --spp 64 --seed " + std::to_string(seed) + " -o " + quoted(run)).status == 0);
+    Image image = readImage(run);
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x)
+        if (layers.at(x, y, material) == index("white"))
+          for (int c = 0; c < 3; ++c) image.at(x, y, c) *= 0.94f;
+    writeExr(image, run);
+    runs += quoted(run) + " ";
+  }
+  const test::CliRun r = runLucent("compare " + runs + quoted(dir / "reference.exr") + " --within 0.05");
+  INFO(r.output);
+  REQUIRE(r.status != 2);
+  const auto out = nlohmann::json::parse(r.output);
+  std::map<std::string, nlohmann::json> found;
+  for (const auto& entry : out["by_surface"]["surfaces"]) found[entry["name"].get<std::string>()] = entry;
+  for (const char* name : {"white", "red", "green", "light", "emitters", "all but emitters"}) REQUIRE(found.count(name));
+  auto interval = [&](const char* name) { return std::pair{found[name]["interval"][0].get<double>(), found[name]["interval"][1].get<double>()}; };
+  CHECK(found["white"]["relative_difference"].get<double>() == Approx(-0.06).margin(0.01));
+  CHECK(interval("white").first <= -0.06);
+  CHECK(interval("white").second >= -0.06);
+  CHECK(interval("white").second < 0);
+  for (const char* name : {"red", "green", "light", "emitters"}) {
+    INFO(name);
+    CHECK(interval(name).first <= 0);
+    CHECK(interval(name).second >= 0);
+  }
+  CHECK(found["light"]["pixels"] == lightPixels);
+  CHECK(found["emitters"]["pixels"] == lightPixels);
+  CHECK(interval("all but emitters").second < 0);
+  CHECK(found["all but emitters"]["pixels"] == 64 * 64 - lightPixels);
 }

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <random>
 #include <tbb/parallel_for.h>
+#include <string>
 #include <vector>
 
 #include "lucent/image/noise_tests.h"
@@ -183,4 +184,68 @@ TEST_CASE("Student's t: p-values and quantiles", "[compare]") {
   CHECK(studentTwoSidedQuantile(0.05, 9) == Approx(2.26215716).epsilon(1e-7));
   CHECK(studentTwoSidedQuantile(0.01, 7) == Approx(3.49948329).epsilon(1e-7));
   CHECK(studentTwoSidedQuantile(1e-6, 2) == Approx(std::sqrt(2 / (1e-6 * (2 - 1e-6)) - 2)).epsilon(1e-6));
+}
+
+TEST_CASE("By surface: each material's interval covers its own bias, at least 1 - 1.5 x 2 alpha of the time",
+          "[compare][calibration]") {
+  // The simulated reference gains surface layers: material 0 the left half, 1 the right half, 2 an
+  // emitter in the biased tile; the runs' right half is 6% dark. Each interval is a (1 - 2 alpha)
+  // one: it must hold the true difference (0 left, -6% right, 0 the emitter) in at least
+  // 1 - 1.5 x 2 alpha of the trials, and with 8 runs of independent or correlated noise tell the
+  // right half's bias from 0.
+  constexpr double alpha = 0.05, bias = -0.06;
+  constexpr int trials = 200;
+  const std::vector<std::string> names = {"left", "right", "lamp"};
+  auto materialAt = [](int x, int y) { return inBiasedTile(x, y) ? 2 : x < kSide / 2 ? 0 : 1; };
+  std::printf("noise model     runs  covered: left  right  lamp  emitters  non-emitters  right's bias shown   (of %d)\n", trials);
+  for (Model model : {Model::Independent, Model::Correlated, Model::HeavyTailed})
+    for (int runs : {2, 4, 8}) {
+      std::vector<std::vector<SurfaceDifference>> results(static_cast<size_t>(trials));
+      tbb::parallel_for(0, trials, [&](int t) {
+        Random rng{77000 + 1000 * uint64_t(model) + 100 * uint64_t(runs) + uint64_t(t)};
+        const Image plain = simulatedReference(rng);
+        Image reference(kSide, kSide, {"R", "G", "B", "variance.R", "variance.G", "variance.B", "surface.material", "surface.emitter"});
+        for (int y = 0; y < kSide; ++y)
+          for (int x = 0; x < kSide; ++x) {
+            for (int c = 0; c < 6; ++c) reference.at(x, y, c) = plain.at(x, y, c);
+            reference.at(x, y, 6) = float(materialAt(x, y));
+            reference.at(x, y, 7) = materialAt(x, y) == 2 ? 1.0f : 0.0f;
+          }
+        std::vector<Image> images;
+        for (int i = 0; i < runs; ++i) {
+          Image run = simulatedRun(model, 0.0, false, rng);
+          for (int y = 0; y < kSide; ++y)
+            for (int x = 0; x < kSide; ++x)
+              if (materialAt(x, y) == 1)
+                for (int c = 0; c < 3; ++c) run.at(x, y, c) *= float(1 + bias);
+          images.push_back(std::move(run));
+        }
+        results[size_t(t)] = differenceBySurface(Candidate(std::move(images)), reference, names, alpha);
+      });
+      // Per unit (left, right, lamp, emitters, all but emitters): trials whose interval holds the truth.
+      // The non-emitters: the left half less the lamp, and the right half (6% dark), by their light.
+      double left = 0, right = 0;
+      for (int y = 0; y < kSide; ++y)
+        for (int x = 0; x < kSide; ++x)
+          for (int c = 0; c < 3; ++c) {
+            if (materialAt(x, y) == 0) left += trueMean(x, y, c);
+            if (materialAt(x, y) == 1) right += trueMean(x, y, c);
+          }
+      const double truths[5] = {0, bias, 0, 0, bias * right / (left + right)};
+      std::vector<int> covered(5, 0);
+      int shown = 0;
+      for (const auto& result : results) {
+        REQUIRE(result.size() == 5);
+        CHECK(result[1].name == "right");
+        CHECK(result[3].kind == SurfaceDifference::Kind::Emitters);
+        CHECK(result[3].pixels == 16 * 16);
+        for (size_t u = 0; u < 5; ++u) covered[u] += result[u].low <= truths[u] && truths[u] <= result[u].high;
+        shown += result[1].high < 0;
+      }
+      std::printf("%-14s %5d  %13d  %5d  %4d  %8d  %12d  %18d\n", modelName(model), runs, covered[0], covered[1],
+                  covered[2], covered[3], covered[4], shown);
+      INFO(modelName(model) << ", " << runs << " runs");
+      for (size_t u = 0; u < 5; ++u) CHECK(covered[u] >= (1 - 1.5 * 2 * alpha) * trials);
+      if (runs == 8 && model != Model::HeavyTailed) CHECK(shown >= 0.95 * trials);
+    }
 }

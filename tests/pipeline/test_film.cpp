@@ -57,7 +57,7 @@ TEST_CASE("The film's layers: features and parts, and a caustic part only where 
     Film film(2, 2, Film::Sums::PerPart, {true, caustic});
     film.add(band.eye, band.light);
     const Image image = film.image();
-    CHECK(image.channelCount() == (caustic ? 19 : 16));
+    CHECK(image.channelCount() == (caustic ? 21 : 18));  // with surface.material and surface.emitter
     CHECK(image.channelIndex("caustic.R") == (caustic ? 16 : -1));
     CHECK(image.at(0, 0, image.channelIndex("R")) == 3.75f);  // the caustic part is in the total either way
     CHECK(image.at(0, 0, image.channelIndex("direct.G")) == 1.25f);
@@ -72,7 +72,7 @@ TEST_CASE("The film's layers: features and parts, and a caustic part only where 
   film.addSample(3, Rgb(1.0f), Rgb(0.5f), Rgb(0.2f), Vec3(0, 0, 1), 4);
   film.addSample(3, Rgb(3.0f), Rgb(0.5f), Rgb(0.4f), Vec3(0, 0, 1), 2);
   const Image image = film.image();
-  CHECK(image.channelCount() == 16);
+  CHECK(image.channelCount() == 18);
   CHECK(image.at(1, 1, 0) == 2.5f);
   CHECK(image.at(1, 1, image.channelIndex("direct.R")) == 2.0f);
   CHECK(image.at(1, 1, image.channelIndex("albedo.G")) == Approx(0.3f));
@@ -101,4 +101,41 @@ TEST_CASE("Without layers a film keeps one total per channel, and its image is t
         CHECK(a.at(x, y, c) == b.at(x, y, b.channelIndex(std::string(1, "RGB"[c]))));
       }
   CHECK(a.at(0, 0, 0) == float(1.25 + 0x1p-23));  // the pixel's parts, summed exactly
+}
+
+TEST_CASE("A film's pixel surfaces become the surface layers, and parts must agree on them", "[film]") {
+  const std::vector<std::string> names = {"wall", "lamp"};
+  const std::vector<uint32_t> codes = {PixelSurface::code(0, false), PixelSurface::code(1, true),
+                                       PixelSurface::code(-1, false), PixelSurface::code(-1, true)};
+  Film film(2, 2, Film::Sums::PerSample, {true, false});
+  film.setSurfaces(codes, names);
+  const Image image = film.image();
+  const int material = image.channelIndex("surface.material"), emitter = image.channelIndex("surface.emitter");
+  REQUIRE(material >= 0);
+  REQUIRE(emitter >= 0);
+  CHECK(image.at(0, 0, material) == 0.0f);
+  CHECK(image.at(0, 0, emitter) == 0.0f);
+  CHECK(image.at(1, 0, material) == 1.0f);
+  CHECK(image.at(1, 0, emitter) == 1.0f);
+  CHECK(image.at(0, 1, material) == -1.0f);  // the background
+  CHECK(image.at(1, 1, emitter) == 1.0f);    // an environment's background emits
+  CHECK(Film(2, 2, Film::Sums::PerSample, {}).image().channelIndex("surface.material") == -1);
+
+  // A merge takes the parts' surfaces; a part that saw another surface, or another scene's
+  // materials, is refused.
+  Film part(2, 2, {0, 1, 2, 2}, Film::Sums::PerSample, {true, false});
+  part.setSurfaces({codes[2], codes[3]}, names);
+  Film whole(2, 2, Film::Sums::PerSample, {true, false});
+  whole.setMaterialNames(names);
+  whole.add(part);
+  CHECK(whole.pixelSurfaces()[2] == codes[2]);
+  CHECK(whole.pixelSurfaces()[0] == PixelSurface::kUnknown);
+  whole.add(film);
+  CHECK(std::vector<uint32_t>(whole.pixelSurfaces().begin(), whole.pixelSurfaces().end()) == codes);
+  Film other(2, 2, {0, 1, 2, 2}, Film::Sums::PerSample, {true, false});
+  other.setSurfaces({codes[3], codes[3]}, names);
+  CHECK_THROWS_WITH(whole.add(other), Catch::Contains("pixel (0, 1) shows another surface"));
+  Film renamed(2, 2, {0, 1, 2, 2}, Film::Sums::PerSample, {true, false});
+  renamed.setSurfaces({codes[2], codes[3]}, {"wall", "light"});
+  CHECK_THROWS_WITH(whole.add(renamed), Catch::Contains("other materials"));
 }

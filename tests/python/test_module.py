@@ -187,3 +187,29 @@ def test_dumps_read_as_structured_arrays(tmp_path):
     damaged.write_bytes((tmp_path / "global.photons.bin").read_bytes()[:100])
     with pytest.raises(RuntimeError, match="damaged.bin"):
         lucent.read_dump(str(damaged))
+
+
+def test_the_breakdown_by_surface_names_the_references_materials(tmp_path):
+    """A reference with layers carries its materials' names: read_image and render give them as
+    "materials", and compare breaks the difference down by them, as `lucent compare` does."""
+    code, _, err = cli("render", CORNELL, "--resolution", "32x32", "--spp", 64, "--seed", 2, "--sampler",
+                       "independent", "--variance", "--layers", "--quiet", "-o", tmp_path / "reference.exr")
+    assert code == 0, err
+    reference = lucent.read_image(str(tmp_path / "reference.exr"))
+    assert "light" in reference["materials"] and "surface" in reference["layers"]
+    assert reference["layer_channels"]["surface"] == ["emitter", "material"]
+    module = lucent.render(lucent.load_scene(CORNELL, resolution=(32, 32)), spp=4, layers=True)
+    assert module["materials"] == reference["materials"]
+    assert np.array_equal(module["layers"]["surface"], reference["layers"]["surface"])
+    paths = [tmp_path / f"run{seed}.exr" for seed in (3, 4, 5)]
+    for seed, path in zip((3, 4, 5), paths):
+        code, _, err = cli("render", CORNELL, "--resolution", "32x32", "--spp", 16, "--seed", seed, "--quiet", "-o", path)
+        assert code == 0, err
+    runs = [lucent.read_image(str(path))["image"] for path in paths]
+    code, out, err = cli("compare", *paths, tmp_path / "reference.exr", "--within", "0.2")
+    assert code in (0, 1, 3), err
+    expected = json.loads(out)
+    del expected["image"], expected["runs"], expected["reference"]
+    assert lucent.compare(runs, reference, within=0.2) == expected
+    names = [entry["name"] for entry in expected["by_surface"]["surfaces"]]
+    assert "light" in names and "emitters" in names and "all but emitters" in names

@@ -4,6 +4,7 @@
 #pragma once
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "lucent/image/flip.h"
 #include "lucent/image/image.h"
@@ -23,6 +24,9 @@ struct ComparisonSettings {
   std::optional<double> startExposure, stopExposure;  // HDR-FLIP's range (default: from the reference)
   bool heatmap = false;            // also make the heatmap compare --heatmap writes
   bool ldr = false;                // an 8-bit candidate against the reference clipped to [0, 1]
+  // The reference's material names by index (its lucent:materials), which name the breakdown of
+  // the difference by the surfaces its surface.material layer shows.
+  std::vector<std::string> materialNames;
 };
 
 // An 8-bit (display) image holds at most 1 once decoded: against a reference brighter than that
@@ -31,6 +35,11 @@ struct ComparisonSettings {
 // std::invalid_argument saying so, unless `ldr`: then those values of `reference` are clipped to 1,
 // and their count is returned (0 where nothing applies).
 uint64_t matchDisplayRange(bool candidateIsSrgb, bool referenceIsSrgb, Image& reference, bool ldr);
+
+// The material names an image's metadata holds (lucent:materials, a JSON array of strings, which
+// render --layers writes); empty where it has none. Throws std::invalid_argument where it is not
+// such an array.
+std::vector<std::string> materialNamesOf(const ImageMetadata& metadata);
 
 // Throws std::invalid_argument, naming the option as the command line spells it, for a setting out
 // of its range.

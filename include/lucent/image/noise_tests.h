@@ -131,6 +131,29 @@ struct EquivalenceTest {
 EquivalenceTest testEquivalence(const Candidate& candidate, const Image& reference, double within, double alpha,
                                 int grid = 4);
 
+// Where a difference lies: the candidate's relative difference from the reference over the pixels
+// of each surface the reference's surface layers tell apart (render --layers: surface.material,
+// surface.emitter, what each pixel's centre shows), each material (named by `materialNames`, the
+// reference's lucent:materials; by its index beyond them), the background, the emitters, and all
+// but the emitters; each with its (1 - 2 alpha) confidence interval as testEquivalence's regions
+// have it, except that with runs a surface's variance is its own sum's spread, with n - 1 degrees
+// of freedom (a surface's pixels lie all over the image, where noise shared over long ranges, such
+// as a per-run offset, adds more than a pool over tiles would say). The interval is absent (NaN)
+// where the candidate's noise is unknown. Empty where the reference has no surface layers. The
+// reference needs variance layers.
+struct SurfaceDifference {
+  enum class Kind { Material, Background, Emitters, NonEmitters };
+  Kind kind = Kind::Material;
+  int64_t material = -1;  // Kind::Material: the reference's material index
+  std::string name;   // the material's name, "background", "emitters", "all but emitters"
+  uint64_t pixels = 0;
+  double relativeDifference = 0, low = 0, high = 0;
+};
+std::vector<SurfaceDifference> differenceBySurface(const Candidate& candidate, const Image& reference,
+                                                   const std::vector<std::string>& materialNames, double alpha);
+// "material", "background", "emitters", "non_emitters".
+const char* surfaceKindName(SurfaceDifference::Kind kind);
+
 // The z with probability alpha above it under the standard normal distribution, alpha in (0, 1).
 double normalUpperQuantile(double alpha);
 // The two-sided p-value of t under Student's t with `dof` degrees of freedom (the normal

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "lucent/core/exact_sum.h"
@@ -92,6 +93,14 @@ class Film {
   void add(const EyePaths& band, const PointRadiance& light);
   uint64_t droppedPoints() const { return dropped_; }
 
+  // With features: what each pixel of the region shows (PixelSurface codes, row by row), and the
+  // scene's material names the codes index; set once, by the render's start.
+  void setSurfaces(std::vector<uint32_t> codes, std::vector<std::string> materialNames);
+  std::span<uint32_t> pixelSurfaces() { return surfaces_; }
+  std::span<const uint32_t> pixelSurfaces() const { return surfaces_; }
+  const std::vector<std::string>& materialNames() const { return materialNames_; }
+  void setMaterialNames(std::vector<std::string> names) { materialNames_ = std::move(names); }
+
   // Camera samples taken at a pixel (valid or not), from the first of the render's sample range:
   // where a checkpoint's render resumes. Methods set it as they finish a pixel's samples.
   void setTaken(uint64_t pixel, uint32_t taken) { taken_[local(pixel)] = taken; }
@@ -101,7 +110,8 @@ class Film {
   Image image() const;
 
   // Another film of the same image, layout and layers whose region lies inside this one's: its
-  // sums, valid samples and samples taken are added to this film's.
+  // sums, valid samples and samples taken are added to this film's, and its pixels' surfaces (which
+  // must agree with this film's where both know them) taken.
   void add(const Film& part);
 
   // The state, as film files store it (pipeline/film_file.h).
@@ -138,6 +148,8 @@ class Film {
   UninitializedVector<ExactSum> sums_;  // zeroed in parallel: a film can be hundreds of megabytes
   std::vector<uint32_t> samples_;  // valid camera samples per pixel
   std::vector<uint32_t> taken_;    // camera samples taken per pixel
+  std::vector<uint32_t> surfaces_; // with features: PixelSurface codes per pixel
+  std::vector<std::string> materialNames_;
   uint64_t dropped_ = 0;
 };
 

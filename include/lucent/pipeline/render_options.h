@@ -22,7 +22,7 @@ struct CommonOptions {
   PixelFilterKind pixelFilter = PixelFilterKind::Box;
   double filterRadius = 0;  // 0: the filter's own
   uint64_t seed = 0;
-  bool layers = false;  // add the first hit's albedo, normal and depth and the light's parts as layers
+  bool layers = false;  // add the first hit's features, the light's parts and each pixel's surface as layers
 };
 
 // `sppHelp` says what a sample is to the method.
@@ -42,7 +42,8 @@ inline OptionTable<CommonOptions> commonOptionTable(std::string sppHelp) {
   t.real("filter_radius", &O::filterRadius, 0, 16, "pixels", "the pixel filter's radius (0: the filter's own)");
   t.integer("seed", &O::seed, 0, 0x1p62, "", "random seed (the same seed gives the same image, whatever the threads)");
   t.flag("layers", &O::layers,
-         "add the first hit's albedo, normal and depth and the light's parts as layers of the EXR");
+         "add the first hit's albedo, normal and depth, the light's parts and what each pixel's centre shows "
+         "(surface.material, surface.emitter) as layers of the EXR");
   return t;
 }
 inline const char* const kCameraRaysHelp = "camera rays per pixel: one through the pixel's centre, more stratified over it";

@@ -45,9 +45,10 @@ RenderPart beginRender(const OptionTable<Options>& table, const Options& options
 }
 
 // The film a render starts from: empty, or a copy of control.resume, which must be a film of this
-// part with this layout (std::invalid_argument otherwise).
-Film startFilm(const RenderControl& control, const Scene& scene, const RenderPart& part, Film::Sums sums,
-               FilmLayers layers);
+// part with this layout (std::invalid_argument otherwise); with features, what its pixels show
+// (tracePixelSurfaces) and the scene's material names.
+Film startFilm(const RenderControl& control, const Scene& scene, const Visibility& visibility, const RenderPart& part,
+               Film::Sums sums, FilmLayers layers);
 
 // The camera paths of a part, following mirrors and glass up to maxSpecularDepth bounces.
 EyePathSettings eyePathSettings(const CommonOptions& common, int maxSpecularDepth, const RenderPart& part);
@@ -59,8 +60,8 @@ void addBand(Film& film, const EyePaths& band, const PointRadiance& light, int i
 // The image of a method that shades every camera sample of its part at once: a film (PerPart sums)
 // started as startFilm does, the shading points' light added, every pixel's samples taken; sets
 // out's image, film and sppDone, and times stage "image".
-void shadeImage(RenderOutput& out, const RenderControl& control, const Scene& scene, const RenderPart& part,
-                const EyePaths& eye, const PointRadiance& light, FilmLayers layers);
+void shadeImage(RenderOutput& out, const RenderControl& control, const Scene& scene, const Visibility& visibility,
+                const RenderPart& part, const EyePaths& eye, const PointRadiance& light, FilmLayers layers);
 
 // Whether every pixel of the part has all its samples.
 bool filmComplete(const Film& film, const RenderPart& part);

@@ -111,5 +111,24 @@ struct EyePaths {
 inline constexpr float kSplitWeight = 0.05f;
 EyePaths traceEyePaths(const Scene& scene, const Visibility& visibility, const EyePathSettings& settings);
 
+// What a pixel's centre shows, for the layers by which compare and report break a difference down
+// (surface.material, surface.emitter): the first surface the camera ray through the centre hits
+// (not followed through mirrors and glass), its material and whether it emits towards the camera;
+// where nothing is hit, the background, which emits where the scene has an environment. One code
+// per pixel: 0 unknown (not traced), else 2 + the material (1 for the background), with kEmitter
+// set where it emits.
+struct PixelSurface {
+  static constexpr uint32_t kUnknown = 0;
+  static constexpr uint32_t kEmitter = 1u << 31;
+  static uint32_t code(int material, bool emits) { return uint32_t(material + 2) | (emits ? kEmitter : 0u); }
+  static int material(uint32_t code) { return int(code & ~kEmitter) - 2; }  // -1: the background
+  static bool emits(uint32_t code) { return (code & kEmitter) != 0; }
+};
+
+// What the centre of each pixel of `region` (row by row) shows, as PixelSurface codes: the
+// first surface the camera ray hits, its material, and whether it emits towards the camera (its
+// emitted radiance there is not black; the background where the scene has an environment).
+std::vector<uint32_t> tracePixelSurfaces(const Scene& scene, const Visibility& visibility, const PixelRect& region);
+
 
 }  // namespace lucent

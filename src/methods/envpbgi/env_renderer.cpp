@@ -204,7 +204,7 @@ class EnvPbgiRender {
   void shadePixels(RenderOutput& out) {
     beginStage("pixels");
     Stopwatch pixelClock;
-    auto film = std::make_shared<Film>(startFilm(control_, scene_, part_, Film::Sums::PerPart, {o_.common.layers, false}));
+    auto film = std::make_shared<Film>(startFilm(control_, scene_, vis_, part_, Film::Sums::PerPart, {o_.common.layers, false}));
     BandLoop loop;
     loop.maxSamples = o_.dumpDirectory.empty() ? kReusableBandSamples : ~uint64_t(0);
     loop.progressFrom = 0.65;

@@ -299,7 +299,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   const GatherTotals totals = reportGatherStages(scratch, gatherSeconds, upsampleSeconds, stats);
 
   if (!o.shading.dumpDirectory.empty()) dumpShadingPoints(o.shading.dumpDirectory, "", eye, shading, false);
-  shadeImage(out, control, scene, part, eye, shading, {o.common.layers, false});
+  shadeImage(out, control, scene, vis, part, eye, shading, {o.common.layers, false});
 
   const MicroCounters& c = totals.counters;
   stats.addCounter("eye_rays", eye.rays);

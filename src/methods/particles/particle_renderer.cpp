@@ -203,7 +203,7 @@ class ParticleRender {
     fs.allGatherLinks = everything_ ? &gatherLinks_ : nullptr;
     field_.emplace(fs);
 
-    film_ = std::make_shared<Film>(startFilm(control_, scene_, part_, Film::Sums::PerPart, {o_.common.layers, false}));
+    film_ = std::make_shared<Film>(startFilm(control_, scene_, vis_, part_, Film::Sums::PerPart, {o_.common.layers, false}));
     RenderStats frameStages;
     BandLoop loop;
     loop.maxSamples = wholeImage_ ? ~uint64_t(0) : kReusableBandSamples;

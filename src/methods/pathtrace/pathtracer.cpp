@@ -740,7 +740,7 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
                           "checkpointed or resumed");
   }
   // Every pixel is owned by one tile, and its samples are added in sample order.
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerSample,
+  auto film = std::make_shared<Film>(startFilm(control, scene, visibility, part, Film::Sums::PerSample,
                                                {options.common.layers, false, options.variance, options.paths}));
   PathTracer tracer(scene, visibility, options);
   const PixelRect& region = part.region;

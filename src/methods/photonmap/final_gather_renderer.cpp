@@ -165,7 +165,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   RenderOutput out;
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::All, out.stats);
 
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {options.common.layers, true}));
+  auto film = std::make_shared<Film>(startFilm(control, scene, vis, part, Film::Sums::PerPart, {options.common.layers, true}));
   const uint32_t heapSize = maps.globalSettings.k;  // the caustic map is estimated by estimateAtPoints
   tbb::enumerable_thread_specific<GatherScratch> scratch([&] {
     GatherScratch s;

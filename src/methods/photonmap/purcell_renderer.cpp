@@ -56,7 +56,7 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
   // caustics from the caustic map, so each light path is counted once.
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::Indirect, out.stats);
 
-  auto film = std::make_shared<Film>(startFilm(control, scene, part, Film::Sums::PerPart, {options.common.layers, true}));
+  auto film = std::make_shared<Film>(startFilm(control, scene, vis, part, Film::Sums::PerPart, {options.common.layers, true}));
   tbb::enumerable_thread_specific<EstimateCounters> globalCounters, causticCounters;
   RenderTotals totals;
   renderBands(scene, vis, options, control, part, *film, totals, [&](BandShadingPoints& band, const auto& progress) {
