@@ -322,6 +322,41 @@ py::array readDumpArray(const std::filesystem::path& file) {
   return out;
 }
 
+// Writes records as the dump file `file` (DIR/NAME.bin, docs/dump-format.md) of record type `type`:
+// a structured array of record_dtype(type)'s dtype, or for uint32, uint64 and float any numeric
+// array (converted); without a type, the one whose dtype the array has.
+void writeDumpArray(const std::filesystem::path& file, const py::array& records, std::optional<std::string> type) {
+  const std::string path = file.string();
+  if (file.extension() != ".bin") throw std::invalid_argument("'" + path + "': a dump file's name ends in .bin");
+  const py::dtype dtype = records.dtype();
+  if (!type) {
+    for (const auto& [name, record] : dumpRecordTypes())
+      if (recordDtype(name).equal(dtype)) type = name;
+    if (!type) {
+      const std::string plain = dtype.kind() == 'u' && dtype.itemsize() == 4   ? "uint32"
+                                : dtype.kind() == 'u' && dtype.itemsize() == 8 ? "uint64"
+                                : dtype.kind() == 'f' && dtype.itemsize() == 4 ? "float"
+                                                                               : "";
+      if (plain.empty())
+        throw std::invalid_argument("'" + path + "': no dump record type has the array's dtype " +
+                                    py::repr(dtype).cast<std::string>() + "; give type=");
+      type = plain;
+    }
+  }
+  if (!dumpRecordTypes().count(*type)) throw std::invalid_argument("no dump record type '" + *type + "'");
+  const py::dtype wanted = recordDtype(*type);
+  const bool scalar = !wanted.has_fields();
+  if (!scalar && !wanted.equal(dtype))
+    throw std::invalid_argument("'" + path + "': the array's dtype is not record_dtype('" + *type + "')");
+  // Records in the dtype's layout, C order; a scalar type's values converted to it.
+  const py::object typed = scalar ? records.attr("astype")(wanted) : py::object(records);
+  const py::array flat = py::array::ensure(typed, py::array::c_style);
+  if (!flat) throw std::invalid_argument("'" + path + "': the array cannot be read as records");
+  const uint64_t count = uint64_t(flat.size());
+  const std::filesystem::path directory = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
+  writeDump(directory.string(), file.stem().string(), *type, flat.data(), uint32_t(wanted.itemsize()), count);
+}
+
 }  // namespace
 
 PYBIND11_MODULE(lucent, m) {
@@ -384,4 +419,8 @@ PYBIND11_MODULE(lucent, m) {
                       "srgb (an 8-bit sRGB file, decoded to linear)");
   m.def("record_dtype", &recordDtype, py::arg("type"), "The NumPy dtype of a dump record type (docs/dump-format.md)");
   m.def("read_dump", &readDumpArray, py::arg("path"), "A dump file as a NumPy structured array of its records");
+  m.def("write_dump", &writeDumpArray, py::arg("path"), py::arg("records"), py::arg("type") = py::none(),
+        "Writes records as a dump file (DIR/NAME.bin) that check-dump compares: a structured array of "
+        "record_dtype(type)'s dtype (the type found from the dtype when not given), or a numeric array for "
+        "uint32, uint64 and float");
 }

@@ -76,19 +76,7 @@ std::unique_ptr<MethodOptions> resolveMethodOptions(const Method& method, const 
 }
 
 nlohmann::ordered_json methodOptionsJson(const Method& method, const OptionValues& resolved) {
-  nlohmann::ordered_json out = nlohmann::ordered_json::object();
-  for (const auto& [name, text] : resolved) {
-    const OptionSpec* spec = nullptr;
-    for (const OptionSpec& s : method.options())
-      if (s.name == name) spec = &s;
-    switch (spec ? spec->kind : OptionKind::Text) {
-      case OptionKind::Integer: out[name] = std::stoll(text); break;
-      case OptionKind::Real: out[name] = std::stod(text); break;
-      case OptionKind::Flag: out[name] = text == "true"; break;
-      default: out[name] = text;
-    }
-  }
-  return out;
+  return nlohmann::ordered_json::parse(optionsJsonText(method.options(), resolved));
 }
 
 std::string optionsHelp(const std::vector<OptionSpec>& options) {

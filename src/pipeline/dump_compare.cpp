@@ -6,8 +6,10 @@
 #include <cstddef>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -258,6 +260,85 @@ bool endsWith(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
+// What a record index of an array stands for, from the reference's directory: per shading point
+// (the arrays beside a band's or the image's shading_points, and a search's queries), its pixel
+// (x, y with settings.json's width), sample and branch; per cell of a photon map's grid, the cell.
+class RecordPlaces {
+ public:
+  explicit RecordPlaces(std::filesystem::path directory) : directory_(std::move(directory)) {
+    if (!std::filesystem::is_regular_file(directory_ / "settings.json")) return;
+    std::ifstream in(directory_ / "settings.json");
+    if (!in) return;
+    const nlohmann::json settings = nlohmann::json::parse(in, nullptr, false);
+    if (settings.is_object() && settings.contains("width") && settings["width"].is_number_unsigned())
+      width_ = settings["width"].get<uint64_t>();
+  }
+
+  std::string of(const std::string& array, uint64_t index) {
+    const size_t dot = array.rfind('.');
+    const std::string last = dot == std::string::npos ? array : array.substr(dot + 1);
+    static const std::set<std::string> perPoint = {"shading_points", "direct", "indirect", "caustic", "receiver_tiles", "neighbours"};
+    if (perPoint.count(last)) {
+      // band<N>.direct and band<N>.<map>.neighbours beside band<N>.shading_points; direct beside shading_points.
+      const size_t first = array.find('.');
+      const std::string prefix = array.rfind("band", 0) == 0 && first != std::string::npos ? array.substr(0, first + 1) : "";
+      const Array* points = referenceArray(prefix + "shading_points", "ShadingPoint");
+      if (!points || index >= points->count) return "";
+      const std::byte* p = points->record(index);
+      const uint32_t pixel = load<uint32_t>(p + 112), sample = load<uint32_t>(p + 116), branch = load<uint32_t>(p + 120);
+      std::string at = width_ > 0 ? "pixel (" + std::to_string(pixel % width_) + ", " + std::to_string(pixel / width_) + ")"
+                                  : "pixel " + std::to_string(pixel) + " (y * width + x)";
+      return "shading point " + std::to_string(index) + ": " + at + ", sample " + std::to_string(sample) + ", branch " +
+             std::to_string(branch);
+    }
+    static const std::set<std::string> perCell = {"arrived", "first_photon", "slots", "cell_counts"};
+    if (perCell.count(last) && dot != std::string::npos) {
+      const Array* grid = referenceArray(array.substr(0, dot) + ".grid", "UniformGrid");
+      if (!grid || grid->count != 1) return "";
+      int64_t res[3];
+      for (int a = 0; a < 3; ++a) res[a] = load<int32_t>(grid->record(0) + 48 + 4 * a);
+      if (res[0] < 1 || res[1] < 1 || res[2] < 1) return "";
+      // cell_counts: the prefix sums' entries, res + 1 per axis; slots: m^2 per cell.
+      const int64_t side[3] = {res[0] + (last == "cell_counts"), res[1] + (last == "cell_counts"), res[2] + (last == "cell_counts")};
+      const uint64_t cells = uint64_t(side[0] * side[1] * side[2]);
+      uint64_t cell = index, slot = 0;
+      if (last == "slots") {
+        const Array* slots = referenceArray(array, "uint32");
+        const uint64_t perCellSlots = slots && slots->count % cells == 0 ? slots->count / cells : 0;
+        if (perCellSlots == 0) return "";
+        cell = index / perCellSlots, slot = index % perCellSlots;
+      }
+      if (cell >= cells) return "";
+      const uint64_t x = cell % uint64_t(side[0]), y = cell / uint64_t(side[0]) % uint64_t(side[1]),
+                     z = cell / uint64_t(side[0] * side[1]);
+      return std::string(last == "cell_counts" ? "prefix sum below cell (" : "cell (") + std::to_string(x) + ", " +
+             std::to_string(y) + ", " + std::to_string(z) + ")" + (last == "slots" ? ", slot " + std::to_string(slot) : "");
+    }
+    return "";
+  }
+
+ private:
+  // The reference's array of that name and type, read once; null where it has none (or another type).
+  const Array* referenceArray(const std::string& name, const std::string& type) {
+    auto found = arrays_.find(name);
+    if (found == arrays_.end()) {
+      std::optional<Array> array;
+      const std::filesystem::path path = directory_ / (name + ".bin");
+      if (std::filesystem::is_regular_file(path)) {
+        try {
+          array = readArray(path);
+        } catch (const std::exception&) {  // compared (and refused) as an array of its own
+        }
+      }
+      found = arrays_.emplace(name, std::move(array)).first;
+    }
+    return found->second && found->second->type == type ? &*found->second : nullptr;
+  }
+  std::filesystem::path directory_;
+  uint64_t width_ = 0;
+  std::map<std::string, std::optional<Array>> arrays_;
+};
+
 }  // namespace
 
 void checkDumpCompareOptions(const DumpCompareOptions& options) {
@@ -330,6 +411,10 @@ DumpComparison compareDumpDirectories(const std::string& reference, const std::s
     }
     out.arrays.push_back(std::move(a));
   }
+  RecordPlaces places{fs::path(reference)};
+  for (ArrayComparison& a : out.arrays)
+    if (a.rule != "tree" && a.rule != "multiset")
+      for (RecordDifference& d : a.first) d.where = places.of(a.name, d.index);
   return out;
 }
 
@@ -341,7 +426,8 @@ std::string dumpComparisonJson(const DumpComparison& c) {
     if (!a.problem.empty()) j["problem"] = a.problem;
     nlohmann::json first = nlohmann::json::array();
     for (const RecordDifference& d : a.first)
-      first.push_back({{"index", d.index}, {"field", d.field}, {"reference", d.reference}, {"candidate", d.candidate}});
+      first.push_back({{"index", d.index}, {"where", d.where}, {"field", d.field}, {"reference", d.reference},
+                       {"candidate", d.candidate}});
     if (!first.empty()) j["first_differing"] = first;
     arrays.push_back(j);
   }
@@ -358,8 +444,8 @@ std::string dumpComparisonReport(const DumpComparison& c) {
     if (a.problem.empty()) s << a.differing << " of " << a.referenceRecords << " records differ\n";
     else s << a.problem << "\n";
     for (const RecordDifference& d : a.first)
-      s << "  record " << d.index << " " << d.field << ": " << d.reference << " in the reference, " << d.candidate
-        << " in the candidate\n";
+      s << "  record " << d.index << (d.where.empty() ? "" : " (" + d.where + ")") << " " << d.field << ": "
+        << d.reference << " in the reference, " << d.candidate << " in the candidate\n";
   }
   return s.str();
 }

@@ -2,7 +2,10 @@
 
 #include <charconv>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <sstream>
+
+#include "core/json_text.h"
 
 namespace lucent {
 
@@ -101,6 +104,22 @@ std::string tripleText(const std::array<uint32_t, 3>& value) {
   std::ostringstream s;
   s << value[0] << 'x' << value[1] << 'x' << value[2];
   return s.str();
+}
+
+std::string optionsJsonText(const std::vector<OptionSpec>& specs, const OptionValues& values) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::object();
+  for (const auto& [name, text] : values) {
+    const OptionSpec* spec = nullptr;
+    for (const OptionSpec& s : specs)
+      if (s.name == name) spec = &s;
+    switch (spec ? spec->kind : OptionKind::Text) {
+      case OptionKind::Integer: out[name] = std::stoll(text); break;
+      case OptionKind::Real: out[name] = std::stod(text); break;
+      case OptionKind::Flag: out[name] = text == "true"; break;
+      default: out[name] = text;
+    }
+  }
+  return jsonText(out);
 }
 
 }  // namespace lucent

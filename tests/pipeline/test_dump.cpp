@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "lucent/core/dump.h"
 #include "lucent/methods/microrender.h"
@@ -251,6 +252,20 @@ TEST_CASE("The CLI dumps pmfg's and micro's stages into a directory it creates, 
   CHECK(std::filesystem::exists(dir / "global.photons.bin"));
   CHECK(std::filesystem::exists(dir / "global.source_index.bin"));  // pmfg's kd-tree
   CHECK(std::filesystem::exists(dir / "band0.indirect.bin"));
+  // Beside the arrays, what made them: every option and the values derived from them.
+  {
+    std::ifstream in(dir / "settings.json");
+    const auto settings = nlohmann::json::parse(in);
+    CHECK(settings["method"] == "pmfg");
+    CHECK(settings["options"]["gather_rays"] == 4);
+    CHECK(settings["options"]["photons"] == 500);
+    CHECK(settings["options"].contains("k"));
+    CHECK(settings["derived"]["max_radius"].get<double>() > 0);
+    CHECK(settings["derived"].contains("caustic_k"));
+    CHECK(settings["width"] == 16);
+    CHECK(settings["height"] == 16);
+    CHECK(settings["camera"]["fov_y"].get<double>() > 0);
+  }
 
   // A missing directory is created, with its missing parents; a file in the way is refused.
   const auto missing = lucent::test::runLucent("render " + scene + " --method purcell --dump " +

@@ -296,7 +296,28 @@ TEST_CASE("lucent check-dump passes a render's dump against another thread count
   run = test::runLucent("check-dump " + a.path.string() + " " + b.path.string());
   CHECK(run.status == 1);
   CHECK(run.output.find("band0.indirect (Rgb, elementwise): 1 of") != std::string::npos);
-  CHECK(run.output.find("record 10 rgb[0]") != std::string::npos);
+  // The record is named by the query it stands for: its shading point's pixel, sample and branch.
+  const auto points = readDump<ShadingPoint>(a / "band0.shading_points.bin", "ShadingPoint");
+  const std::string where = "shading point 10: pixel (" + std::to_string(points[10].pixel % 32) + ", " +
+                            std::to_string(points[10].pixel / 32) + "), sample " + std::to_string(points[10].sample) +
+                            ", branch " + std::to_string(points[10].branch);
+  INFO(run.output);
+  CHECK(run.output.find("record 10 (" + where + ") rgb[0]: ") != std::string::npos);
+  CHECK(run.output.find(std::to_string(indirect[10].r).substr(0, 5)) != std::string::npos);  // the changed value
+  CHECK(run.output.find("\"where\":\"" + where + "\"") != std::string::npos);
+  // A grid's per-cell array names the cell.
+  auto firstPhoton = readDump<uint32_t>(b / "global.first_photon.bin", "uint32");
+  const auto grid = readDump<UniformGrid>(a / "global.grid.bin", "UniformGrid");
+  REQUIRE(grid.size() == 1);
+  const uint32_t cell = uint32_t(firstPhoton.size() / 2);
+  firstPhoton[cell] += 1;
+  writeDump(b.path.string(), "global.first_photon", "uint32", std::span(firstPhoton));
+  run = test::runLucent("check-dump " + a.path.string() + " " + b.path.string());
+  const uint32_t x = cell % uint32_t(grid[0].res[0]), y = cell / uint32_t(grid[0].res[0]) % uint32_t(grid[0].res[1]),
+                 z = cell / uint32_t(grid[0].res[0] * grid[0].res[1]);
+  INFO(run.output);
+  CHECK(run.output.find("record " + std::to_string(cell) + " (cell (" + std::to_string(x) + ", " + std::to_string(y) +
+                        ", " + std::to_string(z) + ")) value: ") != std::string::npos);
 
   CHECK(test::runLucent("check-dump " + a.path.string() + " " + (a / "missing")).status == 2);
 }

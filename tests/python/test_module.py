@@ -213,3 +213,38 @@ def test_the_breakdown_by_surface_names_the_references_materials(tmp_path):
     assert lucent.compare(runs, reference, within=0.2) == expected
     names = [entry["name"] for entry in expected["by_surface"]["surfaces"]]
     assert "light" in names and "emitters" in names and "all but emitters" in names
+
+
+def test_write_dump_writes_what_read_dump_and_check_dump_read(tmp_path):
+    """A backend written in Python dumps its arrays with write_dump; check-dump compares them with
+    Lucent's, names the shading point's pixel where one differs, and a dump carries its settings."""
+    reference, candidate = tmp_path / "reference", tmp_path / "candidate"
+    scene = lucent.load_scene(CORNELL, resolution=(16, 16))
+    lucent.render(scene, method="purcell", photons=2000, caustic_photons=0, dump=str(reference))
+    with open(reference / "settings.json") as f:
+        settings = json.load(f)
+    assert settings["method"] == "purcell" and settings["width"] == 16 and settings["derived"]["max_radius"] > 0
+    points = lucent.read_dump(str(reference / "band0.shading_points.bin"))
+    direct = lucent.read_dump(str(reference / "band0.direct.bin"))
+    candidate.mkdir()
+    lucent.write_dump(str(candidate / "band0.shading_points.bin"), points)  # the type found from the dtype
+    changed = direct.copy()
+    changed["rgb"][7, 1] += 1
+    lucent.write_dump(str(candidate / "band0.direct.bin"), changed, type="Rgb")
+    lucent.write_dump(str(candidate / "global.cell_counts.bin"),
+                      lucent.read_dump(str(reference / "global.cell_counts.bin")).astype(np.int64), type="uint32")
+    assert np.array_equal(lucent.read_dump(str(candidate / "band0.direct.bin")), changed)
+    code, out, err = cli("check-dump", reference, candidate)
+    assert code == 1, err
+    result = json.loads(out)
+    compared = {a["name"]: a for a in result["arrays"]}
+    assert compared["band0.shading_points"]["passed"] and compared["global.cell_counts"]["passed"]
+    first = compared["band0.direct"]["first_differing"][0]
+    pixel = int(points["pixel"][7])
+    assert first["index"] == 7 and first["field"] == "rgb[1]"
+    assert first["where"].startswith("shading point 7: pixel (%d, %d)" % (pixel % 16, pixel // 16))
+    assert float(first["candidate"]) == pytest.approx(float(changed["rgb"][7, 1]))
+    with pytest.raises(ValueError, match=".bin"):
+        lucent.write_dump(str(candidate / "x.dat"), direct)
+    with pytest.raises(ValueError, match="dtype"):
+        lucent.write_dump(str(candidate / "x.bin"), np.zeros(3, dtype=np.int16))

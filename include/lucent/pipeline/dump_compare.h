@@ -16,9 +16,12 @@ struct DumpCompareOptions {
 };
 
 // One differing record: its index (for multisets, the index in the reference after sorting; for
-// trees, the reference's node), the first field that differs and both values as text.
+// trees, the reference's node), what it stands for where the reference's directory tells (a
+// shading point's pixel, sample and branch; a photon grid's cell), the first field that differs
+// and both values as text.
 struct RecordDifference {
   uint64_t index = 0;
+  std::string where;
   std::string field, reference, candidate;
 };
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lucent/core/stop.h"
+#include "lucent/pipeline/dumps.h"
 #include "lucent/pipeline/options.h"
 #include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_control.h"
@@ -78,7 +79,12 @@ class DeclaredMethod final : public Method {
     if (!resolved || &resolved->table != &table_)
       throw std::invalid_argument("--method " + name_ + " was given another method's options");
     const StopScope stops(control.stop);
-    return render_(scene, visibility, resolved->options, control);
+    RenderOutput out = render_(scene, visibility, resolved->options, control);
+    // A render that dumps its stages says beside the arrays what they were made with.
+    const OptionValues values = table_.values(resolved->options);
+    for (const auto& [name, value] : values)
+      if (name == "dump" && !value.empty()) writeDumpSettings(value, name_, optionsJsonText(table_.specs(), values), out.stats, scene);
+    return out;
   }
   using Method::render;
   bool interruptible() const override { return interruptible_; }

@@ -70,6 +70,10 @@ std::string rangeText(double min, double max, OptionKind kind);
 // Option values by name, as text, in the order they were given.
 using OptionValues = std::vector<std::pair<std::string, std::string>>;
 
+// The values as one JSON object, by each option's kind in `specs`: numbers, true or false, and
+// strings (triples and names, and a name `specs` does not declare).
+std::string optionsJsonText(const std::vector<OptionSpec>& specs, const OptionValues& values);
+
 template <class Options>
 class OptionTable {
  public:
