@@ -71,7 +71,9 @@ void checkOutputDirectories(const Method& method, const OptionValues& resolved, 
     if (directory.empty() || spec == method.options().end() || spec->kind != OptionKind::Text) continue;
     for (const std::string& input : scene.inputFiles) {
       std::error_code ec;
-      if (fs::path(input).extension() == ".bin" && fs::equivalent(fs::absolute(input).parent_path(), directory, ec))
+      // A dump's arrays (*.bin) and its settings (settings.json) would replace the input there.
+      const bool dumpName = fs::path(input).extension() == ".bin" || fs::path(input).filename() == "settings.json";
+      if (dumpName && fs::equivalent(fs::absolute(input).parent_path(), directory, ec))
         throw std::invalid_argument(spec->flag() + " '" + directory + "' holds '" + input +
                                     "', a file the scene reads, under a dump file's name; choose another directory");
     }

@@ -217,7 +217,7 @@ FilmFile readFilmFile(const std::string& path) {
   const uint64_t expected = kPreambleBytes + uint64_t(headerBytes) + sumBytes + countArrays * countBytes;
   if (fileBytes != expected)
     throw fail("its size is not the " + std::to_string(expected) + " bytes its header makes (truncated or damaged)");
-  requireMemory(pixels * (uint64_t(sumsPerPixel) * sizeof(ExactSum) + 8), "the film of '" + path + "'",
+  requireMemory(pixels * (uint64_t(sumsPerPixel) * sizeof(ExactSum) + 4 * countArrays), "the film of '" + path + "'",
                 "raise --memory-limit if the machine has the memory");
   file.film = std::make_unique<Film>(width, height, region, sums, layers);
   Film& film = *file.film;

@@ -933,6 +933,21 @@ def test_a_dump_never_replaces_a_buffer_of_the_scene(work):
     assert changed(before, snapshot(work)) == []
 
 
+def test_a_dump_never_replaces_a_scene_file_named_as_its_settings(work):
+    box_scene(work, name="settings.json")
+    before = snapshot(work)
+    run = lucent("render", "settings.json", "--method", "purcell", "--resolution", "8x8", "--photons", "1000", "--dump", ".",
+                 "-q", "-o", "out.exr", cwd=work)
+    assert run.code == 1 and "--dump '.' holds" in run.err and "settings.json" in run.err, run
+    assert run.cpu_seconds < 5
+    code = ("import sys\ns = lucent.load_scene('settings.json', resolution=(8, 8))\n"
+            "try:\n    lucent.render(s, method='purcell', photons=1000, dump='.')\nexcept ValueError as e:\n"
+            "    print(e); sys.exit(3)")
+    py = python_lucent(code, cwd=work)
+    assert py.code == 3 and "holds" in py.out and "settings.json" in py.out, py
+    assert changed(before, snapshot(work)) == []
+
+
 def test_python_refuses_a_scene_file_that_chooses_where_lucent_writes(work):
     os.mkdir(os.path.join(work, "elsewhere"))
     scene = box_scene(work, extra={"render": {"method": "micro", "dump": "elsewhere", "points": 4096}})

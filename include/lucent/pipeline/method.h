@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "lucent/core/stop.h"
-#include "lucent/pipeline/dumps.h"
+#include "lucent/pipeline/dump_settings.h"
 #include "lucent/pipeline/options.h"
 #include "lucent/pipeline/render_options.h"
 #include "lucent/pipeline/render_control.h"
