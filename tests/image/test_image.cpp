@@ -762,3 +762,52 @@ TEST_CASE("lucent compare says where a difference lies: per material, for emitte
   CHECK(interval("all but emitters").second < 0);
   CHECK(found["all but emitters"]["pixels"] == 64 * 64 - lightPixels);
 }
+
+TEST_CASE("A correct foreign render, with another pixel filter and noise shared between pixels, passes given its runs",
+          "[compare][cli]") {
+  // A GPU path tracer's runs as they reach Lucent: its pixel filter a tent of radius 1 (rendered
+  // here by Lucent with --pixel-filter tent), its noise correlated between pixels (each run gets a
+  // zero-mean field of white noise under a tent of radius 1 pixel, 4% of the pixel, and an offset of
+  // 0.5% of the whole image, as a shared random sequence would give) and no variance layer. Given
+  // its 8 runs, --test passes it against a tent reference and --within 0.05 does not fail it; a box
+  // reference, which every edge of the light tells apart, fails it.
+  const test::TempDir dir("compare-foreign");
+  const std::string scene = quoted(LUCENT_SOURCE_DIR "/scenes/cornell-box.json") + " --resolution 64x64 --quiet";
+  for (const char* filter : {"tent", "box"}) {
+    const test::CliRun r = runLucent("render " + scene + " --spp 1024 --sampler independent --variance --seed 1 "
+                                     "--pixel-filter " + filter + " -o " + quoted(dir / (std::string(filter) + ".exr")));
+    INFO(r.output);
+    REQUIRE(r.status == 0);
+  }
+  std::string runs;
+  std::mt19937_64 rng(2024);
+  std::normal_distribution<float> normal;
+  for (int seed = 2; seed < 10; ++seed) {
+    const std::string run = dir / ("run" + std::to_string(seed) + ".exr");
+    REQUIRE(runLucent("render " + scene + " --spp 64 --pixel-filter tent --seed " + std::to_string(seed) + " -o " +
+                      quoted(run)).status == 0);
+    Image image = rgbChannels(readImage(run));
+    std::vector<float> field(66 * 66);
+    for (float& e : field) e = normal(rng);
+    const float offset = 0.005f * normal(rng);
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x) {
+        float shared = 0;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx)
+            shared += (dx == 0 ? 0.5f : 0.25f) * (dy == 0 ? 0.5f : 0.25f) * field[size_t((y + 1 + dy) * 66 + x + 1 + dx)];
+        for (int c = 0; c < 3; ++c) image.at(x, y, c) *= 1 + 0.04f / 0.375f * shared + offset;
+      }
+    writeExr(image, run);
+    runs += quoted(run) + " ";
+  }
+  auto verdict = [&](const std::string& reference, const std::string& flags) {
+    const test::CliRun r = runLucent("compare " + runs + quoted(dir / reference) + " " + flags);
+    INFO(r.output);
+    REQUIRE(r.status != 2);
+    return r.status;
+  };
+  CHECK(verdict("tent.exr", "--test") == 0);
+  CHECK(verdict("tent.exr", "--within 0.05") != 1);
+  CHECK(verdict("box.exr", "--test") == 1);
+}
