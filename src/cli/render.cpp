@@ -12,7 +12,6 @@
 #include <map>
 #include <optional>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string_view>
 #include <tuple>
 
@@ -35,12 +34,6 @@ namespace lucent::cli {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string hex(uint64_t v) {
-  std::ostringstream s;
-  s << std::hex << v;
-  return s.str();
-}
 
 // While alive: SIGINT and SIGTERM ask the render to stop; a second one ends the process as usual.
 // Once it is gone (the render returned, its outputs written) the process ignores both until it
@@ -174,7 +167,7 @@ int runRender(const RenderArgs& a) {
   info.method = method->name();
   info.options = jsonText(options);
   info.scene = fs::absolute(a.scene).lexically_normal().string();
-  info.sceneHash = hex(scene.contentHash);
+  info.sceneHash = contentHashText(scene);
   info.version = LUCENT_VERSION;
   info.embreeIsa = visibility.isa();
   info.laneIsa = laneIsaName(laneIsa());
@@ -284,7 +277,7 @@ int runRender(const RenderArgs& a) {
   summary["output"] = a.output;
   if (!a.png.empty()) summary["png"] = a.png;
   if (keepFilm) summary["film"] = filmPath;
-  summary["scene_hash"] = hex(scene.contentHash);
+  summary["scene_hash"] = contentHashText(scene);
   if (!scene.ignored.empty()) summary["ignored"] = scene.ignored;
   std::cout << jsonText(summary) << std::endl;
   // Interrupted: the status a shell gives a process that the signal ended.

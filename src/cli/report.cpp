@@ -661,12 +661,7 @@ int runReport(const ReportOptions& opt) {
     if (c.test) entry["passed"] = c.test->verdict == Verdict::Pass, entry["test"] = verdictName(c.test->verdict);
     if (c.equivalence)
       entry["equivalent"] = c.equivalence->verdict == Verdict::Pass, entry["within"] = verdictName(c.equivalence->verdict);
-    if (!c.surfaces.empty()) {
-      entry["by_surface"] = nlohmann::ordered_json::array();
-      for (const SurfaceDifference& d : c.surfaces)
-        entry["by_surface"].push_back({{"name", d.name}, {"kind", surfaceKindName(d.kind)}, {"pixels", d.pixels},
-                                       {"relative_difference", d.relativeDifference}, {"interval", {d.low, d.high}}});
-    }
+    if (!c.surfaces.empty()) entry["by_surface"] = nlohmann::ordered_json::parse(surfaceDifferencesJson(c.surfaces));
     line["candidates"].push_back(entry);
   }
   std::cout << jsonText(line) << std::endl;

@@ -24,9 +24,7 @@ void writeDump(const std::string& directory, const std::string& name, const std:
                const void* records, uint32_t recordBytes, uint64_t count) {
   const std::filesystem::path path = std::filesystem::path(directory) / (name + ".bin");
   if (type.size() >= sizeof(DumpHeader::type)) throw std::logic_error("dump type name too long: " + type);
-  std::error_code ec;
-  std::filesystem::create_directories(directory, ec);
-  if (ec) throw std::runtime_error("cannot create dump directory '" + directory + "': " + ec.message());
+  createDumpDirectory(directory);
   DumpHeader header{};
   std::memcpy(header.magic, kMagic, sizeof kMagic);
   header.version = kDumpVersion;
@@ -41,6 +39,12 @@ void writeDump(const std::string& directory, const std::string& name, const std:
     out.close();
     if (!out) throw WriteFailure("write failed");
   });
+}
+
+void createDumpDirectory(const std::string& directory) {
+  std::error_code ec;
+  std::filesystem::create_directories(directory, ec);
+  if (ec) throw std::runtime_error("cannot create dump directory '" + directory + "': " + ec.message());
 }
 
 std::string dumpDirectoryProblem(const std::string& directory) {

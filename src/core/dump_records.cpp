@@ -55,4 +55,13 @@ const std::map<std::string, DumpRecordType>& dumpRecordTypes() {
   return types;
 }
 
+uint32_t dumpFieldOffset(const std::string& type, const std::string& field) {
+  uint32_t offset = 0;
+  for (const DumpField& f : dumpRecordTypes().at(type).fields) {
+    if (field == f.name) return offset;
+    offset += dumpFieldBytes(f.kind) * f.count;
+  }
+  throw std::logic_error("dump record type " + type + " has no field " + field);
+}
+
 }  // namespace lucent

@@ -64,23 +64,6 @@ nlohmann::ordered_json equivalenceJson(const EquivalenceTest& t) {
   return out;
 }
 
-nlohmann::ordered_json surfacesJson(const std::vector<SurfaceDifference>& surfaces, double alpha) {
-  nlohmann::ordered_json out;
-  out["confidence"] = 1 - 2 * alpha;
-  out["surfaces"] = nlohmann::ordered_json::array();
-  for (const SurfaceDifference& d : surfaces) {
-    nlohmann::ordered_json entry = {{"kind", surfaceKindName(d.kind)}};
-    if (d.kind == SurfaceDifference::Kind::Material) entry["material"] = d.material;
-    entry["name"] = d.name;
-    entry["pixels"] = d.pixels;
-    entry["relative_difference"] = d.relativeDifference;
-    // null bounds: the candidate's noise is unknown
-    entry["interval"] = {d.low, d.high};
-    out["surfaces"].push_back(entry);
-  }
-  return out;
-}
-
 std::string percent(double value) {
   std::ostringstream s;
   s << std::showpos << std::setprecision(2) << std::fixed << 100 * value << "%";
@@ -163,6 +146,20 @@ nlohmann::ordered_json flipJson(const FlipResult& f, double pixelsPerDegree) {
 }
 
 }  // namespace
+
+std::string surfaceDifferencesJson(const std::vector<SurfaceDifference>& surfaces) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (const SurfaceDifference& d : surfaces) {
+    nlohmann::ordered_json entry = {{"kind", surfaceKindName(d.kind)}};
+    if (d.kind == SurfaceDifference::Kind::Material) entry["material"] = d.material;
+    entry["name"] = d.name;
+    entry["pixels"] = d.pixels;
+    entry["relative_difference"] = d.relativeDifference;
+    entry["interval"] = {d.low, d.high};  // null bounds: the candidate's noise is unknown
+    out.push_back(entry);
+  }
+  return jsonText(out);
+}
 
 std::vector<std::string> materialNamesOf(const ImageMetadata& metadata) {
   for (const auto& [key, value] : metadata) {
@@ -299,7 +296,9 @@ ImageComparison compareImagePair(Candidate candidate, Image referenceFile, const
   if (test) out["test"] = testJson(*test);
   if (equivalence) out["equivalence"] = equivalenceJson(*equivalence);
   if (flipResult) out["flip"] = flipJson(*flipResult, opt.pixelsPerDegree);
-  if (!surfaces.empty()) out["by_surface"] = surfacesJson(surfaces, opt.alpha);
+  if (!surfaces.empty())
+    out["by_surface"] = {{"confidence", 1 - 2 * opt.alpha},
+                         {"surfaces", nlohmann::ordered_json::parse(surfaceDifferencesJson(surfaces))}};
   out["verdict"] = verdictName(result.verdict);
   out["passed"] = result.verdict == Verdict::Pass;
   if (opt.heatmap)

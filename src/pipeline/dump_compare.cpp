@@ -232,9 +232,9 @@ void compareTrees(const Array& r, const Array& c, const DumpRecordType* type, co
     seenA[a] = seenB[b] = true;
     RecordDifference d;
     d.index = a;
-    // child[2] at byte 32 of the 48-byte node.
-    const uint32_t ca0 = load<uint32_t>(r.record(a) + 32), ca1 = load<uint32_t>(r.record(a) + 36);
-    const uint32_t cb0 = load<uint32_t>(c.record(b) + 32), cb1 = load<uint32_t>(c.record(b) + 36);
+    static const uint32_t child = dumpFieldOffset("EnvPointNode", "child");
+    const uint32_t ca0 = load<uint32_t>(r.record(a) + child), ca1 = load<uint32_t>(r.record(a) + child + 4);
+    const uint32_t cb0 = load<uint32_t>(c.record(b) + child), cb1 = load<uint32_t>(c.record(b) + child + 4);
     const bool leafA = ca0 == 0, leafB = cb0 == 0;
     if (leafA != leafB) {
       d.field = "child";
@@ -285,7 +285,8 @@ class RecordPlaces {
       const Array* points = referenceArray(prefix + "shading_points", "ShadingPoint");
       if (!points || index >= points->count) return "";
       const std::byte* p = points->record(index);
-      const uint32_t pixel = load<uint32_t>(p + 112), sample = load<uint32_t>(p + 116), branch = load<uint32_t>(p + 120);
+      const auto field = [p](const char* name) { return load<uint32_t>(p + dumpFieldOffset("ShadingPoint", name)); };
+      const uint32_t pixel = field("pixel"), sample = field("sample"), branch = field("branch");
       std::string at = width_ > 0 ? "pixel (" + std::to_string(pixel % width_) + ", " + std::to_string(pixel / width_) + ")"
                                   : "pixel " + std::to_string(pixel) + " (y * width + x)";
       return "shading point " + std::to_string(index) + ": " + at + ", sample " + std::to_string(sample) + ", branch " +
@@ -296,7 +297,7 @@ class RecordPlaces {
       const Array* grid = referenceArray(array.substr(0, dot) + ".grid", "UniformGrid");
       if (!grid || grid->count != 1) return "";
       int64_t res[3];
-      for (int a = 0; a < 3; ++a) res[a] = load<int32_t>(grid->record(0) + 48 + 4 * a);
+      for (int a = 0; a < 3; ++a) res[a] = load<int32_t>(grid->record(0) + dumpFieldOffset("UniformGrid", "res") + 4 * a);
       if (res[0] < 1 || res[1] < 1 || res[2] < 1) return "";
       // cell_counts: the prefix sums' entries, res + 1 per axis; slots: m^2 per cell.
       const int64_t side[3] = {res[0] + (last == "cell_counts"), res[1] + (last == "cell_counts"), res[2] + (last == "cell_counts")};

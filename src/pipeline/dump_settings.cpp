@@ -1,11 +1,11 @@
 #include "lucent/pipeline/dump_settings.h"
 
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "core/json_text.h"
+#include "lucent/core/dump.h"
 #include "lucent/core/files.h"
 
 namespace lucent {
@@ -23,13 +23,11 @@ void writeDumpSettings(const std::string& directory, const std::string& method, 
   settings["camera"] = {{"eye", vector(scene.camera.eye)}, {"look_at", vector(scene.camera.lookAt)},
                         {"up", vector(scene.camera.up)}, {"fov_y", scene.camera.fovY}};
   settings["scene"] = scene.sourcePath;
-  char hash[17];
-  std::snprintf(hash, sizeof hash, "%llx", static_cast<unsigned long long>(scene.contentHash));
-  settings["scene_hash"] = hash;
+  settings["scene_hash"] = contentHashText(scene);
   settings["bounds"] = {{"min", vector(scene.bounds.lo)}, {"max", vector(scene.bounds.hi)}};
   settings["version"] = LUCENT_VERSION;
   const std::string text = jsonText(settings, 2) + "\n";
-  std::filesystem::create_directories(directory);
+  createDumpDirectory(directory);
   writeFileAtomically(std::filesystem::path(directory) / "settings.json", "dump settings",
                       [&text](const std::filesystem::path& tmp) {
                         std::ofstream out(tmp, std::ios::binary);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include "lucent/core/rng.h"
@@ -165,6 +166,12 @@ uint64_t sceneContentHash(const Scene& scene) {
   h = hashArray(h, std::vector<Rgb>{env.radiance});
   h = hashArray(h, std::vector<Camera>{scene.camera});
   return h;
+}
+
+std::string contentHashText(const Scene& scene) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%llx", static_cast<unsigned long long>(scene.contentHash));
+  return text;
 }
 
 }  // namespace lucent

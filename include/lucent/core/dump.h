@@ -51,6 +51,10 @@ bool offsetsCutRuns(const std::vector<Offset>& offsets, uint64_t total) {
 // parents with the first file).
 std::string dumpDirectoryProblem(const std::string& directory);
 
+// Creates `directory` and its missing parents (writeDump's, and the settings file's); throws
+// std::runtime_error naming it when it cannot.
+void createDumpDirectory(const std::string& directory);
+
 // The header's record type name (its type field up to the first NUL).
 std::string recordTypeName(const DumpHeader& header);
 

@@ -27,4 +27,7 @@ struct DumpRecordType {
 
 const std::map<std::string, DumpRecordType>& dumpRecordTypes();
 
+// The byte offset of a record type's field (throws std::logic_error for a field it does not have).
+uint32_t dumpFieldOffset(const std::string& type, const std::string& field);
+
 }  // namespace lucent

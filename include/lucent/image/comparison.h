@@ -41,6 +41,10 @@ uint64_t matchDisplayRange(bool candidateIsSrgb, bool referenceIsSrgb, Image& re
 // such an array.
 std::vector<std::string> materialNamesOf(const ImageMetadata& metadata);
 
+// The breakdown by surface as compare's JSON holds it (by_surface.surfaces), an array, for every
+// front end that reports it.
+std::string surfaceDifferencesJson(const std::vector<SurfaceDifference>& surfaces);
+
 // Throws std::invalid_argument, naming the option as the command line spells it, for a setting out
 // of its range.
 void checkComparisonSettings(const ComparisonSettings& settings);

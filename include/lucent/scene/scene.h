@@ -232,5 +232,7 @@ TriangleGeometry triangleGeometry(Vec3 p0, Vec3 p1, Vec3 p2);
 // Hash of everything that determines an image: geometry, materials, textures, lights, environment
 // and camera. Recompute it after changing the scene (e.g. the camera resolution).
 uint64_t sceneContentHash(const Scene& scene);
+// Scene::contentHash as Lucent writes it (lucent:scene_hash, film files, dump settings): lower-case hex.
+std::string contentHashText(const Scene& scene);
 
 }  // namespace lucent
