@@ -2,8 +2,9 @@
 // separated by NUL bytes (at most 64). They are parsed as the lucent program parses them, every
 // command registered, up to where each command's work would start: CLI11's parsing and checks for compare,
 // merge, report, methods and check-dump; for render, its own flags (parseRenderArgs) and the chosen
-// method's options resolved and checked (renderMethodOptions) against a scene without a render
-// block. Every rejection must be a CLI::ParseError, std::invalid_argument or std::runtime_error;
+// method's options and the part resolved and checked by the render session
+// (session/render_session.h) against a scene without a render block, outputs left out (they would
+// be created to check them). Every rejection must be a CLI::ParseError, std::invalid_argument or std::runtime_error;
 // anything else, a crash, a sanitizer report, a hang or a large allocation is a defect. Seeds:
 // scripts/fuzz-corpus.py command_line.
 #include <CLI/CLI.hpp>
@@ -17,6 +18,7 @@
 #include "cli/commands.h"
 #include "cli/render_args.h"
 #include "lucent/methods/methods.h"
+#include "lucent/session/render_session.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string_view input(reinterpret_cast<const char*>(data), size);
@@ -46,8 +48,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     CLI::App* render = app.get_subcommand("render");
     if (render->parsed()) {
       const lucent::cli::RenderArgs parsed = lucent::cli::parseRenderArgs(render->remaining());
-      const lucent::Method& method = lucent::renderingMethod(parsed.method.empty() ? "pt" : parsed.method);
-      (void)lucent::cli::renderMethodOptions(parsed, lucent::Scene{}, method);
+      lucent::OpenScene scene(lucent::Scene{}, "fuzz.json", {});
+      lucent::RenderRequest request;
+      request.method = parsed.method;
+      request.options = parsed.methodOptions;
+      request.crop = parsed.crop;
+      request.samples = parsed.samples;
+      request.part = parsed.part;
+      request.checkpointSeconds = parsed.checkpointSeconds;
+      request.threads = parsed.threads;
+      (void)lucent::RenderSession(scene, request);
     }
   } catch (const CLI::ParseError&) {
   } catch (const std::invalid_argument&) {

@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-#include "cli/film_merge.h"
+#include "session/film_merge.h"
 #include "film_fuzz_input.h"
 #include "fuzz_files.h"
 #include "lucent/core/memory.h"
@@ -31,7 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     input.remove_prefix(end + kSeparator.size());
   }
   try {
-    const lucent::cli::MergedFilm merged = lucent::cli::mergeFilmFiles(parts);
+    const lucent::MergedFilm merged = lucent::mergeFilmFiles(parts);
     (void)merged.film->image();
   } catch (const std::invalid_argument&) {
   } catch (const std::runtime_error&) {

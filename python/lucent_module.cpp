@@ -7,6 +7,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
+#include <array>
 #if defined(__SSE__)
 #include <xmmintrin.h>
 #endif
@@ -23,12 +24,14 @@
 
 #include "lucent/core/dump.h"
 #include "lucent/core/dump_records.h"
+#include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
 #include "lucent/image/comparison.h"
 #include "lucent/image/image.h"
 #include "lucent/methods/methods.h"
 #include "lucent/pipeline/film.h"
 #include "lucent/scene/loader.h"
+#include "lucent/session/render_session.h"
 #include "lucent/trace/visibility.h"
 
 namespace py = pybind11;
@@ -49,31 +52,24 @@ class KeepFloatingPointMode {
 #endif
 };
 
-// A scene and its Embree visibility, built once for any number of renders.
-struct LoadedScene {
-  Scene scene;
-  std::unique_ptr<Visibility> visibility;
-  std::string path;
-};
-
-// Paths arrive as str, bytes or os.PathLike (pybind11's std::filesystem::path: a str goes through
-// os.fsencode, so a file name that is not UTF-8 reaches its file).
-std::shared_ptr<LoadedScene> loadSceneFile(const std::filesystem::path& file, std::optional<std::pair<int, int>> resolution) {
+// A scene and its Embree visibility, built once for any number of renders (session/render_session.h:
+// the rules of `lucent render` hold for both). Paths arrive as str, bytes or os.PathLike (pybind11's
+// std::filesystem::path: a str goes through os.fsencode, so a file name that is not UTF-8 reaches
+// its file).
+std::shared_ptr<OpenScene> openScene(const std::filesystem::path& file, std::optional<std::pair<int, int>> resolution,
+                                     bool strict, std::optional<std::string> isa, bool robust,
+                                     std::optional<std::string> memoryLimit) {
   const KeepFloatingPointMode keep;
-  const std::string path = file.string();
-  auto s = std::make_shared<LoadedScene>();
-  s->path = path;
-  s->scene = loadScene(path, LoadOptions(true));
-  if (resolution) {
-    const auto [width, height] = *resolution;
-    if (width < 1 || height < 1 || width > kMaxImageSide || height > kMaxImageSide ||
-        uint64_t(width) * uint64_t(height) > kMaxImagePixels)
-      throw std::invalid_argument("resolution=(" + std::to_string(width) + ", " + std::to_string(height) +
-                                  "): each side from 1 to " + std::to_string(kMaxImageSide) + ", at most 2^26 pixels");
-    s->scene.camera.width = resolution->first, s->scene.camera.height = resolution->second;
-  }
-  s->visibility = std::make_unique<Visibility>(s->scene);
-  return s;
+  SceneSettings settings;
+  settings.load = LoadOptions(true);
+  settings.resolution = resolution;
+  settings.strict = strict;
+  settings.isa = isa.value_or("");
+  settings.robust = robust;
+  if (memoryLimit) settings.memoryLimit = parseMemorySize(*memoryLimit);
+  auto scene = std::make_shared<OpenScene>(file.string(), settings);
+  scene->visibility();
+  return scene;
 }
 
 // Text for a method option from a Python value: booleans as true/false, the rest as str() gives it.
@@ -124,10 +120,10 @@ py::dict imageArrays(const Image& image) {
 // Runs `render` on a thread of its own while this one waits for it, taking Python's signals every
 // tenth of a second: Ctrl-C (KeyboardInterrupt, or whatever a handler raises) stops the render within
 // a fraction of a second through `stop`, and the exception is raised once the render has returned.
-RenderOutput renderInterruptibly(const std::function<RenderOutput(const std::atomic<bool>& stop)>& render) {
+RenderResult renderInterruptibly(const std::function<RenderResult(const std::atomic<bool>& stop)>& render) {
   std::atomic<bool> stop{false};
-  std::packaged_task<RenderOutput()> task([&] { return render(stop); });
-  std::future<RenderOutput> done = task.get_future();
+  std::packaged_task<RenderResult()> task([&] { return render(stop); });
+  std::future<RenderResult> done = task.get_future();
   std::thread worker(std::move(task));
   bool interrupted = false;
   {
@@ -153,45 +149,46 @@ RenderOutput renderInterruptibly(const std::function<RenderOutput(const std::ato
   return done.get();
 }
 
-py::dict render(const LoadedScene& s, std::optional<std::string> methodName, std::optional<int> threads, const py::kwargs& kwargs) {
-  const std::string name = methodName ? *methodName : !s.scene.render.method.empty() ? s.scene.render.method : "pt";
-  const Method& method = renderingMethod(name);
-  if (threads && (*threads < 0 || *threads > kMaxThreads))
-    throw std::invalid_argument("threads=" + std::to_string(*threads) + ": expected 0 (all cores) to " +
-                                std::to_string(kMaxThreads));
-  // The scene's render block applies when it names this method (or none), under the rules
-  // `lucent render` applies (it cannot choose where Lucent writes).
-  std::vector<std::string> origins;
-  OptionValues values = sceneRenderBlockOptions(s.scene, method, origins);
-  for (const auto& [key, value] : kwargs) values.emplace_back(key.cast<std::string>(), optionText(value));
-  std::unique_ptr<MethodOptions> resolved;
-  try {
-    resolved = method.resolve(values);
-  } catch (const OptionError& e) {
-    throw OptionError(e.option(), name + " option " + e.option() + ": " + e.what());  // named as Python spells it
-  }
-  checkOutputDirectories(method, resolved->values(), s.scene);
+py::dict render(OpenScene& scene, std::optional<std::string> method, std::optional<int> threads,
+               std::optional<std::filesystem::path> output, std::optional<std::filesystem::path> png,
+               std::optional<std::array<int, 4>> crop, std::optional<std::pair<int, int>> samples,
+               std::optional<std::string> part, double checkpoint, bool resume, const py::kwargs& kwargs) {
+  RenderRequest request;
+  request.method = method.value_or("");
+  for (const auto& [key, value] : kwargs) request.options.emplace_back(key.cast<std::string>(), optionText(value));
+  request.optionName = [](const std::string& option) { return option + "="; };  // as Python spells it
+  if (output) request.output = output->string();
+  if (png) request.png = png->string();
+  if (crop) request.crop = {(*crop)[0], (*crop)[1], (*crop)[2], (*crop)[3]};
+  request.samples = samples.value_or(std::pair<int, int>{0, 0});
+  request.part = part.value_or("");
+  request.checkpointSeconds = checkpoint;
+  request.resume = resume;
+  request.threads = threads.value_or(0);
+  RenderSession session(scene, request);
   // On a thread of its own: the interpreter's floating-point mode is not touched.
-  const RenderOutput out = renderInterruptibly([&](const std::atomic<bool>& stop) {
-    ParallelScope scope(threads.value_or(0));
-    RenderControl control;
-    control.stop = &stop;
-    return method.render(s.scene, *s.visibility, *resolved, control);
+  RenderResult result = renderInterruptibly([&](const std::atomic<bool>& stop) {
+    RenderHooks hooks;
+    hooks.stop = &stop;
+    hooks.stoppedBy = [] { return std::string("KeyboardInterrupt"); };
+    return session.run(hooks);
   });
-  py::dict result = imageArrays(out.image);
+  const RenderOutput& out = result.render;
+  py::dict dict = imageArrays(out.image);
   // The names the layer surface's material indices stand for (with layers).
-  if (out.film && out.film->layers().features) result["materials"] = out.film->materialNames();
-  py::dict stats, counters, stages, measured;
+  if (out.film && out.film->layers().features) dict["materials"] = out.film->materialNames();
+  py::dict counters, stages, measured;
   for (const auto& [stage, seconds] : out.stats.stageSeconds) stages[py::str(stage)] = seconds;
   for (const auto& [counter, value] : out.stats.counters) counters[py::str(counter)] = value;
   for (const auto& [key, value] : out.measured) measured[py::str(key)] = value;
-  result["method"] = method.name();
-  result["spp"] = out.sppDone;
-  result["complete"] = out.complete;
-  result["stages"] = stages;
-  result["counters"] = counters;
-  result["measured"] = measured;
-  return result;
+  dict["method"] = session.method().name();
+  dict["spp"] = out.sppDone;
+  dict["complete"] = out.complete;
+  dict["stages"] = stages;
+  dict["counters"] = counters;
+  dict["measured"] = measured;
+  dict["summary"] = py::module_::import("json").attr("loads")(result.summary);
+  return dict;
 }
 
 // An (height, width, 3) array, or a dict of one with its variance and layers (render's, read_image's),
@@ -379,23 +376,34 @@ PYBIND11_MODULE(lucent, m) {
     }
   });
   py::register_exception<OptionError>(m, "OptionError", PyExc_ValueError);
-  py::class_<LoadedScene, std::shared_ptr<LoadedScene>>(m, "Scene", "A loaded scene with its Embree visibility")
-      .def_property_readonly("path", [](const LoadedScene& s) { return py::module_::import("os").attr("fsdecode")(py::bytes(s.path)); })
-      .def_property_readonly("width", [](const LoadedScene& s) { return s.scene.camera.width; })
-      .def_property_readonly("height", [](const LoadedScene& s) { return s.scene.camera.height; })
-      .def_property_readonly("triangles", [](const LoadedScene& s) { return s.scene.indices.size() / 3; });
-  m.def("load_scene", &loadSceneFile, py::arg("path"), py::arg("resolution") = py::none(),
-        "Loads a scene file or a glTF file; resolution=(width, height) overrides the camera's");
+  py::class_<OpenScene, std::shared_ptr<OpenScene>>(m, "Scene", "A loaded scene with its Embree visibility")
+      .def_property_readonly("path", [](const OpenScene& s) { return py::module_::import("os").attr("fsdecode")(py::bytes(s.path())); })
+      .def_property_readonly("width", [](const OpenScene& s) { return s.scene().camera.width; })
+      .def_property_readonly("height", [](const OpenScene& s) { return s.scene().camera.height; })
+      .def_property_readonly("triangles", [](const OpenScene& s) { return s.scene().indices.size() / 3; });
+  m.def("load_scene", &openScene, py::arg("path"), py::arg("resolution") = py::none(), py::arg("strict") = false,
+        py::arg("isa") = py::none(), py::arg("robust") = false, py::arg("memory_limit") = py::none(),
+        "Loads a scene file or a glTF file as `lucent render` does: resolution=(width, height) overrides the "
+        "camera's; strict refuses a scene whose files hold what a render would leave out; isa names the "
+        "instruction set of Embree's kernels and the lane loops (sse4.2, avx, avx2, avx512); robust asks for "
+        "Embree's robust traversal; memory_limit ('8G') bounds the memory the renders may take.");
   m.def("methods", [] {
     std::vector<std::string> names;
     for (const Method* method : renderingMethods()) names.push_back(method->name());
     return names;
   }, "The rendering methods' names");
   m.def("render", &render, py::arg("scene"), py::arg("method") = py::none(), py::arg("threads") = py::none(),
+        py::arg("output") = py::none(), py::arg("png") = py::none(), py::arg("crop") = py::none(),
+        py::arg("samples") = py::none(), py::arg("part") = py::none(), py::arg("checkpoint") = 0.0,
+        py::arg("resume") = false,
         "Renders the scene with a method (default: the scene's render block's, else pt) and its options as keyword "
-        "arguments (spp=64, variance=True, ...: the names of `lucent render --method M --help` with _ for -). Returns "
-        "a dict: image and variance (height x width x 3 float32, variance None unless asked for), layers (name -> "
-        "array), method, spp, complete, stages, counters, measured.");
+        "arguments (spp=64, variance=True, ...: the names of `lucent render --method M --help` with _ for -), as "
+        "`lucent render` does: output='OUT.exr' (and png='OUT.png') writes the image with its metadata; crop=(x0, "
+        "y0, x1, y1), samples=(first, count) or part='rows:K/N' render a part of a split render, its film kept "
+        "beside the output for `lucent merge`; checkpoint=SECONDS and resume=True keep and resume OUT.film. "
+        "Returns a dict: image and variance (height x width x 3 float32, variance None unless asked for), layers "
+        "(name -> array), method, spp, complete, stages, counters, measured, and summary (the JSON line of "
+        "`lucent render`).");
   m.def("compare", &compare, py::arg("image"), py::arg("reference"), py::arg("metric") = "relmse",
         py::arg("max_error") = py::none(), py::arg("test") = false, py::arg("block") = 8, py::arg("within") = py::none(),
         py::arg("alpha") = 0.01, py::arg("layer") = "", py::arg("image_layer") = "", py::arg("ppd") = kFlipPixelsPerDegree,

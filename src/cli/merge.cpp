@@ -11,9 +11,9 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
-#include "cli/film_merge.h"
-#include "cli/film_outputs.h"
-#include "cli/output_paths.h"
+#include "session/film_merge.h"
+#include "session/film_outputs.h"
+#include "session/output_paths.h"
 #include "core/json_text.h"
 
 namespace lucent::cli {

@@ -63,18 +63,6 @@ std::pair<std::string, std::string> methodOptionArg(const std::string& key, cons
   throw std::invalid_argument("unknown option " + key + " (lucent methods lists every method's options)");
 }
 
-std::unique_ptr<MethodOptions> resolveMethodOptions(const Method& method, const OptionValues& values,
-                                                    const std::vector<std::string>& origins) {
-  try {
-    return method.resolve(values);
-  } catch (const OptionError& e) {
-    // Named after the last value given for the option (the command line's over the scene's).
-    for (size_t i = values.size(); i-- > 0;)
-      if (values[i].first == e.option()) throw std::invalid_argument(origins[i] + ": " + e.what());
-    throw std::invalid_argument(flagOf(e.option()) + ": " + e.what());
-  }
-}
-
 nlohmann::ordered_json methodOptionsJson(const Method& method, const OptionValues& resolved) {
   return nlohmann::ordered_json::parse(optionsJsonText(method.options(), resolved));
 }

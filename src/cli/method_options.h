@@ -22,11 +22,6 @@ std::pair<std::string, std::string> methodOptionArg(const std::string& key, cons
                                                     const std::optional<std::string>& next,
                                                     const std::function<std::string()>& takeNext);
 
-// The method's typed options with `values` over its defaults. A value an option does not take throws
-// std::invalid_argument naming where it came from: origins[i] for values[i].
-std::unique_ptr<MethodOptions> resolveMethodOptions(const Method& method, const OptionValues& values,
-                                                    const std::vector<std::string>& origins);
-
 // The options as a JSON object: numbers, true or false, and strings, by each option's kind.
 nlohmann::ordered_json methodOptionsJson(const Method& method, const OptionValues& resolved);
 

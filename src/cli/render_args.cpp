@@ -150,26 +150,6 @@ const OptionSpec* renderFlag(const std::string& key) {
 
 }  // namespace
 
-// --part rows:K/N or samples:K/N: the K-th of N equal parts of the image's rows (a crop of whole
-// rows) or of each pixel's spp samples, set in `control`.
-void applyPart(const std::string& text, const Scene& scene, int spp, RenderControl& control) {
-  const size_t colon = text.find(':'), slash = text.find('/');
-  const std::string axis = text.substr(0, colon);
-  if (colon == std::string::npos || slash == std::string::npos || slash < colon || (axis != "rows" && axis != "samples"))
-    throw std::invalid_argument("--part '" + text + "': expected rows:K/N or samples:K/N");
-  const int count = int(flagged([&] { return parseOptionInteger("part", text.substr(slash + 1), 1, 1 << 24); }));
-  const int index = int(flagged([&] { return parseOptionInteger("part", text.substr(colon + 1, slash - colon - 1), 0, count - 1); }));
-  if (!control.crop.empty() || control.firstSample != 0 || control.sampleCount != 0)
-    throw std::invalid_argument("--part: give either --part or --crop and --samples");
-  const int total = axis == "rows" ? scene.camera.height : spp;
-  if (count > total)
-    throw std::invalid_argument("--part " + text + ": " + std::to_string(count) + " parts of " + std::to_string(total) +
-                                (axis == "rows" ? " rows" : " samples per pixel (--spp)"));
-  const int first = int(int64_t(index) * total / count), end = int(int64_t(index + 1) * total / count);
-  if (axis == "rows") control.crop = {0, first, scene.camera.width, end};
-  else control.firstSample = first, control.sampleCount = end - first;
-}
-
 RenderArgs parseRenderArgs(const std::vector<std::string>& args) {
   RenderArgs a;
   for (size_t i = 0; i < args.size(); ++i) {
@@ -203,17 +183,6 @@ RenderArgs parseRenderArgs(const std::vector<std::string>& args) {
     }
   }
   return a;
-}
-
-std::unique_ptr<MethodOptions> renderMethodOptions(const RenderArgs& args, const Scene& scene, const Method& method) {
-  std::vector<std::string> origins;
-  OptionValues values = sceneRenderBlockOptions(scene, method, origins);
-  for (const auto& [name, text] : args.methodOptions) {
-    origins.push_back(flagOf(name));
-    checkMethodOption(method, name, flagOf(name));
-    values.emplace_back(name, text);
-  }
-  return resolveMethodOptions(method, values, origins);
 }
 
 }  // namespace lucent::cli

@@ -39,13 +39,4 @@ const OptionTable<RenderArgs>& renderFlags();
 // std::invalid_argument naming the flag.
 RenderArgs parseRenderArgs(const std::vector<std::string>& args);
 
-// The method's typed options: its defaults, then the scene file's render block where it names this
-// method (or none), then the command line's; throws std::invalid_argument naming where a value
-// came from.
-std::unique_ptr<MethodOptions> renderMethodOptions(const RenderArgs& args, const Scene& scene, const Method& method);
-
-// --part rows:K/N or samples:K/N: the K-th of N equal parts of the image's rows (a crop of whole
-// rows) or of each pixel's spp samples, set in `control`.
-void applyPart(const std::string& text, const Scene& scene, int spp, RenderControl& control);
-
 }  // namespace lucent::cli

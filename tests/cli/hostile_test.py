@@ -965,9 +965,9 @@ def test_python_refuses_a_scene_file_that_chooses_where_lucent_writes(work):
 
 
 @pytest.mark.parametrize("call, words", [
-    ("lucent.render(lucent.load_scene(SCENE, resolution=(8, 8)), threads=-3)", "threads=-3"),
-    ("lucent.render(lucent.load_scene(SCENE, resolution=(8, 8)), threads=5000)", "threads=5000"),
-    ("lucent.load_scene(SCENE, resolution=(100000, 1))", "resolution=(100000, 1)"),
+    ("lucent.render(lucent.load_scene(SCENE, resolution=(8, 8)), threads=-3)", "threads -3"),
+    ("lucent.render(lucent.load_scene(SCENE, resolution=(8, 8)), threads=5000)", "threads 5000"),
+    ("lucent.load_scene(SCENE, resolution=(100000, 1))", "resolution 100000x1"),
     ("lucent.load_scene(SCENE, resolution=(16384, 16384))", "at most 2^26 pixels"),
     ("lucent.compare(np.zeros((0, 0, 3)), np.zeros((0, 0, 3)))", "has no pixels"),
 ])
@@ -977,6 +977,69 @@ def test_python_refuses_what_the_command_line_refuses(work, call, words):
         scene, call)
     py = python_lucent(code, cwd=work)
     assert py.code == 3 and words in py.out, py
+
+
+# The render session (session/render_session.h) checks a render for every front end: each refusal of
+# `lucent render` is Python's too, in the same words, with nothing written.
+@pytest.mark.parametrize("args, call, words", [
+    (["-o", "taken.exr"], "lucent.render(lucent.load_scene(SCENE), output='taken.exr')", "it is a directory"),
+    (["-o", "out.png"], "lucent.render(lucent.load_scene(SCENE), output='out.png')", "must end in .exr"),
+    (["-o", "nowhere/out.exr"], "lucent.render(lucent.load_scene(SCENE), output='nowhere/out.exr')", "does not exist"),
+    (["-o", "out.exr", "--png", "tex.png"], "lucent.render(lucent.load_scene(SCENE), output='out.exr', png='tex.png')",
+     "a file this process reads"),
+    (["-o", "scene.exr"], "lucent.render(lucent.load_scene(SCENE), output='scene.exr')", "a file this process reads"),
+    (["-o", "out.exr", "--crop", "0,0,99,99"], "lucent.render(lucent.load_scene(SCENE), crop=(0, 0, 99, 99))",
+     "not inside the 8 x 8 image"),
+    (["-o", "out.exr", "--spp", "4", "--samples", "2:9"], "lucent.render(lucent.load_scene(SCENE), spp=4, samples=(2, 9))",
+     "not inside the 4 samples per pixel"),
+    (["-o", "out.exr", "--part", "rows:5/4"], "lucent.render(lucent.load_scene(SCENE), part='rows:5/4')", "--part"),
+    (["-o", "out.exr", "--part", "rows:0/99"], "lucent.render(lucent.load_scene(SCENE), part='rows:0/99')",
+     "99 parts of 8 rows"),
+    (["-o", "out.exr", "--method", "micro", "--checkpoint", "5"],
+     "lucent.render(lucent.load_scene(SCENE), method='micro', output='out.exr', checkpoint=5)", "cannot be checkpointed"),
+    (["-o", "out.exr", "--photons", "100"], "lucent.render(lucent.load_scene(SCENE), photons=100)",
+     "an option of --method"),
+    (["-o", "out.exr", "--spp", "0"], "lucent.render(lucent.load_scene(SCENE), spp=0)", "must be in [1,"),
+    (["-o", "out.exr", "--isa", "avx9"], "lucent.load_scene(SCENE, isa='avx9')", "expected sse4.2, avx, avx2 or avx512"),
+    (["-o", "out.exr", "--method", "nope"], "lucent.render(lucent.load_scene(SCENE), method='nope')", "unknown method 'nope'"),
+])
+def test_python_renders_refuse_what_lucent_render_refuses(work, args, call, words):
+    write(os.path.join(work, "tex.png"), fuzz_corpus().png(2, 2, (200, 100, 50)))
+    write(os.path.join(work, "scene.gltf"), textured_gltf("tex.png")[0])
+    os.mkdir(os.path.join(work, "taken.exr"))
+    if "scene.exr" in args:  # the texture under an EXR's name
+        os.rename(os.path.join(work, "tex.png"), os.path.join(work, "scene.exr"))
+        write(os.path.join(work, "scene.gltf"), textured_gltf("scene.exr")[0])
+    before = snapshot(work)
+    run = lucent("render", "scene.gltf", "--resolution", "8x8", "-q", *args, cwd=work)
+    assert run.code == 1 and words in run.err, run
+    code = ("import sys\nSCENE = 'scene.gltf'\nimport functools\n"
+            "lucent.load_scene = functools.partial(lucent.load_scene, resolution=(8, 8))\n"
+            "try:\n    %s\nexcept ValueError as e:\n    print(e); sys.exit(3)" % call)
+    py = python_lucent(code, cwd=work)
+    assert py.code == 3 and words in py.out, py
+    assert changed(before, snapshot(work)) == []
+
+
+def test_python_writes_parts_and_checkpoints_that_lucent_merges_and_resumes(work):
+    scene = box_scene(work)
+    assert lucent("render", scene, "--spp", "4", "-q", "-o", "whole.exr", cwd=work).code == 0
+    py = python_lucent("s = lucent.load_scene('%s')\n"
+                       "for k in range(2):\n"
+                       "    r = lucent.render(s, spp=4, part='rows:%%d/2' %% k, output='part%%d.exr' %% k)\n"
+                       "    assert r['summary']['film'] == 'part%%d.film' %% k, r['summary']\n"
+                       "r = lucent.render(s, spp=4, seed=9, output='other.exr', png='other.png')\n"
+                       "assert r['summary']['output'] == 'other.exr'\n"
+                       "try:\n    lucent.render(s, spp=4, output='part0.exr', part='rows:0/2', resume=True)\n"
+                       "except ValueError as e:\n    print(e)\n" % scene, cwd=work)
+    assert py.code == 0 and "is not a film of this render" not in py.out, py
+    assert {"part0.exr", "part0.film", "part1.exr", "part1.film", "other.exr", "other.png"} <= set(os.listdir(work))
+    assert lucent("merge", "part0.film", "part1.film", "-o", "merged.exr", cwd=work).code == 0
+    same = lucent("compare", "merged.exr", "whole.exr", "--metric", "rmse", "--max-error", "0", cwd=work)
+    assert same.code == 0, same
+    py = python_lucent("s = lucent.load_scene('%s')\n"
+                       "lucent.render(s, spp=4, seed=3, part='rows:0/2', output='part0.exr', resume=True)" % scene, cwd=work)
+    assert py.code != 0 and "is not a film of this render" in py.err and "--seed" in py.err, py
 
 
 def test_ctrl_c_stops_a_python_render_within_a_second(work):

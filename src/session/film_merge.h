@@ -9,7 +9,7 @@
 
 #include "lucent/pipeline/film_file.h"
 
-namespace lucent::cli {
+namespace lucent {
 
 // A part as given: its film file, or its image with OUT.film beside it.
 std::string partFilmPath(const std::string& part);
@@ -24,4 +24,4 @@ struct MergedFilm {
 // what keeps the parts from belonging together.
 MergedFilm mergeFilmFiles(const std::vector<std::string>& parts);
 
-}  // namespace lucent::cli
+}  // namespace lucent

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-namespace lucent::cli {
+namespace lucent {
 
 // Throws std::invalid_argument naming `flag` unless `path` ends in `extension`, its directory exists,
 // it is none of `inputs` (the files the command reads, perhaps not read yet) nor of the files the
@@ -14,4 +14,4 @@ namespace lucent::cli {
 void checkOutputFile(const std::string& path, const std::string& extension, const std::string& flag,
                      const std::vector<std::string>& inputs);
 
-}  // namespace lucent::cli
+}  // namespace lucent

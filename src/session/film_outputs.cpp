@@ -1,14 +1,13 @@
-#include "cli/film_outputs.h"
+#include "session/film_outputs.h"
 
 #include <algorithm>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "cli/method_options.h"
 #include "lucent/methods/methods.h"
 #include "lucent/trace/visibility.h"
 
-namespace lucent::cli {
+namespace lucent {
 
 std::string filmPathFor(const std::string& exrPath) {
   return std::filesystem::path(exrPath).replace_extension(".film").string();
@@ -25,14 +24,16 @@ std::string renderDifference(const FilmFileInfo& film, const FilmFileInfo& other
     return "it is of another scene or resolution (scene hash " + film.sceneHash + ", this render's " + other.sceneHash + ")";
   const auto a = nlohmann::json::parse(film.options), b = nlohmann::json::parse(other.options);
   const auto& specs = renderingMethod(other.method).options();
-  auto changesImage = [&](const std::string& name) {
-    for (const OptionSpec& spec : specs)
-      if (spec.name == name) return spec.changesImage;
-    return true;
+  auto spec = [&](const std::string& name) {
+    OptionSpec named;
+    named.name = name;
+    for (const OptionSpec& s : specs)
+      if (s.name == name) return s;
+    return named;  // an option the method no longer declares: it may change the image
   };
   for (const auto& [name, value] : b.items())
-    if (changesImage(name) && (!a.contains(name) || a[name] != value))
-      return "its " + flagOf(name) + " is " + (a.contains(name) ? a[name].dump() : "not set") + ", this render's " +
+    if (spec(name).changesImage && (!a.contains(name) || a[name] != value))
+      return "its " + spec(name).flag() + " is " + (a.contains(name) ? a[name].dump() : "not set") + ", this render's " +
              value.dump();
   if (film.version != other.version) return "it was rendered by Lucent " + film.version + ", this render by " + other.version;
   if (film.embreeIsa != other.embreeIsa || film.laneIsa != other.laneIsa)
@@ -69,4 +70,4 @@ ImageMetadata filmMetadata(const FilmFileInfo& info, const Film& film) {
   return meta;
 }
 
-}  // namespace lucent::cli
+}  // namespace lucent

@@ -6,7 +6,7 @@
 #include "lucent/image/image.h"
 #include "lucent/pipeline/film_file.h"
 
-namespace lucent::cli {
+namespace lucent {
 
 // OUT.exr -> OUT.film, the film file of a render's or a merge's output.
 std::string filmPathFor(const std::string& exrPath);
@@ -28,4 +28,4 @@ std::string renderDifference(const FilmFileInfo& film, const FilmFileInfo& other
 // The seed in a method's options JSON ("0" if it has none).
 std::string seedOf(const std::string& optionsJson);
 
-}  // namespace lucent::cli
+}  // namespace lucent

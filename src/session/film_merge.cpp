@@ -1,4 +1,4 @@
-#include "cli/film_merge.h"
+#include "session/film_merge.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -6,9 +6,9 @@
 #include <set>
 #include <stdexcept>
 
-#include "cli/film_outputs.h"
+#include "session/film_outputs.h"
 
-namespace lucent::cli {
+namespace lucent {
 
 namespace {
 
@@ -119,4 +119,4 @@ MergedFilm mergeFilmFiles(const std::vector<std::string>& parts) {
   return out;
 }
 
-}  // namespace lucent::cli
+}  // namespace lucent

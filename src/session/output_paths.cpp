@@ -1,11 +1,11 @@
-#include "cli/output_paths.h"
+#include "session/output_paths.h"
 
 #include <filesystem>
 #include <stdexcept>
 
 #include "lucent/core/files.h"
 
-namespace lucent::cli {
+namespace lucent {
 namespace fs = std::filesystem;
 
 void checkOutputFile(const std::string& path, const std::string& extension, const std::string& flag,
@@ -25,4 +25,4 @@ void checkOutputFile(const std::string& path, const std::string& extension, cons
   }
 }
 
-}  // namespace lucent::cli
+}  // namespace lucent
