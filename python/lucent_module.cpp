@@ -425,6 +425,11 @@ PYBIND11_MODULE(lucent, m) {
     return out;
   }, py::arg("path"), "An image file (EXR, HDR, PNG, ...) as a dict like render's: image, variance, layers, and "
                       "srgb (an 8-bit sRGB file, decoded to linear)");
+  m.def("record_types", [] {
+    std::vector<std::string> names;
+    for (const auto& [name, type] : dumpRecordTypes()) names.push_back(name);
+    return names;
+  }, "The names of every dump record type (docs/dump-format.md), each with its record_dtype");
   m.def("record_dtype", &recordDtype, py::arg("type"), "The NumPy dtype of a dump record type (docs/dump-format.md)");
   m.def("read_dump", &readDumpArray, py::arg("path"), "A dump file as a NumPy structured array of its records");
   m.def("write_dump", &writeDumpArray, py::arg("path"), py::arg("records"), py::arg("type") = py::none(),

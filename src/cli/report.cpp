@@ -359,6 +359,95 @@ async function selfCheck() {
 selfCheck();
 )";
 
+// A candidate's section: where it came from, the flip viewer, the images and heatmaps side by side,
+// the regions of the noise test and the difference by surface.
+void candidateSection(std::ostringstream& html, const ReportOptions& opt, const ReportEntry& c, size_t i, int w, int h,
+                      int zoom, const std::string& bar) {
+  html << "<section id=\"candidate-" << i << "\"><h2>" << escapeHtml(c.label) << "</h2>\n<p class=\"note\"><code>"
+       << escapeHtml(c.path) << "</code>"
+       << (c.runs.size() > 1 ? " and " + std::to_string(c.runs.size() - 1) + " more runs (their mean is shown)" : "")
+       << ": " << provenance(c.metadata);
+  if (c.sidecar) {
+    html << " · <span data-key=\"sidecar\">" << escapeHtml(c.sidecar->path) << ":";
+    if (!c.sidecar->renderer.empty()) html << " renderer " << escapeHtml(c.sidecar->renderer);
+    if (c.sidecar->samples) html << " · samples " << number(*c.sidecar->samples);
+    if (c.sidecar->seconds) html << " · seconds " << number(*c.sidecar->seconds);
+    if (!c.sidecar->device.empty()) html << " · device " << escapeHtml(c.sidecar->device);
+    html << "</span>";
+  }
+  html << "</p>\n";
+  html << "<div class=\"flip-box\"><div class=\"controls\">Zoom <button data-zoom=\"1\">1x</button><button "
+          "data-zoom=\"2\">2x</button><button data-zoom=\"4\">4x</button><button data-zoom=\"8\">8x</button>"
+          "<button data-zoom=\"16\">16x</button> <span class=\"zoom\">1x</span> · <button class=\"flip\">Flip "
+          "(click, f or space)</button><label><input type=\"checkbox\" class=\"auto\"> flip every 0.6 s</label>"
+          "<span class=\"state\">"
+       << escapeHtml(c.label) << "</span> <span class=\"pixel\"></span></div>\n<div class=\"viewer\" data-zoom=\""
+       << zoom << "\" data-label=\"" << escapeHtml(c.label) << "\">" << imageTag(c.imageUri, w, h, c.label, " class=\"a\"")
+       << imageTag("", w, h, "reference (flip of " + c.label + ")", " class=\"b\" data-reference") << "</div></div>\n";
+  html << "<div class=\"images\"><figure>" << imageTag(c.imageUri, w, h, c.label + " (side by side)", " class=\"pixelated\"")
+       << "<figcaption>" << escapeHtml(c.label) << "</figcaption></figure><figure>"
+       << imageTag("", w, h, "reference (side by side with " + c.label + ")", " class=\"pixelated\" data-reference")
+       << "<figcaption>reference</figcaption></figure><figure>"
+       << imageTag(c.errorUri, w, h, "relMSE heatmap of " + c.label, " class=\"pixelated\"")
+       << colourBar(bar, number(c.errorScale), "per-pixel relMSE")
+       << "<figcaption>Per-pixel relMSE, (c − r)² / (r + 0.01)², over R, G, B; magenta: NaN or infinite."
+          "</figcaption></figure><figure>"
+       << imageTag(c.flipUri, w, h, "FLIP map of " + c.label, " class=\"pixelated\"") << colourBar(bar, "1", "FLIP")
+       << "<figcaption>" << flipCaption(c.flip, opt.pixelsPerDegree) << "</figcaption></figure>";
+  if (c.test)
+    html << "<figure>" << imageTag(c.statisticUri, w, h, "test statistic heatmap of " + c.label, " class=\"pixelated\"")
+         << colourBar(bar, "5", "block |z|")
+         << "<figcaption>|z| of the noise test per block of pixels (largest over R, G, B); magenta: infinite.</figcaption>"
+            "</figure>";
+  html << "</div>\n";
+  if (c.test) {
+    const NoiseTest& t = *c.test;
+    html << "<p>Relative difference Σ(c − r) / Σr (bias) and z per region; rejected regions in red"
+         << (c.equivalence ? "; with --within, its (1 − 2α) interval, red where it leaves ±" + number(*opt.within) : "")
+         << ". Blocks of "
+         << t.block << " x " << t.block << " pixels rejected: " << t.blocksRejected << " of " << t.blocks
+         << "; least block p-value " << number(t.minBlockPValue) << ".</p>\n";
+    const std::string undecided = !t.noise.undecided.empty() ? t.noise.undecided
+                                  : c.equivalence          ? c.equivalence->noise.undecided
+                                                           : "";
+    if (!undecided.empty())
+      html << "<p class=\"inconclusive\" data-key=\"undecided\">Inconclusive: " << escapeHtml(undecided) << ".</p>\n";
+    html << "<table class=\"regions\">";
+    const int grid = int(std::lround(std::sqrt(double(t.regions.size() - 1))));
+    for (int row = 0; row < grid; ++row) {
+      html << "<tr>";
+      for (int col = 0; col < grid; ++col) {
+        const size_t k = size_t(1 + row * grid + col);
+        const RegionTest& r = t.regions[k];
+        html << "<td" << (r.rejected ? " class=\"rejected\"" : "") << " data-key=\"region-" << k << "\">"
+             << "<span data-key=\"region-" << k << "-relative_difference\">" << number(r.relativeDifference)
+             << "</span><br>z <span data-key=\"region-" << k << "-z\">" << number(r.z) << "</span>";
+        if (c.equivalence) {
+          const EquivalenceRegion& e = c.equivalence->regions[k];
+          html << "<br><span class=\"" << verdictClass(e.verdict) << "\">[<span data-key=\"region-" << k
+               << "-interval_low\">" << number(e.low) << "</span>, <span data-key=\"region-" << k
+               << "-interval_high\">" << number(e.high) << "</span>]</span>";
+        }
+        html << "</td>";
+      }
+      html << "</tr>";
+    }
+    html << "</table>\n";
+  }
+  if (!c.surfaces.empty()) {
+    html << "<p>By surface (what each pixel's centre shows in the reference): relative difference Σ(c − r) / Σr "
+            "with its (1 − 2α) interval.</p>\n<table class=\"surfaces\" data-key=\"by_surface\"><tr><th>surface</th>"
+            "<th>pixels</th><th>difference</th><th>interval</th></tr>";
+    for (const SurfaceDifference& d : c.surfaces) {
+      const bool known = std::isfinite(d.low) && std::isfinite(d.high);
+      html << "<tr><td>" << escapeHtml(d.name) << "</td><td>" << d.pixels << "</td><td>" << number(d.relativeDifference)
+           << "</td><td>" << (known ? number(d.low) + " to " + number(d.high) : std::string("unknown")) << "</td></tr>";
+    }
+    html << "</table>\n";
+  }
+  html << "</section>\n";
+}
+
 std::string reportPage(const ReportOptions& opt, const Image& reference, const ImageMetadata& referenceMetadata,
                        const std::vector<ReportEntry>& candidates, bool tested) {
   const int w = reference.width(), h = reference.height();
@@ -424,98 +513,14 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
                    " id=\"reference-image\" class=\"pixelated\"")
        << "<figcaption>" << escapeHtml(opt.reference) << "</figcaption></figure>\n";
 
-  for (size_t i = 0; i < candidates.size(); ++i) {
-    const ReportEntry& c = candidates[i];
-    html << "<section id=\"candidate-" << i << "\"><h2>" << escapeHtml(c.label) << "</h2>\n<p class=\"note\"><code>"
-         << escapeHtml(c.path) << "</code>"
-         << (c.runs.size() > 1 ? " and " + std::to_string(c.runs.size() - 1) + " more runs (their mean is shown)" : "")
-         << ": " << provenance(c.metadata);
-    if (c.sidecar) {
-      html << " · <span data-key=\"sidecar\">" << escapeHtml(c.sidecar->path) << ":";
-      if (!c.sidecar->renderer.empty()) html << " renderer " << escapeHtml(c.sidecar->renderer);
-      if (c.sidecar->samples) html << " · samples " << number(*c.sidecar->samples);
-      if (c.sidecar->seconds) html << " · seconds " << number(*c.sidecar->seconds);
-      if (!c.sidecar->device.empty()) html << " · device " << escapeHtml(c.sidecar->device);
-      html << "</span>";
-    }
-    html << "</p>\n";
-    html << "<div class=\"flip-box\"><div class=\"controls\">Zoom <button data-zoom=\"1\">1x</button><button "
-            "data-zoom=\"2\">2x</button><button data-zoom=\"4\">4x</button><button data-zoom=\"8\">8x</button>"
-            "<button data-zoom=\"16\">16x</button> <span class=\"zoom\">1x</span> · <button class=\"flip\">Flip "
-            "(click, f or space)</button><label><input type=\"checkbox\" class=\"auto\"> flip every 0.6 s</label>"
-            "<span class=\"state\">"
-         << escapeHtml(c.label) << "</span> <span class=\"pixel\"></span></div>\n<div class=\"viewer\" data-zoom=\""
-         << zoom << "\" data-label=\"" << escapeHtml(c.label) << "\">" << imageTag(c.imageUri, w, h, c.label, " class=\"a\"")
-         << imageTag("", w, h, "reference (flip of " + c.label + ")", " class=\"b\" data-reference") << "</div></div>\n";
-    html << "<div class=\"images\"><figure>" << imageTag(c.imageUri, w, h, c.label + " (side by side)", " class=\"pixelated\"")
-         << "<figcaption>" << escapeHtml(c.label) << "</figcaption></figure><figure>"
-         << imageTag("", w, h, "reference (side by side with " + c.label + ")", " class=\"pixelated\" data-reference")
-         << "<figcaption>reference</figcaption></figure><figure>"
-         << imageTag(c.errorUri, w, h, "relMSE heatmap of " + c.label, " class=\"pixelated\"")
-         << colourBar(bar, number(c.errorScale), "per-pixel relMSE")
-         << "<figcaption>Per-pixel relMSE, (c − r)² / (r + 0.01)², over R, G, B; magenta: NaN or infinite."
-            "</figcaption></figure><figure>"
-         << imageTag(c.flipUri, w, h, "FLIP map of " + c.label, " class=\"pixelated\"") << colourBar(bar, "1", "FLIP")
-         << "<figcaption>" << flipCaption(c.flip, opt.pixelsPerDegree) << "</figcaption></figure>";
-    if (c.test)
-      html << "<figure>" << imageTag(c.statisticUri, w, h, "test statistic heatmap of " + c.label, " class=\"pixelated\"")
-           << colourBar(bar, "5", "block |z|")
-           << "<figcaption>|z| of the noise test per block of pixels (largest over R, G, B); magenta: infinite.</figcaption>"
-              "</figure>";
-    html << "</div>\n";
-    if (c.test) {
-      const NoiseTest& t = *c.test;
-      html << "<p>Relative difference Σ(c − r) / Σr (bias) and z per region; rejected regions in red"
-           << (c.equivalence ? "; with --within, its (1 − 2α) interval, red where it leaves ±" + number(*opt.within) : "")
-           << ". Blocks of "
-           << t.block << " x " << t.block << " pixels rejected: " << t.blocksRejected << " of " << t.blocks
-           << "; least block p-value " << number(t.minBlockPValue) << ".</p>\n";
-      const std::string undecided = !t.noise.undecided.empty() ? t.noise.undecided
-                                    : c.equivalence          ? c.equivalence->noise.undecided
-                                                             : "";
-      if (!undecided.empty())
-        html << "<p class=\"inconclusive\" data-key=\"undecided\">Inconclusive: " << escapeHtml(undecided) << ".</p>\n";
-      html << "<table class=\"regions\">";
-      const int grid = int(std::lround(std::sqrt(double(t.regions.size() - 1))));
-      for (int row = 0; row < grid; ++row) {
-        html << "<tr>";
-        for (int col = 0; col < grid; ++col) {
-          const size_t k = size_t(1 + row * grid + col);
-          const RegionTest& r = t.regions[k];
-          html << "<td" << (r.rejected ? " class=\"rejected\"" : "") << " data-key=\"region-" << k << "\">"
-               << "<span data-key=\"region-" << k << "-relative_difference\">" << number(r.relativeDifference)
-               << "</span><br>z <span data-key=\"region-" << k << "-z\">" << number(r.z) << "</span>";
-          if (c.equivalence) {
-            const EquivalenceRegion& e = c.equivalence->regions[k];
-            html << "<br><span class=\"" << verdictClass(e.verdict) << "\">[<span data-key=\"region-" << k
-                 << "-interval_low\">" << number(e.low) << "</span>, <span data-key=\"region-" << k
-                 << "-interval_high\">" << number(e.high) << "</span>]</span>";
-          }
-          html << "</td>";
-        }
-        html << "</tr>";
-      }
-      html << "</table>\n";
-    }
-    if (!c.surfaces.empty()) {
-      html << "<p>By surface (what each pixel's centre shows in the reference): relative difference Σ(c − r) / Σr "
-              "with its (1 − 2α) interval.</p>\n<table class=\"surfaces\" data-key=\"by_surface\"><tr><th>surface</th>"
-              "<th>pixels</th><th>difference</th><th>interval</th></tr>";
-      for (const SurfaceDifference& d : c.surfaces) {
-        const bool known = std::isfinite(d.low) && std::isfinite(d.high);
-        html << "<tr><td>" << escapeHtml(d.name) << "</td><td>" << d.pixels << "</td><td>" << number(d.relativeDifference)
-             << "</td><td>" << (known ? number(d.low) + " to " + number(d.high) : std::string("unknown")) << "</td></tr>";
-      }
-      html << "</table>\n";
-    }
-    html << "</section>\n";
-  }
+  for (size_t i = 0; i < candidates.size(); ++i) candidateSection(html, opt, candidates[i], i, w, h, zoom, bar);
   html << "<script>" << kScript << "</script>\n</body></html>\n";
   return html.str();
 }
 
-int runReport(const ReportOptions& opt) {
-  // Ranges checked here (CLI11's range checks print their bounds with 309 digits and let NaN through).
+// The options' ranges and counts (checked here: CLI11's range checks print their bounds with 309
+// digits and let NaN through).
+void checkReportOptions(const ReportOptions& opt) {
   if (!(opt.alpha >= 1e-12 && opt.alpha <= 0.25)) throw std::invalid_argument("--alpha must lie in [1e-12, 0.25]");
   if (opt.within && !(std::isfinite(*opt.within) && *opt.within > 0 && *opt.within <= 10))
     throw std::invalid_argument("--within must lie in (0, 10]");
@@ -526,13 +531,48 @@ int runReport(const ReportOptions& opt) {
   if (opt.runs < 1 || opt.candidates.size() % size_t(opt.runs) != 0)
     throw std::invalid_argument("--runs " + std::to_string(opt.runs) + ": " + std::to_string(opt.candidates.size()) +
                                 " images are not whole candidates of that many runs each");
-  const size_t count = opt.candidates.size() / size_t(opt.runs), runs = size_t(opt.runs);
+  const size_t count = opt.candidates.size() / size_t(opt.runs);
   if (!opt.labels.empty() && opt.labels.size() != count)
     throw std::invalid_argument("--label is given " + std::to_string(opt.labels.size()) + " times for " +
                                 std::to_string(count) + " candidates");
   if (!opt.seconds.empty() && opt.seconds.size() != count)
     throw std::invalid_argument("--seconds is given " + std::to_string(opt.seconds.size()) + " times for " +
                                 std::to_string(count) + " candidates");
+}
+
+// The JSON line: the report, the reference and each candidate's numbers and verdicts.
+std::string reportLine(const ReportOptions& opt, const std::vector<ReportEntry>& candidates, bool tested) {
+  nlohmann::ordered_json line;
+  line["report"] = opt.output;
+  line["reference"] = opt.reference;
+  line["tested"] = tested;
+  line["candidates"] = nlohmann::ordered_json::array();
+  for (const ReportEntry& c : candidates) {
+    nlohmann::ordered_json entry = {{"label", c.label}, {"image", c.path}};
+    if (c.runs.size() > 1) entry["runs"] = c.runs;
+    entry["relmse"] = c.error.overall.relmse, entry["flip"] = c.flip.mean;
+    if (c.seconds) entry["seconds"] = *c.seconds;
+    if (c.sidecar) {
+      nlohmann::ordered_json sidecar = {{"path", c.sidecar->path}};
+      if (!c.sidecar->renderer.empty()) sidecar["renderer"] = c.sidecar->renderer;
+      if (c.sidecar->samples) sidecar["samples"] = *c.sidecar->samples;
+      if (c.sidecar->seconds) sidecar["seconds"] = *c.sidecar->seconds;
+      if (!c.sidecar->device.empty()) sidecar["device"] = c.sidecar->device;
+      if (!c.sidecar->ignored.empty()) sidecar["not_read"] = c.sidecar->ignored;
+      entry["sidecar"] = sidecar;
+    }
+    if (c.test) entry["passed"] = c.test->verdict == Verdict::Pass, entry["test"] = verdictName(c.test->verdict);
+    if (c.equivalence)
+      entry["equivalent"] = c.equivalence->verdict == Verdict::Pass, entry["within"] = verdictName(c.equivalence->verdict);
+    if (!c.surfaces.empty()) entry["by_surface"] = nlohmann::ordered_json::parse(surfaceDifferencesJson(c.surfaces));
+    line["candidates"].push_back(entry);
+  }
+  return jsonText(line);
+}
+
+int runReport(const ReportOptions& opt) {
+  checkReportOptions(opt);
+  const size_t count = opt.candidates.size() / size_t(opt.runs), runs = size_t(opt.runs);
   std::vector<std::string> inputs = opt.candidates;
   inputs.push_back(opt.reference);
   checkOutputFile(opt.output, ".html", "-o", inputs);
@@ -639,32 +679,7 @@ int runReport(const ReportOptions& opt) {
     if (!out) throw WriteFailure("write failed");
   });
 
-  nlohmann::ordered_json line;
-  line["report"] = opt.output;
-  line["reference"] = opt.reference;
-  line["tested"] = tested;
-  line["candidates"] = nlohmann::ordered_json::array();
-  for (const ReportEntry& c : candidates) {
-    nlohmann::ordered_json entry = {{"label", c.label}, {"image", c.path}};
-    if (c.runs.size() > 1) entry["runs"] = c.runs;
-    entry["relmse"] = c.error.overall.relmse, entry["flip"] = c.flip.mean;
-    if (c.seconds) entry["seconds"] = *c.seconds;
-    if (c.sidecar) {
-      nlohmann::ordered_json sidecar = {{"path", c.sidecar->path}};
-      if (!c.sidecar->renderer.empty()) sidecar["renderer"] = c.sidecar->renderer;
-      if (c.sidecar->samples) sidecar["samples"] = *c.sidecar->samples;
-      if (c.sidecar->seconds) sidecar["seconds"] = *c.sidecar->seconds;
-      if (!c.sidecar->device.empty()) sidecar["device"] = c.sidecar->device;
-      if (!c.sidecar->ignored.empty()) sidecar["not_read"] = c.sidecar->ignored;
-      entry["sidecar"] = sidecar;
-    }
-    if (c.test) entry["passed"] = c.test->verdict == Verdict::Pass, entry["test"] = verdictName(c.test->verdict);
-    if (c.equivalence)
-      entry["equivalent"] = c.equivalence->verdict == Verdict::Pass, entry["within"] = verdictName(c.equivalence->verdict);
-    if (!c.surfaces.empty()) entry["by_surface"] = nlohmann::ordered_json::parse(surfaceDifferencesJson(c.surfaces));
-    line["candidates"].push_back(entry);
-  }
-  std::cout << jsonText(line) << std::endl;
+  std::cout << reportLine(opt, candidates, tested) << std::endl;
   return 0;
 }
 

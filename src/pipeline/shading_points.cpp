@@ -61,16 +61,11 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
       if (scene.environment.present) out.emitted += b.weight * environmentRadiance(scene.environment, b.ray.direction);
       continue;
     }
-    const SurfacePoint sp = surfaceAt(scene, hit.triangle, hit.b1, hit.b2);
-    const Material& material = scene.materials[sp.materialId];
-    const Vec3 wo = -b.ray.direction;
-    const bool frontFace = dot(wo, sp.geometricNormal) > 0;
-    if (!material.ke.isBlack()) out.emitted += b.weight * emittedRadiance(scene, hit.triangle, hit.b1, hit.b2, frontFace);
-    const SurfaceBsdf bsdf = bsdfAt(scene, sp);
-    // As the path tracer: the geometric normal where the shading normal puts the viewer on the
-    // other side; glass keeps the winding orientation, other materials are two-sided.
-    Vec3 n = dot(wo, sp.shadingNormal) * dot(wo, sp.geometricNormal) > 0 ? sp.shadingNormal : sp.geometricNormal;
-    if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
+    const ChainVertex v = chainVertexAt(scene, surfaceAt(scene, hit.triangle, hit.b1, hit.b2), b.ray.direction);
+    const SurfacePoint& sp = v.sp;
+    const SurfaceBsdf& bsdf = v.bsdf;
+    if (!scene.materials[sp.materialId].ke.isBlack())
+      out.emitted += b.weight * emittedRadiance(scene, hit.triangle, hit.b1, hit.b2, v.frontFace);
     if (firstHit) {
       firstHit->albedo = layerAlbedo(bsdf);
       firstHit->normal = sp.shadingNormal;
@@ -80,22 +75,19 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
 
     if (!bsdf.isDelta()) {
       if (!reflectanceBound(bsdf).isBlack())
-        points.push_back({sp.position, sp.geometricNormal, n, wo, b.weight, bsdf, pixel, sample, branch++, sp.triangle});
+        points.push_back({sp.position, sp.geometricNormal, v.frame.n, v.wo, b.weight, bsdf, pixel, sample, branch++, sp.triangle});
       continue;
     }
     if (b.depth >= settings.maxSpecularDepth) continue;
-    const Frame frame(n);
-    const Vec3 woLocal = frame.toLocal(wo);
+    const Vec3 woLocal = v.woLocal;
     // Pushes the continuation along s with weight w, unless it leaves on the wrong side of the
     // real surface (shading-normal leaks), as the path tracer does.
     auto push = [&](const BsdfSample& s, Rgb w) {
-      if (!s.valid) return;
-      const Vec3 wi = frame.toWorld(s.wi);
-      const bool transmits = s.wi.z * woLocal.z < 0;
-      if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) return;
+      const std::optional<Ray> next = followLobe(v, s);
+      if (!next) return;
       const Rgb weight = b.weight * w;
       if (weight.isBlack()) return;
-      stack[top++].branch = {{offsetOrigin(sp.position, sp.geometricNormal, wi), wi}, weight, b.depth + 1};
+      stack[top++].branch = {*next, weight, b.depth + 1};
     };
     if (bsdf.type == MaterialType::Glass && b.weight.maxComponent() >= kSplitWeight) {
       // Both lobes, each weighted by the probability with which sampleBsdf would pick it (F, 1 - F):

@@ -550,6 +550,39 @@ struct NodeWalk {
     return id;
   }
 
+  // The primitive's triangles as corners (three vertex indices each), counter-clockwise as the
+  // specification orders strips and fans.
+  std::vector<uint32_t> triangleCorners(const tinygltf::Primitive& p, int mode, const std::string& path, size_t vertices) {
+    std::vector<uint32_t> index;
+    if (p.indices >= 0) {
+      const std::vector<double> read = readAccessor(c, p.indices, path + ".indices", TINYGLTF_TYPE_SCALAR,
+                                                    {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                                                     TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
+      index.reserve(read.size());
+      for (size_t i = 0; i < read.size(); ++i) {
+        if (read[i] >= double(vertices))
+          c.fail(path + ".indices", "element " + std::to_string(i) + " (" + std::to_string(uint64_t(read[i])) +
+                                        ") is not below the vertex count " + std::to_string(vertices));
+        index.push_back(uint32_t(read[i]));
+      }
+    } else {
+      for (size_t i = 0; i < vertices; ++i) index.push_back(uint32_t(i));
+    }
+    std::vector<uint32_t> corners;
+    if (mode == TINYGLTF_MODE_TRIANGLES) {
+      corners.assign(index.begin(), index.end() - ptrdiff_t(index.size() % 3));
+    } else {
+      for (size_t i = 0; i + 2 < index.size(); ++i) {
+        if (mode == TINYGLTF_MODE_TRIANGLE_STRIP)
+          corners.insert(corners.end(), {index[i], index[i + 1 + i % 2], index[i + 2 - i % 2]});
+        else
+          corners.insert(corners.end(), {index[i + 1], index[i + 2], index[0]});
+      }
+    }
+
+    return corners;
+  }
+
   void primitive(const tinygltf::Primitive& p, const std::string& path, const Matrix4& world) {
     const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
     if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE || mode == TINYGLTF_MODE_LINE_LOOP ||
@@ -602,33 +635,7 @@ struct NodeWalk {
         scene.ignored.push_back(c.file + ": " + path + ".attributes." + name + " (not read)");
     if (!p.targets.empty()) scene.ignored.push_back(c.file + ": " + path + ".targets (morph targets: the base shape is rendered)");
 
-    std::vector<uint32_t> index;
-    if (p.indices >= 0) {
-      const std::vector<double> read = readAccessor(c, p.indices, path + ".indices", TINYGLTF_TYPE_SCALAR,
-                                                    {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
-                                                     TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
-      index.reserve(read.size());
-      for (size_t i = 0; i < read.size(); ++i) {
-        if (read[i] >= double(vertices))
-          c.fail(path + ".indices", "element " + std::to_string(i) + " (" + std::to_string(uint64_t(read[i])) +
-                                        ") is not below the vertex count " + std::to_string(vertices));
-        index.push_back(uint32_t(read[i]));
-      }
-    } else {
-      for (size_t i = 0; i < vertices; ++i) index.push_back(uint32_t(i));
-    }
-    // The triangles' corners, counter-clockwise as the specification orders strips and fans.
-    std::vector<uint32_t> corners;
-    if (mode == TINYGLTF_MODE_TRIANGLES) {
-      corners.assign(index.begin(), index.end() - ptrdiff_t(index.size() % 3));
-    } else {
-      for (size_t i = 0; i + 2 < index.size(); ++i) {
-        if (mode == TINYGLTF_MODE_TRIANGLE_STRIP)
-          corners.insert(corners.end(), {index[i], index[i + 1 + i % 2], index[i + 2 - i % 2]});
-        else
-          corners.insert(corners.end(), {index[i + 1], index[i + 2], index[0]});
-      }
-    }
+    const std::vector<uint32_t> corners = triangleCorners(p, mode, path, vertices);
 
     // What the scene will hold, checked before it grows: a mesh named by many nodes is copied for each.
     if (scene.positions.size() + vertices > (uint64_t(1) << 31))

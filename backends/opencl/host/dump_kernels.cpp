@@ -11,9 +11,9 @@
 #include "lucent/core/dump.h"
 #include "lucent/pipeline/shading_points.h"
 #include "lucent/techniques/photons/photon.h"
-#include "methods/envpbgi/radiance_cache.h"
-#include "methods/particles/area_particles.h"
-#include "methods/photonmap/uniform_grid.h"
+#include "lucent/methods/envpbgi_records.h"
+#include "lucent/methods/particles_records.h"
+#include "lucent/methods/photonmap_records.h"
 #include "record_fields.h"
 
 namespace lucent::opencl {

@@ -109,8 +109,7 @@ inline ParticleScatter scatterParticle(const SurfaceBsdf& bsdf, const SurfacePoi
   if (!bs.valid) return out;
   const Vec3 wi = frame.toWorld(bs.wi);
   // Leaving on the other side of the true surface than the BSDF means (a shading-normal leak): none.
-  const bool transmits = bs.wi.z * woLocal.z < 0;
-  if ((dot(wi, ng) * dot(wo, ng) < 0) != transmits) return out;
+  if (leaksThroughSurface(wo, wi, ng, bs.wi.z * woLocal.z < 0)) return out;
   out.wi = wi;
   out.weight = bs.weight;
   if (shaded) {

@@ -1,5 +1,7 @@
 // The local geometry and material at a ray hit.
 #pragma once
+#include <optional>
+
 #include "lucent/scene/bsdf.h"
 #include "lucent/scene/scene.h"
 #include "lucent/scene/texture.h"
@@ -165,6 +167,50 @@ inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
   b.ns = m.ns;
   b.ni = m.ni;
   return b;
+}
+
+// Whether a surface's shading frame turns to the viewer on either side: glass keeps its winding's
+// orientation (its inside and outside differ); every other material is two-sided.
+inline bool twoSidedShading(const SurfaceBsdf& bsdf) { return bsdf.type != MaterialType::Glass; }
+
+// Whether a scattered direction wi lies on the other side of the geometric surface (normal ng) than
+// the lobe sampled says, wo being where the path came from: a reflection through the surface or a
+// transmission that stays, which the shading normal allows and the real surface does not (a light
+// leak). Such samples end the path.
+inline bool leaksThroughSurface(Vec3 wo, Vec3 wi, Vec3 ng, bool transmits) {
+  return (dot(wi, ng) * dot(wo, ng) < 0) != transmits;
+}
+
+// A hit as the specular chains of camera paths and gather rays see it: the surface and its BSDF,
+// the direction back along the ray and which side of the winding it is on, and the shading frame
+// (shadingFrameNormal) with that direction in it.
+struct ChainVertex {
+  SurfacePoint sp;
+  SurfaceBsdf bsdf;
+  Vec3 wo;
+  bool frontFace = false;
+  Frame frame;
+  Vec3 woLocal;
+};
+
+inline ChainVertex chainVertexAt(const Scene& scene, const SurfacePoint& sp, Vec3 rayDirection) {
+  ChainVertex v;
+  v.sp = sp;
+  v.bsdf = bsdfAt(scene, sp);
+  v.wo = -rayDirection;
+  v.frontFace = dot(v.wo, sp.geometricNormal) > 0;
+  v.frame = Frame(shadingFrameNormal(v.wo, sp.shadingNormal, sp.geometricNormal, twoSidedShading(v.bsdf)));
+  v.woLocal = v.frame.toLocal(v.wo);
+  return v;
+}
+
+// The ray that follows a lobe sample from a chain vertex, offset off its surface; none where the
+// sample is invalid or would leak through the real surface (leaksThroughSurface).
+inline std::optional<Ray> followLobe(const ChainVertex& v, const BsdfSample& s) {
+  if (!s.valid) return std::nullopt;
+  const Vec3 wi = v.frame.toWorld(s.wi);
+  if (leaksThroughSurface(v.wo, wi, v.sp.geometricNormal, s.wi.z * v.woLocal.z < 0)) return std::nullopt;
+  return Ray{offsetOrigin(v.sp.position, v.sp.geometricNormal, wi), wi};
 }
 
 }  // namespace lucent

@@ -21,7 +21,7 @@
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 #include "lucent/pipeline/film.h"
-#include "lucent/pipeline/render_stages.h"
+#include "lucent/pipeline/render_driver.h"
 #include "lucent/pipeline/shading_points.h"
 #include "lucent/scene/bsdf.h"
 #include "lucent/scene/surface.h"
@@ -63,9 +63,9 @@ void dumpStages(const std::string& dir, const EnvHierarchy& h, std::span<const u
 // The stages of one render (Fig. 6), in order, and what they hand on to each other.
 class EnvPbgiRender {
  public:
-  EnvPbgiRender(const Scene& scene, const Visibility& vis, const EnvPbgiOptions& o, const RenderControl& control,
-                const RenderPart& part, RenderStats& stats)
-      : scene_(scene), vis_(vis), o_(o), control_(control), part_(part), stats_(stats), env_(scene.environment) {}
+  EnvPbgiRender(const Scene& scene, const Visibility& vis, const EnvPbgiOptions& o, RenderDriver& driver,
+                RenderStats& stats)
+      : scene_(scene), vis_(vis), o_(o), driver_(driver), part_(driver.part()), stats_(stats), env_(scene.environment) {}
   EnvPbgiRender(const EnvPbgiRender&) = delete;
   EnvPbgiRender& operator=(const EnvPbgiRender&) = delete;
 
@@ -204,22 +204,20 @@ class EnvPbgiRender {
   void shadePixels(RenderOutput& out) {
     beginStage("pixels");
     Stopwatch pixelClock;
-    auto film = std::make_shared<Film>(startFilm(control_, scene_, vis_, part_, Film::Sums::PerPart, {o_.common.layers, false}));
+    Film& film = driver_.startFilm(Film::Sums::PerPart, {o_.common.layers, false});
     BandLoop loop;
     loop.maxSamples = o_.dumpDirectory.empty() ? kReusableBandSamples : ~uint64_t(0);
     loop.progressFrom = 0.65;
-    const bool finished = renderRowBands(control_, part_, loop, *film, [&](const PixelRect& band, size_t, const auto&) {
+    const bool finished = driver_.renderBands(loop, [&](const PixelRect& band, size_t, const auto&) {
       const EyePaths eye = shadeBand(band);
       Stopwatch filmClock;
-      addBand(*film, eye, bandShading_, scene_.camera.width, part_);
+      addBand(film, eye, bandShading_, scene_.camera.width, part_);
       imageSeconds_ += filmClock.seconds();
     });
     if (!finished) throw RenderStopped();
     stats_.addStage("pixels", pixelClock.seconds() - imageSeconds_);
     Stopwatch imageClock;
-    out.image = film->image();
-    out.film = film;
-    out.sppDone = part_.samples();
+    driver_.finish(out);
     stats_.addStage("image", imageSeconds_ + imageClock.seconds());
   }
 
@@ -359,7 +357,7 @@ class EnvPbgiRender {
   const Scene& scene_;
   const Visibility& vis_;
   const EnvPbgiOptions& o_;
-  const RenderControl& control_;
+  RenderDriver& driver_;
   const RenderPart& part_;
   RenderStats& stats_;
   const Environment& env_;
@@ -394,16 +392,14 @@ class EnvPbgiRender {
 
 RenderOutput renderEnvPbgi(const Scene& scene, const Visibility& vis, const EnvPbgiOptions& o,
                            const RenderControl& control) {
-  const RenderPart part = beginRender(envPbgiOptionTable(), o, control, scene, "--method envpbgi renders the image at once");
+  RenderDriver driver(envPbgiOptionTable(), o, control, scene, vis, "--method envpbgi renders the image at once");
   requireEnvironmentLights(scene);
   if (hasCutOutSurfaces(scene))
     throw std::invalid_argument("--method envpbgi places its surface points on the surfaces, which would cover the holes of '" +
                                 scene.sourcePath + "' (glTF alphaMode MASK or BLEND): render it with pt, pmfg or purcell");
   RenderOutput out;
-  auto report = [&](double fraction) {
-    if (control.progress) control.progress(fraction);
-  };
-  EnvPbgiRender render(scene, vis, o, control, part, out.stats);
+  auto report = [&](double fraction) { driver.reportProgress(fraction); };
+  EnvPbgiRender render(scene, vis, o, driver, out.stats);
   render.buildHierarchy();
   out.stats.addCounter("points", render.leafCount());
   report(0.05);

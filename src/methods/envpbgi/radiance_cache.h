@@ -11,24 +11,12 @@
 #include <span>
 #include <vector>
 
+#include "lucent/methods/envpbgi_records.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/scene.h"
 #include "methods/envpbgi/env_lighting.h"
 
 namespace lucent {
-
-inline constexpr int kCacheSide = 5;
-inline constexpr int kCacheTexels = kCacheSide * kCacheSide;
-
-// A primary point's cache: irradiance as a function of the receiver's normal, on a 5 x 5 paraboloid
-// map of normals in the point's frame (Frame(normal)), from the environment through the buffer's
-// empty texels and from the nodes it shows, apart (so that the indirect part can be shown alone).
-struct RadianceCache {
-  Vec3 position, normal;  // the primary point's surfel
-  float radius = 0;       // effective radius: the sphere within which the cache is used
-  Rgb environment[kCacheTexels], indirect[kCacheTexels];
-};
-static_assert(sizeof(RadianceCache) == 628, "RadianceCache is a fixed-size record");
 
 // The pre-convolution: per cache texel o its normal n_o (the paraboloid direction of its centre,
 // clamped to the rim outside the disc) and per buffer texel t the weight max(0, n_o . w_t) dOmega_t.

@@ -24,7 +24,7 @@
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 #include "lucent/pipeline/film.h"
-#include "lucent/pipeline/render_stages.h"
+#include "lucent/pipeline/render_driver.h"
 #include "lucent/pipeline/shading_points.h"
 #include "lucent/scene/surface.h"
 #include "point_lighting.h"
@@ -197,7 +197,8 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
                          const RenderControl& control) {
   // Gathering runs over the whole part at once (its Morton order and the upsampling lattice span
   // it): there is no state between stages to checkpoint.
-  const RenderPart part = beginRender(microOptionTable(), o, control, scene, "--method micro gathers the whole image at once");
+  RenderDriver driver(microOptionTable(), o, control, scene, vis, "--method micro gathers the whole image at once");
+  const RenderPart& part = driver.part();
   if (hasCutOutSurfaces(scene))
     throw std::invalid_argument("--method micro places its point hierarchy's points on the surfaces, which would cover the holes of '" +
                                 scene.sourcePath + "' (glTF alphaMode MASK or BLEND): render it with pt, pmfg or purcell");
@@ -299,7 +300,7 @@ RenderOutput renderMicro(const Scene& scene, const Visibility& vis, const MicroR
   const GatherTotals totals = reportGatherStages(scratch, gatherSeconds, upsampleSeconds, stats);
 
   if (!o.shading.dumpDirectory.empty()) dumpShadingPoints(o.shading.dumpDirectory, "", eye, shading, false);
-  shadeImage(out, control, scene, vis, part, eye, shading, {o.common.layers, false});
+  driver.shadeAtOnce(out, eye, shading, {o.common.layers, false});
 
   const MicroCounters& c = totals.counters;
   stats.addCounter("eye_rays", eye.rays);

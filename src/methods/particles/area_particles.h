@@ -10,23 +10,13 @@
 #include "lucent/core/oriented_point_grid.h"
 #include "lucent/core/stats.h"
 #include "lucent/methods/particles.h"
+#include "lucent/methods/particles_records.h"
 #include "lucent/scene/scene.h"
 #include "lucent/techniques/points/point_hierarchy.h"
 
 namespace lucent {
 
 inline constexpr uint32_t kNoParticle = kNoPoint;
-
-// 4.2.1's descriptor, less the light it carries (flux and radiance change with the lights and live
-// in arrays of their own).
-struct AreaParticle {
-  Vec3 position;
-  Vec3 normal;      // geometric normal of the side it stands for
-  float area;       // Delta A: the surface area it stands for
-  Rgb reflectance;  // rho_d: its surface's diffuse reflectance (0 on mirrors and glass)
-  uint32_t triangle;
-};
-static_assert(sizeof(AreaParticle) == 44 && std::is_trivially_copyable_v<AreaParticle>, "dumped as records");
 
 struct AreaParticleOptions {
   uint32_t positions = 50000;  // places on the surfaces (the paper: 50,000 for CBOX, 150,000 for SPONZA)

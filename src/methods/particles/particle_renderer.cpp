@@ -22,7 +22,7 @@
 #include "lucent/pipeline/direct_light.h"
 #include "lucent/pipeline/dumps.h"
 #include "lucent/pipeline/film.h"
-#include "lucent/pipeline/render_stages.h"
+#include "lucent/pipeline/render_driver.h"
 #include "lucent/pipeline/shading_points.h"
 #include "methods/particles/indirect_field.h"
 #include "methods/particles/particle_lighting.h"
@@ -96,9 +96,9 @@ std::vector<uint8_t> detectAliases(const Scene& scene, const EyePaths& eye, cons
 // The paper's stages (Fig. 4), in order, and what they hand on to each other.
 class ParticleRender {
  public:
-  ParticleRender(const Scene& scene, const Visibility& vis, const ParticleOptions& o, const RenderControl& control,
-                 const RenderPart& part, RenderStats& stats)
-      : scene_(scene), vis_(vis), o_(o), control_(control), part_(part), stats_(stats) {}
+  ParticleRender(const Scene& scene, const Visibility& vis, const ParticleOptions& o, RenderDriver& driver,
+                 RenderStats& stats)
+      : scene_(scene), vis_(vis), o_(o), driver_(driver), part_(driver.part()), stats_(stats) {}
   ParticleRender(const ParticleRender&) = delete;
   ParticleRender& operator=(const ParticleRender&) = delete;
 
@@ -203,12 +203,12 @@ class ParticleRender {
     fs.allGatherLinks = everything_ ? &gatherLinks_ : nullptr;
     field_.emplace(fs);
 
-    film_ = std::make_shared<Film>(startFilm(control_, scene_, vis_, part_, Film::Sums::PerPart, {o_.common.layers, false}));
+    film_ = &driver_.startFilm(Film::Sums::PerPart, {o_.common.layers, false});
     RenderStats frameStages;
     BandLoop loop;
     loop.maxSamples = wholeImage_ ? ~uint64_t(0) : kReusableBandSamples;
     loop.progressFrom = 0.6, loop.progressTo = 0.95;
-    const bool finished = renderRowBands(control_, part_, loop, *film_, [&](const PixelRect& band, size_t, const auto&) {
+    const bool finished = driver_.renderBands(loop, [&](const PixelRect& band, size_t, const auto&) {
       EyePathSettings settingsOfBand = eyePathSettings(o_.common, o_.shading.maxSpecularDepth, part_);
       settingsOfBand.region = band;
       beginStage("preliminary_ray_tracing");
@@ -293,9 +293,7 @@ class ParticleRender {
       if (o_.supersample > 0) addToFilm(extra_, extraShading_);
     }
     Stopwatch imageClock;
-    out.image = film_->image();
-    out.film = film_;
-    out.sppDone = part_.samples();
+    driver_.finish(out);
     stats_.addStage("image", imageSeconds_ + imageClock.seconds());
   }
 
@@ -374,7 +372,7 @@ class ParticleRender {
   const Scene& scene_;
   const Visibility& vis_;
   const ParticleOptions& o_;
-  const RenderControl& control_;
+  RenderDriver& driver_;
   const RenderPart& part_;
   RenderStats& stats_;
   const uint32_t sides_ = o_.sides == ParticleSides::Both ? 2 : 1;
@@ -394,7 +392,7 @@ class ParticleRender {
   // Ray tracing: the frame's (with wholeImage_, the whole image's) paths and light, and the
   // supersamples'.
   std::optional<IndirectField> field_;
-  std::shared_ptr<Film> film_;
+  Film* film_ = nullptr;  // the driver's
   EyePaths eye_, extra_;
   PointRadiance shading_{0}, extraShading_{0};
   FieldUpdate first_, added_;
@@ -411,7 +409,7 @@ class ParticleRender {
 
 RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const ParticleOptions& o,
                              const RenderControl& control) {
-  const RenderPart part = beginRender(particleOptionTable(), o, control, scene, "--method particles renders the image at once");
+  RenderDriver driver(particleOptionTable(), o, control, scene, vis, "--method particles renders the image at once");
   if (hasCutOutSurfaces(scene))
     throw std::invalid_argument("--method particles places its area particles on the surfaces, which would cover the holes of '" +
                                 scene.sourcePath + "' (glTF alphaMode MASK or BLEND): render it with pt, pmfg or purcell");
@@ -419,10 +417,8 @@ RenderOutput renderParticles(const Scene& scene, const Visibility& vis, const Pa
     throw std::invalid_argument("--supersample decides each pixel from its neighbours, which a part (--crop, "
                                 "--samples) does not have: render the whole image");
   RenderOutput out;
-  auto report = [&](double fraction) {
-    if (control.progress) control.progress(fraction);
-  };
-  ParticleRender render(scene, vis, o, control, part, out.stats);
+  auto report = [&](double fraction) { driver.reportProgress(fraction); };
+  ParticleRender render(scene, vis, o, driver, out.stats);
   render.placeAreaParticles();
   render.buildScatterLinks();
   report(0.05);

@@ -12,7 +12,7 @@
 #include "lucent/core/path_sampler.h"
 #include "lucent/methods/pathtrace.h"
 #include "lucent/pipeline/film.h"
-#include "lucent/pipeline/render_stages.h"
+#include "lucent/pipeline/render_driver.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"
@@ -178,8 +178,7 @@ class PathTracer {
     if (path.bounce + 1 > opt_.maxDepth) return false;
 
     // Glass keeps the winding orientation (inside/outside); other materials are two-sided.
-    const bool twoSided = bsdf.type != MaterialType::Glass;
-    const Frame frame(shadingFrameNormal(wo, sp.shadingNormal, sp.geometricNormal, twoSided));
+    const Frame frame(shadingFrameNormal(wo, sp.shadingNormal, sp.geometricNormal, twoSidedShading(bsdf)));
     const Vec3 woLocal = frame.toLocal(wo);
 
     if (!bsdf.isDelta()) {
@@ -726,11 +725,175 @@ int nextPassEnd(const PathTraceOptions& options, int first, int samples, int don
   return done < pilotEnd ? std::min(end, pilotEnd) : end;
 }
 
+// A path-traced render: passes of samples over the image's tiles (RenderDriver), to the part's spp,
+// a time budget or an error target, with contribution roulette's pilot before its first pass.
+class PathTracedRender {
+ public:
+  PathTracedRender(const Scene& scene, const Visibility& visibility, const PathTraceOptions& options,
+                   RenderDriver& driver)
+      : scene_(scene), options_(options), driver_(driver), tracer_(scene, visibility, options) {
+    // Every pixel is owned by one tile, and its samples are added in sample order.
+    film_ = &driver.startFilm(Film::Sums::PerSample, {options.common.layers, false, options.variance, options.paths});
+    resumedSamples_ = driver.samplesTaken();
+    driver.expectSamples(double(part().region.pixelCount()) * part().samples());
+    if (options.targetError > 0) streams_ = std::make_unique<StreamSums>(part().region.pixelCount());
+    // Contribution roulette (contribution_roulette.h) from sample kPilotSamples on, the samples
+    // before it taken with throughput roulette. Its pilot is the image's own first samples where the
+    // render starts there and covers the whole image; a crop, a later sample range or a resumed
+    // render traces the pilot's pixels first, on a film of its own.
+    contribution_ = options.roulette == RouletteKind::Contribution && part().sampleEnd > int(kPilotSamples);
+    pilotInFilm_ = part().region == PixelRect{0, 0, scene.camera.width, scene.camera.height} &&
+                   part().sampleBegin == 0 && resumedSamples_ == 0;
+    // The light choice is learnt from the pilot's light samples too (LightMoments).
+    learnLightChoice_ = contribution_ && options.lightChoice == LightChoiceKind::Learned && learnsLightChoice(scene);
+    tracer_.learnLightChoice(learnLightChoice_);
+  }
+
+  RenderOutput render() {
+    beginStage("trace_paths");
+    clock_ = Stopwatch();
+    if (contribution_ && !pilotInFilm_) tracePilot();
+    RenderOutput out;
+    if (options_.targetError > 0) out.measured = renderToErrorTarget();
+    else renderPasses();
+    driver_.finish(out);
+    // A render that its time budget or error target ended is whole; one that a stop request ended is not.
+    if (options_.timeBudget > 0 || options_.targetError > 0) out.complete = !driver_.stopped();
+    Counters total;
+    for (const Counters& c : counters_) {
+      total.rays += c.rays;
+      total.laneShadedHits += c.laneShadedHits;
+      total.invalidSamples += c.invalidSamples;
+    }
+    out.stats.addStage("trace_paths", clock_.seconds());
+    out.stats.addCounter("rays", total.rays);
+    out.stats.addCounter("lane_shaded_hits", total.laneShadedHits);
+    out.stats.addCounter("samples", driver_.samplesTaken() - resumedSamples_);
+    out.stats.addCounter("invalid_samples", total.invalidSamples);
+    return out;
+  }
+
+ private:
+  const RenderPart& part() const { return driver_.part(); }
+
+  // Every tile's samples of the pass on `target` (the image's film, or the pilot's over `area`).
+  void passOn(const PassSamples& pass, Film& target, const PixelRect& area) {
+    const bool image = &target == film_;
+    driver_.renderTiles(area, options_.tileSize, [&](const PixelRect& tile) {
+      return tracer_.renderTile(tile, pass, image ? streams_.get() : nullptr, waves_.local(), counters_.local(), target);
+    }, image);
+  }
+
+  void pass(const PassSamples& samples) {
+    passOn(samples, *film_, part().region);
+    driver_.passDone();
+  }
+
+  // The waves' light moments, summed exactly and cleared, as the light choice they teach.
+  Distribution1D learntChoice() {
+    LightMoments moments;
+    for (PathTracer::Wave& w : waves_) moments.add(std::exchange(w.lightMoments, {}));
+    tracer_.learnLightChoice(false);
+    return learnLightChoice_ ? learntLightChoice(scene_, moments) : scene_.lightDistribution;
+  }
+
+  // The pilot's pixels on a film of their own. No layers: per-sample sums keep each sample's total,
+  // so R, G and B are the image film's, and a whole-image film with the --paths and --variance
+  // layers would take some thirty times the memory.
+  void tracePilot() {
+    const int width = scene_.camera.width, height = scene_.camera.height;
+    Film pilot(width, height, Film::Sums::PerSample, {});
+    passOn({0, 0, pilotPixels(width, height, part().region)}, pilot, {0, 0, width, height});
+    tracedScales_ = RouletteScales(pilot.image(), part().region);
+    tracedChoice_ = learntChoice();
+  }
+
+  void startContributionRoulette() {
+    tracer_.useRoulette(pilotInFilm_ ? RouletteScales(film_->image(), part().region) : std::move(tracedScales_));
+    tracer_.useLightChoice(pilotInFilm_ ? learntChoice() : std::move(tracedChoice_));
+  }
+
+  // Passes of doubling samples (or as the time budget allows: nextPassEnd) to the part's spp. A
+  // resumed render goes on from the fewest samples any pixel has (pixels with more skip them).
+  void renderPasses() {
+    int done = int(*std::min_element(film_->samplesTaken().begin(), film_->samplesTaken().end()));
+    // Where contribution roulette starts, counted from the part's first sample.
+    const int pilotEnd = contribution_ ? std::max(0, int(kPilotSamples) - part().sampleBegin) : 0;
+    if (contribution_ && done >= pilotEnd && !driver_.stopped()) startContributionRoulette();
+    for (int passEnd; done < part().samples() && !driver_.stopped() &&
+                      (passEnd = nextPassEnd(options_, part().sampleBegin, part().samples(), done, clock_.seconds(),
+                                             pilotEnd)) > done;
+         done = passEnd) {
+      pass({part().sampleBegin, part().sampleBegin + passEnd, {}});
+      if (contribution_ && passEnd == pilotEnd && !driver_.stopped()) startContributionRoulette();
+    }
+  }
+
+  // The first pass: kFirstPass samples everywhere; then passes planned from the pixels' estimated
+  // errors, until the image's is at most the target (or the time budget or --spp stops it).
+  std::vector<std::pair<std::string, double>> renderToErrorTarget() {
+    constexpr uint32_t kFirstPass = 8;
+    static_assert(kFirstPass == kPilotSamples, "contribution roulette's pilot is the first pass");
+    const PixelRect& region = part().region;
+    std::vector<uint32_t> ends(region.pixelCount(), kFirstPass);
+    driver_.expectSamples(double(region.pixelCount()) * kFirstPass);
+    double estimate = 0, rate = 1;
+    uint64_t taken = 0;
+    int passes = 0;
+    for (;;) {
+      pass({0, 0, ends});
+      ++passes;
+      if (driver_.stopped()) break;
+      if (contribution_ && passes == 1) startContributionRoulette();
+      const std::vector<float> pixelError = streams_->pixelRelMse();
+      const uint64_t takenBefore = std::exchange(taken, driver_.samplesTaken());
+      const double estimateBefore = std::exchange(estimate, meanRelMse(pixelError));
+      if (estimate <= options_.targetError) break;
+      if (passes > 1) rate = errorRate(estimateBefore, takenBefore, estimate, taken);
+      uint64_t allowed = taken;  // a pass at most doubles the samples: its plan comes from theirs
+      bool budgetLimits = false;
+      if (options_.timeBudget > 0) {
+        const double elapsed = clock_.seconds();
+        const double affordable = std::max(0.0, (options_.timeBudget - elapsed) / (elapsed / double(taken)));
+        budgetLimits = affordable < double(allowed);
+        if (budgetLimits) allowed = uint64_t(affordable);
+      }
+      // Aimed a little below the target, so that noise in the prediction seldom costs another pass.
+      const PassPlan plan = planNextPass(pixelError, film_->samplesTaken(), region.width(), region.height(),
+                                         0.95 * options_.targetError, rate, allowed, uint32_t(part().samples()));
+      if (plan.total == taken) {
+        std::cerr << "lucent: warning: --target-error " << options_.targetError << " not reached: the estimated relMSE is "
+                  << estimate << " (";
+        if (budgetLimits) std::cerr << "the time budget of " << options_.timeBudget << " s ended the render)\n";
+        else std::cerr << "the pixels that need more samples have --spp " << part().samples() << ", the most a pixel takes)\n";
+        break;
+      }
+      ends = plan.samples;
+      driver_.expectSamples(double(std::max(plan.totalForAim, plan.total)));
+    }
+    return {{"estimated_relmse", estimate}, {"samples_spent", double(driver_.samplesTaken())}, {"passes", double(passes)}};
+  }
+
+  const Scene& scene_;
+  const PathTraceOptions& options_;
+  RenderDriver& driver_;
+  PathTracer tracer_;
+  Film* film_ = nullptr;
+  uint64_t resumedSamples_ = 0;
+  std::unique_ptr<StreamSums> streams_;
+  tbb::enumerable_thread_specific<Counters> counters_;
+  tbb::enumerable_thread_specific<PathTracer::Wave> waves_;
+  bool contribution_ = false, pilotInFilm_ = false, learnLightChoice_ = false;
+  RouletteScales tracedScales_;
+  Distribution1D tracedChoice_;
+  Stopwatch clock_;
+};
+
 }  // namespace
 
 RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, const PathTraceOptions& options,
                               const RenderControl& control) {
-  const RenderPart part = beginRender(pathTraceOptionTable(), options, control, scene);
+  RenderDriver driver(pathTraceOptionTable(), options, control, scene, visibility);
   const bool targeted = options.targetError > 0;
   if ((options.timeBudget > 0 || targeted) && (control.isPart() || control.resume || control.checkpointSeconds > 0)) {
     const char* flag = targeted ? "--target-error" : "--time-budget";
@@ -739,164 +902,7 @@ RenderOutput renderPathTraced(const Scene& scene, const Visibility& visibility, 
                           " takes as many samples as it needs, so it cannot be split (--crop, --samples), "
                           "checkpointed or resumed");
   }
-  // Every pixel is owned by one tile, and its samples are added in sample order.
-  auto film = std::make_shared<Film>(startFilm(control, scene, visibility, part, Film::Sums::PerSample,
-                                               {options.common.layers, false, options.variance, options.paths}));
-  PathTracer tracer(scene, visibility, options);
-  const PixelRect& region = part.region;
-  const int width = scene.camera.width, height = scene.camera.height;
-  const int tile = options.tileSize;
-  tbb::enumerable_thread_specific<Counters> counters;
-  tbb::enumerable_thread_specific<PathTracer::Wave> waves;
-  auto samplesTaken = [&] {
-    uint64_t sum = 0;
-    for (uint32_t taken : film->samplesTaken()) sum += taken;
-    return sum;
-  };
-  const uint64_t resumedSamples = samplesTaken();
-  std::atomic<uint64_t> pixelSamplesDone{resumedSamples};
-  double expectedSamples = double(region.pixelCount()) * part.samples();  // for progress
-  CheckpointClock checkpoints(control);
-  const std::unique_ptr<StreamSums> streams = targeted ? std::make_unique<StreamSums>(region.pixelCount()) : nullptr;
-
-  beginStage("trace_paths");
-  Stopwatch clock;
-  std::atomic<bool> stopped{false};
-  // Every tile's samples of the pass on `target` (the film of the image's tiles in `area`), in
-  // parallel, unless a stop request ends it.
-  auto renderPassOn = [&](const PassSamples& pass, Film& target, const PixelRect& area) {
-    // Tiles of the image's grid, cut to the area.
-    const int tileX0 = area.x0 / tile, tileY0 = area.y0 / tile;
-    const int tilesX = (area.x1 + tile - 1) / tile - tileX0, tilesY = (area.y1 + tile - 1) / tile - tileY0;
-    const bool image = &target == film.get();
-    tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY, 1), [&](const tbb::blocked_range<int>& r) {
-      flushDenormals();  // every thread computes alike, whoever created it
-      for (int t = r.begin(); t != r.end(); ++t) {
-        if (control.stopRequested()) {
-          stopped = true;
-          return;
-        }
-        const int tx = tileX0 + t % tilesX, ty = tileY0 + t / tilesX;
-        const PixelRect cut{std::max(area.x0, tx * tile), std::max(area.y0, ty * tile),
-                            std::min(area.x1, (tx + 1) * tile), std::min(area.y1, (ty + 1) * tile)};
-        const uint64_t taken = tracer.renderTile(cut, pass, image ? streams.get() : nullptr, waves.local(), counters.local(), target);
-        if (control.stopRequested()) stopped = true;  // the tile may have ended before its last pixel
-        if (!image) continue;
-        const uint64_t samples = pixelSamplesDone += taken;
-        if (control.progress) control.progress(std::min(1.0, double(samples) / expectedSamples));
-      }
-    });
-  };
-  auto renderPass = [&](const PassSamples& pass) {
-    renderPassOn(pass, *film, region);
-    if (!stopped) checkpoints.reached(*film);
-  };
-
-  // Contribution roulette (contribution_roulette.h) from sample kPilotSamples on, the samples
-  // before it taken with throughput roulette. Its pilot is the image's own first samples where the
-  // render starts there and covers the whole image; a crop, a later sample range or a resumed render
-  // traces the pilot's pixels first, on a film of its own.
-  const int pilotSamples = int(kPilotSamples);
-  const bool contribution = options.roulette == RouletteKind::Contribution && part.sampleEnd > pilotSamples;
-  const bool pilotInFilm = region == PixelRect{0, 0, width, height} && part.sampleBegin == 0 && resumedSamples == 0;
-  // The light choice is learnt from the pilot's light samples too (LightMoments).
-  const bool learnLightChoice = contribution && options.lightChoice == LightChoiceKind::Learned && learnsLightChoice(scene);
-  auto learntChoice = [&] {  // the waves' light moments, summed exactly and cleared
-    LightMoments moments;
-    for (PathTracer::Wave& w : waves) moments.add(std::exchange(w.lightMoments, {}));
-    tracer.learnLightChoice(false);
-    return learnLightChoice ? learntLightChoice(scene, moments) : scene.lightDistribution;
-  };
-  tracer.learnLightChoice(learnLightChoice);
-  RouletteScales tracedScales;
-  Distribution1D tracedChoice;
-  if (contribution && !pilotInFilm) {
-    // No layers: per-sample sums keep each sample's total, so R, G and B are the image film's, and a
-    // whole-image film with the --paths and --variance layers would take some thirty times the memory.
-    Film pilot(width, height, Film::Sums::PerSample, {});
-    renderPassOn({0, 0, pilotPixels(width, height, region)}, pilot, {0, 0, width, height});
-    tracedScales = RouletteScales(pilot.image(), region);
-    tracedChoice = learntChoice();
-  }
-  auto startContributionRoulette = [&] {
-    tracer.useRoulette(pilotInFilm ? RouletteScales(film->image(), region) : std::move(tracedScales));
-    tracer.useLightChoice(pilotInFilm ? learntChoice() : std::move(tracedChoice));
-  };
-
-  RenderOutput out;
-  if (targeted) {
-    // The first pass: kFirstPass samples everywhere; then passes planned from the pixels' estimated
-    // errors, until the image's is at most the target (or the time budget or --spp stops it).
-    constexpr uint32_t kFirstPass = 8;
-    std::vector<uint32_t> ends(region.pixelCount(), kFirstPass);
-    expectedSamples = double(region.pixelCount()) * kFirstPass;
-    double estimate = 0, rate = 1;
-    uint64_t taken = 0;
-    int passes = 0;
-    for (;;) {
-      renderPass({0, 0, ends});
-      ++passes;
-      if (stopped) break;
-      static_assert(kFirstPass == kPilotSamples, "contribution roulette's pilot is the first pass");
-      if (contribution && passes == 1) startContributionRoulette();
-      const std::vector<float> pixelError = streams->pixelRelMse();
-      const uint64_t takenBefore = std::exchange(taken, samplesTaken());
-      const double estimateBefore = std::exchange(estimate, meanRelMse(pixelError));
-      if (estimate <= options.targetError) break;
-      if (passes > 1) rate = errorRate(estimateBefore, takenBefore, estimate, taken);
-      uint64_t allowed = taken;  // a pass at most doubles the samples: its plan comes from theirs
-      bool budgetLimits = false;
-      if (options.timeBudget > 0) {
-        const double elapsed = clock.seconds();
-        const double affordable = std::max(0.0, (options.timeBudget - elapsed) / (elapsed / double(taken)));
-        budgetLimits = affordable < double(allowed);
-        if (budgetLimits) allowed = uint64_t(affordable);
-      }
-      // Aimed a little below the target, so that noise in the prediction seldom costs another pass.
-      const PassPlan plan = planNextPass(pixelError, film->samplesTaken(), region.width(), region.height(),
-                                         0.95 * options.targetError, rate, allowed, uint32_t(part.samples()));
-      if (plan.total == taken) {
-        std::cerr << "lucent: warning: --target-error " << options.targetError << " not reached: the estimated relMSE is "
-                  << estimate << " (";
-        if (budgetLimits) std::cerr << "the time budget of " << options.timeBudget << " s ended the render)\n";
-        else std::cerr << "the pixels that need more samples have --spp " << part.samples() << ", the most a pixel takes)\n";
-        break;
-      }
-      ends = plan.samples;
-      expectedSamples = double(std::max(plan.totalForAim, plan.total));
-    }
-    out.measured = {{"estimated_relmse", estimate}, {"samples_spent", double(samplesTaken())}, {"passes", double(passes)}};
-  } else {
-    // A resumed render goes on from the fewest samples any pixel has (pixels with more skip them).
-    int done = int(*std::min_element(film->samplesTaken().begin(), film->samplesTaken().end()));
-    // Where contribution roulette starts, counted from the part's first sample.
-    const int pilotEnd = contribution ? std::max(0, pilotSamples - part.sampleBegin) : 0;
-    if (contribution && done >= pilotEnd && !stopped) startContributionRoulette();
-    for (int passEnd; done < part.samples() && !stopped &&
-                      (passEnd = nextPassEnd(options, part.sampleBegin, part.samples(), done, clock.seconds(), pilotEnd)) > done;
-         done = passEnd) {
-      renderPass({part.sampleBegin, part.sampleBegin + passEnd, {}});
-      if (contribution && passEnd == pilotEnd && !stopped) startContributionRoulette();
-    }
-  }
-
-  // A render that its time budget or error target ended is whole; one that a stop request ended is not.
-  out.complete = options.timeBudget > 0 || targeted ? !stopped.load() : filmComplete(*film, part);
-  out.sppDone = int(*std::min_element(film->samplesTaken().begin(), film->samplesTaken().end()));
-  out.image = film->image();
-  out.film = film;
-  Counters total;
-  for (const Counters& c : counters) {
-    total.rays += c.rays;
-    total.laneShadedHits += c.laneShadedHits;
-    total.invalidSamples += c.invalidSamples;
-  }
-  out.stats.addStage("trace_paths", clock.seconds());
-  out.stats.addCounter("rays", total.rays);
-  out.stats.addCounter("lane_shaded_hits", total.laneShadedHits);
-  out.stats.addCounter("samples", samplesTaken() - resumedSamples);
-  out.stats.addCounter("invalid_samples", total.invalidSamples);
-  return out;
+  return PathTracedRender(scene, visibility, options, driver).render();
 }
 
 }  // namespace lucent

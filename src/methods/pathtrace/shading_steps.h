@@ -1,6 +1,6 @@
 // The steps of shading a hit that PathTracer::shade (one path at a time, every material) and the
 // lanes (shadeDiffuseLanes, Lambertian hits many at a time) share, beside the scene layer's
-// orientedShadingNormal, shadingFrameNormal, lambertianValue, sampleLambertian,
+// orientedShadingNormal, shadingFrameNormal, leaksThroughSurface, lambertianValue, sampleLambertian,
 // sampleTrianglePoint and shadowRay. Each is written once, with selects only, so that the compiler
 // vectorizes in the lane loop the very function the one-path code calls.
 #pragma once
@@ -44,14 +44,6 @@ inline NextEventSample weighLightSample(PathStrategy strategy, float lightPdf, b
                      : anyNonZero(bsdf.f)            ? 1
                                                      : 0;
   return {bsdf.f * le * (wiLocal.z * w / lightPdf), queued != 0};
-}
-
-// Whether a scattered direction wi lies on the other side of the geometric surface (normal ng) than
-// the lobe sampled says, wo being where the path came from: a reflection through the surface or a
-// transmission that stays, which the shading normal allows and the real surface does not (a light
-// leak). Such samples end the path.
-inline bool leaksThroughSurface(Vec3 wo, Vec3 wi, Vec3 ng, bool transmits) {
-  return (dot(wi, ng) * dot(wo, ng) < 0) != transmits;
 }
 
 }  // namespace lucent

@@ -39,22 +39,23 @@ BandShadingPoints traceBand(const Scene& scene, const Visibility& vis, const Pho
   return out;
 }
 
-bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
-                 const RenderControl& control, const RenderPart& part, Film& film, RenderTotals& totals,
+bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options, RenderDriver& driver,
+                 RenderTotals& totals,
                  const std::function<void(BandShadingPoints& band, const std::function<void(double)>& progress)>& estimate) {
+  const RenderPart& part = driver.part();
   // Dumped bands are named by their index: fixed bands, whatever the time they take.
   BandLoop loop;
   loop.maxSamples = options.bandSamples;
   loop.targetSeconds = options.shading.dumpDirectory.empty() ? 2.0 : 0.0;
   beginStage("bands");
-  return renderRowBands(control, part, loop, film, [&](const PixelRect& band, size_t index, const auto& progress) {
+  return driver.renderBands(loop, [&](const PixelRect& band, size_t index, const auto& progress) {
     Stopwatch rayClock;
     uint64_t bandShadowRays = 0;  // counted once the band is kept
     BandShadingPoints traced = traceBand(scene, vis, options, band, part, bandShadowRays);
     totals.traceSeconds += rayClock.seconds();
     estimate(traced, progress);
     dumpBand(options, index, traced);
-    addBand(film, traced.eye, traced.radiance, scene.camera.width, part);
+    addBand(driver.film(), traced.eye, traced.radiance, scene.camera.width, part);
     totals.shadowRays += bandShadowRays;
     totals.addBand(traced.eye);
   });

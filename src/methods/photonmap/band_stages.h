@@ -9,7 +9,7 @@
 #include "lucent/core/stats.h"
 #include "lucent/methods/photonmap.h"
 #include "lucent/pipeline/film.h"
-#include "lucent/pipeline/render_stages.h"
+#include "lucent/pipeline/render_driver.h"
 #include "lucent/pipeline/shading_points.h"
 #include "lucent/techniques/photons/kd_tree.h"
 #include "lucent/techniques/photons/photon_estimate.h"
@@ -39,15 +39,15 @@ void addEstimateCounters(RenderStats& stats, const std::string& prefix, const Es
 // With the neighbour lists there are, as "band<N>.<map>.neighbours" and ".neighbour_offsets".
 void dumpBand(const PhotonMapOptions& options, size_t band, const BandShadingPoints& traced);
 
-// The band loop of both renderers: the part's rows in bands (RowBands: at most
-// options.bandSamples camera samples, and about two seconds of work unless stages are dumped), from
+// The band loop of both renderers (RenderDriver::renderBands): the part's rows in bands of at most
+// options.bandSamples camera samples and about two seconds of work unless stages are dumped, from
 // the first row the film does not hold in full (a resumed render). Each band is traced by
 // traceBand, finished by `estimate` (the method's radiance estimates at its points; its progress
 // callback takes the fraction of the band done), dumped, and added to the film. Between bands:
 // checkpoints, and stop requests, after which it returns false.
 struct RenderTotals;
-bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
-                 const RenderControl& control, const RenderPart& part, Film& film, RenderTotals& totals,
+bool renderBands(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options, RenderDriver& driver,
+                 RenderTotals& totals,
                  const std::function<void(BandShadingPoints& band, const std::function<void(double)>& progress)>& estimate);
 
 // What both renderers add up over the bands, and report the same way: the paper's Table 1 stages

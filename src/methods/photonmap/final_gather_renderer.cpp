@@ -66,31 +66,23 @@ size_t traceGatherRays(const Scene& scene, const Visibility& vis, const ShadingP
       ++rays;
       const Hit hit = vis.intersect(ray);
       if (!hit.found()) break;  // the environment is direct light
-      const SurfacePoint sp = surfaceAt(scene, hit.triangle, hit.b1, hit.b2);
-      const SurfaceBsdf bsdf = bsdfAt(scene, sp);
-      const Vec3 wo = -ray.direction;
-      const bool frontFace = dot(wo, sp.geometricNormal) > 0;
-      Vec3 n = dot(wo, sp.shadingNormal) * dot(wo, sp.geometricNormal) > 0 ? sp.shadingNormal : sp.geometricNormal;
-      if (bsdf.type != MaterialType::Glass && !frontFace) n = -n;
-      const Frame f(n);
-      if (!bsdf.isDelta()) {
-        if (!reflectanceBound(bsdf).isBlack())
-          hits[found++] = {{sp.position, f, f.toLocal(wo), bsdf, frontFace ? sp.geometricNormal : -sp.geometricNormal},
+      const ChainVertex v = chainVertexAt(scene, surfaceAt(scene, hit.triangle, hit.b1, hit.b2), ray.direction);
+      if (!v.bsdf.isDelta()) {
+        if (!reflectanceBound(v.bsdf).isBlack())
+          hits[found++] = {{v.sp.position, v.frame, v.woLocal, v.bsdf,
+                            v.frontFace ? v.sp.geometricNormal : -v.sp.geometricNormal},
                            weight};
         break;
       }
       if (depth >= maxSpecularDepth) break;
       // Through a mirror or glass: one lobe, chosen with its probability.
-      const Vec3 woL = f.toLocal(wo);
       const float uL = rng.uniform();
-      const BsdfSample s = sampleBsdf(bsdf, woL, uL, {});
-      if (!s.valid) break;
-      wi = f.toWorld(s.wi);
-      const bool transmits = s.wi.z * woL.z < 0;
-      if ((dot(wi, sp.geometricNormal) * dot(wo, sp.geometricNormal) < 0) != transmits) break;
+      const BsdfSample s = sampleBsdf(v.bsdf, v.woLocal, uL, {});
+      const std::optional<Ray> next = followLobe(v, s);
+      if (!next) break;
       weight *= s.weight;
       if (weight.isBlack() || !isFinite(weight)) break;
-      ray = {offsetOrigin(sp.position, sp.geometricNormal, wi), wi};
+      ray = *next;
     }
   }
   return found;
@@ -160,12 +152,12 @@ bool irradianceAt(const PrecomputedIrradiance& samples, const EstimatePoint& q, 
 
 RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                                         const RenderControl& control) {
-  const RenderPart part = beginRender(pmfgOptionTable(), options, control, scene);
+  RenderDriver driver(pmfgOptionTable(), options, control, scene, vis);
   if (options.bandSamples < 1) throw std::invalid_argument("band samples must be at least 1");
   RenderOutput out;
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::All, out.stats);
 
-  auto film = std::make_shared<Film>(startFilm(control, scene, vis, part, Film::Sums::PerPart, {options.common.layers, true}));
+  const Film& film = driver.startFilm(Film::Sums::PerPart, {options.common.layers, true});
   const uint32_t heapSize = maps.globalSettings.k;  // the caustic map is estimated by estimateAtPoints
   tbb::enumerable_thread_specific<GatherScratch> scratch([&] {
     GatherScratch s;
@@ -191,7 +183,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   tbb::enumerable_thread_specific<EstimateCounters> causticCounters;
   const uint64_t gatherSeed = streamSeed(options.common.seed, RenderStream::Gather);
   RenderTotals totals;
-  renderBands(scene, vis, options, control, part, *film, totals, [&](BandShadingPoints& band, const auto& progress) {
+  renderBands(scene, vis, options, driver, totals, [&](BandShadingPoints& band, const auto& progress) {
     const EyePaths& eye = band.eye;
     PointRadiance& radiance = band.radiance;
     const size_t n = eye.points.size();
@@ -246,11 +238,8 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
     });
   });
 
-  out.complete = filmComplete(*film, part);
-  out.sppDone = out.complete ? part.samples() : 0;
-  out.image = film->image();
-  out.film = film;
-  totals.invalid += film->droppedPoints();
+  driver.finish(out);
+  totals.invalid += film.droppedPoints();
   EstimateCounters gc, cc;
   uint64_t gatherRays = 0;
   for (const GatherScratch& s : scratch) gc += s.counters, gatherRays += s.rays, irradianceFallbacks += s.fallbacks;

@@ -49,17 +49,17 @@ NeighbourLists searchNeighbours(const Map* map, std::span<const ShadingPoint> po
 
 RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const PhotonMapOptions& options,
                            const RenderControl& control) {
-  const RenderPart part = beginRender(purcellOptionTable(), options, control, scene);
+  RenderDriver driver(purcellOptionTable(), options, control, scene, vis);
   if (options.bandSamples < 1) throw std::invalid_argument("band samples must be at least 1");
   RenderOutput out;
   // The global map without direct and caustic photons: direct light comes from shadow rays and
   // caustics from the caustic map, so each light path is counted once.
   const RenderPhotonMaps maps = preparePhotonMaps(scene, vis, options, GlobalPhotons::Indirect, out.stats);
 
-  auto film = std::make_shared<Film>(startFilm(control, scene, vis, part, Film::Sums::PerPart, {options.common.layers, true}));
+  const Film& film = driver.startFilm(Film::Sums::PerPart, {options.common.layers, true});
   tbb::enumerable_thread_specific<EstimateCounters> globalCounters, causticCounters;
   RenderTotals totals;
-  renderBands(scene, vis, options, control, part, *film, totals, [&](BandShadingPoints& band, const auto& progress) {
+  renderBands(scene, vis, options, driver, totals, [&](BandShadingPoints& band, const auto& progress) {
     // The radiance estimate at every shading point, from both maps.
     Stopwatch estimateClock;
     const size_t n = band.eye.points.size();
@@ -77,11 +77,8 @@ RenderOutput renderPurcell(const Scene& scene, const Visibility& vis, const Phot
       });
   });
 
-  out.complete = filmComplete(*film, part);
-  out.sppDone = out.complete ? part.samples() : 0;
-  out.image = film->image();
-  out.film = film;
-  totals.invalid += film->droppedPoints();
+  driver.finish(out);
+  totals.invalid += film.droppedPoints();
   EstimateCounters gc, cc;
   for (const auto& c : globalCounters) gc += c;
   for (const auto& c : causticCounters) cc += c;

@@ -71,24 +71,51 @@ std::vector<PointSample> sampleLowDiscrepancy(const Distribution1D& areas, uint3
   return points;
 }
 
-}  // namespace
-
-std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const PointSamplingOptions& options,
-                                      RenderStats* stats) {
+// The sampling's request checked; the scene's total area.
+double checkedTotalArea(const Scene& scene, uint32_t count, const PointSamplingOptions& options) {
   if (count == 0 || count > kMaxPoints)
     throw std::invalid_argument("point sampling: the point count must be 1 .. 2^26, not " + std::to_string(count));
-  const uint32_t c = options.candidates;
-  if (c == 0 || c > kMaxCandidates)
-    throw std::invalid_argument("point sampling: candidates must be 1 .. 64, not " + std::to_string(c));
+  if (options.candidates == 0 || options.candidates > kMaxCandidates)
+    throw std::invalid_argument("point sampling: candidates must be 1 .. 64, not " + std::to_string(options.candidates));
   if (!(options.tileScale >= 1.0f && options.tileScale <= 64.0f))
     throw std::invalid_argument("point sampling: tileScale must be in [1, 64]");
   if (scene.triangleCount() == 0 || scene.faceAreas.size() != scene.triangleCount())
     throw std::invalid_argument("point sampling: the scene has no (finalized) triangles");
-  const Distribution1D areas(scene.faceAreas);
   double totalArea = 0;
   for (float a : scene.faceAreas) totalArea += a;
   if (!(totalArea > 0) || !std::isfinite(totalArea))
     throw std::invalid_argument("point sampling: the scene's triangles have no area");
+  return totalArea;
+}
+
+// The tiles of a level: every key of either sorted list (the candidates' keys hold their triangle
+// below the tile), merged, with the run of each list it holds.
+void mergeTiles(const std::vector<uint64_t>& placedKeys, const std::vector<uint64_t>& candKeys, uint32_t triangleBits,
+                std::vector<Tile>& tiles) {
+  const size_t placed = placedKeys.size(), candCount = candKeys.size();
+  tiles.clear();
+  for (uint32_t i = 0, j = 0; i < placed || j < candCount;) {
+    const uint64_t key = std::min(i < placed ? placedKeys[i] : ~uint64_t(0),
+                                  j < candCount ? candKeys[j] >> triangleBits : ~uint64_t(0));
+    Tile t;
+    t.key = key;
+    t.placedBegin = i;
+    while (i < placed && placedKeys[i] == key) ++i;
+    t.placedEnd = i;
+    t.candBegin = j;
+    while (j < candCount && candKeys[j] >> triangleBits == key) ++j;
+    t.candEnd = j;
+    tiles.push_back(t);
+  }
+}
+
+}  // namespace
+
+std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const PointSamplingOptions& options,
+                                      RenderStats* stats) {
+  const double totalArea = checkedTotalArea(scene, count, options);
+  const uint32_t c = options.candidates;
+  const Distribution1D areas(scene.faceAreas);
 
   beginStage("point_sampling");
   Stopwatch clock;
@@ -164,21 +191,7 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
     });
     radixSortByKey(candKeys, candIndices, grid.keyBits() + triangleBits, keyScratch, indexScratch);
 
-    // The tiles: every key of either list, merged.
-    tiles.clear();
-    for (uint32_t i = 0, j = 0; i < placed || j < candCount;) {
-      const uint64_t key = std::min(i < placed ? placedKeys[i] : ~uint64_t(0),
-                                    j < candCount ? candKeys[j] >> triangleBits : ~uint64_t(0));
-      Tile t;
-      t.key = key;
-      t.placedBegin = i;
-      while (i < placed && placedKeys[i] == key) ++i;
-      t.placedEnd = i;
-      t.candBegin = j;
-      while (j < candCount && candKeys[j] >> triangleBits == key) ++j;
-      t.candEnd = j;
-      tiles.push_back(t);
-    }
+    mergeTiles(placedKeys, candKeys, triangleBits, tiles);
     std::vector<uint32_t> byColour[8];
     for (uint32_t t = 0; t < tiles.size(); ++t)
       if (tiles[t].candEnd > tiles[t].candBegin) byColour[grid.colour(tiles[t].key)].push_back(t);
