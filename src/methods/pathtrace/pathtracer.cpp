@@ -181,15 +181,15 @@ class PathTracer {
     const Frame frame(shadingFrameNormal(wo, sp.shadingNormal, sp.geometricNormal, twoSidedShading(bsdf)));
     const Vec3 woLocal = frame.toLocal(wo);
 
+    const BounceNumbers u = drawBounceNumbers(path.sampler, path.bounce, !bsdf.isDelta());
     if (!bsdf.isDelta()) {
-      queued = sampleDirect(sp, bsdf, frame, woLocal, path.sampler, path.bounce, shadow);
+      queued = sampleDirect(sp, bsdf, frame, woLocal, u.lightPoint, shadow);
       shadow.contribution *= path.beta;
       shadow.verticesBefore = ++path.gatheringVertices;
       if (path.gatheringVertices > 1) shadow.diffuseShare = path.firstDiffuseShare;
     }
 
-    const float uLobe = path.sampler.uniform(path.bounce, SampleUse::Lobe);
-    const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, path.sampler.uniform2(path.bounce, SampleUse::BsdfDirection));
+    const BsdfSample bs = sampleBsdf(bsdf, woLocal, u.lobe, u.bsdfDirection);
     if (!bs.valid) return false;
     // Leaving the first non-specular vertex: the rest of the path's light splits as this direction's BSDF value does.
     if (path.parts && !bsdf.isDelta() && path.gatheringVertices == 1)
@@ -400,7 +400,7 @@ class PathTracer {
     return hit.found() && path.bounce < opt_.maxDepth && material(hit.triangle).type == MaterialType::Diffuse;
   }
 
-  // The lane's surface data and the random numbers shade would draw, in its order: the
+  // The lane's surface data and the random numbers shade draws (drawBounceNumbers): the
   // independent sampler's from the path's generator, the Sobol sampler's drawn beforehand (its
   // lanePairs at `drawn` in `sobol`).
   void fetchDiffuseLane(Path& path, const Hit& hit, uint32_t pathIndex, DiffuseLanes& l,
@@ -441,11 +441,10 @@ class PathTracer {
       l.uRoulette[k] = lanePairs(path) == 3 ? sobol.x[drawn + 2] : kDrawLater;
     } else {
       l.uRoulette[k] = kDrawLater;
-      const Vec2 uLightPoint = path.sampler.uniform2(path.bounce, SampleUse::LightPoint);
-      l.uLightX[k] = uLightPoint.x, l.uLightY[k] = uLightPoint.y;
-      path.sampler.uniform(path.bounce, SampleUse::Lobe);  // shade's lobe choice, which a Lambertian surface does not use
-      const Vec2 uBsdf = path.sampler.uniform2(path.bounce, SampleUse::BsdfDirection);
-      l.uBsdfX[k] = uBsdf.x, l.uBsdfY[k] = uBsdf.y;
+      // shade's numbers, its lobe choice among them, which a Lambertian surface does not use.
+      const BounceNumbers u = drawBounceNumbers(path.sampler, path.bounce, true);
+      l.uLightX[k] = u.lightPoint.x, l.uLightY[k] = u.lightPoint.y;
+      l.uBsdfX[k] = u.bsdfDirection.x, l.uBsdfY[k] = u.bsdfDirection.y;
     }
 
     // The light, chosen by the light point's first number (rescaled for the point): an emitting
@@ -579,10 +578,9 @@ class PathTracer {
   // One light sample, weighted against BSDF sampling (lights that BSDF sampling cannot hit, point
   // and directional, always have weight 1): its shadow ray and what it brings if unoccluded. False
   // when the sample brings nothing whatever the shadow ray finds.
-  bool sampleDirect(const SurfacePoint& sp, const SurfaceBsdf& bsdf, const Frame& frame, Vec3 woLocal,
-                    PathSampler& sampler, int bounce,
+  bool sampleDirect(const SurfacePoint& sp, const SurfaceBsdf& bsdf, const Frame& frame, Vec3 woLocal, Vec2 uLightPoint,
                     ShadowQuery& shadow) const {
-    const LightSample ls = sampleLight(sp.position, sampler.uniform2(bounce, SampleUse::LightPoint), shadow.light);
+    const LightSample ls = sampleLight(sp.position, uLightPoint, shadow.light);
     const Vec3 wiLocal = frame.toLocal(ls.wi);
     const NextEventSample sample = weighLightSample(opt_.strategy, ls.pdf, ls.delta, ls.radiance, ls.wi, wiLocal,
                                                     frame.n, sp.geometricNormal, evalBsdfAndPdf(bsdf, woLocal, wiLocal));

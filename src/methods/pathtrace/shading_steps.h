@@ -5,6 +5,7 @@
 // vectorizes in the lane loop the very function the one-path code calls.
 #pragma once
 #include "lucent/core/math.h"
+#include "lucent/core/path_sampler.h"
 #include "lucent/core/sampling.h"
 #include "lucent/methods/pathtrace.h"
 #include "lucent/scene/bsdf.h"
@@ -44,6 +45,24 @@ inline NextEventSample weighLightSample(PathStrategy strategy, float lightPdf, b
                      : anyNonZero(bsdf.f)            ? 1
                                                      : 0;
   return {bsdf.f * le * (wiLocal.z * w / lightPdf), queued != 0};
+}
+
+// The numbers a bounce at a surface draws, in the one order that PathTracer::shade (every material)
+// and fetchDiffuseLane (Lambertian hits, for the lanes) both take them in: the light point's pair
+// where the surface takes a light sample (not at a mirror or glass), the lobe's choice, the BSDF
+// direction's pair. With the independent sampler this is the order of the path's generator.
+struct BounceNumbers {
+  Vec2 lightPoint;
+  float lobe = 0;
+  Vec2 bsdfDirection;
+};
+
+inline BounceNumbers drawBounceNumbers(PathSampler& sampler, int bounce, bool samplesLight) {
+  BounceNumbers u;
+  if (samplesLight) u.lightPoint = sampler.uniform2(bounce, SampleUse::LightPoint);
+  u.lobe = sampler.uniform(bounce, SampleUse::Lobe);
+  u.bsdfDirection = sampler.uniform2(bounce, SampleUse::BsdfDirection);
+  return u;
 }
 
 }  // namespace lucent
