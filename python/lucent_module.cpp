@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "lucent/core/dump.h"
-#include "lucent/core/dump_records.h"
+#include "lucent/session/dump_records.h"
 #include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
 #include "lucent/image/comparison.h"
@@ -270,7 +270,7 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
   return py::module_::import("json").attr("loads")(result.json);
 }
 
-// The NumPy dtype of a dump record type, from the record table (lucent/core/dump_records.h, whose
+// The NumPy dtype of a dump record type, from the record table (lucent/session/dump_records.h, whose
 // offsets a test checks against the C++ structs).
 py::dtype recordDtype(const std::string& type) {
   const auto found = dumpRecordTypes().find(type);

@@ -552,6 +552,8 @@ def test_a_mesh_that_is_not_an_obj_is_quoted_short_and_escaped(work):
         assert ("%s:1:" % obj) in run.err
         assert "\x1b" not in run.err and "\x07" not in run.err
         assert "/bin/bash" not in run.err and "secret" not in run.err
+        py = python_refuses(work, "lucent.load_scene(%r)" % scene, "%s:1:" % obj)
+        assert "\x07" not in py.out and "/bin/bash" not in py.out and "secret" not in py.out, py
 
 
 @pytest.mark.parametrize("text, words", [
@@ -563,6 +565,7 @@ def test_json_errors_name_the_key_or_the_line(work, text, words):
     write(os.path.join(work, "scene.json"), text)
     run = lucent("render", "scene.json", "-o", "out.exr", cwd=work)
     assert run.code == 1 and words in run.err and "\x1b" not in run.err, run
+    python_refuses(work, "lucent.load_scene('scene.json')", words)
 
 
 def test_a_texture_error_cites_the_map_kd_line(work):
@@ -575,6 +578,7 @@ def test_a_texture_error_cites_the_map_kd_line(work):
     write(os.path.join(work, scene), json.dumps(s))
     run = lucent("render", scene, "-o", "out.exr", cwd=work)
     assert run.code == 1 and "m.mtl:5:" in run.err and "map_Kd" in run.err, run
+    assert "map_Kd" in python_refuses(work, "lucent.load_scene(%r)" % scene, "m.mtl:5:").out
 
 
 @pytest.mark.parametrize("args, status, words", [
@@ -797,6 +801,7 @@ def test_a_broken_gltf_file_is_refused_at_once_and_nothing_is_written(work, name
     run = lucent("render", name, "-o", "out.exr", cwd=work, timeout=30)
     assert run.code == 1 and words in run.err, run
     assert run.cpu_seconds < 5, run
+    python_refuses(work, "lucent.load_scene(%r)" % name, words)
     assert changed(before, snapshot(work)) == []
 
 
@@ -840,6 +845,15 @@ def python_lucent(code, cwd, timeout=120):
                        timeout=timeout, env=PYTHON_ENV)
     return Run(p.returncode, p.stdout.decode(errors="replace"), p.stderr.decode(errors="replace"),
                time.monotonic() - start, children_cpu_seconds() - cpu)
+
+
+def python_refuses(work, call, words):
+    """Runs `call` through the Python module: it must raise, its message holding `words` and no raw
+    escape sequence, as the command line's does."""
+    code = "import sys\ntry:\n    %s\nexcept (ValueError, RuntimeError, MemoryError) as e:\n    print(e); sys.exit(3)" % call
+    py = python_lucent(code, cwd=work)
+    assert py.code == 3 and words in py.out and "\x1b" not in py.out, py
+    return py
 
 
 def fuzz_corpus():
@@ -1211,3 +1225,5 @@ def test_a_gltf_camera_or_light_that_would_render_black_is_refused(work, name, e
     run = lucent("render", name, *args, "--spp", "1", "--resolution", "8x8", "-o", "out.exr", cwd=work, timeout=60)
     assert run.code == 1 and words in run.err, run
     assert not os.path.exists(os.path.join(work, "out.exr"))
+    if not args:  # --lumens-per-watt has no Python counterpart
+        python_refuses(work, "lucent.load_scene(%r, resolution=(8, 8))" % name, words)

@@ -1,4 +1,4 @@
-#include "lucent/core/dump_records.h"
+#include "lucent/session/dump_records.h"
 
 #include <stdexcept>
 
