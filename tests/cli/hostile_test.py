@@ -822,6 +822,8 @@ def test_many_small_instances_are_refused_by_the_memory_limit_at_load(work):
     assert "many.glb" in p.stderr and "--memory-limit" in p.stderr and "film" not in p.stderr, p.stderr
     assert peak_kib < 800 * 1024, "peak %d MiB" % (peak_kib // 1024)
     assert not os.path.exists(os.path.join(work, "out.exr"))
+    py = python_refuses(work, "lucent.load_scene('many.glb', memory_limit='400M')", "many.glb")
+    assert "film" not in py.out, py
 
 
 def test_a_gltf_buffer_that_is_a_fifo_is_refused_without_blocking(work):
