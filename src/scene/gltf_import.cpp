@@ -424,6 +424,7 @@ MaterialSpec defaultMaterial(const Context& c, MaterialType type) {
   spec.ks = Rgb(1.0f);
   spec.ni = 1.5f;
   spec.metallic = 1.0f;
+  spec.singleSided = true;  // the default material's doubleSided is false
   return spec;
 }
 
@@ -468,6 +469,7 @@ MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, std
   if (m.emissiveTexture.index >= 0)
     spec.emissive = textureImage(c, m.emissiveTexture, path + ".emissiveTexture");
   spec.doubleSided = m.doubleSided;
+  spec.singleSided = !m.doubleSided;
   double strength = 1;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_emissive_strength"))
     strength = number(*e, "emissiveStrength", 1);

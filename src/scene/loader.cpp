@@ -27,11 +27,12 @@ namespace {
 // Reads an RGB (or grey) image into texels, convert(channel values as stored, then alpha, 1 where the
 // image has none; sRGB-encoded or not) giving each; row 0 is the top row.
 // Negative values are refused unless allowNegative (the caller checks them).
-// `read` reads the image named `path` (a file, or an image held in memory named as one).
+// `read` reads the image named `path` (a file, or an image held in memory named as one). `srgb`:
+// sRGB-encoded whatever the file's metadata says (glTF's colour textures), else as it says.
 template <class Convert>
 auto readImageTexels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h, Convert convert,
                      bool allowNegative = false,
-                     const std::function<Image(ImageMetadata*)>& read = {}) {
+                     const std::function<Image(ImageMetadata*)>& read = {}, bool srgbWhateverItSays = false) {
   Image image;
   ImageMetadata metadata;
   try {
@@ -43,7 +44,7 @@ auto readImageTexels(const std::string& path, const std::string& context, uint32
   h = static_cast<uint32_t>(image.height());
   const int nc = image.channelCount();
   if (nc < 1 || w == 0 || h == 0) throw SceneError(context + ": image '" + path + "' is empty");
-  const bool srgb = isSrgbEncoded(path, metadata);
+  const bool srgb = srgbWhateverItSays || isSrgbEncoded(path, metadata);
   const int alpha = image.channelIndex("A");
   std::vector<decltype(convert(static_cast<const float*>(nullptr), srgb))> texels(size_t(w) * h);
   for (uint32_t y = 0; y < h; ++y)
@@ -100,7 +101,8 @@ std::vector<Rgb> readTexels(const std::string& path, const std::string& context,
 // are, which decoding to linear and encoding back would give too; other values are converted to
 // linear, clamped to [0, 1] (reflectance) and encoded.
 std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string& context, uint32_t& w, uint32_t& h,
-                                      const std::function<Image(ImageMetadata*)>& read = {}) {
+                                      const std::function<Image(ImageMetadata*)>& read = {},
+                                      bool srgbWhateverItSays = false) {
   return readImageTexels(path, context, w, h, [](const float* stored, bool srgb) {
     uint32_t packed = uint32_t(std::lround(255.0f * stored[3])) << 24;
     for (int k = 0; k < 3; ++k) {
@@ -116,7 +118,7 @@ std::vector<uint32_t> readSrgb8Texels(const std::string& path, const std::string
       packed |= byte << (8 * k);
     }
     return packed;
-  }, false, read);
+  }, false, read, srgbWhateverItSays);
 }
 
 // 8-bit linear texels packed as readSrgb8Texels packs them (glTF's data textures: metallic and
@@ -190,7 +192,10 @@ void applyMaterialOverride(JsonFields fields, detail::MaterialSpec& spec, const 
   if (fields.has("Kd")) spec.kd = fields.rgb("Kd");
   if (fields.has("Ks")) spec.ks = fields.rgb("Ks");
   if (fields.has("Ke")) spec.ke = fields.rgb("Ke");
-  if (fields.has("double_sided")) spec.doubleSided = fields.boolean("double_sided");
+  if (fields.has("double_sided")) {
+    spec.doubleSided = fields.boolean("double_sided");
+    spec.singleSided = spec.singleSided && !spec.doubleSided;  // true makes a glTF material two-sided
+  }
   if (fields.has("Ns")) spec.ns = fields.number("Ns");
   if (fields.has("Ni")) spec.ni = fields.number("Ni");
   if (fields.has("map_Kd")) {
@@ -365,7 +370,10 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
         })
                  : std::function<Image(ImageMetadata*)>();
     const std::string context = file.origin + ": material '" + name + "' " + role;
-    const auto texels = colour ? readSrgb8Texels(file.path, context, tex.width, tex.height, read)
+    // glTF's colour textures (the images a glTF file holds, in memory here) are sRGB whatever a
+    // PNG's gAMA, iCCP or sRGB chunk says (glTF 2.0, "Metallic-Roughness Material"); an MTL's
+    // texture file is read as its metadata says.
+    const auto texels = colour ? readSrgb8Texels(file.path, context, tex.width, tex.height, read, embedded)
                                : readUnorm8Texels(file.path, context, tex.width, tex.height, read);
     scene.texels.insert(scene.texels.end(), texels.begin(), texels.end());
     scene.textures.push_back(tex);
@@ -387,6 +395,7 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
     if (!spec.emissive.empty() && !m.ke.isBlack())
       m.emissiveTexture = addTexture(spec.emissive, spec.name, "emissive texture", true);
     m.emitsBackFace = spec.doubleSided && !m.ke.isBlack() ? 1 : 0;
+    m.culledBehind = spec.singleSided ? 1 : 0;
     if (isGltf(m.type) && !spec.normal.empty()) {
       m.normalTexture = addTexture(spec.normal, spec.name, "normal texture", false);
       const Texture& t = scene.textures[size_t(m.normalTexture)];

@@ -20,13 +20,17 @@ struct EmbreeError {
 };
 }  // namespace
 
-// The triangles with holes (glTF alpha masks and blending), in an Embree geometry of their own whose
-// filter rejects the hits where the surface is not: every query, camera, shadow, photon, gather,
-// honours them, and scenes without holes trace as before, without a filter.
-struct CutOutTriangles {
+// The triangles that are not everywhere for every ray: with holes (glTF alpha masks and blending) or
+// single-sided (glTF doubleSided false: not there from behind). They are in an Embree geometry of
+// their own whose filter rejects the hits where the surface is not: every query, camera, shadow,
+// photon, gather, link, honours them, and scenes without such triangles trace as before, without a
+// filter.
+struct FilteredTriangles {
   const Scene* scene = nullptr;
   std::vector<uint32_t> triangle;  // the geometry's primitive -> the scene's triangle
 };
+
+bool filtered(const Material& m) { return m.alphaMode != AlphaMode::Opaque || m.culledBehind != 0; }
 
 // Whether the surface is at barycentrics (u, v) of triangle `tri`, for a ray from `origin` along
 // `direction`: where its alpha reaches the cutoff (masks), or with probability alpha, decided by a
@@ -49,16 +53,24 @@ bool surfaceIsThere(const Scene& scene, uint32_t tri, float u, float v, Vec3 ori
   return float(key >> 40) * 0x1p-24f < alpha;
 }
 
-void cutOutFilter(const RTCFilterFunctionNArguments* args) {
-  const auto& cut = *static_cast<const CutOutTriangles*>(args->geometryUserPtr);
+void surfaceFilter(const RTCFilterFunctionNArguments* args) {
+  const auto& filtered = *static_cast<const FilteredTriangles*>(args->geometryUserPtr);
+  const Scene& scene = *filtered.scene;
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
-    const uint32_t tri = cut.triangle[RTCHitN_primID(args->hit, args->N, i)];
-    const Vec3 origin{RTCRayN_org_x(args->ray, args->N, i), RTCRayN_org_y(args->ray, args->N, i),
-                      RTCRayN_org_z(args->ray, args->N, i)};
+    const uint32_t tri = filtered.triangle[RTCHitN_primID(args->hit, args->N, i)];
+    const Material& m = scene.materials[scene.materialIds[tri]];
     const Vec3 direction{RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
                          RTCRayN_dir_z(args->ray, args->N, i)};
-    if (!surfaceIsThere(*cut.scene, tri, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i), origin,
+    // From behind (or along it), a single-sided face is not there.
+    if (m.culledBehind != 0 && !(dot(direction, scene.geometricNormal(tri)) < 0)) {
+      args->valid[i] = 0;
+      continue;
+    }
+    if (m.alphaMode == AlphaMode::Opaque) continue;
+    const Vec3 origin{RTCRayN_org_x(args->ray, args->N, i), RTCRayN_org_y(args->ray, args->N, i),
+                      RTCRayN_org_z(args->ray, args->N, i)};
+    if (!surfaceIsThere(scene, tri, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i), origin,
                         direction))
       args->valid[i] = 0;
   }
@@ -69,12 +81,12 @@ struct Visibility::Impl {
   RTCScene scene = nullptr;
   std::string isa;
   EmbreeError error;
-  unsigned cutOutGeometry = RTC_INVALID_GEOMETRY_ID;
-  CutOutTriangles cutOut;
+  unsigned filteredGeometry = RTC_INVALID_GEOMETRY_ID;
+  FilteredTriangles filtered;
   std::vector<uint32_t> opaqueTriangle;  // the opaque geometry's primitive -> the scene's triangle; empty: the same
   // A hit's triangle in the scene.
   uint32_t triangle(unsigned geometry, unsigned primitive) const {
-    return geometry == cutOutGeometry ? cutOut.triangle[primitive]
+    return geometry == filteredGeometry ? filtered.triangle[primitive]
            : opaqueTriangle.empty()   ? primitive
                                       : opaqueTriangle[primitive];
   }
@@ -137,12 +149,12 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
   rtcSetSceneFlags(impl_->scene, options.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
 
-  // The opaque triangles first, as geometry 0 (in a scene without holes, all of them, numbered as
-  // the scene numbers them), then those with holes.
+  // The triangles that are there for every ray first, as geometry 0 (in a scene without holes or
+  // single-sided faces, all of them, numbered as the scene numbers them), then the filtered ones.
   std::vector<uint32_t> opaque;
   for (uint32_t t = 0; t < scene.triangleCount(); ++t)
-    (scene.materials[scene.materialIds[t]].alphaMode == AlphaMode::Opaque ? opaque : impl_->cutOut.triangle).push_back(t);
-  const auto attach = [&](const std::vector<uint32_t>& triangles, bool filtered) {
+    (filtered(scene.materials[scene.materialIds[t]]) ? impl_->filtered.triangle : opaque).push_back(t);
+  const auto attach = [&](const std::vector<uint32_t>& triangles, bool withFilter) {
     RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                                  3 * sizeof(float), scene.positions.size()));
@@ -153,21 +165,21 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
       for (size_t i = 0; i < triangles.size(); ++i)
         std::memcpy(indices + 3 * i, &scene.indices[3 * size_t(triangles[i])], 3 * sizeof(uint32_t));
     }
-    if (filtered) {
-      rtcSetGeometryUserData(geom, &impl_->cutOut);
-      rtcSetGeometryIntersectFilterFunction(geom, cutOutFilter);
-      rtcSetGeometryOccludedFilterFunction(geom, cutOutFilter);
+    if (withFilter) {
+      rtcSetGeometryUserData(geom, &impl_->filtered);
+      rtcSetGeometryIntersectFilterFunction(geom, surfaceFilter);
+      rtcSetGeometryOccludedFilterFunction(geom, surfaceFilter);
     }
     rtcCommitGeometry(geom);
     const unsigned id = rtcAttachGeometry(impl_->scene, geom);
     rtcReleaseGeometry(geom);
     return id;
   };
-  if (!opaque.empty() || impl_->cutOut.triangle.empty()) attach(opaque, false);
-  if (!impl_->cutOut.triangle.empty()) {
+  if (!opaque.empty() || impl_->filtered.triangle.empty()) attach(opaque, false);
+  if (!impl_->filtered.triangle.empty()) {
     impl_->opaqueTriangle = std::move(opaque);
-    impl_->cutOut.scene = &scene;
-    impl_->cutOutGeometry = attach(impl_->cutOut.triangle, true);
+    impl_->filtered.scene = &scene;
+    impl_->filteredGeometry = attach(impl_->filtered.triangle, true);
   }
   rtcCommitScene(impl_->scene);
   if (!impl_->error.message.empty()) throw std::runtime_error(impl_->error.message);

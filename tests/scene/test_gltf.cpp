@@ -546,6 +546,75 @@ TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, second), Catch::Contains("TEXCOORD_1e+300 is not read"));
 }
 
+namespace {
+
+uint32_t pngCrc(const unsigned char* data, size_t size) {
+  uint32_t crc = 0xffffffffu;
+  for (size_t i = 0; i < size; ++i) {
+    crc ^= data[i];
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  return ~crc;
+}
+
+// The PNG with its colour-space chunks (sRGB, gAMA, iCCP, cHRM) and its text (where OpenImageIO
+// keeps its own colour space) replaced by one gAMA chunk of `gamma` x 100000 (45455: the file says
+// its codes are a 1/2.2 power; 100000: linear).
+std::vector<unsigned char> withGamma(const std::vector<unsigned char>& png, uint32_t gamma) {
+  std::vector<unsigned char> out(png.begin(), png.begin() + 8);
+  const auto be32 = [](const unsigned char* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; };
+  const auto put32 = [&](uint32_t v) { for (int k = 3; k >= 0; --k) out.push_back((unsigned char)(v >> (8 * k))); };
+  for (size_t at = 8; at + 12 <= png.size();) {
+    const uint32_t length = be32(&png[at]);
+    const std::string type(reinterpret_cast<const char*>(&png[at + 4]), 4);
+    if (type != "sRGB" && type != "gAMA" && type != "iCCP" && type != "cHRM" && type != "tEXt" && type != "iTXt" &&
+        type != "zTXt")
+      out.insert(out.end(), png.begin() + ptrdiff_t(at), png.begin() + ptrdiff_t(at + 12 + length));
+    if (type == "IHDR") {
+      const size_t start = out.size();
+      put32(4);
+      for (const char c : std::string("gAMA")) out.push_back((unsigned char)c);
+      put32(gamma);
+      put32(pngCrc(&out[start + 4], 8));
+    }
+    at += 12 + length;
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("glTF colour textures are sRGB whatever a PNG's gAMA chunk says", "[gltf][loader]") {
+  const test::TempDir dir;
+  const uint8_t codes[2][3] = {{200, 30, 90}, {12, 250, 128}};
+  Image image(2, 1, {"R", "G", "B"});
+  for (int x = 0; x < 2; ++x)
+    for (int c = 0; c < 3; ++c) image.at(x, 0, c) = kSrgb8ToLinear[codes[x][c]];
+  for (const uint32_t gamma : {45455u, 100000u}) {
+    INFO("gAMA " << gamma);
+    const std::vector<unsigned char> png = withGamma(encodePng(image), gamma);
+    // The file now says so: read as its metadata says, it would not be sRGB.
+    ImageMetadata metadata;
+    readImageFromMemory("gamma.png", ".png", png, &metadata);
+    CHECK(!isSrgbEncoded("gamma.png", metadata));
+    json f = quadFile({{{"mesh", 0}}}, {0});
+    f["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
+    f["materials"][0]["emissiveTexture"] = {{"index", 0}};
+    f["materials"][0]["emissiveFactor"] = {1, 1, 1};
+    f["textures"] = {{{"source", 0}}};
+    f["images"] = {{{"uri", "data:image/png;base64," + base64(png)}}};
+    const Scene scene = loadWrapped(dir.path, f);
+    const Material& m = scene.materials[0];
+    for (const int32_t texture : {m.kdTexture, m.emissiveTexture}) {
+      REQUIRE(texture >= 0);
+      for (int x = 0; x < 2; ++x) {
+        const uint32_t texel = scene.texels[scene.textures[size_t(texture)].offset + uint32_t(x)];
+        for (int c = 0; c < 3; ++c) CHECK(((texel >> (8 * c)) & 0xff) == codes[x][c]);
+      }
+    }
+  }
+}
+
 TEST_CASE("glTF normal and metallic-roughness textures are read as linear data, the normal tilts in the tangent frame",
           "[gltf][loader]") {
   const test::TempDir dir;
@@ -771,6 +840,49 @@ TEST_CASE("glTF alpha: MASK cuts holes for every query, BLEND lets rays through 
   // A bad mode or cutoff is refused with its path.
   f["materials"][0]["alphaMode"] = "HALF";
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, f), Catch::Contains("materials[0].alphaMode: 'HALF'"));
+}
+
+TEST_CASE("glTF single-sided faces (doubleSided false) are not there from behind for any query, two-sided ones are",
+          "[gltf][loader][visibility]") {
+  const test::TempDir dir;
+  // The quad in z = 0, its counter-clockwise normal +z: a ray from z = 1 meets its front, one from
+  // z = -1 its back. Its material says nothing of doubleSided: false, glTF's default.
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  const auto front = [](float tMax = 1e30f) { return Ray{{0.5f, 0.5f, 1}, {0, 0, -1}, 0, tMax}; };
+  const auto back = [](float tMax = 1e30f) { return Ray{{0.5f, 0.5f, -1}, {0, 0, 1}, 0, tMax}; };
+  const auto check = [&](const Scene& scene, bool seenFromBehind) {
+    const Visibility vis(scene);
+    const Hit fromFront = vis.intersect(front()), fromBehind = vis.intersect(back());
+    REQUIRE(fromFront.found());
+    CHECK(fromFront.t == Approx(1));
+    CHECK(fromBehind.found() == seenFromBehind);
+    CHECK(vis.occluded(front(2)));
+    CHECK(vis.occluded(back(2)) == seenFromBehind);
+    // Packets of 16 and 8, front and back rays in turn, give the single rays' answers.
+    Hit hits[16];
+    intersectPacket<16>(vis, 16, [&](int i) { return i % 2 ? back() : front(); }, hits);
+    for (int i = 0; i < 16; ++i) CHECK(hits[i].found() == (i % 2 == 0 || seenFromBehind));
+    bool blocked[8];
+    occludedPacket<8>(vis, 8, [&](int i) { return i % 2 ? back(2) : front(2); }, blocked);
+    for (int i = 0; i < 8; ++i) CHECK(blocked[i] == (i % 2 == 0 || seenFromBehind));
+  };
+  const Scene singleSided = loadWrapped(dir.path, f);
+  REQUIRE(singleSided.materials[0].culledBehind == 1);
+  check(singleSided, false);
+  f["materials"][0]["doubleSided"] = true;
+  const Scene doubleSided = loadWrapped(dir.path, f);
+  REQUIRE(doubleSided.materials[0].culledBehind == 0);
+  check(doubleSided, true);
+  // A scene file's double_sided true makes a single-sided glTF material two-sided.
+  f["materials"][0]["doubleSided"] = false;
+  const std::string gltf = writeFile(dir.path, "model.gltf", f);
+  const json sceneFile = {{"camera", {{"eye", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"up", {0, 1, 0}}, {"fov_y", 40},
+                                      {"resolution", {8, 8}}}},
+                          {"meshes", {{{"gltf", gltf}}}},
+                          {"materials", {{"grey", {{"double_sided", true}}}}}};
+  const Scene overridden = loadScene(writeFile(dir.path, "two-sided.json", sceneFile), LoadOptions(true));
+  REQUIRE(overridden.materials[0].culledBehind == 0);
+  check(overridden, true);
 }
 
 TEST_CASE("Methods that place points on surfaces refuse scenes with holes, naming the methods that take them",

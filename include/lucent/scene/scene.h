@@ -51,10 +51,14 @@ struct Material {
   // emitsBackFace is 1 (glTF's doubleSided).
   int32_t emissiveTexture = -1;
   uint32_t emitsBackFace = 0;
+  // glTF's doubleSided false: seen from behind (against the counter-clockwise winding normal) the
+  // surface is not there, for every visibility query (Visibility's filter): camera, shadow, photon,
+  // gather and link rays pass through its back.
+  uint32_t culledBehind = 0;
   // KHR_materials_specular's textures: A (linear) times `specular`, RGB (sRGB) times ks.
   int32_t specularTexture = -1, specularColorTexture = -1;
 };
-static_assert(sizeof(Material) == 104, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 108, "Material is a fixed-size record shared with GPU backends");
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear
