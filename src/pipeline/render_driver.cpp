@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <utility>
 #include <cmath>
 #include <stdexcept>
 
@@ -99,7 +100,8 @@ bool RenderDriver::renderBands(const BandLoop& loop, const BandRenderer& renderB
   for (size_t index = 0; row < region.y1; ++index) {
     if (control_.stopRequested()) return false;
     Stopwatch bandClock;
-    const auto [first, end] = bands.next(row);
+    const std::pair<int, int> next = bands.next(row);  // named apart: Clang's lambdas take no structured bindings
+    const int first = next.first, end = next.second;
     try {
       renderBand(PixelRect{region.x0, first, region.x1, end}, index,
                  [&](double fraction) { report((double(first - region.y0) + fraction * (end - first)) / rows); });
