@@ -2,8 +2,8 @@
 // separated by NUL bytes (at most 64). They are parsed as the lucent program parses them, every
 // command registered, up to where each command's work would start: CLI11's parsing and checks for compare,
 // merge, report, methods and check-dump; for render, its own flags (parseRenderArgs) and the chosen
-// method's options and the part resolved and checked by the render session
-// (session/render_session.h) against a scene without a render block, outputs left out (they would
+// method's options and the part resolved and checked by RenderSession
+// (render/render_session.h) against a scene without a render block, outputs left out (they would
 // be created to check them). Every rejection must be a CLI::ParseError, std::invalid_argument or std::runtime_error;
 // anything else, a crash, a sanitizer report, a hang or a large allocation is a defect. Seeds:
 // scripts/fuzz-corpus.py command_line.
@@ -18,7 +18,7 @@
 #include "cli/commands.h"
 #include "cli/render_args.h"
 #include "lucent/methods/methods.h"
-#include "lucent/session/render_session.h"
+#include "lucent/render/render_session.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string_view input(reinterpret_cast<const char*>(data), size);

@@ -1,5 +1,5 @@
 // libFuzzer target for the dump reader and lucent check-dump (lucent/core/dump.h,
-// lucent/session/dump_compare.h): one input is up to six dump files separated by the line
+// lucent/render/dump_compare.h): one input is up to six dump files separated by the line
 // "--file--", written in turn into a reference and a candidate directory under the names that the
 // comparison's rules know (a plain array, the neighbour sets and their offsets, a tree); the two
 // directories are then compared, reported and summarised as `lucent check-dump` does, with the
@@ -18,7 +18,7 @@
 #include "fuzz_files.h"
 #include "lucent/core/dump.h"
 #include "lucent/core/memory.h"
-#include "lucent/session/dump_compare.h"
+#include "lucent/render/dump_compare.h"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-#include "session/film_merge.h"
+#include "render/film_merge.h"
 #include "film_fuzz_input.h"
 #include "fuzz_files.h"
 #include "lucent/core/memory.h"

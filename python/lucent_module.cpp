@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "lucent/core/dump.h"
-#include "lucent/session/dump_records.h"
+#include "lucent/render/dump_records.h"
 #include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
 #include "lucent/image/comparison.h"
@@ -31,7 +31,7 @@
 #include "lucent/methods/methods.h"
 #include "lucent/pipeline/film.h"
 #include "lucent/scene/loader.h"
-#include "lucent/session/render_session.h"
+#include "lucent/render/render_session.h"
 #include "lucent/trace/visibility.h"
 
 namespace py = pybind11;
@@ -52,7 +52,7 @@ class KeepFloatingPointMode {
 #endif
 };
 
-// A scene and its Embree visibility, built once for any number of renders (session/render_session.h:
+// A scene and its Embree visibility, built once for any number of renders (render/render_session.h:
 // the rules of `lucent render` hold for both). Paths arrive as str, bytes or os.PathLike (pybind11's
 // std::filesystem::path: a str goes through os.fsencode, so a file name that is not UTF-8 reaches
 // its file).
@@ -165,13 +165,13 @@ py::dict render(OpenScene& scene, std::optional<std::string> method, std::option
   request.checkpointSeconds = checkpoint;
   request.resume = resume;
   request.threads = threads.value_or(0);
-  RenderSession session(scene, request);
+  RenderSession rendering(scene, request);
   // On a thread of its own: the interpreter's floating-point mode is not touched.
   RenderResult result = renderInterruptibly([&](const std::atomic<bool>& stop) {
     RenderHooks hooks;
     hooks.stop = &stop;
     hooks.stoppedBy = [] { return std::string("KeyboardInterrupt"); };
-    return session.run(hooks);
+    return rendering.run(hooks);
   });
   const RenderOutput& out = result.render;
   py::dict dict = imageArrays(out.image);
@@ -181,7 +181,7 @@ py::dict render(OpenScene& scene, std::optional<std::string> method, std::option
   for (const auto& [stage, seconds] : out.stats.stageSeconds) stages[py::str(stage)] = seconds;
   for (const auto& [counter, value] : out.stats.counters) counters[py::str(counter)] = value;
   for (const auto& [key, value] : out.measured) measured[py::str(key)] = value;
-  dict["method"] = session.method().name();
+  dict["method"] = rendering.method().name();
   dict["spp"] = out.sppDone;
   dict["complete"] = out.complete;
   dict["stages"] = stages;
@@ -270,7 +270,7 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
   return py::module_::import("json").attr("loads")(result.json);
 }
 
-// The NumPy dtype of a dump record type, from the record table (lucent/session/dump_records.h, whose
+// The NumPy dtype of a dump record type, from the record table (lucent/render/dump_records.h, whose
 // offsets a test checks against the C++ structs).
 py::dtype recordDtype(const std::string& type) {
   const auto found = dumpRecordTypes().find(type);

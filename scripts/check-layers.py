@@ -12,7 +12,7 @@ import re
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-LAYERS = ["core", "image", "scene", "trace", "pipeline", "techniques", "methods", "session", "cli"]
+LAYERS = ["core", "image", "scene", "trace", "pipeline", "techniques", "methods", "render", "cli"]
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 REGISTRY = {"src/methods/methods.cpp"}
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Every dump record type is described once, in src/session/dump_records.cpp (dumpRecordTypes: what
+"""Every dump record type is described once, in src/render/dump_records.cpp (dumpRecordTypes: what
 check-dump compares and the Python module's record_dtype reads); what restates it must say the same:
 scripts/read-dump.py's dtypes (for readers with NumPy only) and the record table of
 docs/dump-format.md, type by type and field by field (offset, kind, name, shape, size). The OpenCL

@@ -1,5 +1,5 @@
 // lucent check-dump REFERENCE_DIR CANDIDATE_DIR: another backend's stage dumps against Lucent's,
-// array by array (lucent/session/dump_compare.h). Prints a line per differing array with its first
+// array by array (lucent/render/dump_compare.h). Prints a line per differing array with its first
 // differing records, then a JSON summary; exits 0 when every array compared agrees, 1 when one
 // differs, 2 on an error (a directory that is not there, a file that is not a dump, nothing to
 // compare).
@@ -9,7 +9,7 @@
 
 #include "cli/commands.h"
 #include "lucent/core/text.h"
-#include "lucent/session/dump_compare.h"
+#include "lucent/render/dump_compare.h"
 
 namespace lucent::cli {
 

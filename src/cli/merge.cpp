@@ -11,9 +11,9 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
-#include "session/film_merge.h"
-#include "session/film_outputs.h"
-#include "session/output_paths.h"
+#include "render/film_merge.h"
+#include "render/film_outputs.h"
+#include "render/output_paths.h"
 #include "core/json_text.h"
 
 namespace lucent::cli {

@@ -22,7 +22,7 @@
 #include "lucent/core/stats.h"
 #include "lucent/core/stop.h"
 #include "lucent/methods/methods.h"
-#include "lucent/session/render_session.h"
+#include "lucent/render/render_session.h"
 
 namespace lucent::cli {
 namespace fs = std::filesystem;
@@ -113,7 +113,7 @@ int runRender(const RenderArgs& a) {
   request.checkpointSeconds = a.checkpointSeconds;
   request.resume = a.resume;
   request.threads = a.threads;
-  RenderSession session(scene, request);
+  RenderSession rendering(scene, request);
 
   // From here to the end, SIGINT and SIGTERM ask the render to stop (the scene's loading and the
   // BVH before it end at once by the signal's default action); one that comes after the render
@@ -128,7 +128,7 @@ int runRender(const RenderArgs& a) {
     hooks.stop = &signals.requested();
     hooks.stoppedBy = [&] { return std::string(signals.signal() > 0 ? signalName() : "stop"); };
     try {
-      result = session.run(hooks);
+      result = rendering.run(hooks);
     } catch (const RenderStopped&) {
       // Before any sample (or a method that cannot keep a part of its image): nothing is written,
       // and a checkpoint resumed from stays as it was.

@@ -21,7 +21,7 @@
 
 #include "cli/commands.h"
 #include "cli/comparison_options.h"
-#include "session/output_paths.h"
+#include "render/output_paths.h"
 #include "core/json_text.h"
 #include "lucent/core/text.h"
 #include "lucent/core/files.h"

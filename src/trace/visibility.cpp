@@ -30,7 +30,7 @@ struct FilteredTriangles {
   std::vector<uint32_t> triangle;  // the geometry's primitive -> the scene's triangle
 };
 
-bool filtered(const Material& m) { return m.alphaMode != AlphaMode::Opaque || m.culledBehind != 0; }
+bool needsFilter(const Material& m) { return m.alphaMode != AlphaMode::Opaque || m.culledBehind != 0; }
 
 // Whether the surface is at barycentrics (u, v) of triangle `tri`, for a ray from `origin` along
 // `direction`: where its alpha reaches the cutoff (masks), or with probability alpha, decided by a
@@ -153,7 +153,7 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
   // single-sided faces, all of them, numbered as the scene numbers them), then the filtered ones.
   std::vector<uint32_t> opaque;
   for (uint32_t t = 0; t < scene.triangleCount(); ++t)
-    (filtered(scene.materials[scene.materialIds[t]]) ? impl_->filtered.triangle : opaque).push_back(t);
+    (needsFilter(scene.materials[scene.materialIds[t]]) ? impl_->filtered.triangle : opaque).push_back(t);
   const auto attach = [&](const std::vector<uint32_t>& triangles, bool withFilter) {
     RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,

@@ -10,7 +10,7 @@
 
 #include "dump_kernels.h"
 #include "lucent/core/dump.h"
-#include "lucent/session/dump_compare.h"
+#include "lucent/render/dump_compare.h"
 #include "lucent/methods/envpbgi.h"
 #include "lucent/methods/particles.h"
 #include "lucent/methods/photonmap.h"

@@ -995,7 +995,7 @@ def test_python_refuses_what_the_command_line_refuses(work, call, words):
     assert py.code == 3 and words in py.out, py
 
 
-# The render session (session/render_session.h) checks a render for every front end: each refusal of
+# RenderSession (render/render_session.h) checks a render for every front end: each refusal of
 # `lucent render` is Python's too, in the same words, with nothing written.
 @pytest.mark.parametrize("args, call, words", [
     (["-o", "taken.exr"], "lucent.render(lucent.load_scene(SCENE), output='taken.exr')", "it is a directory"),

@@ -2,10 +2,10 @@
 // method's typed options (and with any method by name), compare images, read a stage dump.
 // Renders the Cornell box with the path tracer at 16 x 16 (16 samples per pixel, seed 1) and
 // requires it identical to REFERENCE.exr (rendered the same way by `lucent render`), by the typed
-// call, by name and through a render session, whose EXR must hold the same pixels; then renders it
+// call, by name and through a RenderSession, whose EXR must hold the same pixels; then renders it
 // with purcell, dumping its stages into DUMPS, and reads the
 // photons back. Every supported header is included: each compiles from the installed tree alone.
-//   consumer SCENE.json REFERENCE.exr DUMPS (the session's image: DUMPS/../session.exr)
+//   consumer SCENE.json REFERENCE.exr DUMPS (RenderSession's image: DUMPS/../rendered.exr)
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -20,7 +20,7 @@
 #include "lucent/methods/pathtrace.h"
 #include "lucent/methods/photonmap.h"
 #include "lucent/scene/loader.h"
-#include "lucent/session/render_session.h"
+#include "lucent/render/render_session.h"
 #include "lucent/techniques/photons/photon.h"
 #include "lucent/techniques/points/point_nodes.h"
 #include "lucent/trace/visibility.h"
@@ -50,11 +50,11 @@ int main(int argc, char** argv) {
     settings.load.quiet = true;
     settings.resolution = {16, 16};
     lucent::OpenScene opened(argv[1], settings);
-    const std::string written = std::string(argv[3]) + "/../session.exr";
-    const lucent::RenderResult session =
+    const std::string written = std::string(argv[3]) + "/../rendered.exr";
+    const lucent::RenderResult rendered =
         lucent::RenderSession(opened, {.method = "pt", .options = {{"spp", "16"}, {"seed", "1"}}, .output = written}).run();
     const lucent::ImageError bySession = lucent::compareImages(lucent::readImage(written), reference);
-    std::printf("consumer: pt, RMSE %g through a render session (%s)\n", bySession.overall.rmse, session.summary.c_str());
+    std::printf("consumer: pt, RMSE %g through a RenderSession (%s)\n", bySession.overall.rmse, rendered.summary.c_str());
     if (bySession.overall.rmse != 0 || bySession.nonFinite != 0) return 1;
 
     lucent::PhotonMapOptions purcellOptions;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the build into a temporary prefix, builds tests/consumer against it with find_package,
-# and runs it: it renders the Cornell box by typed options, by name and through a render session,
+# and runs it: it renders the Cornell box by typed options, by name and through a RenderSession,
 # each of which must match `lucent render`'s image bit for bit, and reads back a stage dump. Only the
 # marked headers are installed (CMakeLists.txt: LUCENT_API_HEADERS, LUCENT_DETAIL_HEADERS; listed in
 # include/lucent/headers.txt), and each compiles on its own from the installed tree.

@@ -148,6 +148,16 @@ Scene loadWrapped(const fs::path& dir, const json& gltf, bool quiet = true) {
   return loadScene(wrapGltf(dir, gltf), LoadOptions(quiet));
 }
 
+// A 2 x 1 texture's sRGB codes, and the PNG of them that Lucent's encoder writes from their linear
+// values.
+constexpr uint8_t kTexelCodes[2][3] = {{200, 30, 90}, {12, 250, 128}};
+std::vector<unsigned char> texelCodesPng() {
+  Image image(2, 1, {"R", "G", "B"});
+  for (int x = 0; x < 2; ++x)
+    for (int c = 0; c < 3; ++c) image.at(x, 0, c) = kSrgb8ToLinear[kTexelCodes[x][c]];
+  return encodePng(image);
+}
+
 // The quad with an occlusion texture, which renders leave out and list.
 json quadWithOcclusion() {
   json f = quadFile({{{"mesh", 0}}}, {0});
@@ -428,12 +438,8 @@ TEST_CASE("lucent render --strict refuses a scene whose files hold what the rend
 
 TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read as its sRGB codes", "[gltf][loader]") {
   const test::TempDir dir;
-  // A 2 x 1 PNG of known sRGB codes, written by Lucent's encoder from their linear values.
-  const uint8_t codes[2][3] = {{200, 30, 90}, {12, 250, 128}};
-  Image image(2, 1, {"R", "G", "B"});
-  for (int x = 0; x < 2; ++x)
-    for (int c = 0; c < 3; ++c) image.at(x, 0, c) = kSrgb8ToLinear[codes[x][c]];
-  const std::vector<unsigned char> png = encodePng(image);
+  const auto& codes = kTexelCodes;
+  const std::vector<unsigned char> png = texelCodesPng();
   json viaUri = quadFile({{{"mesh", 0}}}, {0});
   viaUri["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
   viaUri["textures"] = {{{"source", 0}, {"sampler", 0}}};
@@ -586,13 +592,10 @@ std::vector<unsigned char> withGamma(const std::vector<unsigned char>& png, uint
 
 TEST_CASE("glTF colour textures are sRGB whatever a PNG's gAMA chunk says", "[gltf][loader]") {
   const test::TempDir dir;
-  const uint8_t codes[2][3] = {{200, 30, 90}, {12, 250, 128}};
-  Image image(2, 1, {"R", "G", "B"});
-  for (int x = 0; x < 2; ++x)
-    for (int c = 0; c < 3; ++c) image.at(x, 0, c) = kSrgb8ToLinear[codes[x][c]];
+  const auto& codes = kTexelCodes;
   for (const uint32_t gamma : {45455u, 100000u}) {
     INFO("gAMA " << gamma);
-    const std::vector<unsigned char> png = withGamma(encodePng(image), gamma);
+    const std::vector<unsigned char> png = withGamma(texelCodesPng(), gamma);
     // The file now says so: read as its metadata says, it would not be sRGB.
     ImageMetadata metadata;
     readImageFromMemory("gamma.png", ".png", png, &metadata);

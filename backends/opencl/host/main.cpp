@@ -28,7 +28,7 @@
 #include "core/json_text.h"
 #include "dump_kernels.h"
 #include "lucent/core/files.h"
-#include "lucent/session/dump_compare.h"
+#include "lucent/render/dump_compare.h"
 
 using namespace lucent;
 using namespace lucent::opencl;

@@ -1,4 +1,4 @@
-// lucent check-dump's rules (lucent/session/dump_compare.h): each array kind finds a one-record
+// lucent check-dump's rules (lucent/render/dump_compare.h): each array kind finds a one-record
 // difference, naming the record and field, and lets through what its rule allows (photons
 // reordered, a float within the tolerance, ties at a search's radius, a tree numbered otherwise).
 #include <catch2/catch.hpp>
@@ -10,7 +10,7 @@
 #include <random>
 
 #include "lucent/core/dump.h"
-#include "lucent/session/dump_records.h"
+#include "lucent/render/dump_records.h"
 #include "lucent/pipeline/shading_points.h"
 #include "lucent/techniques/points/point_hierarchy.h"
 #include "lucent/techniques/points/point_nodes.h"
@@ -18,7 +18,7 @@
 #include "methods/envpbgi/radiance_cache.h"
 #include "methods/particles/area_particles.h"
 #include "methods/particles/radiance_particles.h"
-#include "lucent/session/dump_compare.h"
+#include "lucent/render/dump_compare.h"
 #include "lucent/techniques/photons/kd_tree.h"
 #include "lucent/techniques/photons/photon.h"
 #include "methods/envpbgi/env_points.h"

@@ -1,4 +1,4 @@
-#include "session/film_outputs.h"
+#include "render/film_outputs.h"
 
 #include <algorithm>
 #include <filesystem>

@@ -1,4 +1,4 @@
-#include "lucent/session/dump_records.h"
+#include "lucent/render/dump_records.h"
 
 #include <stdexcept>
 

@@ -1,4 +1,4 @@
-#include "lucent/session/dump_compare.h"
+#include "lucent/render/dump_compare.h"
 
 #include <algorithm>
 #include <bit>
@@ -18,7 +18,7 @@
 
 #include "core/json_text.h"
 #include "lucent/core/dump.h"
-#include "lucent/session/dump_records.h"
+#include "lucent/render/dump_records.h"
 
 namespace lucent {
 

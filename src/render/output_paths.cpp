@@ -1,4 +1,4 @@
-#include "session/output_paths.h"
+#include "render/output_paths.h"
 
 #include <filesystem>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-#include "lucent/session/render_session.h"
+#include "lucent/render/render_session.h"
 
 #include <algorithm>
 #include <cmath>
@@ -16,8 +16,8 @@
 #include "lucent/methods/methods.h"
 #include "lucent/pipeline/film_file.h"
 #include "lucent/pipeline/render_stages.h"
-#include "session/film_outputs.h"
-#include "session/output_paths.h"
+#include "render/film_outputs.h"
+#include "render/output_paths.h"
 
 namespace lucent {
 namespace fs = std::filesystem;
@@ -121,7 +121,6 @@ void OpenScene::prepare() {
 const Visibility& OpenScene::visibility() {
   if (!visibility_) {
     Stopwatch clock;
-    setMemoryLimit(settings_.memoryLimit);
     VisibilityOptions options;
     options.robust = settings_.robust;
     options.isa = settings_.isa;
@@ -231,8 +230,8 @@ RenderResult RenderSession::run(const RenderHooks& hooks) {
   const RenderRequest& r = request_;
   setLaneIsa(laneIsaFor(scene_.settings().isa));
   ParallelScope parallel(r.threads);
+  setMemoryLimit(scene_.settings().memoryLimit);  // the process's: another open scene may have set its own
   const Visibility& visibility = scene_.visibility();
-  setMemoryLimit(scene_.settings().memoryLimit);
 
   RenderControl control = control_;
   const RenderPart part = resolvePart(control, scene, options_->common().spp);

@@ -1,4 +1,4 @@
-#include "session/film_merge.h"
+#include "render/film_merge.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -6,7 +6,7 @@
 #include <set>
 #include <stdexcept>
 
-#include "session/film_outputs.h"
+#include "render/film_outputs.h"
 
 namespace lucent {
 
