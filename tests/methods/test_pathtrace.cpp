@@ -4,12 +4,15 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "lucent/core/parallel.h"
 #include "lucent/methods/pathtrace.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/loader.h"
+#include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"
+#include "methods/pathtrace/diffuse_lanes.h"
 #include "test_bsdfs.h"
 #include "test_scenes.h"
 #include "test_support.h"
@@ -84,13 +87,13 @@ TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "
   }
 }
 
-TEST_CASE("Camera rays and Lambertian hits in lanes give the image of shade(), bit for bit, on every material",
-          "[pathtrace][determinism]") {
-  // Every kind of light and material: the Cornell box with mirror and glass spheres and some
-  // glossy (Phong) wall triangles, plus a point light, a directional light and a constant
-  // environment; walls with interpolated normals made up from their positions, a textured floor,
-  // and vertices with texture coordinates. Lambertian hits are shaded in lanes on one side and by
-  // PathTracer::shade on the other, as the other materials' hits always are.
+namespace {
+
+// Every kind of light and material: the Cornell box with mirror and glass spheres and some glossy
+// (Phong) wall triangles, plus a point light, a directional light and a constant environment; walls
+// with interpolated normals made up from their positions, a textured floor, and vertices with
+// texture coordinates.
+Scene everyMaterialAndLight() {
   Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true});
   Material glossy;
   glossy.type = MaterialType::Phong;
@@ -118,6 +121,17 @@ TEST_CASE("Camera rays and Lambertian hits in lanes give the image of shade(), b
   for (Material& m : scene.materials)
     if (m.type == MaterialType::Diffuse && m.ke.isBlack()) m.kdTexture = 0;
   finalizeScene(scene);
+  return scene;
+}
+
+}  // namespace
+
+TEST_CASE("Camera rays and Lambertian hits in lanes give the image of one path at a time, bit for bit, on every "
+          "material",
+          "[pathtrace][determinism]") {
+  // Lambertian hits shaded all lanes at once on one side, one lane at a time on the other, where
+  // each path also draws its own Sobol numbers.
+  const Scene scene = everyMaterialAndLight();
   const Visibility vis(scene);
   for (const PathStrategy strategy : {PathStrategy::Mis, PathStrategy::LightSampling, PathStrategy::BsdfSampling})
     for (const int maxDepth : {1024, 2}) {
@@ -135,12 +149,113 @@ TEST_CASE("Camera rays and Lambertian hits in lanes give the image of shade(), b
       const RenderOutput scalar = renderPathTraced(scene, vis, opt);
       INFO("strategy " << int(strategy) << ", max depth " << maxDepth << ", sampler " << int(opt.sampler));
       REQUIRE(lanes.image.pixels() == scalar.image.pixels());
-      // Not a vacuous comparison: light arrives, and many hits were Lambertian (shaded in lanes on
-      // one side only).
+      // Not a vacuous comparison: light arrives, and many hits were Lambertian.
       REQUIRE(test::channelMean(lanes.image, 0).mean > 0.01);
       CHECK(lanes.stats.counter("lane_shaded_hits") > lanes.stats.counter("rays") / 4);
-      CHECK(scalar.stats.counter("lane_shaded_hits") == 0);
+      CHECK(scalar.stats.counter("lane_shaded_hits") == lanes.stats.counter("lane_shaded_hits"));
     }
+}
+
+TEST_CASE("A Lambertian lane holds surfaceAt's, bsdfAt's and sampleChosenLight's values", "[pathtrace]") {
+  // The lanes read a hit's surface and an emitting triangle themselves (fetchLambertianSurface,
+  // fetchLaneLight), where every other hit goes through surfaceAt, bsdfAt and sampleChosenLight.
+  // Hits at scattered barycentrics on the Lambertian triangles of a scene with vertex normals at
+  // some vertices and a textured albedo, each lit by one of its emitting triangles.
+  const Scene scene = everyMaterialAndLight();
+  std::vector<uint32_t> laneLights;
+  for (uint32_t li = 0; li < scene.lights.size(); ++li)
+    if (laneLight(scene, li).isTriangle) laneLights.push_back(li);
+  // The Cornell box's light's triangles; the point, directional and environment lights are not.
+  REQUIRE(!laneLights.empty());
+  REQUIRE(laneLights.size() + 3 == scene.lights.size());
+  const auto lanes = std::make_unique<DiffuseLanes>();
+  std::vector<TexturedLane> textured;
+  std::vector<Hit> hits;
+  Rng rng(5);
+  for (uint32_t n = 0; n < 100 * scene.materialIds.size() && hits.size() < uint32_t(kMaxLanes); ++n) {
+    const uint32_t t = n % uint32_t(scene.materialIds.size());
+    const Material& m = scene.materials[scene.materialIds[t]];
+    if (m.type != MaterialType::Diffuse || !m.ke.isBlack()) continue;
+    const uint32_t k = lanes->count++;
+    Hit& hit = hits.emplace_back();
+    hit.triangle = t, hit.b1 = 0.5f * rng.uniform(), hit.b2 = 0.5f * rng.uniform(), hit.t = 1;
+    fetchLambertianSurface(scene, hit, sampleUniformSphere(rng.uniform2()), *lanes, k, textured);
+    lanes->light[k] = laneLights[k % laneLights.size()];
+    fetchLaneLight(laneLight(scene, lanes->light[k]), *lanes, k);
+    lanes->lightIsTriangle[k] = 1;
+    lanes->lightPmf[k] = 0.5f;
+    lanes->uLightX[k] = rng.uniform(), lanes->uLightY[k] = rng.uniform();
+    lanes->uBsdfX[k] = rng.uniform(), lanes->uBsdfY[k] = rng.uniform();
+  }
+  REQUIRE(hits.size() == uint32_t(kMaxLanes));
+  readLaneTextures(*lanes, textured);
+  shadeDiffuseLanes(*lanes, 0, lanes->count);
+  const DiffuseLanes& l = *lanes;
+  int interpolated = 0, queued = 0;
+  for (uint32_t k = 0; k < l.count; ++k) {
+    INFO("lane " << k << ", triangle " << hits[k].triangle);
+    const SurfacePoint sp = surfaceAt(scene, hits[k].triangle, hits[k].b1, hits[k].b2);
+    const SurfaceBsdf bsdf = bsdfAt(scene, sp);
+    REQUIRE(Vec3{l.posX[k], l.posY[k], l.posZ[k]} == sp.position);
+    REQUIRE(Vec3{l.ngx[k], l.ngy[k], l.ngz[k]} == sp.geometricNormal);
+    REQUIRE(Vec3{l.snX[k], l.snY[k], l.snZ[k]} == sp.shadingNormal);
+    REQUIRE(Rgb{l.kdR[k], l.kdG[k], l.kdB[k]} == bsdf.kd);
+    REQUIRE((l.frontFace[k] != 0) == (dot(Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]}, sp.geometricNormal) < 0));
+    interpolated += !(sp.shadingNormal == sp.geometricNormal);
+    // The lane's light sample is sampleChosenLight's: its shadow ray and radiance.
+    const LightSample ls = sampleChosenLight(scene, l.light[k], l.lightPmf[k], sp.position, {l.uLightX[k], l.uLightY[k]});
+    if (!l.shadowQueued[k]) continue;
+    ++queued;
+    REQUIRE(ls.pdf > 0);
+    const Ray shadow = shadowRay(sp.position, sp.geometricNormal, ls);
+    REQUIRE(Vec3{l.shadowOx[k], l.shadowOy[k], l.shadowOz[k]} == shadow.origin);
+    REQUIRE(Vec3{l.shadowDx[k], l.shadowDy[k], l.shadowDz[k]} == shadow.direction);
+    REQUIRE(l.shadowTMax[k] == shadow.tMax);
+    REQUIRE(Rgb{l.leR[k], l.leG[k], l.leB[k]} == ls.radiance);
+  }
+  // Not vacuous: interpolated normals, textured albedos and light samples were compared.
+  CHECK(interpolated > 5);
+  CHECK(textured.size() > 5);
+  CHECK(queued > 5);
+  // Emitters the lanes leave to sampleChosenLight: two-sided or textured ones.
+  Scene twoSided = scene;
+  for (Material& m : twoSided.materials) m.emitsBackFace = m.ke.isBlack() ? 0 : 1;
+  Scene texturedEmitter = scene;
+  for (Material& m : texturedEmitter.materials) m.emissiveTexture = m.ke.isBlack() ? -1 : 0;
+  for (const uint32_t li : laneLights) {
+    CHECK_FALSE(laneLight(twoSided, li).isTriangle);
+    CHECK_FALSE(laneLight(texturedEmitter, li).isTriangle);
+  }
+}
+
+TEST_CASE("Lambertian surfaces shaded in lanes and the equal glTF BRDF shaded by shade() agree", "[pathtrace][gltf]") {
+  // A glTF dielectric of specular 0 reflects as Lambertian (Appendix B: no Fresnel term at all, the
+  // diffuse lobe whole), and shade() takes its hits through the generic BSDF: the lanes' sequence
+  // against the generic one, in the scene with every material and kind of light (its emitter
+  // turned too: it emits as before).
+  const Scene lambertian = everyMaterialAndLight();
+  Scene gltf = lambertian;
+  int turned = 0;
+  for (Material& m : gltf.materials)
+    if (m.type == MaterialType::Diffuse) {
+      m.type = MaterialType::Gltf, m.metallic = 0, m.roughness = 0.6f, m.specular = 0, m.ks = Rgb(1.0f);
+      ++turned;
+    }
+  REQUIRE(turned > 0);
+  PathTraceOptions opt;
+  opt.common.spp = 64;
+  opt.sampler = SamplerKind::Independent;
+  opt.common.seed = 3;
+  const RenderOutput inLanes = renderPathTraced(lambertian, Visibility(lambertian), opt);
+  opt.common.seed = 4;
+  const RenderOutput generic = renderPathTraced(gltf, Visibility(gltf), opt);
+  CHECK(generic.stats.counter("lane_shaded_hits") == 0);
+  CHECK(inLanes.stats.counter("lane_shaded_hits") > inLanes.stats.counter("rays") / 4);
+  for (int c = 0; c < 3; ++c) {
+    const double z = test::agreementZ(inLanes.image, generic.image, c);
+    INFO("channel " << c << ": z = " << z);
+    CHECK(std::abs(z) < 4.5);
+  }
 }
 
 TEST_CASE("Pixel centres: every sample of a pixel takes the centre's camera ray, in lanes and one by one",

@@ -45,8 +45,8 @@ struct PathTraceOptions {
   // images are point samples of the image, not its pixels' averages.
   bool pixelCentres = false;
   // Camera rays are started and Lambertian hits shaded many at a time in vectorized loops
-  // (CameraLanes, DiffuseLanes), other hits one by one. False does everything one path at a time,
-  // every hit by PathTracer::shade, for tests that the lanes change nothing.
+  // (CameraLanes, DiffuseLanes), other hits one by one. False runs the same loops one path at a
+  // time, and draws each path's Sobol numbers by itself, for tests that the lanes change nothing.
   bool laneShading = true;
   // A padded Owen-scrambled Sobol sequence (lower error at equal samples), or independent random
   // numbers for validation (include/lucent/core/path_sampler.h).

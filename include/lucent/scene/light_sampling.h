@@ -78,6 +78,17 @@ inline TrianglePointSample sampleTrianglePoint(Vec3 q0, Vec3 q1, Vec3 q2, Vec3 n
   return {q, wi, distance, pdf, b};
 }
 
+// An emitting triangle as sampleTrianglePoint takes it.
+struct EmittingTriangle {
+  Vec3 q0, q1, q2, normal;
+  float area = 0;
+  bool twoSided = false;  // its material emits from its back too (Material::emitsBackFace)
+};
+inline EmittingTriangle emittingTriangle(const Scene& scene, uint32_t t) {
+  return {scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), scene.geometricNormal(t), scene.triangleArea(t),
+          scene.materials[scene.materialIds[t]].emitsBackFace != 0};
+}
+
 // A sample of light `li`, chosen with probability `pmf` (its pdf includes it).
 inline LightSample sampleChosenLight(const Scene& scene, uint32_t li, float pmf, Vec3 receiver, Vec2 u) {
   LightSample s;
@@ -85,13 +96,11 @@ inline LightSample sampleChosenLight(const Scene& scene, uint32_t li, float pmf,
   switch (light.type) {
     case LightType::Triangle: {
       const uint32_t t = light.triangle;
-      const Vec3 n = scene.geometricNormal(t);
-      const TrianglePointSample q =
-          sampleTrianglePoint(scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), n, scene.triangleArea(t), pmf,
-                              receiver, u, scene.materials[scene.materialIds[t]].emitsBackFace != 0);
+      const EmittingTriangle e = emittingTriangle(scene, t);
+      const TrianglePointSample q = sampleTrianglePoint(e.q0, e.q1, e.q2, e.normal, e.area, pmf, receiver, u, e.twoSided);
       if (!(q.pdf > 0)) return {};
       s.point = q.point, s.wi = q.wi, s.distance = q.distance, s.pdf = q.pdf;
-      s.radiance = emittedRadiance(scene, t, q.b.x, q.b.y, dot(q.wi, n) < 0);
+      s.radiance = emittedRadiance(scene, t, q.b.x, q.b.y, dot(q.wi, e.normal) < 0);
       return s;
     }
     case LightType::Point:

@@ -4,6 +4,7 @@
 #include "lucent/core/lane_clones.h"
 #include "lucent/core/sampling.h"
 #include "lucent/scene/light_sampling.h"
+#include "lucent/scene/texture.h"
 #include "lucent/scene/surface.h"
 #include "methods/pathtrace/shading_steps.h"
 
@@ -44,12 +45,61 @@ LUCENT_LANE_VERSIONS(void, startCameraPaths, (CameraLanes& l, uint32_t first, ui
                   uint64_t seed, const PinholeCamera& camera, const PixelFilter& filter, bool pixelCentres),
                      (l, first, last, sampler, seed, camera, filter, pixelCentres))
 
-// What PathTracer::shade does at a Lambertian hit, with the functions it calls: the shading
-// normal (surfaceAt's) and frame, next-event estimation (sampleDirect, with sampleLight's triangle
-// case where the light is an emitting triangle), and the next direction (sampleBsdf).
-LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l)) {
+void fetchLambertianSurface(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k,
+                            std::vector<TexturedLane>& textured) {
+  const uint32_t* v = &s.indices[3 * size_t(hit.triangle)];
+  store(direction, l.dirX, l.dirY, l.dirZ, k);
+  // surfaceAt's arithmetic, up to the normalization of the interpolated normal.
+  store(barycentric(s.positions[v[0]], s.positions[v[1]], s.positions[v[2]], hit.b1, hit.b2), l.posX, l.posY, l.posZ, k);
+  store(barycentric(s.normals[v[0]], s.normals[v[1]], s.normals[v[2]], hit.b1, hit.b2), l.normalX, l.normalY,
+        l.normalZ, k);
+  l.hasNormals[k] = !(s.normals[v[0]] == Vec3{0, 0, 0});
+  store(s.faceNormals[hit.triangle], l.ngx, l.ngy, l.ngz, k);
+  const Material& m = s.materials[s.materialIds[hit.triangle]];
+  l.emits[k] = !m.ke.isBlack();
+  if (m.kdTexture < 0) {
+    l.kdR[k] = m.kd.r, l.kdG[k] = m.kd.g, l.kdB[k] = m.kd.b;
+    return;
+  }
+  SurfacePoint sp;
+  sp.triangle = hit.triangle, sp.b1 = hit.b1, sp.b2 = hit.b2;
+  const Texture& t = s.textures[size_t(m.kdTexture)];
+  const BilinearFootprint f = bilinearFootprint(t, s.texels.data(), textureUv(s, t, sp));
+  for (const uint32_t* texel : {f.row0 + f.x0, f.row0 + f.x1, f.row1 + f.x0, f.row1 + f.x1}) __builtin_prefetch(texel);
+  textured.push_back({k, f, m.kd});
+}
+
+void readLaneTextures(DiffuseLanes& l, std::span<const TexturedLane> textured) {
+  for (const TexturedLane& t : textured) {
+    const Rgb kd = t.kd * bilinear(t.footprint);
+    l.kdR[t.lane] = kd.r, l.kdG[t.lane] = kd.g, l.kdB[t.lane] = kd.b;
+  }
+}
+
+LaneLight laneLight(const Scene& scene, uint32_t light) {
+  const Light& l = scene.lights[light];
+  if (l.type != LightType::Triangle) return {};
+  const Material& m = scene.materials[scene.materialIds[l.triangle]];
+  const EmittingTriangle e = emittingTriangle(scene, l.triangle);
+  return {e, m.ke, !e.twoSided && m.emissiveTexture < 0};
+}
+
+void fetchLaneLight(const LaneLight& light, DiffuseLanes& l, uint32_t k) {
+  const EmittingTriangle& e = light.triangle;
+  store(e.q0, l.q0x, l.q0y, l.q0z, k);
+  store(e.q1, l.q1x, l.q1y, l.q1z, k);
+  store(e.q2, l.q2x, l.q2y, l.q2z, k);
+  store(e.normal, l.lightNx, l.lightNy, l.lightNz, k);
+  l.lightArea[k] = e.area;
+  l.leR[k] = light.le.r, l.leG[k] = light.le.g, l.leB[k] = light.le.b;
+}
+
+// What PathTracer::shade does at a hit, for a Lambertian surface: the shading normal (surfaceAt's)
+// and frame, next-event estimation (sampleDirect, with sampleChosenLight's triangle case where the
+// light is a LaneLight), and the next direction (sampleBsdf).
+LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint32_t last)) {
   const PathStrategy strategy = l.strategy;
-  for (uint32_t k = 0; k < l.count; ++k) {
+  for (uint32_t k = first; k < last; ++k) {
     const Vec3 ng{l.ngx[k], l.ngy[k], l.ngz[k]};
     const Vec3 sn = select(l.hasNormals[k] != 0, orientedShadingNormal({l.normalX[k], l.normalY[k], l.normalZ[k]}, ng), ng);
     const Vec3 woWorld = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
@@ -91,6 +141,6 @@ LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l)) {
     store(wiWorld, l.nextDx, l.nextDy, l.nextDz, k);
   }
 }
-LUCENT_LANE_VERSIONS(void, shadeDiffuseLanes, (DiffuseLanes& l), (l))
+LUCENT_LANE_VERSIONS(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint32_t last), (l, first, last))
 
 }  // namespace lucent

@@ -2,14 +2,20 @@
 // random numbers of each hit are fetched into a structure of arrays (one slot per path, a "lane"),
 // then every step that is the same arithmetic for all lanes runs as one loop over the lanes, which
 // the compiler vectorizes (eight lanes per instruction with AVX2, sixteen with AVX-512, chosen at
-// run time). The loop calls the functions PathTracer::shade calls (shading_steps.h), which shades
-// every hit when paths are traced one at a time.
+// run time). The same loop over one lane shades single paths (PathTraceOptions::laneShading off);
+// it calls the functions PathTracer::shade, which shades the other materials' hits, calls
+// (shading_steps.h).
 #pragma once
 #include <cstdint>
+#include <span>
+#include <vector>
 
 #include "lucent/core/path_sampler.h"
 #include "lucent/methods/pathtrace.h"
 #include "lucent/scene/camera.h"
+#include "lucent/scene/light_sampling.h"
+#include "lucent/scene/texture.h"
+#include "lucent/trace/visibility.h"
 
 namespace lucent {
 
@@ -85,8 +91,35 @@ struct CameraLanes {
 void startCameraPaths(CameraLanes& lanes, uint32_t first, uint32_t last, SamplerKind sampler, uint64_t seed,
                       const PinholeCamera& camera, const PixelFilter& filter, bool pixelCentres);
 
-// Every lane's shading normal and frame, its light sample's shadow ray and what it brings, and the
-// cosine-distributed next direction.
-void shadeDiffuseLanes(DiffuseLanes& lanes);
+// A lane whose albedo is textured: the texels to read, and the material's factor.
+struct TexturedLane {
+  uint32_t lane;
+  BilinearFootprint footprint;
+  Rgb kd;
+};
+
+// Lane k's surface at a Lambertian hit of a ray along `direction`, as surfaceAt and bsdfAt give it:
+// the position; the vertex normals interpolated, which shadeDiffuseLanes normalizes and turns as
+// surfaceAt does; the geometric normal; whether it emits; the albedo, or where a texture scales it,
+// its texels requested (prefetched, and added to `textured` for readLaneTextures once every lane
+// is fetched: a texel from memory then no longer holds up the next lane).
+void fetchLambertianSurface(const Scene& scene, const Hit& hit, Vec3 direction, DiffuseLanes& lanes, uint32_t k,
+                            std::vector<TexturedLane>& textured);
+void readLaneTextures(DiffuseLanes& lanes, std::span<const TexturedLane> textured);
+
+// What a lane needs of a light to sample it itself: an emitting triangle seen from one side, of
+// constant radiance le (sampleChosenLight's triangle case then). Other lights have isTriangle false.
+struct LaneLight {
+  EmittingTriangle triangle;
+  Rgb le;
+  bool isTriangle = false;
+};
+LaneLight laneLight(const Scene& scene, uint32_t light);
+void fetchLaneLight(const LaneLight& light, DiffuseLanes& lanes, uint32_t k);
+
+// Lanes [first, last): each lane's shading normal and frame, its light sample's shadow ray and what
+// it brings, and the cosine-distributed next direction. One lane at a time ([k, k + 1)) the same
+// loop shades single paths, with the same arithmetic.
+void shadeDiffuseLanes(DiffuseLanes& lanes, uint32_t first, uint32_t last);
 
 }  // namespace lucent

@@ -106,21 +106,6 @@ int runBegin(int sample) {
 }
 int runEnd(int sample) { return sample >= kRunLength ? runBegin(sample) + kRunLength : std::max(1, 2 * runBegin(sample)); }
 
-// What a lane needs of an emitting triangle to sample it, gathered once per light.
-struct TriangleLightRecord {
-  Vec3 q0, q1, q2, normal;
-  float area = 0;
-  Rgb le;
-  bool isTriangle = false;
-};
-
-// A lane whose albedo is textured: the texels to read, and the material's factor.
-struct TexturedLane {
-  uint32_t lane;
-  BilinearFootprint footprint;
-  Rgb kd;
-};
-
 // What shading a hit reads of the scene: vertex records and per-triangle records.
 size_t sceneArrayBytes(const Scene& s) {
   return s.positions.size() * sizeof(Vec3) + s.normals.size() * sizeof(Vec3) + s.texcoords.size() * sizeof(Vec2) +
@@ -140,18 +125,8 @@ struct PassSamples {
 class PathTracer {
  public:
   PathTracer(const Scene& scene, const Visibility& vis, const PathTraceOptions& opt)
-      : scene_(scene), vis_(vis), opt_(opt), camera_(scene.camera), lightRecords_(scene.lights.size()),
-        lightChoice_(scene.lightDistribution) {
-    for (uint32_t li = 0; li < scene.lights.size(); ++li) {
-      const Light& light = scene.lights[li];
-      if (light.type != LightType::Triangle) continue;
-      const uint32_t t = light.triangle;
-      // The lanes sample one-sided emitters of constant radiance; the others as other lights are.
-      const Material& m = scene.materials[scene.materialIds[t]];
-      lightRecords_[li] = {scene.vertex(t, 0), scene.vertex(t, 1), scene.vertex(t, 2), scene.geometricNormal(t),
-                           scene.triangleArea(t), m.ke,
-                           m.emitsBackFace == 0 && m.emissiveTexture < 0};
-    }
+      : scene_(scene), vis_(vis), opt_(opt), camera_(scene.camera), lightChoice_(scene.lightDistribution) {
+    for (uint32_t li = 0; li < scene.lights.size(); ++li) laneLights_.push_back(laneLight(scene, li));
   }
 
   // One bounce of a path whose ray met `hit` (or nothing): emission found, the light sample (its
@@ -267,7 +242,7 @@ class PathTracer {
       const bool drawnInLanes = drawDiffuseLaneNumbers(w);
       uint32_t drawn = 0;  // the next lane's first pair in w.sobol
       for (const uint32_t i : w.active) {
-        if (opt_.laneShading && inDiffuseLane(w.paths[i], w.hits[i])) {
+        if (inDiffuseLane(w.paths[i], w.hits[i])) {
           fetchDiffuseLane(w.paths[i], w.hits[i], i, lanes, w.textured, w.otherLights,
                            drawnInLanes ? std::exchange(drawn, drawn + lanePairs(w.paths[i])) : kNotDrawn, w.sobol);
           continue;
@@ -347,17 +322,17 @@ class PathTracer {
   }
 
   // The Lambertian hits fetched into the wave's lanes: their textures' texels, their lights other
-  // than triangles, the lanes' shading, and what it gives their paths; the lanes are then empty.
+  // than LaneLights, the lanes' shading (all at once, or one lane at a time without laneShading),
+  // and what it gives their paths; the lanes are then empty.
   void shadeLanes(Wave& w, Counters& counters) const {
     DiffuseLanes& lanes = *w.lanes;
     if (lanes.count == 0) return;
     counters.laneShadedHits += lanes.count;
-    for (const TexturedLane& t : w.textured) {
-      const Rgb kd = t.kd * bilinear(t.footprint);
-      lanes.kdR[t.lane] = kd.r, lanes.kdG[t.lane] = kd.g, lanes.kdB[t.lane] = kd.b;
-    }
+    readLaneTextures(lanes, w.textured);
     sampleOtherLights(lanes, w.otherLights);
-    shadeDiffuseLanes(lanes);
+    if (opt_.laneShading) shadeDiffuseLanes(lanes, 0, lanes.count);
+    else
+      for (uint32_t k = 0; k < lanes.count; ++k) shadeDiffuseLanes(lanes, k, k + 1);
     finishDiffuseLanes(lanes, w);
     lanes.count = 0;
     w.textured.clear();
@@ -366,8 +341,8 @@ class PathTracer {
 
   // With the Sobol sampler, the numbers fetchDiffuseLane takes for every Lambertian hit of the
   // bounce, drawn in lanes (in the order of the hits; their pairs one after the other). False with
-  // the independent sampler, whose numbers come in sequence from each path's generator, and one
-  // path at a time (laneShading off: the reference the lanes are tested against).
+  // the independent sampler, whose numbers come in sequence from each path's generator, and without
+  // laneShading, where each path draws its own as shade() does.
   static constexpr uint32_t kNotDrawn = ~0u;
   bool drawDiffuseLaneNumbers(Wave& w) const {
     if (opt_.sampler != SamplerKind::Sobol || !opt_.laneShading) return false;
@@ -394,8 +369,8 @@ class PathTracer {
   // where roulette may end the path on the next bounce, that bounce's roulette pair.
   uint32_t lanePairs(const Path& path) const { return path.bounce + 1 >= opt_.rouletteDepth ? 3 : 2; }
 
-  // Hits that DiffuseLanes shades: Lambertian surfaces below the depth limit (every one: shade()
-  // takes the other materials).
+  // Hits that DiffuseLanes shades: Lambertian surfaces below the depth limit (every one; shade()
+  // takes the other materials' hits).
   bool inDiffuseLane(const Path& path, const Hit& hit) const {
     return hit.found() && path.bounce < opt_.maxDepth && material(hit.triangle).type == MaterialType::Diffuse;
   }
@@ -408,32 +383,9 @@ class PathTracer {
                         const Wave::SobolRequests& sobol) const {
     const uint32_t k = l.count++;
     const Scene& s = scene_;
-    const uint32_t* v = &s.indices[3 * size_t(hit.triangle)];
-    const Vec3 p0 = s.positions[v[0]], p1 = s.positions[v[1]], p2 = s.positions[v[2]];
-    const Vec3 n0 = s.normals[v[0]], n1 = s.normals[v[1]], n2 = s.normals[v[2]];
-    const Vec3 ng = s.faceNormals[hit.triangle];
     l.path[k] = pathIndex;
-    l.dirX[k] = path.ray.direction.x, l.dirY[k] = path.ray.direction.y, l.dirZ[k] = path.ray.direction.z;
-    // surfaceAt's arithmetic, up to the normalization of the interpolated normal.
-    const Vec3 position = barycentric(p0, p1, p2, hit.b1, hit.b2);
-    const Vec3 normal = barycentric(n0, n1, n2, hit.b1, hit.b2);
-    l.posX[k] = position.x, l.posY[k] = position.y, l.posZ[k] = position.z;
-    l.normalX[k] = normal.x, l.normalY[k] = normal.y, l.normalZ[k] = normal.z;
-    l.hasNormals[k] = !(n0 == Vec3{0, 0, 0});
-    l.ngx[k] = ng.x, l.ngy[k] = ng.y, l.ngz[k] = ng.z;
-    // bsdfAt's albedo; a texture's texels are requested now and read once every lane is fetched.
-    const Material& m = material(hit.triangle);
-    l.emits[k] = !m.ke.isBlack();
-    if (m.kdTexture < 0) {
-      l.kdR[k] = m.kd.r, l.kdG[k] = m.kd.g, l.kdB[k] = m.kd.b;
-    } else {
-      SurfacePoint sp;
-      sp.triangle = hit.triangle, sp.b1 = hit.b1, sp.b2 = hit.b2;
-      const Texture& t = s.textures[size_t(m.kdTexture)];
-      const BilinearFootprint f = bilinearFootprint(t, s.texels.data(), textureUv(s, t, sp));
-      for (const uint32_t* texel : {f.row0 + f.x0, f.row0 + f.x1, f.row1 + f.x0, f.row1 + f.x1}) __builtin_prefetch(texel);
-      textured.push_back({k, f, m.kd});
-    }
+    fetchLambertianSurface(s, hit, path.ray.direction, l, k, textured);
+    const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
     if (drawn != kNotDrawn) {
       l.uLightX[k] = sobol.x[drawn], l.uLightY[k] = sobol.y[drawn];
       l.uBsdfX[k] = sobol.x[drawn + 1], l.uBsdfY[k] = sobol.y[drawn + 1];
@@ -447,26 +399,21 @@ class PathTracer {
       l.uBsdfX[k] = u.bsdfDirection.x, l.uBsdfY[k] = u.bsdfDirection.y;
     }
 
-    // The light, chosen by the light point's first number (rescaled for the point): an emitting
-    // triangle's data for the lanes' own sampling; any other light is sampled by sampleOtherLights,
-    // as is the no light of a scene without one (no sample then).
+    // The light, chosen by the light point's first number (rescaled for the point): a LaneLight's
+    // data for the lanes' own sampling; any other light is sampled by sampleOtherLights, as is the
+    // no light of a scene without one (no sample then).
     const LightChoice choice =
         s.lights.empty() ? LightChoice{} : chooseLight(s, lightChoice_, position, l.uLightX[k], &l.uLightX[k]);
     l.light[k] = choice.light;
     l.lightPmf[k] = choice.pmf;
-    const TriangleLightRecord* light = s.lights.empty() ? nullptr : &lightRecords_[choice.light];
+    const LaneLight* light = s.lights.empty() ? nullptr : &laneLights_[choice.light];
     l.lightIsTriangle[k] = light && light->isTriangle;
     l.lightDelta[k] = false;  // set by sampleOtherLights for the others
     if (!l.lightIsTriangle[k]) {
       otherLights.push_back(k);
       return;
     }
-    l.q0x[k] = light->q0.x, l.q0y[k] = light->q0.y, l.q0z[k] = light->q0.z;
-    l.q1x[k] = light->q1.x, l.q1y[k] = light->q1.y, l.q1z[k] = light->q1.z;
-    l.q2x[k] = light->q2.x, l.q2y[k] = light->q2.y, l.q2z[k] = light->q2.z;
-    l.lightNx[k] = light->normal.x, l.lightNy[k] = light->normal.y, l.lightNz[k] = light->normal.z;
-    l.lightArea[k] = light->area;
-    l.leR[k] = light->le.r, l.leG[k] = light->le.g, l.leB[k] = light->le.b;
+    fetchLaneLight(*light, l, k);
   }
 
   // Point, directional and environment lights and two-sided or textured emitters: the light each lane
@@ -494,8 +441,8 @@ class PathTracer {
       const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
       if (l.emits[k]) gatherEmission(path, hit, l.frontFace[k] != 0, position);
       if (path.bounce == 0)
-        path.recordFirstHit(Rgb(l.kdR[k], l.kdG[k], l.kdB[k]) + material(hit.triangle).ks, {l.snX[k], l.snY[k], l.snZ[k]},
-                            hit.t);
+        path.recordFirstHit(layerAlbedo({MaterialType::Diffuse, {l.kdR[k], l.kdG[k], l.kdB[k]}, material(hit.triangle).ks}),
+                            {l.snX[k], l.snY[k], l.snZ[k]}, hit.t);
       const int verticesBefore = ++path.gatheringVertices;
       if (verticesBefore == 1) path.firstDiffuseShare = Rgb(1.0f);  // a Lambertian surface reflects only diffusely
       if (l.shadowQueued[k]) {
@@ -596,7 +543,7 @@ class PathTracer {
   const PathTraceOptions& opt_;
   const PinholeCamera camera_;
   const PixelFilter filter_{{opt_.common.pixelFilter, opt_.common.filterRadius}};
-  std::vector<TriangleLightRecord> lightRecords_;  // by light index
+  std::vector<LaneLight> laneLights_;  // by light index
   // A hit's triangle and vertex records are prefetched when the scene's arrays outgrow a core's
   // second-level cache (1 MiB here): Sponza's shading reads then wait on memory (its fetch stage
   // is 1.5x slower without), while the Cornell box's stay cached and prefetching costs it 1%.
