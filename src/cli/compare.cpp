@@ -20,7 +20,6 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <sstream>
 
 #include "cli/commands.h"
 #include "cli/comparison_options.h"
@@ -98,10 +97,8 @@ int runCompare(const CompareOptions& opt) {
   }
   if (opt.json || !::isatty(STDOUT_FILENO)) std::cout << jsonText(out) << std::endl;
   else {
-    // File names in the words may hold anything: each line is made printable on its own.
-    std::istringstream lines(result.words);
-    for (std::string line; std::getline(lines, line);) std::cout << printable(line) << "\n";
-    std::cout << std::flush;
+    // File names in the words may hold anything.
+    std::cout << printableLines(result.words) << (result.words.ends_with('\n') ? "" : "\n") << std::flush;
   }
   return verdictExitStatus(result.verdict);
 }

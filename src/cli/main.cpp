@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
                  "or --memory-limit)\n";
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "lucent: error: " << lucent::printable(e.what()) << "\n";
+    std::cerr << "lucent: error: " << lucent::printableLines(e.what()) << "\n";
     return 1;
   }
   return exitCode;

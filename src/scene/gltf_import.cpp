@@ -41,6 +41,7 @@ const std::set<std::string> kSupportedExtensions = {"KHR_lights_punctual", "KHR_
 struct Context {
   const tinygltf::Model& model;
   const std::string& file;
+  const std::string& warnings;  // TinyGLTF's: why an image named by its URI could not be read
   [[noreturn]] void fail(const std::string& path, const std::string& what) const {
     throw SceneError(file + ": " + path + ": " + what);
   }
@@ -54,6 +55,28 @@ std::string quoted(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.15g", value);
   return text;
+}
+
+// Why image `index`'s URI could not be read, as TinyGLTF's warnings say it in the line before their
+// note of the image ("File not found : NAME": no such file in the glTF file's folder; a file read
+// error: the loader's reason), as ": REASON"; empty if they do not say.
+std::string imageReadProblem(const Context& c, size_t index) {
+  const size_t note = c.warnings.find("Failed to load external 'uri' for image[" + std::to_string(index) + "]");
+  if (note == std::string::npos) return "";
+  std::string before = c.warnings.substr(0, note);
+  while (!before.empty() && (before.back() == '\n' || before.back() == ' ')) before.pop_back();
+  std::string line = before.substr(before.rfind('\n') == std::string::npos ? 0 : before.rfind('\n') + 1);
+  const std::string notFound = "File not found : ";
+  if (line.rfind(notFound, 0) == 0) {
+    // TinyGLTF's file test is regularFileExists: the name may be there as something else.
+    const fs::path folder = fs::path(c.file).parent_path(), named = folder / line.substr(notFound.size());
+    const std::string problem = regularFileProblem(named);
+    if (!problem.empty() && problem != "not found") return ": " + named.string() + " " + problem;
+    return ": no such file in " + (folder.empty() ? std::string(".") : folder.string());
+  }
+  const std::string readError = "File read error : ";
+  if (line.rfind(readError, 0) == 0) line.erase(0, readError.size());
+  return line.empty() ? "" : ": " + line;
 }
 
 // Whether a transformed point or direction is finite as floats, as the scene keeps it.
@@ -373,7 +396,8 @@ TextureFile textureImage(const Context& c, const tinygltf::TextureInfo& info, co
     file.bytes.assign(p, p + length);
   } else {
     file.bytes = image.image;  // as read from its URI (keepImageBytes)
-    if (file.bytes.empty()) c.fail(imagePath + ".uri", "the image could not be read");
+    if (file.bytes.empty())
+      c.fail(imagePath + ".uri", "'" + image.uri + "' could not be read" + imageReadProblem(c, size_t(texture.source)));
   }
   const auto& bytes = file.bytes;
   const bool png = bytes.size() >= 8 && std::memcmp(bytes.data(), "\x89PNG\r\n\x1a\n", 8) == 0;
@@ -631,9 +655,9 @@ struct NodeWalk {
     const std::vector<double> texcoords1 = readsSet1 ? readTexcoords("TEXCOORD_1") : std::vector<double>();
     if ((!normals.empty() && normals.size() / 3 != vertices) || (!tangents.empty() && tangents.size() / 4 != vertices))
       c.fail(path + ".attributes", "its attributes differ in count from POSITION's " + std::to_string(vertices));
+    // Tangents serve a normal texture only: without one they change nothing, and are not listed.
     for (const auto& [name, accessor] : p.attributes)
-      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && name != "TEXCOORD_1" &&
-          !(name == "TANGENT" && normalMapped))
+      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && name != "TEXCOORD_1" && name != "TANGENT")
         scene.ignored.push_back(c.file + ": " + path + ".attributes." + name + " (not read)");
     if (!p.targets.empty()) scene.ignored.push_back(c.file + ": " + path + ".targets (morph targets: the base shape is rendered)");
 
@@ -920,7 +944,7 @@ void importGltf(const std::string& path, const GltfOptions& options, Scene& scen
     if (first.size() > 200) first = first.substr(0, 200) + "...";
     throw SceneError(path + ": not a readable glTF file: " + (first.empty() ? "unknown error" : first));
   }
-  const Context c{model, path};
+  const Context c{model, path, warning};
   for (const std::string& name : model.extensionsRequired)
     if (!kSupportedExtensions.count(name))
       c.fail("extensionsRequired", "names " + name + ", which Lucent does not render");

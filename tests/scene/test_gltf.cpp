@@ -376,7 +376,11 @@ TEST_CASE("Broken glTF files are refused with the file and the JSON path of what
   f["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
   f["textures"] = {{{"source", 0}}};
   f["images"] = {{{"uri", "missing.png"}}};
-  refused(f, "images[0].uri: the image could not be read");
+  refused(f, "images[0].uri: 'missing.png' could not be read: no such file in " + dir.path.string());
+  fs::create_directory(dir.path / "folder.png");
+  f["images"] = {{{"uri", "folder.png"}}};
+  refused(f, "images[0].uri: 'folder.png' could not be read: " + (dir.path / "folder.png").string() +
+                 " is not a regular file");
   f["images"] = {{{"uri", "data:image/png;base64," + base64({'n', 'o', 't', ' ', 'a', 'n', ' ', 'i', 'm', 'a', 'g', 'e'})}}};
   refused(f, "images[0]: is neither a PNG nor a JPEG image");
   f = good;
@@ -422,6 +426,15 @@ TEST_CASE("lucent render renders a glTF file from its camera and says what it le
   const auto it = std::find_if(metadata.begin(), metadata.end(), [](const auto& m) { return m.first == "lucent:ignored"; });
   REQUIRE(it != metadata.end());
   CHECK(json::parse(it->second) == line["ignored"]);
+  // --strict refuses it, one line per thing left out, and writes nothing.
+  const std::string refusedExr = dir / "strict.exr";
+  const test::CliRun strict =
+      test::runLucent("render " + wrapGltf(dir.path, quadWithOcclusion()) + " --spp 1 -q --strict -o " + refusedExr);
+  INFO(strict.output);
+  CHECK(strict.status == 1);
+  CHECK_THAT(strict.output, Catch::Contains("hold:\n  ") && Catch::Contains("occlusionTexture"));
+  CHECK(strict.output.find("\\x0a") == std::string::npos);
+  CHECK_FALSE(fs::exists(refusedExr));
 }
 
 TEST_CASE("lucent render --strict refuses a scene whose files hold what the render leaves out", "[gltf][cli]") {
@@ -687,6 +700,25 @@ TEST_CASE("glTF normal and metallic-roughness textures are read as linear data, 
     const SurfacePoint sp = surfaceAt(scene, 0, 1 / 3.0f, 1 / 3.0f);
     CHECK(sp.shadingNormal.y > 0);
   }
+}
+
+TEST_CASE("Tangents on a material without a normal texture are nothing left out", "[gltf][loader]") {
+  // They would serve a normal texture only: --strict has nothing to refuse.
+  const test::TempDir dir;
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  std::vector<unsigned char> tangents;
+  for (int v = 0; v < 4; ++v)
+    for (const float c : {1.0f, 0.0f, 0.0f, 1.0f}) append(tangents, c);
+  f["buffers"].push_back({{"byteLength", tangents.size()}, {"uri", "data:application/octet-stream;base64," + base64(tangents)}});
+  f["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", tangents.size()}});
+  f["accessors"].push_back({{"bufferView", 3}, {"componentType", 5126}, {"count", 4}, {"type", "VEC4"}});
+  f["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = 4;
+  CHECK(loadWrapped(dir.path, f).ignored.empty());
+  // Another attribute still is.
+  f["meshes"][0]["primitives"][0]["attributes"]["_TEMPERATURE"] = 4;
+  const Scene scene = loadWrapped(dir.path, f);
+  REQUIRE(scene.ignored.size() == 1);
+  CHECK_THAT(scene.ignored[0], Catch::Contains("attributes._TEMPERATURE (not read)"));
 }
 
 TEST_CASE("KHR_materials_specular's textures: its factor times their A (linear), its colour times their RGB (sRGB)",

@@ -9,6 +9,8 @@ namespace lucent {
 // UTF-8), and bytes that are not part of valid UTF-8 (a raw 0x9b is an 8-bit terminal's CSI).
 // Printable UTF-8 is kept.
 std::string printable(std::string_view text);
+// The same for a message of several lines: each line made printable, the line breaks kept.
+std::string printableLines(std::string_view text);
 
 // A short excerpt of text read from a file, for a message: printable, at most `most` characters
 // (cut with "..."), so that a message never reproduces a file's contents.
