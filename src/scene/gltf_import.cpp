@@ -609,6 +609,26 @@ struct NodeWalk {
     return corners;
   }
 
+  // COLOR_0 (accessor `index`, none where negative) of a primitive's vertices: RGB or RGBA, floats or
+  // normalized unsigned bytes or shorts, each in [0, 1].
+  std::vector<double> readColours(int index, const std::string& user, size_t vertices) const {
+    if (index < 0) return {};
+    const bool rgba = size_t(index) < c.model.accessors.size() && c.model.accessors[size_t(index)].type == TINYGLTF_TYPE_VEC4;
+    const std::vector<double> read =
+        readAccessor(c, index, user, rgba ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3,
+                     {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
+    const tinygltf::Accessor& a = c.model.accessors[size_t(index)];
+    const std::string accessorPath = at("accessors", size_t(index));
+    if (a.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT && !a.normalized)
+      c.fail(accessorPath + ".normalized", "must be true for " + user + " of integers");
+    if (read.size() / (rgba ? 4 : 3) != vertices)
+      c.fail(user, "its count differs from POSITION's " + std::to_string(vertices));
+    for (size_t k = 0; k < read.size(); ++k)
+      if (!(read[k] >= 0 && read[k] <= 1))
+        c.fail(accessorPath, "element " + std::to_string(k / (rgba ? 4 : 3)) + " is not a colour in [0, 1]");
+    return read;
+  }
+
   void primitive(const tinygltf::Primitive& p, const std::string& path, const Matrix4& world) {
     const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
     if (mode == TINYGLTF_MODE_POINTS || mode == TINYGLTF_MODE_LINE || mode == TINYGLTF_MODE_LINE_LOOP ||
@@ -652,12 +672,15 @@ struct NodeWalk {
       return read;
     };
     texcoords = readTexcoords("TEXCOORD_0");
+    const std::vector<double> colours = readColours(attribute("COLOR_0"), path + ".attributes.COLOR_0", vertices);
+    const size_t colourChannels = colours.size() / vertices;
     const std::vector<double> texcoords1 = readsSet1 ? readTexcoords("TEXCOORD_1") : std::vector<double>();
     if ((!normals.empty() && normals.size() / 3 != vertices) || (!tangents.empty() && tangents.size() / 4 != vertices))
       c.fail(path + ".attributes", "its attributes differ in count from POSITION's " + std::to_string(vertices));
     // Tangents serve a normal texture only: without one they change nothing, and are not listed.
     for (const auto& [name, accessor] : p.attributes)
-      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && name != "TEXCOORD_1" && name != "TANGENT")
+      if (name != "POSITION" && name != "NORMAL" && name != "TEXCOORD_0" && name != "TEXCOORD_1" && name != "TANGENT" &&
+          name != "COLOR_0")
         scene.ignored.push_back(c.file + ": " + path + ".attributes." + name + " (not read)");
     if (!p.targets.empty()) scene.ignored.push_back(c.file + ": " + path + ".targets (morph targets: the base shape is rendered)");
 
@@ -698,6 +721,12 @@ struct NodeWalk {
         scene.texcoords1.resize(scene.positions.size() - 1);  // zeros for the vertices of meshes without
         scene.texcoords1.push_back(texcoords1.empty() ? Vec2{0, 0}
                                                       : Vec2{float(texcoords1[2 * v]), float(1 - texcoords1[2 * v + 1])});
+      }
+      if (!colours.empty()) {
+        scene.colours.resize(scene.positions.size() - 1);  // white for the vertices of meshes without
+        const double* rgba = &colours[colourChannels * v];
+        scene.colours.push_back(
+            {Rgb(float(rgba[0]), float(rgba[1]), float(rgba[2])), colourChannels == 4 ? float(rgba[3]) : 1.0f});
       }
     }
     if (normalMapped) placeTangents(tangents, world, mirrored, first, corners, spec.normal);

@@ -411,6 +411,7 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
   }
   if (!scene.tangents.empty()) scene.tangents.resize(scene.positions.size());  // meshes read after a glTF file's
   if (!scene.texcoords1.empty()) scene.texcoords1.resize(scene.positions.size());
+  if (!scene.colours.empty()) scene.colours.resize(scene.positions.size());
   // Light selection weighs lights by power; an emitter whose power overflows a float would break it.
   for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
     const uint32_t id = scene.materialIds[t];

@@ -155,6 +155,7 @@ uint64_t sceneContentHash(const Scene& scene) {
   h = hashArray(h, scene.texcoords);
   if (!scene.tangents.empty()) h = hashArray(h, scene.tangents);  // absent: the hash of scenes without them unchanged
   if (!scene.texcoords1.empty()) h = hashArray(h, scene.texcoords1);
+  if (!scene.colours.empty()) h = hashArray(h, scene.colours);
   h = hashArray(h, scene.indices);
   h = hashArray(h, scene.materialIds);
   h = hashArray(h, scene.materials);

@@ -43,7 +43,8 @@ bool surfaceIsThere(const Scene& scene, uint32_t tri, float u, float v, Vec3 ori
   sp.b1 = u;
   sp.b2 = v;
   const float alpha =
-      surfaceAlpha(scene, m, m.kdTexture >= 0 ? textureUv(scene, scene.textures[size_t(m.kdTexture)], sp) : Vec2{0, 0});
+      surfaceAlpha(scene, m, m.kdTexture >= 0 ? textureUv(scene, scene.textures[size_t(m.kdTexture)], sp) : Vec2{0, 0}) *
+      vertexColourAt(scene, sp).alpha;
   if (m.alphaMode == AlphaMode::Mask) return alpha >= m.alphaCutoff;
   uint32_t bits[6];
   std::memcpy(bits, &origin, 12);

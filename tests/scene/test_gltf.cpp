@@ -877,6 +877,89 @@ TEST_CASE("glTF alpha: MASK cuts holes for every query, BLEND lets rays through 
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, f), Catch::Contains("materials[0].alphaMode: 'HALF'"));
 }
 
+namespace {
+
+// The quad of quadFile with a COLOR_0 accessor (number 4, in a second buffer) of the given component
+// type (float, unsigned byte or short) and type (VEC3 or VEC4): per vertex (x, y) (0, 0) red, (1, 0)
+// green, (0, 1) blue, (1, 1) grey, alpha 1 where x = 0 and 0 where x = 1. `colours` gets the values
+// the file holds, four per vertex (alpha 1 for VEC3).
+json quadWithColours(int componentType, int channels, std::vector<float>& colours) {
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  const double wanted[4][4] = {{1, 0, 0, 1}, {0, 1, 0, 0}, {0, 0, 1, 1}, {0.5, 0.5, 0.5, 0}};
+  std::vector<unsigned char> bytes;
+  colours.clear();
+  const int stride = componentType == 5126 ? 4 * channels : componentType == 5121 ? 4 : 8;  // elements 4-byte aligned
+  for (const auto& v : wanted) {
+    const size_t start = bytes.size();
+    for (int k = 0; k < 4; ++k) {
+      const double x = v[k];
+      if (k == channels) {
+        colours.push_back(1.0f);
+        break;
+      }
+      if (componentType == 5126) append(bytes, float(x)), colours.push_back(float(x));
+      if (componentType == 5121) append(bytes, uint8_t(std::lround(x * 255))), colours.push_back(float(std::lround(x * 255) / 255.0));
+      if (componentType == 5123)
+        append(bytes, uint16_t(std::lround(x * 65535))), colours.push_back(float(std::lround(x * 65535) / 65535.0));
+    }
+    bytes.resize(start + size_t(stride), 0);
+  }
+  f["buffers"].push_back({{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + base64(bytes)}});
+  f["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", bytes.size()}, {"byteStride", stride}});
+  json accessor = {{"bufferView", 3}, {"componentType", componentType}, {"count", 4}, {"type", channels == 4 ? "VEC4" : "VEC3"}};
+  if (componentType != 5126) accessor["normalized"] = true;
+  f["accessors"].push_back(accessor);
+  f["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = 4;
+  return f;
+}
+
+}  // namespace
+
+TEST_CASE("glTF COLOR_0 multiplies the base colour and alpha: floats, normalized bytes and shorts, RGB and RGBA",
+          "[gltf][loader]") {
+  const test::TempDir dir;
+  std::vector<float> colours;
+  for (const auto& [componentType, channels] :
+       {std::pair{5126, 3}, std::pair{5126, 4}, std::pair{5121, 4}, std::pair{5123, 3}}) {
+    INFO("component type " << componentType << ", " << channels << " channels");
+    const Scene scene = loadWrapped(dir.path, quadWithColours(componentType, channels, colours));
+    CHECK(scene.ignored.empty());
+    REQUIRE(scene.colours.size() == scene.positions.size());
+    const Rgb factor = scene.materials[0].kd;
+    for (uint32_t t = 0; t < scene.triangleCount(); ++t)
+      for (const auto& [b1, b2, corner] : {std::tuple{0.0f, 0.0f, 0}, std::tuple{1.0f, 0.0f, 1}, std::tuple{0.0f, 1.0f, 2}}) {
+        const uint32_t v = scene.indices[3 * t + uint32_t(corner)];
+        const SurfacePoint sp = surfaceAt(scene, t, b1, b2);
+        const float* c = &colours[4 * v];
+        CHECK(bsdfAt(scene, sp).kd == Rgb(factor.r * c[0], factor.g * c[1], factor.b * c[2]));
+        CHECK(vertexColourAt(scene, sp).alpha == c[3]);
+      }
+    // Between the vertices, interpolated.
+    const SurfacePoint centre = surfaceAt(scene, 0, 1 / 3.0f, 1 / 3.0f);
+    const uint32_t* v = &scene.indices[0];
+    for (int k = 0; k < 3; ++k)
+      CHECK(bsdfAt(scene, centre).kd[k] ==
+            Approx(factor[k] * (colours[4 * v[0] + k] + colours[4 * v[1] + k] + colours[4 * v[2] + k]) / 3).epsilon(1e-5));
+  }
+  // With alphaMode MASK (cutoff 0.5) the alpha cuts a hole where x > 0.5.
+  json f = quadWithColours(5121, 4, colours);
+  f["materials"][0]["alphaMode"] = "MASK";
+  const Scene masked = loadWrapped(dir.path, f);
+  const Visibility vis(masked);
+  CHECK(vis.intersect(Ray{{0.25f, 0.5f, 1}, {0, 0, -1}}).found());
+  CHECK_FALSE(vis.intersect(Ray{{0.75f, 0.5f, 1}, {0, 0, -1}}).found());
+  // Integers not normalized, and floats outside [0, 1], are refused.
+  f = quadWithColours(5121, 4, colours);
+  f["accessors"][4]["normalized"] = false;
+  REQUIRE_THROWS_WITH(loadWrapped(dir.path, f), Catch::Contains("accessors[4].normalized: must be true for"));
+  f = quadWithColours(5126, 3, colours);
+  f["accessors"][4]["componentType"] = 5126;
+  std::vector<unsigned char> bright;
+  for (int k = 0; k < 12; ++k) append(bright, k == 4 ? 1.5f : 0.5f);
+  f["buffers"][1] = {{"byteLength", bright.size()}, {"uri", "data:application/octet-stream;base64," + base64(bright)}};
+  REQUIRE_THROWS_WITH(loadWrapped(dir.path, f), Catch::Contains("accessors[4]: element 1 is not a colour in [0, 1]"));
+}
+
 TEST_CASE("glTF single-sided faces (doubleSided false) are not there from behind for any query, two-sided ones are",
           "[gltf][loader][visibility]") {
   const test::TempDir dir;

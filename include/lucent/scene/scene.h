@@ -154,6 +154,13 @@ struct Tangent {
 };
 static_assert(sizeof(Tangent) == 16);
 
+// glTF's COLOR_0 at a vertex: it multiplies the base colour and the base alpha.
+struct VertexColour {
+  Rgb rgb{1.0f};
+  float alpha = 1.0f;
+};
+static_assert(sizeof(VertexColour) == 16);
+
 inline constexpr size_t kMostNearbyLights = 64;
 
 struct Scene {
@@ -163,6 +170,7 @@ struct Scene {
   std::vector<Vec2> texcoords;   // zero where the OBJ had none
   std::vector<Vec2> texcoords1;  // glTF's TEXCOORD_1 where a texture reads it (else empty), zero where a mesh has none
   std::vector<Tangent> tangents;  // empty, or one per vertex (zero direction where none is known)
+  std::vector<VertexColour> colours;  // glTF's COLOR_0 where a mesh has one (else empty), white where a mesh has none
   // Triangles.
   std::vector<uint32_t> indices;      // 3 per triangle
   std::vector<uint32_t> materialIds;  // 1 per triangle

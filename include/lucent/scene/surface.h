@@ -59,6 +59,21 @@ inline Rgb textureAt(const Scene& scene, int32_t index, const SurfacePoint& sp,
   return bilinear(bilinearFootprint(t, scene.texels.data(), textureUv(scene, t, sp)), decode);
 }
 
+// glTF's COLOR_0 interpolated at a surface point; white and opaque where the scene has none.
+inline VertexColour vertexColourAt(const Scene& scene, const SurfacePoint& sp) {
+  if (scene.colours.empty()) return {};
+  const uint32_t* v = &scene.indices[3 * sp.triangle];
+  const VertexColour a = scene.colours[v[0]], b = scene.colours[v[1]], c = scene.colours[v[2]];
+  const float b0 = 1.0f - sp.b1 - sp.b2;
+  return {a.rgb * b0 + b.rgb * sp.b1 + c.rgb * sp.b2, a.alpha * b0 + b.alpha * sp.b1 + c.alpha * sp.b2};
+}
+
+// The material's base colour factor at a surface point: its kd times the vertex colour, where the
+// scene has vertex colours (glTF's COLOR_0); a colour texture multiplies it in turn.
+inline Rgb baseFactorAt(const Scene& scene, const Material& m, const SurfacePoint& sp) {
+  return scene.colours.empty() ? m.kd : m.kd * vertexColourAt(scene, sp).rgb;
+}
+
 // The radiance triangle tri emits at barycentrics (b1, b2) towards its front (front) or back side:
 // the material's ke times its emissive texture; black towards the back unless the material emits
 // there (Material::emitsBackFace).
@@ -144,7 +159,8 @@ inline SurfaceBsdf gltfBsdf(const Material& m, Rgb base, float metallic, float r
 
 inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
   const Material& m = scene.materials[sp.materialId];
-  const Rgb kd = m.kdTexture < 0 ? m.kd : m.kd * textureAt(scene, m.kdTexture, sp);
+  const Rgb factor = baseFactorAt(scene, m, sp);
+  const Rgb kd = m.kdTexture < 0 ? factor : factor * textureAt(scene, m.kdTexture, sp);
   if (isGltf(m.type)) {
     float metallic = m.metallic, roughness = m.roughness, specular = m.specular;
     Rgb specularColour = m.ks;

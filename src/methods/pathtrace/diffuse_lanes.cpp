@@ -57,16 +57,17 @@ void fetchLambertianSurface(const Scene& s, const Hit& hit, Vec3 direction, Diff
   store(s.faceNormals[hit.triangle], l.ngx, l.ngy, l.ngz, k);
   const Material& m = s.materials[s.materialIds[hit.triangle]];
   l.emits[k] = !m.ke.isBlack();
-  if (m.kdTexture < 0) {
-    l.kdR[k] = m.kd.r, l.kdG[k] = m.kd.g, l.kdB[k] = m.kd.b;
-    return;
-  }
   SurfacePoint sp;
   sp.triangle = hit.triangle, sp.b1 = hit.b1, sp.b2 = hit.b2;
+  const Rgb factor = baseFactorAt(s, m, sp);
+  if (m.kdTexture < 0) {
+    l.kdR[k] = factor.r, l.kdG[k] = factor.g, l.kdB[k] = factor.b;
+    return;
+  }
   const Texture& t = s.textures[size_t(m.kdTexture)];
   const BilinearFootprint f = bilinearFootprint(t, s.texels.data(), textureUv(s, t, sp));
   for (const uint32_t* texel : {f.row0 + f.x0, f.row0 + f.x1, f.row1 + f.x0, f.row1 + f.x1}) __builtin_prefetch(texel);
-  textured.push_back({k, f, m.kd});
+  textured.push_back({k, f, factor});
 }
 
 void readLaneTextures(DiffuseLanes& l, std::span<const TexturedLane> textured) {

@@ -91,7 +91,7 @@ struct CameraLanes {
 void startCameraPaths(CameraLanes& lanes, uint32_t first, uint32_t last, SamplerKind sampler, uint64_t seed,
                       const PinholeCamera& camera, const PixelFilter& filter, bool pixelCentres);
 
-// A lane whose albedo is textured: the texels to read, and the material's factor.
+// A lane whose albedo is textured: the texels to read, and the base factor they scale (baseFactorAt).
 struct TexturedLane {
   uint32_t lane;
   BilinearFootprint footprint;

@@ -37,7 +37,7 @@ TriangleShape triangleShape(const Scene& scene, uint32_t tri) {
 Rgb pointAlbedo(const Scene& scene, const PointSample& s) {
   const Material& m = scene.materials[scene.materialIds[s.triangle]];
   if (m.type == MaterialType::Mirror || m.type == MaterialType::Glass) return Rgb(0.0f);
-  if (m.kdTexture < 0 && !isGltf(m.type)) return m.kd;
+  if (m.kdTexture < 0 && !isGltf(m.type) && scene.colours.empty()) return m.kd;
   SurfacePoint sp;
   sp.triangle = s.triangle;
   sp.materialId = scene.materialIds[s.triangle];
