@@ -10,6 +10,7 @@ void addMethodsCommand(CLI::App& app, int& exitCode);
 void addMergeCommand(CLI::App& app, int& exitCode);
 void addReportCommand(CLI::App& app, int& exitCode);
 void addCheckDumpCommand(CLI::App& app, int& exitCode);
+void addBsdfCommand(CLI::App& app, int& exitCode);
 
 // Every command of the lucent program, in the order its help lists them.
 inline void addCommands(CLI::App& app, int& exitCode) {
@@ -19,5 +20,6 @@ inline void addCommands(CLI::App& app, int& exitCode) {
   addMergeCommand(app, exitCode);
   addReportCommand(app, exitCode);
   addCheckDumpCommand(app, exitCode);
+  addBsdfCommand(app, exitCode);
 }
 }  // namespace lucent::cli

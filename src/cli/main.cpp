@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
     for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->get_name() == command;
     if (!known) {
       std::cerr << "lucent: error: unknown command '" << lucent::printable(command)
-                << "' (commands: render, compare, methods, merge, report, check-dump; lucent --help)\n";
+                << "' (commands: render, compare, methods, merge, report, check-dump, bsdf; lucent --help)\n";
       return 1;
     }
   }

@@ -36,7 +36,7 @@ constexpr uint64_t kMemoryCheckBytes = uint64_t(1) << 24;
 // Extensions read, and those whose content is listed as left out rather than rendered.
 const std::set<std::string> kSupportedExtensions = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
                                                     "KHR_texture_transform", "KHR_materials_specular",
-                                                    "KHR_materials_ior"};
+                                                    "KHR_materials_ior", "EXT_mesh_gpu_instancing"};
 
 struct Context {
   const tinygltf::Model& model;
@@ -118,8 +118,29 @@ struct Matrix4 {
   }
 };
 
-Matrix4 nodeMatrix(const Context& c, const tinygltf::Node& node, const std::string& path) {
+// T * R * S for translation t, the rotation of unit quaternion q (x, y, z, w) and scale s, column by
+// column.
+Matrix4 trsMatrix(const double t[3], const double q[4], const double s[3]) {
+  const double x = q[0], y = q[1], z = q[2], w = q[3];
+  const double rot[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
+                         2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
+                         2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)};
   Matrix4 r;
+  for (int col = 0; col < 3; ++col)
+    for (int row = 0; row < 3; ++row) r.m[col * 4 + row] = rot[col * 3 + row] * s[col];
+  for (int k = 0; k < 3; ++k) r.m[12 + k] = t[k];
+  return r;
+}
+
+// Quaternion q made unit length in place; false for a zero (or non-finite) one.
+bool normalizeQuaternion(double q[4]) {
+  const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (!(len > 0) || !std::isfinite(len)) return false;
+  for (int k = 0; k < 4; ++k) q[k] /= len;
+  return true;
+}
+
+Matrix4 nodeMatrix(const Context& c, const tinygltf::Node& node, const std::string& path) {
   const auto finite = [&](const std::vector<double>& v, const char* key) {
     for (const double x : v)
       if (!std::isfinite(x)) c.fail(path + "." + key, "has a non-finite value");
@@ -127,6 +148,7 @@ Matrix4 nodeMatrix(const Context& c, const tinygltf::Node& node, const std::stri
   if (!node.matrix.empty()) {
     if (node.matrix.size() != 16) c.fail(path + ".matrix", "expected 16 numbers");
     finite(node.matrix, "matrix");
+    Matrix4 r;
     std::copy(node.matrix.begin(), node.matrix.end(), r.m);
     return r;
   }
@@ -136,23 +158,14 @@ Matrix4 nodeMatrix(const Context& c, const tinygltf::Node& node, const std::stri
   finite(node.translation, "translation");
   finite(node.rotation, "rotation");
   finite(node.scale, "scale");
-  double x = 0, y = 0, z = 0, w = 1;
+  double q[4] = {0, 0, 0, 1}, t[3] = {0, 0, 0}, s[3] = {1, 1, 1};
   if (!node.rotation.empty()) {
-    x = node.rotation[0], y = node.rotation[1], z = node.rotation[2], w = node.rotation[3];
-    const double len = std::sqrt(x * x + y * y + z * z + w * w);
-    if (!(len > 0)) c.fail(path + ".rotation", "is not a rotation (a zero quaternion)");
-    x /= len, y /= len, z /= len, w /= len;
+    std::copy(node.rotation.begin(), node.rotation.end(), q);
+    if (!normalizeQuaternion(q)) c.fail(path + ".rotation", "is not a rotation (a zero quaternion)");
   }
-  const double s[3] = {node.scale.empty() ? 1 : node.scale[0], node.scale.empty() ? 1 : node.scale[1],
-                       node.scale.empty() ? 1 : node.scale[2]};
-  // T * R * S, column by column.
-  const double rot[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
-                         2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
-                         2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)};
-  for (int col = 0; col < 3; ++col)
-    for (int row = 0; row < 3; ++row) r.m[col * 4 + row] = rot[col * 3 + row] * s[col];
-  for (int k = 0; k < 3; ++k) r.m[12 + k] = node.translation.empty() ? 0 : node.translation[k];
-  return r;
+  if (!node.translation.empty()) std::copy(node.translation.begin(), node.translation.end(), t);
+  if (!node.scale.empty()) std::copy(node.scale.begin(), node.scale.end(), s);
+  return trsMatrix(t, q, s);
 }
 
 int componentBytes(int type) {
@@ -890,6 +903,53 @@ struct NodeWalk {
     content.camera = camera;
   }
 
+  // Calls place(M) for each transform M at which node n places its mesh: its world transform, or
+  // with EXT_mesh_gpu_instancing once per instance, the world transform times the instance's
+  // T * R * S (its attributes TRANSLATION, ROTATION and SCALE, each optional, all of one count;
+  // ROTATION as floats or normalized signed bytes or shorts). Each instance's triangles are checked
+  // against the memory limit as they are placed (primitive), as a node's are.
+  template <class Place>
+  void forEachInstance(const tinygltf::Node& n, const std::string& path, const Matrix4& world, Place&& place) {
+    const tinygltf::Value* e = extension(n.extensions, "EXT_mesh_gpu_instancing");
+    if (!e) return place(world);
+    const std::string instancing = path + ".extensions.EXT_mesh_gpu_instancing";
+    if (!e->IsObject() || !e->Get("attributes").IsObject()) c.fail(instancing, "has no attributes object");
+    const tinygltf::Value& attributes = e->Get("attributes");
+    std::vector<double> read[3];
+    const char* names[3] = {"TRANSLATION", "ROTATION", "SCALE"};
+    size_t count = 0;
+    for (const std::string& name : attributes.Keys()) {
+      const std::string user = instancing + ".attributes." + name;
+      const int k = name == names[0] ? 0 : name == names[1] ? 1 : name == names[2] ? 2 : -1;
+      if (k < 0) {
+        scene.ignored.push_back(c.file + ": " + user + " (not read)");
+        continue;
+      }
+      const tinygltf::Value& index = attributes.Get(name);
+      if (!index.IsInt()) c.fail(user, "is not an accessor index");
+      read[k] = k == 1 ? readAccessor(c, index.GetNumberAsInt(), user, TINYGLTF_TYPE_VEC4,
+                                      {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT})
+                       : readAccessor(c, index.GetNumberAsInt(), user, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT});
+      const size_t instances = read[k].size() / (k == 1 ? 4 : 3);
+      if (count != 0 && instances != count)
+        c.fail(user, "has " + std::to_string(instances) + " instances, another attribute " + std::to_string(count));
+      count = instances;
+      for (const double x : read[k])
+        if (!std::isfinite(x)) c.fail(user, "has a non-finite value");
+    }
+    if (count == 0) c.fail(instancing + ".attributes", "names no TRANSLATION, ROTATION or SCALE");
+    for (size_t i = 0; i < count; ++i) {
+      double t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, s[3] = {1, 1, 1};
+      if (!read[0].empty()) std::copy_n(&read[0][3 * i], 3, t);
+      if (!read[1].empty()) {
+        std::copy_n(&read[1][4 * i], 4, q);
+        if (!normalizeQuaternion(q)) c.fail(instancing + ".attributes.ROTATION", "instance " + std::to_string(i) + " is a zero quaternion");
+      }
+      if (!read[2].empty()) std::copy_n(&read[2][3 * i], 3, s);
+      place(world * trsMatrix(t, q, s));
+    }
+  }
+
   // glTF's nodes form disjoint strict trees: a node has one parent at most, and a scene names a
   // root once. A node reached twice (a cycle, a node shared by two parents, a root named twice) is
   // refused: followed, a file of a few kilobytes could name 2^40 instances.
@@ -907,8 +967,10 @@ struct NodeWalk {
     if (n.mesh >= 0) {
       if (size_t(n.mesh) >= c.model.meshes.size()) c.fail(path + ".mesh", "mesh " + std::to_string(n.mesh) + " does not exist");
       const tinygltf::Mesh& mesh = c.model.meshes[size_t(n.mesh)];
-      for (size_t k = 0; k < mesh.primitives.size(); ++k)
-        primitive(mesh.primitives[k], at("meshes", size_t(n.mesh)) + "." + at("primitives", k), world);
+      forEachInstance(n, path, world, [&](const Matrix4& placed) {
+        for (size_t k = 0; k < mesh.primitives.size(); ++k)
+          primitive(mesh.primitives[k], at("meshes", size_t(n.mesh)) + "." + at("primitives", k), placed);
+      });
     }
     if (n.skin >= 0) scene.ignored.push_back(c.file + ": " + path + ".skin (the bind pose is rendered)");
     if (n.camera >= 0) camera(n.camera, path, n.name, world);

@@ -1,11 +1,13 @@
 // `lucent render` end to end: outputs, metadata, the JSON summary, layers and the time budget.
 #include <catch2/catch.hpp>
+#include <algorithm>
 
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "lucent/image/image.h"
+#include "lucent/scene/loader.h"
 #include "test_support.h"
 
 using namespace lucent;
@@ -312,4 +314,44 @@ TEST_CASE("Every command's bad arguments exit 1, compare's 2, and help 0", "[cli
   CHECK_THAT(threads.output, Catch::Contains("--threads: '-2'"));
   CHECK(runLucent("nonsense").status == 1);
   CHECK(runLucent("merge").status == 1);
+}
+
+TEST_CASE("lucent bsdf lists a scene's materials and gives one's albedo, f and pdf as CSV or JSON", "[cli][bsdf]") {
+  const std::string scene = LUCENT_SOURCE_DIR "/scenes/cornell-box.json";
+  const test::CliRun list = test::runLucent("bsdf " + scene);
+  INFO(list.output);
+  REQUIRE(list.status == 0);
+  CHECK_THAT(list.output, Catch::Contains(",white,diffuse\n"));
+  // A Lambertian material: E = kd at every angle; f = kd / pi and pdf = cos / pi for a pair.
+  const Scene loaded = loadScene(scene, {true});
+  const auto white = std::find(loaded.materialNames.begin(), loaded.materialNames.end(), "white");
+  REQUIRE(white != loaded.materialNames.end());
+  const Rgb kd = loaded.materials[size_t(white - loaded.materialNames.begin())].kd;
+  const test::CliRun r = test::runLucent("bsdf " + scene + " white --cosines 3 --samples 64 --wo 0,0,1 --wi 0,0.6,0.8 --json");
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  CHECK(j["type"] == "diffuse");
+  REQUIRE(j["directional_albedo"].size() == 3);
+  for (const auto& e : j["directional_albedo"])
+    for (int c = 0; c < 3; ++c) CHECK(e["albedo"][c].get<double>() == Approx(kd[c]).epsilon(1e-6));
+  for (int c = 0; c < 3; ++c) CHECK(j["f"][c].get<double>() == Approx(kd[c] / kPi).epsilon(1e-6));
+  CHECK(j["pdf"].get<double>() == Approx(0.8 / kPi).epsilon(1e-6));
+  const test::CliRun csv = test::runLucent("bsdf " + scene + " white --cosines 2 --samples 64");
+  CHECK(csv.status == 0);
+  CHECK_THAT(csv.output, Catch::StartsWith("cos_theta,albedo_r,albedo_g,albedo_b,error_r,error_g,error_b\n0.25,"));
+  // A name that is no material's, and one direction without the other, are refused.
+  const test::CliRun unknown = test::runLucent("bsdf " + scene + " velvet");
+  CHECK(unknown.status == 1);
+  CHECK_THAT(unknown.output, Catch::Contains("'velvet' is neither the name nor the index"));
+  const test::CliRun half = test::runLucent("bsdf " + scene + " white --wo 0,0,1");
+  CHECK(half.status == 1);
+  CHECK_THAT(half.output, Catch::Contains("--wo and --wi: give both"));
+  const test::CliRun zero = test::runLucent("bsdf " + scene + " white --wo 0,0,0 --wi 0,0,1");
+  CHECK(zero.status == 1);
+  CHECK_THAT(zero.output, Catch::Contains("--wo: not a direction"));
+  CHECK(test::runLucent("bsdf " + scene + " white --cosines 0").status == 1);
+  const test::CliRun missing = test::runLucent("bsdf no-such-scene.json");
+  CHECK(missing.status == 1);
+  CHECK_THAT(missing.output, Catch::Contains("no-such-scene.json"));
 }

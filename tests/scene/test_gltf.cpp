@@ -960,6 +960,62 @@ TEST_CASE("glTF COLOR_0 multiplies the base colour and alpha: floats, normalized
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, f), Catch::Contains("accessors[4]: element 1 is not a colour in [0, 1]"));
 }
 
+TEST_CASE("EXT_mesh_gpu_instancing places a node's mesh once per instance, at the node's transform times the "
+          "instance's",
+          "[gltf][loader]") {
+  const test::TempDir dir;
+  // Three instances of the unit quad under a node moved by (0, 0, -1): the first where the node puts
+  // it, the second moved by (2, 0, 0), the third turned 90 degrees about z (a quaternion of
+  // normalized shorts), scaled by 2 and moved by (0, 3, 0).
+  json f = quadFile({{{"mesh", 0}, {"translation", {0, 0, -1}}}}, {0});
+  std::vector<unsigned char> bytes;
+  for (const float v : {0.0f, 0.0f, 0.0f, 2.0f, 0.0f, 0.0f, 0.0f, 3.0f, 0.0f}) append(bytes, v);
+  for (const int16_t v : {0, 0, 0, 32767, 0, 0, 0, 32767, 0, 0, 23170, 23170}) append(bytes, v);
+  for (const float v : {1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 2.0f, 2.0f, 2.0f}) append(bytes, v);
+  f["buffers"].push_back({{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + base64(bytes)}});
+  f["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", 36}});
+  f["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 36}, {"byteLength", 24}});
+  f["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 60}, {"byteLength", 36}});
+  f["accessors"].push_back({{"bufferView", 3}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}});
+  f["accessors"].push_back({{"bufferView", 4}, {"componentType", 5122}, {"normalized", true}, {"count", 3}, {"type", "VEC4"}});
+  f["accessors"].push_back({{"bufferView", 5}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}});
+  f["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"] = {{"TRANSLATION", 4}, {"ROTATION", 5}, {"SCALE", 6}};
+  f["extensionsUsed"].push_back("EXT_mesh_gpu_instancing");
+  f["extensionsRequired"] = {"EXT_mesh_gpu_instancing"};
+  const Scene scene = loadWrapped(dir.path, f);
+  CHECK(scene.ignored.empty());
+  REQUIRE(scene.positions.size() == 12);
+  REQUIRE(scene.triangleCount() == 6);
+  const Vec3 corners[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  for (int v = 0; v < 4; ++v) {
+    const Vec3 c = corners[v];
+    for (const auto& [placed, expected] : {std::pair{scene.positions[size_t(v)], c + Vec3{0, 0, -1}},
+                                           std::pair{scene.positions[size_t(4 + v)], c + Vec3{2, 0, -1}},
+                                           std::pair{scene.positions[size_t(8 + v)], Vec3{-2 * c.y, 2 * c.x + 3, -1}}})
+      for (int k = 0; k < 3; ++k) CHECK(placed[k] == Approx(expected[k]).margin(1e-4));
+  }
+  // The turned instance's normals turn with it: still +z.
+  CHECK(scene.geometricNormal(4).z == Approx(1).margin(1e-5));
+  // An attribute of the file's own is left out and said; TRANSLATION alone places copies.
+  f["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"] = {{"TRANSLATION", 4}, {"_ID", 4}};
+  const Scene moved = loadWrapped(dir.path, f);
+  REQUIRE(moved.ignored.size() == 1);
+  CHECK_THAT(moved.ignored[0], Catch::Contains("EXT_mesh_gpu_instancing.attributes._ID (not read)"));
+  CHECK(moved.triangleCount() == 6);
+  // Refused with their paths: counts that differ, a zero quaternion, no attribute read.
+  const auto refusedWith = [&](const json& attributes, const std::string& expected) {
+    json g = f;
+    g["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"] = attributes;
+    REQUIRE_THROWS_WITH(loadWrapped(dir.path, g), Catch::Contains("nodes[0].extensions.EXT_mesh_gpu_instancing" + expected));
+  };
+  f["accessors"][6]["count"] = 2;
+  refusedWith({{"TRANSLATION", 4}, {"SCALE", 6}}, ".attributes.TRANSLATION: has 3 instances, another attribute 2");
+  f["accessors"][6]["count"] = 3;
+  refusedWith({{"_ID", 4}}, ".attributes: names no TRANSLATION, ROTATION or SCALE");
+  f["buffers"][1]["uri"] = "data:application/octet-stream;base64," + base64(std::vector<unsigned char>(96, 0));
+  refusedWith({{"ROTATION", 5}}, ".attributes.ROTATION: instance 0 is a zero quaternion");
+}
+
 TEST_CASE("glTF single-sided faces (doubleSided false) are not there from behind for any query, two-sided ones are",
           "[gltf][loader][visibility]") {
   const test::TempDir dir;

@@ -157,6 +157,19 @@ inline SurfaceBsdf gltfBsdf(const Material& m, Rgb base, float metallic, float r
   return b;
 }
 
+// A material's BSDF from its factors alone, as bsdfAt gives it where no texture or vertex colour
+// scales them.
+inline SurfaceBsdf materialBsdf(const Material& m) {
+  if (isGltf(m.type)) return gltfBsdf(m, m.kd, m.metallic, m.roughness, m.specular, m.ks);
+  SurfaceBsdf b;
+  b.type = m.type;
+  b.kd = m.kd;
+  b.ks = m.ks;
+  b.ns = m.ns;
+  b.ni = m.ni;
+  return b;
+}
+
 inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
   const Material& m = scene.materials[sp.materialId];
   const Rgb factor = baseFactorAt(scene, m, sp);
@@ -176,12 +189,8 @@ inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
     if (m.specularColorTexture >= 0) specularColour = specularColour * textureAt(scene, m.specularColorTexture, sp);
     return gltfBsdf(m, kd, metallic, roughness, specular, specularColour);
   }
-  SurfaceBsdf b;
-  b.type = m.type;
+  SurfaceBsdf b = materialBsdf(m);
   b.kd = kd;
-  b.ks = m.ks;
-  b.ns = m.ns;
-  b.ni = m.ni;
   return b;
 }
 
