@@ -1,6 +1,7 @@
 #include "lucent/render/render_session.h"
 
 #include <algorithm>
+#include <numeric>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -277,6 +278,16 @@ RenderResult RenderSession::run(const RenderHooks& hooks) {
   summary["method"] = method_->name();
   summary["options"] = nlohmann::ordered_json::parse(info.options);
   summary["spp"] = out.sppDone;
+  // Where pixels took different counts (an error target spends samples where the error is), "spp"
+  // is what every pixel has; the least, mean and most are given beside it.
+  if (out.film) {
+    const std::span<const uint32_t> taken = out.film->samplesTaken();
+    const auto [least, most] = std::minmax_element(taken.begin(), taken.end());
+    if (least != taken.end() && *least != *most) {
+      const double total = std::accumulate(taken.begin(), taken.end(), 0.0);
+      summary["spp_per_pixel"] = {{"least", *least}, {"mean", total / double(taken.size())}, {"most", *most}};
+    }
+  }
   summary["complete"] = out.complete;
   if (!out.complete) summary["stopped_by"] = hooks.stoppedBy ? hooks.stoppedBy() : "stop";
   if (control.isPart()) {

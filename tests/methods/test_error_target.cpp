@@ -238,8 +238,13 @@ TEST_CASE("render --target-error records its estimate and samples, and its image
   };
   CHECK(std::stod(header("lucent:estimated_relmse")) == Approx(estimate).epsilon(1e-12));
   CHECK(header("lucent:samples_spent") == std::to_string(uint64_t(spent)));
-  // Adaptive: the fewest samples a pixel has (lucent:spp) is below the mean.
+  // Adaptive: the fewest samples a pixel has (lucent:spp, the summary's spp) is below the mean; the
+  // summary gives the least, mean and most beside it.
   CHECK(std::stod(header("lucent:spp")) < spent / (128 * 128) * 0.8);
+  REQUIRE(summary.contains("spp_per_pixel"));
+  CHECK(summary["spp_per_pixel"]["least"] == summary["spp"]);
+  CHECK(summary["spp_per_pixel"]["mean"].get<double>() == Approx(spent / (128 * 128)).epsilon(1e-9));
+  CHECK(summary["spp_per_pixel"]["most"].get<double>() > summary["spp_per_pixel"]["mean"].get<double>());
   test::checkAgreesWithinNoise(exr, LUCENT_SOURCE_DIR "/references/cornell-box.exr");
 }
 
