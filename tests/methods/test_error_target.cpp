@@ -248,6 +248,21 @@ TEST_CASE("render --target-error records its estimate and samples, and its image
   test::checkAgreesWithinNoise(exr, LUCENT_SOURCE_DIR "/references/cornell-box.exr");
 }
 
+TEST_CASE("render --target-error without --spp is met: its pixels take up to 65536 samples", "[error-target][cli]") {
+  // The declared default of 64 would stop this render short of its target (its pixels need up to
+  // some 270 samples); --spp given stays the cap (the next test).
+  const test::TempDir dir("error-target");
+  const test::CliRun r = test::runLucent("render " LUCENT_SOURCE_DIR "/scenes/cornell-box.json --target-error 0.002 "
+                                         "--resolution 64x64 --quiet -o " + test::quoted(dir / "met.exr"));
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  CHECK(r.output.find("not reached") == std::string::npos);
+  const nlohmann::json summary = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+  CHECK(summary["options"]["spp"] == 65536);
+  CHECK(summary["estimated_relmse"].get<double>() <= 0.002);
+  CHECK(summary["spp_per_pixel"]["most"].get<int>() > 64);
+}
+
 TEST_CASE("render --target-error stops at --spp and at the time budget, saying the target was not reached",
           "[error-target][cli]") {
   const test::TempDir dir("error-target");

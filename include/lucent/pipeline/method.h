@@ -70,6 +70,7 @@ class DeclaredMethod final : public Method {
   std::unique_ptr<MethodOptions> resolve(const OptionValues& values) const override {
     auto resolved = std::make_unique<Resolved>(table_);
     for (const auto& [name, text] : values) table_.set(resolved->options, name, text);
+    table_.setConditionalDefaults(resolved->options, values);
     table_.validate(resolved->options);
     return resolved;
   }

@@ -214,6 +214,23 @@ class OptionTable {
     return *this;
   }
 
+  // Option `option`'s value where the options given leave it out and `when` holds of them: `text`
+  // instead of its declared default (an error target's spp, the most a pixel takes: high, for the
+  // target asks for as many samples as it needs).
+  OptionTable& defaultWhen(std::string option, std::function<bool(const Options&)> when, std::string text) {
+    if (!has(option)) throw std::logic_error("option '" + option + "' is not declared");
+    conditionalDefaults_.push_back({std::move(option), std::move(when), std::move(text)});
+    return *this;
+  }
+  // Sets the conditional defaults (defaultWhen) of the options that `given` leaves out.
+  void setConditionalDefaults(Options& options, const OptionValues& given) const {
+    for (const ConditionalDefault& d : conditionalDefaults_) {
+      bool named = false;
+      for (const auto& [name, text] : given) named = named || name == d.option;
+      if (!named && d.when(options)) set(options, d.option, d.text);
+    }
+  }
+
   const std::vector<OptionSpec>& specs() const { return specs_; }
   bool has(std::string_view name) const { return find(name) != nullptr; }
 
@@ -249,6 +266,11 @@ class OptionTable {
     std::string option;
     std::function<std::string(const Options&)> check;
   };
+  struct ConditionalDefault {
+    std::string option;
+    std::function<bool(const Options&)> when;
+    std::string text;
+  };
   OptionTable& add(OptionSpec spec, std::function<void(Options&, std::string_view)> parse,
                    std::function<std::string(const Options&)> format, std::function<std::string(const Options&)> check) {
     if (has(spec.name)) throw std::logic_error("option '" + spec.name + "' declared twice");
@@ -271,6 +293,7 @@ class OptionTable {
   std::vector<OptionSpec> specs_;
   std::vector<Entry> entries_;
   std::vector<Rule> rules_;
+  std::vector<ConditionalDefault> conditionalDefaults_;
 };
 
 }  // namespace lucent

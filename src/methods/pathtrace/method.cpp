@@ -4,6 +4,12 @@
 
 namespace lucent {
 
+namespace {
+// The most samples a pixel takes with an error target where --spp is not given: the target, not a
+// cap, ends the render.
+constexpr int kTargetErrorSpp = 65536;
+}  // namespace
+
 const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
   static const OptionTable<PathTraceOptions> table = [] {
     using O = PathTraceOptions;
@@ -28,7 +34,9 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
            "stop sampling within this many seconds (at least one sample per pixel); 0: no budget");
     t.real("target_error", &O::targetError, 0, 1, "relMSE",
            "render until the image's estimated relMSE against the converged image is at most this, spending samples "
-           "where the pixels' errors are largest (with --spp the most a pixel takes, --time-budget a limit); 0: no target");
+           "where the pixels' errors are largest (with --spp the most a pixel takes, 65536 unless given; --time-budget "
+           "a limit); 0: no target");
+    t.defaultWhen("spp", [](const O& o) { return o.targetError > 0; }, std::to_string(kTargetErrorSpp));
     t.rule("target_error", [](const O& o) {
       // Each pixel's samples alternate between two streams, a pair per pass.
       return o.targetError > 0 && o.common.spp < 8 ? "needs at least 8 samples per pixel (--spp), its first pass" : "";
