@@ -50,7 +50,7 @@ uint32_t findMaterial(const Scene& scene, const std::string& material) {
       std::stoul(material) < scene.materials.size())
     return uint32_t(std::stoul(material));
   throw std::invalid_argument("'" + material + "' is neither the name nor the index of one of the scene's " +
-                              std::to_string(scene.materials.size()) + " materials (lucent bsdf " + "SCENE lists them)");
+                              std::to_string(scene.materials.size()) + " materials (lucent bsdf SCENE lists them)");
 }
 
 // What scales the material's factors at a surface point and is not read here.
