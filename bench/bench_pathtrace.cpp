@@ -61,7 +61,7 @@ RecordedRays recordRays(const Scene& scene, const Visibility& vis, const PathTra
           ray = {offsetOrigin(sp.position, n, wi), wi};
           // The path tracer's continuation: the cosine-sampled weight is the albedo, a black
           // throughput ends the path, and from the roulette depth on Russian roulette.
-          beta *= bsdfAt(scene, sp).kd;
+          beta *= bsdfAt(scene, sp).diffuse();
           if (beta.isBlack()) break;
           if (depth + 1 >= opt.rouletteDepth && !survivesRussianRoulette(beta, rng.uniform())) break;
         }

@@ -279,8 +279,9 @@ py::dtype recordDtype(const std::string& type) {
   if (record.fields.size() == 1 && record.fields[0].count == 1 && std::string(record.fields[0].name) == "value")
     return py::dtype(record.fields[0].kind == DumpFieldKind::F32 ? "<f4" : record.fields[0].kind == DumpFieldKind::U64 ? "<u8" : "<u4");
   py::list names, formats, offsets;
-  uint32_t offset = 0;
-  for (const DumpField& f : found->second.fields) {
+  const std::vector<uint32_t> fieldOffsets = dumpFieldOffsets(record);
+  for (size_t i = 0; i < record.fields.size(); ++i) {
+    const DumpField& f = record.fields[i];
     const char* base = "";
     switch (f.kind) {
       case DumpFieldKind::F32: base = "<f4"; break;
@@ -294,8 +295,7 @@ py::dtype recordDtype(const std::string& type) {
     const std::string shape = f.columns > 0 ? "(" + std::to_string(f.count / f.columns) + "," + std::to_string(f.columns) + ")"
                                             : "(" + std::to_string(f.count) + ",)";
     formats.append(f.count > 1 ? py::str(shape + base) : py::str(base));
-    offsets.append(offset);
-    offset += dumpFieldBytes(f.kind) * f.count;
+    offsets.append(fieldOffsets[i]);
   }
   py::dict spec;
   spec["names"] = names, spec["formats"] = formats, spec["offsets"] = offsets, spec["itemsize"] = found->second.bytes;

@@ -19,6 +19,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LUCENT = os.path.join(ROOT, "build", "lucent")
 
 SCENES = ["cornell-box", "cornell-box-glossy", "cornell-box-spheres", "glass-ball", "ring", "ring-area", "sponza"]
+# glTF files, read directly: their metallic-roughness materials in both masking forms.
+GLTF_SCENES = ["gltf/cornell-box.glb"]
 # envpbgi refuses emitting triangles: its scenes are lit by an environment and a sun.
 ENVIRONMENT_SCENES = ["primitives", "primitives-glossy", "sponza-courtyard"]
 
@@ -53,10 +55,16 @@ def cases(quick):
         for variant in variants:
             yield (f"{scenes[0]} {method} {' '.join(variant)}", scenes[0], method,
                    ["--resolution", "48x48"] + base + variant)
+        if scenes is not ENVIRONMENT_SCENES:
+            for scene in GLTF_SCENES[:1] if quick else GLTF_SCENES:
+                for masking in ["separable", "height-correlated"]:
+                    yield (f"{scene} {method} --gltf-masking {masking}", scene, method,
+                           ["--resolution", "48x48", "--gltf-masking", masking] + base)
 
 
 def render(binary, scene, method, args, output):
-    command = [binary, "render", os.path.join(ROOT, "scenes", scene + ".json"), "--method", method, "--threads", "2",
+    path = os.path.join(ROOT, "scenes", scene if os.path.splitext(scene)[1] else scene + ".json")
+    command = [binary, "render", path, "--method", method, "--threads", "2",
                "--quiet", "-o", output] + args
     result = subprocess.run(command, capture_output=True, text=True)
     if result.returncode != 0:

@@ -37,10 +37,15 @@ DTYPES = {
     "Surfel": np.dtype([("position",) + F3, ("normal",) + F3]),
     "RadianceCache": np.dtype([("position",) + F3, ("normal",) + F3, ("radius", "<f4"),
                                ("environment", "<f4", (25, 3)), ("indirect", "<f4", (25, 3))]),
-    "ShadingPoint": np.dtype([("position",) + F3, ("geometric_normal",) + F3, ("normal",) + F3, ("wo",) + F3,
-                              ("weight",) + F3, ("material", "<u4"), ("kd",) + F3, ("ks",) + F3, ("ns", "<f4"),
-                              ("ni", "<f4"), ("alpha", "<f4"), ("f90", "<f4"), ("dielectric_f0", "<f4"),
-                              ("dielectric_f90", "<f4"), ("pixel", "<u4"), ("sample", "<u4"), ("branch", "<u4"), ("triangle", "<u4")]),
+    # The lobe's parameters are a union: each kind's fields from byte 64.
+    "ShadingPoint": np.dtype({
+        "names": ["position", "geometric_normal", "normal", "wo", "weight", "material", "lambertian_kd", "phong_kd",
+                  "phong_ks", "phong_ns", "gltf_kd", "gltf_ks", "gltf_alpha", "gltf_f90", "gltf_dielectric_f0",
+                  "gltf_dielectric_f90", "gltf_masking", "pixel", "sample", "branch", "triangle"],
+        "formats": ["(3,)<f4"] * 5 + ["<u4", "(3,)<f4", "(3,)<f4", "(3,)<f4", "<f4", "(3,)<f4", "(3,)<f4"] + ["<f4"] * 4
+                   + ["<u4"] * 5,
+        "offsets": [0, 12, 24, 36, 48, 60, 64, 64, 76, 88, 64, 76, 88, 92, 96, 100, 104, 108, 112, 116, 120],
+        "itemsize": 124}),
     "AreaParticle": np.dtype([("position",) + F3, ("normal",) + F3, ("area", "<f4"), ("reflectance",) + F3,
                               ("triangle", "<u4")]),
     "TriangleTessellation": np.dtype([("first", "<u4"), ("segments", "<u4")]),

@@ -10,21 +10,9 @@ inline Vec3 directionAt(double theta, double phi) {
   return {float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)), float(std::cos(theta))};
 }
 
-inline SurfaceBsdf diffuseBsdf(Rgb kd) {
-  SurfaceBsdf b;
-  b.type = MaterialType::Diffuse;
-  b.kd = kd;
-  return b;
-}
+inline SurfaceBsdf diffuseBsdf(Rgb kd) { return LambertianLobe{kd}; }
 
-inline SurfaceBsdf phongBsdf(Rgb kd, Rgb ks, float ns) {
-  SurfaceBsdf b;
-  b.type = MaterialType::Phong;
-  b.kd = kd;
-  b.ks = ks;
-  b.ns = ns;
-  return b;
-}
+inline SurfaceBsdf phongBsdf(Rgb kd, Rgb ks, float ns) { return PhongLobe{kd, ks, ns}; }
 
 // Directional albedo a(wo) = integral of f(wo, wi) cos(theta_i) over the hemisphere, per channel, by
 // the midpoint rule in coordinates centred on the mirror direction (where the Phong lobe is narrow),

@@ -21,16 +21,12 @@ namespace lucent::cli {
 
 namespace {
 
-const char* typeName(MaterialType t) {
-  switch (t) {
-    case MaterialType::Diffuse: return "diffuse";
-    case MaterialType::Phong: return "phong";
-    case MaterialType::Mirror: return "mirror";
-    case MaterialType::Glass: return "glass";
-    case MaterialType::Gltf: return "gltf (separable masking)";
-    case MaterialType::GltfHeightCorrelated: return "gltf (height-correlated masking)";
-  }
-  return "?";
+// Its kind, and for a GGX lobe the masking form.
+std::string typeName(const Material& m) {
+  std::string name = materialTypeName(m.type);
+  if (m.type == MaterialType::Gltf)
+    name += m.masking == GgxMasking::Separable ? " (separable masking)" : " (height-correlated masking)";
+  return name;
 }
 
 struct BsdfArgs {
@@ -77,8 +73,8 @@ int runBsdf(const BsdfArgs& a) {
   if (a.material.empty()) {
     nlohmann::ordered_json list = nlohmann::ordered_json::array();
     for (uint32_t i = 0; i < scene.materials.size(); ++i) {
-      if (a.json) list.push_back({{"index", i}, {"name", scene.materialNames[i]}, {"type", typeName(scene.materials[i].type)}});
-      else std::cout << i << "," << printable(scene.materialNames[i]) << "," << typeName(scene.materials[i].type) << "\n";
+      if (a.json) list.push_back({{"index", i}, {"name", scene.materialNames[i]}, {"type", typeName(scene.materials[i])}});
+      else std::cout << i << "," << printable(scene.materialNames[i]) << "," << typeName(scene.materials[i]) << "\n";
     }
     if (a.json) std::cout << jsonText(list) << std::endl;
     return 0;
@@ -88,14 +84,14 @@ int runBsdf(const BsdfArgs& a) {
   const Material& m = scene.materials[index];
   const SurfaceBsdf bsdf = materialBsdf(m);
   nlohmann::ordered_json out = {{"scene", a.scene},         {"material", scene.materialNames[index]},
-                                {"index", index},            {"type", typeName(m.type)},
+                                {"index", index},            {"type", typeName(m)},
                                 {"not_read", notRead(scene, m)}, {"samples", a.samples},
                                 {"seed", a.seed}};
   std::ostringstream csv;
   csv << std::setprecision(7) << "cos_theta,albedo_r,albedo_g,albedo_b,error_r,error_g,error_b\n";
   nlohmann::ordered_json albedo = nlohmann::ordered_json::array();
-  // From grazing to normal incidence (for glass also from inside, cos theta < 0).
-  const bool inside = m.type == MaterialType::Glass;
+  // From grazing to normal incidence (for a transmitting lobe also from inside, cos theta < 0).
+  const bool inside = has(kindFlags(m.type), BsdfFlags::Transmission);
   for (int k = inside ? -a.cosines : 0; k < a.cosines; ++k) {
     const float cosTheta = float((k + 0.5) / a.cosines);
     const AlbedoEstimate e = directionalAlbedo(bsdf, cosTheta, a.samples, a.seed);

@@ -89,7 +89,7 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
       if (weight.isBlack()) return;
       stack[top++].branch = {*next, weight, b.depth + 1};
     };
-    if (bsdf.type == MaterialType::Glass && b.weight.maxComponent() >= kSplitWeight) {
+    if (has(bsdf.flags(), BsdfFlags::Transmission) && b.weight.maxComponent() >= kSplitWeight) {
       // Both lobes, each weighted by the probability with which sampleBsdf would pick it (F, 1 - F):
       // u = 0 picks reflection unless F = 0, u just below 1 refraction unless F = 1 (total internal
       // reflection).

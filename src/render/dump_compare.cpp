@@ -90,9 +90,11 @@ bool firstDifference(const DumpRecordType* type, uint32_t recordBytes, const std
     d.reference = d.candidate = "(differ)";
     return true;
   }
-  uint32_t offset = 0;
-  for (const DumpField& f : type->fields) {
+  const std::vector<uint32_t> offsets = dumpFieldOffsets(*type);
+  for (size_t field = 0; field < type->fields.size(); ++field) {
+    const DumpField& f = type->fields[field];
     const uint32_t size = dumpFieldBytes(f.kind);
+    uint32_t offset = offsets[field];
     for (uint32_t i = 0; i < f.count; ++i, offset += size) {
       if (skip.count(f.name)) continue;
       const std::byte *x = a + offset, *y = b + offset;

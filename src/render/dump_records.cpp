@@ -1,5 +1,6 @@
 #include "lucent/render/dump_records.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace lucent {
@@ -39,28 +40,49 @@ const std::map<std::string, DumpRecordType>& dumpRecordTypes() {
         {"AreaParticle", {44, {{"position", K::F32, 3}, {"normal", K::F32, 3}, {"area", K::F32, 1}, {"reflectance", K::F32, 3},
                                {"triangle", K::U32, 1}}, false}},
         {"TriangleTessellation", {8, {{"first", K::U32, 1}, {"segments", K::U32, 1}}, true}},
-        {"ShadingPoint", {128, {{"position", K::F32, 3}, {"geometric_normal", K::F32, 3}, {"normal", K::F32, 3}, {"wo", K::F32, 3},
-                                {"weight", K::F32, 3}, {"material", K::U32, 1}, {"kd", K::F32, 3}, {"ks", K::F32, 3},
-                                {"ns", K::F32, 1}, {"ni", K::F32, 1}, {"alpha", K::F32, 1}, {"f90", K::F32, 1},
-                                {"dielectric_f0", K::F32, 1}, {"dielectric_f90", K::F32, 1}, {"pixel", K::U32, 1},
-                                {"sample", K::U32, 1}, {"branch", K::U32, 1}, {"triangle", K::U32, 1}}, false}},
+        // The BSDF's lobe by its kind ("material"): the union's members a shading point can hold (no
+        // specular lobe is one), each from byte 64; the union's 44 bytes end at 108.
+        {"ShadingPoint", {124, {{"position", K::F32, 3}, {"geometric_normal", K::F32, 3}, {"normal", K::F32, 3}, {"wo", K::F32, 3},
+                                {"weight", K::F32, 3}, {"material", K::U32, 1},
+                                {"lambertian_kd", K::F32, 3, 0, 64},
+                                {"phong_kd", K::F32, 3, 0, 64}, {"phong_ks", K::F32, 3}, {"phong_ns", K::F32, 1},
+                                {"gltf_kd", K::F32, 3, 0, 64}, {"gltf_ks", K::F32, 3}, {"gltf_alpha", K::F32, 1},
+                                {"gltf_f90", K::F32, 1}, {"gltf_dielectric_f0", K::F32, 1}, {"gltf_dielectric_f90", K::F32, 1},
+                                {"gltf_masking", K::U32, 1},
+                                {"pixel", K::U32, 1, 0, 108}, {"sample", K::U32, 1}, {"branch", K::U32, 1}, {"triangle", K::U32, 1}}, false}},
     };
+    // Every byte of a record is some field's: no gaps, nothing past its end.
     for (const auto& [name, type] : t) {
-      uint32_t bytes = 0;
-      for (const DumpField& f : type.fields) bytes += dumpFieldBytes(f.kind) * f.count;
-      if (bytes != type.bytes) throw std::logic_error("dump records: the fields of " + name + " do not add up to its size");
+      std::vector<bool> covered(type.bytes, false);
+      const std::vector<uint32_t> offsets = dumpFieldOffsets(type);
+      for (size_t i = 0; i < type.fields.size(); ++i)
+        for (uint32_t b = 0; b < dumpFieldBytes(type.fields[i].kind) * type.fields[i].count; ++b) {
+          if (offsets[i] + b >= type.bytes) throw std::logic_error("dump records: a field of " + name + " ends past its size");
+          covered[offsets[i] + b] = true;
+        }
+      if (std::find(covered.begin(), covered.end(), false) != covered.end())
+        throw std::logic_error("dump records: the fields of " + name + " leave bytes uncovered");
     }
     return t;
   }();
   return types;
 }
 
-uint32_t dumpFieldOffset(const std::string& type, const std::string& field) {
-  uint32_t offset = 0;
-  for (const DumpField& f : dumpRecordTypes().at(type).fields) {
-    if (field == f.name) return offset;
-    offset += dumpFieldBytes(f.kind) * f.count;
+std::vector<uint32_t> dumpFieldOffsets(const DumpRecordType& type) {
+  std::vector<uint32_t> out;
+  uint32_t next = 0;
+  for (const DumpField& f : type.fields) {
+    out.push_back(f.at >= 0 ? uint32_t(f.at) : next);
+    next = out.back() + dumpFieldBytes(f.kind) * f.count;
   }
+  return out;
+}
+
+uint32_t dumpFieldOffset(const std::string& type, const std::string& field) {
+  const DumpRecordType& t = dumpRecordTypes().at(type);
+  const std::vector<uint32_t> offsets = dumpFieldOffsets(t);
+  for (size_t i = 0; i < t.fields.size(); ++i)
+    if (field == t.fields[i].name) return offsets[i];
   throw std::logic_error("dump record type " + type + " has no field " + field);
 }
 

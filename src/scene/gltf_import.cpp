@@ -452,11 +452,12 @@ double unitNumber(const Context& c, double value, const std::string& path) {
 }
 
 // The specification's default material, for primitives that name none: a white rough metal.
-MaterialSpec defaultMaterial(const Context& c, MaterialType type) {
+MaterialSpec defaultMaterial(const Context& c, GgxMasking masking) {
   MaterialSpec spec;
   spec.name = "glTF default material";
   spec.origin = c.file + ": the default material";
-  spec.type = type;
+  spec.type = MaterialType::Gltf;
+  spec.masking = masking;
   spec.kd = Rgb(1.0f);
   spec.ks = Rgb(1.0f);
   spec.ni = 1.5f;
@@ -468,7 +469,7 @@ MaterialSpec defaultMaterial(const Context& c, MaterialType type) {
 // A glTF material: pbrMetallicRoughness with KHR_materials_ior and KHR_materials_specular as
 // Appendix B's BRDF (the masking term's form as `type` says), and its emission; what that leaves
 // out is listed in `ignored`, and what would change the image beyond that is refused.
-MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, std::vector<std::string>& ignored) {
+MaterialSpec materialSpec(const Context& c, size_t index, GgxMasking masking, std::vector<std::string>& ignored) {
   const tinygltf::Material& m = c.model.materials[index];
   const std::string path = at("materials", index);
   const std::string named = c.file + ": " + path + (m.name.empty() ? "" : " '" + m.name + "'");
@@ -482,7 +483,8 @@ MaterialSpec materialSpec(const Context& c, size_t index, MaterialType type, std
   MaterialSpec spec;
   spec.name = m.name.empty() ? path : m.name;
   spec.origin = c.file + ": " + path;
-  spec.type = type;
+  spec.type = MaterialType::Gltf;
+  spec.masking = masking;
   spec.kd = Rgb(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]), float(pbr.baseColorFactor[2]));
   spec.metallic = float(unitNumber(c, pbr.metallicFactor, pbrPath + ".metallicFactor"));
   spec.roughness = float(unitNumber(c, pbr.roughnessFactor, pbrPath + ".roughnessFactor"));
@@ -569,7 +571,7 @@ struct NodeWalk {
   double lumensPerWatt;
   const std::string& cameraName;           // empty: the first camera
   std::vector<std::string> cameraNames;    // the cameras passed over for another name
-  MaterialType materialType;               // Gltf or GltfHeightCorrelated
+  GgxMasking masking;                      // every material's Smith form
   std::map<int, uint32_t> materialOf;      // glTF material (-1: the default) -> spec
   uint64_t skippedPrimitives = 0;      // points and lines
   uint64_t grownSinceMemoryCheck = 0;  // bytes the scene took since the last memory check
@@ -578,7 +580,7 @@ struct NodeWalk {
     if (const auto it = materialOf.find(index); it != materialOf.end()) return it->second;
     if (index >= 0 && size_t(index) >= c.model.materials.size())
       c.fail(user, "material " + std::to_string(index) + " does not exist");
-    MaterialSpec spec = index < 0 ? defaultMaterial(c, materialType) : materialSpec(c, size_t(index), materialType, scene.ignored);
+    MaterialSpec spec = index < 0 ? defaultMaterial(c, masking) : materialSpec(c, size_t(index), masking, scene.ignored);
     std::string name = spec.name;
     if (import.materialIndex.count(name)) name += " (" + c.file + ": " + at("materials", size_t(index)) + ")";
     spec.name = name;
@@ -1045,7 +1047,7 @@ void importGltf(const std::string& path, const GltfOptions& options, Scene& scen
   if (model.scenes.empty()) c.fail("scenes", "the file has no scene");
   const size_t sceneIndex = model.defaultScene >= 0 ? size_t(model.defaultScene) : 0;
   if (sceneIndex >= model.scenes.size()) c.fail("scene", "scene " + std::to_string(sceneIndex) + " does not exist");
-  NodeWalk walk{c, scene, import, content, options.lumensPerWatt, options.camera, {}, options.heightCorrelated ? MaterialType::GltfHeightCorrelated : MaterialType::Gltf, {}, 0};
+  NodeWalk walk{c, scene, import, content, options.lumensPerWatt, options.camera, {}, options.heightCorrelated ? GgxMasking::HeightCorrelated : GgxMasking::Separable, {}, 0};
   std::vector<bool> reached(model.nodes.size(), false);
   for (const int root : model.scenes[sceneIndex].nodes) walk.node(root, Matrix4{}, 0, reached);
   if (!options.camera.empty() && !content.camera) {

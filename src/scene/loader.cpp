@@ -14,6 +14,7 @@
 #include "lucent/core/files.h"
 #include "lucent/core/text.h"
 #include "lucent/image/image.h"
+#include "lucent/scene/bsdf.h"
 #include "lucent/scene/texture.h"
 #include "gltf_import.h"
 #include "obj_import.h"
@@ -183,11 +184,8 @@ void applyMaterialOverride(JsonFields fields, detail::MaterialSpec& spec, const 
   spec.origin.pop_back();  // the trailing '.'
   if (fields.has("type")) {
     const std::string type = fields.string("type");
-    if (type == "diffuse") spec.type = MaterialType::Diffuse;
-    else if (type == "phong") spec.type = MaterialType::Phong;
-    else if (type == "mirror") spec.type = MaterialType::Mirror;
-    else if (type == "glass") spec.type = MaterialType::Glass;
-    else fields.failKey("type", "expected one of diffuse, phong, mirror, glass");
+    spec.type = sceneFileMaterialType(type);
+    if (!spec.type) fields.failKey("type", "expected one of " + sceneFileMaterialTypes());
   }
   if (fields.has("Kd")) spec.kd = fields.rgb("Kd");
   if (fields.has("Ks")) spec.ks = fields.rgb("Ks");
@@ -384,19 +382,19 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
     Material m = detail::classifyMaterial(spec);
     if (!spec.mapKd.empty())
       m.kdTexture = addTexture(spec.mapKd, spec.name, spec.mapKd.bytes.empty() ? "map_Kd" : "base colour texture", true);
-    if (isGltf(m.type) && !spec.metallicRoughness.empty())
+    if (m.type == MaterialType::Gltf && !spec.metallicRoughness.empty())
       m.metallicRoughnessTexture = addTexture(spec.metallicRoughness, spec.name, "metallic-roughness texture", false);
     // Normal textures perturb glTF materials' shading normals only: Lambertian hits are shaded in
     // the path tracer's lanes, from the vertex normals.
-    if (isGltf(m.type) && !spec.specularTexture.empty())
+    if (m.type == MaterialType::Gltf && !spec.specularTexture.empty())
       m.specularTexture = addTexture(spec.specularTexture, spec.name, "specular texture", false);
-    if (isGltf(m.type) && !spec.specularColourTexture.empty())
+    if (m.type == MaterialType::Gltf && !spec.specularColourTexture.empty())
       m.specularColorTexture = addTexture(spec.specularColourTexture, spec.name, "specular colour texture", true);
     if (!spec.emissive.empty() && !m.ke.isBlack())
       m.emissiveTexture = addTexture(spec.emissive, spec.name, "emissive texture", true);
     m.emitsBackFace = spec.doubleSided && !m.ke.isBlack() ? 1 : 0;
     m.culledBehind = spec.singleSided ? 1 : 0;
-    if (isGltf(m.type) && !spec.normal.empty()) {
+    if (m.type == MaterialType::Gltf && !spec.normal.empty()) {
       m.normalTexture = addTexture(spec.normal, spec.name, "normal texture", false);
       const Texture& t = scene.textures[size_t(m.normalTexture)];
       if (steepNormalShare(std::span(scene.texels).subspan(t.offset, size_t(t.width) * t.height)) > 0.5)
@@ -405,7 +403,7 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
     else if (!spec.normal.empty())
       scene.ignored.push_back(spec.origin + ": material '" + spec.name +
                               "': its normal texture (the material is overridden as " +
-                              (m.type == MaterialType::Diffuse ? "diffuse" : "another type") + ")");
+                              materialTypeName(m.type) + ")");
     scene.materials.push_back(m);
     scene.materialNames.push_back(spec.name);
   }

@@ -411,6 +411,7 @@ Material classifyMaterial(const MaterialSpec& spec) {
   m.ni = spec.ni;
   m.metallic = spec.metallic;
   m.roughness = spec.roughness;
+  m.masking = spec.masking;
   m.specular = spec.specular;
   m.normalScale = spec.normalScale;
   m.alphaMode = spec.alphaMode;
@@ -446,7 +447,6 @@ Material classifyMaterial(const MaterialSpec& spec) {
       m.kd = Rgb(0.0f);
       break;
     case MaterialType::Gltf:
-    case MaterialType::GltfHeightCorrelated:
       // The glTF import checks each value against its JSON path; these are the model's own bounds.
       if (!(spec.kd.maxComponent() <= 1) || !(m.metallic >= 0 && m.metallic <= 1) ||
           !(m.roughness >= 0 && m.roughness <= 1) || !(m.specular >= 0 && m.specular <= 1) || !(m.ni >= 0) ||

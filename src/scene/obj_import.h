@@ -33,6 +33,7 @@ struct MaterialSpec {
   TextureFile mapKd;                 // map_Kd, or a glTF base colour texture (sRGB)
   std::optional<MaterialType> type;  // set by the scene file's "type" or by the glTF import
   float metallic = 0.0f, roughness = 1.0f, specular = 1.0f;  // glTF only
+  GgxMasking masking = GgxMasking::Separable;                // glTF only
   TextureFile metallicRoughness;     // glTF only (linear)
   TextureFile normal;                // glTF only (linear)
   float normalScale = 1.0f;

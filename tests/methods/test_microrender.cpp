@@ -45,7 +45,7 @@ struct TestMapping {
       : tables(makeMappingTables(side, tableSize)) {
     const WarpTable* t = nullptr;
     if (kind == MappingKind::Warped) {
-      if (b.type == MaterialType::Diffuse) {
+      if (b.onlyDiffuse()) {
         t = &tables.lambertian;
       } else {
         tabulateBrdfSlice(b, wo, tables, table);
@@ -55,6 +55,9 @@ struct TestMapping {
     evaluatePixels(mapping, kind, side, jitter, t, b, wo, tables);
   }
 };
+
+// A Phong lobe's exponent, 0 for the Lambertian lobe, for messages.
+float exponent(const SurfaceBsdf& b) { return b.type == MaterialType::Phong ? b.phong.ns : 0.0f; }
 
 double directionalAlbedo(const SurfaceBsdf& b, Vec3 wo) { return test::directionalAlbedo(b, wo).average(); }
 
@@ -192,7 +195,7 @@ TEST_CASE("Warped mapping: its directions follow its density and the normalized 
     // Own density: the claimed pdf divided by the inside mass.
     auto ownPdf = [&](Vec3 w) { return float(m.pdf(w) / insideMass); };
     const auto ownSampler = sampledAgainst(ownPdf);
-    INFO("theta_o " << c.theta << ", ns " << c.bsdf.ns << ", inside mass " << insideMass);
+    INFO("theta_o " << c.theta << ", ns " << exponent(c.bsdf) << ", inside mass " << insideMass);
     CHECK_CHI2_PASS(chi2::testSphere(ownSampler, ownPdf, own));
     // The exact slice: f cos / rho.
     auto exactPdf = [&](Vec3 w) { return w.z > 0 ? float(evalBsdf(c.bsdf, wo, w).average() * w.z / rho) : 0.0f; };
@@ -201,8 +204,9 @@ TEST_CASE("Warped mapping: its directions follow its density and the normalized 
     CHECK_CHI2_PASS(chi2::testSphere(exactSampler, exactPdf, exact));
     // Negative control: the slice of a lobe twice as sharp (or, for the diffuse case, Phong 10) is
     // rejected by the histogram.
-    const SurfaceBsdf wrong = c.bsdf.type == MaterialType::Diffuse ? phongBsdf(Rgb(0.2f), Rgb(0.7f), 10)
-                                                                    : phongBsdf(c.bsdf.kd, c.bsdf.ks, 2 * c.bsdf.ns);
+    const SurfaceBsdf wrong = c.bsdf.type == MaterialType::Diffuse
+                                  ? phongBsdf(Rgb(0.2f), Rgb(0.7f), 10)
+                                  : phongBsdf(c.bsdf.phong.kd, c.bsdf.phong.ks, 2 * c.bsdf.phong.ns);
     const double rhoWrong = directionalAlbedo(wrong, wo);
     auto wrongPdf = [&](Vec3 w) { return w.z > 0 ? float(evalBsdf(wrong, wo, w).average() * w.z / rhoWrong) : 0.0f; };
     const auto wrongSampler = sampledAgainst(wrongPdf);
@@ -227,7 +231,7 @@ TEST_CASE("Mappings: the weights of a uniform unit radiance sum to the direction
         sum += s, sum2 += s * s;
       }
       const double mean = sum / kJitters, se = std::sqrt(std::max(0.0, sum2 / kJitters - mean * mean) / kJitters);
-      INFO("kind " << int(kind) << ", ns " << b.ns << ": " << mean << " +- " << se << ", rho " << rho);
+      INFO("kind " << int(kind) << ", ns " << exponent(b) << ": " << mean << " +- " << se << ", rho " << rho);
       REQUIRE(std::abs(mean - rho) <= 4.5 * se + 1e-4 * rho);
     }
 }
@@ -684,7 +688,7 @@ TEST_CASE("Gathering a uniform radiance field gives the receiver's directional a
           sum += v, sum2 += v * v;
         }
         const double mean = sum / kGathers, se = std::sqrt(std::max(0.0, sum2 / kGathers - mean * mean) / kGathers);
-        INFO("mapping " << int(kind) << ", ns " << b.ns << ", theta_o " << theta << ": " << mean << " +- " << se
+        INFO("mapping " << int(kind) << ", ns " << exponent(b) << ", theta_o " << theta << ": " << mean << " +- " << se
                         << ", albedo " << rho);
         REQUIRE(std::abs(mean - rho) <= 4.5 * se + 0.01 * rho);
       }

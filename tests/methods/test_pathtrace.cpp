@@ -199,7 +199,8 @@ TEST_CASE("A Lambertian lane holds surfaceAt's, bsdfAt's and sampleChosenLight's
     REQUIRE(Vec3{l.posX[k], l.posY[k], l.posZ[k]} == sp.position);
     REQUIRE(Vec3{l.ngx[k], l.ngy[k], l.ngz[k]} == sp.geometricNormal);
     REQUIRE(Vec3{l.snX[k], l.snY[k], l.snZ[k]} == sp.shadingNormal);
-    REQUIRE(Rgb{l.kdR[k], l.kdG[k], l.kdB[k]} == bsdf.kd);
+    REQUIRE(bsdf.type == MaterialType::Diffuse);
+    REQUIRE(Rgb{l.kdR[k], l.kdG[k], l.kdB[k]} == bsdf.lambertian.kd);
     REQUIRE((l.frontFace[k] != 0) == (dot(Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]}, sp.geometricNormal) < 0));
     interpolated += !(sp.shadingNormal == sp.geometricNormal);
     // The lane's light sample is sampleChosenLight's: its shadow ray and radiance.
@@ -447,16 +448,17 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
   struct Case {
     float metallic, roughness;
     Rgb base;
-    MaterialType type;
+    GgxMasking masking;
     double theta;
   };
-  for (const Case& k : {Case{1, 0.3f, Rgb(0.9f, 0.6f, 0.3f), MaterialType::Gltf, 1.0},
-                        Case{0, 0.5f, Rgb(1.0f), MaterialType::Gltf, 1.4},
-                        Case{0.5f, 0.7f, Rgb(0.2f, 0.5f, 0.8f), MaterialType::GltfHeightCorrelated, 0.5}})
+  for (const Case& k : {Case{1, 0.3f, Rgb(0.9f, 0.6f, 0.3f), GgxMasking::Separable, 1.0},
+                        Case{0, 0.5f, Rgb(1.0f), GgxMasking::Separable, 1.4},
+                        Case{0.5f, 0.7f, Rgb(0.2f, 0.5f, 0.8f), GgxMasking::HeightCorrelated, 0.5}})
     for (const PathStrategy strategy : {PathStrategy::Mis, PathStrategy::LightSampling, PathStrategy::BsdfSampling}) {
       Scene scene;
       Material m;
-      m.type = k.type;
+      m.type = MaterialType::Gltf;
+      m.masking = k.masking;
       m.kd = k.base;
       m.ks = Rgb(1.0f);
       m.ni = 1.5f;

@@ -407,7 +407,7 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
       q.position = p;
       q.frame = Frame(n);
       q.facingNormal = n;
-      q.bsdf.kd = Rgb(0.5f);
+      q.bsdf = LambertianLobe{Rgb(0.5f)};
       estimate_detail::Accumulator one(q), eight(q);
       KnnGridSearch a = beginKnnGrid(p, k, maxRadius), b = a;
       advanceKnnGrid(map, a, shells, [&](uint32_t, const Photon& photon, float d2) { one.add(photon, d2); });
@@ -436,8 +436,7 @@ TEST_CASE("The estimate's runs of photons summed eight at a time equal one photo
       // A glossy surface's photons need the BRDF each: the visitor declines the runs, and the
       // estimate is that of one photon at a time, to the bit.
       EstimatePoint glossy = q;
-      glossy.bsdf.type = MaterialType::Phong;
-      glossy.bsdf.kd = Rgb(0.2f), glossy.bsdf.ks = Rgb(0.5f), glossy.bsdf.ns = 30;
+      glossy.bsdf = PhongLobe{Rgb(0.2f), Rgb(0.5f), 30};
       glossy.woLocal = normalize(Vec3{0.3f, -0.2f, 1.0f});
       estimate_detail::Accumulator glossyOne(glossy), glossyVisited(glossy);
       KnnGridSearch c = beginKnnGrid(p, k, maxRadius), d = c;
@@ -518,11 +517,8 @@ TEST_CASE("Estimates taken cell by cell equal one search per point", "[photonmap
       sp.normal = sampleUniformSphere(rng.uniform2());
       sp.geometricNormal = sp.normal;
       sp.wo = sp.normal;
-      sp.bsdf.kd = Rgb(0.5f, 0.4f, 0.3f);
-      if (points.size() % 7 == 3) {
-        sp.bsdf.type = MaterialType::Phong;
-        sp.bsdf.ks = Rgb(0.4f), sp.bsdf.ns = 20;
-      }
+      sp.bsdf = LambertianLobe{Rgb(0.5f, 0.4f, 0.3f)};
+      if (points.size() % 7 == 3) sp.bsdf = PhongLobe{Rgb(0.5f, 0.4f, 0.3f), Rgb(0.4f), 20};
       sp.pixel = uint32_t(points.size());
       points.push_back(sp);
     }
@@ -544,7 +540,7 @@ TEST_CASE("Estimates taken cell by cell equal one search per point", "[photonmap
       EstimateCounters one;
       const Rgb searched = estimateRadiance(map, q, settings, nullptr, one);
       INFO("k " << k << ", max radius " << maxRadius << ", point " << i);
-      if (q.bsdf.type != MaterialType::Diffuse) {
+      if (!q.bsdf.onlyDiffuse()) {
         CHECK((byCell[i] == searched));  // searched on its own
         continue;
       }
@@ -557,7 +553,7 @@ TEST_CASE("Estimates taken cell by cell equal one search per point", "[photonmap
         CHECK((byCell[i] == Rgb() && searched == Rgb()));
         continue;
       }
-      const float scale = float(q.bsdf.kd.maxComponent() * kInvPi / (kPi * radius2));
+      const float scale = float(q.bsdf.diffuse().maxComponent() * kInvPi / (kPi * radius2));
       for (int c = 0; c < 3; ++c)
         CHECK(std::abs(byCell[i][c] - searched[c]) <= 2.0f * float(search.found) * 0x1p-24f * acc.sum[c] * scale + 1e-30f);
       ++compared;

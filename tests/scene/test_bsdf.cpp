@@ -66,7 +66,7 @@ TEST_CASE("BSDF sampling weights average to the integrated albedo", "[bsdf]") {
       }
       const double mean = sum / n, se = std::sqrt(std::max(0.0, sum2 / n - mean * mean) / n);
       const double expected = albedo(b, wo);
-      INFO("Kd " << b.kd.g << " Ks " << b.ks.g << " Ns " << b.ns << " theta " << theta << ": " << mean << " +- " << se
+      INFO("Kd " << b.phong.kd.g << " Ks " << b.phong.ks.g << " Ns " << b.phong.ns << " theta " << theta << ": " << mean << " +- " << se
                  << " vs " << expected);
       REQUIRE(std::abs(mean - expected) <= 5 * se + 1e-3);
     }
@@ -74,9 +74,7 @@ TEST_CASE("BSDF sampling weights average to the integrated albedo", "[bsdf]") {
 }
 
 TEST_CASE("Mirror reflects about the normal with weight Ks", "[bsdf]") {
-  SurfaceBsdf m;
-  m.type = MaterialType::Mirror;
-  m.ks = Rgb(0.9f, 0.8f, 0.7f);
+  const SurfaceBsdf m = MirrorLobe{Rgb(0.9f, 0.8f, 0.7f)};
   const Vec3 wo = normalize(Vec3{0.3f, -0.2f, 0.8f});
   const BsdfSample s = sampleBsdf(m, wo, 0.5f, {0.5f, 0.5f});
   REQUIRE(s.valid);
@@ -84,14 +82,12 @@ TEST_CASE("Mirror reflects about the normal with weight Ks", "[bsdf]") {
   REQUIRE(s.wi.x == Approx(-wo.x));
   REQUIRE(s.wi.y == Approx(-wo.y));
   REQUIRE(s.wi.z == Approx(wo.z));
-  REQUIRE(s.weight == m.ks);
+  REQUIRE(s.weight == m.mirror.tint);
   REQUIRE(evalBsdf(m, wo, s.wi).isBlack());
 }
 
 TEST_CASE("Glass: Snell's law, Fresnel split, total internal reflection", "[bsdf]") {
-  SurfaceBsdf g;
-  g.type = MaterialType::Glass;
-  g.ni = 1.5f;
+  const SurfaceBsdf g = GlassLobe{1.5f};
   // Fresnel at normal incidence: ((n-1)/(n+1))^2.
   REQUIRE(fresnelDielectric(1.0f, 1.0f, 1.5f) == Approx(0.04f).epsilon(1e-4));
   REQUIRE(fresnelDielectric(0.0f, 1.0f, 1.5f) == Approx(1.0f));
@@ -127,11 +123,7 @@ TEST_CASE("Phong lobes of huge exponents stay finite at the mirror direction", "
   Rng rng(4);
   int aboveOne = 0;
   for (float ns : {3e8f, 1e12f, 1e15f}) {
-    SurfaceBsdf b;
-    b.type = MaterialType::Phong;
-    b.kd = Rgb(0.3f);
-    b.ks = Rgb(0.25f);
-    b.ns = ns;
+    const SurfaceBsdf b = PhongLobe{Rgb(0.3f), Rgb(0.25f), ns};
     for (int i = 0; i < 20000; ++i) {
       const Vec3 wo = normalize(Vec3{rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() + 0.05f});
       const Vec3 mirror = reflect(wo, {0, 0, 1});
@@ -160,14 +152,14 @@ TEST_CASE("lucent bsdf's directional albedo: the numerical integration's, kd, ks
   gltf.metallic = 0.3f;
   gltf.roughness = 0.4f;
   Material rough = gltf;
-  rough.type = MaterialType::GltfHeightCorrelated;
+  rough.masking = GgxMasking::HeightCorrelated;
   rough.metallic = 0, rough.roughness = 0.8f;
   for (const SurfaceBsdf& b : {phong(0.4f, 0.5f, 40), materialBsdf(gltf), materialBsdf(rough)})
     for (const float cosTheta : {0.95f, 0.6f, 0.2f}) {
       const AlbedoEstimate e = directionalAlbedo(b, cosTheta, 200000, 3);
       const Rgb expected = test::directionalAlbedo(b, {std::sqrt(1 - cosTheta * cosTheta), 0, cosTheta});
       for (int c = 0; c < 3; ++c) {
-        INFO("type " << int(b.type) << ", cos theta " << cosTheta << ", channel " << c << ": " << e.albedo[c] << " +- "
+        INFO("type " << int(b.type) << ", masking " << (b.type == MaterialType::Gltf ? int(b.gltf.masking) : -1) << ", cos theta " << cosTheta << ", channel " << c << ": " << e.albedo[c] << " +- "
                      << e.standardError[c] << " against " << expected[c]);
         CHECK(e.standardError[c] > 0);
         CHECK(std::abs(e.albedo[c] - expected[c]) <= 5 * e.standardError[c] + 0.002 * expected[c]);
@@ -192,5 +184,70 @@ TEST_CASE("lucent bsdf's directional albedo: the numerical integration's, kd, ks
     const double F = fresnelDielectric(cosTheta, 1.0f, 1.5f);
     INFO("cos theta " << cosTheta << ": " << e.albedo.g << " +- " << e.standardError.g);
     CHECK(std::abs(e.albedo.g - (F + (1 - F) / 2.25)) <= 5 * e.standardError.g);
+  }
+}
+
+TEST_CASE("Every kind of the table keeps its flags' promises", "[bsdf]") {
+  // For each row of bsdf/kinds.h, a material of that kind with coloured, non-trivial parameters:
+  // specular lobes evaluate to nothing and sample deltas, others sample what they evaluate; a lobe
+  // without transmission never sends light through, one with it does; a diffuse-only lobe's value
+  // does not depend on the directions; the diffuse part, the albedo layer and the bound nest; a
+  // two-sided lobe scatters only what arrives above it, another from both sides; a kind's name
+  // leads back to it where scene files may give it.
+  Material m;
+  m.kd = Rgb(0.5f, 0.3f, 0.2f);
+  m.ks = Rgb(0.3f, 0.4f, 0.2f);
+  m.ns = 20;
+  m.ni = 1.5f;
+  m.metallic = 0.3f;
+  m.roughness = 0.5f;
+  std::vector<MaterialType> kinds;
+#define LUCENT_TEST_KIND(kind, value, Lobe, member, name, sceneFile)                                        \
+  kinds.push_back(MaterialType::kind);                                                                    \
+  CHECK(uint32_t(MaterialType::kind) == value);                                                           \
+  CHECK(std::string(materialTypeName(MaterialType::kind)) == name);                                       \
+  CHECK(sceneFileMaterialType(name) == (sceneFile ? std::optional(MaterialType::kind) : std::nullopt));
+  LUCENT_MATERIAL_KINDS(LUCENT_TEST_KIND)
+#undef LUCENT_TEST_KIND
+  Rng rng(12);
+  for (const MaterialType kind : kinds) {
+    m.type = kind;
+    const SurfaceBsdf b = materialBsdf(m);
+    const BsdfFlags flags = b.flags();
+    INFO("kind " << materialTypeName(kind));
+    REQUIRE(b.type == kind);
+    CHECK(flags == kindFlags(kind));
+    CHECK((has(flags, BsdfFlags::Reflection) || has(flags, BsdfFlags::Transmission)));
+    CHECK((has(flags, BsdfFlags::Diffuse) || has(flags, BsdfFlags::Glossy) || has(flags, BsdfFlags::Specular)));
+    const Rgb diffuse = b.diffuse(), albedo = layerAlbedo(b), bound = reflectanceBound(b);
+    for (int c = 0; c < 3; ++c) {
+      CHECK(diffuse[c] <= albedo[c]);
+      CHECK(albedo[c] <= bound[c]);
+    }
+    CHECK(diffuse.isBlack() == !has(flags, BsdfFlags::Diffuse));
+    int through = 0, back = 0;
+    const BsdfValue reference = evalBsdfAndPdf(b, directionAt(0.3, 0.2), directionAt(0.9, 2.0));
+    for (int i = 0; i < 2000; ++i) {
+      const Vec3 wo = sampleUniformSphere(rng.uniform2());
+      const Vec3 wi = sampleUniformSphere(rng.uniform2());
+      const BsdfValue v = evalBsdfAndPdf(b, wo, wi);
+      if (b.isDelta()) CHECK((v.f.isBlack() && v.pdf == 0));
+      if (b.onlyDiffuse() && wo.z > 0 && wi.z > 0) CHECK(v.f == reference.f);
+      // A two-sided lobe is only ever seen from above (the frame is turned to the viewer): from
+      // below it scatters nothing. One that is not (glass) scatters light arriving from either side.
+      const Vec3 woBelow{wo.x, wo.y, -std::abs(wo.z)};
+      if (wo.z != 0)
+        CHECK(sampleBsdf(b, woBelow, rng.uniform(), rng.uniform2()).valid == !has(flags, BsdfFlags::TwoSided));
+      const BsdfSample s = sampleBsdf(b, wo, rng.uniform(), rng.uniform2());
+      if (!s.valid) continue;
+      CHECK(s.delta == b.isDelta());
+      if (!s.delta) {
+        const BsdfValue at = evalBsdfAndPdf(b, wo, s.wi);
+        CHECK(s.pdf == Approx(at.pdf).epsilon(1e-5));
+      }
+      (s.wi.z * wo.z < 0 ? through : back) += 1;
+    }
+    CHECK((through > 0) == has(flags, BsdfFlags::Transmission));
+    CHECK((back > 0) == has(flags, BsdfFlags::Reflection));
   }
 }

@@ -26,12 +26,7 @@ const double kAlpha = chi2::sidak(0.01, kChi2Tests);
 using test::directionAt;
 const auto diffuse = &test::diffuseBsdf;
 const auto phong = &test::phongBsdf;
-SurfaceBsdf glass(float ni) {
-  SurfaceBsdf b;
-  b.type = MaterialType::Glass;
-  b.ni = ni;
-  return b;
-}
+SurfaceBsdf glass(float ni) { return GlassLobe{ni}; }
 
 Vec3 mirrorOf(Vec3 wo) { return {-wo.x, -wo.y, wo.z}; }
 
@@ -119,16 +114,16 @@ TEST_CASE("Phong sampling: Kd/Ks mixtures, exponents 10 to 1000, down to grazing
   for (const Case& c : cases) {
     for (double theta : c.thetas) {
       const SurfaceBsdf& b = c.b;
-      INFO("Kd " << b.kd.average() << ", Ks " << b.ks.average() << ", Ns " << b.ns << ", theta_o " << theta);
+      INFO("Kd " << b.phong.kd.average() << ", Ks " << b.phong.ks.average() << ", Ns " << b.phong.ns << ", theta_o " << theta);
       const Vec3 wo = directionAt(theta, 2.1);
       auto pdf = [&](Vec3 wi) { return bsdfPdf(b, wo, wi); };
       WeightCheck weights;
-      const chi2::Result r = chi2::testSphere(bsdfSampler(b, wo, weights), pdf, lobeOptions(wo, b.ns, seed++));
+      const chi2::Result r = chi2::testSphere(bsdfSampler(b, wo, weights), pdf, lobeOptions(wo, b.phong.ns, seed++));
       CHECK_CHI2_PASS(r);
       INFO(weights.first);
       CHECK(weights.wrong == 0);
       // Grazing wo puts part of the lobe below the horizon, where the sampler fails.
-      if (theta > 1.4 && b.ns <= 100) CHECK(r.failures > 0);
+      if (theta > 1.4 && b.phong.ns <= 100) CHECK(r.failures > 0);
     }
   }
 }
@@ -148,7 +143,7 @@ TEST_CASE("Phong pdf and value match the mixture formula", "[bsdf]") {
     const double pdf = above ? pd * wi.z / kPi + (1 - pd) * 51 * lobe : 0.0;
     CHECK(bsdfPdf(b, wo, wi) == Approx(pdf).epsilon(1e-4).margin(1e-6));
     for (int c = 0; c < 3; ++c) {
-      const double f = above ? b.kd[c] / kPi + b.ks[c] * 52 * lobe : 0.0;
+      const double f = above ? b.phong.kd[c] / kPi + b.phong.ks[c] * 52 * lobe : 0.0;
       CHECK(evalBsdf(b, wo, wi)[c] == Approx(f).epsilon(1e-4).margin(1e-6));
     }
   }
@@ -180,7 +175,7 @@ TEST_CASE("Phong sampling: negative controls", "[bsdf][chi2]") {
     auto sampler = [&](Rng& rng) {
       const float u = rng.uniform();
       const Vec2 u2 = rng.uniform2();
-      const Vec3 wi = u < b.diffuseChoice() ? sampleCosineHemisphere(u2) : samplePhongLobe(u2, b.ns);
+      const Vec3 wi = u < b.phong.diffuseChoice() ? sampleCosineHemisphere(u2) : samplePhongLobe(u2, b.phong.ns);
       return DirectionSample{wi, pdf(wi)};
     };
     CHECK_CHI2_REJECT(chi2::testSphere(sampler, pdf, lobeOptions(wo2, 10, 103)));

@@ -671,9 +671,9 @@ TEST_CASE("glTF normal and metallic-roughness textures are read as linear data, 
     SurfacePoint sp = surfaceAt(scene, 0, 0.25f, 0.25f);
     const SurfaceBsdf b = bsdfAt(scene, sp);
     const double metallic = 0.8 * 64 / 255.0, roughness = 0.9 * 128 / 255.0;
-    CHECK(b.alpha == Approx(roughness * roughness).epsilon(1e-5));
-    CHECK(b.kd.r == Approx(0.5 * (1 - metallic)).epsilon(1e-5));
-    CHECK(b.ks.r == Approx(0.5 * metallic).epsilon(1e-5));  // the quad's specularFactor 0: no dielectric F0
+    CHECK(b.gltf.alpha == Approx(roughness * roughness).epsilon(1e-5));
+    CHECK(b.gltf.kd.r == Approx(0.5 * (1 - metallic)).epsilon(1e-5));
+    CHECK(b.gltf.ks.r == Approx(0.5 * metallic).epsilon(1e-5));  // the quad's specularFactor 0: no dielectric F0
     expectNormal(scene, 1, 2);
     // The default scale, 1.
     f["materials"][0]["normalTexture"].erase("scale");
@@ -739,10 +739,10 @@ TEST_CASE("KHR_materials_specular's textures: its factor times their A (linear),
   SurfacePoint sp = surfaceAt(scene, 0, 0.25f, 0.25f);
   const SurfaceBsdf b = bsdfAt(scene, sp);
   const double specular = 0.5 * 102 / 255.0;
-  CHECK(b.dielectricF90 == Approx(specular).epsilon(1e-5));
-  CHECK(b.f90 == Approx(specular).epsilon(1e-5));
+  CHECK(b.gltf.dielectricF90 == Approx(specular).epsilon(1e-5));
+  CHECK(b.gltf.f90 == Approx(specular).epsilon(1e-5));
   const int codes[3] = {128, 64, 255};
-  for (int c = 0; c < 3; ++c) CHECK(b.ks[c] == Approx(0.04 * kSrgb8ToLinear[size_t(codes[c])] * specular).epsilon(1e-4));
+  for (int c = 0; c < 3; ++c) CHECK(b.gltf.ks[c] == Approx(0.04 * kSrgb8ToLinear[size_t(codes[c])] * specular).epsilon(1e-4));
   // A textureInfo that is not one is refused with its path.
   f["materials"][0]["extensions"]["KHR_materials_specular"]["specularTexture"] = 3;
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, f),
@@ -931,14 +931,14 @@ TEST_CASE("glTF COLOR_0 multiplies the base colour and alpha: floats, normalized
         const uint32_t v = scene.indices[3 * t + uint32_t(corner)];
         const SurfacePoint sp = surfaceAt(scene, t, b1, b2);
         const float* c = &colours[4 * v];
-        CHECK(bsdfAt(scene, sp).kd == Rgb(factor.r * c[0], factor.g * c[1], factor.b * c[2]));
+        CHECK(bsdfAt(scene, sp).diffuse() == Rgb(factor.r * c[0], factor.g * c[1], factor.b * c[2]));
         CHECK(vertexColourAt(scene, sp).alpha == c[3]);
       }
     // Between the vertices, interpolated.
     const SurfacePoint centre = surfaceAt(scene, 0, 1 / 3.0f, 1 / 3.0f);
     const uint32_t* v = &scene.indices[0];
     for (int k = 0; k < 3; ++k)
-      CHECK(bsdfAt(scene, centre).kd[k] ==
+      CHECK(bsdfAt(scene, centre).diffuse()[k] ==
             Approx(factor[k] * (colours[4 * v[0] + k] + colours[4 * v[1] + k] + colours[4 * v[2] + k]) / 3).epsilon(1e-5));
   }
   // With alphaMode MASK (cutoff 0.5) the alpha cuts a hole where x > 0.5.
@@ -1158,15 +1158,15 @@ TEST_CASE("A glTF entry's masking and lumens per watt, and the load options', re
     return loadScene(writeFile(dir.path, "scene.json", scene), options);
   };
   const Scene plain = load({{"gltf", file}}, LoadOptions(true));
-  CHECK(plain.materials[0].type == MaterialType::Gltf);
+  CHECK(plain.materials[0].masking == GgxMasking::Separable);
   CHECK(plain.lights[0].value.g == Approx(1.0f));
   const Scene flagged = load({{"gltf", file}}, LoadOptions(true, {true, 341.5, ""}));
-  CHECK(flagged.materials[0].type == MaterialType::GltfHeightCorrelated);
+  CHECK(flagged.materials[0].masking == GgxMasking::HeightCorrelated);
   CHECK(flagged.lights[0].value.g == Approx(2.0f));
   // The entry's own fields win over the load options.
   const Scene own = load({{"gltf", file}, {"masking", "separable"}, {"lumens_per_watt", 68.3}},
                          LoadOptions(true, {true, 341.5, ""}));
-  CHECK(own.materials[0].type == MaterialType::Gltf);
+  CHECK(own.materials[0].masking == GgxMasking::Separable);
   CHECK(own.lights[0].value.g == Approx(10.0f));
   REQUIRE_THROWS_WITH(load({{"gltf", file}, {"masking", "smooth"}}, LoadOptions(true)),
                       Catch::Contains("masking") && Catch::Contains("expected separable or height-correlated"));

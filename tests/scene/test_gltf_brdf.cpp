@@ -27,12 +27,13 @@ struct Parameters {
   Rgb base{0.8f, 0.5f, 0.2f};
   float metallic = 0, roughness = 0.5f, ior = 1.5f, specular = 1;
   Rgb specularColour{1.0f};
-  MaterialType type = MaterialType::Gltf;
+  GgxMasking masking = GgxMasking::Separable;
 };
 
 SurfaceBsdf bsdfOf(const Parameters& p) {
   Material m;
-  m.type = p.type;
+  m.type = MaterialType::Gltf;
+  m.masking = p.masking;
   m.kd = p.base;
   m.ks = p.specularColour;
   m.ni = p.ior;
@@ -52,7 +53,7 @@ double appendixB(const Parameters& p, Vec3 wo, Vec3 wi, int channel) {
   const double hl = std::sqrt(hx * hx + hy * hy + hz * hz);
   const double nh = hz / hl, vh = (double(wo.x) * hx + double(wo.y) * hy + double(wo.z) * hz) / hl;
   const double d = a2 / (kPi * std::pow(nh * nh * (a2 - 1) + 1, 2));
-  const double v = p.type == MaterialType::Gltf
+  const double v = p.masking == GgxMasking::Separable
                        ? 1 / ((nl + std::sqrt(a2 + (1 - a2) * nl * nl)) * (nv + std::sqrt(a2 + (1 - a2) * nv * nv)))
                        : 0.5 / (nl * std::sqrt(nv * nv * (1 - a2) + a2) + nv * std::sqrt(nl * nl * (1 - a2) + a2));
   const double specularBrdf = v * d;
@@ -97,10 +98,10 @@ MeanWeight meanSampleWeight(const SurfaceBsdf& b, Vec3 wo, int n, uint64_t seed)
 TEST_CASE("glTF BRDF: the value is Appendix B's metal/dielectric mix with KHR_materials_ior and _specular",
           "[bsdf][gltf]") {
   Rng rng(5);
-  for (const MaterialType type : {MaterialType::Gltf, MaterialType::GltfHeightCorrelated})
+  for (const GgxMasking masking : {GgxMasking::Separable, GgxMasking::HeightCorrelated})
     for (int i = 0; i < 3000; ++i) {
       Parameters p;
-      p.type = type;
+      p.masking = masking;
       p.base = Rgb(rng.uniform(), rng.uniform(), rng.uniform());
       p.metallic = i % 3 == 0 ? 0.0f : i % 3 == 1 ? 1.0f : rng.uniform();
       p.roughness = 0.1f + 0.9f * rng.uniform();
@@ -111,7 +112,7 @@ TEST_CASE("glTF BRDF: the value is Appendix B's metal/dielectric mix with KHR_ma
       const Vec3 wo = sampleUniformSphere(rng.uniform2()), wi = sampleUniformSphere(rng.uniform2());
       const Rgb f = evalBsdf(b, wo, wi);
       for (int c = 0; c < 3; ++c) {
-        INFO("type " << int(type) << ", case " << i << ", channel " << c);
+        INFO("masking " << int(masking) << ", case " << i << ", channel " << c);
         CHECK(f[c] == Approx(appendixB(p, wo, wi, c)).epsilon(2e-4).margin(1e-6));
       }
     }
@@ -121,7 +122,7 @@ TEST_CASE("glTF BRDF: reciprocal, and zero unless both directions lie above the 
   Rng rng(6);
   for (int i = 0; i < 3000; ++i) {
     Parameters p;
-    p.type = i % 2 ? MaterialType::Gltf : MaterialType::GltfHeightCorrelated;
+    p.masking = i % 2 ? GgxMasking::Separable : GgxMasking::HeightCorrelated;
     p.metallic = rng.uniform();
     p.roughness = 0.05f + 0.95f * rng.uniform();
     p.specularColour = Rgb(rng.uniform(), rng.uniform(), rng.uniform());
@@ -142,7 +143,7 @@ TEST_CASE("glTF BRDF: sampled directions have the density bsdfPdf gives, and wei
         Parameters p;
         p.metallic = metal ? 1.0f : 0.0f;
         p.roughness = roughness;
-        p.type = metal ? MaterialType::Gltf : MaterialType::GltfHeightCorrelated;
+        p.masking = metal ? GgxMasking::Separable : GgxMasking::HeightCorrelated;
         const SurfaceBsdf b = bsdfOf(p);
         const Vec3 wo = directionAt(theta, 0.7);
         INFO("roughness " << roughness << ", theta " << theta << (metal ? ", metal" : ", dielectric"));
@@ -177,12 +178,12 @@ TEST_CASE("glTF BRDF: the chi-square test rejects a lobe choice other than the o
   p.base = Rgb(0.3f);
   const SurfaceBsdf b = bsdfOf(p);
   const Vec3 wo = directionAt(1.2, 0.2);
-  // The specular lobe chosen 1.3 times as often as gltfSpecularChoice says.
-  const float choice = std::min(1.0f, 1.3f * gltfSpecularChoice(b, wo.z));
+  // The specular lobe chosen 1.3 times as often as specularChoice says.
+  const float choice = std::min(1.0f, 1.3f * b.gltf.specularChoice(wo.z));
   const auto sampler = [&](Rng& rng) {
     const float u = rng.uniform();
     const Vec2 u2 = rng.uniform2();
-    const Vec3 wi = u < choice ? reflect(wo, sampleGgxVisibleNormal(b.alpha, wo, u2)) : sampleCosineHemisphere(u2);
+    const Vec3 wi = u < choice ? reflect(wo, sampleGgxVisibleNormal(b.gltf.alpha, wo, u2)) : sampleCosineHemisphere(u2);
     return chi2::DirectionSample{wi, wi.z > 0 ? bsdfPdf(b, wo, wi) : 0.0f};
   };
   chi2::Options opt;
@@ -256,7 +257,7 @@ TEST_CASE("glTF BRDF: at the smallest roughness a metal reflects as a mirror wit
   p.metallic = 1;
   p.roughness = 0;  // rendered at alpha kMinGgxAlpha
   const SurfaceBsdf b = bsdfOf(p);
-  REQUIRE(b.alpha == kMinGgxAlpha);
+  REQUIRE(b.gltf.alpha == kMinGgxAlpha);
   Rng rng(41);
   for (const double theta : {0.0, 0.6, 1.2}) {
     const Vec3 wo = directionAt(theta, 1.0);

@@ -424,12 +424,8 @@ TEST_CASE("Particle scattering: without shading normals the BSDF sample itself, 
     tilted.shadingNormal = normalize(Vec3{std::sin(degrees * kPi / 180), 0, std::cos(degrees * kPi / 180)});
     return tilted;
   };
-  SurfaceBsdf glass;
-  glass.type = MaterialType::Glass;
-  glass.ni = 1.5f;
-  SurfaceBsdf mirror;
-  mirror.type = MaterialType::Mirror;
-  mirror.ks = Rgb(0.9f);
+  const SurfaceBsdf glass = GlassLobe{1.5f};
+  const SurfaceBsdf mirror = MirrorLobe{Rgb(0.9f)};
   SECTION("a face without vertex normals: sampleBsdf's weight bit for bit, and no number drawn") {
     Rng numbers(3);
     for (const SurfaceBsdf& b : {test::diffuseBsdf(Rgb(0.6f)), test::phongBsdf(Rgb(0.2f), Rgb(0.5f), 20), glass, mirror})

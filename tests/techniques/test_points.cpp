@@ -534,7 +534,7 @@ TEST_CASE("Leaves: position, face normal, radius and albedo of their point", "[p
     REQUIRE(leaf.sphere.center == sp.position);
     REQUIRE(leaf.cone.axis == scene.faceNormals[s.triangle]);
     REQUIRE(leaf.cone.angle == 0);
-    REQUIRE(leaf.albedo == bsdfAt(scene, sp).kd);
+    REQUIRE(leaf.albedo == bsdfAt(scene, sp).diffuse());
     REQUIRE(leaf.sphere.radius == Approx(std::sqrt(1.5 * 100.0 / n / kPi)));
     REQUIRE(h.nodeAreas[n + j] == h.restPointArea);
   }

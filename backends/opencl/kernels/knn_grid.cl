@@ -171,7 +171,7 @@ __kernel void knnGridEstimate(__global const Photon* photons, __global const uin
     const Rgb inside = s.farthestD2 == r2 ? rgb(s.sum.r - s.farthest.r, s.sum.g - s.farthest.g, s.sum.b - s.farthest.b)
                                           : s.sum;
     const float invPi = 0.31830988618379067154f, pi = 3.14159265358979323846f;
-    L = scaleRgb(mulRgb(inside, scaleRgb(sp.bsdf.kd, invPi)), 1.0f / (pi * r2));
+    L = scaleRgb(mulRgb(inside, scaleRgb(sp.bsdf.lambertian.kd, invPi)), 1.0f / (pi * r2));
   }
   radiance[i] = L;
   radius2Out[i] = r2;

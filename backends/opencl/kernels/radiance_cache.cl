@@ -64,7 +64,7 @@ __kernel void interpolateCaches(__global const RadianceCache* caches, __global c
     total += weight;
   }
   const float invPi = 0.31830988618379067154f;
-  const Rgb rho = scaleRgb(points[i].bsdf.kd, invPi);
+  const Rgb rho = scaleRgb(diffuseAlbedo(points[i].bsdf), invPi);
   indirect[i] = total > 0 ? mulRgb(rho, scaleRgb(sum, (float)(1.0 / total))) : rgb(0.0f, 0.0f, 0.0f);
   reached[i] = total > 0;
 }

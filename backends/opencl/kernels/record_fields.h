@@ -12,10 +12,13 @@
   FIELD(UniformGrid, invCellSize) FIELD(UniformGrid, res) FIELD(UniformGrid, slack)                  \
   RECORD(ShadingPoint) FIELD(ShadingPoint, position) FIELD(ShadingPoint, geometricNormal)            \
   FIELD(ShadingPoint, normal) FIELD(ShadingPoint, wo) FIELD(ShadingPoint, weight)                    \
-  FIELD(ShadingPoint, bsdf.type) FIELD(ShadingPoint, bsdf.kd) FIELD(ShadingPoint, bsdf.ks)           \
-  FIELD(ShadingPoint, bsdf.ns) FIELD(ShadingPoint, bsdf.ni) FIELD(ShadingPoint, bsdf.alpha)          \
-  FIELD(ShadingPoint, bsdf.f90) FIELD(ShadingPoint, bsdf.dielectricF0)                               \
-  FIELD(ShadingPoint, bsdf.dielectricF90) FIELD(ShadingPoint, pixel) FIELD(ShadingPoint, sample)     \
+  FIELD(ShadingPoint, bsdf.type) FIELD(ShadingPoint, bsdf.lambertian.kd)                            \
+  FIELD(ShadingPoint, bsdf.phong.kd) FIELD(ShadingPoint, bsdf.phong.ks)                              \
+  FIELD(ShadingPoint, bsdf.phong.ns) FIELD(ShadingPoint, bsdf.mirror.tint)                           \
+  FIELD(ShadingPoint, bsdf.glass.ni) FIELD(ShadingPoint, bsdf.gltf.kd) FIELD(ShadingPoint, bsdf.gltf.ks) \
+  FIELD(ShadingPoint, bsdf.gltf.alpha) FIELD(ShadingPoint, bsdf.gltf.f90)                            \
+  FIELD(ShadingPoint, bsdf.gltf.dielectricF0) FIELD(ShadingPoint, bsdf.gltf.dielectricF90)           \
+  FIELD(ShadingPoint, bsdf.gltf.masking) FIELD(ShadingPoint, pixel) FIELD(ShadingPoint, sample)      \
   FIELD(ShadingPoint, branch) FIELD(ShadingPoint, triangle)                                          \
   RECORD(RadianceCache) FIELD(RadianceCache, position) FIELD(RadianceCache, normal)                  \
   FIELD(RadianceCache, radius) FIELD(RadianceCache, environment) FIELD(RadianceCache, indirect)      \

@@ -32,11 +32,44 @@ typedef struct {
   float slack;
 } UniformGrid;
 
+// SurfaceBsdf: the material's kind (include/lucent/scene/bsdf/kinds.h) and its lobe's parameters
+// (include/lucent/scene/bsdf/*.h) in a union of 44 bytes.
 typedef struct {
-  uint type;  // 0 diffuse, 1 Phong, 4 and 5 glTF
+  Rgb kd;
+} LambertianLobe;
+
+typedef struct {
   Rgb kd, ks;
-  float ns, ni, alpha, f90, dielectricF0, dielectricF90;
+  float ns;
+} PhongLobe;
+
+typedef struct {
+  Rgb tint;
+} MirrorLobe;
+
+typedef struct {
+  float ni;
+} GlassLobe;
+
+typedef struct {
+  Rgb kd, ks;
+  float alpha, f90, dielectricF0, dielectricF90;
+  uint masking;  // 0 separable, 1 height-correlated
+} GltfMetalRoughLobe;
+
+typedef struct {
+  uint type;  // 0 diffuse, 1 Phong, 2 mirror, 3 glass, 4 glTF
+  union {
+    LambertianLobe lambertian;
+    PhongLobe phong;
+    MirrorLobe mirror;
+    GlassLobe glass;
+    GltfMetalRoughLobe gltf;
+  };
 } SurfaceBsdf;
+
+// The Lambertian term's albedo of a shading point's lobe (none is specular).
+Rgb diffuseAlbedo(SurfaceBsdf b) { return b.type == 1 ? b.phong.kd : b.type == 4 ? b.gltf.kd : b.lambertian.kd; }
 
 typedef struct {
   Vec3 position, geometricNormal, normal, wo;

@@ -7,6 +7,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "lucent/core/math.h"
 
@@ -50,6 +51,11 @@ inline float smithG1(float alpha, float cosW) {
 inline float smithSeparable(float alpha, float cosO, float cosI) { return smithG1(alpha, cosO) * smithG1(alpha, cosI); }
 inline float smithHeightCorrelated(float alpha, float cosO, float cosI) {
   return 1.0f / (1.0f + smithLambda(alpha, cosO) + smithLambda(alpha, cosI));
+}
+// Which of the two a material uses: a parameter of its lobe, not a kind of its own.
+enum class GgxMasking : uint32_t { Separable = 0, HeightCorrelated = 1 };
+inline float smithMasking(GgxMasking form, float alpha, float cosO, float cosI) {
+  return form == GgxMasking::Separable ? smithSeparable(alpha, cosO, cosI) : smithHeightCorrelated(alpha, cosO, cosI);
 }
 
 // A microfacet normal visible from wo (wo.z > 0), with density D_wo(m) = G1(wo) max(0, wo.m) D(m) /

@@ -44,10 +44,11 @@ struct ParticleScatter {
   bool valid = false;
 };
 
-// The shading normal on the particle's side of the surface (glass keeps the winding's).
+// The shading normal on the particle's side of the surface (a lobe that is not two-sided, glass,
+// keeps the winding's).
 inline Vec3 particleShadingNormal(const SurfaceBsdf& bsdf, const SurfacePoint& sp, Vec3 wo) {
   const bool front = dot(wo, sp.geometricNormal) > 0;
-  return bsdf.type != MaterialType::Glass && !front ? -sp.shadingNormal : sp.shadingNormal;
+  return twoSidedShading(bsdf) && !front ? -sp.shadingNormal : sp.shadingNormal;
 }
 
 inline bool hasShadingNormal(const SurfacePoint& sp) { return !(sp.shadingNormal == sp.geometricNormal); }
@@ -89,7 +90,8 @@ inline ParticleScatter scatterParticle(const SurfaceBsdf& bsdf, const SurfacePoi
     out.valid = !out.weight.isBlack();
     return out;
   }
-  if (shaded && bsdf.type == MaterialType::Mirror) {
+  // A specular reflector (a mirror) whose shading normal differs from the surface's.
+  if (shaded && bsdf.isDelta() && !has(bsdf.flags(), BsdfFlags::Transmission)) {
     const Vec3 aboutShading = reflect(wo, n), aboutGeometric = reflect(wo, ngSide);
     const bool viaShading = arrival > 0 && dot(aboutShading, ngSide) > 0;
     const bool viaGeometric = dot(aboutGeometric, n) <= 0;
@@ -97,7 +99,7 @@ inline ParticleScatter scatterParticle(const SurfaceBsdf& bsdf, const SurfacePoi
     const bool both = viaShading && viaGeometric;
     const bool pickShading = viaShading && (!both || rng.uniform() < 0.5f);
     out.wi = pickShading ? aboutShading : aboutGeometric;
-    out.weight = bsdf.ks * ((both ? 2.0f : 1.0f) *
+    out.weight = layerAlbedo(bsdf) * ((both ? 2.0f : 1.0f) *
                             (pickShading ? std::abs(dot(aboutShading, ng)) / std::abs(dot(wo, ng)) : 1.0f));
     out.delta = out.valid = true;
     return out;

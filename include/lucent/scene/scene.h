@@ -9,14 +9,17 @@
 #include "lucent/core/distribution.h"
 #include "lucent/core/math.h"
 #include "lucent/image/image.h"
+#include "lucent/scene/bsdf/kinds.h"
+#include "lucent/scene/ggx.h"
 
 namespace lucent {
 
-// Gltf and GltfHeightCorrelated are glTF's metallic-roughness material (glTF 2.0, Appendix B), with
-// the Smith masking-shadowing term of the appendix (separable) or of the Khronos sample renderer
-// and many GPU engines (height-correlated): one type each, so that a kernel switches on the type.
-enum class MaterialType : uint32_t { Diffuse = 0, Phong = 1, Mirror = 2, Glass = 3, Gltf = 4, GltfHeightCorrelated = 5 };
-inline bool isGltf(MaterialType t) { return t == MaterialType::Gltf || t == MaterialType::GltfHeightCorrelated; }
+// What a material is: a row of the kinds' table (bsdf/kinds.h), its lobe in bsdf/.
+enum class MaterialType : uint32_t {
+#define LUCENT_MATERIAL_TYPE(kind, value, Lobe, member, name, sceneFile) kind = value,
+  LUCENT_MATERIAL_KINDS(LUCENT_MATERIAL_TYPE)
+#undef LUCENT_MATERIAL_TYPE
+};
 
 // glTF's alphaMode: opaque; masked (a point is there where its alpha is at least alphaCutoff); or
 // blended, rendered as stochastic transparency (a point is there with probability alpha).
@@ -39,6 +42,7 @@ struct Material {
   int32_t kdTexture = -1;  // index into Scene::textures, -1 for none
   // glTF only.
   float metallic = 0.0f, roughness = 1.0f;
+  GgxMasking masking = GgxMasking::Separable;  // Smith's form (ggx.h): Appendix B's, or --height-correlated
   float specular = 1.0f;                   // KHR_materials_specular's specularFactor
   int32_t metallicRoughnessTexture = -1;   // linear; B scales metallic, G roughness
   int32_t normalTexture = -1;              // linear tangent-space normals, x and y scaled by normalScale
@@ -58,7 +62,7 @@ struct Material {
   // KHR_materials_specular's textures: A (linear) times `specular`, RGB (sRGB) times ks.
   int32_t specularTexture = -1, specularColorTexture = -1;
 };
-static_assert(sizeof(Material) == 108, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 112, "Material is a fixed-size record shared with GPU backends");
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear

@@ -136,13 +136,12 @@ inline SurfacePoint surfaceAt(const Scene& scene, uint32_t tri, float b1, float 
 // content when its factor asks for one.
 constexpr float kMinGgxAlpha = 1e-3f;
 
-// Appendix B's metal/dielectric mix expanded into SurfaceBsdf's terms (bsdf.h) for base colour
-// `base`, from the file's factors times its textures: metallic and roughness, and
+// Appendix B's metal/dielectric mix expanded into the lobe's terms (bsdf/gltf_metal_rough.h) for
+// base colour `base`, from the file's factors times its textures: metallic and roughness, and
 // KHR_materials_specular's specular factor and colour.
 inline SurfaceBsdf gltfBsdf(const Material& m, Rgb base, float metallic, float roughness, float specular,
                             Rgb specularColour) {
-  SurfaceBsdf b;
-  b.type = m.type;
+  GltfMetalRoughLobe b;
   // KHR_materials_ior and KHR_materials_specular: the dielectric's F0 from the index, coloured,
   // clamped to 1, then weighted by the specular factor, which is also its F90.
   const float r = (m.ni - 1.0f) / (m.ni + 1.0f);
@@ -154,27 +153,31 @@ inline SurfaceBsdf gltfBsdf(const Material& m, Rgb base, float metallic, float r
   b.dielectricF0 = f0.maxComponent();
   b.dielectricF90 = specular;
   b.alpha = std::max(roughness * roughness, kMinGgxAlpha);
+  b.masking = m.masking;
   return b;
 }
 
+// A material's lobe for diffuse colour kd (its Kd, or Kd times its texture and vertex colours), the
+// other parameters from its factors.
+inline SurfaceBsdf materialBsdf(const Material& m, Rgb kd) {
+  switch (m.type) {
+    case MaterialType::Diffuse: return LambertianLobe{kd};
+    case MaterialType::Phong: return PhongLobe{kd, m.ks, m.ns};
+    case MaterialType::Mirror: return MirrorLobe{m.ks};
+    case MaterialType::Glass: return GlassLobe{m.ni};
+    case MaterialType::Gltf: return gltfBsdf(m, kd, m.metallic, m.roughness, m.specular, m.ks);
+  }
+  return LambertianLobe{kd};
+}
 // A material's BSDF from its factors alone, as bsdfAt gives it where no texture or vertex colour
 // scales them.
-inline SurfaceBsdf materialBsdf(const Material& m) {
-  if (isGltf(m.type)) return gltfBsdf(m, m.kd, m.metallic, m.roughness, m.specular, m.ks);
-  SurfaceBsdf b;
-  b.type = m.type;
-  b.kd = m.kd;
-  b.ks = m.ks;
-  b.ns = m.ns;
-  b.ni = m.ni;
-  return b;
-}
+inline SurfaceBsdf materialBsdf(const Material& m) { return materialBsdf(m, m.kd); }
 
 inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
   const Material& m = scene.materials[sp.materialId];
   const Rgb factor = baseFactorAt(scene, m, sp);
   const Rgb kd = m.kdTexture < 0 ? factor : factor * textureAt(scene, m.kdTexture, sp);
-  if (isGltf(m.type)) {
+  if (m.type == MaterialType::Gltf) {
     float metallic = m.metallic, roughness = m.roughness, specular = m.specular;
     Rgb specularColour = m.ks;
     if (m.metallicRoughnessTexture >= 0) {
@@ -189,14 +192,8 @@ inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
     if (m.specularColorTexture >= 0) specularColour = specularColour * textureAt(scene, m.specularColorTexture, sp);
     return gltfBsdf(m, kd, metallic, roughness, specular, specularColour);
   }
-  SurfaceBsdf b = materialBsdf(m);
-  b.kd = kd;
-  return b;
+  return materialBsdf(m, kd);
 }
-
-// Whether a surface's shading frame turns to the viewer on either side: glass keeps its winding's
-// orientation (its inside and outside differ); every other material is two-sided.
-inline bool twoSidedShading(const SurfaceBsdf& bsdf) { return bsdf.type != MaterialType::Glass; }
 
 // Whether a scattered direction wi lies on the other side of the geometric surface (normal ng) than
 // the lobe sampled says, wo being where the path came from: a reflection through the surface or a

@@ -26,9 +26,7 @@ BufferQuadrature makeQuadrature(MappingKind kind, int side) {
   BufferQuadrature q;
   q.side = side;
   const MappingTables tables = makeMappingTables(side, 1);
-  SurfaceBsdf white;
-  white.type = MaterialType::Diffuse;
-  white.kd = Rgb(1.0f);
+  const SurfaceBsdf white = LambertianLobe{Rgb(1.0f)};
   // Texel centres; a unit diffuse BRDF's weights are cos dOmega / pi.
   evaluatePixels(q.mapping, kind, side, {0.5f, 0.5f}, nullptr, white, {0, 0, 1}, tables);
   q.cosineWeight.assign(q.texels(), 0.0f);

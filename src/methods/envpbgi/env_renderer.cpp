@@ -36,10 +36,6 @@ namespace {
 
 enum class EnvStream : uint64_t { Points = 31 };
 
-// A shading point's diffuse reflectance: the method shades every receiver as diffuse (the paper's
-// surfaces are), a glossy one by its diffuse part.
-Rgb diffusePart(const SurfaceBsdf& bsdf) { return bsdf.kd; }
-
 // Dumps (docs/dump-format.md) of the stages before the pixels.
 void dumpStages(const std::string& dir, const EnvHierarchy& h, std::span<const uint32_t> primary,
                 std::span<const uint32_t> primaryTexels, std::span<const Rgb> direct,
@@ -314,10 +310,11 @@ class EnvPbgiRender {
 
   void shade(const EyePaths& eye, size_t i, const BufferIrradiance& e) {
     const ShadingPoint& p = eye.points[i];
-    const Rgb rho = diffusePart(p.bsdf) * kInvPi;
+    // Every receiver is shaded as diffuse (the paper's surfaces are), a glossy one by its diffuse part.
+    const Rgb rho = p.bsdf.diffuse() * kInvPi;
     bandShading_.direct[i] += rho * e.environment;
     bandShading_.indirect[i] = rho * e.nodes;
-    if (p.bsdf.type != MaterialType::Diffuse) ++glossy_;
+    if (!p.bsdf.onlyDiffuse()) ++glossy_;
   }
 
   // The receivers `which` (indices into the band's points), each from a micro-buffer of its own, in

@@ -104,7 +104,7 @@ inline void gatherPacket(const GatherContext& ctx, std::span<const GatherRequest
     const Stopwatch buildClock;
     const WarpTable* table = nullptr;
     if (ctx.mapping == MappingKind::Warped) {
-      if (q.bsdf->type == MaterialType::Diffuse) {
+      if (q.bsdf->onlyDiffuse()) {
         table = &ctx.tables->lambertian;
       } else {
         tabulateBrdfSlice(*q.bsdf, woLocal, *ctx.tables, lane.table);

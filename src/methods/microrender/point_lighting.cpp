@@ -49,8 +49,7 @@ std::vector<Rgb> directAtLeaves(const Scene& scene, const Visibility& vis, const
     sp.geometricNormal = leaf.faceNormal;
     sp.normal = leaf.normal;
     sp.wo = leaf.normal;
-    sp.bsdf.type = MaterialType::Diffuse;
-    sp.bsdf.kd = Rgb(1.0f);
+    sp.bsdf = LambertianLobe{Rgb(1.0f)};
     sp.pixel = j;
     e[j] = directLight(scene, lights, vis, sp, samples, stream, threadRays.local());
   });
@@ -96,11 +95,11 @@ std::vector<VirtualPointLight> traceVirtualPointLights(const Scene& scene, const
       const SurfaceBsdf bsdf = bsdfAt(scene, sp);
       const Vec3 wo = -ray.direction;
       const bool front = dot(wo, sp.geometricNormal) > 0;
-      if (!bsdf.isDelta() && !bsdf.kd.isBlack()) {
+      if (!bsdf.diffuse().isBlack()) {
         // With the cosines' ratio, as photons are stored (particle_scattering.h).
         const float arrival = particleArrivalRatio(sp, particleShadingNormal(bsdf, sp, wo), wo);
         if (arrival > 0 && isFinite(flux * arrival))
-          perPath[p].push_back({sp.position, front ? sp.geometricNormal : -sp.geometricNormal, flux * arrival, bsdf.kd});
+          perPath[p].push_back({sp.position, front ? sp.geometricNormal : -sp.geometricNormal, flux * arrival, bsdf.diffuse()});
       }
       // The direction's numbers before the lobe's: the order in which GCC drew them when both were
       // arguments of one sampleBsdf call, so that faces without vertex normals keep their VPLs bit
@@ -164,8 +163,7 @@ void radiosityBounces(const Scene& scene, const PointHierarchy& h, const GatherC
   std::vector<Rgb> gathered(count), irradiance(h.leafCount);
   tbb::enumerable_thread_specific<GatherScratch> scratch;
   const uint64_t stream = lightingSeed(seed, LightingStream::Radiosity);
-  SurfaceBsdf white;
-  white.kd = Rgb(1.0f);
+  const SurfaceBsdf white = LambertianLobe{Rgb(1.0f)};
   for (int b = 0; b < bounces; ++b) {
     // Packets of consecutive nodes (neighbours in space, as the point order is the tree's).
     gatherInPackets(
@@ -222,7 +220,7 @@ NodeRadiance lightPoints(const Scene& scene, const Visibility& vis, const PointH
         q.position = leaf.position;
         q.frame = Frame(leaf.normal);
         q.woLocal = {0, 0, 1};
-        q.bsdf.kd = leaf.albedo;
+        q.bsdf = LambertianLobe{leaf.albedo};
         q.facingNormal = leaf.faceNormal;
         radiance.rgb[h.leafCount + j] = estimateRadiance(tree, q, settings, heaps.local().data(), counters.local());
       });

@@ -57,7 +57,7 @@ AreaParticles distributeAreaParticles(const Scene& scene, const AreaParticleOpti
       const SurfaceBsdf bsdf = bsdfAt(scene, sp);
       // Particles are Lambertian (4.2.1: f = rho_d / pi): a glossy surface keeps its diffuse part,
       // mirrors and glass absorb.
-      const Rgb rho = bsdf.isDelta() ? Rgb(0.0f) : bsdf.kd;
+      const Rgb rho = bsdf.diffuse();
       for (int side = 0; side < out.sides; ++side)
         out.particles[i * size_t(out.sides) + size_t(side)] = {
             sp.position, side == 0 ? sp.geometricNormal : -sp.geometricNormal, area, rho, s.triangle};

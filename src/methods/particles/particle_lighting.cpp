@@ -30,7 +30,7 @@ std::vector<Rgb> emitLight(const Scene& scene, const Visibility& vis, std::span<
       s.normal = p.normal;
       s.wo = p.normal;
       s.weight = Rgb(1.0f);
-      s.bsdf = {MaterialType::Diffuse, Rgb(1.0f), Rgb(0.0f), 1.0f, 1.0f};
+      s.bsdf = LambertianLobe{Rgb(1.0f)};
       s.pixel = uint32_t(i);
       s.triangle = p.triangle;
     }

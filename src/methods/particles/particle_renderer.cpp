@@ -351,8 +351,8 @@ class ParticleRender {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, paths.points.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
       stopPoint();
       for (size_t i = r.begin(); i != r.end(); ++i) {
-        shading.indirect[i] = paths.points[i].bsdf.kd * field_->irradiance(weights[i]) * kInvPi;
-        if (paths.points[i].bsdf.type != MaterialType::Diffuse) ++glossy_;
+        shading.indirect[i] = paths.points[i].bsdf.diffuse() * field_->irradiance(weights[i]) * kInvPi;
+        if (!paths.points[i].bsdf.onlyDiffuse()) ++glossy_;
       }
     });
     timing.addStage("ray_tracing" + suffix, tracingClock.seconds());

@@ -152,7 +152,7 @@ class PathTracer {
     path.recordFirstHit(layerAlbedo(bsdf), sp.shadingNormal, hit.t);
     if (path.bounce + 1 > opt_.maxDepth) return false;
 
-    // Glass keeps the winding orientation (inside/outside); other materials are two-sided.
+    // Glass keeps the winding orientation (inside/outside); two-sided lobes turn to the viewer.
     const Frame frame(shadingFrameNormal(wo, sp.shadingNormal, sp.geometricNormal, twoSidedShading(bsdf)));
     const Vec3 woLocal = frame.toLocal(wo);
 
@@ -441,7 +441,7 @@ class PathTracer {
       const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
       if (l.emits[k]) gatherEmission(path, hit, l.frontFace[k] != 0, position);
       if (path.bounce == 0)
-        path.recordFirstHit(layerAlbedo({MaterialType::Diffuse, {l.kdR[k], l.kdG[k], l.kdB[k]}, material(hit.triangle).ks}),
+        path.recordFirstHit(layerAlbedo(LambertianLobe{{l.kdR[k], l.kdG[k], l.kdB[k]}}),
                             {l.snX[k], l.snY[k], l.snZ[k]}, hit.t);
       const int verticesBefore = ++path.gatheringVertices;
       if (verticesBefore == 1) path.firstDiffuseShare = Rgb(1.0f);  // a Lambertian surface reflects only diffusely

@@ -397,7 +397,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
       stopPoint();
       for (size_t j = r.begin(); j != r.end(); ++j) {
         const ShadingPoint& p = points[order[j]];
-        queries[j] = {p.position, estimatePoint(p).side(), p.bsdf.kd, order[j], p.bsdf.type == MaterialType::Diffuse};
+        queries[j] = {p.position, estimatePoint(p).side(), p.bsdf.diffuse(), order[j], p.bsdf.onlyDiffuse()};
       }
     });
 

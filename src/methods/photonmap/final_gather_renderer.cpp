@@ -120,7 +120,7 @@ PrecomputedIrradiance precomputeIrradiance(const Scene& scene, const Map& map, s
       q.position = p.position;
       q.frame = Frame(facing);
       q.woLocal = {0, 0, 1};
-      q.bsdf = {MaterialType::Diffuse, Rgb(1.0f), Rgb(0.0f), 1.0f, 1.0f};
+      q.bsdf = LambertianLobe{Rgb(1.0f)};
       q.facingNormal = facing;
       // A white Lambertian surface reflects E / pi.
       out.irradiance[i] = estimateRadiance(map, q, settings, heap.data(), c) * kPi;
@@ -144,7 +144,7 @@ bool irradianceAt(const PrecomputedIrradiance& samples, const EstimatePoint& q, 
     return photonLights(s.normal, s.normal, s.position - q.position, d2, side);
   });
   if (nearest == kNoPoint) return false;
-  radiance = samples.irradiance[nearest] * q.bsdf.kd * kInvPi;
+  radiance = samples.irradiance[nearest] * q.bsdf.diffuse() * kInvPi;
   return true;
 }
 
@@ -215,10 +215,10 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
           for (size_t h = 0; h < hits; ++h) {
             const EstimatePoint& q = s.hits[h].point;
             Rgb L;
-            if (!precomputed || q.bsdf.type != MaterialType::Diffuse ||
+            if (!precomputed || !q.bsdf.onlyDiffuse() ||
                 !irradianceAt(irradiance, q, L)) {
               L = estimateRadiance(*global, q, maps.globalSettings, s.heap.data(), s.counters);
-              s.fallbacks += precomputed && q.bsdf.type == MaterialType::Diffuse;
+              s.fallbacks += precomputed && q.bsdf.onlyDiffuse();
             }
             L = s.hits[h].weight * L;
             for (int c = 0; c < 3; ++c) sum[c] += L[c];

@@ -142,8 +142,7 @@ void reserveStored(std::vector<Photon>& map, size_t more, const std::string& opt
 std::optional<EmissionTarget> specularTarget(const Scene& scene) {
   std::vector<Vec3> vertices;
   for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
-    const MaterialType type = scene.materials[scene.materialIds[t]].type;
-    if (type == MaterialType::Mirror || type == MaterialType::Glass)
+    if (onlySpecular(kindFlags(scene.materials[scene.materialIds[t]].type)))
       for (int v = 0; v < 3; ++v) vertices.push_back(scene.vertex(t, v));
   }
   if (vertices.empty()) return std::nullopt;

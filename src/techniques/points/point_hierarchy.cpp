@@ -31,19 +31,18 @@ TriangleShape triangleShape(const Scene& scene, uint32_t tri) {
   return {g.normal, g.area};
 }
 
-// Diffuse albedo at the point, its textures looked up at its uv (a glTF material's diffuse colour,
-// (1 - metallic) times the base colour); specular materials (mirror, glass) have no diffuse lobe and
-// get 0.
+// Diffuse albedo at the point (its lobe's Lambertian term), its textures looked up at its uv (a glTF
+// material's diffuse colour, (1 - metallic) times the base colour); specular lobes (mirror, glass)
+// have none and get 0.
 Rgb pointAlbedo(const Scene& scene, const PointSample& s) {
   const Material& m = scene.materials[scene.materialIds[s.triangle]];
-  if (m.type == MaterialType::Mirror || m.type == MaterialType::Glass) return Rgb(0.0f);
-  if (m.kdTexture < 0 && !isGltf(m.type) && scene.colours.empty()) return m.kd;
+  if (m.kdTexture < 0 && m.metallicRoughnessTexture < 0 && scene.colours.empty()) return materialBsdf(m).diffuse();
   SurfacePoint sp;
   sp.triangle = s.triangle;
   sp.materialId = scene.materialIds[s.triangle];
   sp.b1 = s.b1;
   sp.b2 = s.b2;
-  return bsdfAt(scene, sp).kd;
+  return bsdfAt(scene, sp).diffuse();
 }
 
 void computeLeaves(PointHierarchy& h, const Scene& scene) {

@@ -23,7 +23,7 @@ struct EstimatePoint {
   Vec3 position;
   Frame frame;        // shading frame whose normal is on the viewer's side
   Vec3 woLocal;       // towards the viewer, in `frame`
-  SurfaceBsdf bsdf;   // Diffuse or Phong
+  SurfaceBsdf bsdf;   // not only specular
   Vec3 facingNormal;  // the geometric normal on the viewer's side
   SurfaceSide side() const { return {frame.n, facingNormal}; }
 };
@@ -77,7 +77,7 @@ struct Accumulator {
   uint32_t used = 0;
 
   explicit Accumulator(const EstimatePoint& point)
-      : q(point), side(point.side()), diffuse(point.bsdf.type == MaterialType::Diffuse) {}
+      : q(point), side(point.side()), diffuse(point.bsdf.onlyDiffuse()) {}
   [[gnu::always_inline]] void add(const Photon& p, float d2) {
     // Which side the photon came from needs no unit incoming direction; the BRDF of a glossy
     // surface does.
@@ -96,7 +96,7 @@ struct Accumulator {
   Rgb radiance(float radius2) const {
     if (!(radius2 > 0)) return {};
     const Rgb inside = farthestD2 == radius2 ? sum - farthest : sum;
-    return diffuse ? diffuseRadiance(inside, q.bsdf.kd, radius2) : inside * (1.0f / (kPi * radius2));
+    return diffuse ? diffuseRadiance(inside, q.bsdf.diffuse(), radius2) : inside * (1.0f / (kPi * radius2));
   }
 };
 

@@ -1,0 +1,77 @@
+// glTF 2.0's metallic-roughness BRDF (Appendix B), with KHR_materials_ior and
+// KHR_materials_specular, its metal/dielectric mix expanded (surface.h's gltfBsdf fills it):
+//   f = kd / pi (1 - Fd) + F D G / (4 |n.wo| |n.wi|),
+//   F  = ks + (f90 - ks) (1 - |wo.h|)^5           (the mixed Fresnel term, per channel),
+//   Fd = dielectricF0 + (dielectricF90 - dielectricF0) (1 - |wo.h|)^5   (its dielectric's largest
+//        channel, which the diffuse base loses: KHR_materials_specular's max_value),
+// kd = (1 - metallic) base colour, D the GGX distribution of roughness alpha, G Smith's
+// masking-shadowing in the form `masking` names (ggx.h).
+#pragma once
+#include <algorithm>
+#include <cmath>
+
+#include "lucent/scene/bsdf/lambertian.h"
+#include "lucent/scene/ggx.h"
+
+namespace lucent {
+
+// glTF's Schlick weight (1 - |wo.h|)^5, the share of the way from F0 to F90.
+inline float schlickWeight(float cosWoH) {
+  const float x = 1.0f - std::min(1.0f, std::abs(cosWoH));
+  const float x2 = x * x;
+  return x2 * x2 * x;
+}
+
+struct GltfMetalRoughLobe {
+  Rgb kd, ks;
+  float alpha = 1, f90 = 1, dielectricF0 = 0, dielectricF90 = 0;
+  GgxMasking masking = GgxMasking::Separable;
+
+  static constexpr BsdfFlags flags =
+      BsdfFlags::Reflection | BsdfFlags::Diffuse | BsdfFlags::Glossy | BsdfFlags::TwoSided;
+
+  // The share of the diffuse base that the dielectric's Fresnel term leaves, at Schlick weight w.
+  float diffuseWeight(float w) const { return 1.0f - (dielectricF0 + (dielectricF90 - dielectricF0) * w); }
+
+  // Probability of choosing the GGX lobe: the share of the two terms' weights at the Fresnel term
+  // of n.wo, the visible-normal distribution's centre.
+  float specularChoice(float woZ) const {
+    const float w = schlickWeight(woZ);
+    const float specular = (ks + (Rgb(f90) - ks) * w).average();
+    const float diffuse = kd.average() * diffuseWeight(w);
+    return specular + diffuse > 0 ? specular / (specular + diffuse) : 0.0f;
+  }
+
+  BsdfValue evaluate(Vec3 wo, Vec3 wi) const {
+    const Vec3 h = normalize(wo + wi);
+    const float w = schlickWeight(dot(wo, h));
+    const Rgb F = ks + (Rgb(f90) - ks) * w;
+    const float specular = ggxD(alpha, h) * smithMasking(masking, alpha, wo.z, wi.z) / (4.0f * wo.z * wi.z);
+    const float ps = specularChoice(wo.z);
+    return {kd * (kInvPi * diffuseWeight(w)) + F * specular,
+            ps * ggxReflectionPdf(alpha, wo, wi) + (1.0f - ps) * cosineHemispherePdf(wi.z)};
+  }
+
+  BsdfSample sample(Vec3 wo, float u, Vec2 u2, Transport) const {
+    if (wo.z <= 0) return {};
+    return mixtureSample(*this, wo, u < specularChoice(wo.z) ? reflect(wo, sampleGgxVisibleNormal(alpha, wo, u2))
+                                                             : sampleCosineHemisphere(u2));
+  }
+
+  // At normal incidence.
+  Rgb albedo() const { return kd + ks; }
+  // The Fresnel term reaches f90 at grazing angles.
+  Rgb bound() const { return kd + Rgb(std::max(ks.r, f90), std::max(ks.g, f90), std::max(ks.b, f90)); }
+  Rgb diffuse() const { return kd; }
+
+  Rgb diffuseShare(Vec3 wo, Vec3 wi) const {
+    if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
+    const Rgb f = evaluate(wo, wi).f;
+    if (f.isBlack()) return Rgb(0.0f);
+    const float w = schlickWeight(dot(wo, normalize(wo + wi)));
+    return channelShare(lambertianValue(kd, wo.z, wi.z).f * diffuseWeight(w), f);
+  }
+};
+static_assert(sizeof(GltfMetalRoughLobe) == 44, "a lobe is a plain record of floats");
+
+}  // namespace lucent
