@@ -90,7 +90,7 @@ int runRender(const RenderArgs& a) {
   if (a.scene.empty()) throw std::invalid_argument("no scene file given (lucent render SCENE.json -o OUT.exr)");
   if (a.output.empty() && !a.help) throw std::invalid_argument("no output file given (-o OUT.exr)");
   SceneSettings settings;
-  settings.load = {a.quiet, {a.gltfHeightCorrelated, a.lumensPerWatt, a.gltfCamera}};
+  settings.load = {a.quiet, {a.gltfHeightCorrelated, a.gltfBendNormalMaps, a.lumensPerWatt, a.gltfCamera}};
   if (a.resolution.second > 0) settings.resolution = a.resolution;
   settings.strict = a.strict;
   settings.isa = a.isa;

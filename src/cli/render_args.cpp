@@ -124,6 +124,10 @@ const OptionTable<RenderArgs>& renderFlags() {
                    "Smith masking-shadowing of glTF materials: Appendix B's separable form, or the height-correlated "
                    "one of the Khronos sample renderer and many GPU engines (a scene file's glTF entry may set its "
                    "own)");
+    t.choice<bool>("gltf_normal_maps", &A::gltfBendNormalMaps, {{"bend", true}, {"as-given", false}},
+                   "glTF normal maps: bent per viewing direction so that mirror reflections stay above the surface, "
+                   "as production renderers do, or as the texture gives them (reflections below the surface are "
+                   "lost: dark rims) (a scene file's glTF entry may set its own)");
     t.real("lumens_per_watt", &A::lumensPerWatt, 1e-6, 1e6, "lm/W",
            "glTF lights' photometric intensities (cd, lx) to watts (a scene file's glTF entry may set its own)");
     t.text("gltf_camera", &A::gltfCamera, "",

@@ -26,6 +26,7 @@ struct RenderArgs {
   uint64_t memoryLimit = 0;  // 0: the available memory
   bool quiet = false, robust = false, help = false, logStages = false, strict = false;
   bool gltfHeightCorrelated = false;
+  bool gltfBendNormalMaps = true;
   double lumensPerWatt = GltfOptions{}.lumensPerWatt;
   std::string gltfCamera;
   OptionValues methodOptions;  // as given, in order

@@ -467,7 +467,7 @@ MaterialSpec defaultMaterial(const Context& c, GgxMasking masking) {
 }
 
 // A glTF material: pbrMetallicRoughness with KHR_materials_ior and KHR_materials_specular as
-// Appendix B's BRDF (the masking term's form as `type` says), and its emission; what that leaves
+// Appendix B's BRDF (the masking term's form as `masking` says), and its emission; what that leaves
 // out is listed in `ignored`, and what would change the image beyond that is refused.
 MaterialSpec materialSpec(const Context& c, size_t index, GgxMasking masking, std::vector<std::string>& ignored) {
   const tinygltf::Material& m = c.model.materials[index];
@@ -572,6 +572,7 @@ struct NodeWalk {
   const std::string& cameraName;           // empty: the first camera
   std::vector<std::string> cameraNames;    // the cameras passed over for another name
   GgxMasking masking;                      // every material's Smith form
+  bool bendNormalMaps;                     // GltfOptions::bendNormalMaps
   std::map<int, uint32_t> materialOf;      // glTF material (-1: the default) -> spec
   uint64_t skippedPrimitives = 0;      // points and lines
   uint64_t grownSinceMemoryCheck = 0;  // bytes the scene took since the last memory check
@@ -584,6 +585,7 @@ struct NodeWalk {
     std::string name = spec.name;
     if (import.materialIndex.count(name)) name += " (" + c.file + ": " + at("materials", size_t(index)) + ")";
     spec.name = name;
+    spec.bendNormalMap = bendNormalMaps;
     const uint32_t id = uint32_t(import.specs.size());
     import.materialIndex.emplace(name, id);
     import.specs.push_back(spec);
@@ -1047,7 +1049,8 @@ void importGltf(const std::string& path, const GltfOptions& options, Scene& scen
   if (model.scenes.empty()) c.fail("scenes", "the file has no scene");
   const size_t sceneIndex = model.defaultScene >= 0 ? size_t(model.defaultScene) : 0;
   if (sceneIndex >= model.scenes.size()) c.fail("scene", "scene " + std::to_string(sceneIndex) + " does not exist");
-  NodeWalk walk{c, scene, import, content, options.lumensPerWatt, options.camera, {}, options.heightCorrelated ? GgxMasking::HeightCorrelated : GgxMasking::Separable, {}, 0};
+  NodeWalk walk{c, scene, import, content, options.lumensPerWatt, options.camera, {}, options.heightCorrelated ? GgxMasking::HeightCorrelated : GgxMasking::Separable,
+                options.bendNormalMaps, {}, 0};
   std::vector<bool> reached(model.nodes.size(), false);
   for (const int root : model.scenes[sceneIndex].nodes) walk.node(root, Matrix4{}, 0, reached);
   if (!options.camera.empty() && !content.camera) {

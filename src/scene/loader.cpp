@@ -396,6 +396,7 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
     m.culledBehind = spec.singleSided ? 1 : 0;
     if (m.type == MaterialType::Gltf && !spec.normal.empty()) {
       m.normalTexture = addTexture(spec.normal, spec.name, "normal texture", false);
+      m.bendsNormalMap = spec.bendNormalMap ? 1 : 0;
       const Texture& t = scene.textures[size_t(m.normalTexture)];
       if (steepNormalShare(std::span(scene.texels).subspan(t.offset, size_t(t.width) * t.height)) > 0.5)
         steepNormalTextures.push_back(spec.name);
@@ -499,6 +500,11 @@ Scene loadScene(const std::string& jsonPath, const LoadOptions& options) {
         if (masking != "separable" && masking != "height-correlated")
           mesh.failKey("masking", "expected separable or height-correlated");
         gltfOptions.heightCorrelated = masking == "height-correlated";
+      }
+      if (mesh.has("normal_maps")) {
+        const std::string normalMaps = mesh.string("normal_maps");
+        if (normalMaps != "bend" && normalMaps != "as-given") mesh.failKey("normal_maps", "expected bend or as-given");
+        gltfOptions.bendNormalMaps = normalMaps == "bend";
       }
       if (mesh.has("lumens_per_watt")) {
         gltfOptions.lumensPerWatt = mesh.number("lumens_per_watt");

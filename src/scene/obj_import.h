@@ -37,6 +37,7 @@ struct MaterialSpec {
   TextureFile metallicRoughness;     // glTF only (linear)
   TextureFile normal;                // glTF only (linear)
   float normalScale = 1.0f;
+  bool bendNormalMap = false;        // glTF only: Material::bendsNormalMap
   TextureFile emissive;              // glTF only (sRGB), multiplies ke
   TextureFile specularTexture, specularColourTexture;  // glTF only: KHR_materials_specular's (A linear; sRGB)
   bool doubleSided = false;          // an emitter's back faces emit too (glTF's doubleSided, a scene file's double_sided)

@@ -1094,7 +1094,7 @@ TEST_CASE("A glTF file rendered on its own takes the camera named, its node's na
   f["scenes"][0]["nodes"].push_back(int(f["nodes"].size()) - 2);
   f["scenes"][0]["nodes"].push_back(int(f["nodes"].size()) - 1);
   const std::string file = writeFile(dir.path, "cameras.gltf", f);
-  const auto load = [&](const std::string& name) { return loadScene(file, LoadOptions(true, {false, 683.0, name})); };
+  const auto load = [&](const std::string& name) { return loadScene(file, LoadOptions(true, {false, true, 683.0, name})); };
   CHECK(load("").camera.fovY == Approx(1.0 * 180 / kPi));  // the first in node order
   CHECK(load("wide").camera.fovY == Approx(1.0 * 180 / kPi));
   CHECK(load("narrow").camera.fovY == Approx(0.2 * 180 / kPi));
@@ -1146,10 +1146,16 @@ TEST_CASE("lucent render refuses to write over a glTF file's external buffer or 
   CHECK(bytes(dir / "quad.exr") == binBefore);
 }
 
-TEST_CASE("A glTF entry's masking and lumens per watt, and the load options', reach its materials and lights",
+TEST_CASE("A glTF entry's masking, normal maps and lumens per watt, and the load options', reach its materials and "
+          "lights",
           "[gltf][loader]") {
   const test::TempDir dir;
-  const json f = quadFile({{{"mesh", 0}}}, {0});  // a point light of 683 cd
+  json f = quadFile({{{"mesh", 0}}}, {0});  // a point light of 683 cd
+  Image flat(1, 1, {"R", "G", "B"});
+  flat.at(0, 0, 0) = flat.at(0, 0, 1) = kSrgb8ToLinear[128], flat.at(0, 0, 2) = 1.0f;
+  f["materials"][0]["normalTexture"] = {{"index", 0}};
+  f["textures"] = {{{"source", 0}}};
+  f["images"] = {{{"uri", "data:image/png;base64," + base64(encodePng(flat))}}};
   const std::string file = writeFile(dir.path, "model.gltf", f);
   const auto load = [&](const json& entry, const LoadOptions& options) {
     const json scene = {{"camera", {{"eye", {0, 0, 10}}, {"look_at", {0, 0, 0}}, {"up", {0, 1, 0}}, {"fov_y", 40},
@@ -1158,16 +1164,23 @@ TEST_CASE("A glTF entry's masking and lumens per watt, and the load options', re
     return loadScene(writeFile(dir.path, "scene.json", scene), options);
   };
   const Scene plain = load({{"gltf", file}}, LoadOptions(true));
+  REQUIRE(plain.materials[0].normalTexture >= 0);
   CHECK(plain.materials[0].masking == GgxMasking::Separable);
+  CHECK(plain.materials[0].bendsNormalMap == 1);  // bent by default
   CHECK(plain.lights[0].value.g == Approx(1.0f));
-  const Scene flagged = load({{"gltf", file}}, LoadOptions(true, {true, 341.5, ""}));
+  const Scene flagged = load({{"gltf", file}}, LoadOptions(true, {true, false, 341.5, ""}));
   CHECK(flagged.materials[0].masking == GgxMasking::HeightCorrelated);
+  CHECK(flagged.materials[0].bendsNormalMap == 0);
   CHECK(flagged.lights[0].value.g == Approx(2.0f));
   // The entry's own fields win over the load options.
-  const Scene own = load({{"gltf", file}, {"masking", "separable"}, {"lumens_per_watt", 68.3}},
-                         LoadOptions(true, {true, 341.5, ""}));
+  const Scene own = load({{"gltf", file}, {"masking", "separable"}, {"normal_maps", "bend"}, {"lumens_per_watt", 68.3}},
+                         LoadOptions(true, {true, false, 341.5, ""}));
   CHECK(own.materials[0].masking == GgxMasking::Separable);
+  CHECK(own.materials[0].bendsNormalMap == 1);
   CHECK(own.lights[0].value.g == Approx(10.0f));
+  CHECK(load({{"gltf", file}, {"normal_maps", "as-given"}}, LoadOptions(true)).materials[0].bendsNormalMap == 0);
   REQUIRE_THROWS_WITH(load({{"gltf", file}, {"masking", "smooth"}}, LoadOptions(true)),
                       Catch::Contains("masking") && Catch::Contains("expected separable or height-correlated"));
+  REQUIRE_THROWS_WITH(load({{"gltf", file}, {"normal_maps", "flat"}}, LoadOptions(true)),
+                      Catch::Contains("normal_maps") && Catch::Contains("expected bend or as-given"));
 }

@@ -20,6 +20,10 @@ struct GltfOptions {
   // of the Khronos sample renderer and many GPU engines (to compare a backend with the model it
   // implements).
   bool heightCorrelated = false;
+  // Normal-mapped shading normals bent, per viewing direction, just enough that the mirror
+  // direction stays above the surface (bentForReflection, surface.h), as production renderers do;
+  // false: as the texture gives them, where reflections below the surface are lost (dark rims).
+  bool bendNormalMaps = true;
   // KHR_lights_punctual's photometric intensities (candela, lux) to Lucent's radiometric ones:
   // lumens per watt (683, the luminous efficacy of 555 nm light, as Blender's importer uses).
   double lumensPerWatt = 683.0;

@@ -59,10 +59,14 @@ struct Material {
   // surface is not there, for every visibility query (Visibility's filter): camera, shadow, photon,
   // gather and link rays pass through its back.
   uint32_t culledBehind = 0;
+  // 1: the normal texture's shading normal is bent towards the geometric one, per viewing
+  // direction, so that the mirror direction stays above the surface (bentForReflection,
+  // surface.h); 0: as the texture gives it.
+  uint32_t bendsNormalMap = 0;
   // KHR_materials_specular's textures: A (linear) times `specular`, RGB (sRGB) times ks.
   int32_t specularTexture = -1, specularColorTexture = -1;
 };
-static_assert(sizeof(Material) == 112, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 116, "Material is a fixed-size record shared with GPU backends");
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear

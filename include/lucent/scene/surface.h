@@ -42,6 +42,29 @@ inline Vec3 shadingFrameNormal(Vec3 wo, Vec3 sn, Vec3 ng, bool twoSided) {
   return select(behind, -n, n);
 }
 
+// A shading normal n (on wo's side) bent towards the geometric normal g (on wo's side) just enough
+// that wo's mirror direction R stays above the surface: R.g >= t, t = min(0.9 wo.g, 0.01), so a
+// reflection may be as shallow as the view (nearly) but no shallower than 0.01. Unchanged where R
+// already is; g where n is not above the surface. This is the reflection correction production
+// renderers apply to normal maps (Cycles'); derived here in the plane of g and n's tangential part
+// X: with n(theta) = sin(theta) X + cos(theta) g and wo = (x, ., z) in (X, g),
+//   R(theta).g = 2 (n.wo)(n.g) - z = x sin(2 theta) + z cos(2 theta) = rho cos(2 theta - phi),
+// rho = |(x, z)|, phi = atan2(x, z). R.g >= t where |2 theta - phi| <= acos(t / rho), an interval
+// holding theta = 0 (R.g = z > t there); the tilt kept is its upper end, the nearest to n's.
+inline Vec3 bentForReflection(Vec3 wo, Vec3 n, Vec3 g) {
+  const float z = dot(wo, g);
+  const float t = std::min(0.9f * z, 0.01f);
+  if (dot(reflect(wo, n), g) >= t) return n;
+  const Vec3 tangential = n - g * dot(n, g);
+  const float sinTilt = length(tangential);
+  if (!(dot(n, g) > 0) || !(sinTilt > 0) || !(z > 0)) return g;
+  const Vec3 X = tangential / sinTilt;
+  const float x = dot(wo, X);
+  const float rho = std::sqrt(x * x + z * z);
+  const float theta = 0.5f * (std::atan2(x, z) + std::acos(std::min(1.0f, t / rho)));
+  return normalize(X * std::sin(theta) + g * std::cos(theta));
+}
+
 // Texture t's coordinates at a surface point: its set's, interpolated, then transformed.
 inline Vec2 textureUv(const Scene& scene, const Texture& t, const SurfacePoint& sp) {
   const std::vector<Vec2>& set = t.set == 0 ? scene.texcoords : scene.texcoords1;
@@ -215,13 +238,22 @@ struct ChainVertex {
   Vec3 woLocal;
 };
 
+// The normal of a hit's shading frame seen from wo (shadingFrameNormal), a normal map's bent where
+// its material asks (Material::bendsNormalMap, bentForReflection).
+inline Vec3 hitFrameNormal(const Scene& scene, const SurfacePoint& sp, Vec3 wo, bool twoSided) {
+  const Vec3 n = shadingFrameNormal(wo, sp.shadingNormal, sp.geometricNormal, twoSided);
+  const Material& m = scene.materials[sp.materialId];
+  if (m.bendsNormalMap == 0 || !(dot(wo, n) > 0)) return n;
+  return bentForReflection(wo, n, dot(wo, sp.geometricNormal) > 0 ? sp.geometricNormal : -sp.geometricNormal);
+}
+
 inline ChainVertex chainVertexAt(const Scene& scene, const SurfacePoint& sp, Vec3 rayDirection) {
   ChainVertex v;
   v.sp = sp;
   v.bsdf = bsdfAt(scene, sp);
   v.wo = -rayDirection;
   v.frontFace = dot(v.wo, sp.geometricNormal) > 0;
-  v.frame = Frame(shadingFrameNormal(v.wo, sp.shadingNormal, sp.geometricNormal, twoSidedShading(v.bsdf)));
+  v.frame = Frame(hitFrameNormal(scene, sp, v.wo, twoSidedShading(v.bsdf)));
   v.woLocal = v.frame.toLocal(v.wo);
   return v;
 }

@@ -153,7 +153,7 @@ class PathTracer {
     if (path.bounce + 1 > opt_.maxDepth) return false;
 
     // Glass keeps the winding orientation (inside/outside); two-sided lobes turn to the viewer.
-    const Frame frame(shadingFrameNormal(wo, sp.shadingNormal, sp.geometricNormal, twoSidedShading(bsdf)));
+    const Frame frame(hitFrameNormal(scene_, sp, wo, twoSidedShading(bsdf)));
     const Vec3 woLocal = frame.toLocal(wo);
 
     const BounceNumbers u = drawBounceNumbers(path.sampler, path.bounce, !bsdf.isDelta());
