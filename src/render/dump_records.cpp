@@ -1,6 +1,10 @@
 #include "lucent/render/dump_records.h"
 
 #include <algorithm>
+#include <cstddef>
+#include <deque>
+
+#include "lucent/pipeline/shading_points.h"
 #include <stdexcept>
 
 namespace lucent {
@@ -12,6 +16,32 @@ uint32_t dumpFieldBytes(DumpFieldKind k) {
     default: return 4;
   }
 }
+
+namespace {
+
+// A shading point's fields, its BSDF's lobe as the union it is: each kind's members (the lobe
+// header's `fields`, named KIND_FIELD) from the union's first byte, for every kind a shading point
+// can hold (none that is only specular).
+std::vector<DumpField> shadingPointFields() {
+  using K = DumpFieldKind;
+  static std::deque<std::string> names;  // the composed names, kept for DumpField::name
+  std::vector<DumpField> out = {{"position", K::F32, 3}, {"geometric_normal", K::F32, 3}, {"normal", K::F32, 3},
+                                {"wo", K::F32, 3},       {"weight", K::F32, 3},           {"material", K::U32, 1}};
+  const auto lobe = int32_t(offsetof(ShadingPoint, bsdf) + offsetof(SurfaceBsdf, lambertian));
+#define LUCENT_LOBE_FIELDS(kind, value, Lobe, member, kindName, sceneFile)                                  \
+  if (!onlySpecular(Lobe::flags))                                                                    \
+    for (const LobeField& f : Lobe::fields) {                                                        \
+      names.push_back(std::string(#member) + "_" + f.name);                                         \
+      out.push_back({names.back().c_str(), f.isFloat ? K::F32 : K::U32, f.count, 0, &f == Lobe::fields ? lobe : -1}); \
+    }
+  LUCENT_MATERIAL_KINDS(LUCENT_LOBE_FIELDS)
+#undef LUCENT_LOBE_FIELDS
+  const auto after = int32_t(lobe + SurfaceBsdf::kLobeBytes);
+  out.insert(out.end(), {{"pixel", K::U32, 1, 0, after}, {"sample", K::U32, 1}, {"branch", K::U32, 1}, {"triangle", K::U32, 1}});
+  return out;
+}
+
+}  // namespace
 
 const std::map<std::string, DumpRecordType>& dumpRecordTypes() {
   using K = DumpFieldKind;
@@ -40,16 +70,7 @@ const std::map<std::string, DumpRecordType>& dumpRecordTypes() {
         {"AreaParticle", {44, {{"position", K::F32, 3}, {"normal", K::F32, 3}, {"area", K::F32, 1}, {"reflectance", K::F32, 3},
                                {"triangle", K::U32, 1}}, false}},
         {"TriangleTessellation", {8, {{"first", K::U32, 1}, {"segments", K::U32, 1}}, true}},
-        // The BSDF's lobe by its kind ("material"): the union's members a shading point can hold (no
-        // specular lobe is one), each from byte 64; the union's 44 bytes end at 108.
-        {"ShadingPoint", {124, {{"position", K::F32, 3}, {"geometric_normal", K::F32, 3}, {"normal", K::F32, 3}, {"wo", K::F32, 3},
-                                {"weight", K::F32, 3}, {"material", K::U32, 1},
-                                {"lambertian_kd", K::F32, 3, 0, 64},
-                                {"phong_kd", K::F32, 3, 0, 64}, {"phong_ks", K::F32, 3}, {"phong_ns", K::F32, 1},
-                                {"gltf_kd", K::F32, 3, 0, 64}, {"gltf_ks", K::F32, 3}, {"gltf_alpha", K::F32, 1},
-                                {"gltf_f90", K::F32, 1}, {"gltf_dielectric_f0", K::F32, 1}, {"gltf_dielectric_f90", K::F32, 1},
-                                {"gltf_masking", K::U32, 1},
-                                {"pixel", K::U32, 1, 0, 108}, {"sample", K::U32, 1}, {"branch", K::U32, 1}, {"triangle", K::U32, 1}}, false}},
+        {"ShadingPoint", {uint32_t(sizeof(ShadingPoint)), shadingPointFields(), false}},
     };
     // Every byte of a record is some field's: no gaps, nothing past its end.
     for (const auto& [name, type] : t) {

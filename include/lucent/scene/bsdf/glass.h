@@ -20,6 +20,7 @@ inline float fresnelDielectric(float cosI, float etaI, float etaT) {
 
 struct GlassLobe {
   float ni = 1.5f;
+  static constexpr LobeField fields[] = {{"ni", true, 1}};
 
   static constexpr BsdfFlags flags = BsdfFlags::Reflection | BsdfFlags::Transmission | BsdfFlags::Specular;
   BsdfValue evaluate(Vec3, Vec3) const { return {}; }
@@ -51,6 +52,6 @@ struct GlassLobe {
   Rgb diffuse() const { return Rgb(0.0f); }
   Rgb diffuseShare(Vec3, Vec3) const { return Rgb(0.0f); }
 };
-static_assert(sizeof(GlassLobe) == 4, "a lobe is a plain record of floats");
+static_assert(sizeof(GlassLobe) == lobeFieldBytes<GlassLobe>(), "a lobe is a plain record of its fields");
 
 }  // namespace lucent

@@ -26,6 +26,9 @@ struct GltfMetalRoughLobe {
   Rgb kd, ks;
   float alpha = 1, f90 = 1, dielectricF0 = 0, dielectricF90 = 0;
   GgxMasking masking = GgxMasking::Separable;
+  static constexpr LobeField fields[] = {{"kd", true, 3},    {"ks", true, 3},  {"alpha", true, 1},
+                                         {"f90", true, 1},   {"dielectric_f0", true, 1},
+                                         {"dielectric_f90", true, 1}, {"masking", false, 1}};
 
   static constexpr BsdfFlags flags =
       BsdfFlags::Reflection | BsdfFlags::Diffuse | BsdfFlags::Glossy | BsdfFlags::TwoSided;
@@ -72,6 +75,6 @@ struct GltfMetalRoughLobe {
     return channelShare(lambertianValue(kd, wo.z, wi.z).f * diffuseWeight(w), f);
   }
 };
-static_assert(sizeof(GltfMetalRoughLobe) == 44, "a lobe is a plain record of floats");
+static_assert(sizeof(GltfMetalRoughLobe) == lobeFieldBytes<GltfMetalRoughLobe>(), "a lobe is a plain record of its fields");
 
 }  // namespace lucent

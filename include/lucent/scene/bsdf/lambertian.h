@@ -35,9 +35,11 @@ inline BsdfSample sampleLambertian(Rgb kd, float woZ, Vec2 u) {
 //   albedo        the reflectance a first hit records in the albedo layer;
 //   bound         an upper bound of the light it reflects, per channel (Russian roulette);
 //   diffuse       its Lambertian term's albedo (the point-based methods' share; 0 for none);
-//   diffuseShare  the share of f(wo, wi) that is the Lambertian term's (1 for a lobe of only it).
+//   diffuseShare  the share of f(wo, wi) that is the Lambertian term's (1 for a lobe of only it);
+//   fields        its members as dumps name them (LobeField).
 struct LambertianLobe {
   Rgb kd;
+  static constexpr LobeField fields[] = {{"kd", true, 3}};
 
   static constexpr BsdfFlags flags = BsdfFlags::Reflection | BsdfFlags::Diffuse | BsdfFlags::TwoSided;
   BsdfValue evaluate(Vec3 wo, Vec3 wi) const { return lambertianValue(kd, wo.z, wi.z); }
@@ -47,6 +49,6 @@ struct LambertianLobe {
   Rgb diffuse() const { return kd; }
   Rgb diffuseShare(Vec3, Vec3) const { return Rgb(1.0f); }
 };
-static_assert(sizeof(LambertianLobe) == 12, "a lobe is a plain record of floats");
+static_assert(sizeof(LambertianLobe) == lobeFieldBytes<LambertianLobe>(), "a lobe is a plain record of its fields");
 
 }  // namespace lucent

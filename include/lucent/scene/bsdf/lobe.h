@@ -28,6 +28,20 @@ constexpr bool onlySpecular(BsdfFlags f) { return has(f, BsdfFlags::Specular) &&
 // Only a Lambertian term: its radiance is albedo / pi times the irradiance, whatever wo.
 constexpr bool onlyDiffuse(BsdfFlags f) { return has(f, BsdfFlags::Diffuse) && !has(f, BsdfFlags::Glossy) && !has(f, BsdfFlags::Specular); }
 
+// A lobe's parameter as dumps name it (src/render/dump_records.cpp): its name, whether it holds
+// floats (else uint32), and its 4-byte words. A lobe lists its members in order, without padding.
+struct LobeField {
+  const char* name;
+  bool isFloat;
+  uint32_t count;
+};
+template <class Lobe>
+constexpr uint32_t lobeFieldBytes() {
+  uint32_t bytes = 0;
+  for (const LobeField& f : Lobe::fields) bytes += 4 * f.count;
+  return bytes;
+}
+
 // Radiance is transported from the camera; importance (photon flux) from the lights. They differ in
 // refraction, where radiance is scaled by (eta_i / eta_t)^2 and flux is not (Veach 1997, 5.2).
 enum class Transport { Radiance, Importance };

@@ -6,6 +6,7 @@ namespace lucent {
 
 struct MirrorLobe {
   Rgb tint;
+  static constexpr LobeField fields[] = {{"tint", true, 3}};
 
   static constexpr BsdfFlags flags = BsdfFlags::Reflection | BsdfFlags::Specular | BsdfFlags::TwoSided;
   BsdfValue evaluate(Vec3, Vec3) const { return {}; }
@@ -23,6 +24,6 @@ struct MirrorLobe {
   Rgb diffuse() const { return Rgb(0.0f); }
   Rgb diffuseShare(Vec3, Vec3) const { return Rgb(0.0f); }
 };
-static_assert(sizeof(MirrorLobe) == 12, "a lobe is a plain record of floats");
+static_assert(sizeof(MirrorLobe) == lobeFieldBytes<MirrorLobe>(), "a lobe is a plain record of its fields");
 
 }  // namespace lucent

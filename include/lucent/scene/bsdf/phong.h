@@ -11,6 +11,7 @@ namespace lucent {
 struct PhongLobe {
   Rgb kd, ks;
   float ns = 1;
+  static constexpr LobeField fields[] = {{"kd", true, 3}, {"ks", true, 3}, {"ns", true, 1}};
 
   static constexpr BsdfFlags flags =
       BsdfFlags::Reflection | BsdfFlags::Diffuse | BsdfFlags::Glossy | BsdfFlags::TwoSided;
@@ -50,6 +51,6 @@ struct PhongLobe {
     return channelShare(lambertianValue(kd, wo.z, wi.z).f, f);
   }
 };
-static_assert(sizeof(PhongLobe) == 28, "a lobe is a plain record of floats");
+static_assert(sizeof(PhongLobe) == lobeFieldBytes<PhongLobe>(), "a lobe is a plain record of its fields");
 
 }  // namespace lucent
