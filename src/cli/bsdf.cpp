@@ -56,6 +56,8 @@ std::vector<std::string> notRead(const Scene& scene, const Material& m) {
   if (m.metallicRoughnessTexture >= 0) out.push_back("metallic-roughness texture");
   if (m.specularTexture >= 0) out.push_back("specular texture");
   if (m.specularColorTexture >= 0) out.push_back("specular colour texture");
+  if (m.sheenColourTexture >= 0) out.push_back("sheen colour texture");
+  if (m.sheenRoughnessTexture >= 0) out.push_back("sheen roughness texture");
   if (m.normalTexture >= 0) out.push_back("normal texture");
   if (!scene.colours.empty()) out.push_back("vertex colours");
   return out;

@@ -36,7 +36,8 @@ constexpr uint64_t kMemoryCheckBytes = uint64_t(1) << 24;
 // Extensions read, and those whose content is listed as left out rather than rendered.
 const std::set<std::string> kSupportedExtensions = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
                                                     "KHR_texture_transform", "KHR_materials_specular",
-                                                    "KHR_materials_ior", "EXT_mesh_gpu_instancing"};
+                                                    "KHR_materials_ior", "KHR_materials_sheen",
+                                                    "EXT_mesh_gpu_instancing"};
 
 struct Context {
   const tinygltf::Model& model;
@@ -550,6 +551,26 @@ MaterialSpec materialSpec(const Context& c, size_t index, GgxMasking masking, st
     if (e->Has("specularColorTexture"))
       spec.specularColourTexture =
           textureImage(c, textureInfo(c, *e, "specularColorTexture", at), at + ".specularColorTexture");
+  }
+  // KHR_materials_sheen: a sheen layer over the base (bsdf/sheen.h).
+  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_sheen")) {
+    const std::string at = path + ".extensions.KHR_materials_sheen";
+    if (e->Has("sheenColorFactor")) {
+      const tinygltf::Value& colour = e->Get("sheenColorFactor");
+      if (!colour.IsArray() || colour.ArrayLen() != 3) c.fail(at + ".sheenColorFactor", "expected 3 numbers");
+      for (int k = 0; k < 3; ++k) {
+        const tinygltf::Value& v = colour.Get(k);
+        const double x = v.IsNumber() ? v.GetNumberAsDouble() : v.IsInt() ? double(v.GetNumberAsInt()) : -1;
+        if (!(x >= 0 && x <= 1)) c.fail(at + ".sheenColorFactor", "every value must be in [0, 1]");
+        spec.sheenColour[k] = float(x);
+      }
+    }
+    spec.sheenRoughness = float(unitNumber(c, number(*e, "sheenRoughnessFactor", 0), at + ".sheenRoughnessFactor"));
+    if (e->Has("sheenColorTexture"))
+      spec.sheenColourTexture = textureImage(c, textureInfo(c, *e, "sheenColorTexture", at), at + ".sheenColorTexture");
+    if (e->Has("sheenRoughnessTexture"))
+      spec.sheenRoughnessTexture =
+          textureImage(c, textureInfo(c, *e, "sheenRoughnessTexture", at), at + ".sheenRoughnessTexture");
   }
   spec.ni = 1.5f;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_ior")) {

@@ -388,6 +388,10 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
     // the path tracer's lanes, from the vertex normals.
     if (m.type == MaterialType::Gltf && !spec.specularTexture.empty())
       m.specularTexture = addTexture(spec.specularTexture, spec.name, "specular texture", false);
+    if (m.type == MaterialType::Gltf && !spec.sheenColourTexture.empty())
+      m.sheenColourTexture = addTexture(spec.sheenColourTexture, spec.name, "sheen colour texture", true);
+    if (m.type == MaterialType::Gltf && !spec.sheenRoughnessTexture.empty())
+      m.sheenRoughnessTexture = addTexture(spec.sheenRoughnessTexture, spec.name, "sheen roughness texture", false);
     if (m.type == MaterialType::Gltf && !spec.specularColourTexture.empty())
       m.specularColorTexture = addTexture(spec.specularColourTexture, spec.name, "specular colour texture", true);
     if (!spec.emissive.empty() && !m.ke.isBlack())

@@ -412,6 +412,8 @@ Material classifyMaterial(const MaterialSpec& spec) {
   m.metallic = spec.metallic;
   m.roughness = spec.roughness;
   m.masking = spec.masking;
+  m.sheenColour = spec.sheenColour;
+  m.sheenRoughness = spec.sheenRoughness;
   m.specular = spec.specular;
   m.normalScale = spec.normalScale;
   m.alphaMode = spec.alphaMode;
@@ -450,7 +452,8 @@ Material classifyMaterial(const MaterialSpec& spec) {
       // The glTF import checks each value against its JSON path; these are the model's own bounds.
       if (!(spec.kd.maxComponent() <= 1) || !(m.metallic >= 0 && m.metallic <= 1) ||
           !(m.roughness >= 0 && m.roughness <= 1) || !(m.specular >= 0 && m.specular <= 1) || !(m.ni >= 0) ||
-          !std::isfinite(m.ni) || !std::isfinite(m.ks.maxComponent()))
+          !std::isfinite(m.ni) || !std::isfinite(m.ks.maxComponent()) || !(m.sheenColour.maxComponent() <= 1) ||
+          !(std::min({m.sheenColour.r, m.sheenColour.g, m.sheenColour.b}) >= 0) || !(m.sheenRoughness >= 0 && m.sheenRoughness <= 1))
         fail("glTF parameters out of their ranges");
       break;
     case MaterialType::Glass:

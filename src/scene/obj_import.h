@@ -38,6 +38,9 @@ struct MaterialSpec {
   TextureFile normal;                // glTF only (linear)
   float normalScale = 1.0f;
   bool bendNormalMap = false;        // glTF only: Material::bendsNormalMap
+  Rgb sheenColour{0.0f};             // glTF only: KHR_materials_sheen's factors and textures (sRGB; A linear)
+  float sheenRoughness = 0.0f;
+  TextureFile sheenColourTexture, sheenRoughnessTexture;
   TextureFile emissive;              // glTF only (sRGB), multiplies ke
   TextureFile specularTexture, specularColourTexture;  // glTF only: KHR_materials_specular's (A linear; sRGB)
   bool doubleSided = false;          // an emitter's back faces emit too (glTF's doubleSided, a scene file's double_sided)

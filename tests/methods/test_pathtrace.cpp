@@ -444,16 +444,20 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
           "[pathtrace][furnace][gltf]") {
   // One bounce to the environment, which is sampled as a light and found by BSDF samples: MIS and
   // each strategy alone give L a(wo), a(wo) integrated numerically (test_bsdfs.h). The camera sees
-  // the plane within 1 degree of theta; the expectation spans a(wo) over that range.
+  // the plane within 1 degree of theta; the expectation spans a(wo) over that range. The last case
+  // has a KHR_materials_sheen layer.
   struct Case {
     float metallic, roughness;
     Rgb base;
     GgxMasking masking;
     double theta;
+    Rgb sheenColour{0.0f};
+    float sheenRoughness = 0;
   };
   for (const Case& k : {Case{1, 0.3f, Rgb(0.9f, 0.6f, 0.3f), GgxMasking::Separable, 1.0},
                         Case{0, 0.5f, Rgb(1.0f), GgxMasking::Separable, 1.4},
-                        Case{0.5f, 0.7f, Rgb(0.2f, 0.5f, 0.8f), GgxMasking::HeightCorrelated, 0.5}})
+                        Case{0.5f, 0.7f, Rgb(0.2f, 0.5f, 0.8f), GgxMasking::HeightCorrelated, 0.5},
+                        Case{0, 0.6f, Rgb(0.3f, 0.2f, 0.6f), GgxMasking::Separable, 1.2, Rgb(1.0f, 0.8f, 0.6f), 0.4f}})
     for (const PathStrategy strategy : {PathStrategy::Mis, PathStrategy::LightSampling, PathStrategy::BsdfSampling}) {
       Scene scene;
       Material m;
@@ -464,6 +468,8 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
       m.ni = 1.5f;
       m.metallic = k.metallic;
       m.roughness = k.roughness;
+      m.sheenColour = k.sheenColour;
+      m.sheenRoughness = k.sheenRoughness;
       test::addQuad(scene, {-100, 0, -100}, {-100, 0, 100}, {100, 0, 100}, {100, 0, -100},
                     test::addMaterial(scene, m, "plane"));
       const Vec3 eye{0, float(20 * std::cos(k.theta)), float(20 * std::sin(k.theta))};
@@ -478,7 +484,7 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
       opt.strategy = strategy;
       const Image image = renderPathTraced(scene, vis, opt).image;
       Material plane = scene.materials[0];
-      const SurfaceBsdf b = gltfBsdf(plane, k.base, k.metallic, k.roughness, plane.specular, plane.ks);
+      const SurfaceBsdf b = materialBsdf(plane);
       Rgb low(1e9f), high(0.0f);
       for (const double theta : {k.theta - 0.0175, k.theta, k.theta + 0.0175}) {
         const Rgb a = test::directionalAlbedo(b, test::directionAt(theta, 0)) * scene.environment.radiance;

@@ -749,6 +749,47 @@ TEST_CASE("KHR_materials_specular's textures: its factor times their A (linear),
                       Catch::Contains("materials[0].extensions.KHR_materials_specular.specularTexture: expected a textureInfo"));
 }
 
+TEST_CASE("KHR_materials_sheen: its colour times the texture's RGB (sRGB), its roughness times the A (linear)",
+          "[gltf][loader]") {
+  const test::TempDir dir;
+  // One 1 x 1 RGBA image of codes (128, 64, 255, 102) for both textures: the sheen colour
+  // (1, 0.5, 0.8) x the sRGB decoding of (128, 64, 255), the roughness 0.6 x 102/255. Nothing is
+  // left out; with sheen colour black the lobe is the plain metallic-roughness one.
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  f["extensionsUsed"] = {"KHR_materials_sheen"};
+  f["images"] = {{{"uri", "data:image/png;base64," + base64(rgbaPng(1, 1, {128, 64, 255, 102}))}}};
+  f["textures"] = {{{"source", 0}}};
+  f["materials"][0]["extensions"]["KHR_materials_sheen"] = {
+      {"sheenColorFactor", {1, 0.5, 0.8}}, {"sheenRoughnessFactor", 0.6}, {"sheenColorTexture", {{"index", 0}}},
+      {"sheenRoughnessTexture", {{"index", 0}}}};
+  const Scene scene = loadWrapped(dir.path, f);
+  CHECK(scene.ignored.empty());
+  const Material& m = scene.materials[0];
+  REQUIRE(m.sheenColourTexture >= 0);
+  REQUIRE(m.sheenRoughnessTexture >= 0);
+  const SurfaceBsdf b = bsdfAt(scene, surfaceAt(scene, 0, 0.25f, 0.25f));
+  const int codes[3] = {128, 64, 255};
+  const double factor[3] = {1, 0.5, 0.8};
+  for (int c = 0; c < 3; ++c)
+    CHECK(b.gltf.sheenColour[c] == Approx(factor[c] * kSrgb8ToLinear[size_t(codes[c])]).epsilon(1e-4));
+  CHECK(b.gltf.sheenRoughness == Approx(0.6 * 102 / 255.0).epsilon(1e-4));
+  // Factors alone; a roughness of 0 is rendered at the smallest one.
+  f["materials"][0]["extensions"]["KHR_materials_sheen"] = {{"sheenColorFactor", {0.2, 0.3, 0.4}}};
+  const Scene plain = loadWrapped(dir.path, f);
+  const SurfaceBsdf p = bsdfAt(plain, surfaceAt(plain, 0, 0.25f, 0.25f));
+  CHECK(p.gltf.sheenColour == Rgb(0.2f, 0.3f, 0.4f));
+  CHECK(p.gltf.sheenRoughness == kMinSheenRoughness);
+  f["materials"][0]["extensions"]["KHR_materials_sheen"] = json::object();
+  const Scene none = loadWrapped(dir.path, f);
+  CHECK(!bsdfAt(none, surfaceAt(none, 0, 0.25f, 0.25f)).gltf.hasSheen());
+  // Out of range, refused with the path.
+  f["materials"][0]["extensions"]["KHR_materials_sheen"] = {{"sheenColorFactor", {1.5, 0, 0}}};
+  REQUIRE_THROWS_WITH(loadWrapped(dir.path, f),
+                      Catch::Contains("materials[0].extensions.KHR_materials_sheen.sheenColorFactor: every value must be in [0, 1]"));
+  f["materials"][0]["extensions"]["KHR_materials_sheen"] = {{"sheenRoughnessFactor", -0.1}};
+  REQUIRE_THROWS_WITH(loadWrapped(dir.path, f), Catch::Contains("KHR_materials_sheen.sheenRoughnessFactor"));
+}
+
 TEST_CASE("A normal texture that tilts most texels past 45 degrees, as a height map does, is warned of", "[gltf][loader]") {
   // Blender's OBJ importer turns map_Bump into a normal texture, and the glTF it exports carries the
   // grey heights as normals (sponza.glb: tilts of about 59 degrees). The render follows the file;

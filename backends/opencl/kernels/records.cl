@@ -33,7 +33,7 @@ typedef struct {
 } UniformGrid;
 
 // SurfaceBsdf: the material's kind (include/lucent/scene/bsdf/kinds.h) and its lobe's parameters
-// (include/lucent/scene/bsdf/*.h) in a union of 44 bytes.
+// (include/lucent/scene/bsdf/*.h) in a union of 60 bytes.
 typedef struct {
   Rgb kd;
 } LambertianLobe;
@@ -55,6 +55,8 @@ typedef struct {
   Rgb kd, ks;
   float alpha, f90, dielectricF0, dielectricF90;
   uint masking;  // 0 separable, 1 height-correlated
+  Rgb sheenColour;
+  float sheenRoughness;
 } GltfMetalRoughLobe;
 
 typedef struct {

@@ -16,7 +16,7 @@
 
 namespace lucent {
 
-// The tag (the material's kind) and the lobe's parameters in a union: the same 48 bytes for every
+// The tag (the material's kind) and the lobe's parameters in a union: the same 64 bytes for every
 // kind, so that dumps, GPU records and lane arrays hold any of them. The bytes a kind does not use
 // are zero (the constructors clear them), so records compare and hash by their bytes.
 struct SurfaceBsdf {
@@ -25,7 +25,7 @@ struct SurfaceBsdf {
 #define LUCENT_LOBE_MEMBER(kind, value, Lobe, member, name, sceneFile) Lobe member;
     LUCENT_MATERIAL_KINDS(LUCENT_LOBE_MEMBER)
 #undef LUCENT_LOBE_MEMBER
-    uint32_t words_[11];  // all of the union, for clearing it
+    uint32_t words_[15];  // all of the union, for clearing it
   };
 
   SurfaceBsdf() : SurfaceBsdf(LambertianLobe{}) {}
@@ -59,7 +59,7 @@ struct SurfaceBsdf {
                 #Lobe " fits SurfaceBsdf's union");
 LUCENT_MATERIAL_KINDS(LUCENT_LOBE_FITS)
 #undef LUCENT_LOBE_FITS
-static_assert(sizeof(SurfaceBsdf) == 48 && std::is_trivially_copyable_v<SurfaceBsdf>,
+static_assert(sizeof(SurfaceBsdf) == 64 && std::is_trivially_copyable_v<SurfaceBsdf>,
               "SurfaceBsdf is a fixed plain record shared with dumps and GPU backends");
 
 // The flags of a kind's lobe (they do not depend on its parameters).

@@ -63,10 +63,15 @@ struct Material {
   // direction, so that the mirror direction stays above the surface (bentForReflection,
   // surface.h); 0: as the texture gives it.
   uint32_t bendsNormalMap = 0;
+  // KHR_materials_sheen: the sheen colour, times sheenColourTexture's RGB (sRGB), and roughness,
+  // times sheenRoughnessTexture's A (linear); black: no sheen layer (bsdf/sheen.h).
+  Rgb sheenColour{0.0f};
+  float sheenRoughness = 0.0f;
+  int32_t sheenColourTexture = -1, sheenRoughnessTexture = -1;
   // KHR_materials_specular's textures: A (linear) times `specular`, RGB (sRGB) times ks.
   int32_t specularTexture = -1, specularColorTexture = -1;
 };
-static_assert(sizeof(Material) == 116, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 140, "Material is a fixed-size record shared with GPU backends");
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear

@@ -163,7 +163,7 @@ constexpr float kMinGgxAlpha = 1e-3f;
 // base colour `base`, from the file's factors times its textures: metallic and roughness, and
 // KHR_materials_specular's specular factor and colour.
 inline SurfaceBsdf gltfBsdf(const Material& m, Rgb base, float metallic, float roughness, float specular,
-                            Rgb specularColour) {
+                            Rgb specularColour, Rgb sheenColour = Rgb(0.0f), float sheenRoughness = 0.0f) {
   GltfMetalRoughLobe b;
   // KHR_materials_ior and KHR_materials_specular: the dielectric's F0 from the index, coloured,
   // clamped to 1, then weighted by the specular factor, which is also its F90.
@@ -177,6 +177,10 @@ inline SurfaceBsdf gltfBsdf(const Material& m, Rgb base, float metallic, float r
   b.dielectricF90 = specular;
   b.alpha = std::max(roughness * roughness, kMinGgxAlpha);
   b.masking = m.masking;
+  if (!sheenColour.isBlack()) {
+    b.sheenColour = sheenColour;
+    b.sheenRoughness = std::max(sheenRoughness, kMinSheenRoughness);
+  }
   return b;
 }
 
@@ -188,7 +192,8 @@ inline SurfaceBsdf materialBsdf(const Material& m, Rgb kd) {
     case MaterialType::Phong: return PhongLobe{kd, m.ks, m.ns};
     case MaterialType::Mirror: return MirrorLobe{m.ks};
     case MaterialType::Glass: return GlassLobe{m.ni};
-    case MaterialType::Gltf: return gltfBsdf(m, kd, m.metallic, m.roughness, m.specular, m.ks);
+    case MaterialType::Gltf:
+      return gltfBsdf(m, kd, m.metallic, m.roughness, m.specular, m.ks, m.sheenColour, m.sheenRoughness);
   }
   return LambertianLobe{kd};
 }
@@ -213,7 +218,14 @@ inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
       specular *= bilinearAlpha(bilinearFootprint(t, scene.texels.data(), textureUv(scene, t, sp)));
     }
     if (m.specularColorTexture >= 0) specularColour = specularColour * textureAt(scene, m.specularColorTexture, sp);
-    return gltfBsdf(m, kd, metallic, roughness, specular, specularColour);
+    Rgb sheenColour = m.sheenColour;
+    float sheenRoughness = m.sheenRoughness;
+    if (m.sheenColourTexture >= 0) sheenColour = sheenColour * textureAt(scene, m.sheenColourTexture, sp);
+    if (m.sheenRoughnessTexture >= 0) {
+      const Texture& t = scene.textures[size_t(m.sheenRoughnessTexture)];
+      sheenRoughness *= bilinearAlpha(bilinearFootprint(t, scene.texels.data(), textureUv(scene, t, sp)));
+    }
+    return gltfBsdf(m, kd, metallic, roughness, specular, specularColour, sheenColour, sheenRoughness);
   }
   return materialBsdf(m, kd);
 }

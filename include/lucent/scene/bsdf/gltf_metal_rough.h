@@ -5,12 +5,17 @@
 //   Fd = dielectricF0 + (dielectricF90 - dielectricF0) (1 - |wo.h|)^5   (its dielectric's largest
 //        channel, which the diffuse base loses: KHR_materials_specular's max_value),
 // kd = (1 - metallic) base colour, D the GGX distribution of roughness alpha, G Smith's
-// masking-shadowing in the form `masking` names (ggx.h).
+// masking-shadowing in the form `masking` names (ggx.h). With KHR_materials_sheen (a sheen colour
+// other than black) the sheen layer of sheen.h lies on top, the above its base.
+// Sampling: the sheen layer (uniformly over the hemisphere, as its fibres reflect most at grazing
+// angles) with probability max3(sheenColour) E(n.wo), else the base's GGX visible normals or
+// cosine lobe, chosen by their weights at n.wo; every sample is weighed by the whole mixture.
 #pragma once
 #include <algorithm>
 #include <cmath>
 
 #include "lucent/scene/bsdf/lambertian.h"
+#include "lucent/scene/bsdf/sheen.h"
 #include "lucent/scene/ggx.h"
 
 namespace lucent {
@@ -26,9 +31,12 @@ struct GltfMetalRoughLobe {
   Rgb kd, ks;
   float alpha = 1, f90 = 1, dielectricF0 = 0, dielectricF90 = 0;
   GgxMasking masking = GgxMasking::Separable;
+  Rgb sheenColour;             // KHR_materials_sheen's; black: no sheen layer
+  float sheenRoughness = 0;    // at least kMinSheenRoughness where there is a sheen layer
   static constexpr LobeField fields[] = {{"kd", true, 3},    {"ks", true, 3},  {"alpha", true, 1},
                                          {"f90", true, 1},   {"dielectric_f0", true, 1},
-                                         {"dielectric_f90", true, 1}, {"masking", false, 1}};
+                                         {"dielectric_f90", true, 1}, {"masking", false, 1},
+                                         {"sheen_colour", true, 3},   {"sheen_roughness", true, 1}};
 
   static constexpr BsdfFlags flags =
       BsdfFlags::Reflection | BsdfFlags::Diffuse | BsdfFlags::Glossy | BsdfFlags::TwoSided;
@@ -45,7 +53,28 @@ struct GltfMetalRoughLobe {
     return specular + diffuse > 0 ? specular / (specular + diffuse) : 0.0f;
   }
 
+  bool hasSheen() const { return !sheenColour.isBlack(); }
+  // The base's scaling under the sheen layer, for directions of cosines woZ and wiZ.
+  float sheenScaling(float woZ, float wiZ) const {
+    const SheenAlbedoTable& e = SheenAlbedoTable::get();
+    const float m = sheenColour.maxComponent();
+    return std::min(1.0f - m * e.at(woZ, sheenRoughness), 1.0f - m * e.at(wiZ, sheenRoughness));
+  }
+  // Probability of sampling the sheen layer.
+  float sheenChoice(float woZ) const {
+    return sheenColour.maxComponent() * SheenAlbedoTable::get().at(woZ, sheenRoughness);
+  }
+
   BsdfValue evaluate(Vec3 wo, Vec3 wi) const {
+    const BsdfValue base = evaluateBase(wo, wi);
+    if (!hasSheen()) return base;
+    const float sheen = sheenValue(sheenRoughness * sheenRoughness, wo.z, wi.z, normalize(wo + wi).z);
+    const float ps = sheenChoice(wo.z);
+    return {sheenColour * sheen + base.f * sheenScaling(wo.z, wi.z), ps * (0.5f * kInvPi) + (1.0f - ps) * base.pdf};
+  }
+
+  // The base: Appendix B's BRDF and the density of its sampling.
+  BsdfValue evaluateBase(Vec3 wo, Vec3 wi) const {
     const Vec3 h = normalize(wo + wi);
     const float w = schlickWeight(dot(wo, h));
     const Rgb F = ks + (Rgb(f90) - ks) * w;
@@ -57,22 +86,38 @@ struct GltfMetalRoughLobe {
 
   BsdfSample sample(Vec3 wo, float u, Vec2 u2, Transport) const {
     if (wo.z <= 0) return {};
+    if (hasSheen()) {
+      const float ps = sheenChoice(wo.z);
+      if (u < ps) {
+        const Vec3 w = sampleUniformSphere(u2);
+        return mixtureSample(*this, wo, {w.x, w.y, std::abs(w.z)});
+      }
+      u = (u - ps) / (1.0f - ps);
+    }
     return mixtureSample(*this, wo, u < specularChoice(wo.z) ? reflect(wo, sampleGgxVisibleNormal(alpha, wo, u2))
                                                              : sampleCosineHemisphere(u2));
   }
 
-  // At normal incidence.
-  Rgb albedo() const { return kd + ks; }
-  // The Fresnel term reaches f90 at grazing angles.
-  Rgb bound() const { return kd + Rgb(std::max(ks.r, f90), std::max(ks.g, f90), std::max(ks.b, f90)); }
-  Rgb diffuse() const { return kd; }
+  // At normal incidence (the base's scaling and the sheen's albedo there).
+  Rgb albedo() const {
+    if (!hasSheen()) return kd + ks;
+    return (kd + ks) * sheenScaling(1.0f, 1.0f) + sheenColour * SheenAlbedoTable::get().at(1.0f, sheenRoughness);
+  }
+  // The Fresnel term reaches f90 at grazing angles; the sheen's albedo is at most 1.
+  Rgb bound() const {
+    const Rgb base = kd + Rgb(std::max(ks.r, f90), std::max(ks.g, f90), std::max(ks.b, f90));
+    return hasSheen() ? base + sheenColour : base;
+  }
+  // The Lambertian term, under the sheen at normal incidence.
+  Rgb diffuse() const { return hasSheen() ? kd * sheenScaling(1.0f, 1.0f) : kd; }
 
   Rgb diffuseShare(Vec3 wo, Vec3 wi) const {
     if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
     const Rgb f = evaluate(wo, wi).f;
     if (f.isBlack()) return Rgb(0.0f);
     const float w = schlickWeight(dot(wo, normalize(wo + wi)));
-    return channelShare(lambertianValue(kd, wo.z, wi.z).f * diffuseWeight(w), f);
+    const float scaling = hasSheen() ? sheenScaling(wo.z, wi.z) : 1.0f;
+    return channelShare(lambertianValue(kd, wo.z, wi.z).f * (diffuseWeight(w) * scaling), f);
   }
 };
 static_assert(sizeof(GltfMetalRoughLobe) == lobeFieldBytes<GltfMetalRoughLobe>(), "a lobe is a plain record of its fields");
