@@ -452,6 +452,19 @@ double unitNumber(const Context& c, double value, const std::string& path) {
   return value;
 }
 
+// An extension's colour factor at `path`: 3 numbers, each in [0, most] (`range` writes it).
+Rgb rgbFactor(const Context& c, const tinygltf::Value& colour, const std::string& path, double most, const char* range) {
+  if (!colour.IsArray() || colour.ArrayLen() != 3) c.fail(path, "expected 3 numbers");
+  Rgb out;
+  for (int k = 0; k < 3; ++k) {
+    const tinygltf::Value& v = colour.Get(k);
+    const double x = v.IsNumber() ? v.GetNumberAsDouble() : v.IsInt() ? double(v.GetNumberAsInt()) : -1;
+    if (!(x >= 0 && x <= most)) c.fail(path, std::string("every value must be in ") + range);
+    out[k] = float(x);
+  }
+  return out;
+}
+
 // The specification's default material, for primitives that name none: a white rough metal.
 MaterialSpec defaultMaterial(const Context& c, GgxMasking masking) {
   MaterialSpec spec;
@@ -537,16 +550,8 @@ MaterialSpec materialSpec(const Context& c, size_t index, GgxMasking masking, st
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_specular")) {
     const std::string at = path + ".extensions.KHR_materials_specular";
     spec.specular = float(unitNumber(c, number(*e, "specularFactor", 1), at + ".specularFactor"));
-    if (e->Has("specularColorFactor")) {
-      const tinygltf::Value& colour = e->Get("specularColorFactor");
-      if (!colour.IsArray() || colour.ArrayLen() != 3) c.fail(at + ".specularColorFactor", "expected 3 numbers");
-      for (int k = 0; k < 3; ++k) {
-        const tinygltf::Value& v = colour.Get(k);
-        const double x = v.IsNumber() ? v.GetNumberAsDouble() : v.IsInt() ? double(v.GetNumberAsInt()) : -1;
-        if (!(x >= 0 && x <= kMaxInputMagnitude)) c.fail(at + ".specularColorFactor", "every value must be in [0, 1e15]");
-        spec.ks[k] = float(x);
-      }
-    }
+    if (e->Has("specularColorFactor"))
+      spec.ks = rgbFactor(c, e->Get("specularColorFactor"), at + ".specularColorFactor", kMaxInputMagnitude, "[0, 1e15]");
     if (e->Has("specularTexture")) spec.specularTexture = textureImage(c, textureInfo(c, *e, "specularTexture", at), at + ".specularTexture");
     if (e->Has("specularColorTexture"))
       spec.specularColourTexture =
@@ -555,16 +560,7 @@ MaterialSpec materialSpec(const Context& c, size_t index, GgxMasking masking, st
   // KHR_materials_sheen: a sheen layer over the base (bsdf/sheen.h).
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_sheen")) {
     const std::string at = path + ".extensions.KHR_materials_sheen";
-    if (e->Has("sheenColorFactor")) {
-      const tinygltf::Value& colour = e->Get("sheenColorFactor");
-      if (!colour.IsArray() || colour.ArrayLen() != 3) c.fail(at + ".sheenColorFactor", "expected 3 numbers");
-      for (int k = 0; k < 3; ++k) {
-        const tinygltf::Value& v = colour.Get(k);
-        const double x = v.IsNumber() ? v.GetNumberAsDouble() : v.IsInt() ? double(v.GetNumberAsInt()) : -1;
-        if (!(x >= 0 && x <= 1)) c.fail(at + ".sheenColorFactor", "every value must be in [0, 1]");
-        spec.sheenColour[k] = float(x);
-      }
-    }
+    if (e->Has("sheenColorFactor")) spec.sheenColour = rgbFactor(c, e->Get("sheenColorFactor"), at + ".sheenColorFactor", 1, "[0, 1]");
     spec.sheenRoughness = float(unitNumber(c, number(*e, "sheenRoughnessFactor", 0), at + ".sheenRoughnessFactor"));
     if (e->Has("sheenColorTexture"))
       spec.sheenColourTexture = textureImage(c, textureInfo(c, *e, "sheenColorTexture", at), at + ".sheenColorTexture");
