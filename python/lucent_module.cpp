@@ -58,10 +58,21 @@ class KeepFloatingPointMode {
 // its file).
 std::shared_ptr<OpenScene> openScene(const std::filesystem::path& file, std::optional<std::pair<int, int>> resolution,
                                      bool strict, std::optional<std::string> isa, bool robust,
-                                     std::optional<std::string> memoryLimit) {
+                                     std::optional<std::string> memoryLimit, const std::string& gltfMasking,
+                                     const std::string& gltfNormalMaps, double lumensPerWatt,
+                                     const std::string& gltfCamera) {
   const KeepFloatingPointMode keep;
   SceneSettings settings;
   settings.load = LoadOptions(true);
+  // The glTF choices of `lucent render`'s --gltf-masking, --gltf-normal-maps, --lumens-per-watt and
+  // --gltf-camera, with their values and bounds.
+  if (gltfMasking != "separable" && gltfMasking != "height-correlated")
+    throw std::invalid_argument("gltf_masking: expected separable or height-correlated, not '" + gltfMasking + "'");
+  if (gltfNormalMaps != "bend" && gltfNormalMaps != "as-given")
+    throw std::invalid_argument("gltf_normal_maps: expected bend or as-given, not '" + gltfNormalMaps + "'");
+  if (!(lumensPerWatt >= 1e-6 && lumensPerWatt <= 1e6))
+    throw std::invalid_argument("lumens_per_watt: must be in [1e-6, 1e6]");
+  settings.load.gltf = {gltfMasking == "height-correlated", gltfNormalMaps == "bend", lumensPerWatt, gltfCamera};
   settings.resolution = resolution;
   settings.strict = strict;
   settings.isa = isa.value_or("");
@@ -383,10 +394,14 @@ PYBIND11_MODULE(lucent, m) {
       .def_property_readonly("triangles", [](const OpenScene& s) { return s.scene().indices.size() / 3; });
   m.def("load_scene", &openScene, py::arg("path"), py::arg("resolution") = py::none(), py::arg("strict") = false,
         py::arg("isa") = py::none(), py::arg("robust") = false, py::arg("memory_limit") = py::none(),
+        py::arg("gltf_masking") = "separable", py::arg("gltf_normal_maps") = "bend",
+        py::arg("lumens_per_watt") = GltfOptions{}.lumensPerWatt, py::arg("gltf_camera") = "",
         "Loads a scene file or a glTF file as `lucent render` does: resolution=(width, height) overrides the "
         "camera's; strict refuses a scene whose files hold what a render would leave out; isa names the "
         "instruction set of Embree's kernels and the lane loops (sse4.2, avx, avx2, avx512); robust asks for "
-        "Embree's robust traversal; memory_limit ('8G') bounds the memory the renders may take.");
+        "Embree's robust traversal; memory_limit ('8G') bounds the memory the renders may take; "
+        "gltf_masking, gltf_normal_maps, lumens_per_watt and gltf_camera read glTF files as the options of "
+        "those names do.");
   m.def("methods", [] {
     std::vector<std::string> names;
     for (const Method* method : renderingMethods()) names.push_back(method->name());

@@ -248,3 +248,21 @@ def test_write_dump_writes_what_read_dump_and_check_dump_read(tmp_path):
         lucent.write_dump(str(candidate / "x.dat"), direct)
     with pytest.raises(ValueError, match="dtype"):
         lucent.write_dump(str(candidate / "x.bin"), np.zeros(3, dtype=np.int16))
+
+
+def test_gltf_choices_load_as_lucent_renders_options_read_them(tmp_path):
+    """gltf_masking and gltf_normal_maps give the image the CLI's options of those names give (the
+    exported Cornell box read directly: its materials are glTF's), and bad values are refused."""
+    box = os.path.join(SOURCE, "scenes", "gltf", "cornell-box.glb")
+    code, _, err = cli("render", box, "--resolution", "16x16", "--spp", "4", "--gltf-masking", "height-correlated",
+                       "--gltf-normal-maps", "as-given", "--quiet", "-o", tmp_path / "box.exr")
+    assert code == 0, err
+    scene = lucent.load_scene(box, resolution=(16, 16), gltf_masking="height-correlated", gltf_normal_maps="as-given")
+    module = lucent.render(scene, spp=4)
+    assert np.array_equal(module["image"], lucent.read_image(str(tmp_path / "box.exr"))["image"])
+    separable = lucent.render(lucent.load_scene(box, resolution=(16, 16)), spp=4)
+    assert not np.array_equal(separable["image"], module["image"])
+    with pytest.raises(ValueError, match="gltf_masking: expected separable or height-correlated"):
+        lucent.load_scene(box, gltf_masking="smooth")
+    with pytest.raises(ValueError, match="gltf_normal_maps: expected bend or as-given"):
+        lucent.load_scene(box, gltf_normal_maps="flat")
