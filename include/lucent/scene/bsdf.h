@@ -17,8 +17,8 @@
 namespace lucent {
 
 // The tag (the material's kind) and the lobe's parameters in a union: the same 64 bytes for every
-// kind, so that dumps, GPU records and lane arrays hold any of them. The bytes a kind does not use
-// are zero (the constructors clear them), so records compare and hash by their bytes.
+// kind, so that dumps and GPU records hold any of them. The bytes a kind does not use are zero (the
+// constructors clear them), so records compare and hash by their bytes.
 struct SurfaceBsdf {
   MaterialType type = MaterialType::Diffuse;
   union {
