@@ -538,6 +538,20 @@ TEST_CASE("Leaves: position, face normal, radius and albedo of their point", "[p
     REQUIRE(leaf.sphere.radius == Approx(std::sqrt(1.5 * 100.0 / n / kPi)));
     REQUIRE(h.nodeAreas[n + j] == h.restPointArea);
   }
+  // A glTF material whose sheen colour alone is textured: the diffuse term lies under the sheen,
+  // scaled by the textured sheen colour there.
+  Material& gltf = scene.materials[0];
+  gltf.type = MaterialType::Gltf;
+  gltf.kdTexture = -1;
+  gltf.metallic = 0;
+  gltf.sheenColour = Rgb(1.0f);
+  gltf.sheenRoughness = 0.5f;
+  gltf.sheenColourTexture = 0;
+  const PointHierarchy sheen = buildPointHierarchy(scene, o);
+  for (uint32_t j = 0; j < n; ++j) {
+    const PointSample& s = sheen.points[j];
+    REQUIRE(sheen.floatNodes[n + j].albedo == bsdfAt(scene, surfaceAt(scene, s.triangle, s.b1, s.b2)).diffuse());
+  }
   // Specular materials have no diffuse albedo.
   scene.materials[0].type = MaterialType::Mirror;
   const PointHierarchy mirror = buildPointHierarchy(scene, o);

@@ -201,6 +201,14 @@ inline SurfaceBsdf materialBsdf(const Material& m, Rgb kd) {
 // scales them.
 inline SurfaceBsdf materialBsdf(const Material& m) { return materialBsdf(m, m.kd); }
 
+// Whether bsdfAt's lobe for the material varies over the surface: a texture or vertex colours
+// scale its factors (where not, materialBsdf(m) is the lobe everywhere).
+inline bool lobeVariesOverSurface(const Scene& scene, const Material& m) {
+  return m.kdTexture >= 0 || m.metallicRoughnessTexture >= 0 || m.specularTexture >= 0 ||
+         m.specularColorTexture >= 0 || m.sheenColourTexture >= 0 || m.sheenRoughnessTexture >= 0 ||
+         !scene.colours.empty();
+}
+
 inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
   const Material& m = scene.materials[sp.materialId];
   const Rgb factor = baseFactorAt(scene, m, sp);

@@ -36,7 +36,7 @@ TriangleShape triangleShape(const Scene& scene, uint32_t tri) {
 // have none and get 0.
 Rgb pointAlbedo(const Scene& scene, const PointSample& s) {
   const Material& m = scene.materials[scene.materialIds[s.triangle]];
-  if (m.kdTexture < 0 && m.metallicRoughnessTexture < 0 && scene.colours.empty()) return materialBsdf(m).diffuse();
+  if (!lobeVariesOverSurface(scene, m)) return materialBsdf(m).diffuse();
   SurfacePoint sp;
   sp.triangle = s.triangle;
   sp.materialId = scene.materialIds[s.triangle];
