@@ -340,18 +340,16 @@ TEST_CASE("lucent bsdf lists a scene's materials and gives one's albedo, f and p
   const test::CliRun csv = test::runLucent("bsdf " + scene + " white --cosines 2 --samples 64");
   CHECK(csv.status == 0);
   CHECK_THAT(csv.output, Catch::StartsWith("cos_theta,albedo_r,albedo_g,albedo_b,error_r,error_g,error_b\n0.25,"));
-  // A name that is no material's, and one direction without the other, are refused.
-  const test::CliRun unknown = test::runLucent("bsdf " + scene + " velvet");
-  CHECK(unknown.status == 1);
-  CHECK_THAT(unknown.output, Catch::Contains("'velvet' is neither the name nor the index"));
-  const test::CliRun half = test::runLucent("bsdf " + scene + " white --wo 0,0,1");
-  CHECK(half.status == 1);
-  CHECK_THAT(half.output, Catch::Contains("--wo and --wi: give both"));
-  const test::CliRun zero = test::runLucent("bsdf " + scene + " white --wo 0,0,0 --wi 0,0,1");
-  CHECK(zero.status == 1);
-  CHECK_THAT(zero.output, Catch::Contains("--wo: not a direction"));
+  // A name that is no material's, one direction without the other, a zero direction and a missing
+  // scene are refused, each with its message.
+  for (const auto& [args, message] : {std::pair<std::string, std::string>{scene + " velvet", "'velvet' is neither the name nor the index"},
+                                      {scene + " white --wo 0,0,1", "--wo and --wi: give both"},
+                                      {scene + " white --wo 0,0,0 --wi 0,0,1", "--wo: not a direction"},
+                                      {"no-such-scene.json", "no-such-scene.json"}}) {
+    const test::CliRun refused = test::runLucent("bsdf " + args);
+    INFO(args);
+    CHECK(refused.status == 1);
+    CHECK_THAT(refused.output, Catch::Contains(message));
+  }
   CHECK(test::runLucent("bsdf " + scene + " white --cosines 0").status == 1);
-  const test::CliRun missing = test::runLucent("bsdf no-such-scene.json");
-  CHECK(missing.status == 1);
-  CHECK_THAT(missing.output, Catch::Contains("no-such-scene.json"));
 }

@@ -209,6 +209,12 @@ inline bool lobeVariesOverSurface(const Scene& scene, const Material& m) {
          !scene.colours.empty();
 }
 
+// Texture `index`'s A channel (linear) at a surface point, filtered as its sampler says.
+inline float textureAlphaAt(const Scene& scene, int32_t index, const SurfacePoint& sp) {
+  const Texture& t = scene.textures[size_t(index)];
+  return bilinearAlpha(bilinearFootprint(t, scene.texels.data(), textureUv(scene, t, sp)));
+}
+
 inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
   const Material& m = scene.materials[sp.materialId];
   const Rgb factor = baseFactorAt(scene, m, sp);
@@ -221,18 +227,12 @@ inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
       metallic *= t.b;
       roughness *= t.g;
     }
-    if (m.specularTexture >= 0) {
-      const Texture& t = scene.textures[size_t(m.specularTexture)];
-      specular *= bilinearAlpha(bilinearFootprint(t, scene.texels.data(), textureUv(scene, t, sp)));
-    }
+    if (m.specularTexture >= 0) specular *= textureAlphaAt(scene, m.specularTexture, sp);
     if (m.specularColorTexture >= 0) specularColour = specularColour * textureAt(scene, m.specularColorTexture, sp);
     Rgb sheenColour = m.sheenColour;
     float sheenRoughness = m.sheenRoughness;
     if (m.sheenColourTexture >= 0) sheenColour = sheenColour * textureAt(scene, m.sheenColourTexture, sp);
-    if (m.sheenRoughnessTexture >= 0) {
-      const Texture& t = scene.textures[size_t(m.sheenRoughnessTexture)];
-      sheenRoughness *= bilinearAlpha(bilinearFootprint(t, scene.texels.data(), textureUv(scene, t, sp)));
-    }
+    if (m.sheenRoughnessTexture >= 0) sheenRoughness *= textureAlphaAt(scene, m.sheenRoughnessTexture, sp);
     return gltfBsdf(m, kd, metallic, roughness, specular, specularColour, sheenColour, sheenRoughness);
   }
   return materialBsdf(m, kd);

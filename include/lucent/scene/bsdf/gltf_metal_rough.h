@@ -68,9 +68,13 @@ struct GltfMetalRoughLobe {
   BsdfValue evaluate(Vec3 wo, Vec3 wi) const {
     const BsdfValue base = evaluateBase(wo, wi);
     if (!hasSheen()) return base;
+    // sheenChoice and sheenScaling, with E(n.wo) looked up once.
+    const SheenAlbedoTable& e = SheenAlbedoTable::get();
+    const float m = sheenColour.maxComponent(), eo = e.at(wo.z, sheenRoughness);
+    const float scaling = std::min(1.0f - m * eo, 1.0f - m * e.at(wi.z, sheenRoughness));
+    const float ps = m * eo;
     const float sheen = sheenValue(sheenRoughness * sheenRoughness, wo.z, wi.z, normalize(wo + wi).z);
-    const float ps = sheenChoice(wo.z);
-    return {sheenColour * sheen + base.f * sheenScaling(wo.z, wi.z), ps * (0.5f * kInvPi) + (1.0f - ps) * base.pdf};
+    return {sheenColour * sheen + base.f * scaling, ps * (0.5f * kInvPi) + (1.0f - ps) * base.pdf};
   }
 
   // The base: Appendix B's BRDF and the density of its sampling.
