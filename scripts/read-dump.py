@@ -41,12 +41,13 @@ DTYPES = {
     "ShadingPoint": np.dtype({
         "names": ["position", "geometric_normal", "normal", "wo", "weight", "material", "lambertian_kd", "phong_kd",
                   "phong_ks", "phong_ns", "gltf_kd", "gltf_ks", "gltf_alpha", "gltf_f90", "gltf_dielectric_f0",
-                  "gltf_dielectric_f90", "gltf_masking", "gltf_sheen_colour", "gltf_sheen_roughness", "pixel", "sample",
-                  "branch", "triangle"],
+                  "gltf_dielectric_f90", "gltf_masking", "gltf_sheen_colour", "gltf_sheen_roughness", "gltf_coat",
+                  "gltf_coat_alpha", "gltf_coat_normal", "pixel", "sample", "branch", "triangle"],
         "formats": ["(3,)<f4"] * 5 + ["<u4", "(3,)<f4", "(3,)<f4", "(3,)<f4", "<f4", "(3,)<f4", "(3,)<f4"] + ["<f4"] * 4
-                   + ["<u4", "(3,)<f4", "<f4"] + ["<u4"] * 4,
-        "offsets": [0, 12, 24, 36, 48, 60, 64, 64, 76, 88, 64, 76, 88, 92, 96, 100, 104, 108, 120, 124, 128, 132, 136],
-        "itemsize": 140}),
+                   + ["<u4", "(3,)<f4", "<f4", "<f4", "<f4", "(3,)<f4"] + ["<u4"] * 4,
+        "offsets": [0, 12, 24, 36, 48, 60, 64, 64, 76, 88, 64, 76, 88, 92, 96, 100, 104, 108, 120, 124, 128, 132, 144,
+                    148, 152, 156],
+        "itemsize": 160}),
     "AreaParticle": np.dtype([("position",) + F3, ("normal",) + F3, ("area", "<f4"), ("reflectance",) + F3,
                               ("triangle", "<u4")]),
     "TriangleTessellation": np.dtype([("first", "<u4"), ("segments", "<u4")]),

@@ -58,7 +58,10 @@ std::vector<std::string> notRead(const Scene& scene, const Material& m) {
   if (m.specularColorTexture >= 0) out.push_back("specular colour texture");
   if (m.sheenColourTexture >= 0) out.push_back("sheen colour texture");
   if (m.sheenRoughnessTexture >= 0) out.push_back("sheen roughness texture");
+  if (m.clearcoatTexture >= 0) out.push_back("clearcoat texture");
+  if (m.clearcoatRoughnessTexture >= 0) out.push_back("clearcoat roughness texture");
   if (m.normalTexture >= 0) out.push_back("normal texture");
+  if (m.clearcoatNormalTexture >= 0) out.push_back("clearcoat normal texture");
   if (!scene.colours.empty()) out.push_back("vertex colours");
   return out;
 }

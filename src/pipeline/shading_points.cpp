@@ -65,7 +65,7 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
     const SurfacePoint& sp = v.sp;
     const SurfaceBsdf& bsdf = v.bsdf;
     if (!scene.materials[sp.materialId].ke.isBlack())
-      out.emitted += b.weight * emittedRadiance(scene, hit.triangle, hit.b1, hit.b2, v.frontFace);
+      out.emitted += b.weight * emittedRadiance(scene, hit.triangle, hit.b1, hit.b2, v.wo);
     if (firstHit) {
       firstHit->albedo = layerAlbedo(bsdf);
       firstHit->normal = sp.shadingNormal;
@@ -237,8 +237,7 @@ std::vector<uint32_t> tracePixelSurfaces(const Scene& scene, const Visibility& v
         const Hit hit = vis.intersect(ray);
         uint32_t code = PixelSurface::code(-1, environmentEmits);
         if (hit.found()) {
-          const bool front = dot(ray.direction, scene.geometricNormal(hit.triangle)) < 0;
-          const bool emits = !emittedRadiance(scene, hit.triangle, hit.b1, hit.b2, front).isBlack();
+          const bool emits = !emittedRadiance(scene, hit.triangle, hit.b1, hit.b2, -ray.direction).isBlack();
           code = PixelSurface::code(int(scene.materialIds[hit.triangle]), emits);
         }
         codes[size_t(y - region.y0) * size_t(region.width()) + size_t(x - region.x0)] = code;

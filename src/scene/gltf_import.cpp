@@ -37,6 +37,7 @@ constexpr uint64_t kMemoryCheckBytes = uint64_t(1) << 24;
 const std::set<std::string> kSupportedExtensions = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
                                                     "KHR_texture_transform", "KHR_materials_specular",
                                                     "KHR_materials_ior", "KHR_materials_sheen",
+                                                    "KHR_materials_clearcoat",
                                                     "EXT_mesh_gpu_instancing"};
 
 struct Context {
@@ -567,6 +568,28 @@ MaterialSpec materialSpec(const Context& c, size_t index, GgxMasking masking, st
     if (e->Has("sheenRoughnessTexture"))
       spec.sheenRoughnessTexture =
           textureImage(c, textureInfo(c, *e, "sheenRoughnessTexture", at), at + ".sheenRoughnessTexture");
+  }
+  // KHR_materials_clearcoat: a clear coat over both (bsdf/gltf_metal_rough.h).
+  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_clearcoat")) {
+    const std::string at = path + ".extensions.KHR_materials_clearcoat";
+    spec.clearcoat = float(unitNumber(c, number(*e, "clearcoatFactor", 0), at + ".clearcoatFactor"));
+    spec.clearcoatRoughness = float(unitNumber(c, number(*e, "clearcoatRoughnessFactor", 0), at + ".clearcoatRoughnessFactor"));
+    if (spec.clearcoat > 0 && spec.clearcoatRoughness * spec.clearcoatRoughness < kMinGgxAlpha) {
+      const std::string smallest = std::to_string(std::sqrt(kMinGgxAlpha)).substr(0, 6);
+      ignored.push_back(named + ": clearcoat roughness below " + smallest + " (rendered as " + smallest + ")");
+    }
+    if (e->Has("clearcoatTexture"))
+      spec.clearcoatTexture = textureImage(c, textureInfo(c, *e, "clearcoatTexture", at), at + ".clearcoatTexture");
+    if (e->Has("clearcoatRoughnessTexture"))
+      spec.clearcoatRoughnessTexture =
+          textureImage(c, textureInfo(c, *e, "clearcoatRoughnessTexture", at), at + ".clearcoatRoughnessTexture");
+    if (e->Has("clearcoatNormalTexture")) {
+      const std::string normalAt = at + ".clearcoatNormalTexture";
+      spec.clearcoatNormalTexture = textureImage(c, textureInfo(c, *e, "clearcoatNormalTexture", at), normalAt);
+      const double scale = number(e->Get("clearcoatNormalTexture"), "scale", 1);
+      if (!(std::abs(scale) <= kMaxInputMagnitude)) c.fail(normalAt + ".scale", "must be finite and at most 1e15");
+      spec.clearcoatNormalScale = float(scale);
+    }
   }
   spec.ni = 1.5f;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_ior")) {

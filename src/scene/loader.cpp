@@ -384,20 +384,26 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
       m.kdTexture = addTexture(spec.mapKd, spec.name, spec.mapKd.bytes.empty() ? "map_Kd" : "base colour texture", true);
     if (m.type == MaterialType::Gltf && !spec.metallicRoughness.empty())
       m.metallicRoughnessTexture = addTexture(spec.metallicRoughness, spec.name, "metallic-roughness texture", false);
-    // Normal textures perturb glTF materials' shading normals only: Lambertian hits are shaded in
-    // the path tracer's lanes, from the vertex normals.
     if (m.type == MaterialType::Gltf && !spec.specularTexture.empty())
       m.specularTexture = addTexture(spec.specularTexture, spec.name, "specular texture", false);
     if (m.type == MaterialType::Gltf && !spec.sheenColourTexture.empty())
       m.sheenColourTexture = addTexture(spec.sheenColourTexture, spec.name, "sheen colour texture", true);
     if (m.type == MaterialType::Gltf && !spec.sheenRoughnessTexture.empty())
       m.sheenRoughnessTexture = addTexture(spec.sheenRoughnessTexture, spec.name, "sheen roughness texture", false);
+    if (m.type == MaterialType::Gltf && !spec.clearcoatTexture.empty())
+      m.clearcoatTexture = addTexture(spec.clearcoatTexture, spec.name, "clearcoat texture", false);
+    if (m.type == MaterialType::Gltf && !spec.clearcoatRoughnessTexture.empty())
+      m.clearcoatRoughnessTexture = addTexture(spec.clearcoatRoughnessTexture, spec.name, "clearcoat roughness texture", false);
+    if (m.type == MaterialType::Gltf && !spec.clearcoatNormalTexture.empty())
+      m.clearcoatNormalTexture = addTexture(spec.clearcoatNormalTexture, spec.name, "clearcoat normal texture", false);
     if (m.type == MaterialType::Gltf && !spec.specularColourTexture.empty())
       m.specularColorTexture = addTexture(spec.specularColourTexture, spec.name, "specular colour texture", true);
     if (!spec.emissive.empty() && !m.ke.isBlack())
       m.emissiveTexture = addTexture(spec.emissive, spec.name, "emissive texture", true);
     m.emitsBackFace = spec.doubleSided && !m.ke.isBlack() ? 1 : 0;
     m.culledBehind = spec.singleSided ? 1 : 0;
+    // Normal textures perturb glTF materials' shading normals only: Lambertian hits are shaded in
+    // the path tracer's lanes, from the vertex normals.
     if (m.type == MaterialType::Gltf && !spec.normal.empty()) {
       m.normalTexture = addTexture(spec.normal, spec.name, "normal texture", false);
       m.bendsNormalMap = spec.bendNormalMap ? 1 : 0;

@@ -414,6 +414,9 @@ Material classifyMaterial(const MaterialSpec& spec) {
   m.masking = spec.masking;
   m.sheenColour = spec.sheenColour;
   m.sheenRoughness = spec.sheenRoughness;
+  m.clearcoat = spec.clearcoat;
+  m.clearcoatRoughness = spec.clearcoatRoughness;
+  m.clearcoatNormalScale = spec.clearcoatNormalScale;
   m.specular = spec.specular;
   m.normalScale = spec.normalScale;
   m.alphaMode = spec.alphaMode;
@@ -453,7 +456,9 @@ Material classifyMaterial(const MaterialSpec& spec) {
       if (!(spec.kd.maxComponent() <= 1) || !(m.metallic >= 0 && m.metallic <= 1) ||
           !(m.roughness >= 0 && m.roughness <= 1) || !(m.specular >= 0 && m.specular <= 1) || !(m.ni >= 0) ||
           !std::isfinite(m.ni) || !std::isfinite(m.ks.maxComponent()) || !(m.sheenColour.maxComponent() <= 1) ||
-          !(std::min({m.sheenColour.r, m.sheenColour.g, m.sheenColour.b}) >= 0) || !(m.sheenRoughness >= 0 && m.sheenRoughness <= 1))
+          !(std::min({m.sheenColour.r, m.sheenColour.g, m.sheenColour.b}) >= 0) || !(m.sheenRoughness >= 0 && m.sheenRoughness <= 1) ||
+          !(m.clearcoat >= 0 && m.clearcoat <= 1) || !(m.clearcoatRoughness >= 0 && m.clearcoatRoughness <= 1) ||
+          !std::isfinite(m.clearcoatNormalScale))
         fail("glTF parameters out of their ranges");
       break;
     case MaterialType::Glass:

@@ -41,6 +41,9 @@ struct MaterialSpec {
   Rgb sheenColour{0.0f};             // glTF only: KHR_materials_sheen's factors and textures (sRGB; A linear)
   float sheenRoughness = 0.0f;
   TextureFile sheenColourTexture, sheenRoughnessTexture;
+  float clearcoat = 0.0f, clearcoatRoughness = 0.0f;  // glTF only: KHR_materials_clearcoat's (textures linear)
+  TextureFile clearcoatTexture, clearcoatRoughnessTexture, clearcoatNormalTexture;
+  float clearcoatNormalScale = 1.0f;
   TextureFile emissive;              // glTF only (sRGB), multiplies ke
   TextureFile specularTexture, specularColourTexture;  // glTF only: KHR_materials_specular's (A linear; sRGB)
   bool doubleSided = false;          // an emitter's back faces emit too (glTF's doubleSided, a scene file's double_sided)

@@ -201,7 +201,6 @@ TEST_CASE("A Lambertian lane holds surfaceAt's, bsdfAt's and sampleChosenLight's
     REQUIRE(Vec3{l.snX[k], l.snY[k], l.snZ[k]} == sp.shadingNormal);
     REQUIRE(bsdf.type == MaterialType::Diffuse);
     REQUIRE(Rgb{l.kdR[k], l.kdG[k], l.kdB[k]} == bsdf.lambertian.kd);
-    REQUIRE((l.frontFace[k] != 0) == (dot(Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]}, sp.geometricNormal) < 0));
     interpolated += !(sp.shadingNormal == sp.geometricNormal);
     // The lane's light sample is sampleChosenLight's: its shadow ray and radiance.
     const LightSample ls = sampleChosenLight(scene, l.light[k], l.lightPmf[k], sp.position, {l.uLightX[k], l.uLightY[k]});
@@ -444,8 +443,9 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
           "[pathtrace][furnace][gltf]") {
   // One bounce to the environment, which is sampled as a light and found by BSDF samples: MIS and
   // each strategy alone give L a(wo), a(wo) integrated numerically (test_bsdfs.h). The camera sees
-  // the plane within 1 degree of theta; the expectation spans a(wo) over that range. The last case
-  // has a KHR_materials_sheen layer.
+  // the plane within 1 degree of theta; the expectation spans a(wo) over that range. The last cases
+  // have a KHR_materials_sheen layer and a KHR_materials_clearcoat coat (its normal the plane's,
+  // which the render takes from world space into its shading frame).
   struct Case {
     float metallic, roughness;
     Rgb base;
@@ -453,11 +453,13 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
     double theta;
     Rgb sheenColour{0.0f};
     float sheenRoughness = 0;
+    float clearcoat = 0, clearcoatRoughness = 0;
   };
   for (const Case& k : {Case{1, 0.3f, Rgb(0.9f, 0.6f, 0.3f), GgxMasking::Separable, 1.0},
                         Case{0, 0.5f, Rgb(1.0f), GgxMasking::Separable, 1.4},
                         Case{0.5f, 0.7f, Rgb(0.2f, 0.5f, 0.8f), GgxMasking::HeightCorrelated, 0.5},
-                        Case{0, 0.6f, Rgb(0.3f, 0.2f, 0.6f), GgxMasking::Separable, 1.2, Rgb(1.0f, 0.8f, 0.6f), 0.4f}})
+                        Case{0, 0.6f, Rgb(0.3f, 0.2f, 0.6f), GgxMasking::Separable, 1.2, Rgb(1.0f, 0.8f, 0.6f), 0.4f},
+                        Case{0.3f, 0.5f, Rgb(0.8f, 0.3f, 0.2f), GgxMasking::HeightCorrelated, 1.3, Rgb(0.0f), 0, 0.9f, 0.2f}})
     for (const PathStrategy strategy : {PathStrategy::Mis, PathStrategy::LightSampling, PathStrategy::BsdfSampling}) {
       Scene scene;
       Material m;
@@ -470,6 +472,8 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
       m.roughness = k.roughness;
       m.sheenColour = k.sheenColour;
       m.sheenRoughness = k.sheenRoughness;
+      m.clearcoat = k.clearcoat;
+      m.clearcoatRoughness = k.clearcoatRoughness;
       test::addQuad(scene, {-100, 0, -100}, {-100, 0, 100}, {100, 0, 100}, {100, 0, -100},
                     test::addMaterial(scene, m, "plane"));
       const Vec3 eye{0, float(20 * std::cos(k.theta)), float(20 * std::sin(k.theta))};
@@ -503,11 +507,12 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
 
 TEST_CASE("glTF metals and dielectrics: MIS, light sampling alone and BSDF sampling alone agree", "[pathtrace][gltf]") {
   // The exported Cornell box with its walls turned into rough metals and its blocks into a shiny
-  // dielectric: every strategy's pdf and weight of the GGX lobe against the others'.
+  // dielectric under a clear coat: every strategy's pdf and weight of the GGX lobes against the
+  // others'.
   Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/gltf/cornell-box.glb", {true});
   for (size_t i = 0; i < scene.materials.size(); ++i) {
     Material& m = scene.materials[i];
-    if (scene.materialNames[i] == "white") m.roughness = 0.25f, m.ks = Rgb(1.0f), m.ni = 1.5f;
+    if (scene.materialNames[i] == "white") m.roughness = 0.25f, m.ks = Rgb(1.0f), m.ni = 1.5f, m.clearcoat = 0.7f, m.clearcoatRoughness = 0.15f;
     if (scene.materialNames[i] == "red" || scene.materialNames[i] == "green") m.metallic = 1, m.roughness = 0.4f;
   }
   scene.camera.width = 48;

@@ -790,6 +790,69 @@ TEST_CASE("KHR_materials_sheen: its colour times the texture's RGB (sRGB), its r
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, f), Catch::Contains("KHR_materials_sheen.sheenRoughnessFactor"));
 }
 
+TEST_CASE("KHR_materials_clearcoat: its factors times the textures' R and G (linear), its own normal, emission "
+          "beneath it",
+          "[gltf][loader]") {
+  const test::TempDir dir;
+  // Image 0: codes (204, 102, 0) for the coat (R) and its roughness (G); image 1: a tilted normal.
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  f["extensionsUsed"] = {"KHR_materials_clearcoat"};
+  f["images"] = {{{"uri", "data:image/png;base64," + base64(rgbaPng(1, 1, {204, 102, 0, 255}))}},
+                 {{"uri", "data:image/png;base64," + base64(rgbaPng(1, 1, {191, 128, 221, 255}))}}};
+  f["textures"] = {{{"source", 0}}, {{"source", 1}}};
+  auto& material = f["materials"][0];
+  material["normalTexture"] = {{"index", 1}};
+  material["emissiveFactor"] = {1, 1, 1};
+  material["extensions"]["KHR_materials_clearcoat"] = {{"clearcoatFactor", 0.8},
+                                                       {"clearcoatTexture", {{"index", 0}}},
+                                                       {"clearcoatRoughnessFactor", 0.5},
+                                                       {"clearcoatRoughnessTexture", {{"index", 0}}}};
+  const Scene scene = loadWrapped(dir.path, f);
+  CHECK(scene.ignored.empty());
+  const SurfacePoint sp = surfaceAt(scene, 0, 0.25f, 0.25f);
+  const SurfaceBsdf b = bsdfAt(scene, sp);
+  const double coat = 0.8 * 204 / 255.0, roughness = 0.5 * 102 / 255.0;
+  CHECK(b.gltf.coat == Approx(coat).epsilon(1e-5));
+  CHECK(b.gltf.coatAlpha == Approx(roughness * roughness).epsilon(1e-5));
+  // The base's normal texture tilts its shading normal, not the coat's: that is the quad's normal.
+  CHECK(sp.shadingNormal.z < 0.99f);
+  CHECK(length(b.gltf.coatNormal - Vec3{0, 0, 1}) < 1e-6f);
+  // Emission lies beneath the coat: 1 - coat (0.04 + 0.96 (1 - cos)^5) of it leaves.
+  for (const double theta : {0.0, 1.0, 1.4}) {
+    const double expected = 1 - coat * (0.04 + 0.96 * std::pow(1 - std::cos(theta), 5));
+    const Vec3 towards{float(std::sin(theta)), 0.0f, float(std::cos(theta))};
+    const Rgb le = emittedRadiance(scene, 0, 0.25f, 0.25f, towards);
+    INFO("theta " << theta);
+    CHECK(le.g == Approx(expected).epsilon(1e-5));
+  }
+  // Its own normal texture, the base's here, tilts it as it tilts the base.
+  material["extensions"]["KHR_materials_clearcoat"]["clearcoatNormalTexture"] = {{"index", 1}};
+  const Scene mapped = loadWrapped(dir.path, f);
+  const SurfacePoint mp = surfaceAt(mapped, 0, 0.25f, 0.25f);
+  CHECK(length(bsdfAt(mapped, mp).gltf.coatNormal - mp.shadingNormal) < 1e-6f);
+  // Scaled as the base's scale would scale it: twice the tilt.
+  material["extensions"]["KHR_materials_clearcoat"]["clearcoatNormalTexture"]["scale"] = 2;
+  const Scene scaled = loadWrapped(dir.path, f);
+  CHECK(bsdfAt(scaled, surfaceAt(scaled, 0, 0.25f, 0.25f)).gltf.coatNormal.z < mp.shadingNormal.z - 0.05f);
+  // A smooth coat is rendered at the smallest roughness and said so; no factor, no coat.
+  material["extensions"]["KHR_materials_clearcoat"] = {{"clearcoatFactor", 1}};
+  const Scene smooth = loadWrapped(dir.path, f);
+  REQUIRE(smooth.ignored.size() == 1);
+  CHECK_THAT(smooth.ignored[0], Catch::Contains("clearcoat roughness below 0.0316"));
+  CHECK(bsdfAt(smooth, surfaceAt(smooth, 0, 0.25f, 0.25f)).gltf.coatAlpha == kMinGgxAlpha);
+  material["extensions"]["KHR_materials_clearcoat"] = json::object();
+  const Scene none = loadWrapped(dir.path, f);
+  CHECK(none.ignored.empty());
+  CHECK(!bsdfAt(none, surfaceAt(none, 0, 0.25f, 0.25f)).gltf.hasCoat());
+  CHECK(emittedRadiance(none, 0, 0.25f, 0.25f, {0, 0, 1}) == Rgb(1.0f));
+  // Out of range, refused with the path.
+  material["extensions"]["KHR_materials_clearcoat"] = {{"clearcoatFactor", 1.5}};
+  REQUIRE_THROWS_WITH(loadWrapped(dir.path, f),
+                      Catch::Contains("materials[0].extensions.KHR_materials_clearcoat.clearcoatFactor: must be in [0, 1]"));
+  material["extensions"]["KHR_materials_clearcoat"] = {{"clearcoatFactor", 1}, {"clearcoatRoughnessFactor", -1}};
+  REQUIRE_THROWS_WITH(loadWrapped(dir.path, f), Catch::Contains("KHR_materials_clearcoat.clearcoatRoughnessFactor"));
+}
+
 TEST_CASE("A normal texture that tilts most texels past 45 degrees, as a height map does, is warned of", "[gltf][loader]") {
   // Blender's OBJ importer turns map_Bump into a normal texture, and the glTF it exports carries the
   // grey heights as normals (sponza.glb: tilts of about 59 degrees). The render follows the file;

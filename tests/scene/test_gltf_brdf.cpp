@@ -1,6 +1,7 @@
-// glTF's metallic-roughness BRDF (bsdf.h, surface.h's gltfBsdf): its value against Appendix B's
-// formulas written out independently in double, reciprocity, chi-square tests of its sampling, the
-// directional albedo of its sample weights against numerical integration (the furnace, test_bsdfs.h), and the
+// glTF's metallic-roughness BRDF (bsdf.h, surface.h's gltfBsdf) with its sheen and clear coat
+// layers: its value against the specifications' formulas written out independently in double,
+// reciprocity (and the coat's lack of it), chi-square tests of its sampling, the directional albedo
+// of its sample weights against numerical integration (the furnace, test_bsdfs.h), and the
 // limit of small roughness against a mirror.
 #include <catch2/catch.hpp>
 
@@ -18,9 +19,10 @@ using test::directionAt;
 
 namespace {
 
-// 4 roughnesses x 3 angles x 2 materials (a coloured metal, a rough dielectric), and 2 sheen
-// layers x 3 angles, at 1% for the whole file (Sidak); the negative control excluded.
-constexpr int kChi2Tests = 30;
+// 4 roughnesses x 3 angles x 2 materials (a coloured metal, a rough dielectric), 2 sheen layers x 3
+// angles, and 2 coat roughnesses x 2 coat normals x 3 angles, at 1% for the whole file (Sidak); the
+// negative control excluded.
+constexpr int kChi2Tests = 42;
 const double kAlpha = chi2::sidak(0.01, kChi2Tests);
 
 struct Parameters {
@@ -30,6 +32,8 @@ struct Parameters {
   GgxMasking masking = GgxMasking::Separable;
   Rgb sheenColour{0.0f};
   float sheenRoughness = 0;
+  float clearcoat = 0, clearcoatRoughness = 0;
+  Vec3 clearcoatNormal{0, 0, 1};  // in the shading frame
 };
 
 SurfaceBsdf bsdfOf(const Parameters& p) {
@@ -40,7 +44,12 @@ SurfaceBsdf bsdfOf(const Parameters& p) {
   m.ks = p.specularColour;
   m.ni = p.ior;
   m.specular = p.specular;
-  return gltfBsdf(m, p.base, p.metallic, p.roughness, m.specular, m.ks, p.sheenColour, p.sheenRoughness);
+  m.metallic = p.metallic, m.roughness = p.roughness;
+  m.sheenColour = p.sheenColour, m.sheenRoughness = p.sheenRoughness;
+  m.clearcoat = p.clearcoat, m.clearcoatRoughness = p.clearcoatRoughness;
+  GltfFactors f = gltfFactors(m, p.base);
+  f.clearcoatNormal = p.clearcoatNormal;
+  return gltfBsdf(m, f);
 }
 
 // Appendix B with KHR_materials_ior and KHR_materials_specular, as the specifications write it:
@@ -93,6 +102,27 @@ MeanWeight meanSampleWeight(const SurfaceBsdf& b, Vec3 wo, int n, uint64_t seed)
     m.error[c] = std::sqrt(std::max(0.0, sum2[c] / n - m.mean[c] * m.mean[c]) / n);
   }
   return m;
+}
+
+// The chi-square test of a lobe's sampling against bsdfPdf (two seeds drawn from `seed`), and the
+// furnace: the mean sample weight is the directional albedo (numerical integration, test_bsdfs.h),
+// within 4.5 standard errors and the rule's 0.2%.
+void checkSamplingAndAlbedo(const SurfaceBsdf& b, Vec3 wo, uint64_t& seed) {
+  const auto sampler = [&](Rng& rng) {
+    const float u = rng.uniform();
+    const BsdfSample s = sampleBsdf(b, wo, u, rng.uniform2());
+    return s.valid ? chi2::DirectionSample{s.wi, s.pdf} : chi2::DirectionSample{{}, 0.0f};
+  };
+  chi2::Options opt;
+  opt.seed = seed++;
+  opt.mass = std::nullopt;
+  CHECK_CHI2_PASS(chi2::testSphere(sampler, [&](Vec3 wi) { return bsdfPdf(b, wo, wi); }, opt));
+  const Rgb quadrature = test::directionalAlbedo(b, wo);
+  const MeanWeight m = meanSampleWeight(b, wo, 400'000, seed++);
+  for (int c = 0; c < 3; ++c) {
+    INFO("channel " << c << ": quadrature " << quadrature[c] << ", sampled " << m.mean[c] << " +- " << m.error[c]);
+    CHECK(std::abs(m.mean[c] - quadrature[c]) <= 4.5 * m.error[c] + 2e-3 * quadrature[c]);
+  }
 }
 
 }  // namespace
@@ -381,23 +411,7 @@ TEST_CASE("Sheen: sampled directions have the density bsdfPdf gives (chi-square)
       const SurfaceBsdf b = bsdfOf(p);
       const Vec3 wo = directionAt(theta, 0.7);
       INFO("sheen roughness " << sheenRoughness << ", theta " << theta);
-      const auto sampler = [&](Rng& rng) {
-        const float u = rng.uniform();
-        const BsdfSample s = sampleBsdf(b, wo, u, rng.uniform2());
-        return s.valid ? chi2::DirectionSample{s.wi, s.pdf} : chi2::DirectionSample{{}, 0.0f};
-      };
-      chi2::Options opt;
-      opt.seed = seed++;
-      opt.mass = std::nullopt;
-      CHECK_CHI2_PASS(chi2::testSphere(sampler, [&](Vec3 wi) { return bsdfPdf(b, wo, wi); }, opt));
-      // The mean sample weight is the directional albedo (numerical integration, test_bsdfs.h),
-      // within 4.5 standard errors and the rule's 0.2%.
-      const Rgb quadrature = test::directionalAlbedo(b, wo);
-      const MeanWeight m = meanSampleWeight(b, wo, 400'000, seed++);
-      for (int c = 0; c < 3; ++c) {
-        INFO("channel " << c << ": quadrature " << quadrature[c] << ", sampled " << m.mean[c] << " +- " << m.error[c]);
-        CHECK(std::abs(m.mean[c] - quadrature[c]) <= 4.5 * m.error[c] + 2e-3 * quadrature[c]);
-      }
+      checkSamplingAndAlbedo(b, wo, seed);
     }
 }
 
@@ -417,4 +431,189 @@ TEST_CASE("Sheen over a white metal never reflects more than it receives", "[bsd
       CHECK(a.r <= 1.0f + 2e-3f);
       CHECK(a.r > 0.5f);
     }
+}
+
+namespace {
+
+// KHR_materials_clearcoat's layering as the extension writes it, in double, from scratch:
+// mix(material, clearcoat_brdf, clearcoat (0.04 + 0.96 (1 - |V.Nc|)^5)), clearcoat_brdf = D G /
+// (4 |V.Nc| |L.Nc|) of alpha clearcoatRoughness^2 about the coat normal Nc, V = wo; the material
+// beneath as sheenLayer (Appendix B where there is no sheen). The layer is 0 where L or V is below
+// the coat (no microfacet of the coat faces both).
+double coatedLayer(const Parameters& p, Vec3 wo, Vec3 wi, int channel) {
+  if (wo.z <= 0 || wi.z <= 0) return 0;
+  const double under = sheenLayer(p, wo, wi, channel);
+  const Vec3 nc = p.clearcoatNormal;
+  const double len = std::sqrt(double(nc.x) * nc.x + double(nc.y) * nc.y + double(nc.z) * nc.z);
+  const auto dotNc = [&](double x, double y, double z) { return (x * nc.x + y * nc.y + z * nc.z) / len; };
+  const double vn = dotNc(wo.x, wo.y, wo.z), ln = dotNc(wi.x, wi.y, wi.z);
+  const double weight = p.clearcoat * (0.04 + 0.96 * std::pow(1 - std::abs(vn), 5));
+  double layer = 0;
+  if (vn > 0 && ln > 0) {
+    const double r = p.clearcoatRoughness, a = std::max(r * r, double(kMinGgxAlpha)), a2 = a * a;
+    const double hx = double(wo.x) + wi.x, hy = double(wo.y) + wi.y, hz = double(wo.z) + wi.z;
+    const double nh = dotNc(hx, hy, hz) / std::sqrt(hx * hx + hy * hy + hz * hz);
+    const double d = a2 / (kPi * std::pow(nh * nh * (a2 - 1) + 1, 2));
+    const auto g1 = [&](double c) { return 2 * c / (c + std::sqrt(a2 + (1 - a2) * c * c)); };
+    const auto lambda = [&](double c) { return (std::sqrt(1 + a2 * (1 - c * c) / (c * c)) - 1) / 2; };
+    const double g = p.masking == GgxMasking::Separable ? g1(vn) * g1(ln) : 1 / (1 + lambda(vn) + lambda(ln));
+    layer = d * g / (4 * vn * ln);
+  }
+  return (1 - weight) * under + weight * layer;
+}
+
+// A unit vector tilted from +z by `tilt` towards azimuth phi.
+Vec3 tiltedNormal(double tilt, double phi) { return directionAt(tilt, phi); }
+
+}  // namespace
+
+TEST_CASE("Clearcoat: the coated BRDF is the extension's layering about the coat's own normal, zero below the "
+          "surface, and not reciprocal",
+          "[bsdf][gltf]") {
+  Rng rng(9);
+  int nonReciprocal = 0;
+  for (int i = 0; i < 3000; ++i) {
+    Parameters p;
+    p.base = Rgb(rng.uniform(), rng.uniform(), rng.uniform());
+    p.metallic = rng.uniform();
+    p.roughness = 0.1f + 0.9f * rng.uniform();
+    if (i % 4 == 0) p.sheenColour = Rgb(rng.uniform(), rng.uniform(), rng.uniform()), p.sheenRoughness = rng.uniform();
+    p.clearcoat = i % 5 == 0 ? 1.0f : rng.uniform();
+    p.clearcoatRoughness = 0.1f + 0.9f * rng.uniform();
+    p.clearcoatNormal = i % 3 == 0 ? Vec3{0, 0, 1} : tiltedNormal(0.5 * rng.uniform(), 2 * kPi * rng.uniform());
+    p.masking = i % 2 ? GgxMasking::Separable : GgxMasking::HeightCorrelated;
+    const SurfaceBsdf b = bsdfOf(p);
+    const Vec3 wo = sampleUniformSphere(rng.uniform2()), wi = sampleUniformSphere(rng.uniform2());
+    const Rgb f = evalBsdf(b, wo, wi), g = evalBsdf(b, wi, wo);
+    for (int c = 0; c < 3; ++c) {
+      INFO("case " << i << ", channel " << c);
+      CHECK(f[c] == Approx(coatedLayer(p, wo, wi, c)).epsilon(5e-4).margin(1e-6));
+      CHECK(g[c] == Approx(coatedLayer(p, wi, wo, c)).epsilon(5e-4).margin(1e-6));
+    }
+    if (std::abs(f.r - g.r) > 0.01 * std::max(f.r, g.r)) ++nonReciprocal;
+    if (wo.z <= 0 || wi.z <= 0) CHECK(f.isBlack());
+  }
+  // The weight reads V.Nc, not V.h: f(wo, wi) and f(wi, wo) differ wherever the two cosines do
+  // and the coat and the base differ (both directions above the surface in a quarter of the cases).
+  CHECK(nonReciprocal > 300);
+}
+
+TEST_CASE("Clearcoat: importance transport takes the adjoint f(wi, wo), radiance f(wo, wi)", "[bsdf][gltf]") {
+  Rng rng(10);
+  int differ = 0, checked = 0;
+  for (int i = 0; i < 2000; ++i) {
+    Parameters p;
+    p.base = Rgb(0.7f, 0.4f, 0.1f);
+    p.roughness = 0.2f + 0.8f * rng.uniform();
+    p.clearcoat = 1;
+    p.clearcoatRoughness = 0.1f + 0.5f * rng.uniform();
+    p.clearcoatNormal = tiltedNormal(0.3 * rng.uniform(), 2 * kPi * rng.uniform());
+    const SurfaceBsdf b = bsdfOf(p);
+    const Vec3 wo = directionAt(1.5 * rng.uniform(), 2 * kPi * rng.uniform());
+    const float u = rng.uniform();
+    const Vec2 u2 = rng.uniform2();
+    const BsdfSample radiance = sampleBsdf(b, wo, u, u2, Transport::Radiance);
+    const BsdfSample importance = sampleBsdf(b, wo, u, u2, Transport::Importance);
+    REQUIRE(radiance.valid == importance.valid);
+    if (!radiance.valid) continue;
+    ++checked;
+    CHECK(importance.wi == radiance.wi);
+    CHECK(importance.pdf == radiance.pdf);
+    for (int c = 0; c < 3; ++c) {
+      INFO("case " << i << ", channel " << c);
+      CHECK(radiance.weight[c] == Approx(coatedLayer(p, wo, radiance.wi, c) * radiance.wi.z / radiance.pdf).epsilon(1e-3));
+      CHECK(importance.weight[c] == Approx(coatedLayer(p, importance.wi, wo, c) * importance.wi.z / importance.pdf).epsilon(1e-3));
+    }
+    differ += std::abs(importance.weight.g - radiance.weight.g) > 1e-3f * radiance.weight.g;
+  }
+  CHECK(checked > 1500);
+  CHECK(differ > 500);
+}
+
+TEST_CASE("Clearcoat: sampled directions have the density bsdfPdf gives (chi-square), and the furnace",
+          "[bsdf][gltf][chi2]") {
+  uint64_t seed = 81;
+  for (const float coatRoughness : {0.25f, 0.5f})
+    for (const double tilt : {0.0, 0.35})
+      for (const double theta : {0.2, 0.9, 1.4}) {
+        Parameters p;
+        p.base = Rgb(0.6f, 0.3f, 0.2f);
+        p.roughness = 0.6f;
+        p.sheenColour = Rgb(0.3f, 0.2f, 0.1f);
+        p.sheenRoughness = 0.5f;
+        p.clearcoat = 0.9f;
+        p.clearcoatRoughness = coatRoughness;
+        p.clearcoatNormal = tiltedNormal(tilt, 2.0);
+        const SurfaceBsdf b = bsdfOf(p);
+        const Vec3 wo = directionAt(theta, 0.7);
+        INFO("coat roughness " << coatRoughness << ", coat tilt " << tilt << ", theta " << theta);
+        checkSamplingAndAlbedo(b, wo, seed);
+      }
+}
+
+TEST_CASE("Clearcoat over a white metal never reflects more than it receives", "[bsdf][gltf]") {
+  // The layering's promise: (1 - Wc) of a base reflecting at most all plus Wc of a coat reflecting
+  // at most all. A white metal under a full coat, with and without sheen, by quadrature.
+  for (const float coatRoughness : {0.2f, 0.6f})
+    for (const double theta : {0.0, 0.6, 1.1, 1.45}) {
+      Parameters p;
+      p.base = Rgb(1.0f);
+      p.metallic = 1;
+      p.roughness = 0.3f;
+      p.clearcoat = 1;
+      p.clearcoatRoughness = coatRoughness;
+      const Rgb a = test::directionalAlbedo(bsdfOf(p), directionAt(theta, 0.3));
+      p.sheenColour = Rgb(1.0f);
+      p.sheenRoughness = 0.5f;
+      const Rgb s = test::directionalAlbedo(bsdfOf(p), directionAt(theta, 0.3));
+      INFO("coat roughness " << coatRoughness << ", theta " << theta << ": albedo " << a.r << ", with sheen " << s.r);
+      CHECK(a.r <= 1.0f + 2e-3f);
+      CHECK(s.r <= 1.0f + 2e-3f);
+      CHECK(a.r > 0.5f);
+    }
+}
+
+TEST_CASE("Clearcoat: a lobe taken into a shading frame is the layering about the world coat normal", "[bsdf][gltf]") {
+  // bsdfAt's lobe holds the coat normal in world space; inFrame expresses it in the frame every
+  // method shades in (turned to the frame's side when the viewer is behind), reframed moves a lobe
+  // between frames about one normal (micro-rendering's jittered frames). The value is compared
+  // with the layering computed from world-space dot products.
+  Rng rng(12);
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3 n = sampleUniformSphere(rng.uniform2());
+    const Frame toN(n);
+    const Vec3 nc = toN.toWorld(tiltedNormal(0.4 * rng.uniform(), 2 * kPi * rng.uniform()));
+    const bool behind = i % 2 == 1;  // the viewer on the other side: the frame turned to it
+    const Frame frame(behind ? -n : n);
+    Material m;
+    m.type = MaterialType::Gltf;
+    m.kd = Rgb(0.5f, 0.4f, 0.3f);
+    m.ks = Rgb(1.0f);  // the specular colour, Parameters' default
+    m.roughness = 0.5f;
+    m.clearcoat = 1;
+    m.clearcoatRoughness = 0.3f;
+    GltfFactors factors = gltfFactors(m, m.kd);
+    factors.clearcoatNormal = nc;
+    const SurfaceBsdf world = gltfBsdf(m, factors);
+    const SurfaceBsdf local = world.inFrame(frame);
+    const Vec3 wo = frame.toWorld(directionAt(1.4 * rng.uniform(), 2 * kPi * rng.uniform()));
+    const Vec3 wi = frame.toWorld(directionAt(1.4 * rng.uniform(), 2 * kPi * rng.uniform()));
+    // The expected value: Parameters in the frame with the coat normal computed here.
+    Parameters p;
+    p.base = m.kd, p.roughness = m.roughness, p.clearcoat = 1, p.clearcoatRoughness = 0.3f;
+    const Vec3 ncSide = behind ? -nc : nc;
+    p.clearcoatNormal = {dot(ncSide, frame.s), dot(ncSide, frame.t), dot(ncSide, frame.n)};
+    const double expected = coatedLayer(p, frame.toLocal(wo), frame.toLocal(wi), 1);
+    INFO("case " << i);
+    CHECK(evalBsdf(local, frame.toLocal(wo), frame.toLocal(wi)).g == Approx(expected).epsilon(1e-3).margin(1e-6));
+    // The same lobe about a frame turned about the normal, from the first frame or from world space.
+    const float phi = float(2 * kPi * rng.uniform());
+    Frame turned = frame;
+    turned.s = frame.s * std::cos(phi) + frame.t * std::sin(phi);
+    turned.t = frame.t * std::cos(phi) - frame.s * std::sin(phi);
+    const Rgb a = evalBsdf(local.reframed(frame, turned), turned.toLocal(wo), turned.toLocal(wi));
+    const Rgb b = evalBsdf(world.inFrame(turned), turned.toLocal(wo), turned.toLocal(wi));
+    CHECK(a.g == Approx(expected).epsilon(1e-3).margin(1e-6));
+    CHECK(b.g == Approx(expected).epsilon(1e-3).margin(1e-6));
+  }
 }

@@ -19,7 +19,9 @@
   FIELD(ShadingPoint, bsdf.gltf.alpha) FIELD(ShadingPoint, bsdf.gltf.f90)                            \
   FIELD(ShadingPoint, bsdf.gltf.dielectricF0) FIELD(ShadingPoint, bsdf.gltf.dielectricF90)           \
   FIELD(ShadingPoint, bsdf.gltf.masking) FIELD(ShadingPoint, bsdf.gltf.sheenColour)                 \
-  FIELD(ShadingPoint, bsdf.gltf.sheenRoughness) FIELD(ShadingPoint, pixel) FIELD(ShadingPoint, sample) \
+  FIELD(ShadingPoint, bsdf.gltf.sheenRoughness) FIELD(ShadingPoint, bsdf.gltf.coat)                 \
+  FIELD(ShadingPoint, bsdf.gltf.coatAlpha) FIELD(ShadingPoint, bsdf.gltf.coatNormal)                 \
+  FIELD(ShadingPoint, pixel) FIELD(ShadingPoint, sample)                                             \
   FIELD(ShadingPoint, branch) FIELD(ShadingPoint, triangle)                                          \
   RECORD(RadianceCache) FIELD(RadianceCache, position) FIELD(RadianceCache, normal)                  \
   FIELD(RadianceCache, radius) FIELD(RadianceCache, environment) FIELD(RadianceCache, indirect)      \

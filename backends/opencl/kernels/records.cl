@@ -33,7 +33,7 @@ typedef struct {
 } UniformGrid;
 
 // SurfaceBsdf: the material's kind (include/lucent/scene/bsdf/kinds.h) and its lobe's parameters
-// (include/lucent/scene/bsdf/*.h) in a union of 60 bytes.
+// (include/lucent/scene/bsdf/*.h) in a union of 80 bytes (the largest lobe's).
 typedef struct {
   Rgb kd;
 } LambertianLobe;
@@ -57,6 +57,8 @@ typedef struct {
   uint masking;  // 0 separable, 1 height-correlated
   Rgb sheenColour;
   float sheenRoughness;
+  float coat, coatAlpha;
+  Vec3 coatNormal;  // in the shading frame of the point's normal
 } GltfMetalRoughLobe;
 
 typedef struct {

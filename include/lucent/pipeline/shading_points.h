@@ -31,13 +31,13 @@ struct ShadingPoint {
   Vec3 normal;           // shading normal, on the viewer's side
   Vec3 wo;               // towards the viewer
   Rgb weight;            // camera path throughput up to here
-  SurfaceBsdf bsdf;      // not a delta material, non-black
+  SurfaceBsdf bsdf;      // not a delta material, non-black; in the frame Frame(normal)
   uint32_t pixel = 0;
   uint32_t sample = 0;   // the camera sample
   uint32_t branch = 0;   // index of this point among its camera sample's (specular splitting)
   uint32_t triangle = 0; // the triangle hit (for methods that keep light per triangle)
 };
-static_assert(sizeof(ShadingPoint) == 140 && std::is_trivially_copyable_v<ShadingPoint>, "dumped as records");
+static_assert(sizeof(ShadingPoint) == 160 && std::is_trivially_copyable_v<ShadingPoint>, "dumped as records");
 
 struct EyePathSettings {
   int spp = 1;  // camera samples per pixel, stratified over the pixel and drawn through its filter

@@ -1,6 +1,7 @@
 // A material's scattering at a surface point: one lobe of the kinds' table (bsdf/kinds.h), as a
 // fixed plain record, and the one dispatch through which every method evaluates and samples it.
 #pragma once
+#include <algorithm>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -16,8 +17,15 @@
 
 namespace lucent {
 
-// The tag (the material's kind) and the lobe's parameters in a union: the same 64 bytes for every
-// kind, so that dumps and GPU records hold any of them. The bytes a kind does not use are zero (the
+// The largest lobe's size in 4-byte words: SurfaceBsdf's union.
+constexpr size_t kLargestLobeWords = std::max({
+#define LUCENT_LOBE_WORDS(kind, value, Lobe, member, name, sceneFile) sizeof(Lobe) / 4,
+    LUCENT_MATERIAL_KINDS(LUCENT_LOBE_WORDS)
+#undef LUCENT_LOBE_WORDS
+});
+
+// The tag (the material's kind) and the lobe's parameters in a union as large as the largest lobe:
+// the same size for every kind, so that dumps and GPU records hold any of them. The bytes a kind does not use are zero (the
 // constructors clear them), so records compare and hash by their bytes.
 struct SurfaceBsdf {
   MaterialType type = MaterialType::Diffuse;
@@ -25,7 +33,7 @@ struct SurfaceBsdf {
 #define LUCENT_LOBE_MEMBER(kind, value, Lobe, member, name, sceneFile) Lobe member;
     LUCENT_MATERIAL_KINDS(LUCENT_LOBE_MEMBER)
 #undef LUCENT_LOBE_MEMBER
-    uint32_t words_[15];  // all of the union, for clearing it
+    uint32_t words_[kLargestLobeWords];  // all of the union, for clearing it
   };
 
   SurfaceBsdf() : SurfaceBsdf(LambertianLobe{}) {}
@@ -53,13 +61,35 @@ struct SurfaceBsdf {
   bool onlyDiffuse() const { return lucent::onlyDiffuse(flags()); }
   // Its Lambertian term's albedo: what the point-based methods and the diffuse estimates take.
   Rgb diffuse() const { return visit([](const auto& lobe) { return lobe.diffuse(); }); }
+
+  // The lobe in a shading frame: its directions (a clear coat's normal), which bsdfAt gives in
+  // world space, expressed in `frame`, turned to the frame's side. Every site that makes a frame to
+  // evaluate or sample a lobe in takes the lobe through here (ChainVertex and ShadingPoint hold
+  // theirs in their frames).
+  SurfaceBsdf inFrame(const Frame& frame) const {
+    return withCoatNormal([&](Vec3 n) { return frame.toLocal(n); });
+  }
+  // A lobe held in frame `from` expressed in frame `to` instead (about the same normal).
+  SurfaceBsdf reframed(const Frame& from, const Frame& to) const {
+    return withCoatNormal([&](Vec3 n) { return to.toLocal(from.toWorld(n)); });
+  }
+
+ private:
+  template <class Map>
+  SurfaceBsdf withCoatNormal(Map&& map) const {
+    if (type != MaterialType::Gltf || !gltf.hasCoat()) return *this;
+    SurfaceBsdf out = *this;
+    const Vec3 n = map(gltf.coatNormal);
+    out.gltf.coatNormal = n.z < 0 ? -n : n;
+    return out;
+  }
 };
 #define LUCENT_LOBE_FITS(kind, value, Lobe, member, name, sceneFile)                                     \
   static_assert(sizeof(Lobe) <= SurfaceBsdf::kLobeBytes && std::is_trivially_copyable_v<Lobe>, \
                 #Lobe " fits SurfaceBsdf's union");
 LUCENT_MATERIAL_KINDS(LUCENT_LOBE_FITS)
 #undef LUCENT_LOBE_FITS
-static_assert(sizeof(SurfaceBsdf) == 64 && std::is_trivially_copyable_v<SurfaceBsdf>,
+static_assert(sizeof(SurfaceBsdf) == 84 && std::is_trivially_copyable_v<SurfaceBsdf>,
               "SurfaceBsdf is a fixed plain record shared with dumps and GPU backends");
 
 // The flags of a kind's lobe (they do not depend on its parameters).

@@ -100,7 +100,7 @@ inline LightSample sampleChosenLight(const Scene& scene, uint32_t li, float pmf,
       const TrianglePointSample q = sampleTrianglePoint(e.q0, e.q1, e.q2, e.normal, e.area, pmf, receiver, u, e.twoSided);
       if (!(q.pdf > 0)) return {};
       s.point = q.point, s.wi = q.wi, s.distance = q.distance, s.pdf = q.pdf;
-      s.radiance = emittedRadiance(scene, t, q.b.x, q.b.y, dot(q.wi, e.normal) < 0);
+      s.radiance = emittedRadiance(scene, t, q.b.x, q.b.y, -q.wi);
       return s;
     }
     case LightType::Point:
@@ -332,9 +332,8 @@ inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPos
       const bool twoSided = scene.materials[scene.materialIds[t]].emitsBackFace != 0;
       if (target && coneTowards(*target, p, cone)) {
         const Vec3 d = cone.frame.toWorld(sampleUniformCone(uDirection, cone.cosMax));
-        const bool front = dot(d, n) > 0;
         const float cosTheta = std::abs(dot(d, n));
-        const Rgb le = emittedRadiance(scene, t, b.x, b.y, front);  // black behind a one-sided emitter
+        const Rgb le = emittedRadiance(scene, t, b.x, b.y, d);  // black behind a one-sided emitter
         if (!(cosTheta > 0) || le.isBlack()) return s;
         s.ray = {offsetOrigin(p, n, d), d};
         s.power = le * (cosTheta * cone.solidAngle * scene.triangleArea(t) / pmf);
@@ -350,7 +349,7 @@ inline EmissionSample sampleEmission(const Scene& scene, float uLight, Vec2 uPos
       }
       const Vec3 d = Frame(front ? n : -n).toWorld(sampleCosineHemisphere(u));
       s.ray = {offsetOrigin(p, n, d), d};
-      s.power = emittedRadiance(scene, t, b.x, b.y, front) * ((twoSided ? 2.0f : 1.0f) * kPi * scene.triangleArea(t) / pmf);
+      s.power = emittedRadiance(scene, t, b.x, b.y, d) * ((twoSided ? 2.0f : 1.0f) * kPi * scene.triangleArea(t) / pmf);
       break;
     }
     case LightType::Point:

@@ -63,8 +63,8 @@ inline float particleArrivalRatio(const SurfacePoint& sp, Vec3 n, Vec3 wo) {
   return cosGeometric != 0 && cosShading != 0 && sameSide ? std::abs(cosShading / cosGeometric) : 0.0f;
 }
 
-// Scatters a particle arriving from wo; uLobe and u2 are the BSDF sample's numbers, rng gives the
-// strategy's where the surface has a wedge.
+// Scatters a particle arriving from wo off bsdfAt's lobe (in world space); uLobe and u2 are the BSDF
+// sample's numbers, rng gives the strategy's where the surface has a wedge.
 inline ParticleScatter scatterParticle(const SurfaceBsdf& bsdf, const SurfacePoint& sp, Vec3 wo, float uLobe,
                                        Vec2 u2, Rng& rng) {
   ParticleScatter out;
@@ -85,7 +85,7 @@ inline ParticleScatter scatterParticle(const SurfaceBsdf& bsdf, const SurfacePoi
     const Vec3 wi = frame.toWorld(local);
     if (dot(wi, n) > 0 || !(local.z > 0)) return out;  // the other strategy's region
     // f * cos / (wedge * cos / pi)
-    out.weight = evalBsdf(bsdf, local, frame.toLocal(wo)) * (kPi / wedge);
+    out.weight = evalBsdf(bsdf.inFrame(frame), local, frame.toLocal(wo)) * (kPi / wedge);
     out.wi = wi;
     out.valid = !out.weight.isBlack();
     return out;
@@ -107,7 +107,7 @@ inline ParticleScatter scatterParticle(const SurfaceBsdf& bsdf, const SurfacePoi
   if (!(arrival > 0)) return out;
   const Frame frame(n);
   const Vec3 woLocal = frame.toLocal(wo);
-  const BsdfSample bs = sampleBsdf(bsdf, woLocal, uLobe, u2, Transport::Importance);
+  const BsdfSample bs = sampleBsdf(bsdf.inFrame(frame), woLocal, uLobe, u2, Transport::Importance);
   if (!bs.valid) return out;
   const Vec3 wi = frame.toWorld(bs.wi);
   // Leaving on the other side of the true surface than the BSDF means (a shading-normal leak): none.

@@ -70,8 +70,14 @@ struct Material {
   int32_t sheenColourTexture = -1, sheenRoughnessTexture = -1;
   // KHR_materials_specular's textures: A (linear) times `specular`, RGB (sRGB) times ks.
   int32_t specularTexture = -1, specularColorTexture = -1;
+  // KHR_materials_clearcoat: the coat's weight, times clearcoatTexture's R, and roughness, times
+  // clearcoatRoughnessTexture's G; its normal texture, x and y scaled by clearcoatNormalScale (all
+  // linear); 0: no coat (bsdf/gltf_metal_rough.h).
+  float clearcoat = 0.0f, clearcoatRoughness = 0.0f;
+  int32_t clearcoatTexture = -1, clearcoatRoughnessTexture = -1, clearcoatNormalTexture = -1;
+  float clearcoatNormalScale = 1.0f;
 };
-static_assert(sizeof(Material) == 140, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 164, "Material is a fixed-size record shared with GPU backends");
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear

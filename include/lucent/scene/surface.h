@@ -97,22 +97,10 @@ inline Rgb baseFactorAt(const Scene& scene, const Material& m, const SurfacePoin
   return scene.colours.empty() ? m.kd : m.kd * vertexColourAt(scene, sp).rgb;
 }
 
-// The radiance triangle tri emits at barycentrics (b1, b2) towards its front (front) or back side:
-// the material's ke times its emissive texture; black towards the back unless the material emits
-// there (Material::emitsBackFace).
-inline Rgb emittedRadiance(const Scene& scene, uint32_t tri, float b1, float b2, bool front) {
-  const Material& m = scene.materials[scene.materialIds[tri]];
-  if (!front && m.emitsBackFace == 0) return Rgb(0.0f);
-  if (m.emissiveTexture < 0) return m.ke;
-  SurfacePoint sp;
-  sp.triangle = tri, sp.b1 = b1, sp.b2 = b2;
-  return m.ke * textureAt(scene, m.emissiveTexture, sp);
-}
-
-// glTF's normal texture at a hit: the texel's tangent-space normal (2 c - 1, x and y times the
+// A glTF normal texture (its index and scale) at a hit: the texel's tangent-space normal (2 c - 1, x and y times the
 // scale) in the frame of the unit normal n, the interpolated tangent made orthogonal to it, and the
 // bitangent cross(n, t) * sign; n itself where the vertices have no tangent.
-inline Vec3 normalMapped(const Scene& scene, const Material& m, const SurfacePoint& sp, Vec3 n) {
+inline Vec3 normalMapped(const Scene& scene, int32_t texture, float scale, const SurfacePoint& sp, Vec3 n) {
   const uint32_t* v = &scene.indices[3 * sp.triangle];
   const Tangent& a = scene.tangents[v[0]];
   Vec3 t = barycentric(a.direction, scene.tangents[v[1]].direction, scene.tangents[v[2]].direction, sp.b1, sp.b2);
@@ -121,11 +109,22 @@ inline Vec3 normalMapped(const Scene& scene, const Material& m, const SurfacePoi
   if (!(len > 0)) return n;
   t = t / len;
   const Vec3 b = cross(n, t) * a.sign;
-  const Rgb c = textureAt(scene, m.normalTexture, sp, kUnorm8ToFloat);
-  const Vec3 p = t * ((2.0f * c.r - 1.0f) * m.normalScale) + b * ((2.0f * c.g - 1.0f) * m.normalScale) +
+  const Rgb c = textureAt(scene, texture, sp, kUnorm8ToFloat);
+  const Vec3 p = t * ((2.0f * c.r - 1.0f) * scale) + b * ((2.0f * c.g - 1.0f) * scale) +
                  n * (2.0f * c.b - 1.0f);
   const float plen = length(p);
   return plen > 0 ? p / plen : n;
+}
+
+// The unit vertex normal interpolated at a hit, as the vertices give it (not turned to a side); the
+// geometric normal where the face has no vertex normals (OBJ faces have them at all their vertices
+// or at none, stored as zero) or where they cancel.
+inline Vec3 interpolatedNormal(const Scene& scene, const SurfacePoint& sp) {
+  const uint32_t* v = &scene.indices[3 * sp.triangle];
+  if (scene.normals[v[0]] == Vec3{0, 0, 0}) return sp.geometricNormal;
+  const Vec3 n = barycentric(scene.normals[v[0]], scene.normals[v[1]], scene.normals[v[2]], sp.b1, sp.b2);
+  const float len = length(n);
+  return len > 0 ? n / len : sp.geometricNormal;
 }
 
 inline SurfacePoint surfaceAt(const Scene& scene, uint32_t tri, float b1, float b2) {
@@ -142,11 +141,8 @@ inline SurfacePoint surfaceAt(const Scene& scene, uint32_t tri, float b1, float 
   const bool vertexNormals = !(scene.normals[v[0]] == Vec3{0, 0, 0});
   const Material& m = scene.materials[sp.materialId];
   if (m.normalTexture >= 0) {
-    const Vec3 n = vertexNormals ? barycentric(scene.normals[v[0]], scene.normals[v[1]], scene.normals[v[2]], b1, b2)
-                                 : sp.geometricNormal;
-    const float len = length(n);
-    sp.shadingNormal = orientedShadingNormal(normalMapped(scene, m, sp, len > 0 ? n / len : sp.geometricNormal),
-                                             sp.geometricNormal);
+    sp.shadingNormal = orientedShadingNormal(
+        normalMapped(scene, m.normalTexture, m.normalScale, sp, interpolatedNormal(scene, sp)), sp.geometricNormal);
   } else if (vertexNormals) {
     const Vec3 n = barycentric(scene.normals[v[0]], scene.normals[v[1]], scene.normals[v[2]], b1, b2);
     sp.shadingNormal = orientedShadingNormal(n, sp.geometricNormal);
@@ -159,41 +155,78 @@ inline SurfacePoint surfaceAt(const Scene& scene, uint32_t tri, float b1, float 
 // content when its factor asks for one.
 constexpr float kMinGgxAlpha = 1e-3f;
 
-// Appendix B's metal/dielectric mix expanded into the lobe's terms (bsdf/gltf_metal_rough.h) for
-// base colour `base`, from the file's factors times its textures: metallic and roughness, and
-// KHR_materials_specular's specular factor and colour.
-inline SurfaceBsdf gltfBsdf(const Material& m, Rgb base, float metallic, float roughness, float specular,
-                            Rgb specularColour, Rgb sheenColour = Rgb(0.0f), float sheenRoughness = 0.0f) {
+// KHR_materials_clearcoat's normal at a hit, in world space on the geometric normal's side: its own
+// normal texture's, else the interpolated vertex normal (the extension maps the coat only by its
+// own texture, even where the base has one).
+inline Vec3 clearcoatNormalAt(const Scene& scene, const Material& m, const SurfacePoint& sp) {
+  if (m.normalTexture < 0 && m.clearcoatNormalTexture < 0) return sp.shadingNormal;
+  const Vec3 n = interpolatedNormal(scene, sp);
+  if (m.clearcoatNormalTexture < 0) return orientedShadingNormal(n, sp.geometricNormal);
+  return orientedShadingNormal(normalMapped(scene, m.clearcoatNormalTexture, m.clearcoatNormalScale, sp, n),
+                               sp.geometricNormal);
+}
+
+// A glTF material's factors at a surface point: the file's factors times its textures (bsdfAt), or
+// the factors alone (gltfFactors).
+struct GltfFactors {
+  Rgb base;  // base colour (times vertex colours)
+  float metallic = 0, roughness = 1;
+  float specular = 1;  // KHR_materials_specular's factor and colour
+  Rgb specularColour{1.0f};
+  Rgb sheenColour{0.0f};  // KHR_materials_sheen's
+  float sheenRoughness = 0;
+  float clearcoat = 0, clearcoatRoughness = 0;  // KHR_materials_clearcoat's
+  Vec3 clearcoatNormal{0, 0, 1};                // in world space; the shading normal's in gltfFactors
+};
+
+// The material's factors, its base colour `base`.
+inline GltfFactors gltfFactors(const Material& m, Rgb base) {
+  GltfFactors f;
+  f.base = base;
+  f.metallic = m.metallic, f.roughness = m.roughness;
+  f.specular = m.specular, f.specularColour = m.ks;
+  f.sheenColour = m.sheenColour, f.sheenRoughness = m.sheenRoughness;
+  f.clearcoat = m.clearcoat, f.clearcoatRoughness = m.clearcoatRoughness;
+  return f;
+}
+
+// Appendix B's metal/dielectric mix expanded into the lobe's terms (bsdf/gltf_metal_rough.h), with
+// the sheen and clear coat layers where the factors have them.
+inline SurfaceBsdf gltfBsdf(const Material& m, const GltfFactors& f) {
   GltfMetalRoughLobe b;
   // KHR_materials_ior and KHR_materials_specular: the dielectric's F0 from the index, coloured,
   // clamped to 1, then weighted by the specular factor, which is also its F90.
   const float r = (m.ni - 1.0f) / (m.ni + 1.0f);
-  const Rgb c = specularColour;
-  const Rgb f0 = Rgb(std::min(r * r * c.r, 1.0f), std::min(r * r * c.g, 1.0f), std::min(r * r * c.b, 1.0f)) * specular;
-  b.kd = base * (1.0f - metallic);
-  b.ks = f0 * (1.0f - metallic) + base * metallic;
-  b.f90 = specular * (1.0f - metallic) + metallic;
+  const Rgb c = f.specularColour;
+  const Rgb f0 = Rgb(std::min(r * r * c.r, 1.0f), std::min(r * r * c.g, 1.0f), std::min(r * r * c.b, 1.0f)) * f.specular;
+  b.kd = f.base * (1.0f - f.metallic);
+  b.ks = f0 * (1.0f - f.metallic) + f.base * f.metallic;
+  b.f90 = f.specular * (1.0f - f.metallic) + f.metallic;
   b.dielectricF0 = f0.maxComponent();
-  b.dielectricF90 = specular;
-  b.alpha = std::max(roughness * roughness, kMinGgxAlpha);
+  b.dielectricF90 = f.specular;
+  b.alpha = std::max(f.roughness * f.roughness, kMinGgxAlpha);
   b.masking = m.masking;
-  if (!sheenColour.isBlack()) {
-    b.sheenColour = sheenColour;
-    b.sheenRoughness = std::max(sheenRoughness, kMinSheenRoughness);
+  if (!f.sheenColour.isBlack()) {
+    b.sheenColour = f.sheenColour;
+    b.sheenRoughness = std::max(f.sheenRoughness, kMinSheenRoughness);
+  }
+  if (f.clearcoat > 0) {
+    b.coat = f.clearcoat;
+    b.coatAlpha = std::max(f.clearcoatRoughness * f.clearcoatRoughness, kMinGgxAlpha);
+    b.coatNormal = f.clearcoatNormal;
   }
   return b;
 }
 
 // A material's lobe for diffuse colour kd (its Kd, or Kd times its texture and vertex colours), the
-// other parameters from its factors.
+// other parameters from its factors; a clear coat's normal is the shading normal (+z of the frame).
 inline SurfaceBsdf materialBsdf(const Material& m, Rgb kd) {
   switch (m.type) {
     case MaterialType::Diffuse: return LambertianLobe{kd};
     case MaterialType::Phong: return PhongLobe{kd, m.ks, m.ns};
     case MaterialType::Mirror: return MirrorLobe{m.ks};
     case MaterialType::Glass: return GlassLobe{m.ni};
-    case MaterialType::Gltf:
-      return gltfBsdf(m, kd, m.metallic, m.roughness, m.specular, m.ks, m.sheenColour, m.sheenRoughness);
+    case MaterialType::Gltf: return gltfBsdf(m, gltfFactors(m, kd));
   }
   return LambertianLobe{kd};
 }
@@ -206,7 +239,7 @@ inline SurfaceBsdf materialBsdf(const Material& m) { return materialBsdf(m, m.kd
 inline bool lobeVariesOverSurface(const Scene& scene, const Material& m) {
   return m.kdTexture >= 0 || m.metallicRoughnessTexture >= 0 || m.specularTexture >= 0 ||
          m.specularColorTexture >= 0 || m.sheenColourTexture >= 0 || m.sheenRoughnessTexture >= 0 ||
-         !scene.colours.empty();
+         m.clearcoatTexture >= 0 || m.clearcoatRoughnessTexture >= 0 || !scene.colours.empty();
 }
 
 // Texture `index`'s A channel (linear) at a surface point, filtered as its sampler says.
@@ -220,22 +253,40 @@ inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
   const Rgb factor = baseFactorAt(scene, m, sp);
   const Rgb kd = m.kdTexture < 0 ? factor : factor * textureAt(scene, m.kdTexture, sp);
   if (m.type == MaterialType::Gltf) {
-    float metallic = m.metallic, roughness = m.roughness, specular = m.specular;
-    Rgb specularColour = m.ks;
+    GltfFactors f = gltfFactors(m, kd);
     if (m.metallicRoughnessTexture >= 0) {
       const Rgb t = textureAt(scene, m.metallicRoughnessTexture, sp, kUnorm8ToFloat);
-      metallic *= t.b;
-      roughness *= t.g;
+      f.metallic *= t.b;
+      f.roughness *= t.g;
     }
-    if (m.specularTexture >= 0) specular *= textureAlphaAt(scene, m.specularTexture, sp);
-    if (m.specularColorTexture >= 0) specularColour = specularColour * textureAt(scene, m.specularColorTexture, sp);
-    Rgb sheenColour = m.sheenColour;
-    float sheenRoughness = m.sheenRoughness;
-    if (m.sheenColourTexture >= 0) sheenColour = sheenColour * textureAt(scene, m.sheenColourTexture, sp);
-    if (m.sheenRoughnessTexture >= 0) sheenRoughness *= textureAlphaAt(scene, m.sheenRoughnessTexture, sp);
-    return gltfBsdf(m, kd, metallic, roughness, specular, specularColour, sheenColour, sheenRoughness);
+    if (m.specularTexture >= 0) f.specular *= textureAlphaAt(scene, m.specularTexture, sp);
+    if (m.specularColorTexture >= 0) f.specularColour = f.specularColour * textureAt(scene, m.specularColorTexture, sp);
+    if (m.sheenColourTexture >= 0) f.sheenColour = f.sheenColour * textureAt(scene, m.sheenColourTexture, sp);
+    if (m.sheenRoughnessTexture >= 0) f.sheenRoughness *= textureAlphaAt(scene, m.sheenRoughnessTexture, sp);
+    if (m.clearcoat > 0) {
+      if (m.clearcoatTexture >= 0) f.clearcoat *= textureAt(scene, m.clearcoatTexture, sp, kUnorm8ToFloat).r;
+      if (m.clearcoatRoughnessTexture >= 0)
+        f.clearcoatRoughness *= textureAt(scene, m.clearcoatRoughnessTexture, sp, kUnorm8ToFloat).g;
+      f.clearcoatNormal = clearcoatNormalAt(scene, m, sp);
+    }
+    return gltfBsdf(m, f);
   }
   return materialBsdf(m, kd);
+}
+
+// The radiance triangle tri emits at barycentrics (b1, b2) along direction `towards` (leaving the
+// surface): the material's ke times its emissive texture, black behind its front (the side of its
+// winding normal) unless the material emits there (Material::emitsBackFace); under a clear coat,
+// what the coat lets through, 1 - Wc(towards) (KHR_materials_clearcoat: emission lies beneath it).
+inline Rgb emittedRadiance(const Scene& scene, uint32_t tri, float b1, float b2, Vec3 towards) {
+  const Material& m = scene.materials[scene.materialIds[tri]];
+  if (!(dot(towards, scene.geometricNormal(tri)) > 0) && m.emitsBackFace == 0) return Rgb(0.0f);
+  if (m.emissiveTexture < 0 && !(m.clearcoat > 0)) return m.ke;
+  const SurfacePoint sp = surfaceAt(scene, tri, b1, b2);
+  const Rgb le = m.emissiveTexture < 0 ? m.ke : m.ke * textureAt(scene, m.emissiveTexture, sp);
+  if (!(m.clearcoat > 0)) return le;
+  const SurfaceBsdf bsdf = bsdfAt(scene, sp);
+  return bsdf.type == MaterialType::Gltf ? le * (1.0f - bsdf.gltf.coatWeight(towards)) : le;
 }
 
 // Whether a scattered direction wi lies on the other side of the geometric surface (normal ng) than
@@ -251,7 +302,7 @@ inline bool leaksThroughSurface(Vec3 wo, Vec3 wi, Vec3 ng, bool transmits) {
 // (shadingFrameNormal) with that direction in it.
 struct ChainVertex {
   SurfacePoint sp;
-  SurfaceBsdf bsdf;
+  SurfaceBsdf bsdf;  // in `frame`
   Vec3 wo;
   bool frontFace = false;
   Frame frame;
@@ -274,6 +325,7 @@ inline ChainVertex chainVertexAt(const Scene& scene, const SurfacePoint& sp, Vec
   v.wo = -rayDirection;
   v.frontFace = dot(v.wo, sp.geometricNormal) > 0;
   v.frame = Frame(hitFrameNormal(scene, sp, v.wo, twoSidedShading(v.bsdf)));
+  v.bsdf = v.bsdf.inFrame(v.frame);
   v.woLocal = v.frame.toLocal(v.wo);
   return v;
 }

@@ -47,6 +47,7 @@ struct GatherContext {
 // to the next.
 struct GatherLane {
   GatherPoint point;
+  SurfaceBsdf bsdf;  // the request's, in the point's jittered frame
   HemisphereMapping mapping;
   WarpTable table;
   MicroBuffer buffer;
@@ -80,9 +81,9 @@ inline GatherPoint jitteredGatherPoint(Vec3 position, Vec3 normal, Vec3 surfaceN
   return g;
 }
 
-// A surface point to gather at: reflected radiance towards wo (world), for the given BSDF, about the
-// shading normal `normal`, cut by the geometric surface (surfaceNormal, GatherPoint's); the frame's
-// and pixels' jitter drawn from rng.
+// A surface point to gather at: reflected radiance towards wo (world), for the given BSDF (in the
+// frame Frame(normal), as ShadingPoint's), about the shading normal `normal`, cut by the geometric
+// surface (surfaceNormal, GatherPoint's); the frame's and pixels' jitter drawn from rng.
 struct GatherRequest {
   Vec3 position, normal, surfaceNormal, wo;
   const SurfaceBsdf* bsdf = nullptr;
@@ -101,18 +102,19 @@ inline void gatherPacket(const GatherContext& ctx, std::span<const GatherRequest
     Vec2 jitter;
     lane.point = jitteredGatherPoint(q.position, q.normal, q.surfaceNormal, *q.rng, jitter);
     const Vec3 woLocal = lane.point.frame.toLocal(q.wo);
+    lane.bsdf = q.bsdf->reframed(Frame(q.normal), lane.point.frame);
     const Stopwatch buildClock;
     const WarpTable* table = nullptr;
     if (ctx.mapping == MappingKind::Warped) {
-      if (q.bsdf->onlyDiffuse()) {
+      if (lane.bsdf.onlyDiffuse()) {
         table = &ctx.tables->lambertian;
       } else {
-        tabulateBrdfSlice(*q.bsdf, woLocal, *ctx.tables, lane.table);
+        tabulateBrdfSlice(lane.bsdf, woLocal, *ctx.tables, lane.table);
         table = &lane.table;
       }
     }
     const double built = buildClock.seconds();
-    evaluatePixels(lane.mapping, ctx.mapping, side, jitter, table, *q.bsdf, woLocal, *ctx.tables);
+    evaluatePixels(lane.mapping, ctx.mapping, side, jitter, table, lane.bsdf, woLocal, *ctx.tables);
     s.buildSeconds += built;
     s.evaluateSeconds += buildClock.seconds() - built;
     lanes[l] = {&lane.point, &lane.mapping, &lane.buffer};

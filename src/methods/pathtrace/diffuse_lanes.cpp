@@ -82,7 +82,7 @@ LaneLight laneLight(const Scene& scene, uint32_t light) {
   if (l.type != LightType::Triangle) return {};
   const Material& m = scene.materials[scene.materialIds[l.triangle]];
   const EmittingTriangle e = emittingTriangle(scene, l.triangle);
-  return {e, m.ke, !e.twoSided && m.emissiveTexture < 0};
+  return {e, m.ke, !e.twoSided && m.emissiveTexture < 0 && !(m.clearcoat > 0)};
 }
 
 void fetchLaneLight(const LaneLight& light, DiffuseLanes& l, uint32_t k) {
@@ -106,7 +106,6 @@ LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint
     const Vec3 woWorld = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
     const Frame frame(shadingFrameNormal(woWorld, sn, ng, true));
     store(sn, l.snX, l.snY, l.snZ, k);
-    l.frontFace[k] = dot(woWorld, ng) > 0;
     const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
     const Vec3 wo = frame.toLocal(woWorld);
     const Rgb kd{l.kdR[k], l.kdG[k], l.kdB[k]};

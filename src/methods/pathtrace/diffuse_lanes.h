@@ -57,10 +57,9 @@ struct DiffuseLanes {
   alignas(64) float leR[kLaneSlots], leG[kLaneSlots], leB[kLaneSlots], lightPdf[kLaneSlots];
   alignas(64) int32_t lightDelta[kLaneSlots];
 
-  // Computed (shadeDiffuseLanes): the shading normal and the side the viewer is on, for the
-  // first-hit layers and emission; next-event estimation and BSDF sampling.
+  // Computed (shadeDiffuseLanes): the shading normal, for the first-hit layers; next-event
+  // estimation and BSDF sampling.
   alignas(64) float snX[kLaneSlots], snY[kLaneSlots], snZ[kLaneSlots];
-  alignas(64) int32_t frontFace[kLaneSlots];
   alignas(64) int32_t shadowQueued[kLaneSlots];
   alignas(64) float shadowOx[kLaneSlots], shadowOy[kLaneSlots], shadowOz[kLaneSlots], shadowDx[kLaneSlots],
       shadowDy[kLaneSlots], shadowDz[kLaneSlots], shadowTMax[kLaneSlots];
@@ -108,7 +107,7 @@ void fetchLambertianSurface(const Scene& scene, const Hit& hit, Vec3 direction, 
 void readLaneTextures(DiffuseLanes& lanes, std::span<const TexturedLane> textured);
 
 // What a lane needs of a light to sample it itself: an emitting triangle seen from one side, of
-// constant radiance le (sampleChosenLight's triangle case then). Other lights have isTriangle false.
+// constant radiance le, not under a clear coat (sampleChosenLight's triangle case then). Other lights have isTriangle false.
 struct LaneLight {
   EmittingTriangle triangle;
   Rgb le;

@@ -145,16 +145,16 @@ class PathTracer {
     }
     const SurfacePoint sp = surfaceAt(scene_, hit.triangle, hit.b1, hit.b2);
     const Vec3 wo = -ray.direction;
-    const bool frontFace = dot(wo, sp.geometricNormal) > 0;
 
-    gatherEmission(path, hit, frontFace, sp.position);
-    const SurfaceBsdf bsdf = bsdfAt(scene_, sp);
-    path.recordFirstHit(layerAlbedo(bsdf), sp.shadingNormal, hit.t);
+    gatherEmission(path, hit, sp.position);
+    const SurfaceBsdf worldBsdf = bsdfAt(scene_, sp);
+    path.recordFirstHit(layerAlbedo(worldBsdf), sp.shadingNormal, hit.t);
     if (path.bounce + 1 > opt_.maxDepth) return false;
 
     // Glass keeps the winding orientation (inside/outside); two-sided lobes turn to the viewer.
-    const Frame frame(hitFrameNormal(scene_, sp, wo, twoSidedShading(bsdf)));
+    const Frame frame(hitFrameNormal(scene_, sp, wo, twoSidedShading(worldBsdf)));
     const Vec3 woLocal = frame.toLocal(wo);
+    const SurfaceBsdf bsdf = worldBsdf.inFrame(frame);
 
     const BounceNumbers u = drawBounceNumbers(path.sampler, path.bounce, !bsdf.isDelta());
     if (!bsdf.isDelta()) {
@@ -439,7 +439,7 @@ class PathTracer {
       Path& path = w.paths[i];
       const Hit& hit = w.hits[i];
       const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
-      if (l.emits[k]) gatherEmission(path, hit, l.frontFace[k] != 0, position);
+      if (l.emits[k]) gatherEmission(path, hit, position);
       if (path.bounce == 0)
         path.recordFirstHit(layerAlbedo(LambertianLobe{{l.kdR[k], l.kdG[k], l.kdB[k]}}),
                             {l.snX[k], l.snY[k], l.snZ[k]}, hit.t);
@@ -465,10 +465,10 @@ class PathTracer {
 
   const Material& material(uint32_t triangle) const { return scene_.materials[scene_.materialIds[triangle]]; }
 
-  // Emission of the face the path has met (its front, or frontFace false), weighted against light
+  // Emission of the face the path's ray has met, towards the ray's origin, weighted against light
   // sampling.
-  void gatherEmission(Path& path, const Hit& hit, bool frontFace, Vec3 position) const {
-    const Rgb le = emittedRadiance(scene_, hit.triangle, hit.b1, hit.b2, frontFace);
+  void gatherEmission(Path& path, const Hit& hit, Vec3 position) const {
+    const Rgb le = emittedRadiance(scene_, hit.triangle, hit.b1, hit.b2, -path.ray.direction);
     if (le.isBlack()) return;
     const float lightPdf = path.lastDelta ? 0.0f
                                           : triangleLightPdf(scene_, lightChoice_, hit.triangle, path.ray.direction,
