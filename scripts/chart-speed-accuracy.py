@@ -111,11 +111,14 @@ SCENES = {
     "maze": scene("128x128", 64, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
                   (8, 16), (150000, (37500, 75000, 150000, 300000)), (1e-1, 3e-2, 1e-2)),
     # glTF scenes (scenes/gltf): Sponza as Blender's exporter wrote it (normal textures, the sun) under
-    # the sky, and glTF's metals and rough dielectrics with a spot light and the sun.
+    # the sky, glTF's metals and rough dielectrics with a spot light and the sun, and its material
+    # extensions (sheen, clear coat, thin-walled transmission) in the same room.
     "gltf/sponza-sky": scene("160x100", 1024, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
                              (8, 16, 24), (150000, (37500, 75000, 150000, 300000))),
     "gltf/materials-sky": scene("160x80", 256, (16, 64, 256), photons(["--photons"], "photons", *MILLION),
                                 (8, 16, 24), (50000, (12500, 25000, 50000, 100000))),
+    "gltf/extensions-sky": scene("160x80", 256, (16, 64, 256), photons(["--photons"], "photons", *MILLION),
+                                 (8, 16, 24), (50000, (12500, 25000, 50000, 100000))),
     "primitives": environment_scene("320x180"),
     "sponza-courtyard": environment_scene("160x100"),
 }

@@ -14,10 +14,13 @@ inline SurfaceBsdf diffuseBsdf(Rgb kd) { return LambertianLobe{kd}; }
 
 inline SurfaceBsdf phongBsdf(Rgb kd, Rgb ks, float ns) { return PhongLobe{kd, ks, ns}; }
 
-// Directional albedo a(wo) = integral of f(wo, wi) cos(theta_i) over the hemisphere, per channel, by
-// the midpoint rule in coordinates centred on the mirror direction (where the Phong lobe is narrow),
-// fine enough to resolve cos^1000.
+// Directional albedo a(wo) = integral of f(wo, wi) |cos(theta_i)| over the hemisphere, per channel,
+// by the midpoint rule in coordinates centred on the mirror direction (where the Phong lobe is
+// narrow), fine enough to resolve cos^1000; for a lobe that transmits (not a delta), over the
+// hemisphere below too, each direction there the mirror image of one above (a thin-walled lobe's
+// transmission peaks about the mirror direction's image).
 inline Rgb directionalAlbedo(const SurfaceBsdf& b, Vec3 wo) {
+  const bool through = has(b.flags(), BsdfFlags::Transmission) && !b.isDelta();
   const Frame lobe(reflect(wo, {0, 0, 1}));
   const int nAlpha = 6000, nPhi = 360;
   double sum[3] = {0, 0, 0};
@@ -29,6 +32,9 @@ inline Rgb directionalAlbedo(const SurfaceBsdf& b, Vec3 wo) {
       if (wi.z <= 0) continue;
       const Rgb f = evalBsdf(b, wo, wi);
       for (int c = 0; c < 3; ++c) ring[c] += f[c] * wi.z;
+      if (!through) continue;
+      const Rgb t = evalBsdf(b, wo, {wi.x, wi.y, -wi.z});
+      for (int c = 0; c < 3; ++c) ring[c] += t[c] * wi.z;
     }
     for (int c = 0; c < 3; ++c) sum[c] += ring[c] * std::sin(alpha);
   }

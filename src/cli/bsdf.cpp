@@ -62,6 +62,7 @@ std::vector<std::string> notRead(const Scene& scene, const Material& m) {
   if (m.clearcoatRoughnessTexture >= 0) out.push_back("clearcoat roughness texture");
   if (m.normalTexture >= 0) out.push_back("normal texture");
   if (m.clearcoatNormalTexture >= 0) out.push_back("clearcoat normal texture");
+  if (m.transmissionTexture >= 0) out.push_back("transmission texture");
   if (!scene.colours.empty()) out.push_back("vertex colours");
   return out;
 }

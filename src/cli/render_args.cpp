@@ -119,7 +119,7 @@ const OptionTable<RenderArgs>& renderFlags() {
     t.placeholder("isa", "ISA");
     t.flag("strict", &A::strict,
            "refuse a scene whose files hold what the render would leave out (a glTF material's occlusion texture "
-           "or transmission: the JSON line's \"ignored\")");
+           "or volume: the JSON line's \"ignored\")");
     t.choice<bool>("gltf_masking", &A::gltfHeightCorrelated, {{"separable", false}, {"height-correlated", true}},
                    "Smith masking-shadowing of glTF materials: Appendix B's separable form, or the height-correlated "
                    "one of the Khronos sample renderer and many GPU engines (a scene file's glTF entry may set its "

@@ -29,14 +29,16 @@ namespace {
 
 // A receiver's light sample: the contribution its shadow ray brings if unoccluded.
 template <class Emit>
-void emitLightSample(const ShadingPoint& point, const Frame& frame, Vec3 woLocal, float side, const LightSample& ls,
+void emitLightSample(const ShadingPoint& point, const Frame& frame, Vec3 woLocal, const LightSample& ls,
                      Emit&& emit) {
   if (!(ls.pdf > 0) || ls.radiance.isBlack()) return;
   const Vec3 wiLocal = frame.toLocal(ls.wi);
-  if (wiLocal.z <= 0 || dot(ls.wi, point.geometricNormal) * side <= 0) return;
+  const float cosine = receivingCosine(ls.wi, wiLocal, point.normal, point.geometricNormal,
+                                       has(point.bsdf.flags(), BsdfFlags::Transmission));
+  if (!(cosine > 0)) return;
   const Rgb f = evalBsdf(point.bsdf, woLocal, wiLocal);
   if (f.isBlack()) return;
-  emit(shadowRay(point.position, point.geometricNormal, ls), f * ls.radiance * (wiLocal.z / ls.pdf));
+  emit(shadowRay(point.position, point.geometricNormal, ls), f * ls.radiance * (cosine / ls.pdf));
 }
 
 // The shadow rays of one point, in order: emit(ray, contribution, exact). First one to each point and
@@ -47,9 +49,8 @@ void shadowSamples(const Scene& scene, const DirectLights& lights, const Shading
                    uint64_t seed, Emit&& emit) {
   const Frame frame(point.normal);
   const Vec3 woLocal = frame.toLocal(point.wo);
-  const float side = dot(point.normal, point.geometricNormal);
   for (const uint32_t i : lights.delta)
-    emitLightSample(point, frame, woLocal, side, deltaLightSample(scene.lights[i], point.position),
+    emitLightSample(point, frame, woLocal, deltaLightSample(scene.lights[i], point.position),
                     [&](const Ray& ray, Rgb c) { emit(ray, c, true); });
   if (!lights.anySampled || samples <= 0) return;
   Rng rng(seed, point.pixel, uint64_t(point.sample) << 32 | point.branch);
@@ -63,7 +64,7 @@ void shadowSamples(const Scene& scene, const DirectLights& lights, const Shading
       const uint32_t k = lights.choice.pick(uLight);
       ls = sampleChosenLight(scene, lights.sampled[k], lights.choice.pmf(k), point.position, u);
     }
-    emitLightSample(point, frame, woLocal, side, ls, [&](const Ray& ray, Rgb c) { emit(ray, c, false); });
+    emitLightSample(point, frame, woLocal, ls, [&](const Ray& ray, Rgb c) { emit(ray, c, false); });
   }
 }
 

@@ -166,6 +166,17 @@ RenderSession::RenderSession(OpenScene& scene, RenderRequest request) : scene_(s
     throw OptionError(e.option(), name(e.option()) + ": " + e.what());
   }
   checkOutputDirectories(*method_, options_->values(), s);
+  ignored_ = s.ignored;
+  if (!method_->rendersTransmission())
+    for (size_t i = 0; i < s.materials.size(); ++i)
+      if (s.materials[i].transmission > 0)
+        ignored_.push_back("material '" + s.materialNames[i] + "': the light its KHR_materials_transmission passes " +
+                           "through the surface, in part (--method " + method_->name() + "; pt renders it)");
+  if (scene_.settings().strict && ignored_.size() > s.ignored.size()) {
+    std::string list;
+    for (size_t i = s.ignored.size(); i < ignored_.size(); ++i) list += "\n  " + ignored_[i];
+    throw std::invalid_argument("--strict: the render would leave out what the scene's files hold:" + list);
+  }
 
   if ((r.checkpointSeconds > 0 || r.resume) && !method_->interruptible())
     throw std::invalid_argument(std::string(r.resume ? "--resume" : "--checkpoint") + ": --method " + method_->name() +
@@ -199,13 +210,13 @@ std::optional<FilmFile> filmToResume(const std::string& path, const FilmFileInfo
 
 // The EXR's header: how the render was made (filmMetadata), its time and threads, what it measured,
 // and what the scene's files hold that it leaves out, so that a reference says how it differs.
-ImageMetadata imageMetadata(const FilmFileInfo& info, const RenderOutput& out, const Scene& scene, double seconds,
-                            int threads) {
+ImageMetadata imageMetadata(const FilmFileInfo& info, const RenderOutput& out, const std::vector<std::string>& ignored,
+                            double seconds, int threads) {
   ImageMetadata meta = filmMetadata(info, *out.film);
   meta.emplace_back("lucent:render_seconds", std::to_string(seconds));
   meta.emplace_back("lucent:threads", std::to_string(threads));
   for (const auto& [key, value] : out.measured) meta.emplace_back("lucent:" + key, measuredJson(value).dump());
-  if (!scene.ignored.empty()) meta.emplace_back("lucent:ignored", nlohmann::json(scene.ignored).dump());
+  if (!ignored.empty()) meta.emplace_back("lucent:ignored", nlohmann::json(ignored).dump());
   return meta;
 }
 
@@ -267,7 +278,7 @@ RenderResult RenderSession::run(const RenderHooks& hooks) {
     std::vector<FileToWrite> alsoWrite;
     if (keepFilm) alsoWrite.push_back(filmFile(filmPath, *out.film, info));
     Stopwatch writeClock;
-    writeExrAndPng(out.image, r.output, imageMetadata(info, out, scene, clock_.seconds(), parallel.threads()), r.png,
+    writeExrAndPng(out.image, r.output, imageMetadata(info, out, ignored_, clock_.seconds(), parallel.threads()), r.png,
                    std::move(alsoWrite));
     if (!keepFilm && (checkpointed || resumed)) fs::remove(filmPath);
     stats.addStage("write_images", writeClock.seconds());
@@ -313,7 +324,7 @@ RenderResult RenderSession::run(const RenderHooks& hooks) {
   if (!r.png.empty()) summary["png"] = r.png;
   if (keepFilm) summary["film"] = filmPath;
   summary["scene_hash"] = info.sceneHash;
-  if (!scene.ignored.empty()) summary["ignored"] = scene.ignored;
+  if (!ignored_.empty()) summary["ignored"] = ignored_;
   result.summary = jsonText(summary);
   return result;
 }

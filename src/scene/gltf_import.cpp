@@ -37,7 +37,7 @@ constexpr uint64_t kMemoryCheckBytes = uint64_t(1) << 24;
 const std::set<std::string> kSupportedExtensions = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
                                                     "KHR_texture_transform", "KHR_materials_specular",
                                                     "KHR_materials_ior", "KHR_materials_sheen",
-                                                    "KHR_materials_clearcoat",
+                                                    "KHR_materials_clearcoat", "KHR_materials_transmission",
                                                     "EXT_mesh_gpu_instancing"};
 
 struct Context {
@@ -481,6 +481,52 @@ MaterialSpec defaultMaterial(const Context& c, GgxMasking masking) {
   return spec;
 }
 
+// The extensions that layer on or replace part of Appendix B's BRDF (bsdf/gltf_metal_rough.h):
+// KHR_materials_sheen, _clearcoat and _transmission.
+void readLayerExtensions(const Context& c, const tinygltf::Material& m, const std::string& path,
+                         const std::string& named, MaterialSpec& spec, std::vector<std::string>& ignored) {
+  // KHR_materials_sheen: a sheen layer over the base (bsdf/sheen.h).
+  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_sheen")) {
+    const std::string at = path + ".extensions.KHR_materials_sheen";
+    if (e->Has("sheenColorFactor")) spec.sheenColour = rgbFactor(c, e->Get("sheenColorFactor"), at + ".sheenColorFactor", 1, "[0, 1]");
+    spec.sheenRoughness = float(unitNumber(c, number(*e, "sheenRoughnessFactor", 0), at + ".sheenRoughnessFactor"));
+    if (e->Has("sheenColorTexture"))
+      spec.sheenColourTexture = textureImage(c, textureInfo(c, *e, "sheenColorTexture", at), at + ".sheenColorTexture");
+    if (e->Has("sheenRoughnessTexture"))
+      spec.sheenRoughnessTexture =
+          textureImage(c, textureInfo(c, *e, "sheenRoughnessTexture", at), at + ".sheenRoughnessTexture");
+  }
+  // KHR_materials_clearcoat: a clear coat over both (bsdf/gltf_metal_rough.h).
+  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_clearcoat")) {
+    const std::string at = path + ".extensions.KHR_materials_clearcoat";
+    spec.clearcoat = float(unitNumber(c, number(*e, "clearcoatFactor", 0), at + ".clearcoatFactor"));
+    spec.clearcoatRoughness = float(unitNumber(c, number(*e, "clearcoatRoughnessFactor", 0), at + ".clearcoatRoughnessFactor"));
+    if (spec.clearcoat > 0 && spec.clearcoatRoughness * spec.clearcoatRoughness < kMinGgxAlpha) {
+      const std::string smallest = std::to_string(std::sqrt(kMinGgxAlpha)).substr(0, 6);
+      ignored.push_back(named + ": clearcoat roughness below " + smallest + " (rendered as " + smallest + ")");
+    }
+    if (e->Has("clearcoatTexture"))
+      spec.clearcoatTexture = textureImage(c, textureInfo(c, *e, "clearcoatTexture", at), at + ".clearcoatTexture");
+    if (e->Has("clearcoatRoughnessTexture"))
+      spec.clearcoatRoughnessTexture =
+          textureImage(c, textureInfo(c, *e, "clearcoatRoughnessTexture", at), at + ".clearcoatRoughnessTexture");
+    if (e->Has("clearcoatNormalTexture")) {
+      const std::string normalAt = at + ".clearcoatNormalTexture";
+      spec.clearcoatNormalTexture = textureImage(c, textureInfo(c, *e, "clearcoatNormalTexture", at), normalAt);
+      const double scale = number(e->Get("clearcoatNormalTexture"), "scale", 1);
+      if (!(std::abs(scale) <= kMaxInputMagnitude)) c.fail(normalAt + ".scale", "must be finite and at most 1e15");
+      spec.clearcoatNormalScale = float(scale);
+    }
+  }
+  // KHR_materials_transmission: thin-walled, the diffuse base's share that passes through.
+  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_transmission")) {
+    const std::string at = path + ".extensions.KHR_materials_transmission";
+    spec.transmission = float(unitNumber(c, number(*e, "transmissionFactor", 0), at + ".transmissionFactor"));
+    if (e->Has("transmissionTexture"))
+      spec.transmissionTexture = textureImage(c, textureInfo(c, *e, "transmissionTexture", at), at + ".transmissionTexture");
+  }
+}
+
 // A glTF material: pbrMetallicRoughness with KHR_materials_ior and KHR_materials_specular as
 // Appendix B's BRDF (the masking term's form as `masking` says), and its emission; what that leaves
 // out is listed in `ignored`, and what would change the image beyond that is refused.
@@ -558,39 +604,7 @@ MaterialSpec materialSpec(const Context& c, size_t index, GgxMasking masking, st
       spec.specularColourTexture =
           textureImage(c, textureInfo(c, *e, "specularColorTexture", at), at + ".specularColorTexture");
   }
-  // KHR_materials_sheen: a sheen layer over the base (bsdf/sheen.h).
-  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_sheen")) {
-    const std::string at = path + ".extensions.KHR_materials_sheen";
-    if (e->Has("sheenColorFactor")) spec.sheenColour = rgbFactor(c, e->Get("sheenColorFactor"), at + ".sheenColorFactor", 1, "[0, 1]");
-    spec.sheenRoughness = float(unitNumber(c, number(*e, "sheenRoughnessFactor", 0), at + ".sheenRoughnessFactor"));
-    if (e->Has("sheenColorTexture"))
-      spec.sheenColourTexture = textureImage(c, textureInfo(c, *e, "sheenColorTexture", at), at + ".sheenColorTexture");
-    if (e->Has("sheenRoughnessTexture"))
-      spec.sheenRoughnessTexture =
-          textureImage(c, textureInfo(c, *e, "sheenRoughnessTexture", at), at + ".sheenRoughnessTexture");
-  }
-  // KHR_materials_clearcoat: a clear coat over both (bsdf/gltf_metal_rough.h).
-  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_clearcoat")) {
-    const std::string at = path + ".extensions.KHR_materials_clearcoat";
-    spec.clearcoat = float(unitNumber(c, number(*e, "clearcoatFactor", 0), at + ".clearcoatFactor"));
-    spec.clearcoatRoughness = float(unitNumber(c, number(*e, "clearcoatRoughnessFactor", 0), at + ".clearcoatRoughnessFactor"));
-    if (spec.clearcoat > 0 && spec.clearcoatRoughness * spec.clearcoatRoughness < kMinGgxAlpha) {
-      const std::string smallest = std::to_string(std::sqrt(kMinGgxAlpha)).substr(0, 6);
-      ignored.push_back(named + ": clearcoat roughness below " + smallest + " (rendered as " + smallest + ")");
-    }
-    if (e->Has("clearcoatTexture"))
-      spec.clearcoatTexture = textureImage(c, textureInfo(c, *e, "clearcoatTexture", at), at + ".clearcoatTexture");
-    if (e->Has("clearcoatRoughnessTexture"))
-      spec.clearcoatRoughnessTexture =
-          textureImage(c, textureInfo(c, *e, "clearcoatRoughnessTexture", at), at + ".clearcoatRoughnessTexture");
-    if (e->Has("clearcoatNormalTexture")) {
-      const std::string normalAt = at + ".clearcoatNormalTexture";
-      spec.clearcoatNormalTexture = textureImage(c, textureInfo(c, *e, "clearcoatNormalTexture", at), normalAt);
-      const double scale = number(e->Get("clearcoatNormalTexture"), "scale", 1);
-      if (!(std::abs(scale) <= kMaxInputMagnitude)) c.fail(normalAt + ".scale", "must be finite and at most 1e15");
-      spec.clearcoatNormalScale = float(scale);
-    }
-  }
+  readLayerExtensions(c, m, path, named, spec, ignored);
   spec.ni = 1.5f;
   if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_ior")) {
     const double ior = number(*e, "ior", 1.5);

@@ -396,6 +396,8 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
       m.clearcoatRoughnessTexture = addTexture(spec.clearcoatRoughnessTexture, spec.name, "clearcoat roughness texture", false);
     if (m.type == MaterialType::Gltf && !spec.clearcoatNormalTexture.empty())
       m.clearcoatNormalTexture = addTexture(spec.clearcoatNormalTexture, spec.name, "clearcoat normal texture", false);
+    if (m.type == MaterialType::Gltf && !spec.transmissionTexture.empty())
+      m.transmissionTexture = addTexture(spec.transmissionTexture, spec.name, "transmission texture", false);
     if (m.type == MaterialType::Gltf && !spec.specularColourTexture.empty())
       m.specularColorTexture = addTexture(spec.specularColourTexture, spec.name, "specular colour texture", true);
     if (!spec.emissive.empty() && !m.ke.isBlack())

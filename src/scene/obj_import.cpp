@@ -417,6 +417,7 @@ Material classifyMaterial(const MaterialSpec& spec) {
   m.clearcoat = spec.clearcoat;
   m.clearcoatRoughness = spec.clearcoatRoughness;
   m.clearcoatNormalScale = spec.clearcoatNormalScale;
+  m.transmission = spec.transmission;
   m.specular = spec.specular;
   m.normalScale = spec.normalScale;
   m.alphaMode = spec.alphaMode;
@@ -458,7 +459,7 @@ Material classifyMaterial(const MaterialSpec& spec) {
           !std::isfinite(m.ni) || !std::isfinite(m.ks.maxComponent()) || !(m.sheenColour.maxComponent() <= 1) ||
           !(std::min({m.sheenColour.r, m.sheenColour.g, m.sheenColour.b}) >= 0) || !(m.sheenRoughness >= 0 && m.sheenRoughness <= 1) ||
           !(m.clearcoat >= 0 && m.clearcoat <= 1) || !(m.clearcoatRoughness >= 0 && m.clearcoatRoughness <= 1) ||
-          !std::isfinite(m.clearcoatNormalScale))
+          !std::isfinite(m.clearcoatNormalScale) || !(m.transmission >= 0 && m.transmission <= 1))
         fail("glTF parameters out of their ranges");
       break;
     case MaterialType::Glass:

@@ -44,6 +44,8 @@ struct MaterialSpec {
   float clearcoat = 0.0f, clearcoatRoughness = 0.0f;  // glTF only: KHR_materials_clearcoat's (textures linear)
   TextureFile clearcoatTexture, clearcoatRoughnessTexture, clearcoatNormalTexture;
   float clearcoatNormalScale = 1.0f;
+  float transmission = 0.0f;         // glTF only: KHR_materials_transmission's (texture linear)
+  TextureFile transmissionTexture;
   TextureFile emissive;              // glTF only (sRGB), multiplies ke
   TextureFile specularTexture, specularColourTexture;  // glTF only: KHR_materials_specular's (A linear; sRGB)
   bool doubleSided = false;          // an emitter's back faces emit too (glTF's doubleSided, a scene file's double_sided)

@@ -444,8 +444,9 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
   // One bounce to the environment, which is sampled as a light and found by BSDF samples: MIS and
   // each strategy alone give L a(wo), a(wo) integrated numerically (test_bsdfs.h). The camera sees
   // the plane within 1 degree of theta; the expectation spans a(wo) over that range. The last cases
-  // have a KHR_materials_sheen layer and a KHR_materials_clearcoat coat (its normal the plane's,
-  // which the render takes from world space into its shading frame).
+  // have a KHR_materials_sheen layer, a KHR_materials_clearcoat coat (its normal the plane's, which
+  // the render takes from world space into its shading frame), and a thin-walled
+  // KHR_materials_transmission, through which the environment below is seen and lit from.
   struct Case {
     float metallic, roughness;
     Rgb base;
@@ -454,12 +455,14 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
     Rgb sheenColour{0.0f};
     float sheenRoughness = 0;
     float clearcoat = 0, clearcoatRoughness = 0;
+    float transmission = 0;
   };
   for (const Case& k : {Case{1, 0.3f, Rgb(0.9f, 0.6f, 0.3f), GgxMasking::Separable, 1.0},
                         Case{0, 0.5f, Rgb(1.0f), GgxMasking::Separable, 1.4},
                         Case{0.5f, 0.7f, Rgb(0.2f, 0.5f, 0.8f), GgxMasking::HeightCorrelated, 0.5},
                         Case{0, 0.6f, Rgb(0.3f, 0.2f, 0.6f), GgxMasking::Separable, 1.2, Rgb(1.0f, 0.8f, 0.6f), 0.4f},
-                        Case{0.3f, 0.5f, Rgb(0.8f, 0.3f, 0.2f), GgxMasking::HeightCorrelated, 1.3, Rgb(0.0f), 0, 0.9f, 0.2f}})
+                        Case{0.3f, 0.5f, Rgb(0.8f, 0.3f, 0.2f), GgxMasking::HeightCorrelated, 1.3, Rgb(0.0f), 0, 0.9f, 0.2f},
+                        Case{0, 0.3f, Rgb(0.9f, 0.7f, 0.4f), GgxMasking::Separable, 0.9, Rgb(0.0f), 0, 0.5f, 0.2f, 0.8f}})
     for (const PathStrategy strategy : {PathStrategy::Mis, PathStrategy::LightSampling, PathStrategy::BsdfSampling}) {
       Scene scene;
       Material m;
@@ -474,6 +477,7 @@ TEST_CASE("glTF furnace: a plane of glTF material under a constant environment s
       m.sheenRoughness = k.sheenRoughness;
       m.clearcoat = k.clearcoat;
       m.clearcoatRoughness = k.clearcoatRoughness;
+      m.transmission = k.transmission;
       test::addQuad(scene, {-100, 0, -100}, {-100, 0, 100}, {100, 0, 100}, {100, 0, -100},
                     test::addMaterial(scene, m, "plane"));
       const Vec3 eye{0, float(20 * std::cos(k.theta)), float(20 * std::sin(k.theta))};

@@ -209,14 +209,24 @@ TEST_CASE("Every kind of the table keeps its flags' promises", "[bsdf]") {
   CHECK(sceneFileMaterialType(name) == (sceneFile ? std::optional(MaterialType::kind) : std::nullopt));
   LUCENT_MATERIAL_KINDS(LUCENT_TEST_KIND)
 #undef LUCENT_TEST_KIND
-  Rng rng(12);
+  // Every kind, and a glTF material that transmits (its lobe's flags depend on its parameters).
+  std::vector<Material> materials;
   for (const MaterialType kind : kinds) {
     m.type = kind;
-    const SurfaceBsdf b = materialBsdf(m);
+    materials.push_back(m);
+  }
+  materials.push_back(m);
+  materials.back().type = MaterialType::Gltf;
+  materials.back().transmission = 0.6f;
+  Rng rng(12);
+  for (const Material& material : materials) {
+    const MaterialType kind = material.type;
+    const SurfaceBsdf b = materialBsdf(material);
     const BsdfFlags flags = b.flags();
-    INFO("kind " << materialTypeName(kind));
+    INFO("kind " << materialTypeName(kind) << ", transmission " << material.transmission);
     REQUIRE(b.type == kind);
-    CHECK(flags == kindFlags(kind));
+    CHECK((uint32_t(flags) & ~uint32_t(kindFlags(kind))) == 0);  // what the lobe does, its kind may
+    CHECK(has(flags, BsdfFlags::Transmission) == (kind == MaterialType::Glass || material.transmission > 0));
     CHECK((has(flags, BsdfFlags::Reflection) || has(flags, BsdfFlags::Transmission)));
     CHECK((has(flags, BsdfFlags::Diffuse) || has(flags, BsdfFlags::Glossy) || has(flags, BsdfFlags::Specular)));
     const Rgb diffuse = b.diffuse(), albedo = layerAlbedo(b), bound = reflectanceBound(b);

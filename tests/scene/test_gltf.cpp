@@ -449,6 +449,44 @@ TEST_CASE("lucent render --strict refuses a scene whose files hold what the rend
   CHECK(plain.status == 0);
 }
 
+TEST_CASE("KHR_materials_transmission: read with its texture's R, and listed as left out by methods other than pt",
+          "[gltf][loader][cli]") {
+  const test::TempDir dir;
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  f["extensionsUsed"] = {"KHR_materials_transmission"};
+  f["images"] = {{{"uri", "data:image/png;base64," + base64(rgbaPng(1, 1, {153, 0, 0, 255}))}}};
+  f["textures"] = {{{"source", 0}}};
+  f["materials"][0]["extensions"]["KHR_materials_transmission"] = {{"transmissionFactor", 0.5},
+                                                                   {"transmissionTexture", {{"index", 0}}}};
+  const Scene scene = loadWrapped(dir.path, f);
+  CHECK(scene.ignored.empty());
+  const SurfaceBsdf b = bsdfAt(scene, surfaceAt(scene, 0, 0.25f, 0.25f));
+  CHECK(b.gltf.transmission == Approx(0.5 * 153 / 255.0).epsilon(1e-5));
+  CHECK(has(b.flags(), BsdfFlags::Transmission));
+  f["materials"][0]["extensions"]["KHR_materials_transmission"] = {{"transmissionFactor", 1.5}};
+  REQUIRE_THROWS_WITH(loadWrapped(dir.path, f),
+                      Catch::Contains("materials[0].extensions.KHR_materials_transmission.transmissionFactor: must be in [0, 1]"));
+  // pt renders it; pmfg (as every other method) says what it leaves out, and --strict refuses it.
+  f["materials"][0]["extensions"]["KHR_materials_transmission"] = {{"transmissionFactor", 0.5}};
+  const std::string file = wrapGltf(dir.path, f), exr = dir / "quad.exr";
+  const test::CliRun pt = test::runLucent("render " + file + " --spp 1 --resolution 8x8 -q --strict -o " + exr);
+  INFO(pt.output);
+  CHECK(pt.status == 0);
+  CHECK(pt.output.find("\"ignored\"") == std::string::npos);
+  const test::CliRun pmfg =
+      test::runLucent("render " + file + " --method pmfg --photons 1000 --gather-rays 4 --spp 1 --resolution 8x8 -q -o " + exr);
+  INFO(pmfg.output);
+  REQUIRE(pmfg.status == 0);
+  const json line = json::parse(pmfg.output.substr(pmfg.output.find('{')));
+  REQUIRE(line.contains("ignored"));
+  CHECK_THAT(line["ignored"][0].get<std::string>(), Catch::Contains("KHR_materials_transmission") && Catch::Contains("pmfg"));
+  fs::remove(exr);
+  const test::CliRun strict = test::runLucent("render " + file + " --method pmfg --spp 1 --resolution 8x8 -q --strict -o " + exr);
+  CHECK(strict.status == 1);
+  CHECK_THAT(strict.output, Catch::Contains("--strict") && Catch::Contains("KHR_materials_transmission"));
+  CHECK_FALSE(fs::exists(exr));
+}
+
 TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read as its sRGB codes", "[gltf][loader]") {
   const test::TempDir dir;
   const auto& codes = kTexelCodes;

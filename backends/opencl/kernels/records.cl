@@ -33,7 +33,7 @@ typedef struct {
 } UniformGrid;
 
 // SurfaceBsdf: the material's kind (include/lucent/scene/bsdf/kinds.h) and its lobe's parameters
-// (include/lucent/scene/bsdf/*.h) in a union of 80 bytes (the largest lobe's).
+// (include/lucent/scene/bsdf/*.h) in a union of 84 bytes (the largest lobe's).
 typedef struct {
   Rgb kd;
 } LambertianLobe;
@@ -59,6 +59,7 @@ typedef struct {
   float sheenRoughness;
   float coat, coatAlpha;
   Vec3 coatNormal;  // in the shading frame of the point's normal
+  float transmission;
 } GltfMetalRoughLobe;
 
 typedef struct {
@@ -72,8 +73,15 @@ typedef struct {
   };
 } SurfaceBsdf;
 
-// The Lambertian term's albedo of a shading point's lobe (none is specular).
-Rgb diffuseAlbedo(SurfaceBsdf b) { return b.type == 1 ? b.phong.kd : b.type == 4 ? b.gltf.kd : b.lambertian.kd; }
+// The Lambertian term's albedo of a shading point's lobe (none is specular), as SurfaceBsdf::diffuse
+// gives it, but for a glTF sheen layer's scaling, which reads the sheen's albedo table (not here).
+Rgb diffuseAlbedo(SurfaceBsdf b) {
+  if (b.type == 4) {
+    const float s = (1.0f - b.gltf.coat * 0.04f) * (1.0f - b.gltf.transmission);
+    return (Rgb){b.gltf.kd.r * s, b.gltf.kd.g * s, b.gltf.kd.b * s};
+  }
+  return b.type == 1 ? b.phong.kd : b.lambertian.kd;
+}
 
 typedef struct {
   Vec3 position, geometricNormal, normal, wo;

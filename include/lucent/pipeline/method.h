@@ -53,6 +53,9 @@ class Method {
   // has when stopped (a method that does not refuses a control that asks for checkpoints or a
   // resume).
   virtual bool interruptible() const = 0;
+  // Whether it renders all the light a glTF material's KHR_materials_transmission passes through a
+  // surface (a render by one that does not lists such materials as left out).
+  virtual bool rendersTransmission() const = 0;
 };
 
 // A method whose options are the struct Options, declared by `table`, rendered by `render`.
@@ -61,9 +64,9 @@ class DeclaredMethod final : public Method {
  public:
   using RenderFn = RenderOutput (*)(const Scene&, const Visibility&, const Options&, const RenderControl&);
   DeclaredMethod(std::string name, std::string summary, const OptionTable<Options>& table, RenderFn render,
-                 bool interruptible)
+                 bool interruptible, bool rendersTransmission)
       : name_(std::move(name)), summary_(std::move(summary)), table_(table), render_(render),
-        interruptible_(interruptible) {}
+        interruptible_(interruptible), rendersTransmission_(rendersTransmission) {}
   const std::string& name() const override { return name_; }
   const std::string& summary() const override { return summary_; }
   const std::vector<OptionSpec>& options() const override { return table_.specs(); }
@@ -89,6 +92,7 @@ class DeclaredMethod final : public Method {
   }
   using Method::render;
   bool interruptible() const override { return interruptible_; }
+  bool rendersTransmission() const override { return rendersTransmission_; }
 
  private:
   struct Resolved final : MethodOptions {
@@ -101,7 +105,7 @@ class DeclaredMethod final : public Method {
   std::string name_, summary_;
   const OptionTable<Options>& table_;
   RenderFn render_;
-  bool interruptible_;
+  bool interruptible_, rendersTransmission_;
 };
 
 }  // namespace lucent

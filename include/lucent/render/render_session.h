@@ -127,6 +127,9 @@ class RenderSession {
   RenderRequest request_;
   const Method* method_ = nullptr;
   std::unique_ptr<MethodOptions> options_;
+  // What the render leaves out of what the scene's files hold: the scene's list (Scene::ignored) and
+  // what this method does not render of it.
+  std::vector<std::string> ignored_;
   RenderControl control_;  // the part
   Stopwatch clock_;
 };

@@ -89,10 +89,10 @@ struct SurfaceBsdf {
                 #Lobe " fits SurfaceBsdf's union");
 LUCENT_MATERIAL_KINDS(LUCENT_LOBE_FITS)
 #undef LUCENT_LOBE_FITS
-static_assert(sizeof(SurfaceBsdf) == 84 && std::is_trivially_copyable_v<SurfaceBsdf>,
+static_assert(sizeof(SurfaceBsdf) == 88 && std::is_trivially_copyable_v<SurfaceBsdf>,
               "SurfaceBsdf is a fixed plain record shared with dumps and GPU backends");
 
-// The flags of a kind's lobe (they do not depend on its parameters).
+// What a kind's lobes may do: SurfaceBsdf::flags says what one does.
 constexpr BsdfFlags kindFlags(MaterialType type) {
   switch (type) {
 #define LUCENT_KIND_FLAGS(kind, value, Lobe, member, name, sceneFile) \
@@ -103,7 +103,9 @@ constexpr BsdfFlags kindFlags(MaterialType type) {
   return BsdfFlags::None;
 }
 
-inline BsdfFlags SurfaceBsdf::flags() const { return kindFlags(type); }
+inline BsdfFlags SurfaceBsdf::flags() const {
+  return visit([](const auto& lobe) { return instanceFlags(lobe); });
+}
 
 // A kind's name, as scene files and `lucent bsdf` write it.
 constexpr const char* materialTypeName(MaterialType type) {
@@ -147,9 +149,11 @@ inline Rgb reflectanceBound(const SurfaceBsdf& b) {
 }
 
 // The BSDF's value and the density with which sampleBsdf picks wi, computed together: zero for
-// specular lobes (Dirac deltas) and unless both directions are above the surface.
+// specular lobes (Dirac deltas), unless wo is above the surface, and unless wi is too or the lobe
+// transmits.
 inline BsdfValue evalBsdfAndPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
-  if (b.isDelta() || wo.z <= 0 || wi.z <= 0) return {Rgb(0.0f), 0.0f};
+  if (b.isDelta() || wo.z <= 0 || !(wi.z > 0 || (wi.z < 0 && has(b.flags(), BsdfFlags::Transmission))))
+    return {Rgb(0.0f), 0.0f};
   return b.visit([&](const auto& lobe) { return lobe.evaluate(wo, wi); });
 }
 inline Rgb evalBsdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) { return evalBsdfAndPdf(b, wo, wi).f; }

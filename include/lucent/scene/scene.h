@@ -76,8 +76,12 @@ struct Material {
   float clearcoat = 0.0f, clearcoatRoughness = 0.0f;
   int32_t clearcoatTexture = -1, clearcoatRoughnessTexture = -1, clearcoatNormalTexture = -1;
   float clearcoatNormalScale = 1.0f;
+  // KHR_materials_transmission (thin-walled): the share of the diffuse base that passes through,
+  // times transmissionTexture's R (linear); 0: opaque.
+  float transmission = 0.0f;
+  int32_t transmissionTexture = -1;
 };
-static_assert(sizeof(Material) == 164, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 172, "Material is a fixed-size record shared with GPU backends");
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear

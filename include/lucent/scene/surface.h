@@ -177,6 +177,7 @@ struct GltfFactors {
   float sheenRoughness = 0;
   float clearcoat = 0, clearcoatRoughness = 0;  // KHR_materials_clearcoat's
   Vec3 clearcoatNormal{0, 0, 1};                // in world space; the shading normal's in gltfFactors
+  float transmission = 0;                       // KHR_materials_transmission's
 };
 
 // The material's factors, its base colour `base`.
@@ -187,11 +188,12 @@ inline GltfFactors gltfFactors(const Material& m, Rgb base) {
   f.specular = m.specular, f.specularColour = m.ks;
   f.sheenColour = m.sheenColour, f.sheenRoughness = m.sheenRoughness;
   f.clearcoat = m.clearcoat, f.clearcoatRoughness = m.clearcoatRoughness;
+  f.transmission = m.transmission;
   return f;
 }
 
 // Appendix B's metal/dielectric mix expanded into the lobe's terms (bsdf/gltf_metal_rough.h), with
-// the sheen and clear coat layers where the factors have them.
+// the transmission, sheen and clear coat where the factors have them.
 inline SurfaceBsdf gltfBsdf(const Material& m, const GltfFactors& f) {
   GltfMetalRoughLobe b;
   // KHR_materials_ior and KHR_materials_specular: the dielectric's F0 from the index, coloured,
@@ -215,6 +217,7 @@ inline SurfaceBsdf gltfBsdf(const Material& m, const GltfFactors& f) {
     b.coatAlpha = std::max(f.clearcoatRoughness * f.clearcoatRoughness, kMinGgxAlpha);
     b.coatNormal = f.clearcoatNormal;
   }
+  b.transmission = f.transmission;
   return b;
 }
 
@@ -239,7 +242,8 @@ inline SurfaceBsdf materialBsdf(const Material& m) { return materialBsdf(m, m.kd
 inline bool lobeVariesOverSurface(const Scene& scene, const Material& m) {
   return m.kdTexture >= 0 || m.metallicRoughnessTexture >= 0 || m.specularTexture >= 0 ||
          m.specularColorTexture >= 0 || m.sheenColourTexture >= 0 || m.sheenRoughnessTexture >= 0 ||
-         m.clearcoatTexture >= 0 || m.clearcoatRoughnessTexture >= 0 || !scene.colours.empty();
+         m.clearcoatTexture >= 0 || m.clearcoatRoughnessTexture >= 0 || m.transmissionTexture >= 0 ||
+         !scene.colours.empty();
 }
 
 // Texture `index`'s A channel (linear) at a surface point, filtered as its sampler says.
@@ -269,6 +273,7 @@ inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
         f.clearcoatRoughness *= textureAt(scene, m.clearcoatRoughnessTexture, sp, kUnorm8ToFloat).g;
       f.clearcoatNormal = clearcoatNormalAt(scene, m, sp);
     }
+    if (m.transmissionTexture >= 0) f.transmission *= textureAt(scene, m.transmissionTexture, sp, kUnorm8ToFloat).r;
     return gltfBsdf(m, f);
   }
   return materialBsdf(m, kd);
@@ -295,6 +300,17 @@ inline Rgb emittedRadiance(const Scene& scene, uint32_t tri, float b1, float b2,
 // leak). Such samples end the path.
 inline bool leaksThroughSurface(Vec3 wo, Vec3 wi, Vec3 ng, bool transmits) {
   return (dot(wi, ng) * dot(wo, ng) < 0) != transmits;
+}
+
+// The cosine at which a lobe receives light arriving from direction wi (wiLocal in its frame of
+// normal n, ng the geometric normal): wiLocal.z where wi lies above both the shading and the real
+// surface, -wiLocal.z below both for a lobe that transmits, else 0 (the other side, or a leak past
+// the shading normal). Written with selects for the path tracer's lane loop.
+inline float receivingCosine(Vec3 wi, Vec3 wiLocal, Vec3 n, Vec3 ng, bool transmits) {
+  const float turn = transmits && wiLocal.z < 0 ? -1.0f : 1.0f;
+  const float cosine = wiLocal.z * turn;
+  const float side = dot(wi, ng) * dot(n, ng) * turn;
+  return side > 0 ? cosine : 0.0f;
 }
 
 // A hit as the specular chains of camera paths and gather rays see it: the surface and its BSDF,

@@ -530,7 +530,8 @@ class PathTracer {
     const LightSample ls = sampleLight(sp.position, uLightPoint, shadow.light);
     const Vec3 wiLocal = frame.toLocal(ls.wi);
     const NextEventSample sample = weighLightSample(opt_.strategy, ls.pdf, ls.delta, ls.radiance, ls.wi, wiLocal,
-                                                    frame.n, sp.geometricNormal, evalBsdfAndPdf(bsdf, woLocal, wiLocal));
+                                                    frame.n, sp.geometricNormal, evalBsdfAndPdf(bsdf, woLocal, wiLocal),
+                                                    has(bsdf.flags(), BsdfFlags::Transmission));
     if (!sample.queued) return false;
     shadow.ray = shadowRay(sp.position, sp.geometricNormal, ls);
     shadow.contribution = sample.contribution;

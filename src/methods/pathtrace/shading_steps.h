@@ -23,8 +23,9 @@ inline bool anyNonZero(Rgb c) {
 // not, its radiance le from direction wi (wiLocal in the shading frame of normal n, geometric
 // normal ng), and the BSDF's value and density there. What it brings if its shadow ray is
 // unoccluded (before the path's throughput), and whether that ray is worth tracing: not when the
-// sample or the BSDF is zero, when wi is below the shading or the geometric surface, or when the
-// strategy is BSDF sampling alone and the light could be hit by it. Conditions are float or int
+// sample or the BSDF is zero, when wi is below the shading or the geometric surface (unless the lobe
+// transmits and wi is below both), or when the strategy is BSDF sampling alone and the light could
+// be hit by it. Conditions are float or int
 // selects, each on one comparison, and the BSDF's weight is computed before it is selected: the
 // vectorizer left the lane loop scalar with bool chains or a call inside a select's arm.
 struct NextEventSample {
@@ -32,19 +33,19 @@ struct NextEventSample {
   bool queued;
 };
 inline NextEventSample weighLightSample(PathStrategy strategy, float lightPdf, bool lightDelta, Rgb le, Vec3 wi,
-                                        Vec3 wiLocal, Vec3 n, Vec3 ng, BsdfValue bsdf) {
+                                        Vec3 wiLocal, Vec3 n, Vec3 ng, BsdfValue bsdf, bool transmits = false) {
   const float delta = lightDelta ? 1.0f : 0.0f;
   const float mis = powerHeuristic(lightPdf, bsdf.pdf);
   const float misWeight = strategy == PathStrategy::LightSampling ? 1.0f : mis;
   const float w = delta != 0 ? 1.0f : misWeight;
   const float queuedPdf = lightPdf * (strategy == PathStrategy::BsdfSampling ? delta : 1.0f);
-  const int queued = !(queuedPdf > 0)                ? 0
-                     : !anyNonZero(le)               ? 0
-                     : wiLocal.z <= 0                ? 0
-                     : dot(wi, ng) * dot(n, ng) <= 0 ? 0
-                     : anyNonZero(bsdf.f)            ? 1
-                                                     : 0;
-  return {bsdf.f * le * (wiLocal.z * w / lightPdf), queued != 0};
+  const float cosine = receivingCosine(wi, wiLocal, n, ng, transmits);
+  const int queued = !(queuedPdf > 0)     ? 0
+                     : !anyNonZero(le)    ? 0
+                     : cosine <= 0        ? 0
+                     : anyNonZero(bsdf.f) ? 1
+                                          : 0;
+  return {bsdf.f * le * (cosine * w / lightPdf), queued != 0};
 }
 
 // The numbers a bounce at a surface draws, in the one order that PathTracer::shade (every material)

@@ -59,7 +59,8 @@ size_t traceGatherRays(const Scene& scene, const Visibility& vis, const ShadingP
     const BsdfSample bs = sampleBsdf(point.bsdf, woLocal, uLobe, u);
     if (!bs.valid) continue;
     Vec3 wi = frame.toWorld(bs.wi);
-    if (dot(wi, point.geometricNormal) * side <= 0) continue;  // below the real surface
+    // On the other side of the real surface than the lobe scatters to (a leak past the shading normal).
+    if ((dot(wi, point.geometricNormal) * side <= 0) != (bs.wi.z < 0)) continue;
     Rgb weight = bs.weight;
     Ray ray{offsetOrigin(point.position, point.geometricNormal, wi), wi};
     for (int depth = 0;; ++depth) {

@@ -5,7 +5,12 @@
 //   Fd = dielectricF0 + (dielectricF90 - dielectricF0) (1 - |wo.h|)^5   (its dielectric's largest
 //        channel, which the diffuse base loses: KHR_materials_specular's max_value),
 // kd = (1 - metallic) base colour, D the GGX distribution of roughness alpha, G Smith's
-// masking-shadowing in the form `masking` names (ggx.h). With KHR_materials_sheen (a sheen colour
+// masking-shadowing in the form `masking` names (ggx.h). With KHR_materials_transmission (thin-walled:
+// a surface of two faces back to back) the share `transmission` of the diffuse base passes through
+// instead, by the GGX lobe mirrored through the surface, tinted by the base colour:
+//   f_t(wo, wi) = kd transmission (1 - Fd) D G / (4 |n.wo| |n.wi|) at the half vector of wo and wi
+//   mirrored, (wi.x, wi.y, -wi.z) (the extension's H_T = normalize(V - 2 (N.L) N + L)),
+// and kd (1 - transmission) / pi (1 - Fd) remains diffuse. With KHR_materials_sheen (a sheen colour
 // other than black) the sheen layer of sheen.h lies on top, the above its base. With
 // KHR_materials_clearcoat (coat > 0) a clear coat lies on top of both, as the extension layers it:
 //   f_coated(V, L) = (1 - Wc(V)) f(V, L) + Wc(V) D_c G_c / (4 |V.nc| |L.nc|),
@@ -14,10 +19,13 @@
 // or the surface's without the base's normal texture). V is the viewer's side: the weight uses
 // V.nc where a microfacet Fresnel term would use V.h, so the coated BRDF is not reciprocal
 // (f(wo, wi) != f(wi, wo)) and importance transport takes its adjoint f(wi, wo).
+// The sheen and the coat reflect only; light they pass goes on to the base, reflected or transmitted.
 // Sampling: the coat (its GGX visible normals about nc) with probability Wc(wo) where wo is above
 // the coat; else the sheen layer (uniformly over the hemisphere, as its fibres reflect most at
-// grazing angles) with probability max3(sheenColour) E(n.wo), else the base's GGX visible normals
-// or cosine lobe, chosen by their weights at n.wo; every sample is weighed by the whole mixture.
+// grazing angles) with probability max3(sheenColour) E(n.wo), else the base's GGX visible normals,
+// cosine lobe or mirrored visible normals, chosen by their weights at n.wo; every sample is weighed
+// by the whole mixture. A reflection drawn below the surface, or a transmission above it, is no
+// sample.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -46,27 +54,39 @@ struct GltfMetalRoughLobe {
   // The coat's normal, in the shading frame: bsdfAt gives it in world space, and the lobe is taken
   // into the frame where one is made (SurfaceBsdf::inFrame).
   Vec3 coatNormal{0, 0, 1};
+  float transmission = 0;      // KHR_materials_transmission's; 0: opaque
   static constexpr LobeField fields[] = {{"kd", true, 3},    {"ks", true, 3},  {"alpha", true, 1},
                                          {"f90", true, 1},   {"dielectric_f0", true, 1},
                                          {"dielectric_f90", true, 1}, {"masking", false, 1},
                                          {"sheen_colour", true, 3},   {"sheen_roughness", true, 1},
                                          {"coat", true, 1},           {"coat_alpha", true, 1},
-                                         {"coat_normal", true, 3}};
+                                         {"coat_normal", true, 3},    {"transmission", true, 1}};
 
-  static constexpr BsdfFlags flags =
-      BsdfFlags::Reflection | BsdfFlags::Diffuse | BsdfFlags::Glossy | BsdfFlags::TwoSided;
+  // What the kind may do; instanceFlags what this lobe does (it transmits where transmission > 0).
+  static constexpr BsdfFlags flags = BsdfFlags::Reflection | BsdfFlags::Transmission | BsdfFlags::Diffuse |
+                                     BsdfFlags::Glossy | BsdfFlags::TwoSided;
+  BsdfFlags instanceFlags() const {
+    return transmission > 0 ? flags : BsdfFlags::Reflection | BsdfFlags::Diffuse | BsdfFlags::Glossy | BsdfFlags::TwoSided;
+  }
 
   // The share of the diffuse base that the dielectric's Fresnel term leaves, at Schlick weight w.
   float diffuseWeight(float w) const { return 1.0f - (dielectricF0 + (dielectricF90 - dielectricF0) * w); }
 
-  // Probability of choosing the GGX lobe: the share of the two terms' weights at the Fresnel term
-  // of n.wo, the visible-normal distribution's centre.
-  float specularChoice(float woZ) const {
+  // Probabilities of choosing the base's GGX reflection and its transmission (the rest: its cosine
+  // lobe): the shares of the terms' weights at the Fresnel term of n.wo, the visible-normal
+  // distribution's centre.
+  struct BaseChoice {
+    float specular = 0, transmitted = 0;
+  };
+  BaseChoice baseChoice(float woZ) const {
     const float w = schlickWeight(woZ);
     const float specular = (ks + (Rgb(f90) - ks) * w).average();
-    const float diffuse = kd.average() * diffuseWeight(w);
-    return specular + diffuse > 0 ? specular / (specular + diffuse) : 0.0f;
+    const float under = kd.average() * diffuseWeight(w);
+    const float sum = specular + under;
+    if (!(sum > 0)) return {};
+    return {specular / sum, under * transmission / sum};
   }
+  float specularChoice(float woZ) const { return baseChoice(woZ).specular; }
 
   bool hasSheen() const { return !sheenColour.isBlack(); }
   // The base's scaling under the sheen layer, for directions of cosines woZ and wiZ.
@@ -103,45 +123,69 @@ struct GltfMetalRoughLobe {
   BsdfValue evaluate(Vec3 wo, Vec3 wi) const {
     const BsdfValue under = evaluateUnderCoat(wo, wi);
     if (!hasCoat()) return under;
-    const BsdfValue layer = coatLayer(wo, wi);
+    const BsdfValue layer = wi.z > 0 ? coatLayer(wo, wi) : BsdfValue{Rgb(0.0f), 0.0f};
     const float w = coatWeight(wo), pc = coatChoice(wo);
     return {under.f * (1.0f - w) + layer.f * w, pc * layer.pdf + (1.0f - pc) * under.pdf};
+  }
+
+  // f(wi, wo): what importance transport, carrying light from wo to wi, takes. The layers beneath the
+  // coat are reciprocal; the coat's weight reads wi.
+  Rgb adjointValue(Vec3 wo, Vec3 wi) const {
+    const Rgb under = evaluateUnderCoat(wo, wi).f;
+    if (!hasCoat()) return under;
+    const float w = coatWeight(wi);
+    return wi.z > 0 ? under * (1.0f - w) + coatLayer(wo, wi).f * w : under * (1.0f - w);
   }
 
   // Below the coat: the sheen layer over the base, or the base alone.
   BsdfValue evaluateUnderCoat(Vec3 wo, Vec3 wi) const {
     const BsdfValue base = evaluateBase(wo, wi);
     if (!hasSheen()) return base;
-    // sheenChoice and sheenScaling, with E(n.wo) looked up once.
+    // sheenChoice and sheenScaling, with E(n.wo) looked up once; the sheen reflects only.
     const SheenAlbedoTable& e = SheenAlbedoTable::get();
     const float m = sheenColour.maxComponent(), eo = e.at(wo.z, sheenRoughness);
-    const float scaling = std::min(1.0f - m * eo, 1.0f - m * e.at(wi.z, sheenRoughness));
+    const float scaling = std::min(1.0f - m * eo, 1.0f - m * e.at(std::abs(wi.z), sheenRoughness));
     const float ps = m * eo;
+    if (!(wi.z > 0)) return {base.f * scaling, (1.0f - ps) * base.pdf};
     const float sheen = sheenValue(sheenRoughness * sheenRoughness, wo.z, wi.z, normalize(wo + wi).z);
     return {sheenColour * sheen + base.f * scaling, ps * (0.5f * kInvPi) + (1.0f - ps) * base.pdf};
   }
 
-  // The base: Appendix B's BRDF and the density of its sampling.
+  // The base: Appendix B's BRDF with the thin-walled transmission, and the density of its sampling.
   BsdfValue evaluateBase(Vec3 wo, Vec3 wi) const {
+    const BaseChoice choice = baseChoice(wo.z);
+    if (!(wi.z > 0)) {
+      // Through the surface: the reflection lobe about the mirrored direction.
+      const Vec3 mirrored{wi.x, wi.y, -wi.z};
+      if (!(transmission > 0 && mirrored.z > 0)) return {Rgb(0.0f), 0.0f};
+      const Vec3 h = normalize(wo + mirrored);
+      const float lobe = ggxD(alpha, h) * smithMasking(masking, alpha, wo.z, mirrored.z) / (4.0f * wo.z * mirrored.z);
+      return {kd * (transmission * diffuseWeight(schlickWeight(dot(wo, h))) * lobe),
+              choice.transmitted * ggxReflectionPdf(alpha, wo, mirrored)};
+    }
     const Vec3 h = normalize(wo + wi);
     const float w = schlickWeight(dot(wo, h));
     const Rgb F = ks + (Rgb(f90) - ks) * w;
     const float specular = ggxD(alpha, h) * smithMasking(masking, alpha, wo.z, wi.z) / (4.0f * wo.z * wi.z);
-    const float ps = specularChoice(wo.z);
-    return {kd * (kInvPi * diffuseWeight(w)) + F * specular,
-            ps * ggxReflectionPdf(alpha, wo, wi) + (1.0f - ps) * cosineHemispherePdf(wi.z)};
+    return {kd * (kInvPi * diffuseWeight(w) * (1.0f - transmission)) + F * specular,
+            choice.specular * ggxReflectionPdf(alpha, wo, wi) +
+                (1.0f - choice.specular - choice.transmitted) * cosineHemispherePdf(wi.z)};
   }
 
   BsdfSample sample(Vec3 wo, float u, Vec2 u2, Transport transport) const {
     if (wo.z <= 0) return {};
-    BsdfSample s = mixtureSample(*this, wo, sampleDirection(wo, u, u2));
+    bool through = false;
+    const Vec3 wi = sampleDirection(wo, u, u2, through);
+    BsdfSample s = mixtureSample(*this, wo, wi, through);
     // Importance flows from L to V: the adjoint f(wi, wo), which only the coat's weight makes differ.
-    if (s.valid && hasCoat() && transport == Transport::Importance) s.weight = evaluate(s.wi, wo).f * (s.wi.z / s.pdf);
+    if (s.valid && hasCoat() && transport == Transport::Importance)
+      s.weight = adjointValue(wo, s.wi) * (std::abs(s.wi.z) / s.pdf);
     return s;
   }
 
-  // A direction from one of the mixture's terms, `u` choosing the term.
-  Vec3 sampleDirection(Vec3 wo, float u, Vec2 u2) const {
+  // A direction from one of the mixture's terms, `u` choosing the term; `through` says whether the
+  // term transmits.
+  Vec3 sampleDirection(Vec3 wo, float u, Vec2 u2, bool& through) const {
     if (hasCoat()) {
       const float pc = coatChoice(wo);
       if (u < pc) {
@@ -159,7 +203,14 @@ struct GltfMetalRoughLobe {
       }
       u = (u - ps) / (1.0f - ps);
     }
-    return u < specularChoice(wo.z) ? reflect(wo, sampleGgxVisibleNormal(alpha, wo, u2)) : sampleCosineHemisphere(u2);
+    const BaseChoice choice = baseChoice(wo.z);
+    if (u < choice.specular) return reflect(wo, sampleGgxVisibleNormal(alpha, wo, u2));
+    if (u < choice.specular + choice.transmitted) {
+      through = true;
+      const Vec3 r = reflect(wo, sampleGgxVisibleNormal(alpha, wo, u2));
+      return {r.x, r.y, -r.z};
+    }
+    return sampleCosineHemisphere(u2);
   }
 
   // At normal incidence (the base's scaling and the sheen's albedo there), under the coat's weight
@@ -178,8 +229,10 @@ struct GltfMetalRoughLobe {
     const Rgb under = hasSheen() ? base + sheenColour : base;
     return hasCoat() ? Rgb(std::max(under.r, 1.0f), std::max(under.g, 1.0f), std::max(under.b, 1.0f)) : under;
   }
-  // The Lambertian term, under the sheen and the coat at normal incidence.
-  Rgb diffuse() const { return (hasSheen() ? kd * sheenScaling(1.0f, 1.0f) : kd) * (1.0f - coat * 0.04f); }
+  // The Lambertian term, under the sheen and the coat at normal incidence, less what transmits.
+  Rgb diffuse() const {
+    return (hasSheen() ? kd * sheenScaling(1.0f, 1.0f) : kd) * ((1.0f - coat * 0.04f) * (1.0f - transmission));
+  }
 
   Rgb diffuseShare(Vec3 wo, Vec3 wi) const {
     if (wo.z <= 0 || wi.z <= 0) return Rgb(0.0f);
@@ -187,7 +240,7 @@ struct GltfMetalRoughLobe {
     if (f.isBlack()) return Rgb(0.0f);
     const float w = schlickWeight(dot(wo, normalize(wo + wi)));
     const float scaling = (hasSheen() ? sheenScaling(wo.z, wi.z) : 1.0f) * (hasCoat() ? 1.0f - coatWeight(wo) : 1.0f);
-    return channelShare(lambertianValue(kd, wo.z, wi.z).f * (diffuseWeight(w) * scaling), f);
+    return channelShare(lambertianValue(kd, wo.z, wi.z).f * (diffuseWeight(w) * scaling * (1.0f - transmission)), f);
   }
 };
 static_assert(sizeof(GltfMetalRoughLobe) == lobeFieldBytes<GltfMetalRoughLobe>(), "a lobe is a plain record of its fields");

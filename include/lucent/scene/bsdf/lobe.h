@@ -67,18 +67,29 @@ inline Rgb channelShare(Rgb part, Rgb whole) {
 }
 
 // A direction wi drawn from one lobe of a mixture, weighed by the whole mixture's value and density
-// (`lobe.evaluate`, wo above the surface): valid where both are positive above the surface.
+// (`lobe.evaluate`, wo above the surface): valid where both are positive on the side the lobe
+// scatters to, above the surface or (`through`, a transmitting lobe) below it.
 template <class Lobe>
-BsdfSample mixtureSample(const Lobe& lobe, Vec3 wo, Vec3 wi) {
+BsdfSample mixtureSample(const Lobe& lobe, Vec3 wo, Vec3 wi, bool through = false) {
   BsdfSample s;
   s.wi = wi;
-  if (s.wi.z <= 0) return s;
+  if (through ? !(s.wi.z < 0) : !(s.wi.z > 0)) return s;
   const BsdfValue v = lobe.evaluate(wo, s.wi);
   s.pdf = v.pdf;
   if (!(s.pdf > 0)) return s;
-  s.weight = v.f * (s.wi.z / s.pdf);
+  s.weight = v.f * (std::abs(s.wi.z) / s.pdf);
   s.valid = true;
   return s;
+}
+
+// A lobe's flags where its parameters decide some (a glTF material transmits where its transmission
+// is above 0): its instanceFlags(), else its kind's.
+template <class Lobe>
+constexpr BsdfFlags instanceFlags(const Lobe& lobe) {
+  if constexpr (requires { lobe.instanceFlags(); })
+    return lobe.instanceFlags();
+  else
+    return Lobe::flags;
 }
 
 }  // namespace lucent
