@@ -345,6 +345,29 @@ void loadRenderBlock(JsonFields fields, const nlohmann::json& block, RenderBlock
 
 namespace {
 
+// A glTF material's textures other than its base colour, emissive and normal textures: where the
+// import keeps it, where the material indexes it, what messages call it, and whether it is colour
+// (sRGB) or data (linear). In the order they are added to the scene.
+struct GltfTexture {
+  detail::TextureFile detail::MaterialSpec::*file;
+  int32_t Material::*index;
+  const char* role;
+  bool colour;
+};
+const GltfTexture kGltfTextures[] = {
+    {&detail::MaterialSpec::metallicRoughness, &Material::metallicRoughnessTexture, "metallic-roughness texture", false},
+    {&detail::MaterialSpec::specularTexture, &Material::specularTexture, "specular texture", false},
+    {&detail::MaterialSpec::sheenColourTexture, &Material::sheenColourTexture, "sheen colour texture", true},
+    {&detail::MaterialSpec::sheenRoughnessTexture, &Material::sheenRoughnessTexture, "sheen roughness texture", false},
+    {&detail::MaterialSpec::clearcoatTexture, &Material::clearcoatTexture, "clearcoat texture", false},
+    {&detail::MaterialSpec::clearcoatRoughnessTexture, &Material::clearcoatRoughnessTexture,
+     "clearcoat roughness texture", false},
+    {&detail::MaterialSpec::clearcoatNormalTexture, &Material::clearcoatNormalTexture, "clearcoat normal texture",
+     false},
+    {&detail::MaterialSpec::transmissionTexture, &Material::transmissionTexture, "transmission texture", false},
+    {&detail::MaterialSpec::specularColourTexture, &Material::specularColorTexture, "specular colour texture", true},
+};
+
 // The scene's materials from their specs (and textures), its emitters checked, then finalized:
 // what every scene shares once its triangles are in.
 void finishScene(Scene& scene, const detail::ObjImport& import, const std::string& path, const LoadOptions& options) {
@@ -382,24 +405,9 @@ void finishScene(Scene& scene, const detail::ObjImport& import, const std::strin
     Material m = detail::classifyMaterial(spec);
     if (!spec.mapKd.empty())
       m.kdTexture = addTexture(spec.mapKd, spec.name, spec.mapKd.bytes.empty() ? "map_Kd" : "base colour texture", true);
-    if (m.type == MaterialType::Gltf && !spec.metallicRoughness.empty())
-      m.metallicRoughnessTexture = addTexture(spec.metallicRoughness, spec.name, "metallic-roughness texture", false);
-    if (m.type == MaterialType::Gltf && !spec.specularTexture.empty())
-      m.specularTexture = addTexture(spec.specularTexture, spec.name, "specular texture", false);
-    if (m.type == MaterialType::Gltf && !spec.sheenColourTexture.empty())
-      m.sheenColourTexture = addTexture(spec.sheenColourTexture, spec.name, "sheen colour texture", true);
-    if (m.type == MaterialType::Gltf && !spec.sheenRoughnessTexture.empty())
-      m.sheenRoughnessTexture = addTexture(spec.sheenRoughnessTexture, spec.name, "sheen roughness texture", false);
-    if (m.type == MaterialType::Gltf && !spec.clearcoatTexture.empty())
-      m.clearcoatTexture = addTexture(spec.clearcoatTexture, spec.name, "clearcoat texture", false);
-    if (m.type == MaterialType::Gltf && !spec.clearcoatRoughnessTexture.empty())
-      m.clearcoatRoughnessTexture = addTexture(spec.clearcoatRoughnessTexture, spec.name, "clearcoat roughness texture", false);
-    if (m.type == MaterialType::Gltf && !spec.clearcoatNormalTexture.empty())
-      m.clearcoatNormalTexture = addTexture(spec.clearcoatNormalTexture, spec.name, "clearcoat normal texture", false);
-    if (m.type == MaterialType::Gltf && !spec.transmissionTexture.empty())
-      m.transmissionTexture = addTexture(spec.transmissionTexture, spec.name, "transmission texture", false);
-    if (m.type == MaterialType::Gltf && !spec.specularColourTexture.empty())
-      m.specularColorTexture = addTexture(spec.specularColourTexture, spec.name, "specular colour texture", true);
+    if (m.type == MaterialType::Gltf)
+      for (const GltfTexture& t : kGltfTextures)
+        if (!(spec.*t.file).empty()) m.*t.index = addTexture(spec.*t.file, spec.name, t.role, t.colour);
     if (!spec.emissive.empty() && !m.ke.isBlack())
       m.emissiveTexture = addTexture(spec.emissive, spec.name, "emissive texture", true);
     m.emitsBackFace = spec.doubleSided && !m.ke.isBlack() ? 1 : 0;
