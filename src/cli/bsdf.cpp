@@ -96,8 +96,9 @@ int runBsdf(const BsdfArgs& a) {
   std::ostringstream csv;
   csv << std::setprecision(7) << "cos_theta,albedo_r,albedo_g,albedo_b,error_r,error_g,error_b\n";
   nlohmann::ordered_json albedo = nlohmann::ordered_json::array();
-  // From grazing to normal incidence (for a transmitting lobe also from inside, cos theta < 0).
-  const bool inside = has(kindFlags(m.type), BsdfFlags::Transmission);
+  // From grazing to normal incidence (for a lobe with an inside, glass, also from there, cos theta < 0;
+  // a two-sided one is only ever seen from above).
+  const bool inside = has(bsdf.flags(), BsdfFlags::Transmission) && !twoSidedShading(bsdf);
   for (int k = inside ? -a.cosines : 0; k < a.cosines; ++k) {
     const float cosTheta = float((k + 0.5) / a.cosines);
     const AlbedoEstimate e = directionalAlbedo(bsdf, cosTheta, a.samples, a.seed);

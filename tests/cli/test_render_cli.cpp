@@ -352,4 +352,14 @@ TEST_CASE("lucent bsdf lists a scene's materials and gives one's albedo, f and p
     CHECK_THAT(refused.output, Catch::Contains(message));
   }
   CHECK(test::runLucent("bsdf " + scene + " white --cosines 0").status == 1);
+  // A thin-walled transmitting glTF material is two-sided: albedos from above only, with the light it
+  // passes (the tinted shell: about 0.04 + 0.96 base colour at normal incidence; 0.13 in red without).
+  const test::CliRun shell = test::runLucent(std::string("bsdf ") + LUCENT_SOURCE_DIR
+                                             "/scenes/gltf/extensions.glb 'tinted shell' --cosines 4 --samples 4096 --json");
+  INFO(shell.output);
+  REQUIRE(shell.status == 0);
+  const nlohmann::json s = nlohmann::json::parse(shell.output);
+  REQUIRE(s["directional_albedo"].size() == 4);
+  for (const auto& e : s["directional_albedo"]) CHECK(e["cos_theta"].get<double>() > 0);
+  CHECK(s["directional_albedo"][3]["albedo"][0].get<double>() > 0.8);
 }
