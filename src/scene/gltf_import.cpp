@@ -722,16 +722,20 @@ struct NodeWalk {
       normals = readAccessor(c, attribute("NORMAL"), path + ".attributes.NORMAL", TINYGLTF_TYPE_VEC3,
                              {TINYGLTF_COMPONENT_TYPE_FLOAT});
     const uint32_t materialId = material(p.material, path + ".material");
-    const bool normalMapped = !import.specs[materialId].normal.empty();
+    const MaterialSpec& spec = import.specs[materialId];
+    // Tangents for the normal textures, the base's or (without one) the clear coat's: the two share
+    // their tangent space (KHR_materials_clearcoat says they should use the same coordinates).
+    const bool normalMapped = !spec.normal.empty() || !spec.clearcoatNormalTexture.empty();
     std::vector<double> tangents;
     if (normalMapped && attribute("TANGENT") >= 0)
       tangents = readAccessor(c, attribute("TANGENT"), path + ".attributes.TANGENT", TINYGLTF_TYPE_VEC4,
                               {TINYGLTF_COMPONENT_TYPE_FLOAT});
     // TEXCOORD_0, and TEXCOORD_1 where one of the material's textures reads it.
-    const MaterialSpec& spec = import.specs[materialId];
     bool readsSet1 = false;
     for (const TextureFile* f : {&spec.mapKd, &spec.metallicRoughness, &spec.normal, &spec.emissive,
-                                 &spec.specularTexture, &spec.specularColourTexture})
+                                 &spec.specularTexture, &spec.specularColourTexture, &spec.sheenColourTexture,
+                                 &spec.sheenRoughnessTexture, &spec.clearcoatTexture, &spec.clearcoatRoughnessTexture,
+                                 &spec.clearcoatNormalTexture, &spec.transmissionTexture})
       readsSet1 = readsSet1 || (!f->empty() && f->set == 1);
     const auto readTexcoords = [&](const std::string& name) {
       if (attribute(name.c_str()) < 0) return std::vector<double>();
@@ -800,7 +804,8 @@ struct NodeWalk {
             {Rgb(float(rgba[0]), float(rgba[1]), float(rgba[2])), colourChannels == 4 ? float(rgba[3]) : 1.0f});
       }
     }
-    if (normalMapped) placeTangents(tangents, world, mirrored, first, corners, spec.normal);
+    if (normalMapped)
+      placeTangents(tangents, world, mirrored, first, corners, spec.normal.empty() ? spec.clearcoatNormalTexture : spec.normal);
     for (size_t t = 0; t + 2 < corners.size(); t += 3) {
       uint32_t a = first + corners[t], b = first + corners[t + 1], d = first + corners[t + 2];
       if (mirrored) std::swap(b, d);

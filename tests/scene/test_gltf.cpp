@@ -872,6 +872,29 @@ TEST_CASE("KHR_materials_clearcoat: its factors times the textures' R and G (lin
   material["extensions"]["KHR_materials_clearcoat"]["clearcoatNormalTexture"]["scale"] = 2;
   const Scene scaled = loadWrapped(dir.path, f);
   CHECK(bsdfAt(scaled, surfaceAt(scaled, 0, 0.25f, 0.25f)).gltf.coatNormal.z < mp.shadingNormal.z - 0.05f);
+  // Its own normal texture without the base's: tangents are made for it (here from the texture
+  // coordinates: tangent +x, bitangent -y), and the base keeps the vertex normal.
+  material.erase("normalTexture");
+  material["extensions"]["KHR_materials_clearcoat"]["clearcoatNormalTexture"].erase("scale");
+  const Scene coatOnly = loadWrapped(dir.path, f);
+  REQUIRE(coatOnly.tangents.size() == coatOnly.positions.size());
+  const SurfacePoint cp = surfaceAt(coatOnly, 0, 0.25f, 0.25f);
+  CHECK(length(cp.shadingNormal - Vec3{0, 0, 1}) < 1e-6f);
+  const double x = 2 * 191 / 255.0 - 1, y = 2 * 128 / 255.0 - 1, z = 2 * 221 / 255.0 - 1;
+  const double len = std::sqrt(x * x + y * y + z * z);
+  const Vec3 coatOnlyNormal = bsdfAt(coatOnly, cp).gltf.coatNormal;
+  CHECK(coatOnlyNormal.x == Approx(x / len).margin(1e-5));
+  CHECK(coatOnlyNormal.y == Approx(-y / len).margin(1e-5));
+  CHECK(coatOnlyNormal.z == Approx(z / len).margin(1e-5));
+  // The clear coat's textures may read TEXCOORD_1: the set is read for them.
+  f["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = 2;
+  material["extensions"]["KHR_materials_clearcoat"] = {{"clearcoatFactor", 0.8},
+                                                       {"clearcoatTexture", {{"index", 0}, {"texCoord", 1}}},
+                                                       {"clearcoatRoughnessFactor", 0.5}};
+  const Scene set1 = loadWrapped(dir.path, f);
+  CHECK(set1.texcoords1.size() == set1.positions.size());
+  CHECK(bsdfAt(set1, surfaceAt(set1, 0, 0.25f, 0.25f)).gltf.coat == Approx(coat).epsilon(1e-5));
+  f["meshes"][0]["primitives"][0]["attributes"].erase("TEXCOORD_1");
   // A smooth coat is rendered at the smallest roughness and said so; no factor, no coat.
   material["extensions"]["KHR_materials_clearcoat"] = {{"clearcoatFactor", 1}};
   const Scene smooth = loadWrapped(dir.path, f);
