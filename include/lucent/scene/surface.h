@@ -287,10 +287,12 @@ inline Rgb emittedRadiance(const Scene& scene, uint32_t tri, float b1, float b2,
   const Material& m = scene.materials[scene.materialIds[tri]];
   if (!(dot(towards, scene.geometricNormal(tri)) > 0) && m.emitsBackFace == 0) return Rgb(0.0f);
   if (m.emissiveTexture < 0 && !(m.clearcoat > 0)) return m.ke;
-  const SurfacePoint sp = surfaceAt(scene, tri, b1, b2);
+  // The texture reads the barycentrics alone; the coat needs the whole surface point (its normals).
+  SurfacePoint sp;
+  sp.triangle = tri, sp.b1 = b1, sp.b2 = b2;
   const Rgb le = m.emissiveTexture < 0 ? m.ke : m.ke * textureAt(scene, m.emissiveTexture, sp);
   if (!(m.clearcoat > 0)) return le;
-  const SurfaceBsdf bsdf = bsdfAt(scene, sp);
+  const SurfaceBsdf bsdf = bsdfAt(scene, surfaceAt(scene, tri, b1, b2));
   return bsdf.type == MaterialType::Gltf ? le * (1.0f - bsdf.gltf.coatWeight(towards)) : le;
 }
 
