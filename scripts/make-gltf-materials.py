@@ -10,7 +10,8 @@ measured F0 of gold and copper that the glTF specification's examples use.
 scenes/gltf/extensions.glb: the material extensions GPU path tracers render, one sphere each: a
 velvet (KHR_materials_sheen over a dark base), a car paint (KHR_materials_clearcoat over a
 half-metallic red), a frosted and a tinted thin-walled shell (KHR_materials_transmission, rough and
-smooth).
+smooth), and an amber glass ball (KHR_materials_volume: refracting at index 1.5, KHR_materials_ior,
+and absorbing inside).
 
 The ground and wall are rough grey dielectrics. Procedural, so the scenes need no third-party data;
 rerun to regenerate."""
@@ -43,6 +44,10 @@ EXTENSIONS = ROOM + [
      {"KHR_materials_clearcoat": {"clearcoatFactor": 1.0, "clearcoatRoughnessFactor": 0.1}}),
     ("frosted shell", (0.95, 0.95, 0.95), 0.0, 0.3, {"KHR_materials_transmission": {"transmissionFactor": 1.0}}),
     ("tinted shell", (0.9, 0.6, 0.3), 0.0, 0.05, {"KHR_materials_transmission": {"transmissionFactor": 0.9}}),
+    ("amber glass", (1.0, 1.0, 1.0), 0.0, 0.05,
+     {"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": 1.5},
+      "KHR_materials_volume": {"thicknessFactor": 1.6, "attenuationDistance": 0.8,
+                               "attenuationColor": [0.9, 0.5, 0.15]}}),
 ]
 
 
@@ -164,9 +169,10 @@ for file, table, spheres, used in [
           for k, name in enumerate(["gold", "copper", "rough white", "shiny blue", "tinted"])],
          ["KHR_lights_punctual", "KHR_materials_ior", "KHR_materials_specular"]),
         ("extensions.glb", EXTENSIONS,
-         [(name, (-3.0 + 2.0 * k, 0.8, 0.0), 0.8)
-          for k, name in enumerate(["velvet", "car paint", "frosted shell", "tinted shell"])],
-         ["KHR_lights_punctual", "KHR_materials_sheen", "KHR_materials_clearcoat", "KHR_materials_transmission"])]:
+         [(name, (-4.0 + 2.0 * k, 0.8, 0.0), 0.8)
+          for k, name in enumerate(["velvet", "car paint", "frosted shell", "tinted shell", "amber glass"])],
+         ["KHR_lights_punctual", "KHR_materials_sheen", "KHR_materials_clearcoat", "KHR_materials_transmission",
+          "KHR_materials_ior", "KHR_materials_volume"])]:
     glb, triangles = scene_glb(table, spheres, used)
     (out / file).write_bytes(glb)
     print(f"{out / file}: {triangles} triangles, {len(glb)} bytes")

@@ -1,7 +1,10 @@
 // BSDFs and directions that several test files build, and the directional albedo by quadrature.
 #pragma once
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
+#include "lucent/core/rng.h"
 #include "lucent/scene/bsdf.h"
 
 namespace lucent::test {
@@ -13,6 +16,29 @@ inline Vec3 directionAt(double theta, double phi) {
 inline SurfaceBsdf diffuseBsdf(Rgb kd) { return LambertianLobe{kd}; }
 
 inline SurfaceBsdf phongBsdf(Rgb kd, Rgb ks, float ns) { return PhongLobe{kd, ks, ns}; }
+
+// The mean of sampleBsdf's weights (what a path tracer multiplies by, or with Transport::Importance
+// a photon; invalid samples weigh 0) and its standard error, per channel.
+struct MeanWeight {
+  double mean[3] = {0, 0, 0}, error[3] = {0, 0, 0};
+};
+inline MeanWeight meanSampleWeight(const SurfaceBsdf& b, Vec3 wo, int n, uint64_t seed,
+                                   Transport transport = Transport::Radiance) {
+  Rng rng(seed);
+  double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
+  for (int i = 0; i < n; ++i) {
+    const float u = rng.uniform();
+    const BsdfSample s = sampleBsdf(b, wo, u, rng.uniform2(), transport);
+    if (!s.valid) continue;
+    for (int c = 0; c < 3; ++c) sum[c] += s.weight[c], sum2[c] += double(s.weight[c]) * s.weight[c];
+  }
+  MeanWeight m;
+  for (int c = 0; c < 3; ++c) {
+    m.mean[c] = sum[c] / n;
+    m.error[c] = std::sqrt(std::max(0.0, sum2[c] / n - m.mean[c] * m.mean[c]) / n);
+  }
+  return m;
+}
 
 // Directional albedo a(wo) = integral of f(wo, wi) |cos(theta_i)| over the hemisphere, per channel,
 // by the midpoint rule in coordinates centred on the mirror direction (where the Phong lobe is

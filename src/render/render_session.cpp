@@ -171,7 +171,9 @@ RenderSession::RenderSession(OpenScene& scene, RenderRequest request) : scene_(s
     for (size_t i = 0; i < s.materials.size(); ++i)
       if (s.materials[i].transmission > 0)
         ignored_.push_back("material '" + s.materialNames[i] + "': the light its KHR_materials_transmission passes " +
-                           "through the surface, in part (--method " + method_->name() + "; pt renders it)");
+                           "through the surface, in part" +
+                           (s.materials[i].boundsVolume ? ", and its KHR_materials_volume medium's attenuation" : "") +
+                           " (--method " + method_->name() + "; pt renders it)");
   if (scene_.settings().strict && ignored_.size() > s.ignored.size()) {
     std::string list;
     for (size_t i = s.ignored.size(); i < ignored_.size(); ++i) list += "\n  " + ignored_[i];

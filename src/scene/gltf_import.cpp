@@ -38,6 +38,7 @@ const std::set<std::string> kSupportedExtensions = {"KHR_lights_punctual", "KHR_
                                                     "KHR_texture_transform", "KHR_materials_specular",
                                                     "KHR_materials_ior", "KHR_materials_sheen",
                                                     "KHR_materials_clearcoat", "KHR_materials_transmission",
+                                                    "KHR_materials_volume",
                                                     "EXT_mesh_gpu_instancing"};
 
 struct Context {
@@ -482,7 +483,7 @@ MaterialSpec defaultMaterial(const Context& c, GgxMasking masking) {
 }
 
 // The extensions that layer on or replace part of Appendix B's BRDF (bsdf/gltf_metal_rough.h):
-// KHR_materials_sheen, _clearcoat and _transmission.
+// KHR_materials_sheen, _clearcoat, _transmission and _volume.
 void readLayerExtensions(const Context& c, const tinygltf::Material& m, const std::string& path,
                          const std::string& named, MaterialSpec& spec, std::vector<std::string>& ignored) {
   // KHR_materials_sheen: a sheen layer over the base (bsdf/sheen.h).
@@ -524,6 +525,20 @@ void readLayerExtensions(const Context& c, const tinygltf::Material& m, const st
     spec.transmission = float(unitNumber(c, number(*e, "transmissionFactor", 0), at + ".transmissionFactor"));
     if (e->Has("transmissionTexture"))
       spec.transmissionTexture = textureImage(c, textureInfo(c, *e, "transmissionTexture", at), at + ".transmissionTexture");
+  }
+  // KHR_materials_volume: a thickness above 0 makes the surface a medium's boundary (light enters
+  // where it transmits). Its thicknessTexture is a rasterizer's estimate of the path length inside,
+  // which a ray tracer measures (the extension: "ray-tracers should ignore the thickness texture").
+  if (const tinygltf::Value* e = extension(m.extensions, "KHR_materials_volume")) {
+    const std::string at = path + ".extensions.KHR_materials_volume";
+    const double thickness = number(*e, "thicknessFactor", 0);
+    if (!(thickness >= 0 && thickness <= kMaxInputMagnitude)) c.fail(at + ".thicknessFactor", "must be in [0, 1e15]");
+    if (e->Has("thicknessTexture")) textureInfo(c, *e, "thicknessTexture", at);
+    const double distance = number(*e, "attenuationDistance", kInf);
+    if (!(float(distance) > 0)) c.fail(at + ".attenuationDistance", "must be above 0 (and 1e-38 or more)");
+    if (e->Has("attenuationColor")) spec.attenuationColour = rgbFactor(c, e->Get("attenuationColor"), at + ".attenuationColor", 1, "[0, 1]");
+    spec.attenuationDistance = float(distance);
+    spec.boundsVolume = thickness > 0 && spec.transmission > 0;
   }
 }
 
@@ -613,6 +628,10 @@ MaterialSpec materialSpec(const Context& c, size_t index, GgxMasking masking, st
       c.fail(path + ".extensions.KHR_materials_ior.ior", "must be 0 or in [1, 1e15]");
     spec.ni = float(ior);
   }
+  // An index of 0 reflects all (F0 = 1): nothing enters a volume. A volume's boundary is seen from
+  // both sides whatever doubleSided says (the extension: it "has no effect on volume boundaries").
+  if (spec.ni < 1) spec.boundsVolume = false;
+  if (spec.boundsVolume) spec.singleSided = false;
   return spec;
 }
 

@@ -418,6 +418,9 @@ Material classifyMaterial(const MaterialSpec& spec) {
   m.clearcoatRoughness = spec.clearcoatRoughness;
   m.clearcoatNormalScale = spec.clearcoatNormalScale;
   m.transmission = spec.transmission;
+  m.boundsVolume = spec.boundsVolume ? 1 : 0;
+  m.attenuationColour = spec.attenuationColour;
+  m.attenuationDistance = spec.attenuationDistance;
   m.specular = spec.specular;
   m.normalScale = spec.normalScale;
   m.alphaMode = spec.alphaMode;
@@ -459,7 +462,9 @@ Material classifyMaterial(const MaterialSpec& spec) {
           !std::isfinite(m.ni) || !std::isfinite(m.ks.maxComponent()) || !(m.sheenColour.maxComponent() <= 1) ||
           !(std::min({m.sheenColour.r, m.sheenColour.g, m.sheenColour.b}) >= 0) || !(m.sheenRoughness >= 0 && m.sheenRoughness <= 1) ||
           !(m.clearcoat >= 0 && m.clearcoat <= 1) || !(m.clearcoatRoughness >= 0 && m.clearcoatRoughness <= 1) ||
-          !std::isfinite(m.clearcoatNormalScale) || !(m.transmission >= 0 && m.transmission <= 1))
+          !std::isfinite(m.clearcoatNormalScale) || !(m.transmission >= 0 && m.transmission <= 1) ||
+          !(std::min({m.attenuationColour.r, m.attenuationColour.g, m.attenuationColour.b}) >= 0) ||
+          !(m.attenuationColour.maxComponent() <= 1) || !(m.attenuationDistance > 0))
         fail("glTF parameters out of their ranges");
       break;
     case MaterialType::Glass:

@@ -46,6 +46,9 @@ struct MaterialSpec {
   float clearcoatNormalScale = 1.0f;
   float transmission = 0.0f;         // glTF only: KHR_materials_transmission's (texture linear)
   TextureFile transmissionTexture;
+  bool boundsVolume = false;         // glTF only: KHR_materials_volume's (thicknessFactor > 0)
+  Rgb attenuationColour{1.0f};
+  float attenuationDistance = kInf;
   TextureFile emissive;              // glTF only (sRGB), multiplies ke
   TextureFile specularTexture, specularColourTexture;  // glTF only: KHR_materials_specular's (A linear; sRGB)
   bool doubleSided = false;          // an emitter's back faces emit too (glTF's doubleSided, a scene file's double_sided)

@@ -88,6 +88,7 @@ TEST_CASE("The dump record table gives every field at the C++ struct's offset an
                          AT(ShadingPoint, bsdf.gltf.sheenColour), AT(ShadingPoint, bsdf.gltf.sheenRoughness),
                          AT(ShadingPoint, bsdf.gltf.coat), AT(ShadingPoint, bsdf.gltf.coatAlpha),
                          AT(ShadingPoint, bsdf.gltf.coatNormal), AT(ShadingPoint, bsdf.gltf.transmission),
+                         AT(ShadingPoint, bsdf.gltf.volumeIor),
                          AT(ShadingPoint, pixel),
                          AT(ShadingPoint, sample), AT(ShadingPoint, branch), AT(ShadingPoint, triangle)}, sizeof(ShadingPoint)}},
   };

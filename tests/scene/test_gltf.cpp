@@ -12,6 +12,7 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <tuple>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
@@ -20,6 +21,7 @@
 #include "lucent/image/image.h"
 #include "lucent/image/metrics.h"
 #include "lucent/image/noise_tests.h"
+#include "lucent/methods/pathtrace.h"
 #include "lucent/scene/surface.h"
 #include "lucent/scene/texture.h"
 #include "lucent/scene/loader.h"
@@ -485,6 +487,108 @@ TEST_CASE("KHR_materials_transmission: read with its texture's R, and listed as 
   CHECK(strict.status == 1);
   CHECK_THAT(strict.output, Catch::Contains("--strict") && Catch::Contains("KHR_materials_transmission"));
   CHECK_FALSE(fs::exists(exr));
+}
+
+TEST_CASE("KHR_materials_volume: a thickness above 0 with transmission bounds a medium of the material's index and "
+          "attenuation, its thickness texture left to rasterizers",
+          "[gltf][loader][cli]") {
+  const test::TempDir dir;
+  json f = quadFile({{{"mesh", 0}}}, {0});
+  f["extensionsUsed"] = {"KHR_materials_transmission", "KHR_materials_volume", "KHR_materials_ior"};
+  f["images"] = {{{"uri", "data:image/png;base64," + base64(rgbaPng(1, 1, {153, 0, 0, 255}))}}};
+  f["textures"] = {{{"source", 0}}};
+  f["materials"][0]["extensions"]["KHR_materials_transmission"] = {{"transmissionFactor", 1}};
+  f["materials"][0]["extensions"]["KHR_materials_ior"] = {{"ior", 1.33}};
+  f["materials"][0]["extensions"]["KHR_materials_volume"] = {{"thicknessFactor", 0.2},
+                                                             {"thicknessTexture", {{"index", 0}}},
+                                                             {"attenuationDistance", 0.5},
+                                                             {"attenuationColor", {0.9, 0.5, 0.25}}};
+  Scene scene = loadWrapped(dir.path, f);
+  CHECK(scene.ignored.empty());
+  const Material& m = scene.materials[0];
+  CHECK(m.boundsVolume == 1);
+  CHECK(m.culledBehind == 0);  // doubleSided has no effect on a volume's boundary
+  CHECK(m.attenuationDistance == 0.5f);
+  CHECK(m.attenuationColour.b == 0.25f);
+  CHECK(mediumTransmittance(m, 1.0f).b == Approx(0.0625f));
+  SurfaceBsdf b = bsdfAt(scene, surfaceAt(scene, 0, 0.25f, 0.25f));
+  CHECK(b.gltf.volumeIor == 1.33f);
+  CHECK(!has(b.flags(), BsdfFlags::TwoSided));
+  // The defaults: no attenuation; without transmission, or at index 0, nothing enters: a thin wall.
+  f["materials"][0]["extensions"]["KHR_materials_volume"] = {{"thicknessFactor", 1}};
+  scene = loadWrapped(dir.path, f);
+  CHECK(scene.materials[0].boundsVolume == 1);
+  CHECK(mediumTransmittance(scene.materials[0], 1e30f).g == 1.0f);
+  f["materials"][0]["extensions"]["KHR_materials_ior"] = {{"ior", 0}};
+  CHECK(loadWrapped(dir.path, f).materials[0].boundsVolume == 0);
+  f["materials"][0]["extensions"]["KHR_materials_ior"] = {{"ior", 1.33}};
+  f["materials"][0]["extensions"]["KHR_materials_transmission"] = {{"transmissionFactor", 0}};
+  CHECK(loadWrapped(dir.path, f).materials[0].boundsVolume == 0);
+  f["materials"][0]["extensions"]["KHR_materials_transmission"] = {{"transmissionFactor", 1}};
+  f["materials"][0]["extensions"]["KHR_materials_volume"] = {{"thicknessFactor", 0}};
+  scene = loadWrapped(dir.path, f);
+  CHECK(scene.materials[0].boundsVolume == 0);
+  CHECK(scene.materials[0].culledBehind == 1);
+  CHECK(has(bsdfAt(scene, surfaceAt(scene, 0, 0.25f, 0.25f)).flags(), BsdfFlags::TwoSided));
+  for (const auto& [field, value, message] :
+       {std::tuple<const char*, json, const char*>{"thicknessFactor", -1, "thicknessFactor: must be in [0, 1e15]"},
+        {"attenuationDistance", 0, "attenuationDistance: must be above 0"},
+        {"attenuationColor", json{1.5, 0, 0}, "attenuationColor: every value must be in [0, 1]"},
+        {"thicknessTexture", json{{"texCoord", 0}}, "thicknessTexture.index: is required"}}) {
+    f["materials"][0]["extensions"]["KHR_materials_volume"] = {{"thicknessFactor", 1}};
+    f["materials"][0]["extensions"]["KHR_materials_volume"][field] = value;
+    INFO(field);
+    REQUIRE_THROWS_WITH(loadWrapped(dir.path, f),
+                        Catch::Contains(std::string("materials[0].extensions.KHR_materials_volume.") + message));
+  }
+  // pmfg lists the medium among what it leaves out.
+  f["materials"][0]["extensions"]["KHR_materials_volume"] = {{"thicknessFactor", 1}, {"attenuationDistance", 2}};
+  const std::string file = wrapGltf(dir.path, f), exr = dir / "quad.exr";
+  const test::CliRun pmfg =
+      test::runLucent("render " + file + " --method pmfg --photons 1000 --gather-rays 4 --spp 1 --resolution 8x8 -q -o " + exr);
+  INFO(pmfg.output);
+  REQUIRE(pmfg.status == 0);
+  const json line = json::parse(pmfg.output.substr(pmfg.output.find('{')));
+  REQUIRE(line.contains("ignored"));
+  CHECK_THAT(line["ignored"][0].get<std::string>(), Catch::Contains("KHR_materials_volume"));
+}
+
+TEST_CASE("A closed glTF volume of single-sided faces under a constant sky vanishes: light enters, refracts and "
+          "leaves through its back faces",
+          "[gltf][pathtrace][furnace]") {
+  // Six of quadFile's unit quads turned into a cube, each facing out, doubleSided false; a white
+  // lossless boundary of index 1.5 (the white furnace: every microfacet reflects F and passes 1 - F).
+  // Culling the back faces inside would let light leave unrefracted, 1 / 1.5^2 of it.
+  const test::TempDir dir;
+  const double h = std::sqrt(0.5);
+  json f = quadFile({{{"mesh", 0}, {"translation", {0, 0, 1}}},
+                     {{"mesh", 0}, {"translation", {1, 0, 0}}, {"rotation", {0, 1, 0, 0}}},
+                     {{"mesh", 0}, {"translation", {1, 0, 1}}, {"rotation", {0, h, 0, h}}},
+                     {{"mesh", 0}, {"rotation", {0, -h, 0, h}}},
+                     {{"mesh", 0}, {"translation", {0, 1, 1}}, {"rotation", {-h, 0, 0, h}}},
+                     {{"mesh", 0}, {"rotation", {h, 0, 0, h}}}},
+                    {0, 1, 2, 3, 4, 5});
+  f["nodes"].erase(6);  // the point light
+  f["scenes"][0]["nodes"] = {0, 1, 2, 3, 4, 5};
+  f.erase("extensions");
+  f["extensionsUsed"] = {"KHR_materials_transmission", "KHR_materials_volume"};
+  f["materials"][0] = {{"name", "glass"},
+                       {"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 1}}, {"metallicFactor", 0},
+                                                 {"roughnessFactor", 0.1}}},
+                       {"extensions", {{"KHR_materials_transmission", {{"transmissionFactor", 1}}},
+                                       {"KHR_materials_volume", {{"thicknessFactor", 1}}}}}};
+  const std::string model = writeFile(dir.path, "model.gltf", f);
+  const json sceneFile = {{"camera", {{"eye", {2.2, 1.9, 2.6}}, {"look_at", {0.5, 0.5, 0.5}}, {"up", {0, 1, 0}},
+                                      {"fov_y", 30}, {"resolution", {24, 24}}}},
+                          {"meshes", {{{"gltf", model}}}},
+                          {"lights", {{{"type", "environment"}, {"radiance", {0.5, 1.0, 2.0}}}}}};
+  const Scene scene = loadScene(writeFile(dir.path, "scene.json", sceneFile), LoadOptions(true));
+  REQUIRE(scene.ignored.empty());
+  const Visibility vis(scene);
+  PathTraceOptions opt;
+  opt.common.spp = 64;
+  opt.common.seed = 4;
+  test::requireImageMean(renderPathTraced(scene, vis, opt).image, Rgb(0.5f, 1.0f, 2.0f));
 }
 
 TEST_CASE("A glTF base colour texture, from a data URI or a buffer view, is read as its sRGB codes", "[gltf][loader]") {

@@ -108,28 +108,6 @@ double appendixB(const Parameters& p, Vec3 wo, Vec3 wi, int channel) {
   return (1 - p.metallic) * dielectric + p.metallic * metal;
 }
 
-// The mean of sampleBsdf's weights (what a path tracer multiplies by; invalid samples weigh 0) and
-// its standard error, per channel.
-struct MeanWeight {
-  double mean[3] = {0, 0, 0}, error[3] = {0, 0, 0};
-};
-MeanWeight meanSampleWeight(const SurfaceBsdf& b, Vec3 wo, int n, uint64_t seed) {
-  Rng rng(seed);
-  double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
-  for (int i = 0; i < n; ++i) {
-    const float u = rng.uniform();
-    const BsdfSample s = sampleBsdf(b, wo, u, rng.uniform2());
-    if (!s.valid) continue;
-    for (int c = 0; c < 3; ++c) sum[c] += s.weight[c], sum2[c] += double(s.weight[c]) * s.weight[c];
-  }
-  MeanWeight m;
-  for (int c = 0; c < 3; ++c) {
-    m.mean[c] = sum[c] / n;
-    m.error[c] = std::sqrt(std::max(0.0, sum2[c] / n - m.mean[c] * m.mean[c]) / n);
-  }
-  return m;
-}
-
 // The chi-square test of a lobe's sampling against bsdfPdf (two seeds drawn from `seed`), and the
 // furnace: the mean sample weight is the directional albedo (numerical integration, test_bsdfs.h),
 // within 4.5 standard errors and the rule's 0.2%.
@@ -144,7 +122,7 @@ void checkSamplingAndAlbedo(const SurfaceBsdf& b, Vec3 wo, uint64_t& seed) {
   opt.mass = std::nullopt;
   CHECK_CHI2_PASS(chi2::testSphere(sampler, [&](Vec3 wi) { return bsdfPdf(b, wo, wi); }, opt));
   const Rgb quadrature = test::directionalAlbedo(b, wo);
-  const MeanWeight m = meanSampleWeight(b, wo, 400'000, seed++);
+  const test::MeanWeight m = test::meanSampleWeight(b, wo, 400'000, seed++);
   for (int c = 0; c < 3; ++c) {
     INFO("channel " << c << ": quadrature " << quadrature[c] << ", sampled " << m.mean[c] << " +- " << m.error[c]);
     CHECK(std::abs(m.mean[c] - quadrature[c]) <= 4.5 * m.error[c] + 2e-3 * quadrature[c]);
@@ -260,7 +238,7 @@ TEST_CASE("glTF furnace: the sample weights' mean is the directional albedo, met
     const SurfaceBsdf b = bsdfOf(p);
     const Vec3 wo = directionAt(theta, 0.4);
     const Rgb quadrature = test::directionalAlbedo(b, wo);
-    const MeanWeight m = meanSampleWeight(b, wo, n, seed++);
+    const test::MeanWeight m = test::meanSampleWeight(b, wo, n, seed++);
     for (int c = 0; c < 3; ++c) {
       INFO("metallic " << p.metallic << ", roughness " << p.roughness << ", theta " << theta << ", channel " << c
                        << ": quadrature " << quadrature[c] << ", sampled " << m.mean[c] << " +- " << m.error[c]);

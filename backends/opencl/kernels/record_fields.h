@@ -21,7 +21,7 @@
   FIELD(ShadingPoint, bsdf.gltf.masking) FIELD(ShadingPoint, bsdf.gltf.sheenColour)                 \
   FIELD(ShadingPoint, bsdf.gltf.sheenRoughness) FIELD(ShadingPoint, bsdf.gltf.coat)                 \
   FIELD(ShadingPoint, bsdf.gltf.coatAlpha) FIELD(ShadingPoint, bsdf.gltf.coatNormal)                 \
-  FIELD(ShadingPoint, bsdf.gltf.transmission)                                                        \
+  FIELD(ShadingPoint, bsdf.gltf.transmission) FIELD(ShadingPoint, bsdf.gltf.volumeIor)                \
   FIELD(ShadingPoint, pixel) FIELD(ShadingPoint, sample)                                             \
   FIELD(ShadingPoint, branch) FIELD(ShadingPoint, triangle)                                          \
   RECORD(RadianceCache) FIELD(RadianceCache, position) FIELD(RadianceCache, normal)                  \

@@ -33,7 +33,7 @@ typedef struct {
 } UniformGrid;
 
 // SurfaceBsdf: the material's kind (include/lucent/scene/bsdf/kinds.h) and its lobe's parameters
-// (include/lucent/scene/bsdf/*.h) in a union of 84 bytes (the largest lobe's).
+// (include/lucent/scene/bsdf/*.h) in a union of 88 bytes (the largest lobe's).
 typedef struct {
   Rgb kd;
 } LambertianLobe;
@@ -60,6 +60,7 @@ typedef struct {
   float coat, coatAlpha;
   Vec3 coatNormal;  // in the shading frame of the point's normal
   float transmission;
+  float volumeIor;
 } GltfMetalRoughLobe;
 
 typedef struct {

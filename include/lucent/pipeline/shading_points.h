@@ -37,7 +37,7 @@ struct ShadingPoint {
   uint32_t branch = 0;   // index of this point among its camera sample's (specular splitting)
   uint32_t triangle = 0; // the triangle hit (for methods that keep light per triangle)
 };
-static_assert(sizeof(ShadingPoint) == 164 && std::is_trivially_copyable_v<ShadingPoint>, "dumped as records");
+static_assert(sizeof(ShadingPoint) == 168 && std::is_trivially_copyable_v<ShadingPoint>, "dumped as records");
 
 struct EyePathSettings {
   int spp = 1;  // camera samples per pixel, stratified over the pixel and drawn through its filter

@@ -89,7 +89,7 @@ struct SurfaceBsdf {
                 #Lobe " fits SurfaceBsdf's union");
 LUCENT_MATERIAL_KINDS(LUCENT_LOBE_FITS)
 #undef LUCENT_LOBE_FITS
-static_assert(sizeof(SurfaceBsdf) == 88 && std::is_trivially_copyable_v<SurfaceBsdf>,
+static_assert(sizeof(SurfaceBsdf) == 92 && std::is_trivially_copyable_v<SurfaceBsdf>,
               "SurfaceBsdf is a fixed plain record shared with dumps and GPU backends");
 
 // What a kind's lobes may do: SurfaceBsdf::flags says what one does.
@@ -149,10 +149,13 @@ inline Rgb reflectanceBound(const SurfaceBsdf& b) {
 }
 
 // The BSDF's value and the density with which sampleBsdf picks wi, computed together: zero for
-// specular lobes (Dirac deltas), unless wo is above the surface, and unless wi is too or the lobe
-// transmits.
+// specular lobes (Dirac deltas), unless wo is above the surface (or below a lobe that keeps its
+// inside: a volume's boundary), and unless wi is on wo's side or the lobe transmits.
 inline BsdfValue evalBsdfAndPdf(const SurfaceBsdf& b, Vec3 wo, Vec3 wi) {
-  if (b.isDelta() || wo.z <= 0 || !(wi.z > 0 || (wi.z < 0 && has(b.flags(), BsdfFlags::Transmission))))
+  const BsdfFlags flags = b.flags();
+  const bool viewerSide = wo.z > 0 || (wo.z < 0 && !has(flags, BsdfFlags::TwoSided));
+  const bool sameSide = wo.z > 0 ? wi.z > 0 : wi.z < 0, otherSide = wo.z > 0 ? wi.z < 0 : wi.z > 0;
+  if (b.isDelta() || !viewerSide || !(sameSide || (otherSide && has(flags, BsdfFlags::Transmission))))
     return {Rgb(0.0f), 0.0f};
   return b.visit([&](const auto& lobe) { return lobe.evaluate(wo, wi); });
 }

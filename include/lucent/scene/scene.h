@@ -80,8 +80,14 @@ struct Material {
   // times transmissionTexture's R (linear); 0: opaque.
   float transmission = 0.0f;
   int32_t transmissionTexture = -1;
+  // KHR_materials_volume (thicknessFactor > 0): 1 where the mesh bounds a medium of index ni on its
+  // winding's inside, which light crossing a length x keeps attenuationColour^(x /
+  // attenuationDistance) of (Beer-Lambert; +inf: none; mediumTransmittance).
+  uint32_t boundsVolume = 0;
+  Rgb attenuationColour{1.0f};
+  float attenuationDistance = kInf;
 };
-static_assert(sizeof(Material) == 172, "Material is a fixed-size record shared with GPU backends");
+static_assert(sizeof(Material) == 192, "Material is a fixed-size record shared with GPU backends");
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear

@@ -218,7 +218,19 @@ inline SurfaceBsdf gltfBsdf(const Material& m, const GltfFactors& f) {
     b.coatNormal = f.clearcoatNormal;
   }
   b.transmission = f.transmission;
+  if (m.boundsVolume) b.volumeIor = m.ni;
   return b;
+}
+
+// What light keeps of itself crossing a length x of the medium material m bounds (Beer-Lambert,
+// KHR_materials_volume): attenuationColour^(x / attenuationDistance) per channel, 1 with no
+// attenuation, 0 over an infinite length with some.
+inline Rgb mediumTransmittance(const Material& m, float x) {
+  Rgb t(1.0f);
+  if (!(m.attenuationDistance < kInf)) return t;
+  for (int c = 0; c < 3; ++c)
+    if (m.attenuationColour[c] < 1.0f) t[c] = std::pow(m.attenuationColour[c], x / m.attenuationDistance);
+  return t;
 }
 
 // A material's lobe for diffuse colour kd (its Kd, or Kd times its texture and vertex colours), the
@@ -294,6 +306,19 @@ inline Rgb emittedRadiance(const Scene& scene, uint32_t tri, float b1, float b2,
   if (!(m.clearcoat > 0)) return le;
   const SurfaceBsdf bsdf = bsdfAt(scene, surfaceAt(scene, tri, b1, b2));
   return bsdf.type == MaterialType::Gltf ? le * (1.0f - bsdf.gltf.coatWeight(towards)) : le;
+}
+
+// The medium a ray leaving surface point sp along d travels in, as an index into Scene::materials,
+// kNoMedium for none: where the lobe keeps an inside (a volume's boundary, glass) the material's
+// if d goes in and none if it goes out; elsewhere `current`, the medium the path arrived in (media
+// do not nest). Only media that attenuate are followed.
+constexpr uint32_t kNoMedium = ~0u;
+inline uint32_t mediumTowards(const Scene& scene, const SurfacePoint& sp, const SurfaceBsdf& bsdf, Vec3 d,
+                              uint32_t current) {
+  const BsdfFlags flags = bsdf.flags();
+  if (!has(flags, BsdfFlags::Transmission) || has(flags, BsdfFlags::TwoSided)) return current;
+  if (!(scene.materials[sp.materialId].attenuationDistance < kInf)) return kNoMedium;
+  return dot(d, sp.geometricNormal) < 0 ? sp.materialId : kNoMedium;
 }
 
 // Whether a scattered direction wi lies on the other side of the geometric surface (normal ng) than

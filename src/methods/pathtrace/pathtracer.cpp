@@ -54,6 +54,7 @@ struct Path {
   Vec3 lastPosition;
   int gatheringVertices = 0;  // non-specular vertices the path has scattered from so far
   int bounce = 0;
+  uint32_t medium = kNoMedium;  // the attenuating medium the ray travels in (mediumTowards)
   // With --paths, where the light is also split by path (the wave's, kept apart so that a path
   // without it stays small: waves of paths 108 bytes longer traced the Cornell box 4% slower).
   PathParts* parts = nullptr;
@@ -134,6 +135,7 @@ class PathTracer {
   bool shade(Path& path, const Hit& hit, ShadowQuery& shadow, bool& queued) const {
     queued = false;
     const Ray& ray = path.ray;
+    if (path.medium != kNoMedium) path.beta *= mediumTransmittance(scene_.materials[path.medium], hit.found() ? hit.t : kInf);
     if (!hit.found()) {
       if (scene_.environment.present) {
         const Rgb le = environmentRadiance(scene_.environment, ray.direction);
@@ -160,6 +162,8 @@ class PathTracer {
     if (!bsdf.isDelta()) {
       queued = sampleDirect(sp, bsdf, frame, woLocal, u.lightPoint, shadow);
       shadow.contribution *= path.beta;
+      const uint32_t medium = queued ? mediumTowards(scene_, sp, bsdf, shadow.ray.direction, path.medium) : kNoMedium;
+      if (medium != kNoMedium) shadow.contribution *= mediumTransmittance(scene_.materials[medium], shadow.ray.tMax);
       shadow.verticesBefore = ++path.gatheringVertices;
       if (path.gatheringVertices > 1) shadow.diffuseShare = path.firstDiffuseShare;
     }
@@ -171,6 +175,7 @@ class PathTracer {
       path.firstDiffuseShare = diffuseShare(bsdf, woLocal, bs.wi);
     const Vec3 wi = frame.toWorld(bs.wi);
     if (leaksThroughSurface(wo, wi, sp.geometricNormal, bs.wi.z * woLocal.z < 0)) return false;
+    path.medium = mediumTowards(scene_, sp, bsdf, wi, path.medium);
     return continuePath(path, bs.weight, bs.pdf, bs.delta, sp.position,
                         {offsetOrigin(sp.position, sp.geometricNormal, wi), wi});
   }
@@ -369,10 +374,11 @@ class PathTracer {
   // where roulette may end the path on the next bounce, that bounce's roulette pair.
   uint32_t lanePairs(const Path& path) const { return path.bounce + 1 >= opt_.rouletteDepth ? 3 : 2; }
 
-  // Hits that DiffuseLanes shades: Lambertian surfaces below the depth limit (every one; shade()
-  // takes the other materials' hits).
+  // Hits that DiffuseLanes shades: Lambertian surfaces below the depth limit, reached outside any
+  // medium (every one; shade() takes the other materials' hits and the attenuated paths).
   bool inDiffuseLane(const Path& path, const Hit& hit) const {
-    return hit.found() && path.bounce < opt_.maxDepth && material(hit.triangle).type == MaterialType::Diffuse;
+    return hit.found() && path.bounce < opt_.maxDepth && path.medium == kNoMedium &&
+           material(hit.triangle).type == MaterialType::Diffuse;
   }
 
   // The lane's surface data and the random numbers shade draws (drawBounceNumbers): the
