@@ -167,13 +167,18 @@ RenderSession::RenderSession(OpenScene& scene, RenderRequest request) : scene_(s
   }
   checkOutputDirectories(*method_, options_->values(), s);
   ignored_ = s.ignored;
-  if (!method_->rendersTransmission())
-    for (size_t i = 0; i < s.materials.size(); ++i)
-      if (s.materials[i].transmission > 0)
-        ignored_.push_back("material '" + s.materialNames[i] + "': the light its KHR_materials_transmission passes " +
-                           "through the surface, in part" +
-                           (s.materials[i].boundsVolume ? ", and its KHR_materials_volume medium's attenuation" : "") +
-                           " (--method " + method_->name() + "; pt renders it)");
+  const TransmissionRendered transmission = method_->rendersTransmission();
+  for (size_t i = 0; i < s.materials.size(); ++i) {
+    const Material& m = s.materials[i];
+    if (!(m.transmission > 0) || transmission == TransmissionRendered::All) continue;
+    const std::string medium = "its KHR_materials_volume medium's attenuation";
+    const std::string left = transmission == TransmissionRendered::InPart
+                                 ? std::string("the light its KHR_materials_transmission passes through the surface, in part") +
+                                       (m.boundsVolume ? ", and " + medium : "")
+                                 : m.boundsVolume ? medium : "";
+    if (!left.empty())
+      ignored_.push_back("material '" + s.materialNames[i] + "': " + left + " (--method " + method_->name() + "; pt renders it)");
+  }
   if (scene_.settings().strict && ignored_.size() > s.ignored.size()) {
     std::string list;
     for (size_t i = s.ignored.size(); i < ignored_.size(); ++i) list += "\n  " + ignored_[i];

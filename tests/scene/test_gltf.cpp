@@ -150,15 +150,18 @@ Scene loadWrapped(const fs::path& dir, const json& gltf, bool quiet = true) {
   return loadScene(wrapGltf(dir, gltf), LoadOptions(quiet));
 }
 
-// The first entry of the `ignored` list in the JSON line of a small pmfg render of scene `file`.
-std::string pmfgIgnored(const std::string& file, const std::string& exr) {
-  const test::CliRun pmfg =
-      test::runLucent("render " + file + " --method pmfg --photons 1000 --gather-rays 4 --spp 1 --resolution 8x8 -q -o " + exr);
-  INFO(pmfg.output);
-  REQUIRE(pmfg.status == 0);
-  const json line = json::parse(pmfg.output.substr(pmfg.output.find('{')));
-  REQUIRE(line.contains("ignored"));
-  return line["ignored"][0].get<std::string>();
+// The `ignored` list in the JSON line of a small render of scene `file` by `method` (pmfg, micro),
+// one entry per line.
+std::string ignoredBy(const std::string& method, const std::string& file, const std::string& exr) {
+  const std::string options = method == "pmfg" ? " --photons 1000 --gather-rays 4" : "";
+  const test::CliRun r =
+      test::runLucent("render " + file + " --method " + method + options + " --spp 1 --resolution 8x8 -q -o " + exr);
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  const json line = json::parse(r.output.substr(r.output.find('{')));
+  std::string list;
+  for (const json& entry : line.value("ignored", json::array())) list += entry.get<std::string>() + "\n";
+  return list;
 }
 
 // A 2 x 1 texture's sRGB codes, and the PNG of them that Lucent's encoder writes from their linear
@@ -462,7 +465,8 @@ TEST_CASE("lucent render --strict refuses a scene whose files hold what the rend
   CHECK(plain.status == 0);
 }
 
-TEST_CASE("KHR_materials_transmission: read with its texture's R, and listed as left out by methods other than pt",
+TEST_CASE("KHR_materials_transmission: read with its texture's R, rendered by pt, pmfg and purcell, listed as "
+          "left out by the point-based methods",
           "[gltf][loader][cli]") {
   const test::TempDir dir;
   json f = quadFile({{{"mesh", 0}}}, {0});
@@ -479,16 +483,18 @@ TEST_CASE("KHR_materials_transmission: read with its texture's R, and listed as 
   f["materials"][0]["extensions"]["KHR_materials_transmission"] = {{"transmissionFactor", 1.5}};
   REQUIRE_THROWS_WITH(loadWrapped(dir.path, f),
                       Catch::Contains("materials[0].extensions.KHR_materials_transmission.transmissionFactor: must be in [0, 1]"));
-  // pt renders it; pmfg (as every other method) says what it leaves out, and --strict refuses it.
+  // pt and the photon maps render it; micro (as the other point-based methods) says what it leaves
+  // out, and --strict refuses it.
   f["materials"][0]["extensions"]["KHR_materials_transmission"] = {{"transmissionFactor", 0.5}};
   const std::string file = wrapGltf(dir.path, f), exr = dir / "quad.exr";
   const test::CliRun pt = test::runLucent("render " + file + " --spp 1 --resolution 8x8 -q --strict -o " + exr);
   INFO(pt.output);
   CHECK(pt.status == 0);
   CHECK(pt.output.find("\"ignored\"") == std::string::npos);
-  CHECK_THAT(pmfgIgnored(file, exr), Catch::Contains("KHR_materials_transmission") && Catch::Contains("pmfg"));
+  CHECK(ignoredBy("pmfg", file, exr).empty());
+  CHECK_THAT(ignoredBy("micro", file, exr), Catch::Contains("KHR_materials_transmission") && Catch::Contains("micro"));
   fs::remove(exr);
-  const test::CliRun strict = test::runLucent("render " + file + " --method pmfg --spp 1 --resolution 8x8 -q --strict -o " + exr);
+  const test::CliRun strict = test::runLucent("render " + file + " --method micro --spp 1 --resolution 8x8 -q --strict -o " + exr);
   CHECK(strict.status == 1);
   CHECK_THAT(strict.output, Catch::Contains("--strict") && Catch::Contains("KHR_materials_transmission"));
   CHECK_FALSE(fs::exists(exr));
@@ -546,10 +552,13 @@ TEST_CASE("KHR_materials_volume: a thickness above 0 with transmission bounds a 
     REQUIRE_THROWS_WITH(loadWrapped(dir.path, f),
                         Catch::Contains(std::string("materials[0].extensions.KHR_materials_volume.") + message));
   }
-  // pmfg lists the medium among what it leaves out.
+  // pmfg renders the boundary, not the medium's attenuation; micro leaves out both.
   f["materials"][0]["extensions"]["KHR_materials_volume"] = {{"thicknessFactor", 1}, {"attenuationDistance", 2}};
   const std::string file = wrapGltf(dir.path, f), exr = dir / "quad.exr";
-  CHECK_THAT(pmfgIgnored(file, exr), Catch::Contains("KHR_materials_volume"));
+  const std::string pmfg = ignoredBy("pmfg", file, exr), micro = ignoredBy("micro", file, exr);
+  CHECK_THAT(pmfg, Catch::Contains("KHR_materials_volume medium's attenuation"));
+  CHECK_THAT(pmfg, !Catch::Contains("KHR_materials_transmission"));
+  CHECK_THAT(micro, Catch::Contains("KHR_materials_transmission") && Catch::Contains("KHR_materials_volume"));
 }
 
 TEST_CASE("A closed glTF volume of single-sided faces under a constant sky vanishes: light enters, refracts and "

@@ -19,6 +19,11 @@
 
 namespace lucent {
 
+// What of KHR_materials_transmission's light a method renders: some of it (the point-based
+// methods take the diffuse part); all that passes surfaces, thin walls' and media's boundaries, but
+// not a KHR_materials_volume medium's attenuation (the photon maps); or all of it.
+enum class TransmissionRendered { InPart, ThroughSurfaces, All };
+
 // A method's options, set from values by name over its defaults and checked: the method's typed
 // options struct inside (Method::resolve).
 class MethodOptions {
@@ -53,9 +58,9 @@ class Method {
   // has when stopped (a method that does not refuses a control that asks for checkpoints or a
   // resume).
   virtual bool interruptible() const = 0;
-  // Whether it renders all the light a glTF material's KHR_materials_transmission passes through a
-  // surface (a render by one that does not lists such materials as left out).
-  virtual bool rendersTransmission() const = 0;
+  // What of the light glTF materials pass through surfaces it renders (a render lists what it leaves
+  // out).
+  virtual TransmissionRendered rendersTransmission() const = 0;
 };
 
 // A method whose options are the struct Options, declared by `table`, rendered by `render`.
@@ -64,7 +69,7 @@ class DeclaredMethod final : public Method {
  public:
   using RenderFn = RenderOutput (*)(const Scene&, const Visibility&, const Options&, const RenderControl&);
   DeclaredMethod(std::string name, std::string summary, const OptionTable<Options>& table, RenderFn render,
-                 bool interruptible, bool rendersTransmission)
+                 bool interruptible, TransmissionRendered rendersTransmission)
       : name_(std::move(name)), summary_(std::move(summary)), table_(table), render_(render),
         interruptible_(interruptible), rendersTransmission_(rendersTransmission) {}
   const std::string& name() const override { return name_; }
@@ -92,7 +97,7 @@ class DeclaredMethod final : public Method {
   }
   using Method::render;
   bool interruptible() const override { return interruptible_; }
-  bool rendersTransmission() const override { return rendersTransmission_; }
+  TransmissionRendered rendersTransmission() const override { return rendersTransmission_; }
 
  private:
   struct Resolved final : MethodOptions {
@@ -105,7 +110,8 @@ class DeclaredMethod final : public Method {
   std::string name_, summary_;
   const OptionTable<Options>& table_;
   RenderFn render_;
-  bool interruptible_, rendersTransmission_;
+  bool interruptible_;
+  TransmissionRendered rendersTransmission_;
 };
 
 }  // namespace lucent

@@ -69,7 +69,7 @@ const Method& envPbgiMethod() {
       "envpbgi",
       "point-based GI under environment lighting (AMD; Harada 2014): primary and secondary visible points, "
       "propagation, radiance caches",
-      envPbgiOptionTable(), renderEnvPbgi, false, false);
+      envPbgiOptionTable(), renderEnvPbgi, false, TransmissionRendered::InPart);
   return method;
 }
 

@@ -75,7 +75,7 @@ const OptionTable<MicroRenderOptions>& microOptionTable() {
 const Method& microMethod() {
   static const DeclaredMethod<MicroRenderOptions> method(
       "micro", "micro-rendering (Ritschel et al. 2009): final gathering by rasterizing a point hierarchy",
-      microOptionTable(), renderMicro, false, false);
+      microOptionTable(), renderMicro, false, TransmissionRendered::InPart);
   return method;
 }
 

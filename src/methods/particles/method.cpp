@@ -67,7 +67,7 @@ const Method& particlesMethod() {
       "particles",
       "diffuse GI in particle spaces (Chang, Park and Ihm 2015): area particles and links, radiance particles "
       "and estimation lists",
-      particleOptionTable(), renderParticles, false, false);
+      particleOptionTable(), renderParticles, false, TransmissionRendered::InPart);
   return method;
 }
 

@@ -80,7 +80,7 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
 const Method& pathTraceMethod() {
   static const DeclaredMethod<PathTraceOptions> method(
       "pt", "the unbiased reference path tracer: next-event estimation and BSDF sampling by MIS",
-      pathTraceOptionTable(), renderPathTraced, true, true);
+      pathTraceOptionTable(), renderPathTraced, true, TransmissionRendered::All);
   return method;
 }
 

@@ -63,5 +63,14 @@ inline bool photonLights(Vec3 incoming, Vec3 facing, Vec3 offset, float d2, cons
   return (dot(incoming, side.shadingNormal) > 0) & (c > kSameSurfaceCos) &
          (h * h <= d2 * (1 - c + kOffPlane * kOffPlane));
 }
+// Which photons light a transmitting surface point through its surface (a thin wall's other face,
+// a volume's inside): those arriving from below its shading normal, landed on the surface's other
+// face (facing within 60 degrees of its facing normal turned over), off its tangent plane by no
+// more than photonLights allows.
+inline bool photonLightsThrough(Vec3 incoming, Vec3 facing, Vec3 offset, float d2, const SurfaceSide& side) {
+  const float c = -dot(facing, side.facingNormal), h = dot(offset, side.facingNormal);
+  return (dot(incoming, side.shadingNormal) < 0) & (c > kSameSurfaceCos) &
+         (h * h <= d2 * (1 - c + kOffPlane * kOffPlane));
+}
 
 }  // namespace lucent

@@ -4,7 +4,8 @@
 //   L(x, wo) ~ sum over photons p near x of f(x, wo, wi_p) * Phi_p / (pi r^2),
 //
 // over the photons within radius r of x that light the viewer's side of its surface (photonLights:
-// photons on the other side of a thin wall, or on another wall at a corner, do not). r is the
+// photons on the other side of a thin wall, or on another wall at a corner, do not), and where the
+// surface transmits those on its other face that light it through (photonLightsThrough). r is the
 // radius of the search: the k-th nearest photon's distance on the kd-tree; the maximum radius when
 // fewer than k photons lie within it. Here the point, the settings, the sums and the kd-tree's
 // estimate; Purcell's grid maps add theirs (src/methods/photonmap/radiance_estimate.h).
@@ -71,17 +72,20 @@ inline Rgb diffuseRadiance(Rgb inside, Rgb kd, float radius2) { return inside * 
 struct Accumulator {
   const EstimatePoint& q;
   SurfaceSide side;
-  bool diffuse;
+  bool diffuse, transmits;
   Rgb sum, farthest;
   float farthestD2 = -1;
   uint32_t used = 0;
 
   explicit Accumulator(const EstimatePoint& point)
-      : q(point), side(point.side()), diffuse(point.bsdf.onlyDiffuse()) {}
+      : q(point), side(point.side()), diffuse(point.bsdf.onlyDiffuse()),
+        transmits(has(point.bsdf.flags(), BsdfFlags::Transmission)) {}
   [[gnu::always_inline]] void add(const Photon& p, float d2) {
-    // Which side the photon came from needs no unit incoming direction; the BRDF of a glossy
-    // surface does.
-    const bool front = photonLights(octahedralDirection(p.direction), photonFacing(p), p.position - q.position, d2, side);
+    // Which side the photon came from needs no unit incoming direction; the BSDF of a glossy
+    // surface does. A surface that transmits is never only diffuse.
+    const Vec3 incoming = octahedralDirection(p.direction), facing = photonFacing(p), offset = p.position - q.position;
+    const bool front = photonLights(incoming, facing, offset, d2, side) ||
+                       (transmits && photonLightsThrough(incoming, facing, offset, d2, side));
     const Rgb share = diffuse ? p.power * float(front) : front ? glossyShare(p) : Rgb();
     used += front;
     sum += share;
