@@ -57,20 +57,22 @@ struct SurfaceSide {
   Vec3 facingNormal;   // the geometric normal on the viewer's side
 };
 // incoming: the photon's octahedralDirection (any length); facing: photonFacing(photon); offset:
-// the photon's position less the point's, and d2 its squared length (distance2).
-inline bool photonLights(Vec3 incoming, Vec3 facing, Vec3 offset, float d2, const SurfaceSide& side) {
-  const float c = dot(facing, side.facingNormal), h = dot(offset, side.facingNormal);
-  return (dot(incoming, side.shadingNormal) > 0) & (c > kSameSurfaceCos) &
+// the photon's position less the point's, and d2 its squared length (distance2); face: 1 for the
+// viewer's side, -1 for the other face (photonLightsThrough).
+inline bool photonLightsFace(Vec3 incoming, Vec3 facing, Vec3 offset, float d2, const SurfaceSide& side, float face) {
+  const float c = face * dot(facing, side.facingNormal), h = dot(offset, side.facingNormal);
+  return (face * dot(incoming, side.shadingNormal) > 0) & (c > kSameSurfaceCos) &
          (h * h <= d2 * (1 - c + kOffPlane * kOffPlane));
+}
+inline bool photonLights(Vec3 incoming, Vec3 facing, Vec3 offset, float d2, const SurfaceSide& side) {
+  return photonLightsFace(incoming, facing, offset, d2, side, 1.0f);
 }
 // Which photons light a transmitting surface point through its surface (a thin wall's other face,
 // a volume's inside): those arriving from below its shading normal, landed on the surface's other
 // face (facing within 60 degrees of its facing normal turned over), off its tangent plane by no
 // more than photonLights allows.
 inline bool photonLightsThrough(Vec3 incoming, Vec3 facing, Vec3 offset, float d2, const SurfaceSide& side) {
-  const float c = -dot(facing, side.facingNormal), h = dot(offset, side.facingNormal);
-  return (dot(incoming, side.shadingNormal) < 0) & (c > kSameSurfaceCos) &
-         (h * h <= d2 * (1 - c + kOffPlane * kOffPlane));
+  return photonLightsFace(incoming, facing, offset, d2, side, -1.0f);
 }
 
 }  // namespace lucent
