@@ -98,13 +98,12 @@ struct ShadowPackets {
 
 Rgb directLight(const Scene& scene, const DirectLights& lights, const Visibility& vis, const ShadingPoint& point,
                 int samples, uint64_t seed, uint64_t& rays) {
-  if (samples <= 0) return {};
   Rgb sampled, exact;
   ShadowPackets packets(vis, rays);
   shadowSamples(scene, lights, point, samples, seed,
                 [&](const Ray& ray, Rgb c, bool isExact) { packets.add(ray, c, isExact ? &exact : &sampled); });
   packets.flush();
-  return sampled * (1.0f / float(samples)) + exact;
+  return samples > 0 ? sampled * (1.0f / float(samples)) + exact : exact;
 }
 
 namespace {

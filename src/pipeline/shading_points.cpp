@@ -9,6 +9,7 @@
 #include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
 #include "lucent/core/sampling.h"
+#include "lucent/pipeline/direct_light.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/surface.h"
 #include "lucent/core/stop.h"
@@ -38,10 +39,15 @@ struct SampleResult {
 };
 
 // Follows one camera ray, whose closest hit is given, through specular bounces; appends the shading
-// points it reaches.
-SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const EyePathSettings& settings, Ray ray,
-                               float filterWeight, const Hit& cameraHit, uint32_t pixel, uint32_t sample, Rng& rng,
-                               FirstHit* firstHit, std::vector<ShadingPoint>& points, uint64_t& rays) {
+// points it reaches. Specular are mirrors and glass, and the smooth surfaces that transmit (a lobe
+// with a specular part that transmits: glTF's glass and shells of small roughness), followed by a
+// sample of their lobe: an estimate from photons' directions under so narrow a lobe would be
+// noise. What other light reaches such a surface the chain's next hits bring; the point, spot and
+// directional lights, which no ray meets, are taken at it by a shadow ray each.
+SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const DirectLights& lights,
+                               const EyePathSettings& settings, Ray ray, float filterWeight, const Hit& cameraHit,
+                               uint32_t pixel, uint32_t sample, Rng& rng, FirstHit* firstHit,
+                               std::vector<ShadingPoint>& points, uint64_t& rays) {
   SampleResult out;
   BranchSlot stack[kMaxBranchStack];
   int top = 0;
@@ -73,10 +79,16 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
       firstHit = nullptr;
     }
 
-    if (!bsdf.isDelta()) {
+    const BsdfFlags flags = bsdf.flags();
+    const bool smoothTransmitter = !bsdf.isDelta() && has(flags, BsdfFlags::Specular) && has(flags, BsdfFlags::Transmission);
+    if (!bsdf.isDelta() && !smoothTransmitter) {
       if (!reflectanceBound(bsdf).isBlack())
         points.push_back({sp.position, sp.geometricNormal, v.frame.n, v.wo, b.weight, bsdf, pixel, sample, branch++, sp.triangle});
       continue;
+    }
+    if (smoothTransmitter && !lights.delta.empty()) {
+      const ShadingPoint at{sp.position, sp.geometricNormal, v.frame.n, v.wo, b.weight, bsdf, pixel, sample, 0, sp.triangle};
+      out.emitted += b.weight * directLight(scene, lights, vis, at, 0, 0, rays);
     }
     if (b.depth >= settings.maxSpecularDepth) continue;
     const Vec3 woLocal = v.woLocal;
@@ -89,7 +101,7 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
       if (weight.isBlack()) return;
       stack[top++].branch = {*next, weight, b.depth + 1};
     };
-    if (has(bsdf.flags(), BsdfFlags::Transmission) && b.weight.maxComponent() >= kSplitWeight) {
+    if (!smoothTransmitter && has(flags, BsdfFlags::Transmission) && b.weight.maxComponent() >= kSplitWeight) {
       // Both lobes, each weighted by the probability with which sampleBsdf would pick it (F, 1 - F):
       // u = 0 picks reflection unless F = 0, u just below 1 refraction unless F = 1 (total internal
       // reflection).
@@ -98,9 +110,10 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
       if (r.valid && r.wi.z * woLocal.z > 0) push(r, r.weight * r.pdf);
       if (t.valid && t.wi.z * woLocal.z < 0) push(t, t.weight * t.pdf);
     } else {
-      // One lobe, chosen with its probability (sampleBsdf's weight for delta lobes has it divided out).
+      // One lobe, chosen with its probability (sampleBsdf's weight for delta lobes has it divided out);
+      // a smooth transmitter's direction in its lobe.
       const float uLobe = rng.uniform();
-      const BsdfSample s = sampleBsdf(bsdf, woLocal, uLobe, {});
+      const BsdfSample s = sampleBsdf(bsdf, woLocal, uLobe, smoothTransmitter ? rng.uniform2() : Vec2{});
       push(s, s.weight);
     }
   }
@@ -132,6 +145,7 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
   const PinholeCamera camera(scene.camera);
   const PixelFilter filter(settings.filter);
   const uint64_t seed = streamSeed(settings.seed, RenderStream::Eye);
+  const DirectLights lights(scene);
 
   // Most camera samples end in one shading point, held per tile, then in the band's array, with the
   // radiance the method computes at it (direct and indirect).
@@ -173,8 +187,9 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
           const size_t index = pixelIndex(int(cs.pixel % uint32_t(width)), int(cs.pixel / uint32_t(width)));
           const size_t before = points.size();
           FirstHit first;
-          const SampleResult res = traceCameraSample(scene, vis, settings, cs.ray, cs.filterWeight, hit, cs.pixel, cs.sample, cs.rng,
-                                                     settings.layers ? &first : nullptr, points, tileRays[t]);
+          const SampleResult res = traceCameraSample(scene, vis, lights, settings, cs.ray, cs.filterWeight, hit, cs.pixel,
+                                                     cs.sample, cs.rng, settings.layers ? &first : nullptr, points,
+                                                     tileRays[t]);
           if (!res.valid || !summable(res.emitted)) {
             points.resize(before);
             ++tileInvalid[t];

@@ -708,64 +708,69 @@ TEST_CASE("A flat mirror's caustic equals the mirrored light's illumination", "[
   }
 }
 
-TEST_CASE("A thin-walled transmitting plane lit from below: purcell and pmfg estimate the light it passes as the "
-          "path tracer renders it",
+TEST_CASE("A thin-walled transmitting plane lit from below: purcell and pmfg render the light it passes as the "
+          "path tracer does, rough or smooth",
           "[photonmap-render][gltf]") {
-  // A glTF plane (KHR_materials_transmission, thin-walled) over a diffuse floor, a point light
-  // between them, the camera above: all it sees is light passed up through the plane, directly from
-  // the light (shadow rays) and after the floor (photons on the plane's underside, which its
-  // estimate from above counts through the surface: photonLightsThrough). The image means agree
-  // within 0.03% (purcell) and 0.3% (pmfg, whose gather rays pass the plane) against the 1,024-spp
-  // path tracer; without photonLightsThrough purcell's is 43% low. Tolerances: 3% of the mean, 5%
-  // of the indirect part (the estimate's disc of 0.3 blurs the floor's light, whose irradiance
-  // varies by a factor of 9 over the view).
-  Scene scene;
-  Material thin;
-  thin.type = MaterialType::Gltf;
-  thin.kd = Rgb(0.9f, 0.8f, 0.7f);
-  thin.ks = Rgb(1.0f);
-  thin.ni = 1.5f;
-  thin.metallic = 0;
-  thin.roughness = 0.6f;
-  thin.transmission = 0.8f;
-  test::addQuad(scene, {-3, 0, -3}, {-3, 0, 3}, {3, 0, 3}, {3, 0, -3}, test::addMaterial(scene, thin, "thin"));
-  Material floor;
-  floor.kd = Rgb(0.7f);
-  test::addQuad(scene, {-3, -1, -3}, {-3, -1, 3}, {3, -1, 3}, {3, -1, -3}, test::addMaterial(scene, floor, "floor"));
-  Light point;
-  point.type = LightType::Point;
-  point.vector = {0.3f, -0.5f, 0.2f};
-  point.value = Rgb(2.0f);
-  scene.lights.push_back(point);
-  scene.camera = test::testCamera({0, 4, 0.001f}, {0, 0, 0}, 24, 24, 40);
-  finalizeScene(scene);
-  const Visibility vis(scene);
-  PathTraceOptions pt;
-  pt.common.spp = 1024;
-  pt.common.seed = 3;
-  pt.common.layers = true;
-  const Image reference = renderPathTraced(scene, vis, pt).image;
-  PhotonMapOptions opt;
-  opt.photons = 400000;
-  opt.causticPhotons = 0;
-  opt.k = 100;
-  opt.maxRadius = 0.3f;
-  opt.gatherRays = 64;
-  opt.common.layers = true;
-  opt.common.seed = 5;
-  for (const char* method : {"purcell", "pmfg"}) {
-    const Image image = std::string(method) == "purcell" ? renderPurcell(scene, vis, opt).image
-                                                          : renderPhotonMapFinalGather(scene, vis, opt).image;
-    for (int c = 0; c < 3; ++c) {
-      const int indirect = image.channelIndex("indirect.R") + c;
-      const test::MeanAndError all = test::channelMean(image, c), expected = test::channelMean(reference, c);
-      const test::MeanAndError ind = test::channelMean(image, indirect),
-                               expectedInd = test::channelMean(reference, reference.channelIndex("indirect.R") + c);
-      INFO(method << ", channel " << c << ": mean " << all.mean << " +- " << all.standardError << " against "
-                  << expected.mean << " +- " << expected.standardError << "; indirect " << ind.mean << " against "
-                  << expectedInd.mean);
-      CHECK(std::abs(all.mean - expected.mean) <= 0.03 * expected.mean);
-      CHECK(std::abs(ind.mean - expectedInd.mean) <= 0.05 * expectedInd.mean);
+  // A glTF plane (KHR_materials_transmission, thin-walled) over a diffuse floor, a small emitter
+  // between them facing the floor, out of view, the camera above: all it sees is light passed up
+  // through the plane. (A point light there would make the plane's underside reflect its caustic
+  // onto the floor, which the path tracer finds only by next-event estimation under a near-delta
+  // lobe, too rarely for a reference at a smooth plane: 3% low at roughness 0.05.)
+  // Rough, the plane is a shading point whose photon estimate counts the photons on its underside
+  // (photonLightsThrough); smooth (GGX alpha 0.0025), the eye paths follow it as a specular chain to
+  // the floor. Against the 4,096-spp path tracer, per pixel: the mean difference within 4.5 standard
+  // errors of the differences' spread (at most 2% of the mean; the path tracer's and the gathers'
+  // noise, independent across pixels, dominates it) plus 2% of the mean for the estimate's disc
+  // (radius up to 0.3), whose blur of the floor's light measured 1%.
+  for (const float roughness : {0.6f, 0.05f}) {
+    Scene scene;
+    Material thin;
+    thin.type = MaterialType::Gltf;
+    thin.kd = Rgb(0.9f, 0.8f, 0.7f);
+    thin.ks = Rgb(1.0f);
+    thin.ni = 1.5f;
+    thin.metallic = 0;
+    thin.roughness = roughness;
+    thin.transmission = 0.8f;
+    test::addQuad(scene, {-3, 0, -3}, {-3, 0, 3}, {3, 0, 3}, {3, 0, -3}, test::addMaterial(scene, thin, "thin"));
+    Material floor;
+    floor.kd = Rgb(0.7f);
+    test::addQuad(scene, {-3, -1, -3}, {-3, -1, 3}, {3, -1, 3}, {3, -1, -3}, test::addMaterial(scene, floor, "floor"));
+    Material lamp;
+    lamp.kd = Rgb(0.0f);
+    lamp.ke = Rgb(20.0f);
+    test::addQuad(scene, {1.8f, -0.5f, -0.4f}, {2.6f, -0.5f, -0.4f}, {2.6f, -0.5f, 0.4f}, {1.8f, -0.5f, 0.4f},
+                  test::addMaterial(scene, lamp, "lamp"));
+    scene.camera = test::testCamera({0, 4, 0.001f}, {0, 0, 0}, 24, 24, 40);
+    finalizeScene(scene);
+    const Visibility vis(scene);
+    PathTraceOptions pt;
+    pt.common.spp = 4096;
+    pt.common.seed = 3;
+    const Image reference = renderPathTraced(scene, vis, pt).image;
+    PhotonMapOptions opt;
+    opt.photons = 400000;
+    opt.causticPhotons = 0;
+    opt.k = 100;
+    opt.maxRadius = 0.3f;
+    opt.gatherRays = 64;
+    opt.common.spp = 16;
+    opt.common.seed = 5;
+    for (const char* method : {"purcell", "pmfg"}) {
+      const Image image = std::string(method) == "purcell" ? renderPurcell(scene, vis, opt).image
+                                                            : renderPhotonMapFinalGather(scene, vis, opt).image;
+      for (int c = 0; c < 3; ++c) {
+        std::vector<double> differences;
+        for (int y = 0; y < 24; ++y)
+          for (int x = 0; x < 24; ++x) differences.push_back(double(image.at(x, y, c)) - reference.at(x, y, c));
+        const test::MeanAndError d = test::meanOf(differences), expected = test::channelMean(reference, c);
+        const double tolerance = 4.5 * d.standardError + 0.02 * expected.mean;
+        INFO(method << ", roughness " << roughness << ", channel " << c << ": mean " << expected.mean + d.mean
+                    << " against " << expected.mean << ", difference " << d.mean << " +- " << d.standardError
+                    << ", tolerance " << tolerance);
+        CHECK(std::abs(d.mean) <= tolerance);
+        CHECK(d.standardError < 0.02 * expected.mean);
+      }
     }
   }
 }

@@ -37,7 +37,9 @@ void analyticDirectLight(const Scene& scene, const Visibility& visibility, std::
                          std::span<Rgb> direct, uint64_t& rays);
 
 // One point's direct light as estimateDirectLight's, its shadow rays in packets of its own samples
-// (estimateDirectLight packs rays across points instead).
+// (estimateDirectLight packs rays across points instead); with `samples` 0, that of the point,
+// spot and directional lights alone (for a point whose other light rays bring, no ray meeting
+// those).
 Rgb directLight(const Scene& scene, const DirectLights& lights, const Visibility& visibility, const ShadingPoint& point,
                 int samples, uint64_t seed, uint64_t& rays);
 

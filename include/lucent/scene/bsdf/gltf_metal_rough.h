@@ -79,15 +79,21 @@ struct GltfMetalRoughLobe {
                                          {"coat_normal", true, 3},    {"transmission", true, 1},
                                          {"volume_ior", true, 1}};
 
-  // What the kind may do; instanceFlags what this lobe does (it transmits where transmission > 0).
+  // What the kind may do; instanceFlags what this lobe does: it transmits where transmission > 0,
+  // specularly too where its GGX lobe is at most kSmoothAlpha wide (or an index-matched volume's
+  // delta passes light straight), and keeps its inside where it bounds a volume.
   static constexpr BsdfFlags flags = BsdfFlags::Reflection | BsdfFlags::Transmission | BsdfFlags::Diffuse |
-                                     BsdfFlags::Glossy | BsdfFlags::TwoSided;
+                                     BsdfFlags::Glossy | BsdfFlags::Specular | BsdfFlags::TwoSided;
   BsdfFlags instanceFlags() const {
-    if (boundsVolume())
-      return BsdfFlags::Reflection | BsdfFlags::Transmission | BsdfFlags::Diffuse | BsdfFlags::Glossy |
-             (indexMatched() ? BsdfFlags::Specular : BsdfFlags::None);
-    return transmission > 0 ? flags : BsdfFlags::Reflection | BsdfFlags::Diffuse | BsdfFlags::Glossy | BsdfFlags::TwoSided;
+    const BsdfFlags reflecting = BsdfFlags::Reflection | BsdfFlags::Diffuse | BsdfFlags::Glossy;
+    if (!(transmission > 0) && !boundsVolume()) return reflecting | BsdfFlags::TwoSided;
+    const bool specular = alpha <= kSmoothAlpha || (boundsVolume() && indexMatched());
+    return reflecting | BsdfFlags::Transmission | (specular ? BsdfFlags::Specular : BsdfFlags::None) |
+           (boundsVolume() ? BsdfFlags::None : BsdfFlags::TwoSided);
   }
+  // A GGX lobe this narrow spreads light over about a degree: the photon methods follow the light it
+  // passes as they follow glass (a specular chain), not estimating from photons' directions under it.
+  static constexpr float kSmoothAlpha = 0.01f;
 
   // Indices this close to 1 refract by less than 0.25 degrees (at 80 degrees' incidence), and
   // Walter's half vector, from eta_o wo + eta_i wi, loses its digits to cancellation there.
