@@ -14,7 +14,7 @@ method, not the aliasing of point samples at edges.
                                                    [--methods pt pmfg ...] [--threads 2] [--out DIR]
 
 The references (path tracer, 16,384 samples per pixel, box-filtered and through the pixel centres)
-are rendered once and kept in out/charts/.
+are rendered once per scene content (its `scene_hash`, in their file names) and kept in out/charts/.
 Needs matplotlib (Debian: python3-matplotlib); run with /usr/bin/python3. About 80 minutes on 2
 cores with all twelve scenes (gltf/extensions-sky alone: 13); run on an otherwise idle machine.
 """
@@ -141,10 +141,21 @@ def scene_path(name):
     return os.path.join(ROOT, "scenes", name + ".json")
 
 
+def scene_hash(scene, hashes={}):
+    """The hash Lucent gives the scene's content (its files and what they reference), from a render of
+    one pixel: a reference kept under it is never one of an older version of the scene."""
+    if scene not in hashes:
+        image = os.path.join(CACHE, f"hash-{os.getpid()}.exr")
+        hashes[scene] = run(["render", scene_path(scene), "--resolution", "1x1", "--spp", "1", "--quiet", "-o", image])[
+            "scene_hash"]
+        os.remove(image)
+    return hashes[scene]
+
+
 def reference(scene, resolution, centres, max_depth):
     kind = "centres" if centres else "box"
     depth = f"-depth{max_depth}" if max_depth else ""
-    path = os.path.join(CACHE, f"{file_name(scene)}-{resolution}-pt{depth}-{REFERENCE_SPP}spp-{kind}.exr")
+    path = os.path.join(CACHE, f"{file_name(scene)}-{scene_hash(scene)}-{resolution}-pt{depth}-{REFERENCE_SPP}spp-{kind}.exr")
     if not os.path.exists(path):
         print(f"  (path-tracing the reference {os.path.basename(path)})", flush=True)
         run(["render", scene_path(scene), "--method", "pt", "--spp", str(REFERENCE_SPP), "--seed", "1",

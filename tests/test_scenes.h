@@ -1,6 +1,7 @@
 // Scenes built in code for tests with analytic answers.
 #pragma once
 #include <array>
+#include <cmath>
 #include <vector>
 
 #include "lucent/scene/scene.h"
@@ -42,6 +43,27 @@ inline void addQuad(Scene& scene, Vec3 a, Vec3 b, Vec3 c, Vec3 d, uint32_t mater
   }
   scene.indices.insert(scene.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
   scene.materialIds.insert(scene.materialIds.end(), {material, material});
+}
+
+// Adds a UV sphere of `rings` x `segments` quads (triangles at the poles), its vertex normals exact,
+// wound counter-clockwise seen from outside.
+inline void addSphere(Scene& scene, Vec3 centre, float radius, int rings, int segments, uint32_t material) {
+  const auto base = static_cast<uint32_t>(scene.positions.size());
+  for (int i = 0; i <= rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const float theta = kPi * float(i) / float(rings), phi = 2 * kPi * float(j) / float(segments);
+      const Vec3 n{std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)};
+      scene.positions.push_back(centre + n * radius);
+      scene.normals.push_back(n);
+      scene.texcoords.push_back({0, 0});
+    }
+  const auto at = [&](int i, int j) { return base + uint32_t(i * segments + (j % segments)); };
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      if (i > 0) scene.indices.insert(scene.indices.end(), {at(i, j), at(i, j + 1), at(i + 1, j + 1)});
+      if (i < rings - 1) scene.indices.insert(scene.indices.end(), {at(i, j), at(i + 1, j + 1), at(i + 1, j)});
+      scene.materialIds.insert(scene.materialIds.end(), size_t(int(i > 0) + int(i < rings - 1)), material);
+    }
 }
 
 inline uint32_t addMaterial(Scene& scene, const Material& m, const std::string& name) {

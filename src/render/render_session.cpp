@@ -172,10 +172,11 @@ RenderSession::RenderSession(OpenScene& scene, RenderRequest request) : scene_(s
     const Material& m = s.materials[i];
     if (!(m.transmission > 0) || transmission == TransmissionRendered::All) continue;
     const std::string medium = "its KHR_materials_volume medium's attenuation";
+    const bool attenuates = m.boundsVolume && m.attenuationDistance < kInf && std::min({m.attenuationColour.r, m.attenuationColour.g, m.attenuationColour.b}) < 1;
     const std::string left = transmission == TransmissionRendered::InPart
                                  ? std::string("the light its KHR_materials_transmission passes through the surface, in part") +
-                                       (m.boundsVolume ? ", and " + medium : "")
-                                 : m.boundsVolume ? medium : "";
+                                       (attenuates ? ", and " + medium : "")
+                                 : attenuates ? medium : "";
     if (!left.empty())
       ignored_.push_back("material '" + s.materialNames[i] + "': " + left + " (--method " + method_->name() + "; pt renders it)");
   }

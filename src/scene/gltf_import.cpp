@@ -535,7 +535,7 @@ void readLayerExtensions(const Context& c, const tinygltf::Material& m, const st
     if (!(thickness >= 0 && thickness <= kMaxInputMagnitude)) c.fail(at + ".thicknessFactor", "must be in [0, 1e15]");
     if (e->Has("thicknessTexture")) textureInfo(c, *e, "thicknessTexture", at);
     const double distance = number(*e, "attenuationDistance", kInf);
-    if (!(float(distance) > 0)) c.fail(at + ".attenuationDistance", "must be above 0 (and 1e-38 or more)");
+    if (!(float(distance) > 0)) c.fail(at + ".attenuationDistance", "must be above 0 (as a float)");
     if (e->Has("attenuationColor")) spec.attenuationColour = rgbFactor(c, e->Get("attenuationColor"), at + ".attenuationColor", 1, "[0, 1]");
     spec.attenuationDistance = float(distance);
     spec.boundsVolume = thickness > 0 && spec.transmission > 0;

@@ -413,7 +413,8 @@ TEST_CASE("Beer-Lambert: a KHR_materials_volume medium keeps attenuationColour^(
   // light, within 1e-8 of all in this view) holds a diffuse plane at z = -0.5, lit by a point light
   // inside; the camera looks down -z through the face z = 1. Direct light only: each pixel's centre
   // sees rho I cos / (pi d^2) times the medium's transmittance over the camera ray's 1.5 / |dir.z|
-  // inside and the light's d.
+  // inside and the light's d; within 5e-4, what float rounding and the rays' offsets off their ends
+  // leave (measured below 1.5e-4; missing either segment's attenuation costs a factor 0.3 or less).
   Scene scene;
   Material medium;
   medium.type = MaterialType::Gltf;
@@ -456,7 +457,7 @@ TEST_CASE("Beer-Lambert: a KHR_materials_volume medium keeps attenuationColour^(
       for (int c = 0; c < 3; ++c) {
         const double expected = direct * std::pow(double(medium.attenuationColour[c]), (inside + d) / 1.2);
         INFO("pixel " << x << ", " << y << ", channel " << c);
-        REQUIRE(image.at(x, y, c) == Approx(expected).epsilon(2e-3));
+        REQUIRE(image.at(x, y, c) == Approx(expected).epsilon(5e-4));
       }
     }
 }

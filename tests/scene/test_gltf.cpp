@@ -553,12 +553,16 @@ TEST_CASE("KHR_materials_volume: a thickness above 0 with transmission bounds a 
                         Catch::Contains(std::string("materials[0].extensions.KHR_materials_volume.") + message));
   }
   // pmfg renders the boundary, not the medium's attenuation; micro leaves out both.
-  f["materials"][0]["extensions"]["KHR_materials_volume"] = {{"thicknessFactor", 1}, {"attenuationDistance", 2}};
+  f["materials"][0]["extensions"]["KHR_materials_volume"] = {
+      {"thicknessFactor", 1}, {"attenuationDistance", 2}, {"attenuationColor", {0.5, 0.5, 0.5}}};
   const std::string file = wrapGltf(dir.path, f), exr = dir / "quad.exr";
   const std::string pmfg = ignoredBy("pmfg", file, exr), micro = ignoredBy("micro", file, exr);
   CHECK_THAT(pmfg, Catch::Contains("KHR_materials_volume medium's attenuation"));
   CHECK_THAT(pmfg, !Catch::Contains("KHR_materials_transmission"));
   CHECK_THAT(micro, Catch::Contains("KHR_materials_transmission") && Catch::Contains("KHR_materials_volume"));
+  // A medium that does not attenuate leaves nothing out.
+  f["materials"][0]["extensions"]["KHR_materials_volume"] = {{"thicknessFactor", 1}, {"attenuationDistance", 2}};
+  CHECK(ignoredBy("pmfg", wrapGltf(dir.path, f), exr).empty());
 }
 
 TEST_CASE("A closed glTF volume of single-sided faces under a constant sky vanishes: light enters, refracts and "

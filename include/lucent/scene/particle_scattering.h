@@ -74,9 +74,12 @@ inline ParticleScatter scatterParticle(const SurfaceBsdf& bsdf, const SurfacePoi
   const bool shaded = hasShadingNormal(sp);
   const float arrival = particleArrivalRatio(sp, n, wo);
 
-  // The wedge's probability (non-specular surfaces only); no number is drawn where it is empty.
+  // The wedge's probability (two-sided non-specular surfaces only: a lobe with an inside, a volume's
+  // boundary, keeps its winding's normal as glass does, and is sampled from either side); no number
+  // is drawn where it is empty.
   const Vec3 ngSide = dot(wo, ng) > 0 ? ng : -ng;
-  const float wedge = shaded && !bsdf.isDelta() ? 0.5f * (1.0f - std::min(1.0f, dot(n, ngSide))) : 0.0f;
+  const float wedge =
+      shaded && !bsdf.isDelta() && twoSidedShading(bsdf) ? 0.5f * (1.0f - std::min(1.0f, dot(n, ngSide))) : 0.0f;
   if (wedge > 0 && rng.uniform() < wedge) {
     // The wedge: the path tracer's viewer there takes the geometric normal, for the BSDF and the
     // cosine of wo (whose ratio to the geometric one is then 1).

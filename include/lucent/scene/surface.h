@@ -310,15 +310,18 @@ inline Rgb emittedRadiance(const Scene& scene, uint32_t tri, float b1, float b2,
 
 // The medium a ray leaving surface point sp along d travels in, as an index into Scene::materials,
 // kNoMedium for none: where the lobe keeps an inside (a volume's boundary, glass) the material's
-// if d goes in and none if it goes out; elsewhere `current`, the medium the path arrived in (media
-// do not nest). Only media that attenuate are followed.
+// if d goes in (none for a material that does not attenuate: only media that do are followed) and
+// none if it goes out (media do not nest), `current` if it goes out of one that does not attenuate
+// (a reflection off glass in water stays in the water); elsewhere `current`, the medium the path
+// arrived in.
 constexpr uint32_t kNoMedium = ~0u;
 inline uint32_t mediumTowards(const Scene& scene, const SurfacePoint& sp, const SurfaceBsdf& bsdf, Vec3 d,
                               uint32_t current) {
   const BsdfFlags flags = bsdf.flags();
   if (!has(flags, BsdfFlags::Transmission) || has(flags, BsdfFlags::TwoSided)) return current;
-  if (!(scene.materials[sp.materialId].attenuationDistance < kInf)) return kNoMedium;
-  return dot(d, sp.geometricNormal) < 0 ? sp.materialId : kNoMedium;
+  const bool in = dot(d, sp.geometricNormal) < 0;
+  if (!(scene.materials[sp.materialId].attenuationDistance < kInf)) return in ? kNoMedium : current;
+  return in ? sp.materialId : kNoMedium;
 }
 
 // Whether a scattered direction wi lies on the other side of the geometric surface (normal ng) than

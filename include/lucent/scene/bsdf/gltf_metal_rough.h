@@ -23,7 +23,7 @@
 // f_t as above (times the sheen's scaling and 1 - Wc of the outer direction, as light entering
 // has); the diffuse base and the metal absorb what reaches them from inside. An index within
 // kIndexMatched of 1 bends nothing: its transmission is a Dirac delta straight through, of weight
-// kd transmission (1 - Fd) at n.wo. With KHR_materials_sheen (a sheen colour
+// kd transmission (1 - Fd) at n.wo times the sheen's scaling and 1 - Wc of the outer direction. With KHR_materials_sheen (a sheen colour
 // other than black) the sheen layer of sheen.h lies on top, the above its base. With
 // KHR_materials_clearcoat (coat > 0) a clear coat lies on top of both, as the extension layers it:
 //   f_coated(V, L) = (1 - Wc(V)) f(V, L) + Wc(V) D_c G_c / (4 |V.nc| |L.nc|),
@@ -192,13 +192,13 @@ struct GltfMetalRoughLobe {
 
   // From inside a volume (wo.z < 0): the reflection and the light refracted out.
   BsdfValue evaluateFromInside(Vec3 wo, Vec3 wi) const {
-    if (!(wi.z > 0)) {
+    if (wi.z < 0) {
       const Microfacet m = internalReflection(wo, wi);
       if (!m.valid) return {Rgb(0.0f), 0.0f};
       const float choice = insideReflectionChoice(indexMatched() ? interfaceWeight(wo, {0, 0, 1}) : m.w);
       return {fresnelAt(m.w) * m.lobe, choice * m.density};
     }
-    if (indexMatched()) return {Rgb(0.0f), 0.0f};
+    if (!(wi.z > 0) || indexMatched()) return {Rgb(0.0f), 0.0f};
     const Microfacet m = refraction(wo, wi);
     if (!m.valid) return {Rgb(0.0f), 0.0f};
     const float passed = transmission * passedAt(m.w) * m.lobe * outerScaling(-wo.z, wi.z, wi);

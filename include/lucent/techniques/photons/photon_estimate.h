@@ -22,11 +22,13 @@ namespace lucent {
 // A diffuse or glossy surface point seen from direction wo.
 struct EstimatePoint {
   Vec3 position;
-  Frame frame;        // shading frame whose normal is on the viewer's side
+  Frame frame;        // shading frame whose normal is on the viewer's side (but for a volume's boundary)
   Vec3 woLocal;       // towards the viewer, in `frame`
   SurfaceBsdf bsdf;   // not only specular
   Vec3 facingNormal;  // the geometric normal on the viewer's side
-  SurfaceSide side() const { return {frame.n, facingNormal}; }
+  // The frame of a lobe with an inside (a volume's boundary) keeps its winding's normal, which a
+  // viewer inside sees from below.
+  SurfaceSide side() const { return {woLocal.z < 0 ? -frame.n : frame.n, facingNormal}; }
 };
 
 inline EstimatePoint estimatePoint(const ShadingPoint& sp) {
