@@ -27,10 +27,11 @@ DirectLights::DirectLights(const Scene& scene) {
 
 namespace {
 
-// A receiver's light sample: the contribution its shadow ray brings if unoccluded.
+// A receiver's light sample: the contribution its shadow ray brings if unoccluded, less what a
+// medium it crosses absorbs.
 template <class Emit>
-void emitLightSample(const ShadingPoint& point, const Frame& frame, Vec3 woLocal, const LightSample& ls,
-                     Emit&& emit) {
+void emitLightSample(const Scene& scene, const ShadingPoint& point, const Frame& frame, Vec3 woLocal,
+                     const LightSample& ls, Emit&& emit) {
   if (!(ls.pdf > 0) || ls.radiance.isBlack()) return;
   const Vec3 wiLocal = frame.toLocal(ls.wi);
   const float cosine = receivingCosine(ls.wi, wiLocal, point.normal, point.geometricNormal,
@@ -38,7 +39,10 @@ void emitLightSample(const ShadingPoint& point, const Frame& frame, Vec3 woLocal
   if (!(cosine > 0)) return;
   const Rgb f = evalBsdf(point.bsdf, woLocal, wiLocal);
   if (f.isBlack()) return;
-  emit(shadowRay(point.position, point.geometricNormal, ls), f * ls.radiance * (cosine / ls.pdf));
+  const Ray ray = shadowRay(point.position, point.geometricNormal, ls);
+  const uint32_t medium =
+      mediumTowards(scene, scene.materialIds[point.triangle], point.geometricNormal, point.bsdf, ls.wi, point.medium);
+  emit(ray, f * ls.radiance * (cosine / ls.pdf) * transmittanceIn(scene, medium, ray.tMax));
 }
 
 // The shadow rays of one point, in order: emit(ray, contribution, exact). First one to each point and
@@ -50,7 +54,7 @@ void shadowSamples(const Scene& scene, const DirectLights& lights, const Shading
   const Frame frame(point.normal);
   const Vec3 woLocal = frame.toLocal(point.wo);
   for (const uint32_t i : lights.delta)
-    emitLightSample(point, frame, woLocal, deltaLightSample(scene.lights[i], point.position),
+    emitLightSample(scene, point, frame, woLocal, deltaLightSample(scene.lights[i], point.position),
                     [&](const Ray& ray, Rgb c) { emit(ray, c, true); });
   if (!lights.anySampled || samples <= 0) return;
   Rng rng(seed, point.pixel, uint64_t(point.sample) << 32 | point.branch);
@@ -64,7 +68,7 @@ void shadowSamples(const Scene& scene, const DirectLights& lights, const Shading
       const uint32_t k = lights.choice.pick(uLight);
       ls = sampleChosenLight(scene, lights.sampled[k], lights.choice.pmf(k), point.position, u);
     }
-    emitLightSample(point, frame, woLocal, ls, [&](const Ray& ray, Rgb c) { emit(ray, c, false); });
+    emitLightSample(scene, point, frame, woLocal, ls, [&](const Ray& ray, Rgb c) { emit(ray, c, false); });
   }
 }
 

@@ -20,7 +20,8 @@ namespace {
 struct Branch {
   Ray ray;
   Rgb weight;
-  int depth = 0;  // specular bounces so far
+  int depth = 0;                // specular bounces so far
+  uint32_t medium = kNoMedium;  // the attenuating medium the ray travels in (the camera's: none)
 };
 
 // Depth-first over a camera sample's branches: each pop pushes at most two, and the depth is
@@ -39,11 +40,11 @@ struct SampleResult {
 };
 
 // Follows one camera ray, whose closest hit is given, through specular bounces; appends the shading
-// points it reaches. Specular are mirrors and glass, and the smooth surfaces that transmit (a lobe
-// with a specular part that transmits: glTF's glass and shells of small roughness), followed by a
-// sample of their lobe: an estimate from photons' directions under so narrow a lobe would be
-// noise. What other light reaches such a surface the chain's next hits bring; the point, spot and
-// directional lights, which no ray meets, are taken at it by a shadow ray each.
+// points it reaches. Specular are the surfaces passed as specular (SurfaceBsdf::passedAsSpecular):
+// mirrors and glass, and the smooth surfaces that transmit, followed by a sample of their lobe.
+// What other light reaches such a surface the chain's next hits bring; the point, spot and
+// directional lights, which no ray meets, are taken at it by a shadow ray each. Inside a
+// KHR_materials_volume medium the weight loses what the medium absorbs along each segment.
 SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const DirectLights& lights,
                                const EyePathSettings& settings, Ray ray, float filterWeight, const Hit& cameraHit,
                                uint32_t pixel, uint32_t sample, Rng& rng, FirstHit* firstHit,
@@ -51,11 +52,11 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
   SampleResult out;
   BranchSlot stack[kMaxBranchStack];
   int top = 0;
-  stack[top++].branch = {ray, Rgb(filterWeight), 0};
+  stack[top++].branch = {ray, Rgb(filterWeight), 0, kNoMedium};
   uint32_t branch = 0;
   bool fromCamera = true;
   while (top > 0) {
-    const Branch b = stack[--top].branch;
+    Branch b = stack[--top].branch;
     if (!isFinite(b.ray.origin) || !isFinite(b.ray.direction) || !isFinite(b.weight)) {
       out.valid = false;
       return out;
@@ -63,6 +64,7 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
     ++rays;
     const Hit hit = fromCamera ? cameraHit : vis.intersect(b.ray);
     fromCamera = false;
+    if (b.medium != kNoMedium) b.weight *= transmittanceIn(scene, b.medium, hit.found() ? hit.t : kInf);
     if (!hit.found()) {
       if (scene.environment.present) out.emitted += b.weight * environmentRadiance(scene.environment, b.ray.direction);
       continue;
@@ -79,15 +81,16 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
       firstHit = nullptr;
     }
 
-    const BsdfFlags flags = bsdf.flags();
-    const bool smoothTransmitter = !bsdf.isDelta() && has(flags, BsdfFlags::Specular) && has(flags, BsdfFlags::Transmission);
-    if (!bsdf.isDelta() && !smoothTransmitter) {
+    if (!bsdf.passedAsSpecular()) {
       if (!reflectanceBound(bsdf).isBlack())
-        points.push_back({sp.position, sp.geometricNormal, v.frame.n, v.wo, b.weight, bsdf, pixel, sample, branch++, sp.triangle});
+        points.push_back(
+            {sp.position, sp.geometricNormal, v.frame.n, v.wo, b.weight, bsdf, pixel, sample, branch++, sp.triangle, b.medium});
       continue;
     }
+    const bool smoothTransmitter = !bsdf.isDelta();
     if (smoothTransmitter && !lights.delta.empty()) {
-      const ShadingPoint at{sp.position, sp.geometricNormal, v.frame.n, v.wo, b.weight, bsdf, pixel, sample, 0, sp.triangle};
+      const ShadingPoint at{sp.position, sp.geometricNormal, v.frame.n, v.wo, b.weight, bsdf, pixel, sample, 0, sp.triangle,
+                            b.medium};
       out.emitted += b.weight * directLight(scene, lights, vis, at, 0, 0, rays);
     }
     if (b.depth >= settings.maxSpecularDepth) continue;
@@ -99,9 +102,9 @@ SampleResult traceCameraSample(const Scene& scene, const Visibility& vis, const 
       if (!next) return;
       const Rgb weight = b.weight * w;
       if (weight.isBlack()) return;
-      stack[top++].branch = {*next, weight, b.depth + 1};
+      stack[top++].branch = {*next, weight, b.depth + 1, mediumTowards(scene, sp, bsdf, next->direction, b.medium)};
     };
-    if (!smoothTransmitter && has(flags, BsdfFlags::Transmission) && b.weight.maxComponent() >= kSplitWeight) {
+    if (!smoothTransmitter && has(bsdf.flags(), BsdfFlags::Transmission) && b.weight.maxComponent() >= kSplitWeight) {
       // Both lobes, each weighted by the probability with which sampleBsdf would pick it (F, 1 - F):
       // u = 0 picks reflection unless F = 0, u just below 1 refraction unless F = 1 (total internal
       // reflection).

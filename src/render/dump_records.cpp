@@ -37,7 +37,8 @@ std::vector<DumpField> shadingPointFields() {
   LUCENT_MATERIAL_KINDS(LUCENT_LOBE_FIELDS)
 #undef LUCENT_LOBE_FIELDS
   const auto after = int32_t(lobe + SurfaceBsdf::kLobeBytes);
-  out.insert(out.end(), {{"pixel", K::U32, 1, 0, after}, {"sample", K::U32, 1}, {"branch", K::U32, 1}, {"triangle", K::U32, 1}});
+  out.insert(out.end(), {{"pixel", K::U32, 1, 0, after}, {"sample", K::U32, 1}, {"branch", K::U32, 1}, {"triangle", K::U32, 1},
+                          {"medium", K::U32, 1}});
   return out;
 }
 

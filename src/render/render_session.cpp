@@ -167,19 +167,11 @@ RenderSession::RenderSession(OpenScene& scene, RenderRequest request) : scene_(s
   }
   checkOutputDirectories(*method_, options_->values(), s);
   ignored_ = s.ignored;
-  const TransmissionRendered transmission = method_->rendersTransmission();
-  for (size_t i = 0; i < s.materials.size(); ++i) {
-    const Material& m = s.materials[i];
-    if (!(m.transmission > 0) || transmission == TransmissionRendered::All) continue;
-    const std::string medium = "its KHR_materials_volume medium's attenuation";
-    const bool attenuates = m.boundsVolume && m.attenuationDistance < kInf && std::min({m.attenuationColour.r, m.attenuationColour.g, m.attenuationColour.b}) < 1;
-    const std::string left = transmission == TransmissionRendered::InPart
-                                 ? std::string("the light its KHR_materials_transmission passes through the surface, in part") +
-                                       (attenuates ? ", and " + medium : "")
-                                 : attenuates ? medium : "";
-    if (!left.empty())
-      ignored_.push_back("material '" + s.materialNames[i] + "': " + left + " (--method " + method_->name() + "; pt renders it)");
-  }
+  for (size_t i = 0; i < s.materials.size(); ++i)
+    if (s.materials[i].transmission > 0 && method_->rendersTransmission() == TransmissionRendered::InPart)
+      ignored_.push_back("material '" + s.materialNames[i] +
+                         "': the light its KHR_materials_transmission passes through the surface, in part (--method " +
+                         method_->name() + "; pt renders it)");
   if (scene_.settings().strict && ignored_.size() > s.ignored.size()) {
     std::string list;
     for (size_t i = s.ignored.size(); i < ignored_.size(); ++i) list += "\n  " + ignored_[i];

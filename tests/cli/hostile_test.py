@@ -1137,8 +1137,9 @@ def knn_grid_dump(directory, res):
     write(os.path.join(directory, "global.photon_list.bin"), dump_file("uint32", struct.pack("<I", 0)))
     first = struct.pack("<I", 0) * (photon_cell + 1) + struct.pack("<I", 1) * (cells - photon_cell)
     write(os.path.join(directory, "global.first_photon.bin"), dump_file("uint32", first))
-    point = struct.pack("<15fI3f19I4I", 0.5, 0.5, 0.25, *[0.0] * 12, 0, 0.5, 0.5, 0.5, *[0] * 19, 0, 0, 0, 0)
-    write(os.path.join(directory, "band0.shading_points.bin"), dump_file("ShadingPoint", point, 168))
+    point = struct.pack("<15fI3f19I5I", 0.5, 0.5, 0.25, *[0.0] * 12, 0, 0.5, 0.5, 0.5, *[0] * 19, 0, 0, 0, 0,
+                        0xFFFFFFFF)
+    write(os.path.join(directory, "band0.shading_points.bin"), dump_file("ShadingPoint", point, 172))
     write(os.path.join(directory, "band0.indirect.bin"), dump_file("Rgb", struct.pack("<3f", 0, 0, 0), 12))
     write(os.path.join(directory, "band0.global.neighbour_offsets.bin"), dump_file("uint64", struct.pack("<2Q", 0, 1), 8))
     write(os.path.join(directory, "band0.global.neighbours.bin"),

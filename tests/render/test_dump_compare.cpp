@@ -90,7 +90,8 @@ TEST_CASE("The dump record table gives every field at the C++ struct's offset an
                          AT(ShadingPoint, bsdf.gltf.coatNormal), AT(ShadingPoint, bsdf.gltf.transmission),
                          AT(ShadingPoint, bsdf.gltf.volumeIor),
                          AT(ShadingPoint, pixel),
-                         AT(ShadingPoint, sample), AT(ShadingPoint, branch), AT(ShadingPoint, triangle)}, sizeof(ShadingPoint)}},
+                         AT(ShadingPoint, sample), AT(ShadingPoint, branch), AT(ShadingPoint, triangle),
+                         AT(ShadingPoint, medium)}, sizeof(ShadingPoint)}},
   };
 #undef AT
   REQUIRE(cpp.size() == dumpRecordTypes().size());

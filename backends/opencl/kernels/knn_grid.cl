@@ -58,13 +58,13 @@ inline Vec3 normalize3(Vec3 v) {
 
 // Which photons light the point's side (include/lucent/techniques/photons/photon.h): arriving from
 // above its shading normal, landed on a surface facing within 60 degrees of its facing normal, and
-// off its tangent plane by no more than the angle between the normals explains.
+// off its plane by no more than the angle between the normals explains on a mesh (sin a).
 inline bool photonLights(Photon p, Vec3 shadingNormal, Vec3 facingNormal, Vec3 offset, float d2) {
   const Vec3 incoming = octahedralDirection(p.direction, 16);
   const Vec3 facing = normalize3(octahedralDirection(p.flags >> 11, 10));
   const float c = dot3(facing, facingNormal), h = dot3(offset, facingNormal);
   const float offPlane = 0.01f;
-  return (dot3(incoming, shadingNormal) > 0) & (c > 0.5f) & (h * h <= d2 * (1 - c + offPlane * offPlane));
+  return (dot3(incoming, shadingNormal) > 0) & (c > 0.5f) & (h * h <= d2 * (1 - c * c + offPlane * offPlane));
 }
 
 typedef struct {

@@ -23,7 +23,7 @@
   FIELD(ShadingPoint, bsdf.gltf.coatAlpha) FIELD(ShadingPoint, bsdf.gltf.coatNormal)                 \
   FIELD(ShadingPoint, bsdf.gltf.transmission) FIELD(ShadingPoint, bsdf.gltf.volumeIor)                \
   FIELD(ShadingPoint, pixel) FIELD(ShadingPoint, sample)                                             \
-  FIELD(ShadingPoint, branch) FIELD(ShadingPoint, triangle)                                          \
+  FIELD(ShadingPoint, branch) FIELD(ShadingPoint, triangle) FIELD(ShadingPoint, medium)              \
   RECORD(RadianceCache) FIELD(RadianceCache, position) FIELD(RadianceCache, normal)                  \
   FIELD(RadianceCache, radius) FIELD(RadianceCache, environment) FIELD(RadianceCache, indirect)      \
   RECORD(AreaParticle) FIELD(AreaParticle, position) FIELD(AreaParticle, normal)                     \

@@ -88,7 +88,7 @@ typedef struct {
   Vec3 position, geometricNormal, normal, wo;
   Rgb weight;
   SurfaceBsdf bsdf;
-  uint pixel, sample, branch, triangle;
+  uint pixel, sample, branch, triangle, medium;
 } ShadingPoint;
 
 typedef struct {

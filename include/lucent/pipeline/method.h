@@ -21,9 +21,8 @@ namespace lucent {
 
 // What of KHR_materials_transmission's light a method renders: some of it (the point-based
 // methods take the diffuse part of rough transmitters, and follow smooth ones as glass, as every
-// method's camera paths do); all that passes surfaces, thin walls' and media's boundaries, but
-// not a KHR_materials_volume medium's attenuation (the photon maps); or all of it.
-enum class TransmissionRendered { InPart, ThroughSurfaces, All };
+// method's camera paths do), or all of it, with a KHR_materials_volume medium's attenuation.
+enum class TransmissionRendered { InPart, All };
 
 // A method's options, set from values by name over its defaults and checked: the method's typed
 // options struct inside (Method::resolve).

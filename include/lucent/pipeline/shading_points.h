@@ -36,8 +36,9 @@ struct ShadingPoint {
   uint32_t sample = 0;   // the camera sample
   uint32_t branch = 0;   // index of this point among its camera sample's (specular splitting)
   uint32_t triangle = 0; // the triangle hit (for methods that keep light per triangle)
+  uint32_t medium = kNoMedium;  // the attenuating medium the point lies in, for its shadow and gather rays
 };
-static_assert(sizeof(ShadingPoint) == 168 && std::is_trivially_copyable_v<ShadingPoint>, "dumped as records");
+static_assert(sizeof(ShadingPoint) == 172 && std::is_trivially_copyable_v<ShadingPoint>, "dumped as records");
 
 struct EyePathSettings {
   int spp = 1;  // camera samples per pixel, stratified over the pixel and drawn through its filter

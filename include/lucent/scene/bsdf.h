@@ -58,6 +58,10 @@ struct SurfaceBsdf {
 
   BsdfFlags flags() const;
   bool isDelta() const { return onlySpecular(flags()); }
+  // Whether the photon methods pass the surface by a sample of its lobe, as they pass mirrors and
+  // glass, instead of estimating there: specular lobes, and smooth ones that transmit (glTF glass
+  // and shells of small roughness), under which an estimate from photons' directions is noise.
+  bool passedAsSpecular() const;
   bool onlyDiffuse() const { return lucent::onlyDiffuse(flags()); }
   // Its Lambertian term's albedo: what the point-based methods and the diffuse estimates take.
   Rgb diffuse() const { return visit([](const auto& lobe) { return lobe.diffuse(); }); }
@@ -105,6 +109,10 @@ constexpr BsdfFlags kindFlags(MaterialType type) {
 
 inline BsdfFlags SurfaceBsdf::flags() const {
   return visit([](const auto& lobe) { return instanceFlags(lobe); });
+}
+inline bool SurfaceBsdf::passedAsSpecular() const {
+  const BsdfFlags f = flags();
+  return onlySpecular(f) || (has(f, BsdfFlags::Specular) && has(f, BsdfFlags::Transmission));
 }
 
 // A kind's name, as scene files and `lucent bsdf` write it.

@@ -15,7 +15,10 @@
 // surface and below the shading normal (where the viewer would make the path tracer take the
 // geometric normal). The wedge is chosen with the probability of its share of the cosine-weighted
 // hemisphere, (1 - cos(shading, geometric)) / 2; without shading normals it is empty, nothing more
-// is drawn, and the result is the BSDF sample unchanged.
+// is drawn, and the result is the BSDF sample unchanged. A rough lobe with an inside (a volume's
+// boundary) keeps its winding's normals and scatters to both sides: its wedge, of the same
+// probability, is the two wedges of the sphere, one face's cosine lobe about the geometric normal
+// picked at random.
 //
 // A mirror sends the particle to every viewer direction that the path tracer would reflect into its
 // arrival: reflect(wo, ns) where that lies above both normals (weight Ks |cos(wi, ng)| /
@@ -74,21 +77,32 @@ inline ParticleScatter scatterParticle(const SurfaceBsdf& bsdf, const SurfacePoi
   const bool shaded = hasShadingNormal(sp);
   const float arrival = particleArrivalRatio(sp, n, wo);
 
-  // The wedge's probability (two-sided non-specular surfaces only: a lobe with an inside, a volume's
-  // boundary, keeps its winding's normal as glass does, and is sampled from either side); no number
-  // is drawn where it is empty.
+  // The wedge's probability (non-specular surfaces only); no number is drawn where it is empty. A
+  // two-sided lobe's wedge lies on the particle's side; a lobe with an inside (a volume's boundary)
+  // keeps its winding's normal, as glass does, and has a wedge on each side of its surface.
   const Vec3 ngSide = dot(wo, ng) > 0 ? ng : -ng;
-  const float wedge =
-      shaded && !bsdf.isDelta() && twoSidedShading(bsdf) ? 0.5f * (1.0f - std::min(1.0f, dot(n, ngSide))) : 0.0f;
+  const bool twoSided = twoSidedShading(bsdf);
+  const float wedge = shaded && !bsdf.isDelta()
+                          ? 0.5f * (1.0f - std::min(1.0f, twoSided ? dot(n, ngSide) : dot(n, ng)))
+                          : 0.0f;
   if (wedge > 0 && rng.uniform() < wedge) {
-    // The wedge: the path tracer's viewer there takes the geometric normal, for the BSDF and the
-    // cosine of wo (whose ratio to the geometric one is then 1).
-    const Frame frame(ngSide);
+    // The wedge: the path tracer's viewer there takes the geometric normal (the winding's, for a
+    // lobe with an inside), for the BSDF and the cosine of wo (whose ratio to the geometric one is
+    // then 1). Two-sided: cosine-distributed about ngSide; else about either face's normal, each
+    // with probability 1/2.
+    const Vec3 axis = twoSided || rng.uniform() < 0.5f ? ngSide : -ngSide;
+    const Vec3 shadingOnAxisSide = twoSided || dot(axis, ng) > 0 ? n : -n;
+    const Frame sampling(axis);
     const Vec3 local = sampleCosineHemisphere(u2);
-    const Vec3 wi = frame.toWorld(local);
-    if (dot(wi, n) > 0 || !(local.z > 0)) return out;  // the other strategy's region
-    // f * cos / (wedge * cos / pi)
-    out.weight = evalBsdf(bsdf.inFrame(frame), local, frame.toLocal(wo)) * (kPi / wedge);
+    const Vec3 wi = sampling.toWorld(local);
+    if (dot(wi, shadingOnAxisSide) > 0 || !(local.z > 0)) return out;  // the other strategy's region
+    // f * cos / (wedge * cos / pi), and the half for a lobe with an inside.
+    if (twoSided) {
+      out.weight = evalBsdf(bsdf.inFrame(sampling), local, sampling.toLocal(wo)) * (kPi / wedge);
+    } else {
+      const Frame winding(ng);
+      out.weight = evalBsdf(bsdf.inFrame(winding), winding.toLocal(wi), winding.toLocal(wo)) * (2 * kPi / wedge);
+    }
     out.wi = wi;
     out.valid = !out.weight.isBlack();
     return out;

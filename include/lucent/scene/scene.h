@@ -88,6 +88,9 @@ struct Material {
   float attenuationDistance = kInf;
 };
 static_assert(sizeof(Material) == 192, "Material is a fixed-size record shared with GPU backends");
+// A medium is named by the index of the material bounding it (a KHR_materials_volume boundary that
+// attenuates); kNoMedium: none (mediumTowards).
+constexpr uint32_t kNoMedium = ~0u;
 
 // A texture stored in Scene::texels from `offset`, row-major, row 0 at the top (v = 1). Texels are
 // 8-bit RGBA packed in 32 bits (R in the low byte), sRGB-encoded for colour (kdTexture) and linear

@@ -258,6 +258,14 @@ inline bool lobeVariesOverSurface(const Scene& scene, const Material& m) {
          !scene.colours.empty();
 }
 
+// Whether bsdfAt's lobe for the material is passed as specular (SurfaceBsdf::passedAsSpecular)
+// anywhere on its surface: its factors' lobe is, or a transmitter's roughness texture may make it
+// so (the texture scales the roughness factor down).
+inline bool mayPassAsSpecular(const Material& m) {
+  return materialBsdf(m).passedAsSpecular() ||
+         (m.type == MaterialType::Gltf && m.metallicRoughnessTexture >= 0 && (m.transmission > 0 || m.boundsVolume));
+}
+
 // Texture `index`'s A channel (linear) at a surface point, filtered as its sampler says.
 inline float textureAlphaAt(const Scene& scene, int32_t index, const SurfacePoint& sp) {
   const Texture& t = scene.textures[size_t(index)];
@@ -308,20 +316,28 @@ inline Rgb emittedRadiance(const Scene& scene, uint32_t tri, float b1, float b2,
   return bsdf.type == MaterialType::Gltf ? le * (1.0f - bsdf.gltf.coatWeight(towards)) : le;
 }
 
-// The medium a ray leaving surface point sp along d travels in, as an index into Scene::materials,
-// kNoMedium for none: where the lobe keeps an inside (a volume's boundary, glass) the material's
-// if d goes in (none for a material that does not attenuate: only media that do are followed) and
-// none if it goes out (media do not nest), `current` if it goes out of one that does not attenuate
-// (a reflection off glass in water stays in the water); elsewhere `current`, the medium the path
-// arrived in.
-constexpr uint32_t kNoMedium = ~0u;
-inline uint32_t mediumTowards(const Scene& scene, const SurfacePoint& sp, const SurfaceBsdf& bsdf, Vec3 d,
+// The medium a ray leaving a point of material `materialId` (geometric normal ng, lobe bsdf) along
+// d travels in, as an index into Scene::materials, kNoMedium for none: where the lobe keeps an
+// inside (a volume's boundary, glass) the material's if d goes in (none for a material that does
+// not attenuate: only media that do are followed) and none if it goes out (media do not nest),
+// `current` if it goes out of one that does not attenuate (a reflection off glass in water stays
+// in the water); elsewhere `current`, the medium the path arrived in.
+inline uint32_t mediumTowards(const Scene& scene, uint32_t materialId, Vec3 ng, const SurfaceBsdf& bsdf, Vec3 d,
                               uint32_t current) {
   const BsdfFlags flags = bsdf.flags();
   if (!has(flags, BsdfFlags::Transmission) || has(flags, BsdfFlags::TwoSided)) return current;
-  const bool in = dot(d, sp.geometricNormal) < 0;
-  if (!(scene.materials[sp.materialId].attenuationDistance < kInf)) return in ? kNoMedium : current;
-  return in ? sp.materialId : kNoMedium;
+  const bool in = dot(d, ng) < 0;
+  if (!(scene.materials[materialId].attenuationDistance < kInf)) return in ? kNoMedium : current;
+  return in ? materialId : kNoMedium;
+}
+inline uint32_t mediumTowards(const Scene& scene, const SurfacePoint& sp, const SurfaceBsdf& bsdf, Vec3 d,
+                              uint32_t current) {
+  return mediumTowards(scene, sp.materialId, sp.geometricNormal, bsdf, d, current);
+}
+
+// What light keeps of itself along a segment of length x in `medium` (kNoMedium: all of it).
+inline Rgb transmittanceIn(const Scene& scene, uint32_t medium, float x) {
+  return medium == kNoMedium ? Rgb(1.0f) : mediumTransmittance(scene.materials[medium], x);
 }
 
 // Whether a scattered direction wi lies on the other side of the geometric surface (normal ng) than

@@ -135,7 +135,7 @@ class PathTracer {
   bool shade(Path& path, const Hit& hit, ShadowQuery& shadow, bool& queued) const {
     queued = false;
     const Ray& ray = path.ray;
-    if (path.medium != kNoMedium) path.beta *= mediumTransmittance(scene_.materials[path.medium], hit.found() ? hit.t : kInf);
+    if (path.medium != kNoMedium) path.beta *= transmittanceIn(scene_, path.medium, hit.found() ? hit.t : kInf);
     if (!hit.found()) {
       if (scene_.environment.present) {
         const Rgb le = environmentRadiance(scene_.environment, ray.direction);
@@ -162,8 +162,9 @@ class PathTracer {
     if (!bsdf.isDelta()) {
       queued = sampleDirect(sp, bsdf, frame, woLocal, u.lightPoint, shadow);
       shadow.contribution *= path.beta;
-      const uint32_t medium = queued ? mediumTowards(scene_, sp, bsdf, shadow.ray.direction, path.medium) : kNoMedium;
-      if (medium != kNoMedium) shadow.contribution *= mediumTransmittance(scene_.materials[medium], shadow.ray.tMax);
+      if (queued)
+        shadow.contribution *= transmittanceIn(scene_, mediumTowards(scene_, sp, bsdf, shadow.ray.direction, path.medium),
+                                               shadow.ray.tMax);
       shadow.verticesBefore = ++path.gatheringVertices;
       if (path.gatheringVertices > 1) shadow.diffuseShare = path.firstDiffuseShare;
     }

@@ -1,13 +1,14 @@
 // --method pmfg: Jensen's RT/PM/FG (Jensen 1996; Jensen 2001, chapter 9), the ground truth that GPU
 // photon mappers and final gatherers are compared against. At the first diffuse or glossy surface
-// reached from the camera (through mirrors and glass):
+// reached from the camera (through mirrors, glass and smooth transmitters, the surfaces passed as
+// specular: SurfaceBsdf::passedAsSpecular):
 //   direct light       shadow rays to the lights (L D E);
 //   caustics           the caustic map's radiance estimate (L S+ D E);
 //   indirect light     final gathering: gatherRays rays distributed by the BSDF (cosine for
-//                      diffuse surfaces), stratified, followed through mirrors and glass; at the
-//                      diffuse or glossy surface each reaches, the global map's estimate with all
-//                      photons, direct ones included (L {S|D}* D S* D E).
-// Emission seen by gather rays (also through mirrors and glass) is not added: light reaching the
+//                      diffuse surfaces), stratified, followed through the surfaces passed as
+//                      specular; at the diffuse or glossy surface each reaches, the global map's
+//                      estimate with all photons, direct ones included (L {S|D}* D S* D E).
+// Emission seen by gather rays (also through specular surfaces) is not added: light reaching the
 // shading point straight from an emitter is counted by the shadow rays, and through specular
 // surfaces by the caustic map. So is the environment seen by gather rays.
 #include <tbb/blocked_range.h>
@@ -45,13 +46,13 @@ struct GatherScratch {
   EstimateCounters counters;
 };
 
-// Traces the gather rays of one shading point; returns how many reached a diffuse or glossy surface.
+// Traces the gather rays of one shading point; returns how many reached a diffuse or glossy surface,
+// their weights less what the media they crossed absorb.
 size_t traceGatherRays(const Scene& scene, const Visibility& vis, const ShadingPoint& point, int count,
                        int maxSpecularDepth, uint64_t seed, GatherHit* hits, uint64_t& rays) {
   Rng rng(seed, point.pixel, uint64_t(point.sample) << 32 | point.branch);
   const Frame frame(point.normal);
   const Vec3 woLocal = frame.toLocal(point.wo);
-  const float side = dot(point.wo, point.geometricNormal);
   size_t found = 0;
   for (int j = 0; j < count; ++j) {
     const float uLobe = rng.uniform();
@@ -59,16 +60,20 @@ size_t traceGatherRays(const Scene& scene, const Visibility& vis, const ShadingP
     const BsdfSample bs = sampleBsdf(point.bsdf, woLocal, uLobe, u);
     if (!bs.valid) continue;
     Vec3 wi = frame.toWorld(bs.wi);
-    // On the other side of the real surface than the lobe scatters to (a leak past the shading normal).
-    if ((dot(wi, point.geometricNormal) * side <= 0) != (bs.wi.z < 0)) continue;
+    // On the other side of the real surface than the lobe scatters to (a leak past the shading
+    // normal; a volume's boundary seen from inside has wo below its frame).
+    if (leaksThroughSurface(point.wo, wi, point.geometricNormal, bs.wi.z * woLocal.z < 0)) continue;
     Rgb weight = bs.weight;
     Ray ray{offsetOrigin(point.position, point.geometricNormal, wi), wi};
+    uint32_t medium = mediumTowards(scene, scene.materialIds[point.triangle], point.geometricNormal, point.bsdf, wi,
+                                    point.medium);
     for (int depth = 0;; ++depth) {
       ++rays;
       const Hit hit = vis.intersect(ray);
       if (!hit.found()) break;  // the environment is direct light
+      if (medium != kNoMedium) weight *= transmittanceIn(scene, medium, hit.t);
       const ChainVertex v = chainVertexAt(scene, surfaceAt(scene, hit.triangle, hit.b1, hit.b2), ray.direction);
-      if (!v.bsdf.isDelta()) {
+      if (!v.bsdf.passedAsSpecular()) {
         if (!reflectanceBound(v.bsdf).isBlack())
           hits[found++] = {{v.sp.position, v.frame, v.woLocal, v.bsdf,
                             v.frontFace ? v.sp.geometricNormal : -v.sp.geometricNormal},
@@ -76,14 +81,16 @@ size_t traceGatherRays(const Scene& scene, const Visibility& vis, const ShadingP
         break;
       }
       if (depth >= maxSpecularDepth) break;
-      // Through a mirror or glass: one lobe, chosen with its probability.
+      // Through a mirror, glass or a smooth transmitter: one lobe, chosen with its probability (and
+      // the smooth lobe's direction in it).
       const float uL = rng.uniform();
-      const BsdfSample s = sampleBsdf(v.bsdf, v.woLocal, uL, {});
+      const BsdfSample s = sampleBsdf(v.bsdf, v.woLocal, uL, v.bsdf.isDelta() ? Vec2{} : rng.uniform2());
       const std::optional<Ray> next = followLobe(v, s);
       if (!next) break;
       weight *= s.weight;
       if (weight.isBlack() || !isFinite(weight)) break;
       ray = *next;
+      medium = mediumTowards(scene, v.sp, v.bsdf, ray.direction, medium);
     }
   }
   return found;

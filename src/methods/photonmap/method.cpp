@@ -87,14 +87,14 @@ const OptionTable<PhotonMapOptions>& pmfgOptionTable() {
 const Method& purcellMethod() {
   static const DeclaredMethod<PhotonMapOptions> method(
       "purcell", "photon mapping on the GPU (Purcell et al. 2003): grid maps and the kNN-grid estimate, visualized",
-      purcellOptionTable(), renderPurcell, true, TransmissionRendered::ThroughSurfaces);
+      purcellOptionTable(), renderPurcell, true, TransmissionRendered::All);
   return method;
 }
 
 const Method& pmfgMethod() {
   static const DeclaredMethod<PhotonMapOptions> method(
       "pmfg", "ray tracing with photon maps and final gathering (Jensen): the second ground truth",
-      pmfgOptionTable(), renderPhotonMapFinalGather, true, TransmissionRendered::ThroughSurfaces);
+      pmfgOptionTable(), renderPhotonMapFinalGather, true, TransmissionRendered::All);
   return method;
 }
 

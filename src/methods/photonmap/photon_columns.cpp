@@ -105,7 +105,7 @@ LUCENT_LANE_HELPER Block block(const PhotonColumns& c, uint32_t first, Ints vali
       load(&c.incomingX[first]) * q.nx + load(&c.incomingY[first]) * q.ny + load(&c.incomingZ[first]) * q.nz;
   const Floats facing = load(&c.facingX[first]) * q.fx + load(&c.facingY[first]) * q.fy + load(&c.facingZ[first]) * q.fz;
   const Floats h = dx * q.fx + dy * q.fy + dz * q.fz;
-  b.lights = (cosine > 0) & (facing > kSameSurfaceCos) & (h * h <= b.d2 * (1 - facing + kOffPlane * kOffPlane));
+  b.lights = (cosine > 0) & (facing > kSameSurfaceCos) & (h * h <= b.d2 * (1 - facing * facing + kOffPlane * kOffPlane));
   b.valid = valid;
   return b;
 }

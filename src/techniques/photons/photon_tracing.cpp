@@ -20,9 +20,10 @@ struct PhotonPath {
   Ray ray;
   Rgb power;
   uint32_t index;         // the emitted photon's index: the key of its random streams
-  uint32_t specularOnly;  // 1 while every bounce so far was specular
+  uint32_t specularOnly;  // 1 while every surface so far was passed as specular
+  uint32_t medium;        // the attenuating medium the ray travels in (mediumTowards)
 };
-static_assert(sizeof(PhotonPath) == 52, "PhotonPath is a fixed-size record");
+static_assert(sizeof(PhotonPath) == 56, "PhotonPath is a fixed-size record");
 
 // What one work item of a bounce stage produces: at most one stored photon and one continuation.
 struct BounceResult {
@@ -50,7 +51,8 @@ void closestHits(const Visibility& vis, const std::vector<PhotonPath>& paths, Un
   });
 }
 
-// Stage "bounce": the path's photon stored where it hit a non-specular surface, and its next ray.
+// Stage "bounce": the path's photon stored where it hit a surface not passed as specular, and its
+// next ray (a caustic path's while every surface it met was passed as specular).
 BounceResult bounce(const Scene& scene, const PhotonPath& path, const Hit& hit, uint32_t depth, uint64_t seed,
                     bool causticOnly) {
   BounceResult out;
@@ -58,14 +60,16 @@ BounceResult bounce(const Scene& scene, const PhotonPath& path, const Hit& hit, 
   const SurfacePoint sp = surfaceAt(scene, hit.triangle, hit.b1, hit.b2);
   const SurfaceBsdf bsdf = bsdfAt(scene, sp);
   const Vec3 wo = -path.ray.direction;
+  const Rgb power = path.power * transmittanceIn(scene, path.medium, hit.t);
 
-  if (!bsdf.isDelta() && !reflectanceBound(bsdf).isBlack()) {
+  const bool passed = bsdf.passedAsSpecular();
+  if (!passed && !reflectanceBound(bsdf).isBlack()) {
     // Stored with the ratio of the cosines that viewers above the shading normal see it with
     // (particle_scattering.h); one from below the shading normal adds nothing for them.
     const float arrival = particleArrivalRatio(sp, particleShadingNormal(bsdf, sp, wo), wo);
     out.caustic = path.specularOnly && depth > 0;
     const Vec3 facing = dot(wo, sp.geometricNormal) > 0 ? sp.geometricNormal : -sp.geometricNormal;
-    out.photon = {sp.position, path.power * arrival, encodeOctahedral(wo),
+    out.photon = {sp.position, power * arrival, encodeOctahedral(wo),
                   std::min(depth, kPhotonBounceMask) | (out.caustic ? kPhotonCausticFlag : 0u) | photonFacingBits(facing)};
     out.stored = (!causticOnly || out.caustic) && arrival > 0 && isFinite(out.photon.power);
     if (causticOnly) return out;  // no caustic path continues from a non-specular surface
@@ -80,8 +84,8 @@ BounceResult bounce(const Scene& scene, const PhotonPath& path, const Hit& hit, 
   const ParticleScatter scatter = scatterParticle(bsdf, sp, wo, uLobe, rng.uniform2(), rng);
   if (!scatter.valid) return out;
   const Vec3 wi = scatter.wi;
-  out.next = {{offsetOrigin(sp.position, sp.geometricNormal, wi), wi}, path.power * scatter.weight * (1.0f / survival),
-              path.index, uint32_t(path.specularOnly && scatter.delta)};
+  out.next = {{offsetOrigin(sp.position, sp.geometricNormal, wi), wi}, power * scatter.weight * (1.0f / survival),
+              path.index, uint32_t(path.specularOnly && passed), mediumTowards(scene, sp, bsdf, wi, path.medium)};
   out.alive = !out.next.power.isBlack() && isFinite(out.next.power);
   return out;
 }
@@ -142,7 +146,7 @@ void reserveStored(std::vector<Photon>& map, size_t more, const std::string& opt
 std::optional<EmissionTarget> specularTarget(const Scene& scene) {
   std::vector<Vec3> vertices;
   for (uint32_t t = 0; t < scene.triangleCount(); ++t) {
-    if (onlySpecular(kindFlags(scene.materials[scene.materialIds[t]].type)))
+    if (mayPassAsSpecular(scene.materials[scene.materialIds[t]]))
       for (int v = 0; v < 3; ++v) vertices.push_back(scene.vertex(t, v));
   }
   if (vertices.empty()) return std::nullopt;
@@ -181,7 +185,7 @@ PhotonMaps tracePhotons(const Scene& scene, const Visibility& vis, const PhotonT
       const Vec2 uPosition = rng.uniform2();
       const Vec2 uDirection = rng.uniform2();
       const EmissionSample e = sampleEmission(scene, uLight, uPosition, uDirection, target, target ? rng.next() : 0);
-      paths[i] = {e.ray, e.power * share, i, 1};
+      paths[i] = {e.ray, e.power * share, i, 1, kNoMedium};  // lights lie outside media
       emitted[i] = e.valid;
     }
   });

@@ -402,7 +402,9 @@ struct GltfMetalRoughLobe {
   }
 
   // At normal incidence (the base's scaling and the sheen's albedo there), under the coat's weight
-  // there, the coat reflecting all it takes.
+  // there, the coat reflecting all it takes. The transmitted share counts with the diffuse one:
+  // KHR_materials_transmission tints what passes by the base colour, so kd is the base's colour
+  // whether it scatters or passes (a denoiser's albedo of glass is its tint, not black).
   Rgb albedo() const {
     const Rgb under = hasSheen() ? (kd + ks) * sheenScaling(1.0f, 1.0f) +
                                        sheenColour * SheenAlbedoTable::get().at(1.0f, sheenRoughness)

@@ -27,13 +27,14 @@ struct PhotonTracingOptions {
   std::string photonsOption = "--photons";
 };
 
-// The bounding sphere of the scene's mirror and glass triangles, where caustic paths must start,
-// with a projection map of them for each point light outside it; none when the scene has no
-// specular surface.
+// The bounding sphere of the scene's triangles that may be passed as specular (mirrors, glass and
+// smooth transmitters: mayPassAsSpecular), where caustic paths must start, with a projection map
+// of them for each point light outside it; none when the scene has no such surface.
 std::optional<EmissionTarget> specularTarget(const Scene& scene);
 
-// Photons stored at non-specular surfaces. The caustic map holds those that reached a diffuse or
-// glossy surface through specular bounces only (L S+ D); the global map holds every stored photon
+// Photons stored at surfaces not passed as specular (SurfaceBsdf::passedAsSpecular). The caustic
+// map holds those that reached one through surfaces passed as specular only (L S+ D: mirrors,
+// glass, smooth transmitters, whichever part of their lobe scattered); the global map holds every stored photon
 // (L {S|D}* D), direct ones included. Caustic photons carry kPhotonCausticFlag in both maps.
 struct PhotonMaps {
   std::vector<Photon> global;
