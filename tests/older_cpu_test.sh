@@ -4,7 +4,9 @@
 # choose their code for that CPU, and an instruction it lacks stops the process (SIGILL). Per model:
 # the visibility tests (Embree packets on every ISA the model runs), a render whose reported ISAs
 # are the model's and whose image matches a native render at that ISA, and on the AVX2 model (the
-# common cluster node without AVX-512) the ISA tests, which render every method.
+# common cluster node without AVX-512) the ISA tests, which render every method with the lane loops
+# and Embree kernels that model picks. Not emulated: the comparison of Embree's kernels with one
+# another (every ISA this CPU runs, natively, in the main tests: the same kernels, 73 s emulated).
 # Skipped (exit 77, with the reason) where qemu-x86_64 is missing.
 #   tests/older_cpu_test.sh LUCENT LUCENT_TESTS SOURCE_DIR
 set -euo pipefail
@@ -42,5 +44,5 @@ PY
   "$lucent" compare "$work/emulated-$isa.exr" "$work/native-$isa.exr" --metric relmse --max-error 1e-9 > /dev/null ||
     { echo "the render on $cpu differs from the native render with --isa $isa"; exit 1; }
 done
-echo "== Haswell-v4: every method at every ISA it runs"
-emulate Haswell-v4 "$tests" "[isa]"
+echo "== Haswell-v4: every method with the lane loops and Embree kernels it picks"
+emulate Haswell-v4 "$tests" "[isa]~Every instruction set's Embree kernels render every method's image alike"

@@ -23,6 +23,12 @@ import pytest
 LUCENT = os.environ["LUCENT_CLI"]
 SOURCE = os.environ["LUCENT_SOURCE"]
 
+# A shell that starts this suite in the background (`cmd &`) ignores SIGINT in it, and an ignored
+# signal stays ignored in every child: the SIGINT tests would see renders that never stop. A handled
+# one reverts to its default action in the children.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
 
 # --- helpers -------------------------------------------------------------------------------------
 

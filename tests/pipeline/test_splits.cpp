@@ -227,10 +227,10 @@ TEST_CASE("merge refuses parts that do not belong together, and writes nothing",
 }
 
 TEST_CASE("A render killed after a checkpoint resumes to the uninterrupted image, bit for bit", "[splits][cli][resume]") {
-  // Renders long enough for a checkpoint between bands (pmfg's bands are about 2 s of work: its
-  // photon estimate at every gather hit keeps it there).
+  // Renders long enough for a checkpoint between bands (pt's 1,024 samples are about 3 s of work,
+  // pmfg's bands about 2 s: its photon estimate at every gather hit keeps it there).
   const test::TempDir dir("resume");
-  for (const std::string method : {"pt --spp 2048", "pmfg --spp 4 --gather-rays 128 --photons 20000 --gather-estimate photons"}) {
+  for (const std::string method : {"pt --spp 1024", "pmfg --spp 4 --gather-rays 128 --photons 20000 --gather-estimate photons"}) {
     CAPTURE(method);
     const std::string args = quoted(kCornell) + " --method " + method + " --resolution 96x72 --layers --quiet";
     const std::string out = dir / "out.exr", film = dir / "out.film";
@@ -257,10 +257,10 @@ TEST_CASE("SIGINT and SIGTERM stop a render with a checkpoint and an image marke
   const test::TempDir dir("resume");
   for (const int signal : {SIGTERM, SIGINT}) {
     CAPTURE(signal);
-    const std::string args = quoted(kCornell) + " --spp 4096 --resolution 96x72 --quiet";
+    const std::string args = quoted(kCornell) + " --spp 1024 --resolution 96x72 --quiet";
     const std::string out = dir / "out.exr", film = dir / "out.film";
     fs::remove(out), fs::remove(film);
-    // A checkpoint first, so that the stop comes while paths are being traced.
+    // A checkpoint first, so that the stop comes while paths are being traced (about 3 s of them).
     Background render("render " + args + " --checkpoint 0.2 -o " + quoted(out), dir / "log.txt");
     REQUIRE(waitFor(film));
     render.signal(signal);
