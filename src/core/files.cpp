@@ -292,6 +292,8 @@ void checkWritable(const std::filesystem::path& path, const std::string& what) {
     throw std::runtime_error("cannot write " + what + " '" + path.string() + "': it is a directory");
   if (const std::string clash = inputFileClash(path); !clash.empty())
     throw std::runtime_error("cannot write " + what + " '" + path.string() + "': " + clash);
+  // The probe is a temporary file too: a signal waits until it is removed.
+  const SignalsWaitForWrites signalsWait;
   const std::filesystem::path probe = temporaryPathFor(path);
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) {
