@@ -7,6 +7,7 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
 #include "lucent/scene/surface.h"
@@ -17,6 +18,8 @@ namespace {
 struct EmbreeError {
   std::mutex mutex;  // Embree may report from any thread
   std::string message;
+  std::string structure;       // what Embree's allocations build, as --memory-limit's message names it
+  std::string overMemoryLimit;  // requireMemory's message for the first allocation refused
 };
 }  // namespace
 
@@ -98,6 +101,22 @@ struct Visibility::Impl {
 };
 
 namespace {
+// Embree's allocations (the triangles' buffers and the acceleration structure, the one large
+// allocation a render does not make itself), checked against --memory-limit before each is made: a
+// refused one fails the build, which reports RTC_ERROR_OUT_OF_MEMORY.
+bool monitorMemory(void* user, ssize_t bytes, bool post) {
+  if (post || bytes <= 0) return true;
+  auto* error = static_cast<EmbreeError*>(user);
+  try {
+    requireMemory(uint64_t(bytes), error->structure, "render a smaller scene, or raise --memory-limit");
+    return true;
+  } catch (const MemoryLimitError& e) {
+    std::lock_guard lock(error->mutex);
+    if (error->overMemoryLimit.empty()) error->overMemoryLimit = e.what();
+    return false;
+  }
+}
+
 void recordError(void* user, RTCError code, const char* message) {
   auto* error = static_cast<EmbreeError*>(user);
   std::lock_guard lock(error->mutex);
@@ -146,6 +165,9 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
   impl_->device = rtcNewDevice(config.c_str());
   if (!impl_->device) throw std::runtime_error("Embree: cannot create device (" + config + ")");
   rtcSetDeviceErrorFunction(impl_->device, recordError, &impl_->error);
+  impl_->error.structure = "the acceleration structure of the scene's " + std::to_string(scene.triangleCount()) +
+                           " triangles (Embree's BVH)";
+  rtcSetDeviceMemoryMonitorFunction(impl_->device, monitorMemory, &impl_->error);
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneFlags(impl_->scene, options.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
@@ -183,6 +205,7 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
     impl_->filteredGeometry = attach(impl_->filtered.triangle, true);
   }
   rtcCommitScene(impl_->scene);
+  if (!impl_->error.overMemoryLimit.empty()) throw MemoryLimitError(impl_->error.overMemoryLimit);
   if (!impl_->error.message.empty()) throw std::runtime_error(impl_->error.message);
 }
 

@@ -816,8 +816,9 @@ def test_a_broken_gltf_file_is_refused_at_once_and_nothing_is_written(work, name
 
 
 def test_many_small_instances_are_refused_by_the_memory_limit_at_load(work):
-    # 300,000 nodes naming one mesh: a few megabytes of JSON that would expand to gigabytes of
-    # triangles. The load stops at --memory-limit, naming the file, not the film after it.
+    # 300,000 nodes naming one two-triangle mesh: 15 megabytes of file that would expand to about
+    # 400 MiB of vertices and triangles. The load stops at --memory-limit, naming the file, not the
+    # film after it.
     def edit(d):
         first = len(d["nodes"])
         d["nodes"] += [{"mesh": 0, "translation": [k % 97, k // 97 % 89, k // 8633]} for k in range(300000)]
@@ -825,13 +826,13 @@ def test_many_small_instances_are_refused_by_the_memory_limit_at_load(work):
     write(os.path.join(work, "many.glb"), glb_with_json(edit))
     measure = ("import resource, subprocess, sys\nsubprocess.run(sys.argv[1:])\n"
                "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, file=sys.stderr)")
-    p = subprocess.run([sys.executable, "-c", measure, LUCENT, "render", "many.glb", "--memory-limit", "400M", "-q",
+    p = subprocess.run([sys.executable, "-c", measure, LUCENT, "render", "many.glb", "--memory-limit", "200M", "-q",
                         "-o", "out.exr"], cwd=work, capture_output=True, text=True, timeout=120)
     peak_kib = int(p.stderr.strip().splitlines()[-1])
     assert "many.glb" in p.stderr and "--memory-limit" in p.stderr and "film" not in p.stderr, p.stderr
     assert peak_kib < 800 * 1024, "peak %d MiB" % (peak_kib // 1024)
     assert not os.path.exists(os.path.join(work, "out.exr"))
-    py = python_refuses(work, "lucent.load_scene('many.glb', memory_limit='400M')", "many.glb")
+    py = python_refuses(work, "lucent.load_scene('many.glb', memory_limit='200M')", "many.glb")
     assert "film" not in py.out, py
 
 

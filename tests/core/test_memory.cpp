@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "lucent/core/memory.h"
+#include "lucent/trace/visibility.h"
+#include "test_scenes.h"
 #include "test_support.h"
 
 using namespace lucent;
@@ -65,6 +67,32 @@ TEST_CASE("An allocation beyond the limit is refused with the remedy, one within
   CHECK_THROWS_AS(requireMemory(UINT64_MAX, "everything", "lower --all"), MemoryLimitError);
   setMemoryLimit(0);
   CHECK(memoryLimit() >= memoryInUse());
+}
+
+TEST_CASE("Embree's acceleration structure is held to the memory limit: refused beyond it, built within it",
+          "[memory]") {
+  // A sphere of 399,200 triangles: Embree's copies of its vertices and indices alone take about 7 MB,
+  // its BVH tens more.
+  Scene scene;
+  Material diffuse;
+  test::addSphere(scene, {0, 0, 0}, 1, 500, 400, test::addMaterial(scene, diffuse, "diffuse"));
+  scene.camera = test::testCamera({0, 0, 5}, {0, 0, 0}, 8, 8);
+  finalizeScene(scene);
+  struct RestoreDefault {
+    ~RestoreDefault() { setMemoryLimit(0); }
+  } restore;
+  setMemoryLimit(memoryInUse() + (uint64_t(4) << 20));
+  try {
+    const Visibility vis(scene);
+    FAIL("built beyond the limit");
+  } catch (const MemoryLimitError& e) {
+    const std::string message = e.what();
+    CHECK_THAT(message, Catch::StartsWith("the acceleration structure of the scene's 399200 triangles") &&
+                            Catch::Contains("--memory-limit") && Catch::EndsWith("raise --memory-limit"));
+  }
+  setMemoryLimit(memoryInUse() + (uint64_t(1) << 30));
+  const Visibility vis(scene);
+  CHECK(vis.intersect(Ray{{0, 0, 5}, {0, 0, -1}}).found());
 }
 
 TEST_CASE("render stops at once when the memory it would need exceeds --memory-limit", "[memory][cli][render]") {
