@@ -1,8 +1,5 @@
 #include "lucent/image/image.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -14,6 +11,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <span>
 #include <string_view>
@@ -23,6 +21,7 @@
 #include "lucent/core/memory.h"
 #include "lucent/core/srgb.h"
 #include "lucent/core/text.h"
+#include "image/image_codec.h"
 
 namespace lucent {
 
@@ -42,20 +41,6 @@ int Image::channelIndex(const std::string& name) const {
 
 namespace {
 
-// Writes `data` (interleaved, `format`) with `spec` to the file `path` as it is.
-void writeImageFile(const std::filesystem::path& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc format,
-                    const void* data) {
-  auto out = OIIO::ImageOutput::create(path.string());
-  if (!out) throw WriteFailure(OIIO::geterror());
-  if (!out->open(path.string(), spec)) throw WriteFailure(out->geterror());
-  if (!out->write_image(format, data)) {
-    std::string why = out->geterror();
-    out->close();
-    throw WriteFailure(why);
-  }
-  if (!out->close()) throw WriteFailure(out->geterror());
-}
-
 void checkPixelCount(const Image& image, const std::string& path) {
   if (image.pixels().size() != size_t(image.width()) * image.height() * image.channelCount())
     throw std::runtime_error("cannot write image '" + path + "': pixel buffer does not match " +
@@ -71,12 +56,11 @@ namespace {
 
 FileToWrite exrFile(const Image& image, const std::string& path, const ImageMetadata& metadata) {
   checkPixelCount(image, path);
-  return {path, "image", [&image, metadata](const fs::path& tmp) {
-            OIIO::ImageSpec spec(image.width(), image.height(), image.channelCount(), OIIO::TypeDesc::FLOAT);
-            spec.channelnames = image.channels();
-            spec.alpha_channel = image.channelIndex("A");
-            for (const auto& [key, value] : metadata) spec.attribute(key, value);
-            writeImageFile(tmp, spec, OIIO::TypeDesc::FLOAT, image.pixels().data());
+  const ImageCodec& codec = imageCodec();  // loaded before any file of the set is written
+  return {path, "image", [&image, metadata, &codec](const fs::path& tmp) {
+            const std::string why = codec.writeExr(tmp.string(), image.width(), image.height(), image.channels(),
+                                                   image.channelIndex("A"), metadata, image.pixels().data());
+            if (!why.empty()) throw WriteFailure(why);
           }};
 }
 
@@ -84,6 +68,7 @@ FileToWrite pngFile(const Image& image, const std::string& path) {
   checkPixelCount(image, path);
   if (image.channelIndex("R") < 0 || image.channelIndex("G") < 0 || image.channelIndex("B") < 0)
     throw std::runtime_error("cannot write image '" + path + "': it needs R, G and B channels");
+  imageCodec();  // loaded before any file of the set is written
   return {path, "image", [&image](const fs::path& tmp) {
             const std::vector<unsigned char> png = encodePng(image);
             std::ofstream out(tmp, std::ios::binary);
@@ -107,16 +92,13 @@ std::vector<unsigned char> encodePng(const Image& image) {
         v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
         bytes[i++] = linearToSrgb8(v);
       }
-  OIIO::ImageSpec spec(image.width(), image.height(), 3, OIIO::TypeDesc::UINT8);
-  spec.attribute("oiio:ColorSpace", "sRGB");
   std::vector<unsigned char> png;
-  OIIO::Filesystem::IOVecOutput memory(png);
-  auto out = OIIO::ImageOutput::create("png");
-  if (!out || !out->set_ioproxy(&memory) || !out->open("memory.png", spec) ||
-      !out->write_image(OIIO::TypeDesc::UINT8, bytes.data()) || !out->close())
-    throw std::runtime_error("cannot encode a PNG: " + (out ? out->geterror() : OIIO::geterror()));
+  if (const std::string why = imageCodec().encodePng(image.width(), image.height(), bytes.data(), png); !why.empty())
+    throw std::runtime_error("cannot encode a PNG: " + why);
   return png;
 }
+
+void loadImageCodec() { imageCodec(); }
 
 void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata) {
   writeFilesAtomically({exrFile(image, path, metadata)});
@@ -301,17 +283,24 @@ std::string lowercase(std::string text) {
 // The formats Lucent reads, by extension (docs/scene-format.md, map_Kd).
 constexpr std::string_view kReadableExtensions[] = {".exr", ".hdr", ".pfm", ".png", ".jpg", ".jpeg", ".tif", ".tiff"};
 
-// An opened image: its reader, and the bytes it reads where they are in memory.
+// An opened image: the codec's handle, its header, and the bytes it reads where they are in memory.
 struct OpenedImage {
-  std::vector<unsigned char> bytes;  // what `memory` reads, where the file was read whole first
-  std::unique_ptr<OIIO::Filesystem::IOMemReader> memory;
-  std::unique_ptr<OIIO::ImageInput> in;
+  std::vector<unsigned char> bytes;  // what the reader reads, where the file was read whole first
+  CodecImageInfo info;
+  void* handle = nullptr;
+  OpenedImage() = default;
+  OpenedImage(OpenedImage&& o) noexcept
+      : bytes(std::move(o.bytes)), info(std::move(o.info)), handle(std::exchange(o.handle, nullptr)) {}
+  OpenedImage& operator=(OpenedImage&&) = delete;
+  ~OpenedImage() {
+    if (handle) imageCodec().close(handle);
+  }
 };
 
-// The reader of `extension` (".png"...) opened on `name`, read from `memory` where given, its header
-// checked against `sourceBytes`, what the file or memory holds.
+// The reader of `extension` (".png"...) opened on `name`, reading `memory` where given (which must
+// outlive the result), its header checked against `sourceBytes`, what the file or memory holds.
 OpenedImage openWithReader(const std::string& name, const std::string& extension, uint64_t sourceBytes,
-                           std::unique_ptr<OIIO::Filesystem::IOMemReader> memory) {
+                           std::optional<std::span<const unsigned char>> memory) {
   // The reader of the file's extension, and only that one: OpenImageIO's open() tries every reader
   // it has on a file its own does not take, and some abort the process on a crafted file (its RLA
   // reader asserts on a channel type; found by fuzzing).
@@ -319,25 +308,21 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
       std::end(kReadableExtensions))
     throw std::runtime_error("cannot read image '" + name +
                              "': not a format Lucent reads (.exr, .hdr, .pfm, .png, .jpg or .jpeg, .tif or .tiff)");
-  // Created by the format's name: given the path, create() also tries every other reader when the
-  // file is not valid for its own.
-  OpenedImage opened{.bytes = {}, .memory = std::move(memory), .in = OIIO::ImageInput::create(extension.substr(1), false)};
-  auto& in = opened.in;
-  OIIO::ImageSpec header;
-  if (in && opened.memory && !in->set_ioproxy(opened.memory.get()))
-    throw std::runtime_error("cannot read image '" + name + "': its reader cannot read from memory");
   // Colour as stored beside its alpha (PNG's and glTF's convention), not premultiplied by it.
-  OIIO::ImageSpec config;
-  config.attribute("oiio:UnassociatedAlpha", 1);
-  if (!in || !in->open(name, header, config))
-    throw std::runtime_error("cannot read image '" + name + "': " + (in ? in->geterror() : OIIO::geterror()));
-  const OIIO::ImageSpec& spec = in->spec();
+  OpenedImage opened;
+  static const unsigned char kNoBytes = 0;  // an empty memory is still read from memory
+  std::string error;
+  opened.handle = imageCodec().open(name, extension.substr(1),
+                                    memory ? (memory->empty() ? &kNoBytes : memory->data()) : nullptr,
+                                    memory ? memory->size() : 0, opened.info, error);
+  if (!opened.handle) throw std::runtime_error("cannot read image '" + name + "': " + error);
+  const CodecImageInfo& spec = opened.info;
   // The header's size is checked before any pixel is allocated (a 69-byte PNG may claim 20,000 x
   // 20,000).
-  if (spec.width < 1 || spec.height < 1 || spec.nchannels < 1 || spec.nchannels > 1024 ||
+  if (spec.width < 1 || spec.height < 1 || spec.channelCount < 1 || spec.channelCount > 1024 ||
       uint64_t(spec.width) * uint64_t(spec.height) > kMaxImagePixels)
     throw std::runtime_error("cannot read image '" + name + "': its header claims " + std::to_string(spec.width) + " x " +
-                             std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
+                             std::to_string(spec.height) + " pixels of " + std::to_string(spec.channelCount) +
                              " channels (at most 2^26 pixels and 1,024 channels)");
   if (spec.depth > 1)
     throw std::runtime_error("cannot read image '" + name + "': a volume of " + std::to_string(spec.depth) +
@@ -345,15 +330,15 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
   // And against the source's size: a 4.6 KB EXR claiming 8192 x 8192 pixels of 10 float channels
   // would have 2.7 GB allocated and filled before its missing data failed the read.
   uint64_t pixelBytes = 0;
-  for (int c = 0; c < spec.nchannels; ++c) pixelBytes += spec.channelformat(c).size();
+  for (const int bytes : spec.channelBytes) pixelBytes += uint64_t(bytes);
   const uint64_t stored = uint64_t(spec.width) * uint64_t(spec.height) * pixelBytes;
-  const std::string compression = spec.get_string_attribute("compression", "");
+  const std::string& compression = spec.compression;
   // A PFM's floats are stored as they are.
   const bool raw = compression == "none" || extension == ".pfm";
   const uint64_t most = raw ? sourceBytes : sourceBytes * kMostDecodedPerByte;
   if (stored > most)
     throw std::runtime_error("cannot read image '" + name + "': its header claims " + std::to_string(spec.width) +
-                             " x " + std::to_string(spec.height) + " pixels of " + std::to_string(spec.nchannels) +
+                             " x " + std::to_string(spec.height) + " pixels of " + std::to_string(spec.channelCount) +
                              " channels (" + std::to_string(stored) + " bytes), more than its " +
                              std::to_string(sourceBytes) + " bytes can hold" +
                              (compression.empty() ? "" : " compressed as " + compression));
@@ -384,72 +369,62 @@ OpenedImage openChecked(const std::string& path) {
     std::vector<unsigned char> bytes{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
     if (const std::string why = jpegStreamProblem(bytes); !why.empty())
       throw std::runtime_error("cannot read image '" + path + "': " + why);
-    auto memory = std::make_unique<OIIO::Filesystem::IOMemReader>(bytes.data(), bytes.size());
-    OpenedImage opened = openWithReader(path, extension, bytes.size(), std::move(memory));
-    opened.bytes = std::move(bytes);  // the buffer `memory` reads moves with it
+    OpenedImage opened = openWithReader(path, extension, bytes.size(), bytes);
+    opened.bytes = std::move(bytes);  // the buffer the reader reads moves with it
     return opened;
   }
   return openWithReader(path, extension,
-                        ec ? std::numeric_limits<uint64_t>::max() / kMostDecodedPerByte : fileBytes, nullptr);
+                        ec ? std::numeric_limits<uint64_t>::max() / kMostDecodedPerByte : fileBytes, std::nullopt);
 }
 
-std::vector<std::string> channelNames(const OIIO::ImageSpec& spec) {
-  std::vector<std::string> names = spec.channelnames;
-  for (int c = int(names.size()); c < spec.nchannels; ++c) names.push_back("channel" + std::to_string(c));
-  names.resize(size_t(spec.nchannels));
+std::vector<std::string> channelNames(const CodecImageInfo& info) {
+  std::vector<std::string> names = info.channelNames;
+  for (int c = int(names.size()); c < info.channelCount; ++c) names.push_back("channel" + std::to_string(c));
+  names.resize(size_t(info.channelCount));
   return names;
 }
 
 // A grey PFM ("Pf") is read as the same value in R, G and B: compared as a colour image.
-bool isGreyPfm(const OIIO::ImageInput& in) {
-  return std::string_view(in.format_name()) == "pnm" && in.spec().nchannels == 1 && in.spec().format == OIIO::TypeDesc::FLOAT;
+bool isGreyPfm(const CodecImageInfo& info) {
+  return info.formatName == "pnm" && info.channelCount == 1 && info.floatFormat;
 }
 
-std::vector<std::string> channelsAsRead(const OIIO::ImageInput& in) {
-  return isGreyPfm(in) ? std::vector<std::string>{"R", "G", "B"} : channelNames(in.spec());
+std::vector<std::string> channelsAsRead(const CodecImageInfo& info) {
+  return isGreyPfm(info) ? std::vector<std::string>{"R", "G", "B"} : channelNames(info);
 }
 
 }  // namespace
 
 ImageHeader readImageHeader(const std::string& path) {
   const OpenedImage opened = openChecked(path);
-  const auto& in = opened.in;
-  const OIIO::ImageSpec& spec = in->spec();
-  ImageHeader header{spec.width, spec.height, channelsAsRead(*in), {}};
-  for (int c = 0; c < spec.nchannels && size_t(c) < header.channels.size(); ++c)
-    if (spec.channelformat(c) == OIIO::TypeDesc::HALF) header.halfChannels.push_back(header.channels[size_t(c)]);
-  in->close();
+  const CodecImageInfo& spec = opened.info;
+  ImageHeader header{spec.width, spec.height, channelsAsRead(spec), {}};
+  for (int c = 0; c < spec.channelCount && size_t(c) < header.channels.size(); ++c)
+    if (spec.channelIsHalf[size_t(c)]) header.halfChannels.push_back(header.channels[size_t(c)]);
   return header;
 }
 
 namespace {
 
 Image readOpened(OpenedImage opened, const std::string& name, ImageMetadata* metadata) {
-  auto& in = opened.in;
-  const OIIO::ImageSpec& spec = in->spec();
+  const CodecImageInfo& spec = opened.info;
   // The pixels as floats, and OpenImageIO's scanlines, which it decodes up to 256 at a time in
   // their stored format (up to 8 bytes a channel): for a Radiance header claiming 19,854,521 x 2
   // pixels it asked for 61 GB (found by fuzzing).
-  const uint64_t floats = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.nchannels);
-  requireMemory(floats * sizeof(float) * (isGreyPfm(*in) ? 4 : 1) + 256 * uint64_t(spec.width) * uint64_t(spec.nchannels) * 8,
+  const uint64_t floats = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.channelCount);
+  requireMemory(floats * sizeof(float) * (isGreyPfm(spec) ? 4 : 1) + 256 * uint64_t(spec.width) * uint64_t(spec.channelCount) * 8,
                 "the image '" + name + "'", "raise --memory-limit if the machine has the memory");
   Image image(spec.width, spec.height, channelNames(spec));
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels().data()))
-    throw std::runtime_error("cannot read image '" + name + "': " + in->geterror());
-  if (isGreyPfm(*in)) {
+  if (const std::string why = imageCodec().readPixels(opened.handle, image.pixels().data()); !why.empty())
+    throw std::runtime_error("cannot read image '" + name + "': " + why);
+  if (isGreyPfm(spec)) {
     Image rgb(spec.width, spec.height, {"R", "G", "B"});
     for (int y = 0; y < spec.height; ++y)
       for (int x = 0; x < spec.width; ++x)
         for (int c = 0; c < 3; ++c) rgb.at(x, y, c) = image.at(x, y, 0);
     image = std::move(rgb);
   }
-  if (metadata) {
-    metadata->clear();
-    for (const OIIO::ParamValue& p : spec.extra_attribs)
-      if (p.type() == OIIO::TypeDesc::STRING)
-        metadata->emplace_back(p.name().string(), p.get_string());
-  }
-  in->close();
+  if (metadata) *metadata = imageCodec().stringAttributes(opened.handle);
   return image;
 }
 
@@ -464,8 +439,7 @@ Image readImageFromMemory(const std::string& name, const std::string& extension,
   if (extension == ".jpg")
     if (const std::string why = jpegStreamProblem(bytes); !why.empty())
       throw std::runtime_error("cannot read image '" + name + "': " + why);
-  auto memory = std::make_unique<OIIO::Filesystem::IOMemReader>(bytes.data(), bytes.size());
-  return readOpened(openWithReader(name, extension, bytes.size(), std::move(memory)), name, metadata);
+  return readOpened(openWithReader(name, extension, bytes.size(), bytes), name, metadata);
 }
 
 bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata) {

@@ -166,6 +166,7 @@ RenderSession::RenderSession(OpenScene& scene, RenderRequest request) : scene_(s
     throw OptionError(e.option(), name(e.option()) + ": " + e.what());
   }
   checkOutputDirectories(*method_, options_->values(), s);
+  if (!r.output.empty()) loadImageCodec();
   ignored_ = s.ignored;
   for (size_t i = 0; i < s.materials.size(); ++i)
     if (s.materials[i].transmission > 0 && method_->rendersTransmission() == TransmissionRendered::InPart)

@@ -13,8 +13,7 @@
 #include <iostream>
 #include <sstream>
 #include <tuple>
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
+#include <zlib.h>
 #include <nlohmann/json.hpp>
 
 #include "lucent/core/rng.h"
@@ -123,19 +122,37 @@ std::string writeFile(const fs::path& dir, const std::string& name, const json& 
   return p.string();
 }
 
-// An 8-bit RGBA PNG of the given codes (alpha unassociated: stored beside the colour), in memory.
+// An 8-bit RGBA PNG of the given codes (alpha unassociated: stored beside the colour, as PNG
+// stores it), in memory: the signature, IHDR, one IDAT of the rows (each after filter type 0)
+// deflated by zlib, IEND; each chunk with its CRC-32.
 std::vector<unsigned char> rgbaPng(int width, int height, const std::vector<unsigned char>& rgba) {
-  std::vector<unsigned char> png;
-  OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
-  spec.alpha_channel = 3;
-  spec.attribute("oiio:UnassociatedAlpha", 1);
-  OIIO::Filesystem::IOVecOutput memory(png);
-  auto out = OIIO::ImageOutput::create("png");
-  REQUIRE(out);
-  REQUIRE(out->set_ioproxy(&memory));
-  REQUIRE(out->open("image.png", spec));
-  REQUIRE(out->write_image(OIIO::TypeDesc::UINT8, rgba.data()));
-  REQUIRE(out->close());
+  std::vector<unsigned char> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  auto chunk = [&png](const char* type, const std::vector<unsigned char>& data) {
+    const auto word = [&png](uint32_t v) {
+      for (int shift = 24; shift >= 0; shift -= 8) png.push_back(static_cast<unsigned char>(v >> shift));
+    };
+    word(uint32_t(data.size()));
+    const size_t start = png.size();
+    png.insert(png.end(), type, type + 4);
+    png.insert(png.end(), data.begin(), data.end());
+    word(uint32_t(crc32(0, png.data() + start, uInt(png.size() - start))));
+  };
+  std::vector<unsigned char> header;
+  for (const uint32_t v : {uint32_t(width), uint32_t(height)})
+    for (int shift = 24; shift >= 0; shift -= 8) header.push_back(static_cast<unsigned char>(v >> shift));
+  header.insert(header.end(), {8, 6, 0, 0, 0});  // 8 bits, RGBA, deflate, filters, no interlace
+  chunk("IHDR", header);
+  std::vector<unsigned char> rows;
+  for (int y = 0; y < height; ++y) {
+    rows.push_back(0);
+    rows.insert(rows.end(), rgba.begin() + ptrdiff_t(y) * width * 4, rgba.begin() + ptrdiff_t(y + 1) * width * 4);
+  }
+  uLongf deflatedSize = compressBound(uLong(rows.size()));
+  std::vector<unsigned char> deflated(deflatedSize);
+  REQUIRE(compress(deflated.data(), &deflatedSize, rows.data(), uLong(rows.size())) == Z_OK);
+  deflated.resize(deflatedSize);
+  chunk("IDAT", deflated);
+  chunk("IEND", {});
   return png;
 }
 

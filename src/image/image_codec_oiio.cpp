@@ -1,0 +1,107 @@
+// liblucent_image_codec.so: image_codec.h's functions on OpenImageIO.
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+
+#include <memory>
+
+#include "image/image_codec.h"
+
+namespace lucent {
+namespace {
+
+// OpenImageIO's message, or `otherwise` where a reader or writer failed without one (its PFM reader
+// does on a truncated file): "" would read as success.
+std::string failure(const std::string& message, const char* otherwise) { return message.empty() ? otherwise : message; }
+
+std::string writeExr(const std::string& path, int width, int height, const std::vector<std::string>& channels,
+                     int alphaChannel, const CodecAttributes& attributes, const float* pixels) {
+  OIIO::ImageSpec spec(width, height, int(channels.size()), OIIO::TypeDesc::FLOAT);
+  spec.channelnames = channels;
+  spec.alpha_channel = alphaChannel;
+  for (const auto& [key, value] : attributes) spec.attribute(key, value);
+  auto out = OIIO::ImageOutput::create(path);
+  if (!out) return failure(OIIO::geterror(), "no EXR writer");
+  if (!out->open(path, spec)) return failure(out->geterror(), "the file cannot be opened for writing");
+  if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels)) {
+    const std::string why = failure(out->geterror(), "the pixels were not written");
+    out->close();
+    return why;
+  }
+  if (!out->close()) return failure(out->geterror(), "the file was not completed");
+  return "";
+}
+
+std::string encodePng(int width, int height, const unsigned char* rgb, std::vector<unsigned char>& png) {
+  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+  spec.attribute("oiio:ColorSpace", "sRGB");
+  OIIO::Filesystem::IOVecOutput memory(png);
+  auto out = OIIO::ImageOutput::create("png");
+  if (!out || !out->set_ioproxy(&memory) || !out->open("memory.png", spec) ||
+      !out->write_image(OIIO::TypeDesc::UINT8, rgb) || !out->close())
+    return failure(out ? out->geterror() : OIIO::geterror(), "the encoder failed");
+  return "";
+}
+
+struct Opened {
+  std::unique_ptr<OIIO::Filesystem::IOMemReader> memory;
+  std::unique_ptr<OIIO::ImageInput> in;
+};
+
+void* open(const std::string& name, const std::string& format, const unsigned char* memory, size_t bytes,
+           CodecImageInfo& info, std::string& error) {
+  auto opened = std::make_unique<Opened>();
+  // Created by the format's name: given the path, create() also tries every other reader when the
+  // file is not valid for its own.
+  opened->in = OIIO::ImageInput::create(format, false);
+  auto& in = opened->in;
+  if (in && memory) {
+    opened->memory = std::make_unique<OIIO::Filesystem::IOMemReader>(const_cast<unsigned char*>(memory), bytes);
+    if (!in->set_ioproxy(opened->memory.get())) {
+      error = "its reader cannot read from memory";
+      return nullptr;
+    }
+  }
+  OIIO::ImageSpec header, config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  if (!in || !in->open(name, header, config)) {
+    error = failure(in ? in->geterror() : OIIO::geterror(), "its header cannot be read");
+    return nullptr;
+  }
+  const OIIO::ImageSpec& spec = in->spec();
+  info.width = spec.width, info.height = spec.height, info.depth = spec.depth, info.channelCount = spec.nchannels;
+  info.channelNames = spec.channelnames;
+  for (int c = 0; c < spec.nchannels; ++c) {
+    info.channelBytes.push_back(int(spec.channelformat(c).size()));
+    info.channelIsHalf.push_back(spec.channelformat(c) == OIIO::TypeDesc::HALF);
+  }
+  info.compression = spec.get_string_attribute("compression", "");
+  info.formatName = in->format_name();
+  info.floatFormat = spec.format == OIIO::TypeDesc::FLOAT;
+  return opened.release();
+}
+
+std::string readPixels(void* image, float* pixels) {
+  auto& in = static_cast<Opened*>(image)->in;
+  if (!in->read_image(0, 0, 0, in->spec().nchannels, OIIO::TypeDesc::FLOAT, pixels))
+    return failure(in->geterror(), "its pixels cannot be read: truncated or damaged");
+  return "";
+}
+
+CodecAttributes stringAttributes(void* image) {
+  CodecAttributes attributes;
+  for (const OIIO::ParamValue& p : static_cast<Opened*>(image)->in->spec().extra_attribs)
+    if (p.type() == OIIO::TypeDesc::STRING) attributes.emplace_back(p.name().string(), p.get_string());
+  return attributes;
+}
+
+void close(void* image) {
+  std::unique_ptr<Opened> opened(static_cast<Opened*>(image));
+  opened->in->close();
+}
+
+const ImageCodec kCodec{kImageCodecInterface, writeExr, encodePng, open, readPixels, stringAttributes, close};
+
+}  // namespace
+}  // namespace lucent
+
+extern "C" __attribute__((visibility("default"))) const lucent::ImageCodec* lucentImageCodec() { return &lucent::kCodec; }
