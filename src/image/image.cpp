@@ -10,11 +10,11 @@
 #include <iterator>
 #include <limits>
 #include <map>
-#include <memory>
 #include <optional>
-#include <stdexcept>
 #include <span>
+#include <stdexcept>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "lucent/core/files.h"

@@ -126,20 +126,20 @@ std::string writeFile(const fs::path& dir, const std::string& name, const json& 
 // stores it), in memory: the signature, IHDR, one IDAT of the rows (each after filter type 0)
 // deflated by zlib, IEND; each chunk with its CRC-32.
 std::vector<unsigned char> rgbaPng(int width, int height, const std::vector<unsigned char>& rgba) {
+  const auto bigEndian = [](std::vector<unsigned char>& out, uint32_t v) {
+    for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<unsigned char>(v >> shift));
+  };
   std::vector<unsigned char> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-  auto chunk = [&png](const char* type, const std::vector<unsigned char>& data) {
-    const auto word = [&png](uint32_t v) {
-      for (int shift = 24; shift >= 0; shift -= 8) png.push_back(static_cast<unsigned char>(v >> shift));
-    };
-    word(uint32_t(data.size()));
+  auto chunk = [&](const char* type, const std::vector<unsigned char>& data) {
+    bigEndian(png, uint32_t(data.size()));
     const size_t start = png.size();
     png.insert(png.end(), type, type + 4);
     png.insert(png.end(), data.begin(), data.end());
-    word(uint32_t(crc32(0, png.data() + start, uInt(png.size() - start))));
+    bigEndian(png, uint32_t(crc32(0, png.data() + start, uInt(png.size() - start))));
   };
   std::vector<unsigned char> header;
-  for (const uint32_t v : {uint32_t(width), uint32_t(height)})
-    for (int shift = 24; shift >= 0; shift -= 8) header.push_back(static_cast<unsigned char>(v >> shift));
+  bigEndian(header, uint32_t(width));
+  bigEndian(header, uint32_t(height));
   header.insert(header.end(), {8, 6, 0, 0, 0});  // 8 bits, RGBA, deflate, filters, no interlace
   chunk("IHDR", header);
   std::vector<unsigned char> rows;
