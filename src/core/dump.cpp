@@ -17,7 +17,7 @@ namespace lucent {
 static_assert(std::endian::native == std::endian::little);
 
 namespace {
-constexpr char kMagic[8] = {'L', 'C', 'N', 'T', 'D', 'U', 'M', 'P'};
+constexpr char kDumpMagic[8] = {'L', 'C', 'N', 'T', 'D', 'U', 'M', 'P'};
 }
 
 void writeDump(const std::string& directory, const std::string& name, const std::string& type,
@@ -26,7 +26,7 @@ void writeDump(const std::string& directory, const std::string& name, const std:
   if (type.size() >= sizeof(DumpHeader::type)) throw std::logic_error("dump type name too long: " + type);
   createDumpDirectory(directory);
   DumpHeader header{};
-  std::memcpy(header.magic, kMagic, sizeof kMagic);
+  std::memcpy(header.magic, kDumpMagic, sizeof kDumpMagic);
   header.version = kDumpVersion;
   header.recordBytes = recordBytes;
   header.count = count;
@@ -76,7 +76,7 @@ DumpHeader readHeader(std::ifstream& in, const std::string& path) {
   if (!in) throw std::runtime_error("cannot read dump '" + path + "'");
   DumpHeader header{};
   in.read(reinterpret_cast<char*>(&header), sizeof header);
-  if (!in || std::memcmp(header.magic, kMagic, sizeof kMagic) != 0)
+  if (!in || std::memcmp(header.magic, kDumpMagic, sizeof kDumpMagic) != 0)
     throw std::runtime_error("'" + path + "' is not a Lucent dump");
   if (header.version != kDumpVersion)
     throw std::runtime_error("dump '" + path + "' has format version " + std::to_string(header.version) +

@@ -17,7 +17,7 @@ namespace lucent {
 
 namespace {
 
-constexpr char kMagic[8] = {'L', 'C', 'N', 'T', 'F', 'I', 'L', 'M'};
+constexpr char kFilmMagic[8] = {'L', 'C', 'N', 'T', 'F', 'I', 'L', 'M'};
 constexpr uint32_t kFormatVersion = 4;
 constexpr uint32_t kPreambleBytes = 24;  // magic, version, header size, hash
 constexpr uint32_t kMaxHeaderBytes = 1 << 20;
@@ -85,7 +85,7 @@ FileToWrite filmFile(const std::string& path, const Film& film, const FilmFileIn
             const uint64_t zeros = 0;
             std::ofstream out(tmp, std::ios::binary);
             const uint32_t version = kFormatVersion, headerBytes = uint32_t(text.size());
-            out.write(kMagic, 8);
+            out.write(kFilmMagic, 8);
             out.write(reinterpret_cast<const char*>(&version), 4);
             out.write(reinterpret_cast<const char*>(&headerBytes), 4);
             out.write(reinterpret_cast<const char*>(&fileHash), 8);
@@ -231,7 +231,7 @@ FilmFile readFilmFile(const std::string& path) {
   uint64_t fileHash = 0;
   in.read(magic, 8);
   in.read(reinterpret_cast<char*>(&version), 4);
-  if (!in || std::memcmp(magic, kMagic, 8) != 0) throw fail("not a Lucent film file");
+  if (!in || std::memcmp(magic, kFilmMagic, 8) != 0) throw fail("not a Lucent film file");
   if (version != kFormatVersion)
     throw fail("format version " + std::to_string(version) + "; this Lucent reads version " + std::to_string(kFormatVersion));
   in.read(reinterpret_cast<char*>(&headerBytes), 4);

@@ -50,7 +50,7 @@ Array readArray(const std::filesystem::path& path) {
 }
 
 template <class T>
-T load(const std::byte* p) {
+T loadAs(const std::byte* p) {
   T v;
   std::memcpy(&v, p, sizeof v);
   return v;
@@ -71,12 +71,12 @@ std::string valueText(DumpFieldKind k, const std::byte* p) {
   std::ostringstream s;
   s.precision(9);
   switch (k) {
-    case DumpFieldKind::F32: s << load<float>(p); break;
-    case DumpFieldKind::F16: s << "0x" << std::hex << load<uint16_t>(p) << " (binary16)"; break;
-    case DumpFieldKind::U32: s << load<uint32_t>(p); break;
-    case DumpFieldKind::I32: s << load<int32_t>(p); break;
-    case DumpFieldKind::U16: s << load<uint16_t>(p); break;
-    case DumpFieldKind::U64: s << load<uint64_t>(p); break;
+    case DumpFieldKind::F32: s << loadAs<float>(p); break;
+    case DumpFieldKind::F16: s << "0x" << std::hex << loadAs<uint16_t>(p) << " (binary16)"; break;
+    case DumpFieldKind::U32: s << loadAs<uint32_t>(p); break;
+    case DumpFieldKind::I32: s << loadAs<int32_t>(p); break;
+    case DumpFieldKind::U16: s << loadAs<uint16_t>(p); break;
+    case DumpFieldKind::U64: s << loadAs<uint64_t>(p); break;
   }
   return s.str();
 }
@@ -100,9 +100,9 @@ bool firstDifference(const DumpRecordType* type, uint32_t recordBytes, const std
       const std::byte *x = a + offset, *y = b + offset;
       bool same = std::memcmp(x, y, size) == 0;
       if (!same && !type->exact) {
-        if (f.kind == DumpFieldKind::F32) same = floatsAgree(load<float>(x), load<float>(y), o);
+        if (f.kind == DumpFieldKind::F32) same = floatsAgree(loadAs<float>(x), loadAs<float>(y), o);
         if (f.kind == DumpFieldKind::F16) {
-          const uint16_t hx = load<uint16_t>(x), hy = load<uint16_t>(y);
+          const uint16_t hx = loadAs<uint16_t>(x), hy = loadAs<uint16_t>(y);
           const bool special = (hx & 0x7c00u) == 0x7c00u || (hy & 0x7c00u) == 0x7c00u;  // infinities and NaNs
           same = !special && std::abs(ordered16(hx) - ordered16(hy)) <= int64_t(o.ulps);
         }
@@ -143,7 +143,7 @@ std::vector<uint64_t> photonOrder(const Array& a) {
   std::iota(order.begin(), order.end(), uint64_t(0));
   std::sort(order.begin(), order.end(), [&](uint64_t i, uint64_t j) {
     for (int k = 0; k < 3; ++k) {  // by the floats' bits on the ordered line: a strict order even with NaNs
-      const int64_t x = ordered(load<uint32_t>(a.record(i) + 4 * k)), y = ordered(load<uint32_t>(a.record(j) + 4 * k));
+      const int64_t x = ordered(loadAs<uint32_t>(a.record(i) + 4 * k)), y = ordered(loadAs<uint32_t>(a.record(j) + 4 * k));
       if (x != y) return x < y;
     }
     return std::memcmp(a.record(i), a.record(j), a.recordBytes) < 0;
@@ -166,7 +166,7 @@ void compareNeighbours(const Array& r, const Array& c, const std::vector<uint64_
   for (uint64_t q = 0; q < queries; ++q) {
     auto entries = [](const Array& a, uint64_t begin, uint64_t end) {
       std::vector<Neighbour> v;
-      for (uint64_t i = begin; i < end && i < a.count; ++i) v.push_back(load<Neighbour>(a.record(i)));
+      for (uint64_t i = begin; i < end && i < a.count; ++i) v.push_back(loadAs<Neighbour>(a.record(i)));
       std::sort(v.begin(), v.end(), [](Neighbour x, Neighbour y) {
         const int64_t dx = ordered(std::bit_cast<uint32_t>(x.d2)), dy = ordered(std::bit_cast<uint32_t>(y.d2));
         return dx != dy ? dx < dy : x.photon < y.photon;
@@ -235,8 +235,8 @@ void compareTrees(const Array& r, const Array& c, const DumpRecordType* type, co
     RecordDifference d;
     d.index = a;
     static const uint32_t child = dumpFieldOffset("EnvPointNode", "child");
-    const uint32_t ca0 = load<uint32_t>(r.record(a) + child), ca1 = load<uint32_t>(r.record(a) + child + 4);
-    const uint32_t cb0 = load<uint32_t>(c.record(b) + child), cb1 = load<uint32_t>(c.record(b) + child + 4);
+    const uint32_t ca0 = loadAs<uint32_t>(r.record(a) + child), ca1 = loadAs<uint32_t>(r.record(a) + child + 4);
+    const uint32_t cb0 = loadAs<uint32_t>(c.record(b) + child), cb1 = loadAs<uint32_t>(c.record(b) + child + 4);
     const bool leafA = ca0 == 0, leafB = cb0 == 0;
     if (leafA != leafB) {
       d.field = "child";
@@ -287,7 +287,7 @@ class RecordPlaces {
       const Array* points = referenceArray(prefix + "shading_points", "ShadingPoint");
       if (!points || index >= points->count) return "";
       const std::byte* p = points->record(index);
-      const auto field = [p](const char* name) { return load<uint32_t>(p + dumpFieldOffset("ShadingPoint", name)); };
+      const auto field = [p](const char* name) { return loadAs<uint32_t>(p + dumpFieldOffset("ShadingPoint", name)); };
       const uint32_t pixel = field("pixel"), sample = field("sample"), branch = field("branch");
       std::string at = width_ > 0 ? "pixel (" + std::to_string(pixel % width_) + ", " + std::to_string(pixel / width_) + ")"
                                   : "pixel " + std::to_string(pixel) + " (y * width + x)";
@@ -299,7 +299,7 @@ class RecordPlaces {
       const Array* grid = referenceArray(array.substr(0, dot) + ".grid", "UniformGrid");
       if (!grid || grid->count != 1) return "";
       int64_t res[3];
-      for (int a = 0; a < 3; ++a) res[a] = load<int32_t>(grid->record(0) + dumpFieldOffset("UniformGrid", "res") + 4 * a);
+      for (int a = 0; a < 3; ++a) res[a] = loadAs<int32_t>(grid->record(0) + dumpFieldOffset("UniformGrid", "res") + 4 * a);
       if (res[0] < 1 || res[1] < 1 || res[2] < 1) return "";
       // cell_counts: the prefix sums' entries, res + 1 per axis; slots: m^2 per cell.
       const int64_t side[3] = {res[0] + (last == "cell_counts"), res[1] + (last == "cell_counts"), res[2] + (last == "cell_counts")};

@@ -11,7 +11,7 @@
 namespace lucent {
 
 namespace {
-void store(Vec3 v, float* x, float* y, float* z, uint32_t k) { x[k] = v.x, y[k] = v.y, z[k] = v.z; }
+void storeLane(Vec3 v, float* x, float* y, float* z, uint32_t k) { x[k] = v.x, y[k] = v.y, z[k] = v.z; }
 }  // namespace
 
 LUCENT_LANE_LOOP(void, startCameraPaths, (CameraLanes& l, uint32_t first, uint32_t last, SamplerKind sampler,
@@ -48,13 +48,13 @@ LUCENT_LANE_VERSIONS(void, startCameraPaths, (CameraLanes& l, uint32_t first, ui
 void fetchLambertianSurface(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k,
                             std::vector<TexturedLane>& textured) {
   const uint32_t* v = &s.indices[3 * size_t(hit.triangle)];
-  store(direction, l.dirX, l.dirY, l.dirZ, k);
+  storeLane(direction, l.dirX, l.dirY, l.dirZ, k);
   // surfaceAt's arithmetic, up to the normalization of the interpolated normal.
-  store(barycentric(s.positions[v[0]], s.positions[v[1]], s.positions[v[2]], hit.b1, hit.b2), l.posX, l.posY, l.posZ, k);
-  store(barycentric(s.normals[v[0]], s.normals[v[1]], s.normals[v[2]], hit.b1, hit.b2), l.normalX, l.normalY,
+  storeLane(barycentric(s.positions[v[0]], s.positions[v[1]], s.positions[v[2]], hit.b1, hit.b2), l.posX, l.posY, l.posZ, k);
+  storeLane(barycentric(s.normals[v[0]], s.normals[v[1]], s.normals[v[2]], hit.b1, hit.b2), l.normalX, l.normalY,
         l.normalZ, k);
   l.hasNormals[k] = !(s.normals[v[0]] == Vec3{0, 0, 0});
-  store(s.faceNormals[hit.triangle], l.ngx, l.ngy, l.ngz, k);
+  storeLane(s.faceNormals[hit.triangle], l.ngx, l.ngy, l.ngz, k);
   const Material& m = s.materials[s.materialIds[hit.triangle]];
   l.emits[k] = !m.ke.isBlack();
   SurfacePoint sp;
@@ -87,10 +87,10 @@ LaneLight laneLight(const Scene& scene, uint32_t light) {
 
 void fetchLaneLight(const LaneLight& light, DiffuseLanes& l, uint32_t k) {
   const EmittingTriangle& e = light.triangle;
-  store(e.q0, l.q0x, l.q0y, l.q0z, k);
-  store(e.q1, l.q1x, l.q1y, l.q1z, k);
-  store(e.q2, l.q2x, l.q2y, l.q2z, k);
-  store(e.normal, l.lightNx, l.lightNy, l.lightNz, k);
+  storeLane(e.q0, l.q0x, l.q0y, l.q0z, k);
+  storeLane(e.q1, l.q1x, l.q1y, l.q1z, k);
+  storeLane(e.q2, l.q2x, l.q2y, l.q2z, k);
+  storeLane(e.normal, l.lightNx, l.lightNy, l.lightNz, k);
   l.lightArea[k] = e.area;
   l.leR[k] = light.le.r, l.leG[k] = light.le.g, l.leB[k] = light.le.b;
 }
@@ -105,7 +105,7 @@ LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint
     const Vec3 sn = select(l.hasNormals[k] != 0, orientedShadingNormal({l.normalX[k], l.normalY[k], l.normalZ[k]}, ng), ng);
     const Vec3 woWorld = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
     const Frame frame(shadingFrameNormal(woWorld, sn, ng, true));
-    store(sn, l.snX, l.snY, l.snZ, k);
+    storeLane(sn, l.snX, l.snY, l.snZ, k);
     const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
     const Vec3 wo = frame.toLocal(woWorld);
     const Rgb kd{l.kdR[k], l.kdG[k], l.kdB[k]};
@@ -126,8 +126,8 @@ LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint
         weighLightSample(strategy, pdf, delta, le, wi, wiLocal, frame.n, ng, lambertianValue(kd, wo.z, wiLocal.z));
     l.shadowQueued[k] = direct.queued;
     const Ray shadow = shadowRay(position, ng, wi, point, distance);
-    store(shadow.origin, l.shadowOx, l.shadowOy, l.shadowOz, k);
-    store(shadow.direction, l.shadowDx, l.shadowDy, l.shadowDz, k);
+    storeLane(shadow.origin, l.shadowOx, l.shadowOy, l.shadowOz, k);
+    storeLane(shadow.direction, l.shadowDx, l.shadowDy, l.shadowDz, k);
     l.shadowTMax[k] = shadow.tMax;
     l.directR[k] = direct.contribution.r, l.directG[k] = direct.contribution.g, l.directB[k] = direct.contribution.b;
 
@@ -137,8 +137,8 @@ LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint
     l.scattered[k] = next.valid ? !leaksThroughSurface(woWorld, wiWorld, ng, false) : false;
     l.weightR[k] = next.weight.r, l.weightG[k] = next.weight.g, l.weightB[k] = next.weight.b;
     l.scatterPdf[k] = next.pdf;
-    store(offsetOrigin(position, ng, wiWorld), l.nextOx, l.nextOy, l.nextOz, k);
-    store(wiWorld, l.nextDx, l.nextDy, l.nextDz, k);
+    storeLane(offsetOrigin(position, ng, wiWorld), l.nextOx, l.nextOy, l.nextOz, k);
+    storeLane(wiWorld, l.nextDx, l.nextDy, l.nextDz, k);
   }
 }
 LUCENT_LANE_VERSIONS(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint32_t last), (l, first, last))

@@ -37,7 +37,7 @@ struct GatherHit {
 };
 
 // Per-thread scratch and clocks of the gathering stage.
-struct GatherScratch {
+struct FinalGatherScratch {
   std::vector<GatherHit> hits;
   std::vector<PhotonDistance> heap;
   double traceSeconds = 0, estimateSeconds = 0;
@@ -167,8 +167,8 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
 
   const Film& film = driver.startFilm(Film::Sums::PerPart, {options.common.layers, true});
   const uint32_t heapSize = maps.globalSettings.k;  // the caustic map is estimated by estimateAtPoints
-  tbb::enumerable_thread_specific<GatherScratch> scratch([&] {
-    GatherScratch s;
+  tbb::enumerable_thread_specific<FinalGatherScratch> scratch([&] {
+    FinalGatherScratch s;
     s.hits.resize(size_t(options.gatherRays));
     s.heap.resize(heapSize);
     return s;
@@ -206,12 +206,12 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
       // radiance_estimate in proportion.
       if (!global || options.gatherRays == 0) return;
       Stopwatch gatherClock;
-      for (GatherScratch& s : scratch) s.traceSeconds = s.estimateSeconds = 0;
+      for (FinalGatherScratch& s : scratch) s.traceSeconds = s.estimateSeconds = 0;
       std::atomic<size_t> done{0};
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& r) {
         stopPoint();
         flushDenormals();
-        GatherScratch& s = scratch.local();
+        FinalGatherScratch& s = scratch.local();
         for (size_t i = r.begin(); i != r.end(); ++i) {
           const ShadingPoint& point = eye.points[i];
           Stopwatch traceClock;
@@ -239,7 +239,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
       });
       const double wall = gatherClock.seconds();
       double t = 0, e = 0;
-      for (const GatherScratch& s : scratch) t += s.traceSeconds, e += s.estimateSeconds;
+      for (const FinalGatherScratch& s : scratch) t += s.traceSeconds, e += s.estimateSeconds;
       const double share = t + e > 0 ? t / (t + e) : 0.5;
       totals.traceSeconds += wall * share;
       totals.estimateSeconds += wall * (1 - share);
@@ -250,7 +250,7 @@ RenderOutput renderPhotonMapFinalGather(const Scene& scene, const Visibility& vi
   totals.invalid += film.droppedPoints();
   EstimateCounters gc, cc;
   uint64_t gatherRays = 0;
-  for (const GatherScratch& s : scratch) gc += s.counters, gatherRays += s.rays, irradianceFallbacks += s.fallbacks;
+  for (const FinalGatherScratch& s : scratch) gc += s.counters, gatherRays += s.rays, irradianceFallbacks += s.fallbacks;
   for (const auto& c : causticCounters) cc += c;
   totals.report(out.stats, gc, cc);
   out.stats.addCounter("gather_rays", gatherRays);

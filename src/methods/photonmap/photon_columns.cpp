@@ -45,18 +45,18 @@ namespace {
 typedef float Floats __attribute__((vector_size(32)));
 typedef int32_t Ints __attribute__((vector_size(32)));
 
-LUCENT_LANE_HELPER Floats load(const float* p) {
+LUCENT_LANE_HELPER Floats loadLanes(const float* p) {
   Floats v;
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-LUCENT_LANE_HELPER Ints load(const int32_t* p) {
+LUCENT_LANE_HELPER Ints loadLanes(const int32_t* p) {
   Ints v;
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-LUCENT_LANE_HELPER void store(float* p, Floats v) { std::memcpy(p, &v, sizeof v); }
-LUCENT_LANE_HELPER void store(int32_t* p, Ints v) { std::memcpy(p, &v, sizeof v); }
+LUCENT_LANE_HELPER void storeLanes(float* p, Floats v) { std::memcpy(p, &v, sizeof v); }
+LUCENT_LANE_HELPER void storeLanes(int32_t* p, Ints v) { std::memcpy(p, &v, sizeof v); }
 LUCENT_LANE_HELPER Floats broadcast(float f) { return Floats{} + f; }
 LUCENT_LANE_HELPER Ints broadcast(int32_t i) { return Ints{} + i; }
 // The lanes of v where mask is set (all ones), zero elsewhere.
@@ -78,9 +78,9 @@ struct Block {
   Ints lights, valid;
 };
 
-struct Query {
+struct ColumnQuery {
   Floats x, y, z, nx, ny, nz, fx, fy, fz;
-  LUCENT_LANE_HELPER Query(Vec3 q, const SurfaceSide& side)
+  LUCENT_LANE_HELPER ColumnQuery(Vec3 q, const SurfaceSide& side)
       : x(broadcast(q.x)), y(broadcast(q.y)), z(broadcast(q.z)), nx(broadcast(side.shadingNormal.x)),
         ny(broadcast(side.shadingNormal.y)), nz(broadcast(side.shadingNormal.z)), fx(broadcast(side.facingNormal.x)),
         fy(broadcast(side.facingNormal.y)), fz(broadcast(side.facingNormal.z)) {}
@@ -97,13 +97,14 @@ struct LanePositions {
   LUCENT_LANE_HELPER void next() { position += kPhotonLanes; }
 };
 
-LUCENT_LANE_HELPER Block block(const PhotonColumns& c, uint32_t first, Ints valid, const Query& q) {
-  const Floats dx = load(&c.x[first]) - q.x, dy = load(&c.y[first]) - q.y, dz = load(&c.z[first]) - q.z;
+LUCENT_LANE_HELPER Block block(const PhotonColumns& c, uint32_t first, Ints valid, const ColumnQuery& q) {
+  const Floats dx = loadLanes(&c.x[first]) - q.x, dy = loadLanes(&c.y[first]) - q.y, dz = loadLanes(&c.z[first]) - q.z;
   Block b;
   b.d2 = dx * dx + dy * dy + dz * dz;
   const Floats cosine =
-      load(&c.incomingX[first]) * q.nx + load(&c.incomingY[first]) * q.ny + load(&c.incomingZ[first]) * q.nz;
-  const Floats facing = load(&c.facingX[first]) * q.fx + load(&c.facingY[first]) * q.fy + load(&c.facingZ[first]) * q.fz;
+      loadLanes(&c.incomingX[first]) * q.nx + loadLanes(&c.incomingY[first]) * q.ny + loadLanes(&c.incomingZ[first]) * q.nz;
+  const Floats facing =
+      loadLanes(&c.facingX[first]) * q.fx + loadLanes(&c.facingY[first]) * q.fy + loadLanes(&c.facingZ[first]) * q.fz;
   const Floats h = dx * q.fx + dy * q.fy + dz * q.fz;
   b.lights = (cosine > 0) & (facing > kSameSurfaceCos) & (h * h <= b.d2 * (1 - facing * facing + kOffPlane * kOffPlane));
   b.valid = valid;
@@ -114,18 +115,18 @@ LUCENT_LANE_HELPER Block block(const PhotonColumns& c, uint32_t first, Ints vali
 
 LUCENT_LANE_LOOP(void, sumPhotonRun, (const PhotonColumns& c, uint32_t begin, uint32_t end, const SurfaceSide& side, KnnGridSearch& s,
                   PhotonLaneSums& sums)) {
-  const Query q(s.position, side);
+  const ColumnQuery q(s.position, side);
   const uint32_t examinedBefore = s.photonsExamined;
   uint32_t i = begin;
 
   // While fewer than k are accepted: whole blocks as long as the k-th photon is not among them.
   if (s.found < s.k) {
     const Floats maxRadius2 = broadcast(s.maxRadius2);
-    Floats r = load(sums.r), g = load(sums.g), b = load(sums.b);
-    Ints used = load(sums.used);
-    Floats farD2 = load(sums.farthestD2), farR = load(sums.farthestR), farG = load(sums.farthestG),
-           farB = load(sums.farthestB);
-    Ints farOrder = load(reinterpret_cast<const int32_t*>(sums.farthestOrder));
+    Floats r = loadLanes(sums.r), g = loadLanes(sums.g), b = loadLanes(sums.b);
+    Ints used = loadLanes(sums.used);
+    Floats farD2 = loadLanes(sums.farthestD2), farR = loadLanes(sums.farthestR), farG = loadLanes(sums.farthestG),
+           farB = loadLanes(sums.farthestB);
+    Ints farOrder = loadLanes(reinterpret_cast<const int32_t*>(sums.farthestOrder));
     Floats radius2 = broadcast(s.radius2);
     LanePositions lanes(i, end);
     for (; i < end && s.found < s.k; i += kPhotonLanes, lanes.next()) {
@@ -135,7 +136,8 @@ LUCENT_LANE_LOOP(void, sumPhotonRun, (const PhotonColumns& c, uint32_t begin, ui
       if (s.found + uint32_t(accepting) > s.k) break;  // the k-th photon is in this block
       s.found += uint32_t(accepting);
       const Ints lit = accepted & blk.lights;
-      const Floats pr = masked(load(&c.r[i]), lit), pg = masked(load(&c.g[i]), lit), pb = masked(load(&c.b[i]), lit);
+      const Floats pr = masked(loadLanes(&c.r[i]), lit), pg = masked(loadLanes(&c.g[i]), lit),
+                   pb = masked(loadLanes(&c.b[i]), lit);
       r += pr, g += pg, b += pb, used -= lit;
       radius2 = accepted ? (blk.d2 > radius2 ? blk.d2 : radius2) : radius2;
       const Ints farther = accepted & (blk.d2 > farD2);
@@ -143,9 +145,10 @@ LUCENT_LANE_LOOP(void, sumPhotonRun, (const PhotonColumns& c, uint32_t begin, ui
       farR = farther ? pr : farR, farG = farther ? pg : farG, farB = farther ? pb : farB;
       farOrder = farther ? broadcast(int32_t(examinedBefore + (i - begin))) + kLane : farOrder;
     }
-    store(sums.r, r), store(sums.g, g), store(sums.b, b), store(sums.used, used);
-    store(sums.farthestD2, farD2), store(sums.farthestR, farR), store(sums.farthestG, farG), store(sums.farthestB, farB);
-    store(reinterpret_cast<int32_t*>(sums.farthestOrder), farOrder);
+    storeLanes(sums.r, r), storeLanes(sums.g, g), storeLanes(sums.b, b), storeLanes(sums.used, used);
+    storeLanes(sums.farthestD2, farD2), storeLanes(sums.farthestR, farR), storeLanes(sums.farthestG, farG),
+        storeLanes(sums.farthestB, farB);
+    storeLanes(reinterpret_cast<int32_t*>(sums.farthestOrder), farOrder);
     for (int j = 0; j < kPhotonLanes; ++j) s.radius2 = std::max(s.radius2, radius2[j]);
 
     // The block holding the k-th photon, one photon at a time.
@@ -174,16 +177,16 @@ LUCENT_LANE_LOOP(void, sumPhotonRun, (const PhotonColumns& c, uint32_t begin, ui
   // Then the radius stays: every photon within it.
   if (i < end) {
     const Floats radius2 = broadcast(s.radius2);
-    Floats r = load(sums.r), g = load(sums.g), b = load(sums.b);
-    Ints used = load(sums.used), found = {};
+    Floats r = loadLanes(sums.r), g = loadLanes(sums.g), b = loadLanes(sums.b);
+    Ints used = loadLanes(sums.used), found = {};
     for (LanePositions lanes(i, end); i < end; i += kPhotonLanes, lanes.next()) {
       const Block blk = block(c, i, lanes.valid(), q);
       const Ints accepted = (blk.d2 <= radius2) & blk.valid;
       const Ints lit = accepted & blk.lights;
-      r += masked(load(&c.r[i]), lit), g += masked(load(&c.g[i]), lit), b += masked(load(&c.b[i]), lit);
+      r += masked(loadLanes(&c.r[i]), lit), g += masked(loadLanes(&c.g[i]), lit), b += masked(loadLanes(&c.b[i]), lit);
       used -= lit, found -= accepted;
     }
-    store(sums.r, r), store(sums.g, g), store(sums.b, b), store(sums.used, used);
+    storeLanes(sums.r, r), storeLanes(sums.g, g), storeLanes(sums.b, b), storeLanes(sums.used, used);
     s.found += uint32_t(sum(found));
   }
   s.photonsExamined += end - begin;
@@ -212,7 +215,7 @@ void copyColumns(const PhotonColumns& from, uint32_t first, uint32_t count, Phot
 
 LUCENT_LANE_LOOP(GrowingRadius, growingRadius, (const PhotonColumns& c, uint32_t offered, Vec3 q, const SurfaceSide& side, float maxRadius2,
                   uint32_t k)) {
-  const Query query(q, side);
+  const ColumnQuery query(q, side);
   const Floats limit2 = broadcast(maxRadius2);
   GrowingRadius g;
   // Whole blocks while the k-th photon is not among them; each lane keeps its farthest photon,
@@ -257,7 +260,7 @@ LUCENT_LANE_VERSIONS(GrowingRadius, growingRadius, (const PhotonColumns& c, uint
 
 LUCENT_LANE_LOOP(SphereSum, sumWithinRadius, (const PhotonColumns& c, std::span<const ColumnRun> runs, Vec3 q, const SurfaceSide& side,
                   float radius2)) {
-  const Query query(q, side);
+  const ColumnQuery query(q, side);
   const Floats r2 = broadcast(radius2);
   Floats r = {}, g = {}, b = {}, farthest = broadcast(-1.0f);
   Ints used = {}, found = {};
@@ -270,7 +273,7 @@ LUCENT_LANE_LOOP(SphereSum, sumWithinRadius, (const PhotonColumns& c, std::span<
       const Block blk = block(c, i, lanes.valid() & (lanes.position >= begin), query);
       const Ints accepted = (blk.d2 <= r2) & blk.valid;
       const Ints lit = accepted & blk.lights;
-      r += masked(load(&c.r[i]), lit), g += masked(load(&c.g[i]), lit), b += masked(load(&c.b[i]), lit);
+      r += masked(loadLanes(&c.r[i]), lit), g += masked(loadLanes(&c.g[i]), lit), b += masked(loadLanes(&c.b[i]), lit);
       used -= lit, found -= accepted;
       farthest = accepted ? (blk.d2 > farthest ? blk.d2 : farthest) : farthest;
     }
@@ -285,6 +288,7 @@ LUCENT_LANE_LOOP(SphereSum, sumWithinRadius, (const PhotonColumns& c, std::span<
 }
 LUCENT_LANE_VERSIONS(SphereSum, sumWithinRadius, (const PhotonColumns& c, std::span<const ColumnRun> runs, Vec3 q, const SurfaceSide& side,
                   float radius2), (c, runs, q, side, radius2))
+#undef LUCENT_LANE_HELPER
 
 PhotonRunTotals photonRunTotals(const PhotonLaneSums& sums) {
   PhotonRunTotals t;

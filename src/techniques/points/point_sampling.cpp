@@ -49,8 +49,6 @@ constexpr uint32_t kMaxCandidates = 64;
 constexpr size_t kGrain = 4096;
 }  // namespace
 
-using namespace points;
-
 namespace {
 
 // Sobol points 0 .. count - 1 by area: each triangle gets its share of the sequence's first
@@ -91,7 +89,8 @@ double checkedTotalArea(const Scene& scene, uint32_t count, const PointSamplingO
 // The tiles of a level: every key of either sorted list (the candidates' keys hold their triangle
 // below the tile), merged, with the run of each list it holds.
 void mergeTiles(const std::vector<uint64_t>& placedKeys, const std::vector<uint64_t>& candKeys, uint32_t triangleBits,
-                std::vector<Tile>& tiles) {
+                std::vector<points::Tile>& tiles) {
+  using points::Tile;
   const size_t placed = placedKeys.size(), candCount = candKeys.size();
   tiles.clear();
   for (uint32_t i = 0, j = 0; i < placed || j < candCount;) {
@@ -111,22 +110,16 @@ void mergeTiles(const std::vector<uint64_t>& placedKeys, const std::vector<uint6
 
 }  // namespace
 
-std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const PointSamplingOptions& options,
-                                      RenderStats* stats) {
-  const double totalArea = checkedTotalArea(scene, count, options);
-  const uint32_t c = options.candidates;
-  const Distribution1D areas(scene.faceAreas);
+namespace points {
+namespace {
 
-  beginStage("point_sampling");
-  Stopwatch clock;
-  if (options.method == PointSampling::LowDiscrepancy) {
-    std::vector<PointSample> points = sampleLowDiscrepancy(areas, count, options.seed);
-    if (stats) {
-      stats->addStage("point_sampling", clock.seconds());
-      stats->addCounter("points", count);
-    }
-    return points;
-  }
+// Best-candidate sampling, level by level: each level doubles the points, each new point the best
+// of c candidates, placed tile by tile in eight colours so that neighbouring tiles never run at once.
+// Counts the candidates drawn and the points that had fewer than c / 2 to choose from.
+std::vector<PointSample> sampleBestCandidate(const Scene& scene, uint32_t count, const PointSamplingOptions& options,
+                                             const Distribution1D& areas, double totalArea,
+                                             uint64_t& candidatesTotal, uint64_t& fewTotal) {
+  const uint32_t c = options.candidates;
   Bounds3 bounds;
   for (const Vec3& p : scene.positions) bounds.extend(p);
 
@@ -134,7 +127,6 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
   std::vector<Vec3> positions(count);
   tbb::enumerable_thread_specific<NeighbourList> scratch;
   tbb::enumerable_thread_specific<uint64_t> fewCandidates(0);  // points with fewer than c/2
-  uint64_t candidatesTotal = 0;
   // Reused from level to level: fresh pages cost more than the sorts that fill them.
   std::vector<uint64_t> placedKeys, candKeys, keyScratch;
   std::vector<uint32_t> placedIndices, candIndices, indexScratch;
@@ -223,12 +215,32 @@ std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const 
     }
     placed = total;
   }
+  fewTotal = fewCandidates.combine(std::plus<uint64_t>());
+  return points;
+}
 
+}  // namespace
+}  // namespace points
+
+std::vector<PointSample> samplePoints(const Scene& scene, uint32_t count, const PointSamplingOptions& options,
+                                      RenderStats* stats) {
+  const double totalArea = checkedTotalArea(scene, count, options);
+  const Distribution1D areas(scene.faceAreas);
+
+  beginStage("point_sampling");
+  Stopwatch clock;
+  const bool bestCandidate = options.method != PointSampling::LowDiscrepancy;
+  uint64_t candidates = 0, few = 0;
+  std::vector<PointSample> points =
+      bestCandidate ? points::sampleBestCandidate(scene, count, options, areas, totalArea, candidates, few)
+                    : sampleLowDiscrepancy(areas, count, options.seed);
   if (stats) {
     stats->addStage("point_sampling", clock.seconds());
     stats->addCounter("points", count);
-    stats->addCounter("point_candidates", candidatesTotal);
-    stats->addCounter("points_with_few_candidates", fewCandidates.combine(std::plus<uint64_t>()));
+    if (bestCandidate) {
+      stats->addCounter("point_candidates", candidates);
+      stats->addCounter("points_with_few_candidates", few);
+    }
   }
   return points;
 }
