@@ -3,7 +3,9 @@
 reference over render time, one curve per method, each point one setting of the method's quality
 knob (samples, gather rays, photons, micro-buffer size). A curve that keeps falling converges; one
 that flattens has met its bias, and the height of the flat part is the method's failure on that
-scene. Writes docs/charts/<scene>.png (or --out DIR) and prints every point.
+scene. Each point is the median of --seeds runs (3), with bars spanning them. Writes
+docs/charts/<scene>.png, docs/charts/summary.png (seconds to relMSE 0.01 and 0.001, per method and
+scene) and prints every point.
 
 The path tracer averages its pixels (box filter) and is compared with a reference that does too;
 purcell, pmfg, micro and particles take one camera ray through each pixel's centre and are compared with a
@@ -11,16 +13,19 @@ reference traced through the centres (`--pixel-centres`), so that their curves m
 method, not the aliasing of point samples at edges.
 
   /usr/bin/python3 scripts/chart-speed-accuracy.py [--scenes cornell-box ... sponza]
-                                                   [--methods pt pmfg ...] [--threads 2] [--out DIR]
+                                                   [--methods pt pmfg ...] [--seeds 3] [--threads 2]
+                                                   [--out DIR] [--redraw]
 
 The references (path tracer, 16,384 samples per pixel, box-filtered and through the pixel centres)
 are rendered once per scene content (its `scene_hash`, in their file names) and kept in out/charts/.
-Needs matplotlib (Debian: python3-matplotlib); run with /usr/bin/python3. About 80 minutes on 2
-cores with all twelve scenes (gltf/extensions-sky alone: 13); run on an otherwise idle machine.
+Needs matplotlib (Debian: python3-matplotlib); run with /usr/bin/python3. One seed over twelve
+scenes took 80 minutes on 2 cores (gltf/extensions-sky alone: 13); run on an otherwise idle machine.
 """
 import argparse
 import json
+import math
 import os
+import statistics
 import subprocess
 import sys
 
@@ -52,22 +57,27 @@ def buffers(*sides):
     return [(f"{n}x{n} buffers", ["--lighting", "vpl", "--buffer-size", str(n)]) for n in sides]
 
 
-def particle_knobs(particles, counts):
+def particle_knobs(particles, counts, bounces=None):
     """The particle-space method's knobs, each swept about the default (`particles` positions, 8
-    bounces, 16 x 16 gathering links, subtriangles 3 spacings wide)."""
-    base = ["--area-particles", str(particles)]
-    return {"particles (area particles)": [(f"{n // 1000}k particles", ["--area-particles", str(n)]) for n in counts],
-            "particles (bounces)": [(f"n_b {b}", base + ["--bounces", str(b)]) for b in (1, 2, 4, 8, 16)],
-            "particles (gather links)": [(f"{n}x{n} links", base + ["--gather-links", str(n)]) for n in (4, 8, 16, 24)],
-            "particles (tessellation)": [(f"{t} spacings", base + ["--tessellation", str(t)]) for t in (1, 2, 3, 6)]}
+    bounces, 16 x 16 gathering links, subtriangles 3 spacings wide); with `bounces` fixed, the others."""
+    fixed = ["--bounces", str(bounces)] if bounces is not None else []
+    base = ["--area-particles", str(particles)] + fixed
+    knobs = {"particles (area particles)": [(f"{n // 1000}k particles", ["--area-particles", str(n)] + fixed)
+                                            for n in counts],
+             "particles (bounces)": [(f"n_b {b}", base + ["--bounces", str(b)]) for b in (1, 2, 4, 8, 16)],
+             "particles (gather links)": [(f"{n}x{n} links", base + ["--gather-links", str(n)]) for n in (4, 8, 16, 24)],
+             "particles (tessellation)": [(f"{t} spacings", base + ["--tessellation", str(t)]) for t in (1, 2, 3, 6)]}
+    if bounces is not None:
+        del knobs["particles (bounces)"]
+    return knobs
 
 
-def scene(resolution, light_samples, rays, purcell, sides, particles=None, targets=(1e-2, 3e-3, 1e-3, 3e-4)):
+def scene(resolution, light_samples, rays, purcell, sides, particles=(50000, (12500, 25000, 50000, 100000)),
+          targets=(1e-2, 3e-3, 1e-3, 3e-4)):
     methods = {"pt": pt_samples(), "pt (independent)": pt_samples(["--sampler", "independent"]),
                "pt (target error)": pt_targets(targets),
                "pmfg": gather_rays(*rays), "purcell": purcell, "micro (vpl)": buffers(*sides)}
-    if particles:
-        methods.update(particle_knobs(*particles))
+    methods.update(particle_knobs(*particles))
     return {"resolution": resolution, "light_samples": light_samples, "max_depth": None, "methods": methods}
 
 
@@ -75,7 +85,8 @@ def environment_scene(resolution):
     """A scene of the environment-lighting PBGI paper: one indirect bounce (the paper's transport), so
     the references, the path tracer's curve and micro-rendering's (its points lit directly) stop at
     --max-depth 2. envpbgi's knobs: the point count, the primary points' solid-angle threshold, and
-    the primary and secondary buffer sizes."""
+    the primary and secondary buffer sizes. pmfg and purcell are not charted here: their photon maps
+    carry every bounce whatever --photon-bounces says (docs/speed-accuracy.md)."""
     depth = ["--max-depth", "2"]
     return {"resolution": resolution, "light_samples": 1024, "max_depth": 2,
             "methods": {"pt (depth 2)": [(label, options + depth) for label, options in pt_samples()],
@@ -88,7 +99,9 @@ def environment_scene(resolution):
                                                                      "--secondary-buffer-size", str(b)])
                                               for a, b in ((8, 4), (16, 8), (24, 12), (32, 16))],
                         "micro (direct)": [(f"{n}x{n} buffers", ["--lighting", "direct", "--buffer-size", str(n)])
-                                           for n in (8, 16, 24)]}}
+                                           for n in (8, 16, 24)],
+                        # n_b 0: the direct light's particles gathered once, one indirect bounce.
+                        **particle_knobs(150000, (37500, 75000, 150000, 300000), bounces=0)}}
 
 
 # Per scene: the resolution, the shadow rays per shading point of purcell, pmfg and micro (many, so
@@ -119,9 +132,20 @@ SCENES = {
                                 (8, 16, 24), (50000, (12500, 25000, 50000, 100000))),
     "gltf/extensions-sky": scene("160x80", 256, (16, 64, 256), photons(["--photons"], "photons", *MILLION),
                                  (8, 16, 24), (50000, (12500, 25000, 50000, 100000)), (1e-2, 3e-3, 1e-3)),
+    # The Cornell box as Blender's glTF exporter writes it, rendered from the .glb file itself: glTF
+    # dielectrics of F0 0 and F90 1 (a Fresnel-weighted GGX lobe over the diffuse one).
+    "gltf/cornell-box.glb": scene("128x128", 256, (16, 64, 256, 1024), photons(["--photons"], "photons", *MILLION),
+                                  (8, 16, 24)),
     "primitives": environment_scene("320x180"),
+    "primitives-white": environment_scene("320x180"),
+    "primitives-glossy": environment_scene("320x180"),
+    "primitives-courtyard": environment_scene("320x180"),
     "sponza-courtyard": environment_scene("160x100"),
+    "sponza-white": environment_scene("160x100"),
 }
+# RING under its point light is not charted: no method here renders its caustic without bias (the
+# path tracer cannot reach a point light by way of a mirror), so it has no reference; ring-area is
+# the same scene under an area light of the same power.
 REFERENCE_SPP = 16384
 
 
@@ -133,12 +157,14 @@ def run(args, lucent=LUCENT):
 
 
 def file_name(scene):
-    """A scene's name as a file name: gltf/sponza-sky becomes gltf-sponza-sky."""
-    return scene.replace("/", "-")
+    """A scene's name as a file name: gltf/sponza-sky becomes gltf-sponza-sky, gltf/cornell-box.glb
+    gltf-cornell-box-glb."""
+    return scene.replace("/", "-").replace(".", "-")
 
 
 def scene_path(name):
-    return os.path.join(ROOT, "scenes", name + ".json")
+    """A scene file under scenes/: NAME.json, or a glTF file named with its extension."""
+    return os.path.join(ROOT, "scenes", name if name.endswith((".glb", ".gltf")) else name + ".json")
 
 
 def scene_hash(scene, hashes={}):
@@ -164,43 +190,190 @@ def reference(scene, resolution, centres, max_depth):
     return path
 
 
-def measure(scene, resolution, method, options, threads, ref, lucent=LUCENT):
+def measure(scene, resolution, method, options, threads, ref, seeds, lucent=LUCENT):
+    """One setting rendered once per seed: each run's seconds and relMSE."""
     image = os.path.join(CACHE, f"point-{os.getpid()}.exr")
     name = method.split(" ")[0]
-    summary = run(["render", scene_path(scene), "--method", name, "--resolution", resolution, "--threads",
-                   str(threads), "--quiet", "-o", image] + options, lucent)
-    error = run(["compare", image, ref, "--metric", "relmse"])["value"]
-    return summary["seconds"], error
+    runs = []
+    for seed in seeds:
+        summary = run(["render", scene_path(scene), "--method", name, "--resolution", resolution, "--threads",
+                       str(threads), "--seed", str(seed), "--quiet", "-o", image] + options, lucent)
+        error = run(["compare", image, ref, "--metric", "relmse"])["value"]
+        runs.append({"seed": seed, "seconds": summary["seconds"], "relmse": error})
+    return runs
+
+
+def summarize(label, options, runs):
+    """A chart point: the median of the runs' seconds and of their relMSE, with their ranges."""
+    seconds = [r["seconds"] for r in runs]
+    errors = [r["relmse"] for r in runs]
+    return {"setting": label, "options": options, "seconds": statistics.median(seconds),
+            "relmse": statistics.median(errors), "seconds_range": [min(seconds), max(seconds)],
+            "relmse_range": [min(errors), max(errors)], "runs": runs}
+
+
+def spread(points, key):
+    """Asymmetric error bars from each point's range over seeds (none for points of one run)."""
+    ranges = [p.get(f"{key}_range", [p[key], p[key]]) for p in points]
+    return [[p[key] - r[0] for p, r in zip(points, ranges)], [r[1] - p[key] for p, r in zip(points, ranges)]]
+
+
+# Offsets, in points, tried in turn for a point's label until one overlaps no other label or marker:
+# eight around the point, then rings of twelve farther out.
+LABEL_OFFSETS = ([(5, 3), (5, -10), (-5, 3), (-5, -10), (0, 8), (0, -14), (9, -3), (-9, -3)] +
+                 [(round(r * math.cos(a * math.pi / 6)), round(r * math.sin(a * math.pi / 6)) - 3)
+                  for r in (18, 28, 40, 54, 70) for a in range(12)])
+
+
+def place_labels(fig, ax, labels):
+    """Annotates each (x, y, text) where its box overlaps no label placed before it and no marker;
+    where every offset overlaps something, the one overlapping least."""
+    from matplotlib.transforms import IdentityTransform
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    frame = ax.get_window_extent(renderer)
+    pixels_per_point = fig.dpi / 72
+    markers = [ax.transData.transform((x, y)) for x, y, _ in labels]
+    placed = [(mx - 3, my - 3, mx + 3, my + 3) for mx, my in markers]
+
+    def overlap(a, b):
+        return max(0, min(a[2], b[2]) - max(a[0], b[0])) * max(0, min(a[3], b[3]) - max(a[1], b[1]))
+
+    for (x, y, text), (mx, my) in zip(labels, markers):
+        best = None
+        for dx, dy in LABEL_OFFSETS:
+            probe = ax.text(mx + dx * pixels_per_point, my + dy * pixels_per_point, text, fontsize=6,
+                            ha="left" if dx >= 0 else "right", transform=IdentityTransform())
+            b = probe.get_window_extent(renderer)
+            probe.remove()
+            box = (b.x0, b.y0, b.x1, b.y1)
+            outside = box[0] < frame.x0 or box[2] > frame.x1 or box[1] < frame.y0 or box[3] > frame.y1
+            cost = sum(overlap(box, other) for other in placed) + (1e6 if outside else 0)
+            if best is None or cost < best[0]:
+                best = (cost, (dx, dy), box)
+            if cost == 0:
+                break
+        (dx, dy), box = best[1], best[2]
+        far = abs(dx) > 9 or abs(dy) > 14  # beyond the first ring: a line leads to the point
+        ax.annotate(text, (x, y), fontsize=6, textcoords="offset points", xytext=(dx, dy),
+                    ha="left" if dx >= 0 else "right",
+                    arrowprops={"arrowstyle": "-", "linewidth": 0.3, "color": "grey"} if far else None)
+        placed.append(box)
 
 
 def chart(scene, results, out):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7, 5), dpi=110)
+    fig, ax = plt.subplots(figsize=(9.5, 5.5), dpi=110)
+    labels = []
     for method, points in results.items():
         xs = [p["seconds"] for p in points]
         ys = [p["relmse"] for p in points]
         # Another build's curve (--pt-build) dashed in black: the colours cycle after ten curves.
         other = {} if method in SCENES[scene]["methods"] else {"linestyle": "--", "color": "black"}
-        ax.plot(xs, ys, marker="o", label=method, **other)
-        for p in points:
-            ax.annotate(p["setting"], (p["seconds"], p["relmse"]), fontsize=6, textcoords="offset points",
-                        xytext=(4, 3))
+        ax.errorbar(xs, ys, xerr=spread(points, "seconds"), yerr=spread(points, "relmse"), marker="o", markersize=3,
+                    capsize=2, elinewidth=0.6, label=method, **other)
+        labels += [(p["seconds"], p["relmse"], p["setting"]) for p in points]
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("render time, seconds (2 threads)")
     depth = SCENES[scene]["max_depth"]
     transport = f", max depth {depth}" if depth else ""
     ax.set_ylabel(f"relMSE against the path tracer at {REFERENCE_SPP} spp{transport}\n(pt: pixel averages; others: pixel centres)")
-    ax.set_title(f"{scene}: speed against accuracy")
+    seeds = max((len(p.get("runs", [])) for points in results.values() for p in points), default=0)
+    each = f"median of {seeds} seeds, bars: their range" if seeds > 1 else "one run per point"
+    ax.set_title(f"{scene}: speed against accuracy ({each})")
     ax.grid(True, which="both", linewidth=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     fig.tight_layout()
+    place_labels(fig, ax, labels)
     path = os.path.join(out, f"{file_name(scene)}.png")
     fig.savefig(path)
     plt.close(fig)
     return path
+
+
+def time_to_reach(points, target, unbiased):
+    """Seconds a curve takes to reach relMSE `target`, interpolated between its points on log-log
+    axes, with how it was found: "at most" where its fastest point is already below it, "extrapolated"
+    where an unbiased curve (the path tracer's, whose relMSE falls as 1 / time) ends above it, from
+    its last point; None where a biased method's settings never get there."""
+    points = sorted(points, key=lambda p: p["seconds"])
+    if points and points[0]["relmse"] <= target:
+        return points[0]["seconds"], "at most"
+    for a, b in zip(points, points[1:]):
+        if b["relmse"] <= target < a["relmse"]:
+            t = (math.log(target) - math.log(a["relmse"])) / (math.log(b["relmse"]) - math.log(a["relmse"]))
+            return math.exp(math.log(a["seconds"]) + t * (math.log(b["seconds"]) - math.log(a["seconds"]))), ""
+    if unbiased and points:
+        return points[-1]["seconds"] * points[-1]["relmse"] / target, "extrapolated"
+    return None
+
+
+def family(curve):
+    """The summary's column for a curve: a method's knob sweeps are one column (its best), the path
+    tracer's samplers, error target and other builds one each; depth-2 curves are the plain ones."""
+    if curve.startswith("pt"):
+        return curve.replace("depth 2, ", "").replace(" (depth 2)", "")
+    return curve.split(" ")[0]
+
+
+def summary_chart(everything, out, targets=(1e-2, 1e-3)):
+    """Time to reach each target per method and scene: a table of coloured cells; 'never' where no
+    setting of the method gets there, blank where the method is not charted on the scene."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import LogNorm
+    scenes = [scene for scene in SCENES if scene in everything]
+    columns = []
+    for scene in scenes:
+        for curve in everything[scene]:
+            if family(curve) not in columns:
+                columns.append(family(curve))
+    fig, axes = plt.subplots(1, len(targets), figsize=(6.5 * len(targets), 0.42 * len(scenes) + 2.2), dpi=110)
+    table = {}
+    for ax, target in zip(axes, targets):
+        cells = [[None] * len(columns) for _ in scenes]
+        for i, scene in enumerate(scenes):
+            for j, column in enumerate(columns):
+                curves = [points for curve, points in everything[scene].items() if family(curve) == column]
+                if not curves:
+                    continue
+                # The error target's curve is not extended: where its estimate is low (caustics),
+                # its points stop above their targets and do not fall as 1 / time.
+                unbiased = column.startswith("pt") and "target error" not in column
+                reached = [r for r in (time_to_reach(points, target, unbiased) for points in curves) if r]
+                cells[i][j] = min(reached) if reached else "never"
+                table.setdefault(scene, {}).setdefault(column, {})[f"{target:g}"] = (
+                    cells[i][j] if cells[i][j] == "never" else {"seconds": cells[i][j][0], "how": cells[i][j][1]})
+        times = [[c[0] if isinstance(c, tuple) else math.nan for c in row] for row in cells]
+        colours, norm = plt.get_cmap("viridis_r"), LogNorm(vmin=0.01, vmax=1000)
+        ax.imshow(times, cmap=colours, norm=norm, aspect="auto")
+        for i, row in enumerate(cells):
+            for j, c in enumerate(row):
+                if c == "never":
+                    text = "never"
+                elif c:
+                    text = {"at most": "≤", "extrapolated": "~", "": ""}[c[1]] + (f"{c[0]:.2g}" if c[0] < 10 else
+                                                                                       f"{c[0]:.0f}")
+                else:
+                    continue
+                r, g, b, _ = colours(norm(c[0])) if c != "never" else (1, 1, 1, 1)
+                ax.text(j, i, text, ha="center", va="center", fontsize=6.5,
+                        color="white" if 0.3 * r + 0.59 * g + 0.11 * b < 0.5 else "black")
+        ax.set_xticks(range(len(columns)), columns, rotation=40, ha="right", fontsize=7)
+        ax.set_yticks(range(len(scenes)), scenes, fontsize=7)
+        ax.set_title(f"seconds to relMSE {target:g}", fontsize=9)
+    fig.text(0.01, 0.01, "never: no setting swept reaches it; blank: not charted on the scene; ≤: the fastest "
+             "setting is already below it; ~: extrapolated from the path tracer's last point as 1 / time. "
+             "2 threads.", fontsize=7)
+    fig.tight_layout(rect=(0, 0.03, 1, 1))
+    path = os.path.join(out, "summary.png")
+    fig.savefig(path)
+    plt.close(fig)
+    return path, table
 
 
 def main():
@@ -211,6 +384,11 @@ def main():
     parser.add_argument("--methods", nargs="+", metavar="NAME",
                         help="measure only these methods (pt, pmfg, particles, ...: every curve of the method); "
                              "the others keep the points of the last run")
+    parser.add_argument("--seeds", type=int, default=3,
+                        help="runs per setting, seeds 2 .. N + 1 (the references use seed 1): a point is their "
+                             "median, its bars their range")
+    parser.add_argument("--redraw", action="store_true",
+                        help="render nothing: draw the charts and the summary again from the JSON")
     parser.add_argument("--pt-build", nargs=2, metavar=("LABEL", "LUCENT"),
                         help="also draw the path tracer's curve as another build renders it (an older commit's "
                              "build/lucent), labelled 'pt (LABEL)'")
@@ -227,7 +405,9 @@ def main():
     if os.path.exists(data):  # the scenes not run this time keep their points
         with open(data) as f:
             everything = json.load(f)
-    for scene in args.scenes:
+    if args.seeds < 1:
+        sys.exit("chart-speed-accuracy: --seeds must be at least 1")
+    for scene in args.scenes if not args.redraw else []:
         setup = SCENES[scene]
         print(f"== {scene}, {setup['resolution']}, {args.threads} threads", flush=True)
         depth = setup["max_depth"]
@@ -248,15 +428,30 @@ def main():
             for label, options in settings:
                 options = options + common
                 lucent = args.pt_build[1] if args.pt_build and method == f"pt ({args.pt_build[0]})" else LUCENT
-                seconds, error = measure(scene, setup["resolution"], method, options, args.threads, ref, lucent)
-                results[method].append({"setting": label, "options": options, "seconds": seconds, "relmse": error})
-                print(f"  {method:12s} {label:22s} {seconds:8.2f} s  relMSE {error:.5f}", flush=True)
+                runs = measure(scene, setup["resolution"], method, options, args.threads, ref,
+                               range(2, args.seeds + 2), lucent)
+                point = summarize(label, options, runs)
+                results[method].append(point)
+                low, high = point["relmse_range"]
+                print(f"  {method:12s} {label:22s} {point['seconds']:8.2f} s  relMSE {point['relmse']:.5f} "
+                      f"({low:.5f} - {high:.5f})", flush=True)
         for method, points in everything.get(scene, {}).items():
             results.setdefault(method, points)  # curves of other builds (--pt-build) drawn before
         print(f"  chart: {chart(scene, results, args.out)}", flush=True)
         everything[scene] = results
-    with open(data, "w") as f:
-        json.dump({scene: everything[scene] for scene in SCENES if scene in everything}, f, indent=1)
+    if args.redraw:
+        for scene in args.scenes:
+            if scene in everything:
+                print(f"  chart: {chart(scene, everything[scene], args.out)}", flush=True)
+    else:
+        with open(data, "w") as f:
+            json.dump({scene: everything[scene] for scene in SCENES if scene in everything}, f, indent=1)
+    path, table = summary_chart(everything, args.out)
+    print(f"  summary: {path}")
+    for scene, columns in table.items():
+        print(f"  {scene:22s} " + "  ".join(f"{c}: " + ", ".join(
+            f"{t} {'never' if v == 'never' else v['how'] + ' ' + format(v['seconds'], '.3g') + ' s'}"
+            for t, v in times.items()) for c, times in columns.items()))
     return 0
 
 
