@@ -376,6 +376,13 @@ def summary_chart(everything, out, targets=(1e-2, 1e-3)):
     return path, table
 
 
+def save(everything, path):
+    """Writes the points of every scene, in SCENES' order, replacing the file only once written."""
+    with open(path + ".tmp", "w") as f:
+        json.dump({scene: everything[scene] for scene in SCENES if scene in everything}, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
@@ -439,13 +446,11 @@ def main():
             results.setdefault(method, points)  # curves of other builds (--pt-build) drawn before
         print(f"  chart: {chart(scene, results, args.out)}", flush=True)
         everything[scene] = results
+        save(everything, data)  # after each scene: a long run stopped keeps the scenes it finished
     if args.redraw:
         for scene in args.scenes:
             if scene in everything:
                 print(f"  chart: {chart(scene, everything[scene], args.out)}", flush=True)
-    else:
-        with open(data, "w") as f:
-            json.dump({scene: everything[scene] for scene in SCENES if scene in everything}, f, indent=1)
     path, table = summary_chart(everything, args.out)
     print(f"  summary: {path}")
     for scene, columns in table.items():
