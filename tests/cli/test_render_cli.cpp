@@ -66,6 +66,19 @@ TEST_CASE("render writes EXR and PNG with metadata and prints one JSON summary",
       REQUIRE(image.at(x, y, r0) == Approx(image.at(x, y, d0) + image.at(x, y, i0)).margin(1e-5));
 }
 
+TEST_CASE("render: the JSON's seconds are its stages', not the process's set-up", "[cli][render]") {
+  // Loading the image codec (OpenImageIO, 0.25 s) is set-up: a render of 8 x 8 pixels at 1 spp
+  // spends milliseconds outside its stages, not the codec's quarter second.
+  const test::TempDir dir("render-seconds");
+  const test::CliRun r = runLucent("render " + kScene + " --spp 1 --threads 2 --resolution 8x8 -o " + (dir / "out.exr"));
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  const auto summary = nlohmann::json::parse(r.output);
+  double stages = 0;
+  for (const auto& [stage, seconds] : summary["stages"].items()) stages += seconds.get<double>();
+  CHECK(summary["seconds"].get<double>() - stages < 0.15);
+}
+
 TEST_CASE("render: same seed gives the same pixels with 1 and 2 threads, another seed differs", "[cli][render][determinism]") {
   const test::TempDir dir("render-cli");
   auto render = [&](const std::string& name, const std::string& extra) {
