@@ -110,7 +110,7 @@ def environment_scene(resolution):
 MILLION = (16000, 65000, 260000, 1040000)
 SCENES = {
     "cornell-box": scene("128x128", 256, (16, 64, 256, 1024), photons(["--photons"], "photons", *MILLION),
-                         (8, 16, 24, 32), (50000, (12500, 25000, 50000, 100000))),
+                         (8, 16, 24, 32)),
     "glass-ball": scene("128x96", 256, (16, 64, 256, 1024),
                         photons(["--caustic-photons"], "caustic photons", 5000, 20000, 80000, 320000), (8, 16, 24)),
     "cornell-box-spheres": scene("128x128", 256, (16, 64, 256, 1024),
@@ -129,9 +129,9 @@ SCENES = {
     "gltf/sponza-sky": scene("160x100", 1024, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
                              (8, 16, 24), (150000, (37500, 75000, 150000, 300000))),
     "gltf/materials-sky": scene("160x80", 256, (16, 64, 256), photons(["--photons"], "photons", *MILLION),
-                                (8, 16, 24), (50000, (12500, 25000, 50000, 100000))),
+                                (8, 16, 24)),
     "gltf/extensions-sky": scene("160x80", 256, (16, 64, 256), photons(["--photons"], "photons", *MILLION),
-                                 (8, 16, 24), (50000, (12500, 25000, 50000, 100000)), (1e-2, 3e-3, 1e-3)),
+                                 (8, 16, 24), targets=(1e-2, 3e-3, 1e-3)),
     # The Cornell box as Blender's glTF exporter writes it, rendered from the .glb file itself: glTF
     # dielectrics of F0 0 and F90 1 (a Fresnel-weighted GGX lobe over the diffuse one).
     "gltf/cornell-box.glb": scene("128x128", 256, (16, 64, 256, 1024), photons(["--photons"], "photons", *MILLION),
