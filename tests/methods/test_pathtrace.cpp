@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"
 #include "methods/pathtrace/diffuse_lanes.h"
+#include "methods/pathtrace/shading_steps.h"
 #include "test_bsdfs.h"
 #include "test_scenes.h"
 #include "test_support.h"
@@ -90,10 +92,12 @@ TEST_CASE("Renders are bit-identical whatever the thread count and tile size", "
 
 namespace {
 
-// Every kind of light and material: the Cornell box with mirror and glass spheres and some glossy
-// (Phong) wall triangles, plus a point light, a directional light and a constant environment; walls
-// with interpolated normals made up from their positions, a textured floor, and vertices with
-// texture coordinates.
+// Every kind of light and material: the Cornell box with mirror and glass spheres, some glossy
+// (Phong) wall triangles and some of glTF's metallic-roughness material (with a normal texture,
+// bent, and a metallic-roughness texture; and of factors alone, with the height-correlated Smith
+// term), plus a point light, a directional light and a constant environment; walls with
+// interpolated normals made up from their positions, a textured floor, vertices with texture
+// coordinates and tangents.
 Scene everyMaterialAndLight() {
   Scene scene = loadScene(LUCENT_SOURCE_DIR "/scenes/cornell-box-spheres.json", {true});
   Material glossy;
@@ -101,10 +105,23 @@ Scene everyMaterialAndLight() {
   glossy.kd = Rgb(0.3f, 0.4f, 0.2f);
   glossy.ks = Rgb(0.4f);
   glossy.ns = 30;
-  scene.materials.push_back(glossy);
-  for (uint32_t t = 0; t < scene.materialIds.size(); t += 3) {
+  Material mapped;
+  mapped.type = MaterialType::Gltf;
+  mapped.kd = Rgb(0.7f, 0.6f, 0.5f);
+  mapped.ks = Rgb(1.0f);
+  mapped.metallic = 0.8f, mapped.roughness = 0.9f;
+  mapped.normalTexture = 1, mapped.normalScale = 1.5f, mapped.bendsNormalMap = 1;
+  mapped.metallicRoughnessTexture = 2;
+  Material factors = mapped;
+  factors.kd = Rgb(0.4f, 0.6f, 0.7f);
+  factors.metallic = 0.3f, factors.roughness = 0.35f;
+  factors.normalTexture = factors.metallicRoughnessTexture = -1;
+  factors.masking = GgxMasking::HeightCorrelated;
+  const uint32_t first = uint32_t(scene.materials.size());
+  scene.materials.insert(scene.materials.end(), {glossy, mapped, factors});
+  for (uint32_t t = 0; t < scene.materialIds.size(); ++t) {
     const Material& m = scene.materials[scene.materialIds[t]];
-    if (m.type == MaterialType::Diffuse && m.ke.isBlack()) scene.materialIds[t] = uint32_t(scene.materials.size() - 1);
+    if (m.type == MaterialType::Diffuse && m.ke.isBlack() && t % 3 != 2) scene.materialIds[t] = first + t % 3 + t % 2;
   }
   scene.camera.width = 40;
   scene.camera.height = 32;
@@ -117,10 +134,17 @@ Scene everyMaterialAndLight() {
     scene.texcoords[v] = {p.x * 3.1f, p.z * 2.7f};
     if (v % 3 == 0) scene.normals[v] = normalize(Vec3{0.2f * p.x, 1.0f, 0.3f * p.z});
   }
+  scene.tangents.resize(scene.positions.size());
+  for (size_t v = 0; v < scene.positions.size(); ++v)
+    scene.tangents[v] = {normalize(Vec3{1.0f, 0.3f * scene.positions[v].y, -0.2f}), v % 2 ? 1.0f : -1.0f};
+  // Texels: albedo (sRGB), tangent-space normals ((n + 1) / 2), metallic (B) and roughness (G).
   scene.textures.push_back({0, 2, 2});
-  scene.texels = {0xff2040ffu, 0xff40ff20u, 0xffff4020u, 0xffc0c0c0u};
+  scene.textures.push_back({4, 2, 2});
+  scene.textures.push_back({8, 2, 2});
+  scene.texels = {0xff2040ffu, 0xff40ff20u, 0xffff4020u, 0xffc0c0c0u, 0xffff8080u, 0xffe070c0u,
+                  0xffd0a050u, 0xfff09098u, 0xff40c000u, 0xffa06000u, 0xff10ff00u, 0xfff03000u};
   for (Material& m : scene.materials)
-    if (m.type == MaterialType::Diffuse && m.ke.isBlack()) m.kdTexture = 0;
+    if ((m.type == MaterialType::Diffuse && m.ke.isBlack()) || m.normalTexture >= 0) m.kdTexture = 0;
   finalizeScene(scene);
   return scene;
 }
@@ -229,34 +253,129 @@ TEST_CASE("A Lambertian lane holds surfaceAt's, bsdfAt's and sampleChosenLight's
   }
 }
 
-TEST_CASE("Lambertian surfaces shaded in lanes and the equal glTF BRDF shaded by shade() agree", "[pathtrace][gltf]") {
-  // A glTF dielectric of specular 0 reflects as Lambertian (Appendix B: no Fresnel term at all, the
-  // diffuse lobe whole), and shade() takes its hits through the generic BSDF: the lanes' sequence
-  // against the generic one, in the scene with every material and kind of light (its emitter
-  // turned too: it emits as before).
-  const Scene lambertian = everyMaterialAndLight();
-  Scene gltf = lambertian;
-  int turned = 0;
-  for (Material& m : gltf.materials)
-    if (m.type == MaterialType::Diffuse) {
-      m.type = MaterialType::Gltf, m.metallic = 0, m.roughness = 0.6f, m.specular = 0, m.ks = Rgb(1.0f);
-      ++turned;
+TEST_CASE("A glTF lane holds surfaceAt's, bsdfAt's, hitFrameNormal's and the lobe's values", "[pathtrace][gltf]") {
+  // The lanes read a glTF hit's surface, textures and tangents themselves (fetchGltfSurface) and
+  // shade it in lane loops (shadeGltfLanes), where shade() goes through surfaceAt, bsdfAt,
+  // hitFrameNormal, evalBsdfAndPdf and sampleBsdf: the same IEEE operations, so the same bits.
+  // Hits at scattered barycentrics, seen from every direction, on the glTF triangles of the scene
+  // with every material, lit by its lights in turn.
+  const Scene scene = everyMaterialAndLight();
+  const auto lanes = std::make_unique<DiffuseLanes>();
+  lanes->strategy = PathStrategy::Mis;
+  std::vector<TexturedLane> textured;
+  std::vector<Hit> hits;
+  Rng rng(7);
+  for (uint32_t n = 0; n < 100 * scene.materialIds.size() && hits.size() < uint32_t(kMaxLanes); ++n) {
+    const uint32_t t = n % uint32_t(scene.materialIds.size());
+    if (!gltfShadedInLanes(scene.materials[scene.materialIds[t]])) continue;
+    const uint32_t k = --lanes->gltfFirst;
+    Hit& hit = hits.emplace_back();
+    hit.triangle = t, hit.b1 = 0.5f * rng.uniform(), hit.b2 = 0.5f * rng.uniform(), hit.t = 1;
+    fetchGltfSurface(scene, hit, sampleUniformSphere(rng.uniform2()), *lanes, k, textured);
+    // Every light, sampled as sampleOtherLights samples the lights that are not LaneLights.
+    const uint32_t light = n % uint32_t(scene.lights.size());
+    const Vec2 u = rng.uniform2();
+    const LightSample ls = sampleChosenLight(scene, light, 0.5f, {lanes->posX[k], lanes->posY[k], lanes->posZ[k]}, u);
+    lanes->light[k] = light, lanes->lightPmf[k] = 0.5f, lanes->uLightX[k] = u.x, lanes->uLightY[k] = u.y;
+    lanes->lightIsTriangle[k] = 0;
+    lanes->wiX[k] = ls.wi.x, lanes->wiY[k] = ls.wi.y, lanes->wiZ[k] = ls.wi.z, lanes->lightDistance[k] = ls.distance;
+    lanes->pointX[k] = ls.point.x, lanes->pointY[k] = ls.point.y, lanes->pointZ[k] = ls.point.z;
+    lanes->leR[k] = ls.radiance.r, lanes->leG[k] = ls.radiance.g, lanes->leB[k] = ls.radiance.b;
+    lanes->lightPdf[k] = ls.pdf, lanes->lightDelta[k] = ls.delta;
+    lanes->uBsdfX[k] = rng.uniform(), lanes->uBsdfY[k] = rng.uniform(), lanes->uLobe[k] = rng.uniform();
+  }
+  REQUIRE(hits.size() == uint32_t(kMaxLanes));
+  readLaneTextures(*lanes, textured);
+  shadeGltfLanes(*lanes, lanes->gltfFirst, kMaxLanes);
+  const DiffuseLanes& l = *lanes;
+  int mapped = 0, bent = 0, queued = 0, glossy = 0, scattered = 0;
+  for (uint32_t k = l.gltfFirst; k < uint32_t(kMaxLanes); ++k) {
+    const Hit& hit = hits[kMaxLanes - 1 - k];
+    INFO("lane " << k << ", triangle " << hit.triangle);
+    const SurfacePoint sp = surfaceAt(scene, hit.triangle, hit.b1, hit.b2);
+    const SurfaceBsdf bsdf = bsdfAt(scene, sp);
+    REQUIRE(bsdf.type == MaterialType::Gltf);
+    REQUIRE(Vec3{l.posX[k], l.posY[k], l.posZ[k]} == sp.position);
+    REQUIRE(Vec3{l.snX[k], l.snY[k], l.snZ[k]} == sp.shadingNormal);
+    const GltfMetalRoughLobe lobe = gltfLaneLobe(l, k);
+    REQUIRE(std::memcmp(&lobe, &bsdf.gltf, sizeof(lobe)) == 0);
+    const Vec3 wo = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
+    const Frame frame(hitFrameNormal(scene, sp, wo, twoSidedShading(bsdf)));
+    REQUIRE(Vec3{l.frameX[k], l.frameY[k], l.frameZ[k]} == frame.n);
+    mapped += scene.materials[sp.materialId].normalTexture >= 0;
+    bent += l.bent[k];
+    // Next-event estimation as shade() weighs it.
+    const Vec3 woLocal = frame.toLocal(wo);
+    const Vec3 wi{l.wiX[k], l.wiY[k], l.wiZ[k]};
+    const NextEventSample direct =
+        weighLightSample(PathStrategy::Mis, l.lightPdf[k], l.lightDelta[k] != 0, {l.leR[k], l.leG[k], l.leB[k]}, wi,
+                         frame.toLocal(wi), frame.n, sp.geometricNormal, evalBsdfAndPdf(bsdf, woLocal, frame.toLocal(wi)));
+    REQUIRE(l.shadowQueued[k] == int32_t(direct.queued));
+    if (direct.queued) {
+      ++queued;
+      REQUIRE(Rgb{l.directR[k], l.directG[k], l.directB[k]} == direct.contribution);
     }
-  REQUIRE(turned > 0);
+    // The next direction as sampleBsdf draws it.
+    const BsdfSample next = sampleBsdf(bsdf, woLocal, l.uLobe[k], {l.uBsdfX[k], l.uBsdfY[k]});
+    const bool leaks = next.valid && leaksThroughSurface(wo, frame.toWorld(next.wi), sp.geometricNormal, false);
+    REQUIRE(l.scattered[k] == int32_t(next.valid && !leaks));
+    if (!l.scattered[k]) continue;
+    ++scattered;
+    glossy += l.uLobe[k] < bsdf.gltf.specularChoice(woLocal.z);
+    REQUIRE(Vec3{l.nextDx[k], l.nextDy[k], l.nextDz[k]} == frame.toWorld(next.wi));
+    REQUIRE(Rgb{l.weightR[k], l.weightG[k], l.weightB[k]} == next.weight);
+    REQUIRE(l.scatterPdf[k] == next.pdf);
+  }
+  // Not vacuous: normal textures (some bent), light samples, both lobes' directions.
+  CHECK(mapped > 20);
+  CHECK(bent > 0);
+  CHECK(queued > 20);
+  CHECK(glossy > 20);
+  CHECK(scattered - glossy > 20);
+}
+
+TEST_CASE("Lambertian and glTF surfaces shaded in lanes agree with the same BRDFs shaded by shade()", "[pathtrace][gltf]") {
+  // Independent renders of the scene with every material and kind of light, its Lambertian
+  // materials turned into glTF ones: a dielectric of specular 0 reflects as Lambertian (Appendix B:
+  // no Fresnel term at all, the diffuse lobe whole), shaded in glTF lanes against Lambertian lanes;
+  // and a glossy metallic-roughness material shaded in lanes against shade(), which takes it where
+  // a specular texture (white: the same BRDF) scales its factor.
+  const Scene lambertian = everyMaterialAndLight();
+  auto turned = [&](float specular, float metallic, float roughness, bool specularTexture) {
+    Scene gltf = lambertian;
+    gltf.textures.push_back({uint32_t(gltf.texels.size()), 1, 1});
+    gltf.texels.push_back(0xffffffffu);
+    for (Material& m : gltf.materials)
+      if (m.type == MaterialType::Diffuse) {
+        m.type = MaterialType::Gltf, m.metallic = metallic, m.roughness = roughness, m.specular = specular;
+        m.ks = Rgb(1.0f);
+        if (specularTexture) m.specularTexture = int32_t(gltf.textures.size() - 1);
+      }
+    return gltf;
+  };
   PathTraceOptions opt;
   opt.common.spp = 64;
   opt.sampler = SamplerKind::Independent;
-  opt.common.seed = 3;
-  const RenderOutput inLanes = renderPathTraced(lambertian, Visibility(lambertian), opt);
-  opt.common.seed = 4;
-  const RenderOutput generic = renderPathTraced(gltf, Visibility(gltf), opt);
-  CHECK(generic.stats.counter("lane_shaded_hits") == 0);
-  CHECK(inLanes.stats.counter("lane_shaded_hits") > inLanes.stats.counter("rays") / 4);
-  for (int c = 0; c < 3; ++c) {
-    const double z = test::agreementZ(inLanes.image, generic.image, c);
-    INFO("channel " << c << ": z = " << z);
-    CHECK(std::abs(z) < 4.5);
-  }
+  auto render = [&](const Scene& scene, uint64_t seed) {
+    opt.common.seed = seed;
+    return renderPathTraced(scene, Visibility(scene), opt);
+  };
+  auto agree = [](const RenderOutput& a, const RenderOutput& b) {
+    for (int c = 0; c < 3; ++c) {
+      const double z = test::agreementZ(a.image, b.image, c);
+      INFO("channel " << c << ": z = " << z);
+      CHECK(std::abs(z) < 4.5);
+    }
+  };
+  const RenderOutput lambertianLanes = render(lambertian, 3), diffuseGltfLanes = render(turned(0, 0, 0.6f, false), 4);
+  agree(lambertianLanes, diffuseGltfLanes);
+  const RenderOutput glossyLanes = render(turned(1, 0.3f, 0.45f, false), 5);
+  const RenderOutput glossyShaded = render(turned(1, 0.3f, 0.45f, true), 6);
+  agree(glossyLanes, glossyShaded);
+  // Every hit but the mirror's, the glass's and the Phong triangles' in lanes; the turned triangles'
+  // (some 40% of them) not in the last render.
+  CHECK(glossyLanes.stats.counter("lane_shaded_hits") > glossyLanes.stats.counter("rays") / 4);
+  CHECK(glossyShaded.stats.counter("lane_shaded_hits") < 0.8 * glossyLanes.stats.counter("lane_shaded_hits"));
 }
 
 TEST_CASE("Pixel centres: every sample of a pixel takes the centre's camera ray, in lanes and one by one",

@@ -64,7 +64,7 @@ struct TrianglePointSample {
   float distance, pdf;
   Vec2 b;
 };
-inline TrianglePointSample sampleTrianglePoint(Vec3 q0, Vec3 q1, Vec3 q2, Vec3 normal, float area, float pmf,
+[[gnu::always_inline]] inline TrianglePointSample sampleTrianglePoint(Vec3 q0, Vec3 q1, Vec3 q2, Vec3 normal, float area, float pmf,
                                                Vec3 receiver, Vec2 u, bool twoSided = false) {
   const Vec2 b = sampleUniformTriangle(u);
   const Vec3 q = barycentric(q0, q1, q2, b.x, b.y);
@@ -202,7 +202,7 @@ inline LightSample sampleLight(const Scene& scene, Vec3 receiver, float uLight, 
 // light it ends short of that point by the same scale-aware margin by which its origin is offset
 // from the receiver, so that it never counts the light itself as an occluder.
 // Selects only: the path tracer's lane loop vectorizes it (shadeDiffuseLanes).
-inline Ray shadowRay(Vec3 p, Vec3 ng, Vec3 wi, Vec3 lightPoint, float lightDistance) {
+[[gnu::always_inline]] inline Ray shadowRay(Vec3 p, Vec3 ng, Vec3 wi, Vec3 lightPoint, float lightDistance) {
   const Vec3 origin = offsetOrigin(p, ng, wi);
   const Vec3 to = lightPoint - origin;
   const float d = length(to);

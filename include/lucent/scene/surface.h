@@ -23,7 +23,7 @@ struct SurfacePoint {
 
 // The vertex normals interpolated at a hit (not yet normalized), normalized and turned to the side
 // of the geometric normal ng; ng itself where they cancel.
-inline Vec3 orientedShadingNormal(Vec3 interpolated, Vec3 ng) {
+[[gnu::always_inline]] inline Vec3 orientedShadingNormal(Vec3 interpolated, Vec3 ng) {
   const float len = length(interpolated);
   const Vec3 n = select(len > 0, interpolated / len, ng);
   return select(dot(n, ng) < 0, -n, n);
@@ -36,7 +36,7 @@ inline Vec3 surfaceNormalOnSideOf(Vec3 ng, Vec3 n) { return dot(n, ng) < 0 ? -ng
 // The normal of a hit's shading frame, seen from wo: the shading normal sn, or the geometric normal
 // ng where the two put the viewer on different sides (at silhouettes of smooth meshes); turned to
 // the viewer's side for a two-sided material.
-inline Vec3 shadingFrameNormal(Vec3 wo, Vec3 sn, Vec3 ng, bool twoSided) {
+[[gnu::always_inline]] inline Vec3 shadingFrameNormal(Vec3 wo, Vec3 sn, Vec3 ng, bool twoSided) {
   const Vec3 n = select(dot(wo, sn) * dot(wo, ng) > 0, sn, ng);
   const bool behind = dot(wo, ng) > 0 ? false : twoSided;
   return select(behind, -n, n);
@@ -51,10 +51,15 @@ inline Vec3 shadingFrameNormal(Vec3 wo, Vec3 sn, Vec3 ng, bool twoSided) {
 //   R(theta).g = 2 (n.wo)(n.g) - z = x sin(2 theta) + z cos(2 theta) = rho cos(2 theta - phi),
 // rho = |(x, z)|, phi = atan2(x, z). R.g >= t where |2 theta - phi| <= acos(t / rho), an interval
 // holding theta = 0 (R.g = z > t there); the tilt kept is its upper end, the nearest to n's.
+// reflectsTooLow: whether n needs bending (R.g < t), with selects only (the path tracer's lanes
+// test it for every glTF hit and bend the few that need it one at a time).
+[[gnu::always_inline]] inline bool reflectsTooLow(Vec3 wo, Vec3 n, Vec3 g) {
+  return !(dot(reflect(wo, n), g) >= std::min(0.9f * dot(wo, g), 0.01f));
+}
 inline Vec3 bentForReflection(Vec3 wo, Vec3 n, Vec3 g) {
+  if (!reflectsTooLow(wo, n, g)) return n;
   const float z = dot(wo, g);
   const float t = std::min(0.9f * z, 0.01f);
-  if (dot(reflect(wo, n), g) >= t) return n;
   const Vec3 tangential = n - g * dot(n, g);
   const float sinTilt = length(tangential);
   if (!(dot(n, g) > 0) || !(sinTilt > 0) || !(z > 0)) return g;
@@ -65,17 +70,42 @@ inline Vec3 bentForReflection(Vec3 wo, Vec3 n, Vec3 g) {
   return normalize(X * std::sin(theta) + g * std::cos(theta));
 }
 
-// Texture t's coordinates at a surface point: its set's, interpolated, then transformed.
-inline Vec2 textureUv(const Scene& scene, const Texture& t, const SurfacePoint& sp) {
-  const std::vector<Vec2>& set = t.set == 0 ? scene.texcoords : scene.texcoords1;
+// A set of texture coordinates (Scene::texcoords or texcoords1) interpolated at a surface point.
+inline Vec2 interpolatedUv(const Scene& scene, uint32_t set, const SurfacePoint& sp) {
+  const std::vector<Vec2>& uvs = set == 0 ? scene.texcoords : scene.texcoords1;
   const uint32_t* v = &scene.indices[3 * sp.triangle];
-  const Vec2 t0 = set[v[0]], t1 = set[v[1]], t2 = set[v[2]];
+  const Vec2 t0 = uvs[v[0]], t1 = uvs[v[1]], t2 = uvs[v[2]];
   const float b0 = 1.0f - sp.b1 - sp.b2;
-  const Vec2 uv{t0.x * b0 + t1.x * sp.b1 + t2.x * sp.b2, t0.y * b0 + t1.y * sp.b1 + t2.y * sp.b2};
+  return {t0.x * b0 + t1.x * sp.b1 + t2.x * sp.b2, t0.y * b0 + t1.y * sp.b1 + t2.y * sp.b2};
+}
+
+// A hit's texture coordinates, interpolated once for all the textures its material reads: the
+// first set's, and the second's where the scene has one.
+struct HitUv {
+  Vec2 set[2];
+};
+inline HitUv hitUv(const Scene& scene, const SurfacePoint& sp) {
+  HitUv uv;
+  if (!scene.texcoords.empty()) uv.set[0] = interpolatedUv(scene, 0, sp);
+  if (!scene.texcoords1.empty()) uv.set[1] = interpolatedUv(scene, 1, sp);
+  return uv;
+}
+
+// Texture t's coordinates at a hit: its set's, transformed.
+inline Vec2 textureUv(const Texture& t, const HitUv& uv) {
+  return t.transformed == 0 ? uv.set[t.set] : transformedUv(t.transform, uv.set[t.set]);
+}
+inline Vec2 textureUv(const Scene& scene, const Texture& t, const SurfacePoint& sp) {
+  const Vec2 uv = interpolatedUv(scene, t.set, sp);
   return t.transformed == 0 ? uv : transformedUv(t.transform, uv);
 }
 
-// Texture `index` of the scene (>= 0) read at a surface point, bilinearly, decoded by `decode`.
+// Texture `index` of the scene (>= 0) read at a hit's coordinates, bilinearly, decoded by `decode`.
+inline Rgb textureAt(const Scene& scene, int32_t index, const HitUv& uv,
+                     const std::array<float, 256>& decode = kSrgb8ToLinear) {
+  const Texture& t = scene.textures[size_t(index)];
+  return bilinear(bilinearFootprint(t, scene.texels.data(), textureUv(t, uv)), decode);
+}
 inline Rgb textureAt(const Scene& scene, int32_t index, const SurfacePoint& sp,
                      const std::array<float, 256>& decode = kSrgb8ToLinear) {
   const Texture& t = scene.textures[size_t(index)];
@@ -97,23 +127,26 @@ inline Rgb baseFactorAt(const Scene& scene, const Material& m, const SurfacePoin
   return scene.colours.empty() ? m.kd : m.kd * vertexColourAt(scene, sp).rgb;
 }
 
-// A glTF normal texture (its index and scale) at a hit: the texel's tangent-space normal (2 c - 1, x and y times the
-// scale) in the frame of the unit normal n, the interpolated tangent made orthogonal to it, and the
-// bitangent cross(n, t) * sign; n itself where the vertices have no tangent.
+// A normal texture's texel c (linear), x and y times `scale`, in the frame of the unit normal n and
+// the interpolated tangent t: t made orthogonal to n, the bitangent cross(n, t) * sign; n where t
+// lies along n. Selects only, for the path tracer's lane loop (shadeGltfLanes) too.
+[[gnu::always_inline]] inline Vec3 tangentSpaceNormal(Vec3 n, Vec3 t, float sign, Rgb c, float scale) {
+  t = t - n * dot(n, t);
+  const float len = length(t);
+  t = t / len;
+  const Vec3 b = cross(n, t) * sign;
+  const Vec3 p = t * ((2.0f * c.r - 1.0f) * scale) + b * ((2.0f * c.g - 1.0f) * scale) + n * (2.0f * c.b - 1.0f);
+  const float plen = length(p);
+  return select(len > 0 ? plen > 0 : false, p / plen, n);
+}
+
+// A glTF normal texture (its index and scale) at a hit: its texel's tangentSpaceNormal about the unit
+// normal n and the vertices' tangents interpolated.
 inline Vec3 normalMapped(const Scene& scene, int32_t texture, float scale, const SurfacePoint& sp, Vec3 n) {
   const uint32_t* v = &scene.indices[3 * sp.triangle];
   const Tangent& a = scene.tangents[v[0]];
-  Vec3 t = barycentric(a.direction, scene.tangents[v[1]].direction, scene.tangents[v[2]].direction, sp.b1, sp.b2);
-  t = t - n * dot(n, t);
-  const float len = length(t);
-  if (!(len > 0)) return n;
-  t = t / len;
-  const Vec3 b = cross(n, t) * a.sign;
-  const Rgb c = textureAt(scene, texture, sp, kUnorm8ToFloat);
-  const Vec3 p = t * ((2.0f * c.r - 1.0f) * scale) + b * ((2.0f * c.g - 1.0f) * scale) +
-                 n * (2.0f * c.b - 1.0f);
-  const float plen = length(p);
-  return plen > 0 ? p / plen : n;
+  const Vec3 t = barycentric(a.direction, scene.tangents[v[1]].direction, scene.tangents[v[2]].direction, sp.b1, sp.b2);
+  return tangentSpaceNormal(n, t, a.sign, textureAt(scene, texture, sp, kUnorm8ToFloat), scale);
 }
 
 // The unit vertex normal interpolated at a hit, as the vertices give it (not turned to a side); the
@@ -194,20 +227,33 @@ inline GltfFactors gltfFactors(const Material& m, Rgb base) {
 
 // Appendix B's metal/dielectric mix expanded into the lobe's terms (bsdf/gltf_metal_rough.h), with
 // the transmission, sheen and clear coat where the factors have them.
-inline SurfaceBsdf gltfBsdf(const Material& m, const GltfFactors& f) {
+// KHR_materials_ior and KHR_materials_specular: the dielectric's F0 from the index ni, coloured,
+// clamped to 1, then weighted by the specular factor (which is also its F90).
+inline Rgb dielectricF0(float ni, Rgb specularColour, float specular) {
+  const float r = (ni - 1.0f) / (ni + 1.0f);
+  const Rgb c = specularColour;
+  return Rgb(std::min(r * r * c.r, 1.0f), std::min(r * r * c.g, 1.0f), std::min(r * r * c.b, 1.0f)) * specular;
+}
+
+// Appendix B's metal/dielectric mix of base colour `base` and dielectric F0 f0 (dielectricF0) and
+// F90 `specular`, as the lobe's terms: the base of every glTF lobe (gltfBsdf), and of the path
+// tracer's lanes (shadeGltfLanes).
+[[gnu::always_inline]] inline GltfMetalRoughLobe metalRoughLobe(Rgb base, float metallic, float roughness, Rgb f0, float specular,
+                                         GgxMasking masking) {
   GltfMetalRoughLobe b;
-  // KHR_materials_ior and KHR_materials_specular: the dielectric's F0 from the index, coloured,
-  // clamped to 1, then weighted by the specular factor, which is also its F90.
-  const float r = (m.ni - 1.0f) / (m.ni + 1.0f);
-  const Rgb c = f.specularColour;
-  const Rgb f0 = Rgb(std::min(r * r * c.r, 1.0f), std::min(r * r * c.g, 1.0f), std::min(r * r * c.b, 1.0f)) * f.specular;
-  b.kd = f.base * (1.0f - f.metallic);
-  b.ks = f0 * (1.0f - f.metallic) + f.base * f.metallic;
-  b.f90 = f.specular * (1.0f - f.metallic) + f.metallic;
+  b.kd = base * (1.0f - metallic);
+  b.ks = f0 * (1.0f - metallic) + base * metallic;
+  b.f90 = specular * (1.0f - metallic) + metallic;
   b.dielectricF0 = f0.maxComponent();
-  b.dielectricF90 = f.specular;
-  b.alpha = std::max(f.roughness * f.roughness, kMinGgxAlpha);
-  b.masking = m.masking;
+  b.dielectricF90 = specular;
+  b.alpha = std::max(roughness * roughness, kMinGgxAlpha);
+  b.masking = masking;
+  return b;
+}
+
+inline SurfaceBsdf gltfBsdf(const Material& m, const GltfFactors& f) {
+  GltfMetalRoughLobe b = metalRoughLobe(f.base, f.metallic, f.roughness,
+                                        dielectricF0(m.ni, f.specularColour, f.specular), f.specular, m.masking);
   if (!f.sheenColour.isBlack()) {
     b.sheenColour = f.sheenColour;
     b.sheenRoughness = std::max(f.sheenRoughness, kMinSheenRoughness);
@@ -266,37 +312,36 @@ inline bool mayPassAsSpecular(const Material& m) {
          (m.type == MaterialType::Gltf && m.metallicRoughnessTexture >= 0 && (m.transmission > 0 || m.boundsVolume));
 }
 
-// Texture `index`'s A channel (linear) at a surface point, filtered as its sampler says.
-inline float textureAlphaAt(const Scene& scene, int32_t index, const SurfacePoint& sp) {
+// Texture `index`'s A channel (linear) at a hit's coordinates, filtered as its sampler says.
+inline float textureAlphaAt(const Scene& scene, int32_t index, const HitUv& uv) {
   const Texture& t = scene.textures[size_t(index)];
-  return bilinearAlpha(bilinearFootprint(t, scene.texels.data(), textureUv(scene, t, sp)));
+  return bilinearAlpha(bilinearFootprint(t, scene.texels.data(), textureUv(t, uv)));
 }
 
 inline SurfaceBsdf bsdfAt(const Scene& scene, const SurfacePoint& sp) {
   const Material& m = scene.materials[sp.materialId];
   const Rgb factor = baseFactorAt(scene, m, sp);
-  const Rgb kd = m.kdTexture < 0 ? factor : factor * textureAt(scene, m.kdTexture, sp);
-  if (m.type == MaterialType::Gltf) {
-    GltfFactors f = gltfFactors(m, kd);
-    if (m.metallicRoughnessTexture >= 0) {
-      const Rgb t = textureAt(scene, m.metallicRoughnessTexture, sp, kUnorm8ToFloat);
-      f.metallic *= t.b;
-      f.roughness *= t.g;
-    }
-    if (m.specularTexture >= 0) f.specular *= textureAlphaAt(scene, m.specularTexture, sp);
-    if (m.specularColorTexture >= 0) f.specularColour = f.specularColour * textureAt(scene, m.specularColorTexture, sp);
-    if (m.sheenColourTexture >= 0) f.sheenColour = f.sheenColour * textureAt(scene, m.sheenColourTexture, sp);
-    if (m.sheenRoughnessTexture >= 0) f.sheenRoughness *= textureAlphaAt(scene, m.sheenRoughnessTexture, sp);
-    if (m.clearcoat > 0) {
-      if (m.clearcoatTexture >= 0) f.clearcoat *= textureAt(scene, m.clearcoatTexture, sp, kUnorm8ToFloat).r;
-      if (m.clearcoatRoughnessTexture >= 0)
-        f.clearcoatRoughness *= textureAt(scene, m.clearcoatRoughnessTexture, sp, kUnorm8ToFloat).g;
-      f.clearcoatNormal = clearcoatNormalAt(scene, m, sp);
-    }
-    if (m.transmissionTexture >= 0) f.transmission *= textureAt(scene, m.transmissionTexture, sp, kUnorm8ToFloat).r;
-    return gltfBsdf(m, f);
+  if (m.type != MaterialType::Gltf)
+    return materialBsdf(m, m.kdTexture < 0 ? factor : factor * textureAt(scene, m.kdTexture, sp));
+  const HitUv uv = hitUv(scene, sp);
+  GltfFactors f = gltfFactors(m, m.kdTexture < 0 ? factor : factor * textureAt(scene, m.kdTexture, uv));
+  if (m.metallicRoughnessTexture >= 0) {
+    const Rgb t = textureAt(scene, m.metallicRoughnessTexture, uv, kUnorm8ToFloat);
+    f.metallic *= t.b;
+    f.roughness *= t.g;
   }
-  return materialBsdf(m, kd);
+  if (m.specularTexture >= 0) f.specular *= textureAlphaAt(scene, m.specularTexture, uv);
+  if (m.specularColorTexture >= 0) f.specularColour = f.specularColour * textureAt(scene, m.specularColorTexture, uv);
+  if (m.sheenColourTexture >= 0) f.sheenColour = f.sheenColour * textureAt(scene, m.sheenColourTexture, uv);
+  if (m.sheenRoughnessTexture >= 0) f.sheenRoughness *= textureAlphaAt(scene, m.sheenRoughnessTexture, uv);
+  if (m.clearcoat > 0) {
+    if (m.clearcoatTexture >= 0) f.clearcoat *= textureAt(scene, m.clearcoatTexture, uv, kUnorm8ToFloat).r;
+    if (m.clearcoatRoughnessTexture >= 0)
+      f.clearcoatRoughness *= textureAt(scene, m.clearcoatRoughnessTexture, uv, kUnorm8ToFloat).g;
+    f.clearcoatNormal = clearcoatNormalAt(scene, m, sp);
+  }
+  if (m.transmissionTexture >= 0) f.transmission *= textureAt(scene, m.transmissionTexture, uv, kUnorm8ToFloat).r;
+  return gltfBsdf(m, f);
 }
 
 // The radiance triangle tri emits at barycentrics (b1, b2) along direction `towards` (leaving the

@@ -45,18 +45,34 @@ LUCENT_LANE_VERSIONS(void, startCameraPaths, (CameraLanes& l, uint32_t first, ui
                   uint64_t seed, const PinholeCamera& camera, const PixelFilter& filter, bool pixelCentres),
                      (l, first, last, sampler, seed, camera, filter, pixelCentres))
 
-void fetchLambertianSurface(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k,
-                            std::vector<TexturedLane>& textured) {
+namespace {
+// What every lane holds of its hit (surfaceAt's arithmetic, up to the normalization of the
+// interpolated normal), and whether it emits; the hit's material.
+const Material& fetchHitGeometry(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k) {
   const uint32_t* v = &s.indices[3 * size_t(hit.triangle)];
   storeLane(direction, l.dirX, l.dirY, l.dirZ, k);
-  // surfaceAt's arithmetic, up to the normalization of the interpolated normal.
   storeLane(barycentric(s.positions[v[0]], s.positions[v[1]], s.positions[v[2]], hit.b1, hit.b2), l.posX, l.posY, l.posZ, k);
   storeLane(barycentric(s.normals[v[0]], s.normals[v[1]], s.normals[v[2]], hit.b1, hit.b2), l.normalX, l.normalY,
-        l.normalZ, k);
+            l.normalZ, k);
   l.hasNormals[k] = !(s.normals[v[0]] == Vec3{0, 0, 0});
   storeLane(s.faceNormals[hit.triangle], l.ngx, l.ngy, l.ngz, k);
   const Material& m = s.materials[s.materialIds[hit.triangle]];
   l.emits[k] = !m.ke.isBlack();
+  return m;
+}
+
+// Texture t read at coordinates uv later (readLaneTextures), its texels requested now.
+void requestTexture(const Scene& s, const Texture& t, Vec2 uv, uint32_t k, LaneTexture use, Rgb kd,
+                    std::vector<TexturedLane>& textured) {
+  const BilinearFootprint f = bilinearFootprint(t, s.texels.data(), uv);
+  for (const uint32_t* texel : {f.row0 + f.x0, f.row0 + f.x1, f.row1 + f.x0, f.row1 + f.x1}) __builtin_prefetch(texel);
+  textured.push_back({k, use, f, kd});
+}
+}  // namespace
+
+void fetchLambertianSurface(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k,
+                            std::vector<TexturedLane>& textured) {
+  const Material& m = fetchHitGeometry(s, hit, direction, l, k);
   SurfacePoint sp;
   sp.triangle = hit.triangle, sp.b1 = hit.b1, sp.b2 = hit.b2;
   const Rgb factor = baseFactorAt(s, m, sp);
@@ -65,15 +81,68 @@ void fetchLambertianSurface(const Scene& s, const Hit& hit, Vec3 direction, Diff
     return;
   }
   const Texture& t = s.textures[size_t(m.kdTexture)];
-  const BilinearFootprint f = bilinearFootprint(t, s.texels.data(), textureUv(s, t, sp));
-  for (const uint32_t* texel : {f.row0 + f.x0, f.row0 + f.x1, f.row1 + f.x0, f.row1 + f.x1}) __builtin_prefetch(texel);
-  textured.push_back({k, f, factor});
+  requestTexture(s, t, textureUv(s, t, sp), k, LaneTexture::Albedo, factor, textured);
+}
+
+bool gltfShadedInLanes(const Material& m) {
+  return m.type == MaterialType::Gltf && m.sheenColour.isBlack() && !(m.clearcoat > 0) && !(m.transmission > 0) &&
+         m.boundsVolume == 0 && m.specularTexture < 0 && m.specularColorTexture < 0;
+}
+
+void fetchGltfSurface(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k,
+                      std::vector<TexturedLane>& textured) {
+  const Material& m = fetchHitGeometry(s, hit, direction, l, k);
+  SurfacePoint sp;
+  sp.triangle = hit.triangle, sp.b1 = hit.b1, sp.b2 = hit.b2;
+  const Rgb factor = baseFactorAt(s, m, sp);
+  l.kdR[k] = factor.r, l.kdG[k] = factor.g, l.kdB[k] = factor.b;
+  l.metallic[k] = m.metallic, l.roughness[k] = m.roughness;
+  const Rgb f0 = dielectricF0(m.ni, m.ks, m.specular);
+  l.f0R[k] = f0.r, l.f0G[k] = f0.g, l.f0B[k] = f0.b;
+  l.specular[k] = m.specular;
+  l.heightCorrelated[k] = m.masking == GgxMasking::HeightCorrelated;
+  l.normalMapped[k] = m.normalTexture >= 0;
+  l.bendsNormalMap[k] = m.bendsNormalMap != 0;
+  if (m.kdTexture < 0 && m.metallicRoughnessTexture < 0 && m.normalTexture < 0) return;
+  const HitUv uv = hitUv(s, sp);
+  auto request = [&](int32_t index, LaneTexture use, Rgb kd) {
+    const Texture& t = s.textures[size_t(index)];
+    requestTexture(s, t, textureUv(t, uv), k, use, kd, textured);
+  };
+  if (m.kdTexture >= 0) request(m.kdTexture, LaneTexture::Albedo, factor);
+  if (m.metallicRoughnessTexture >= 0) request(m.metallicRoughnessTexture, LaneTexture::MetallicRoughness, {});
+  if (m.normalTexture < 0) return;
+  const uint32_t* v = &s.indices[3 * size_t(hit.triangle)];
+  const Tangent& a = s.tangents[v[0]];
+  storeLane(barycentric(a.direction, s.tangents[v[1]].direction, s.tangents[v[2]].direction, hit.b1, hit.b2), l.tangentX,
+            l.tangentY, l.tangentZ, k);
+  l.tangentSign[k] = a.sign;
+  l.normalScale[k] = m.normalScale;
+  request(m.normalTexture, LaneTexture::Normal, {});
 }
 
 void readLaneTextures(DiffuseLanes& l, std::span<const TexturedLane> textured) {
   for (const TexturedLane& t : textured) {
-    const Rgb kd = t.kd * bilinear(t.footprint);
-    l.kdR[t.lane] = kd.r, l.kdG[t.lane] = kd.g, l.kdB[t.lane] = kd.b;
+    const uint32_t k = t.lane;
+    switch (t.use) {
+      case LaneTexture::Albedo: {
+        const Rgb kd = t.kd * bilinear(t.footprint);
+        l.kdR[k] = kd.r, l.kdG[k] = kd.g, l.kdB[k] = kd.b;
+        break;
+      }
+      case LaneTexture::MetallicRoughness: {
+        // bsdfAt's: B scales the metallic factor, G the roughness.
+        const Rgb c = bilinear(t.footprint, kUnorm8ToFloat);
+        l.metallic[k] *= c.b;
+        l.roughness[k] *= c.g;
+        break;
+      }
+      case LaneTexture::Normal: {
+        const Rgb c = bilinear(t.footprint, kUnorm8ToFloat);
+        l.texelR[k] = c.r, l.texelG[k] = c.g, l.texelB[k] = c.b;
+        break;
+      }
+    }
   }
 }
 
@@ -95,6 +164,49 @@ void fetchLaneLight(const LaneLight& light, DiffuseLanes& l, uint32_t k) {
   l.leR[k] = light.le.r, l.leG[k] = light.le.g, l.leB[k] = light.le.b;
 }
 
+namespace {
+// A lane's light sample: a point on its LaneLight's triangle (sampleChosenLight's triangle case), or
+// the sample fetched (sampleOtherLights).
+struct LaneLightSample {
+  Vec3 wi, point;
+  float distance, pdf;
+  bool delta;
+  Rgb le;
+};
+[[gnu::always_inline]] inline LaneLightSample laneLightSample(const DiffuseLanes& l, uint32_t k, Vec3 position) {
+  const TrianglePointSample q = sampleTrianglePoint(
+      {l.q0x[k], l.q0y[k], l.q0z[k]}, {l.q1x[k], l.q1y[k], l.q1z[k]}, {l.q2x[k], l.q2y[k], l.q2z[k]},
+      {l.lightNx[k], l.lightNy[k], l.lightNz[k]}, l.lightArea[k], l.lightPmf[k], position, {l.uLightX[k], l.uLightY[k]});
+  const bool onTriangle = l.lightIsTriangle[k] != 0;
+  return {select(onTriangle, q.wi, {l.wiX[k], l.wiY[k], l.wiZ[k]}),
+          select(onTriangle, q.point, {l.pointX[k], l.pointY[k], l.pointZ[k]}),
+          onTriangle ? q.distance : l.lightDistance[k],
+          onTriangle ? q.pdf : l.lightPdf[k],
+          l.lightDelta[k] != 0,
+          {l.leR[k], l.leG[k], l.leB[k]}};
+}
+
+// The light sample's shadow ray and what it brings.
+[[gnu::always_inline]] inline void storeNextEvent(DiffuseLanes& l, uint32_t k, NextEventSample direct, Ray shadow) {
+  l.shadowQueued[k] = direct.queued;
+  storeLane(shadow.origin, l.shadowOx, l.shadowOy, l.shadowOz, k);
+  storeLane(shadow.direction, l.shadowDx, l.shadowDy, l.shadowDz, k);
+  l.shadowTMax[k] = shadow.tMax;
+  l.directR[k] = direct.contribution.r, l.directG[k] = direct.contribution.g, l.directB[k] = direct.contribution.b;
+}
+
+// The next ray, leaving `position` along wiWorld, and the sample's weight and density; `scattered`:
+// a valid sample that does not leak through the surface.
+[[gnu::always_inline]] inline void storeNextRay(DiffuseLanes& l, uint32_t k, bool scattered, Rgb weight, float pdf,
+                                                Vec3 position, Vec3 ng, Vec3 wiWorld) {
+  l.scattered[k] = scattered;
+  l.weightR[k] = weight.r, l.weightG[k] = weight.g, l.weightB[k] = weight.b;
+  l.scatterPdf[k] = pdf;
+  storeLane(offsetOrigin(position, ng, wiWorld), l.nextOx, l.nextOy, l.nextOz, k);
+  storeLane(wiWorld, l.nextDx, l.nextDy, l.nextDz, k);
+}
+}  // namespace
+
 // What PathTracer::shade does at a hit, for a Lambertian surface: the shading normal (surfaceAt's)
 // and frame, next-event estimation (sampleDirect, with sampleChosenLight's triangle case where the
 // light is a LaneLight), and the next direction (sampleBsdf).
@@ -110,37 +222,86 @@ LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint
     const Vec3 wo = frame.toLocal(woWorld);
     const Rgb kd{l.kdR[k], l.kdG[k], l.kdB[k]};
 
-    // The light sample: a point on the emitting triangle, or the one fetched.
-    const TrianglePointSample q = sampleTrianglePoint(
-        {l.q0x[k], l.q0y[k], l.q0z[k]}, {l.q1x[k], l.q1y[k], l.q1z[k]}, {l.q2x[k], l.q2y[k], l.q2z[k]},
-        {l.lightNx[k], l.lightNy[k], l.lightNz[k]}, l.lightArea[k], l.lightPmf[k], position, {l.uLightX[k], l.uLightY[k]});
-    const bool onTriangle = l.lightIsTriangle[k] != 0;
-    const Vec3 wi = select(onTriangle, q.wi, {l.wiX[k], l.wiY[k], l.wiZ[k]});
-    const Vec3 point = select(onTriangle, q.point, {l.pointX[k], l.pointY[k], l.pointZ[k]});
-    const float distance = onTriangle ? q.distance : l.lightDistance[k];
-    const float pdf = onTriangle ? q.pdf : l.lightPdf[k];
-    const bool delta = l.lightDelta[k] != 0;
-    const Rgb le{l.leR[k], l.leG[k], l.leB[k]};
-    const Vec3 wiLocal = frame.toLocal(wi);
-    const NextEventSample direct =
-        weighLightSample(strategy, pdf, delta, le, wi, wiLocal, frame.n, ng, lambertianValue(kd, wo.z, wiLocal.z));
-    l.shadowQueued[k] = direct.queued;
-    const Ray shadow = shadowRay(position, ng, wi, point, distance);
-    storeLane(shadow.origin, l.shadowOx, l.shadowOy, l.shadowOz, k);
-    storeLane(shadow.direction, l.shadowDx, l.shadowDy, l.shadowDz, k);
-    l.shadowTMax[k] = shadow.tMax;
-    l.directR[k] = direct.contribution.r, l.directG[k] = direct.contribution.g, l.directB[k] = direct.contribution.b;
+    const LaneLightSample light = laneLightSample(l, k, position);
+    const Vec3 wiLocal = frame.toLocal(light.wi);
+    const NextEventSample direct = weighLightSample(strategy, light.pdf, light.delta, light.le, light.wi, wiLocal,
+                                                    frame.n, ng, lambertianValue(kd, wo.z, wiLocal.z));
+    storeNextEvent(l, k, direct, shadowRay(position, ng, light.wi, light.point, light.distance));
 
-    // The next direction.
     const BsdfSample next = sampleLambertian(kd, wo.z, {l.uBsdfX[k], l.uBsdfY[k]});
     const Vec3 wiWorld = frame.toWorld(next.wi);
-    l.scattered[k] = next.valid ? !leaksThroughSurface(woWorld, wiWorld, ng, false) : false;
-    l.weightR[k] = next.weight.r, l.weightG[k] = next.weight.g, l.weightB[k] = next.weight.b;
-    l.scatterPdf[k] = next.pdf;
-    storeLane(offsetOrigin(position, ng, wiWorld), l.nextOx, l.nextOy, l.nextOz, k);
-    storeLane(wiWorld, l.nextDx, l.nextDy, l.nextDz, k);
+    storeNextRay(l, k, next.valid ? !leaksThroughSurface(woWorld, wiWorld, ng, false) : false, next.weight, next.pdf,
+                 position, ng, wiWorld);
   }
 }
 LUCENT_LANE_VERSIONS(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint32_t last), (l, first, last))
+
+// surfaceAt's shading normal at a glTF hit (the normal texture's about the unit interpolated normal,
+// or that normal) and hitFrameNormal's frame seen from the ray's origin, unbent; `bent` where
+// bentForReflection has to bend it.
+LUCENT_LANE_LOOP(void, gltfShadingFrames, (DiffuseLanes& l, uint32_t first, uint32_t last)) {
+  for (uint32_t k = first; k < last; ++k) {
+    const Vec3 ng{l.ngx[k], l.ngy[k], l.ngz[k]};
+    const Vec3 interpolated{l.normalX[k], l.normalY[k], l.normalZ[k]};
+    const bool hasNormals = l.hasNormals[k] != 0;
+    const float len = length(interpolated);
+    const Vec3 unit = select(hasNormals, select(len > 0, interpolated / len, ng), ng);
+    const Vec3 mapped = tangentSpaceNormal(unit, {l.tangentX[k], l.tangentY[k], l.tangentZ[k]}, l.tangentSign[k],
+                                           {l.texelR[k], l.texelG[k], l.texelB[k]}, l.normalScale[k]);
+    const Vec3 sn = select(l.normalMapped[k] != 0, orientedShadingNormal(mapped, ng),
+                           select(hasNormals, orientedShadingNormal(interpolated, ng), ng));
+    const Vec3 wo = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
+    const Vec3 n = shadingFrameNormal(wo, sn, ng, true);
+    storeLane(sn, l.snX, l.snY, l.snZ, k);
+    storeLane(n, l.frameX, l.frameY, l.frameZ, k);
+    const Vec3 g = select(dot(wo, ng) > 0, ng, -ng);
+    const int bends = l.bendsNormalMap[k] == 0 ? 0 : dot(wo, n) > 0 ? 1 : 0;
+    l.bent[k] = bends == 0 ? 0 : reflectsTooLow(wo, n, g) ? 1 : 0;
+  }
+}
+LUCENT_LANE_VERSIONS(void, gltfShadingFrames, (DiffuseLanes& l, uint32_t first, uint32_t last), (l, first, last))
+
+// The rest of what PathTracer::shade does at such a hit, in the frame: next-event estimation with
+// the lobe's value, and the next direction from the GGX visible normals or the cosine lobe, chosen
+// by their weights at n.wo (GltfMetalRoughLobe::sample).
+LUCENT_LANE_LOOP(void, shadeGltfInFrames, (DiffuseLanes& l, uint32_t first, uint32_t last)) {
+  const PathStrategy strategy = l.strategy;
+  for (uint32_t k = first; k < last; ++k) {
+    const Vec3 ng{l.ngx[k], l.ngy[k], l.ngz[k]};
+    const Vec3 woWorld = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]};
+    const Frame frame({l.frameX[k], l.frameY[k], l.frameZ[k]});
+    const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
+    const Vec3 wo = frame.toLocal(woWorld);
+    const GltfMetalRoughLobe lobe = gltfLaneLobe(l, k);
+    const GltfMetalRoughLobe::BaseChoice choice = lobe.baseChoice(wo.z);
+
+    const LaneLightSample light = laneLightSample(l, k, position);
+    storeLane(light.wi, l.wiX, l.wiY, l.wiZ, k);
+    const Vec3 wiLocal = frame.toLocal(light.wi);
+    const NextEventSample direct = weighLightSample(strategy, light.pdf, light.delta, light.le, light.wi, wiLocal,
+                                                    frame.n, ng, lobe.reflection(wo, wiLocal, choice));
+    storeNextEvent(l, k, direct, shadowRay(position, ng, light.wi, light.point, light.distance));
+
+    const Vec2 u{l.uBsdfX[k], l.uBsdfY[k]};
+    const Vec3 glossy = reflect(wo, sampleGgxVisibleNormal(lobe.alpha, wo, u));
+    const Vec3 wi = select(l.uLobe[k] < choice.specular, glossy, sampleCosineHemisphere(u));
+    const BsdfValue value = lobe.reflection(wo, wi, choice);
+    const Vec3 wiWorld = frame.toWorld(wi);
+    storeNextRay(l, k, value.pdf > 0 ? !leaksThroughSurface(woWorld, wiWorld, ng, false) : false,
+                 value.f * (std::abs(wi.z) / value.pdf), value.pdf, position, ng, wiWorld);
+  }
+}
+LUCENT_LANE_VERSIONS(void, shadeGltfInFrames, (DiffuseLanes& l, uint32_t first, uint32_t last), (l, first, last))
+
+void shadeGltfLanes(DiffuseLanes& l, uint32_t first, uint32_t last) {
+  gltfShadingFrames(l, first, last);
+  for (uint32_t k = first; k < last; ++k) {
+    if (!l.bent[k]) continue;
+    const Vec3 wo = -Vec3{l.dirX[k], l.dirY[k], l.dirZ[k]}, ng{l.ngx[k], l.ngy[k], l.ngz[k]};
+    storeLane(bentForReflection(wo, {l.frameX[k], l.frameY[k], l.frameZ[k]}, dot(wo, ng) > 0 ? ng : -ng), l.frameX,
+              l.frameY, l.frameZ, k);
+  }
+  shadeGltfInFrames(l, first, last);
+}
 
 }  // namespace lucent

@@ -1,5 +1,5 @@
-// The wavefront path tracer's shading of Lambertian hits, many paths at a time: the scene data and
-// random numbers of each hit are fetched into a structure of arrays (one slot per path, a "lane"),
+// The wavefront path tracer's shading of Lambertian and glTF hits, many paths at a time: the scene
+// data and random numbers of each hit are fetched into a structure of arrays (one slot per path, a "lane"),
 // then every step that is the same arithmetic for all lanes runs as one loop over the lanes, which
 // the compiler vectorizes (eight lanes per instruction with AVX2, sixteen with AVX-512, chosen at
 // run time). The same loop over one lane shades single paths (PathTraceOptions::laneShading off);
@@ -12,6 +12,8 @@
 
 #include "lucent/core/path_sampler.h"
 #include "lucent/methods/pathtrace.h"
+#include "lucent/scene/bsdf/gltf_metal_rough.h"
+#include "lucent/scene/surface.h"
 #include "lucent/scene/camera.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/texture.h"
@@ -28,8 +30,11 @@ inline constexpr int kMaxLanes = 256;
 // other; waves of 512 paths ran 1.8x slower for it (1450 against 802 ms), 128 about 1%.
 inline constexpr int kLaneSlots = kMaxLanes + 16;
 
+// Lambertian hits fill the lanes from the first up ([0, count)), glTF hits from the last down
+// ([gltfFirst, kMaxLanes)): a wave's hits are at most kMaxLanes, so the two never meet.
 struct DiffuseLanes {
   uint32_t count = 0;
+  uint32_t gltfFirst = kMaxLanes;
   PathStrategy strategy = PathStrategy::Mis;  // how light is found, the same for every lane
   // Fetched per lane (PathTracer::fetchDiffuseLane). Normals: ng* the triangle's geometric one,
   // normal* the vertex normals interpolated (not yet normalized).
@@ -38,10 +43,11 @@ struct DiffuseLanes {
   alignas(64) float normalX[kLaneSlots], normalY[kLaneSlots], normalZ[kLaneSlots];  // vertex normals interpolated
   alignas(64) int32_t hasNormals[kLaneSlots];
   alignas(64) float ngx[kLaneSlots], ngy[kLaneSlots], ngz[kLaneSlots];  // the triangle's geometric normal
-  alignas(64) float kdR[kLaneSlots], kdG[kLaneSlots], kdB[kLaneSlots];  // textured albedo
+  alignas(64) float kdR[kLaneSlots], kdG[kLaneSlots], kdB[kLaneSlots];  // textured albedo (glTF: base colour)
   alignas(64) int32_t emits[kLaneSlots];  // Ke not black: only then is gatherEmission called
   alignas(64) float uLightX[kLaneSlots], uLightY[kLaneSlots], uBsdfX[kLaneSlots], uBsdfY[kLaneSlots];
   alignas(64) float uRoulette[kLaneSlots];  // the next bounce's, drawn with the others (Sobol), or kDrawLater
+  alignas(64) float uLobe[kLaneSlots];      // glTF: the choice between the GGX and the cosine lobe
   alignas(64) uint32_t path[kLaneSlots];  // the wave's path in this lane
   alignas(64) uint32_t light[kLaneSlots];  // the light sampled (for the pilot's light moments)
 
@@ -57,9 +63,23 @@ struct DiffuseLanes {
   alignas(64) float leR[kLaneSlots], leG[kLaneSlots], leB[kLaneSlots], lightPdf[kLaneSlots];
   alignas(64) int32_t lightDelta[kLaneSlots];
 
-  // Computed (shadeDiffuseLanes): the shading normal, for the first-hit layers; next-event
+  // glTF hits (fetchGltfSurface): the factors of metalRoughLobe, their textures applied; the
+  // vertices' tangents interpolated and the normal texture's texel (linear), where the material has
+  // one; the geometric normal's side of the frame (shadingFrameNormal's).
+  alignas(64) float metallic[kLaneSlots], roughness[kLaneSlots];
+  alignas(64) float f0R[kLaneSlots], f0G[kLaneSlots], f0B[kLaneSlots], specular[kLaneSlots];
+  alignas(64) int32_t heightCorrelated[kLaneSlots];  // GgxMasking::HeightCorrelated
+  alignas(64) int32_t normalMapped[kLaneSlots], bendsNormalMap[kLaneSlots];
+  alignas(64) float tangentX[kLaneSlots], tangentY[kLaneSlots], tangentZ[kLaneSlots], tangentSign[kLaneSlots];
+  alignas(64) float texelR[kLaneSlots], texelG[kLaneSlots], texelB[kLaneSlots], normalScale[kLaneSlots];
+
+  // Computed (shadeDiffuseLanes, shadeGltfLanes): the shading normal, for the first-hit layers;
+  // glTF: the frame's normal (hitFrameNormal's) and whether a normal map's had to be bent, and in
+  // wi* the light sample's direction (for the split by path); next-event
   // estimation and BSDF sampling.
   alignas(64) float snX[kLaneSlots], snY[kLaneSlots], snZ[kLaneSlots];
+  alignas(64) float frameX[kLaneSlots], frameY[kLaneSlots], frameZ[kLaneSlots];
+  alignas(64) int32_t bent[kLaneSlots];
   alignas(64) int32_t shadowQueued[kLaneSlots];
   alignas(64) float shadowOx[kLaneSlots], shadowOy[kLaneSlots], shadowOz[kLaneSlots], shadowDx[kLaneSlots],
       shadowDy[kLaneSlots], shadowDz[kLaneSlots], shadowTMax[kLaneSlots];
@@ -90,9 +110,12 @@ struct CameraLanes {
 void startCameraPaths(CameraLanes& lanes, uint32_t first, uint32_t last, SamplerKind sampler, uint64_t seed,
                       const PinholeCamera& camera, const PixelFilter& filter, bool pixelCentres);
 
-// A lane whose albedo is textured: the texels to read, and the base factor they scale (baseFactorAt).
+// A texture a lane reads: the texels, what the lane takes from them, and for an albedo the base
+// factor they scale (baseFactorAt).
+enum class LaneTexture : uint32_t { Albedo, MetallicRoughness, Normal };
 struct TexturedLane {
   uint32_t lane;
+  LaneTexture use;
   BilinearFootprint footprint;
   Rgb kd;
 };
@@ -104,6 +127,23 @@ struct TexturedLane {
 // is fetched: a texel from memory then no longer holds up the next lane).
 void fetchLambertianSurface(const Scene& scene, const Hit& hit, Vec3 direction, DiffuseLanes& lanes, uint32_t k,
                             std::vector<TexturedLane>& textured);
+
+// The glTF materials shadeGltfLanes shades: Appendix B's metal/dielectric mix with KHR_materials_ior
+// and KHR_materials_specular's factors, normal (bent or as given) and metallic-roughness textures,
+// vertex colours. The layers (sheen, clear coat), transmission, volumes and specular textures are
+// shaded one hit at a time (PathTracer::shade).
+bool gltfShadedInLanes(const Material& m);
+// Lane k's surface at a hit of such a material, as surfaceAt and bsdfAt give it: what
+// fetchLambertianSurface fetches, the texture coordinates interpolated once for the textures, the
+// material's factors and tangents.
+void fetchGltfSurface(const Scene& scene, const Hit& hit, Vec3 direction, DiffuseLanes& lanes, uint32_t k,
+                      std::vector<TexturedLane>& textured);
+// Lane k's lobe (in its shading frame's coordinates), as bsdfAt gives it. Inlined: a call would keep
+// shadeGltfLanes' loop from vectorizing.
+[[gnu::always_inline]] inline GltfMetalRoughLobe gltfLaneLobe(const DiffuseLanes& l, uint32_t k) {
+  return metalRoughLobe({l.kdR[k], l.kdG[k], l.kdB[k]}, l.metallic[k], l.roughness[k], {l.f0R[k], l.f0G[k], l.f0B[k]},
+                        l.specular[k], l.heightCorrelated[k] != 0 ? GgxMasking::HeightCorrelated : GgxMasking::Separable);
+}
 void readLaneTextures(DiffuseLanes& lanes, std::span<const TexturedLane> textured);
 
 // What a lane needs of a light to sample it itself: an emitting triangle seen from one side, of
@@ -120,5 +160,9 @@ void fetchLaneLight(const LaneLight& light, DiffuseLanes& lanes, uint32_t k);
 // it brings, and the cosine-distributed next direction. One lane at a time ([k, k + 1)) the same
 // loop shades single paths, with the same arithmetic.
 void shadeDiffuseLanes(DiffuseLanes& lanes, uint32_t first, uint32_t last);
+// The same for glTF lanes: the normal texture's shading normal and its frame (bent one lane at a
+// time where it must be), next-event estimation and the next direction from the GGX or the cosine
+// lobe.
+void shadeGltfLanes(DiffuseLanes& lanes, uint32_t first, uint32_t last);
 
 }  // namespace lucent

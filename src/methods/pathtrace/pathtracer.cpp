@@ -86,6 +86,9 @@ struct ShadowQuery {
   int verticesBefore = 0;
 };
 
+// Which of the wave's lanes shade a hit (PathTracer::laneKind); None: PathTracer::shade.
+enum class LaneKind : uint8_t { None, Lambertian, Gltf };
+
 // Paths traced together, one lane each when shaded (kMaxLanes: waves of 256, see there).
 constexpr int64_t kWaveSize = kMaxLanes;
 
@@ -110,8 +113,8 @@ int runEnd(int sample) { return sample >= kRunLength ? runBegin(sample) + kRunLe
 // What shading a hit reads of the scene: vertex records and per-triangle records.
 size_t sceneArrayBytes(const Scene& s) {
   return s.positions.size() * sizeof(Vec3) + s.normals.size() * sizeof(Vec3) + s.texcoords.size() * sizeof(Vec2) +
-         s.indices.size() * sizeof(uint32_t) + s.materialIds.size() * sizeof(uint32_t) +
-         s.faceNormals.size() * sizeof(Vec3);
+         s.tangents.size() * sizeof(Tangent) + s.indices.size() * sizeof(uint32_t) +
+         s.materialIds.size() * sizeof(uint32_t) + s.faceNormals.size() * sizeof(Vec3);
 }
 
 // The samples a pass takes at each pixel: from sampleBegin plus the samples the film has taken
@@ -128,6 +131,10 @@ class PathTracer {
   PathTracer(const Scene& scene, const Visibility& vis, const PathTraceOptions& opt)
       : scene_(scene), vis_(vis), opt_(opt), camera_(scene.camera), lightChoice_(scene.lightDistribution) {
     for (uint32_t li = 0; li < scene.lights.size(); ++li) laneLights_.push_back(laneLight(scene, li));
+    for (const Material& m : scene.materials)
+      laneKinds_.push_back(m.type == MaterialType::Diffuse ? LaneKind::Lambertian
+                           : gltfShadedInLanes(m)          ? LaneKind::Gltf
+                                                           : LaneKind::None);
   }
 
   // One bounce of a path whose ray met `hit` (or nothing): emission found, the light sample (its
@@ -202,8 +209,8 @@ class PathTracer {
     std::vector<TexturedLane> textured;
     std::vector<uint32_t> otherLights;  // lanes whose light is not a triangle
     LightMoments lightMoments;          // while the pilot learns the light choice
-    // The Sobol sampler's numbers of a bounce's Lambertian hits, drawn together in lanes before the
-    // hits are fetched: per hit, its light choice's, light point's and BSDF direction's pairs.
+    // The Sobol sampler's numbers of a bounce's lane hits, drawn together in lanes before the hits
+    // are fetched: per hit, its light choice's, light point's and BSDF direction's pairs (lanePairs).
     struct SobolRequests {
       std::vector<uint64_t> pixelKey;
       std::vector<uint32_t> index, dimension;
@@ -242,15 +249,16 @@ class PathTracer {
       w.shadows.clear();
       DiffuseLanes& lanes = *w.lanes;
       lanes.count = 0;
+      lanes.gltfFirst = kMaxLanes;
       lanes.strategy = opt_.strategy;
       w.textured.clear();
       w.otherLights.clear();
       const bool drawnInLanes = drawDiffuseLaneNumbers(w);
       uint32_t drawn = 0;  // the next lane's first pair in w.sobol
       for (const uint32_t i : w.active) {
-        if (inDiffuseLane(w.paths[i], w.hits[i])) {
-          fetchDiffuseLane(w.paths[i], w.hits[i], i, lanes, w.textured, w.otherLights,
-                           drawnInLanes ? std::exchange(drawn, drawn + lanePairs(w.paths[i])) : kNotDrawn, w.sobol);
+        if (const LaneKind kind = laneKind(w.paths[i], w.hits[i]); kind != LaneKind::None) {
+          fetchDiffuseLane(w.paths[i], w.hits[i], kind, i, lanes, w.textured, w.otherLights,
+                           drawnInLanes ? std::exchange(drawn, drawn + lanePairs(w.paths[i], kind)) : kNotDrawn, w.sobol);
           continue;
         }
         ShadowQuery shadow;
@@ -324,29 +332,36 @@ class PathTracer {
       __builtin_prefetch(&scene_.positions[v[k]]);
       __builtin_prefetch(&scene_.normals[v[k]]);
       if (!scene_.texcoords.empty()) __builtin_prefetch(&scene_.texcoords[v[k]]);  // built in code: maybe none
+      if (!scene_.tangents.empty()) __builtin_prefetch(&scene_.tangents[v[k]]);    // for normal textures
     }
   }
 
-  // The Lambertian hits fetched into the wave's lanes: their textures' texels, their lights other
-  // than LaneLights, the lanes' shading (all at once, or one lane at a time without laneShading),
-  // and what it gives their paths; the lanes are then empty.
+  // The Lambertian and glTF hits fetched into the wave's lanes: their textures' texels, their lights
+  // other than LaneLights, the lanes' shading (all at once, or one lane at a time without
+  // laneShading), and what it gives their paths; the lanes are then empty.
   void shadeLanes(Wave& w, Counters& counters) const {
     DiffuseLanes& lanes = *w.lanes;
-    if (lanes.count == 0) return;
-    counters.laneShadedHits += lanes.count;
+    const uint32_t gltfFirst = lanes.gltfFirst, gltfEnd = kMaxLanes;
+    if (lanes.count == 0 && gltfFirst == gltfEnd) return;
+    counters.laneShadedHits += lanes.count + (gltfEnd - gltfFirst);
     readLaneTextures(lanes, w.textured);
     sampleOtherLights(lanes, w.otherLights);
-    if (opt_.laneShading) shadeDiffuseLanes(lanes, 0, lanes.count);
-    else
+    if (opt_.laneShading) {
+      shadeDiffuseLanes(lanes, 0, lanes.count);
+      shadeGltfLanes(lanes, gltfFirst, gltfEnd);
+    } else {
       for (uint32_t k = 0; k < lanes.count; ++k) shadeDiffuseLanes(lanes, k, k + 1);
+      for (uint32_t k = gltfFirst; k < gltfEnd; ++k) shadeGltfLanes(lanes, k, k + 1);
+    }
     finishDiffuseLanes(lanes, w);
     lanes.count = 0;
+    lanes.gltfFirst = kMaxLanes;
     w.textured.clear();
     w.otherLights.clear();
   }
 
-  // With the Sobol sampler, the numbers fetchDiffuseLane takes for every Lambertian hit of the
-  // bounce, drawn in lanes (in the order of the hits; their pairs one after the other). False with
+  // With the Sobol sampler, the numbers fetchDiffuseLane takes for every Lambertian and glTF hit of
+  // the bounce, drawn in lanes (in the order of the hits; their pairs one after the other). False with
   // the independent sampler, whose numbers come in sequence from each path's generator, and without
   // laneShading, where each path draws its own as shade() does.
   static constexpr uint32_t kNotDrawn = ~0u;
@@ -356,11 +371,14 @@ class PathTracer {
     r.pixelKey.clear(), r.index.clear(), r.dimension.clear();
     for (const uint32_t i : w.active) {
       const Path& path = w.paths[i];
-      if (!inDiffuseLane(path, w.hits[i])) continue;
+      const LaneKind kind = laneKind(path, w.hits[i]);
+      if (kind == LaneKind::None) continue;
+      const uint32_t lobe = PathSampler::dimension(path.bounce, SampleUse::Lobe) & ~1u;  // the pair holding it
+      const uint32_t roulette = PathSampler::dimension(path.bounce + 1, SampleUse::Roulette);
       const uint32_t dimensions[] = {PathSampler::dimension(path.bounce, SampleUse::LightPoint),
                                      PathSampler::dimension(path.bounce, SampleUse::BsdfDirection),
-                                     PathSampler::dimension(path.bounce + 1, SampleUse::Roulette)};
-      for (uint32_t k = 0; k < lanePairs(path); ++k) {
+                                     kind == LaneKind::Gltf ? lobe : roulette, roulette};
+      for (uint32_t k = 0; k < lanePairs(path, kind); ++k) {
         r.pixelKey.push_back(path.sampler.pixelKey());
         r.index.push_back(path.sampler.index());
         r.dimension.push_back(dimensions[k]);
@@ -371,38 +389,47 @@ class PathTracer {
     return true;
   }
 
-  // The Sobol pairs drawn in lanes for a Lambertian hit: its light point's and BSDF direction's, and
-  // where roulette may end the path on the next bounce, that bounce's roulette pair.
-  uint32_t lanePairs(const Path& path) const { return path.bounce + 1 >= opt_.rouletteDepth ? 3 : 2; }
+  // The Sobol pairs drawn in lanes for a hit: its light point's and BSDF direction's, a glTF hit's
+  // lobe choice's (the second of its bounce's roulette pair), and where roulette may end the path on
+  // the next bounce, that bounce's roulette pair.
+  uint32_t lanePairs(const Path& path, LaneKind kind) const {
+    return 2 + (kind == LaneKind::Gltf ? 1 : 0) + (path.bounce + 1 >= opt_.rouletteDepth ? 1 : 0);
+  }
 
-  // Hits that DiffuseLanes shades: Lambertian surfaces below the depth limit, reached outside any
-  // medium (every one; shade() takes the other materials' hits and the attenuated paths).
-  bool inDiffuseLane(const Path& path, const Hit& hit) const {
-    return hit.found() && path.bounce < opt_.maxDepth && path.medium == kNoMedium &&
-           material(hit.triangle).type == MaterialType::Diffuse;
+  // Which lanes shade a hit: Lambertian surfaces and the glTF materials of gltfShadedInLanes below
+  // the depth limit, reached outside any medium (shade() takes the other materials' hits and the
+  // attenuated paths).
+  LaneKind laneKind(const Path& path, const Hit& hit) const {
+    if (!hit.found() || path.bounce >= opt_.maxDepth || path.medium != kNoMedium) return LaneKind::None;
+    return laneKinds_[scene_.materialIds[hit.triangle]];
   }
 
   // The lane's surface data and the random numbers shade draws (drawBounceNumbers): the
   // independent sampler's from the path's generator, the Sobol sampler's drawn beforehand (its
   // lanePairs at `drawn` in `sobol`).
-  void fetchDiffuseLane(Path& path, const Hit& hit, uint32_t pathIndex, DiffuseLanes& l,
+  void fetchDiffuseLane(Path& path, const Hit& hit, LaneKind kind, uint32_t pathIndex, DiffuseLanes& l,
                         std::vector<TexturedLane>& textured, std::vector<uint32_t>& otherLights, uint32_t drawn,
                         const Wave::SobolRequests& sobol) const {
-    const uint32_t k = l.count++;
+    const bool gltf = kind == LaneKind::Gltf;
+    const uint32_t k = gltf ? --l.gltfFirst : l.count++;
     const Scene& s = scene_;
     l.path[k] = pathIndex;
-    fetchLambertianSurface(s, hit, path.ray.direction, l, k, textured);
+    if (gltf) fetchGltfSurface(s, hit, path.ray.direction, l, k, textured);
+    else fetchLambertianSurface(s, hit, path.ray.direction, l, k, textured);
     const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
     if (drawn != kNotDrawn) {
       l.uLightX[k] = sobol.x[drawn], l.uLightY[k] = sobol.y[drawn];
       l.uBsdfX[k] = sobol.x[drawn + 1], l.uBsdfY[k] = sobol.y[drawn + 1];
+      const uint32_t next = drawn + 2 + (gltf ? 1 : 0);
+      if (gltf) l.uLobe[k] = sobol.y[drawn + 2];
       // The next bounce's roulette pair holds its lobe choice too, which shade draws itself.
-      l.uRoulette[k] = lanePairs(path) == 3 ? sobol.x[drawn + 2] : kDrawLater;
+      l.uRoulette[k] = next < drawn + lanePairs(path, kind) ? sobol.x[next] : kDrawLater;
     } else {
       l.uRoulette[k] = kDrawLater;
-      // shade's numbers, its lobe choice among them, which a Lambertian surface does not use.
+      // shade's numbers, its lobe choice among them (which a Lambertian surface does not use).
       const BounceNumbers u = drawBounceNumbers(path.sampler, path.bounce, true);
       l.uLightX[k] = u.lightPoint.x, l.uLightY[k] = u.lightPoint.y;
+      l.uLobe[k] = u.lobe;
       l.uBsdfX[k] = u.bsdfDirection.x, l.uBsdfY[k] = u.bsdfDirection.y;
     }
 
@@ -439,35 +466,43 @@ class PathTracer {
   }
 
   // What shade does with the lanes' results: emission, first-hit layers, the shadow query, the
-  // next ray and Russian roulette.
+  // next ray and Russian roulette; Lambertian lanes first, then glTF lanes, each in the order of
+  // their paths.
   void finishDiffuseLanes(const DiffuseLanes& l, Wave& w) const {
-    for (uint32_t k = 0; k < l.count; ++k) {
-      const uint32_t i = l.path[k];
-      Path& path = w.paths[i];
-      const Hit& hit = w.hits[i];
-      const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
-      if (l.emits[k]) gatherEmission(path, hit, position);
-      if (path.bounce == 0)
-        path.recordFirstHit(layerAlbedo(LambertianLobe{{l.kdR[k], l.kdG[k], l.kdB[k]}}),
-                            {l.snX[k], l.snY[k], l.snZ[k]}, hit.t);
-      const int verticesBefore = ++path.gatheringVertices;
-      if (verticesBefore == 1) path.firstDiffuseShare = Rgb(1.0f);  // a Lambertian surface reflects only diffusely
-      if (l.shadowQueued[k]) {
-        ShadowQuery& shadow = w.shadows.emplace_back();
-        shadow.ray = {{l.shadowOx[k], l.shadowOy[k], l.shadowOz[k]}, {l.shadowDx[k], l.shadowDy[k], l.shadowDz[k]}};
-        shadow.ray.tMax = l.shadowTMax[k];
-        shadow.contribution = Rgb(l.directR[k], l.directG[k], l.directB[k]) * path.beta;
-        shadow.verticesBefore = verticesBefore;
-        shadow.diffuseShare = path.firstDiffuseShare;
-        shadow.path = i;
-        shadow.light = l.light[k];
-      }
-      if (l.scattered[k] &&
-          continuePath(path, {l.weightR[k], l.weightG[k], l.weightB[k]}, l.scatterPdf[k], false, position,
-                       {{l.nextOx[k], l.nextOy[k], l.nextOz[k]}, {l.nextDx[k], l.nextDy[k], l.nextDz[k]}},
-                       l.uRoulette[k]))
-        w.next.push_back(i);
+    for (uint32_t k = 0; k < l.count; ++k) finishLane(l, k, false, w);
+    for (uint32_t k = kMaxLanes; k-- > l.gltfFirst;) finishLane(l, k, true, w);
+  }
+  void finishLane(const DiffuseLanes& l, uint32_t k, bool gltf, Wave& w) const {
+    const uint32_t i = l.path[k];
+    Path& path = w.paths[i];
+    const Hit& hit = w.hits[i];
+    const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
+    if (l.emits[k]) gatherEmission(path, hit, position);
+    const SurfaceBsdf lobe = gltf ? SurfaceBsdf(gltfLaneLobe(l, k)) : SurfaceBsdf(LambertianLobe{{l.kdR[k], l.kdG[k], l.kdB[k]}});
+    if (path.bounce == 0) path.recordFirstHit(layerAlbedo(lobe), {l.snX[k], l.snY[k], l.snZ[k]}, hit.t);
+    const int verticesBefore = ++path.gatheringVertices;
+    // The diffuse share of the lobe towards wi at the path's first non-specular vertex, for the
+    // split by path: all of a Lambertian surface's light.
+    auto firstVertexShare = [&](Vec3 wi) {
+      if (!gltf || !path.parts) return Rgb(1.0f);
+      const Frame frame({l.frameX[k], l.frameY[k], l.frameZ[k]});
+      return diffuseShare(lobe, frame.toLocal(-path.ray.direction), frame.toLocal(wi));
+    };
+    if (l.shadowQueued[k]) {
+      ShadowQuery& shadow = w.shadows.emplace_back();
+      shadow.ray = {{l.shadowOx[k], l.shadowOy[k], l.shadowOz[k]}, {l.shadowDx[k], l.shadowDy[k], l.shadowDz[k]}};
+      shadow.ray.tMax = l.shadowTMax[k];
+      shadow.contribution = Rgb(l.directR[k], l.directG[k], l.directB[k]) * path.beta;
+      shadow.verticesBefore = verticesBefore;
+      shadow.diffuseShare = verticesBefore == 1 ? firstVertexShare({l.wiX[k], l.wiY[k], l.wiZ[k]}) : path.firstDiffuseShare;
+      shadow.path = i;
+      shadow.light = l.light[k];
     }
+    const Vec3 next{l.nextDx[k], l.nextDy[k], l.nextDz[k]};
+    if (verticesBefore == 1) path.firstDiffuseShare = firstVertexShare(next);
+    if (l.scattered[k] && continuePath(path, {l.weightR[k], l.weightG[k], l.weightB[k]}, l.scatterPdf[k], false,
+                                       position, {{l.nextOx[k], l.nextOy[k], l.nextOz[k]}, next}, l.uRoulette[k]))
+      w.next.push_back(i);
   }
 
   const Material& material(uint32_t triangle) const { return scene_.materials[scene_.materialIds[triangle]]; }
@@ -552,6 +587,7 @@ class PathTracer {
   const PinholeCamera camera_;
   const PixelFilter filter_{{opt_.common.pixelFilter, opt_.common.filterRadius}};
   std::vector<LaneLight> laneLights_;  // by light index
+  std::vector<LaneKind> laneKinds_;    // by material index
   // A hit's triangle and vertex records are prefetched when the scene's arrays outgrow a core's
   // second-level cache (1 MiB here): Sponza's shading reads then wait on memory (its fetch stage
   // is 1.5x slower without), while the Cornell box's stay cached and prefetching costs it 1%.

@@ -110,13 +110,12 @@ struct GltfMetalRoughLobe {
   struct BaseChoice {
     float specular = 0, transmitted = 0;
   };
-  BaseChoice baseChoice(float woZ) const {
+  [[gnu::always_inline]] BaseChoice baseChoice(float woZ) const {
     const float w = schlickWeight(woZ);
     const float specular = (ks + (Rgb(f90) - ks) * w).average();
     const float under = kd.average() * diffuseWeight(w);
     const float sum = specular + under;
-    if (!(sum > 0)) return {};
-    return {specular / sum, under * transmission / sum};
+    return {sum > 0 ? specular / sum : 0.0f, sum > 0 ? under * transmission / sum : 0.0f};
   }
   float specularChoice(float woZ) const { return baseChoice(woZ).specular; }
 
@@ -293,13 +292,22 @@ struct GltfMetalRoughLobe {
       return {kd * (transmission * diffuseWeight(schlickWeight(dot(wo, h))) * lobe),
               choice.transmitted * ggxReflectionPdf(alpha, wo, mirrored)};
     }
+    return reflection(wo, wi, choice);
+  }
+
+  // The base's reflection, wo and wi above the surface (zero where either is not), and the density
+  // of sampling wi by `choice`. Selects only: the path tracer's lane loop (shadeGltfLanes)
+  // vectorizes this very function.
+  [[gnu::always_inline]] BsdfValue reflection(Vec3 wo, Vec3 wi, BaseChoice choice) const {
     const Vec3 h = normalize(wo + wi);
     const float w = schlickWeight(dot(wo, h));
     const Rgb F = ks + (Rgb(f90) - ks) * w;
     const float specular = ggxD(alpha, h) * smithMasking(masking, alpha, wo.z, wi.z) / (4.0f * wo.z * wi.z);
-    return {kd * (kInvPi * diffuseWeight(w) * (1.0f - transmission)) + F * specular,
-            choice.specular * ggxReflectionPdf(alpha, wo, wi) +
-                (1.0f - choice.specular - choice.transmitted) * cosineHemispherePdf(wi.z)};
+    const Rgb f = kd * (kInvPi * diffuseWeight(w) * (1.0f - transmission)) + F * specular;
+    const float pdf = choice.specular * ggxReflectionPdf(alpha, wo, wi) +
+                      (1.0f - choice.specular - choice.transmitted) * cosineHemispherePdf(wi.z);
+    const bool above = wo.z > 0 ? wi.z > 0 : false;
+    return {{above ? f.r : 0.0f, above ? f.g : 0.0f, above ? f.b : 0.0f}, above ? pdf : 0.0f};
   }
 
   BsdfSample sample(Vec3 wo, float u, Vec2 u2, Transport transport) const {
