@@ -478,15 +478,17 @@ class PathTracer {
     const Hit& hit = w.hits[i];
     const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
     if (l.emits[k]) gatherEmission(path, hit, position);
-    const SurfaceBsdf lobe = gltf ? SurfaceBsdf(gltfLaneLobe(l, k)) : SurfaceBsdf(LambertianLobe{{l.kdR[k], l.kdG[k], l.kdB[k]}});
-    if (path.bounce == 0) path.recordFirstHit(layerAlbedo(lobe), {l.snX[k], l.snY[k], l.snZ[k]}, hit.t);
+    auto lobe = [&] {
+      return gltf ? SurfaceBsdf(gltfLaneLobe(l, k)) : SurfaceBsdf(LambertianLobe{{l.kdR[k], l.kdG[k], l.kdB[k]}});
+    };
+    if (path.bounce == 0) path.recordFirstHit(layerAlbedo(lobe()), {l.snX[k], l.snY[k], l.snZ[k]}, hit.t);
     const int verticesBefore = ++path.gatheringVertices;
     // The diffuse share of the lobe towards wi at the path's first non-specular vertex, for the
     // split by path: all of a Lambertian surface's light.
     auto firstVertexShare = [&](Vec3 wi) {
       if (!gltf || !path.parts) return Rgb(1.0f);
       const Frame frame({l.frameX[k], l.frameY[k], l.frameZ[k]});
-      return diffuseShare(lobe, frame.toLocal(-path.ray.direction), frame.toLocal(wi));
+      return diffuseShare(lobe(), frame.toLocal(-path.ray.direction), frame.toLocal(wi));
     };
     if (l.shadowQueued[k]) {
       ShadowQuery& shadow = w.shadows.emplace_back();
