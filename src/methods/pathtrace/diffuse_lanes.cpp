@@ -47,8 +47,14 @@ LUCENT_LANE_VERSIONS(void, startCameraPaths, (CameraLanes& l, uint32_t first, ui
 
 namespace {
 // What every lane holds of its hit (surfaceAt's arithmetic, up to the normalization of the
-// interpolated normal), and whether it emits; the hit's material.
-const Material& fetchHitGeometry(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k) {
+// interpolated normal), whether it emits, and its base factor (baseFactorAt) as its albedo, which a
+// texture may scale; the hit's material, its surface point's barycentrics, its base factor.
+struct FetchedHit {
+  const Material& m;
+  SurfacePoint sp;
+  Rgb factor;
+};
+FetchedHit fetchHit(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k) {
   const uint32_t* v = &s.indices[3 * size_t(hit.triangle)];
   storeLane(direction, l.dirX, l.dirY, l.dirZ, k);
   storeLane(barycentric(s.positions[v[0]], s.positions[v[1]], s.positions[v[2]], hit.b1, hit.b2), l.posX, l.posY, l.posZ, k);
@@ -58,7 +64,11 @@ const Material& fetchHitGeometry(const Scene& s, const Hit& hit, Vec3 direction,
   storeLane(s.faceNormals[hit.triangle], l.ngx, l.ngy, l.ngz, k);
   const Material& m = s.materials[s.materialIds[hit.triangle]];
   l.emits[k] = !m.ke.isBlack();
-  return m;
+  SurfacePoint sp;
+  sp.triangle = hit.triangle, sp.b1 = hit.b1, sp.b2 = hit.b2;
+  const Rgb factor = baseFactorAt(s, m, sp);
+  l.kdR[k] = factor.r, l.kdG[k] = factor.g, l.kdB[k] = factor.b;
+  return {m, sp, factor};
 }
 
 // Texture t read at coordinates uv later (readLaneTextures), its texels requested now.
@@ -72,16 +82,10 @@ void requestTexture(const Scene& s, const Texture& t, Vec2 uv, uint32_t k, LaneT
 
 void fetchLambertianSurface(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k,
                             std::vector<TexturedLane>& textured) {
-  const Material& m = fetchHitGeometry(s, hit, direction, l, k);
-  SurfacePoint sp;
-  sp.triangle = hit.triangle, sp.b1 = hit.b1, sp.b2 = hit.b2;
-  const Rgb factor = baseFactorAt(s, m, sp);
-  if (m.kdTexture < 0) {
-    l.kdR[k] = factor.r, l.kdG[k] = factor.g, l.kdB[k] = factor.b;
-    return;
-  }
-  const Texture& t = s.textures[size_t(m.kdTexture)];
-  requestTexture(s, t, textureUv(s, t, sp), k, LaneTexture::Albedo, factor, textured);
+  const FetchedHit h = fetchHit(s, hit, direction, l, k);
+  if (h.m.kdTexture < 0) return;
+  const Texture& t = s.textures[size_t(h.m.kdTexture)];
+  requestTexture(s, t, textureUv(s, t, h.sp), k, LaneTexture::Albedo, h.factor, textured);
 }
 
 bool gltfShadedInLanes(const Material& m) {
@@ -91,11 +95,8 @@ bool gltfShadedInLanes(const Material& m) {
 
 void fetchGltfSurface(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k,
                       std::vector<TexturedLane>& textured) {
-  const Material& m = fetchHitGeometry(s, hit, direction, l, k);
-  SurfacePoint sp;
-  sp.triangle = hit.triangle, sp.b1 = hit.b1, sp.b2 = hit.b2;
-  const Rgb factor = baseFactorAt(s, m, sp);
-  l.kdR[k] = factor.r, l.kdG[k] = factor.g, l.kdB[k] = factor.b;
+  const FetchedHit h = fetchHit(s, hit, direction, l, k);
+  const Material& m = h.m;
   l.metallic[k] = m.metallic, l.roughness[k] = m.roughness;
   const Rgb f0 = dielectricF0(m.ni, m.ks, m.specular);
   l.f0R[k] = f0.r, l.f0G[k] = f0.g, l.f0B[k] = f0.b;
@@ -104,12 +105,12 @@ void fetchGltfSurface(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLan
   l.normalMapped[k] = m.normalTexture >= 0;
   l.bendsNormalMap[k] = m.bendsNormalMap != 0;
   if (m.kdTexture < 0 && m.metallicRoughnessTexture < 0 && m.normalTexture < 0) return;
-  const HitUv uv = hitUv(s, sp);
+  const HitUv uv = hitUv(s, h.sp);
   auto request = [&](int32_t index, LaneTexture use, Rgb kd) {
     const Texture& t = s.textures[size_t(index)];
     requestTexture(s, t, textureUv(t, uv), k, use, kd, textured);
   };
-  if (m.kdTexture >= 0) request(m.kdTexture, LaneTexture::Albedo, factor);
+  if (m.kdTexture >= 0) request(m.kdTexture, LaneTexture::Albedo, h.factor);
   if (m.metallicRoughnessTexture >= 0) request(m.metallicRoughnessTexture, LaneTexture::MetallicRoughness, {});
   if (m.normalTexture < 0) return;
   const uint32_t* v = &s.indices[3 * size_t(hit.triangle)];
