@@ -119,9 +119,13 @@ Scene everyMaterialAndLight() {
   factors.masking = GgxMasking::HeightCorrelated;
   const uint32_t first = uint32_t(scene.materials.size());
   scene.materials.insert(scene.materials.end(), {glossy, mapped, factors});
+  // Of the Lambertian triangles that do not emit, those with t % 3 == 2 stay Lambertian; the others
+  // take, by (t % 3, t % 2): (0, 0) the Phong, (0, 1) and (1, 0) the mapped glTF, (1, 1) the factors'.
   for (uint32_t t = 0; t < scene.materialIds.size(); ++t) {
     const Material& m = scene.materials[scene.materialIds[t]];
-    if (m.type == MaterialType::Diffuse && m.ke.isBlack() && t % 3 != 2) scene.materialIds[t] = first + t % 3 + t % 2;
+    if (!(m.type == MaterialType::Diffuse && m.ke.isBlack()) || t % 3 == 2) continue;
+    const uint32_t turned[2][2] = {{first, first + 1}, {first + 1, first + 2}};
+    scene.materialIds[t] = turned[t % 3][t % 2];
   }
   scene.camera.width = 40;
   scene.camera.height = 32;
@@ -307,9 +311,10 @@ TEST_CASE("A glTF lane holds surfaceAt's, bsdfAt's, hitFrameNormal's and the lob
     // Next-event estimation as shade() weighs it.
     const Vec3 woLocal = frame.toLocal(wo);
     const Vec3 wi{l.wiX[k], l.wiY[k], l.wiZ[k]};
+    const Vec3 wiLocal = frame.toLocal(wi);
     const NextEventSample direct =
         weighLightSample(PathStrategy::Mis, l.lightPdf[k], l.lightDelta[k] != 0, {l.leR[k], l.leG[k], l.leB[k]}, wi,
-                         frame.toLocal(wi), frame.n, sp.geometricNormal, evalBsdfAndPdf(bsdf, woLocal, frame.toLocal(wi)));
+                         wiLocal, frame.n, sp.geometricNormal, evalBsdfAndPdf(bsdf, woLocal, wiLocal));
     REQUIRE(l.shadowQueued[k] == int32_t(direct.queued));
     if (direct.queued) {
       ++queued;

@@ -48,7 +48,8 @@ inline float ggxD(float alpha, float cosM) {
 
 // Masking-shadowing of the pair of directions: Appendix B's separable product G1(o) G1(i), or the
 // height-correlated 1 / (1 + Lambda(o) + Lambda(i)), never smaller.
-[[gnu::always_inline]] inline float smithSeparable(float alpha, float cosO, float cosI) { return smithG1(alpha, cosO) * smithG1(alpha, cosI); }
+[[gnu::always_inline]]
+inline float smithSeparable(float alpha, float cosO, float cosI) { return smithG1(alpha, cosO) * smithG1(alpha, cosI); }
 [[gnu::always_inline]] inline float smithHeightCorrelated(float alpha, float cosO, float cosI) {
   return 1.0f / (1.0f + smithLambda(alpha, cosO) + smithLambda(alpha, cosI));
 }

@@ -64,7 +64,8 @@ struct TrianglePointSample {
   float distance, pdf;
   Vec2 b;
 };
-[[gnu::always_inline]] inline TrianglePointSample sampleTrianglePoint(Vec3 q0, Vec3 q1, Vec3 q2, Vec3 normal, float area, float pmf,
+[[gnu::always_inline]]
+inline TrianglePointSample sampleTrianglePoint(Vec3 q0, Vec3 q1, Vec3 q2, Vec3 normal, float area, float pmf,
                                                Vec3 receiver, Vec2 u, bool twoSided = false) {
   const Vec2 b = sampleUniformTriangle(u);
   const Vec3 q = barycentric(q0, q1, q2, b.x, b.y);

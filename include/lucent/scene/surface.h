@@ -225,8 +225,6 @@ inline GltfFactors gltfFactors(const Material& m, Rgb base) {
   return f;
 }
 
-// Appendix B's metal/dielectric mix expanded into the lobe's terms (bsdf/gltf_metal_rough.h), with
-// the transmission, sheen and clear coat where the factors have them.
 // KHR_materials_ior and KHR_materials_specular: the dielectric's F0 from the index ni, coloured,
 // clamped to 1, then weighted by the specular factor (which is also its F90).
 inline Rgb dielectricF0(float ni, Rgb specularColour, float specular) {
@@ -238,7 +236,8 @@ inline Rgb dielectricF0(float ni, Rgb specularColour, float specular) {
 // Appendix B's metal/dielectric mix of base colour `base` and dielectric F0 f0 (dielectricF0) and
 // F90 `specular`, as the lobe's terms: the base of every glTF lobe (gltfBsdf), and of the path
 // tracer's lanes (shadeGltfLanes).
-[[gnu::always_inline]] inline GltfMetalRoughLobe metalRoughLobe(Rgb base, float metallic, float roughness, Rgb f0, float specular,
+[[gnu::always_inline]]
+inline GltfMetalRoughLobe metalRoughLobe(Rgb base, float metallic, float roughness, Rgb f0, float specular,
                                          GgxMasking masking) {
   GltfMetalRoughLobe b;
   b.kd = base * (1.0f - metallic);
@@ -251,6 +250,8 @@ inline Rgb dielectricF0(float ni, Rgb specularColour, float specular) {
   return b;
 }
 
+// Appendix B's metal/dielectric mix expanded into the lobe's terms (bsdf/gltf_metal_rough.h), with
+// the transmission, sheen and clear coat where the factors have them.
 inline SurfaceBsdf gltfBsdf(const Material& m, const GltfFactors& f) {
   GltfMetalRoughLobe b = metalRoughLobe(f.base, f.metallic, f.roughness,
                                         dielectricF0(m.ni, f.specularColour, f.specular), f.specular, m.masking);

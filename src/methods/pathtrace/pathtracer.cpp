@@ -507,8 +507,6 @@ class PathTracer {
       w.next.push_back(i);
   }
 
-  const Material& material(uint32_t triangle) const { return scene_.materials[scene_.materialIds[triangle]]; }
-
   // Emission of the face the path's ray has met, towards the ray's origin, weighted against light
   // sampling.
   void gatherEmission(Path& path, const Hit& hit, Vec3 position) const {

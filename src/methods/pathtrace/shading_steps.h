@@ -32,7 +32,8 @@ struct NextEventSample {
   Rgb contribution;
   bool queued;
 };
-[[gnu::always_inline]] inline NextEventSample weighLightSample(PathStrategy strategy, float lightPdf, bool lightDelta, Rgb le, Vec3 wi,
+[[gnu::always_inline]]
+inline NextEventSample weighLightSample(PathStrategy strategy, float lightPdf, bool lightDelta, Rgb le, Vec3 wi,
                                         Vec3 wiLocal, Vec3 n, Vec3 ng, BsdfValue bsdf, bool transmits = false) {
   const float delta = lightDelta ? 1.0f : 0.0f;
   const float mis = powerHeuristic(lightPdf, bsdf.pdf);
