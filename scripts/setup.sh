@@ -3,7 +3,7 @@
 # (scripts/fuzz.sh adds Clang's); does nothing when they are all there.
 set -euo pipefail
 packages=(build-essential cmake libembree-dev libtbb-dev libopenimageio-dev openimageio-tools
-          libopenexr-dev libcli11-dev catch2 nlohmann-json3-dev libtinygltf-dev python3-imath
+          libopenexr-dev libpng-dev libcli11-dev catch2 nlohmann-json3-dev libtinygltf-dev python3-imath
           python3-numpy ocl-icd-opencl-dev opencl-c-headers pocl-opencl-icd
           pybind11-dev python3-dev python3-pytest "$@")
 missing=()

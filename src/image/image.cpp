@@ -56,10 +56,10 @@ namespace {
 
 FileToWrite exrFile(const Image& image, const std::string& path, const ImageMetadata& metadata) {
   checkPixelCount(image, path);
-  const ImageCodec& codec = imageCodec();  // loaded before any file of the set is written
-  return {path, "image", [&image, metadata, &codec](const fs::path& tmp) {
-            const std::string why = codec.writeExr(tmp.string(), image.width(), image.height(), image.channels(),
-                                                   image.channelIndex("A"), metadata, image.pixels().data());
+  const ImageWriter& writer = imageWriter();  // loaded before any file of the set is written
+  return {path, "image", [&image, metadata, &writer](const fs::path& tmp) {
+            const std::string why = writer.writeExr(tmp.string(), image.width(), image.height(), image.channels(),
+                                                    metadata, image.pixels().data());
             if (!why.empty()) throw WriteFailure(why);
           }};
 }
@@ -68,7 +68,7 @@ FileToWrite pngFile(const Image& image, const std::string& path) {
   checkPixelCount(image, path);
   if (image.channelIndex("R") < 0 || image.channelIndex("G") < 0 || image.channelIndex("B") < 0)
     throw std::runtime_error("cannot write image '" + path + "': it needs R, G and B channels");
-  imageCodec();  // loaded before any file of the set is written
+  imageWriter();  // loaded before any file of the set is written
   return {path, "image", [&image](const fs::path& tmp) {
             const std::vector<unsigned char> png = encodePng(image);
             std::ofstream out(tmp, std::ios::binary);
@@ -93,12 +93,12 @@ std::vector<unsigned char> encodePng(const Image& image) {
         bytes[i++] = linearToSrgb8(v);
       }
   std::vector<unsigned char> png;
-  if (const std::string why = imageCodec().encodePng(image.width(), image.height(), bytes.data(), png); !why.empty())
+  if (const std::string why = imageWriter().encodePng(image.width(), image.height(), bytes.data(), png); !why.empty())
     throw std::runtime_error("cannot encode a PNG: " + why);
   return png;
 }
 
-void loadImageCodec() { imageCodec(); }
+void loadImageWriter() { imageWriter(); }
 
 void writeExr(const Image& image, const std::string& path, const ImageMetadata& metadata) {
   writeFilesAtomically({exrFile(image, path, metadata)});
@@ -293,7 +293,7 @@ struct OpenedImage {
       : bytes(std::move(o.bytes)), info(std::move(o.info)), handle(std::exchange(o.handle, nullptr)) {}
   OpenedImage& operator=(OpenedImage&&) = delete;
   ~OpenedImage() {
-    if (handle) imageCodec().close(handle);
+    if (handle) imageReader().close(handle);
   }
 };
 
@@ -312,9 +312,9 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
   OpenedImage opened;
   static const unsigned char kNoBytes = 0;  // an empty memory is still read from memory
   std::string error;
-  opened.handle = imageCodec().open(name, extension.substr(1),
-                                    memory ? (memory->empty() ? &kNoBytes : memory->data()) : nullptr,
-                                    memory ? memory->size() : 0, opened.info, error);
+  opened.handle = imageReader().open(name, extension.substr(1),
+                                     memory ? (memory->empty() ? &kNoBytes : memory->data()) : nullptr,
+                                     memory ? memory->size() : 0, opened.info, error);
   if (!opened.handle) throw std::runtime_error("cannot read image '" + name + "': " + error);
   const CodecImageInfo& spec = opened.info;
   // The header's size is checked before any pixel is allocated (a 69-byte PNG may claim 20,000 x
@@ -415,7 +415,7 @@ Image readOpened(OpenedImage opened, const std::string& name, ImageMetadata* met
   requireMemory(floats * sizeof(float) * (isGreyPfm(spec) ? 4 : 1) + 256 * uint64_t(spec.width) * uint64_t(spec.channelCount) * 8,
                 "the image '" + name + "'", "raise --memory-limit if the machine has the memory");
   Image image(spec.width, spec.height, channelNames(spec));
-  if (const std::string why = imageCodec().readPixels(opened.handle, image.pixels().data()); !why.empty())
+  if (const std::string why = imageReader().readPixels(opened.handle, image.pixels().data()); !why.empty())
     throw std::runtime_error("cannot read image '" + name + "': " + why);
   if (isGreyPfm(spec)) {
     Image rgb(spec.width, spec.height, {"R", "G", "B"});
@@ -424,7 +424,7 @@ Image readOpened(OpenedImage opened, const std::string& name, ImageMetadata* met
         for (int c = 0; c < 3; ++c) rgb.at(x, y, c) = image.at(x, y, 0);
     image = std::move(rgb);
   }
-  if (metadata) *metadata = imageCodec().stringAttributes(opened.handle);
+  if (metadata) *metadata = imageReader().stringAttributes(opened.handle);
   return image;
 }
 

@@ -9,39 +9,48 @@ namespace lucent {
 
 namespace {
 
-constexpr const char* kModule = "liblucent_image_codec.so";
-
 // The module by its name (the library path: the caller's run path, which the build and the install
 // give every program linking Lucent, LD_LIBRARY_PATH, the system's directories), else beside the
 // program or shared object this code is linked into, or one directory up (a Python module's).
-void* openModule(std::string& why) {
-  if (void* module = dlopen(kModule, RTLD_LAZY | RTLD_LOCAL)) return module;
+void* openModule(const char* module, std::string& why) {
+  if (void* handle = dlopen(module, RTLD_LAZY | RTLD_LOCAL)) return handle;
   why = dlerror();
   Dl_info self;
-  if (dladdr(reinterpret_cast<const void*>(&imageCodec), &self) == 0 || !self.dli_fname) return nullptr;
+  if (dladdr(reinterpret_cast<const void*>(&openModule), &self) == 0 || !self.dli_fname) return nullptr;
   const std::filesystem::path here = std::filesystem::path(self.dli_fname).parent_path();
-  for (const std::filesystem::path& candidate : {here / kModule, here.parent_path() / kModule})
-    if (void* module = dlopen(candidate.c_str(), RTLD_LAZY | RTLD_LOCAL)) return module;
+  for (const std::filesystem::path& candidate : {here / module, here.parent_path() / module})
+    if (void* handle = dlopen(candidate.c_str(), RTLD_LAZY | RTLD_LOCAL)) return handle;
   return nullptr;
 }
 
-const ImageCodec* loadCodec() {
+// The functions `entry` of `module` returns, checked to be this build's.
+template <typename Functions>
+const Functions* loadModule(const char* module, const char* entry, uint32_t interfaceVersion, const char* role) {
   std::string why;
-  void* module = openModule(why);
-  std::string message = "cannot load Lucent's image codec, which reads and writes image files: ";
-  if (!module) throw std::runtime_error(message.append(why));
-  const auto entry = reinterpret_cast<const ImageCodec* (*)()>(dlsym(module, "lucentImageCodec"));
-  const ImageCodec* codec = entry ? entry() : nullptr;
-  if (!codec || codec->interfaceVersion != kImageCodecInterface)
-    throw std::runtime_error(message.append(kModule).append(" is not this build's (its interface differs)"));
-  return codec;
+  void* handle = openModule(module, why);
+  std::string message = std::string("cannot load Lucent's image ") + role + ": ";
+  if (!handle) throw std::runtime_error(message.append(why));
+  const auto function = reinterpret_cast<const Functions* (*)()>(dlsym(handle, entry));
+  const Functions* functions = function ? function() : nullptr;
+  if (!functions || functions->interfaceVersion != interfaceVersion)
+    throw std::runtime_error(message.append(module).append(" is not this build's (its interface differs)"));
+  return functions;
 }
 
 }  // namespace
 
-const ImageCodec& imageCodec() {
-  static const ImageCodec* codec = loadCodec();
-  return *codec;
+const ImageWriter& imageWriter() {
+  static const ImageWriter* writer =
+      loadModule<ImageWriter>("liblucent_image_writer.so", "lucentImageWriter", kImageWriterInterface,
+                                    "writer, which writes image files");
+  return *writer;
+}
+
+const ImageReader& imageReader() {
+  static const ImageReader* reader =
+      loadModule<ImageReader>("liblucent_image_reader.so", "lucentImageReader", kImageReaderInterface,
+                                    "reader, which reads image files");
+  return *reader;
 }
 
 }  // namespace lucent

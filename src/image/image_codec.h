@@ -1,9 +1,11 @@
-// The image file formats' encoders and decoders (OpenImageIO), in a module of their own,
-// liblucent_image_codec.so, loaded the first time an image is read or written: OpenImageIO brings
-// about 260 shared libraries, whose loading took every process 0.25 s at its start (5 ms without
-// them), paid by each command that refuses its input, each render written only as a film, and
-// each test. image.cpp makes every check and decision; the module only calls OpenImageIO. Its
-// interface holds only standard types and plain records: the module links nothing of Lucent's.
+// The image file formats' encoders and decoders, in two modules of their own, each loaded the first
+// time it is needed: liblucent_image_writer.so writes EXR and PNG with OpenEXR and libpng, and
+// liblucent_image_reader.so reads every format Lucent reads with OpenImageIO. OpenImageIO brings
+// about 260 shared libraries, whose loading takes a process 0.3 s of CPU (the writer's libraries a
+// few milliseconds): paid only by a process that reads an image (a textured scene, compare, report),
+// not by each render that writes one, each command that refuses its input, or each test. image.cpp
+// makes every check and decision; the modules only call their libraries. Their interfaces hold only
+// standard types and plain records: the modules link nothing of Lucent's.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -12,6 +14,19 @@
 #include <vector>
 
 namespace lucent {
+
+using CodecAttributes = std::vector<std::pair<std::string, std::string>>;
+
+// The writer's functions. Each returns "" or says why it failed (its library's message).
+struct ImageWriter {
+  uint32_t interfaceVersion;  // kImageWriterInterface: a module of another build is refused
+  // A 32-bit float EXR of interleaved `pixels`, zip-compressed, its channels named, with the string
+  // attributes (none of them one of the header's standard attributes).
+  std::string (*writeExr)(const std::string& path, int width, int height, const std::vector<std::string>& channels,
+                          const CodecAttributes& attributes, const float* pixels);
+  // 8-bit sRGB-encoded RGB, interleaved, as a PNG in memory, marked sRGB.
+  std::string (*encodePng)(int width, int height, const unsigned char* rgb, std::vector<unsigned char>& png);
+};
 
 // What an opened image's header says, as OpenImageIO gives it.
 struct CodecImageInfo {
@@ -24,17 +39,9 @@ struct CodecImageInfo {
   bool floatFormat = false;               // the image's format is 32-bit float
 };
 
-using CodecAttributes = std::vector<std::pair<std::string, std::string>>;
-
-// The module's functions. Each returns "" or says why it failed (OpenImageIO's message).
-struct ImageCodec {
-  uint32_t interfaceVersion;  // kImageCodecInterface: a module of another build is refused
-  // A 32-bit float EXR of interleaved `pixels`, its channels named, `alphaChannel` the alpha's
-  // index or -1, with the string attributes.
-  std::string (*writeExr)(const std::string& path, int width, int height, const std::vector<std::string>& channels,
-                          int alphaChannel, const CodecAttributes& attributes, const float* pixels);
-  // 8-bit sRGB-encoded RGB, interleaved, as a PNG in memory.
-  std::string (*encodePng)(int width, int height, const unsigned char* rgb, std::vector<unsigned char>& png);
+// The reader's functions. Each returns "" or says why it failed (OpenImageIO's message).
+struct ImageReader {
+  uint32_t interfaceVersion;  // kImageReaderInterface
   // Opens `name` with the reader of `format` ("exr", "png"...) and only that one, reading `bytes`
   // from `memory` where it is not null (which must outlive the handle), colour unassociated from
   // alpha; the handle, or null with `error` set.
@@ -47,13 +54,16 @@ struct ImageCodec {
   void (*close)(void* image);
 };
 
-inline constexpr uint32_t kImageCodecInterface = 1;
+inline constexpr uint32_t kImageWriterInterface = 1;
+inline constexpr uint32_t kImageReaderInterface = 2;
 
-// The module's functions, loaded on the first call (thread-safe); throws std::runtime_error where
+// Each module's functions, loaded on the first call (thread-safe); throws std::runtime_error where
 // the module cannot be loaded.
-const ImageCodec& imageCodec();
+const ImageWriter& imageWriter();
+const ImageReader& imageReader();
 
 }  // namespace lucent
 
-// The module's one export.
-extern "C" const lucent::ImageCodec* lucentImageCodec();
+// Each module's one export.
+extern "C" const lucent::ImageWriter* lucentImageWriter();
+extern "C" const lucent::ImageReader* lucentImageReader();

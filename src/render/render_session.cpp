@@ -93,9 +93,8 @@ void checkSceneSettings(const SceneSettings& settings) {
 
 OpenScene::OpenScene(const std::string& path, const SceneSettings& settings) : path_(path), settings_(settings) {
   checkSceneSettings(settings);
-  // Before the clock: loading the image codec (OpenImageIO and the libraries it links, 0.25 s) is
-  // the process's set-up, not the scene's loading or the render's time.
-  loadImageCodec();
+  // Before the clock: loading the image writer is the process's set-up, not the scene's loading.
+  loadImageWriter();
   Stopwatch clock;
   setMemoryLimit(settings.memoryLimit);  // the scene's images are checked against it too
   scene_ = loadScene(path, settings.load);
@@ -169,7 +168,7 @@ RenderSession::RenderSession(OpenScene& scene, RenderRequest request) : scene_(s
     throw OptionError(e.option(), name(e.option()) + ": " + e.what());
   }
   checkOutputDirectories(*method_, options_->values(), s);
-  if (!r.output.empty()) loadImageCodec();  // loaded already where OpenScene read the scene's file
+  if (!r.output.empty()) loadImageWriter();  // loaded already where OpenScene read the scene's file
   ignored_ = s.ignored;
   for (size_t i = 0; i < s.materials.size(); ++i)
     if (s.materials[i].transmission > 0 && method_->rendersTransmission() == TransmissionRendered::InPart)

@@ -14,9 +14,9 @@ struct WriteFailure : std::runtime_error {
 };
 
 // Calls write(tmp) to write a temporary file beside `path` (same directory, so that the rename is
-// atomic; hidden, unique per process and call, keeping the extension, from which OpenImageIO picks
-// the format), then renames it over `path`. On any failure the temporary file is removed; a
-// WriteFailure or a failed rename becomes std::runtime_error("cannot write <what> '<path>': <why>").
+// atomic; hidden, unique per process and call, keeping the extension), then renames it over
+// `path`. On any failure the temporary file is removed; a WriteFailure or a failed rename becomes
+// std::runtime_error("cannot write <what> '<path>': <why>").
 void writeFileAtomically(const std::filesystem::path& path, const std::string& what,
                          const std::function<void(const std::filesystem::path& tmp)>& write);
 

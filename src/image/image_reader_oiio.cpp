@@ -1,4 +1,4 @@
-// liblucent_image_codec.so: image_codec.h's functions on OpenImageIO.
+// liblucent_image_reader.so: image_codec.h's ImageReader on OpenImageIO.
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
@@ -9,38 +9,9 @@
 namespace lucent {
 namespace {
 
-// OpenImageIO's message, or `otherwise` where a reader or writer failed without one (its PFM reader
+// OpenImageIO's message, or `otherwise` where a reader failed without one (its PFM reader
 // does on a truncated file): "" would read as success.
 std::string failure(const std::string& message, const char* otherwise) { return message.empty() ? otherwise : message; }
-
-std::string writeExr(const std::string& path, int width, int height, const std::vector<std::string>& channels,
-                     int alphaChannel, const CodecAttributes& attributes, const float* pixels) {
-  OIIO::ImageSpec spec(width, height, int(channels.size()), OIIO::TypeDesc::FLOAT);
-  spec.channelnames = channels;
-  spec.alpha_channel = alphaChannel;
-  for (const auto& [key, value] : attributes) spec.attribute(key, value);
-  auto out = OIIO::ImageOutput::create(path);
-  if (!out) return failure(OIIO::geterror(), "no EXR writer");
-  if (!out->open(path, spec)) return failure(out->geterror(), "the file cannot be opened for writing");
-  if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels)) {
-    const std::string why = failure(out->geterror(), "the pixels were not written");
-    out->close();
-    return why;
-  }
-  if (!out->close()) return failure(out->geterror(), "the file was not completed");
-  return "";
-}
-
-std::string encodePng(int width, int height, const unsigned char* rgb, std::vector<unsigned char>& png) {
-  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-  spec.attribute("oiio:ColorSpace", "sRGB");
-  OIIO::Filesystem::IOVecOutput memory(png);
-  auto out = OIIO::ImageOutput::create("png");
-  if (!out || !out->set_ioproxy(&memory) || !out->open("memory.png", spec) ||
-      !out->write_image(OIIO::TypeDesc::UINT8, rgb) || !out->close())
-    return failure(out ? out->geterror() : OIIO::geterror(), "the encoder failed");
-  return "";
-}
 
 struct Opened {
   std::unique_ptr<OIIO::Filesystem::IOMemReader> memory;
@@ -99,9 +70,9 @@ void close(void* image) {
   opened->in->close();
 }
 
-const ImageCodec kCodec{kImageCodecInterface, writeExr, encodePng, open, readPixels, stringAttributes, close};
+const ImageReader kReader{kImageReaderInterface, open, readPixels, stringAttributes, close};
 
 }  // namespace
 }  // namespace lucent
 
-extern "C" __attribute__((visibility("default"))) const lucent::ImageCodec* lucentImageCodec() { return &lucent::kCodec; }
+extern "C" __attribute__((visibility("default"))) const lucent::ImageReader* lucentImageReader() { return &lucent::kReader; }
