@@ -42,14 +42,14 @@ const Functions* loadModule(const char* module, const char* entry, uint32_t inte
 const ImageWriter& imageWriter() {
   static const ImageWriter* writer =
       loadModule<ImageWriter>("liblucent_image_writer.so", "lucentImageWriter", kImageWriterInterface,
-                                    "writer, which writes image files");
+                              "writer, which writes image files");
   return *writer;
 }
 
 const ImageReader& imageReader() {
   static const ImageReader* reader =
       loadModule<ImageReader>("liblucent_image_reader.so", "lucentImageReader", kImageReaderInterface,
-                                    "reader, which reads image files");
+                              "reader, which reads image files");
   return *reader;
 }
 
