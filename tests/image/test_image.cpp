@@ -101,6 +101,27 @@ TEST_CASE("EXR overwrite replaces the file") {
   CHECK(dir.entries().size() == 1);
 }
 
+TEST_CASE("The same image and metadata give the same EXR bytes; what the header cannot hold is refused") {
+  // No time of writing in the header: a file's bytes are its pixels' and attributes' alone.
+  TempDir dir;
+  const Image image = makeImage(2, 1, {"R", "G", "B"}, {0.1f, 0.2f, 0.3f, 4.0f, 5.0f, 6.0f});
+  const ImageMetadata metadata = {{"lucent:method", "pt"}};
+  writeExr(image, dir / "a.exr", metadata);
+  writeExr(image, dir / "b.exr", metadata);
+  auto bytes = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  CHECK(bytes(dir / "a.exr") == bytes(dir / "b.exr"));
+  // Two channels of one name, or an attribute named as one of the header's own, are refused, and
+  // nothing is left behind.
+  CHECK_THROWS_WITH(writeExr(makeImage(1, 1, {"R", "R"}, {1, 2}), dir / "twice.exr"),
+                    Catch::Contains("twice.exr") && Catch::Contains("two channels have the same name"));
+  CHECK_THROWS_WITH(writeExr(image, dir / "own.exr", {{"compression", "none"}}),
+                    Catch::Contains("own.exr") && Catch::Contains("'compression' is one of the EXR header's own"));
+  CHECK(dir.entries().size() == 2);
+}
+
 TEST_CASE("PNG is sRGB-encoded, clamped and rounded") {
   TempDir dir;
   // Per pixel: grey 0, 0.5, 1, 2, then one with different R, G, B, and negative and NaN values.
