@@ -101,7 +101,7 @@ TEST_CASE("EXR overwrite replaces the file") {
   CHECK(dir.entries().size() == 1);
 }
 
-TEST_CASE("The same image and metadata give the same EXR bytes; what the header cannot hold is refused") {
+TEST_CASE("The same image and metadata give the same EXR bytes, and what the header cannot hold is refused") {
   // No time of writing in the header: a file's bytes are its pixels' and attributes' alone.
   TempDir dir;
   const Image image = makeImage(2, 1, {"R", "G", "B"}, {0.1f, 0.2f, 0.3f, 4.0f, 5.0f, 6.0f});
