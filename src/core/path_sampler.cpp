@@ -7,6 +7,15 @@ namespace lucent {
 LUCENT_LANE_LOOP(void, sobolPairs, (const uint64_t* __restrict pixelKey, const uint32_t* __restrict index,
                                     const uint32_t* __restrict dimension, uint32_t count, float* __restrict x,
                                     float* __restrict y)) {
+  int lightPoints = 0;
+  for (uint32_t k = 0; k < count; ++k) lightPoints += PathSampler::isLightPoint(dimension[k]) ? 1 : 0;
+  if (lightPoints == 0) {
+    for (uint32_t k = 0; k < count; ++k) {
+      const Vec2 p = PathSampler::sobolPair(pixelKey[k], index[k], dimension[k], false);
+      x[k] = p.x, y[k] = p.y;
+    }
+    return;
+  }
   for (uint32_t k = 0; k < count; ++k) {
     const Vec2 p = PathSampler::sobolPair(pixelKey[k], index[k], dimension[k]);
     x[k] = p.x, y[k] = p.y;

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
 #include <vector>
 
@@ -605,6 +606,10 @@ TEST_CASE("shuffledSobolPair is the Owen-scrambled pair of the Owen-shuffled ind
     const std::array<uint32_t, 2> pair = shuffledSobolPair(index, shuffle, sx, sy);
     REQUIRE(pair[0] == owenScramble(sobolBits(shuffled, 0), sx));
     REQUIRE(pair[1] == owenScramble(sobolBits(shuffled, 1), sy));
+    // The same point's third and fourth dimensions.
+    const std::array<uint32_t, 2> second = shuffledSobolPair(index, shuffle, sx, sy, true);
+    REQUIRE(second[0] == owenScramble(sobolBits(shuffled, 2), sx));
+    REQUIRE(second[1] == owenScramble(sobolBits(shuffled, 3), sy));
   }
 }
 
@@ -630,15 +635,76 @@ bool stratified(const std::vector<Vec2>& points, int m) {
   }
   return true;
 }
+
+// Whether the first n = 2^m points are a (t, m, s)-net in base 2: 2^t of them in every box of
+// volume 2^(t - m) whose sides are powers of two (s = 2 and t = 0: one in every elementary box).
+template <size_t S>
+bool isNet(const std::vector<std::array<float, S>>& points, int m, int t) {
+  std::array<int, S> sides{};  // the box's sides 2^-sides[j], summing to m - t
+  auto each = [&](auto&& self, size_t j, int left) -> bool {
+    if (j + 1 == S) {
+      sides[j] = left;
+      std::map<std::array<uint32_t, S>, int> boxes;
+      for (size_t i = 0; i < (size_t(1) << m); ++i) {
+        std::array<uint32_t, S> box;
+        for (size_t d = 0; d < S; ++d) box[d] = uint32_t(points[i][d] * float(1u << sides[d]));
+        ++boxes[box];
+      }
+      return boxes.size() == (size_t(1) << (m - t)) &&
+             std::all_of(boxes.begin(), boxes.end(), [&](const auto& box) { return box.second == 1 << t; });
+    }
+    for (sides[j] = 0; sides[j] <= left; ++sides[j])
+      if (!self(self, j + 1, left - sides[j])) return false;
+    return true;
+  };
+  return each(each, 0, m - t);
+}
 }  // namespace
 
-TEST_CASE("PathSampler (Sobol): a pixel's first 2^m samples are stratified in every purpose's pair", "[sampling][sobol]") {
-  // Every pair of dimensions (the pixel position, and per bounce the roulette with the lobe, the
-  // light choice with the light point, the BSDF direction) of a pixel's first 2^m
-  // samples holds one point in every elementary box of area 2^-m: a (0, 2)-sequence in base 2.
+TEST_CASE("PathSampler (Sobol): a light point is stratified with the direction the path arrived along", "[sampling][sobol]") {
+  // A bounce's light point and the direction its path arrived along (the position in the pixel at
+  // the first bounce, the bounce before's BSDF direction later) are one 4D Sobol sequence: a
+  // pixel's first 2^m samples put 8 points in every box of volume 2^(3 - m), and the light point
+  // alone 4 in every box of area 2^(2 - m) (the t-values of Sobol's dimensions 0 to 3 and 2, 3).
+  auto sets = [](uint64_t pixel, int bounce, std::vector<std::array<float, 4>>& joint, std::vector<std::array<float, 2>>& light) {
+    joint.clear(), light.clear();
+    for (uint32_t i = 0; i < 1024; ++i) {
+      PathSampler s(SamplerKind::Sobol, 3, pixel, i);
+      const Vec2 arrival = bounce == 0 ? s.camera() : s.uniform2(bounce - 1, SampleUse::BsdfDirection);
+      const Vec2 point = s.uniform2(bounce, SampleUse::LightPoint);
+      joint.push_back({arrival.x, arrival.y, point.x, point.y});
+      light.push_back({point.x, point.y});
+    }
+  };
+  std::vector<std::array<float, 4>> joint;
+  std::vector<std::array<float, 2>> light;
+  for (const uint64_t pixel : {0ull, 17ull, 123456ull})
+    for (const int bounce : {0, 1, 7}) {
+      sets(pixel, bounce, joint, light);
+      for (int m = 3; m <= 10; ++m) {
+        INFO("pixel " << pixel << ", bounce " << bounce << ", 2^" << m << " samples");
+        REQUIRE(isNet(joint, m, 3));
+        REQUIRE(isNet(light, m, 2));
+      }
+    }
+  // Negative control: a light point with a shuffle of its own (padded pairs) is not stratified with
+  // the arrival: some box of 2^-10 x ... holds other than 8 of 1,024 points.
+  joint.clear();
+  for (uint32_t i = 0; i < 1024; ++i) {
+    const std::array<uint32_t, 2> a = shuffledSobolPair(i, 11, 12, 13), b = shuffledSobolPair(i, 21, 22, 23, true);
+    joint.push_back({float(a[0] >> 8) * 0x1p-24f, float(a[1] >> 8) * 0x1p-24f, float(b[0] >> 8) * 0x1p-24f,
+                     float(b[1] >> 8) * 0x1p-24f});
+  }
+  REQUIRE_FALSE(isNet(joint, 10, 3));
+}
+
+TEST_CASE("PathSampler (Sobol): a pixel's first 2^m samples are stratified in every other purpose's pair", "[sampling][sobol]") {
+  // Every other pair of dimensions (the pixel position, and per bounce the roulette with the lobe
+  // and the BSDF direction) of a pixel's first 2^m samples holds one point in every elementary box
+  // of area 2^-m: a (0, 2)-sequence in base 2.
   for (const uint64_t pixel : {0ull, 17ull, 123456ull})
     for (const int bounce : {0, 1, 7})
-      for (const SampleUse use : {SampleUse::Roulette, SampleUse::LightPoint, SampleUse::BsdfDirection}) {
+      for (const SampleUse use : {SampleUse::Roulette, SampleUse::BsdfDirection}) {
         const std::vector<Vec2> points = pixelPairs(3, pixel, bounce, use, 1024);
         for (int m = 0; m <= 10; ++m) {
           INFO("pixel " << pixel << ", bounce " << bounce << ", use " << uint32_t(use) << ", 2^" << m << " samples");
@@ -756,14 +822,29 @@ TEST_CASE("PathSampler (Sobol): pairs and camera pairs drawn in lanes are the sa
     setLaneIsa(isa);
     std::vector<float> x(keys.size(), -1), y(keys.size(), -1);
     sobolPairs(keys.data(), index.data(), dimension.data(), uint32_t(keys.size()), x.data(), y.data());
-    for (size_t k = 0; k < keys.size(); ++k) {
+    auto check = [&](size_t k) {
       const uint32_t d = dimension[k];
       const int bounce = int((d - kCameraDimensions) / kBounceDimensions);
       const SampleUse use = SampleUse((d - kCameraDimensions) % kBounceDimensions);
       const Vec2 expected = samplers[k].uniform2(bounce, use);
       CAPTURE(laneIsaName(isa), k);
       REQUIRE((x[k] == expected.x && y[k] == expected.y));
-    }
+    };
+    for (size_t k = 0; k < keys.size(); ++k) check(k);
+    // A batch without light points (drawn without their lookups): the first 36 pairs' others.
+    std::vector<uint32_t> others;
+    for (uint32_t k = 0; k < 108; ++k)
+      if (!PathSampler::isLightPoint(dimension[k])) others.push_back(k);
+    REQUIRE(others.size() == 72);
+    std::fill(x.begin(), x.end(), -1.0f), std::fill(y.begin(), y.end(), -1.0f);
+    std::vector<uint64_t> otherKeys;
+    std::vector<uint32_t> otherIndex, otherDimension;
+    for (const uint32_t k : others)
+      otherKeys.push_back(keys[k]), otherIndex.push_back(index[k]), otherDimension.push_back(dimension[k]);
+    std::vector<float> ox(others.size()), oy(others.size());
+    sobolPairs(otherKeys.data(), otherIndex.data(), otherDimension.data(), uint32_t(others.size()), ox.data(), oy.data());
+    for (size_t j = 0; j < others.size(); ++j) x[others[j]] = ox[j], y[others[j]] = oy[j];
+    for (const uint32_t k : others) check(k);
     // The camera's pairs with the pixels' keys, 37 samples (a vector's tail).
     std::vector<uint64_t> pixel, sample, cameraKey(37);
     for (uint64_t k = 0; k < 37; ++k) pixel.push_back(mix64(k) % 100000), sample.push_back(k * 977 % 4099);

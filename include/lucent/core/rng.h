@@ -14,6 +14,16 @@ constexpr uint64_t mix64(uint64_t z) {
   return z ^ (z >> 31);
 }
 
+// A bijective 32-bit mix with full avalanche (Wellons's lowbias32): 32-bit multiplies, native in
+// SIMD lanes where 64-bit ones are not.
+constexpr uint32_t mix32(uint32_t x) {
+  x ^= x >> 16;
+  x *= 0x7feb352du;
+  x ^= x >> 15;
+  x *= 0x846ca68bu;
+  return x ^ (x >> 16);
+}
+
 constexpr uint64_t hashKey(uint64_t a, uint64_t b = 0, uint64_t c = 0) {
   return mix64(a + 0x9e3779b97f4a7c15ull * mix64(b + 0x632be59bd9b4e019ull * mix64(c + 1)));
 }

@@ -8,7 +8,7 @@
 
 namespace lucent {
 
-inline constexpr int kSobolDimensions = 3;
+inline constexpr int kSobolDimensions = 4;
 
 namespace sobol_detail {
 
@@ -22,7 +22,7 @@ constexpr uint32_t reverseBits(uint32_t v) {
 // Direction numbers v_k = m_k 2^(32 - k), k = 1 .. 32, of a dimension with primitive polynomial of
 // degree s and coefficients a (Bratley and Fox 1988; the initial m of Joe and Kuo 2008); the first
 // dimension is the van der Corput sequence (all m_k = 1).
-constexpr std::array<uint32_t, 32> directions(int s, uint32_t a, std::array<uint32_t, 2> m0, bool first) {
+constexpr std::array<uint32_t, 32> directions(int s, uint32_t a, std::array<uint32_t, 3> m0, bool first) {
   std::array<uint32_t, 32> v{};
   std::array<uint64_t, 33> m{};
   for (int k = 1; k <= 32; ++k) {
@@ -42,9 +42,10 @@ constexpr std::array<uint32_t, 32> directions(int s, uint32_t a, std::array<uint
 }
 
 inline constexpr std::array<std::array<uint32_t, 32>, kSobolDimensions> kDirections = {
-    directions(0, 0, {0, 0}, true),     // x: van der Corput
-    directions(1, 0, {1, 0}, false),    // x + 1
-    directions(2, 1, {1, 3}, false)};   // x^2 + x + 1
+    directions(0, 0, {0, 0, 0}, true),    // x: van der Corput
+    directions(1, 0, {1, 0, 0}, false),   // x + 1
+    directions(2, 1, {1, 3, 0}, false),   // x^2 + x + 1
+    directions(3, 1, {1, 3, 1}, false)};  // x^3 + x + 1
 
 }  // namespace sobol_detail
 
@@ -69,20 +70,28 @@ constexpr uint32_t laineKarras(uint32_t v, uint32_t seed) {
   return v;
 }
 
-// Per byte of the index, the XOR of the bit-reversed direction numbers its set bits select:
-// reverseBits(sobolBits(i, d)) is four lookups.
-constexpr std::array<std::array<uint32_t, 256>, 4> reversedByteTable(int dimension) {
-  std::array<std::array<uint32_t, 256>, 4> t{};
-  for (int b = 0; b < 4; ++b)
-    for (uint32_t v = 0; v < 256; ++v) {
-      uint32_t x = 0;
-      for (int k = 0; k < 8; ++k)
-        if ((v >> k) & 1u) x ^= reverseBits(kDirections[size_t(dimension)][size_t(8 * b + k)]);
-      t[size_t(b)][v] = x;
-    }
+// For dimensions 1 to 3, per byte of the index, the XOR of the bit-reversed direction numbers its
+// set bits select, at ((dimension - 1) * 4 + byte) * 256 + value: reverseBits(sobolBits(i, d)) is
+// four lookups. One flat table, so that lanes of different dimensions gather from it alike.
+constexpr std::array<uint32_t, 3 * 4 * 256> reversedByteTables() {
+  std::array<uint32_t, 3 * 4 * 256> t{};
+  for (int d = 1; d <= 3; ++d)
+    for (int b = 0; b < 4; ++b)
+      for (uint32_t v = 0; v < 256; ++v) {
+        uint32_t x = 0;
+        for (int k = 0; k < 8; ++k)
+          if ((v >> k) & 1u) x ^= reverseBits(kDirections[size_t(d)][size_t(8 * b + k)]);
+        t[size_t(((d - 1) * 4 + b) * 256) + v] = x;
+      }
   return t;
 }
-inline constexpr std::array<std::array<uint32_t, 256>, 4> kReversedSecondDimension = reversedByteTable(1);
+inline constexpr std::array<uint32_t, 3 * 4 * 256> kReversedByteTables = reversedByteTables();
+[[gnu::always_inline]] constexpr uint32_t reversedCoordinate(uint32_t dimension, uint32_t index) {
+  const uint32_t* t = kReversedByteTables.data();
+  const int32_t base = int32_t(dimension - 1) * 1024;
+  return t[base + int32_t(index & 0xffu)] ^ t[base + 256 + int32_t((index >> 8) & 0xffu)] ^
+         t[base + 512 + int32_t((index >> 16) & 0xffu)] ^ t[base + 768 + int32_t(index >> 24)];
+}
 
 }  // namespace sobol_detail
 
@@ -92,19 +101,21 @@ constexpr uint32_t owenScramble(uint32_t v, uint32_t seed) {
   return sobol_detail::reverseBits(sobol_detail::laineKarras(sobol_detail::reverseBits(v), seed));
 }
 
-// The first two dimensions' scrambled coordinates of the point whose index is shuffled by Owen's
-// scramble keyed by `shuffleSeed` (Burley 2020): owenScramble(sobolBits(owenScramble(index,
-// shuffleSeed), d), seeds[d]) for d = 0, 1, with half the bit reversals.
-constexpr std::array<uint32_t, 2> shuffledSobolPair(uint32_t index, uint32_t shuffleSeed, uint32_t seedX,
-                                                    uint32_t seedY) {
+// Two dimensions' scrambled coordinates of the point whose index is shuffled by Owen's scramble
+// keyed by `shuffleSeed` (Burley 2020), the first two or (`second`) the third and fourth:
+// owenScramble(sobolBits(owenScramble(index, shuffleSeed), d), seed) for d = 0, 1 (seedX, seedY) or
+// d = 2, 3, with half the bit reversals. The two pairs of one index and shuffle are one point of the
+// four-dimensional sequence.
+[[gnu::always_inline]] constexpr std::array<uint32_t, 2> shuffledSobolPair(uint32_t index, uint32_t shuffleSeed,
+                                                                          uint32_t seedX, uint32_t seedY,
+                                                                          bool second = false) {
   using namespace sobol_detail;
   const uint32_t shuffled = reverseBits(laineKarras(reverseBits(index), shuffleSeed));
   // The first dimension is the bit reversal of the index: reversed, the index itself.
-  const uint32_t reversedY = kReversedSecondDimension[0][shuffled & 0xffu] ^
-                             kReversedSecondDimension[1][(shuffled >> 8) & 0xffu] ^
-                             kReversedSecondDimension[2][(shuffled >> 16) & 0xffu] ^
-                             kReversedSecondDimension[3][shuffled >> 24];
-  return {reverseBits(laineKarras(shuffled, seedX)), reverseBits(laineKarras(reversedY, seedY))};
+  const uint32_t third = reversedCoordinate(2, shuffled);
+  const uint32_t reversedX = second ? third : shuffled;
+  const uint32_t reversedY = reversedCoordinate(second ? 3u : 1u, shuffled);
+  return {reverseBits(laineKarras(reversedX, seedX)), reverseBits(laineKarras(reversedY, seedY))};
 }
 
 // The scrambled coordinate in [0, 1) (24 bits, so never 1).

@@ -48,7 +48,8 @@ struct PathTraceOptions {
   // (CameraLanes, DiffuseLanes), other hits one by one. False runs the same loops one path at a
   // time, and draws each path's Sobol numbers by itself, for tests that the lanes change nothing.
   bool laneShading = true;
-  // A padded Owen-scrambled Sobol sequence (lower error at equal samples), or independent random
+  // An Owen-scrambled Sobol sequence padded per bounce and purpose, each light point stratified with
+  // the direction its path arrived along (lower error at equal samples), or independent random
   // numbers for validation (include/lucent/core/path_sampler.h).
   SamplerKind sampler = SamplerKind::Sobol;
   CommonOptions common{.spp = 64};  // spp: the most any pixel takes with a time budget or an error target

@@ -51,7 +51,8 @@ const OptionTable<PathTraceOptions>& pathTraceOptionTable() {
     t.choice("sampler", &O::sampler,
              std::vector<std::pair<std::string, SamplerKind>>{{"independent", SamplerKind::Independent},
                                                               {"sobol", SamplerKind::Sobol}},
-             "random numbers: independent, or an Owen-scrambled Sobol sequence padded per bounce and purpose");
+             "random numbers: independent, or an Owen-scrambled Sobol sequence padded per bounce and purpose, each light "
+             "point stratified with the direction its path arrived along");
     t.flag("variance", &O::variance,
            "add the variance of each pixel's mean (variance.R, .G, .B), for lucent compare --test");
     t.rule("variance", [](const O& o) {

@@ -210,8 +210,10 @@ class PathTracer {
     std::vector<uint32_t> otherLights;  // lanes whose light is not a triangle
     LightMoments lightMoments;          // while the pilot learns the light choice
     // The Sobol sampler's numbers of a bounce's lane hits, drawn together in lanes before the hits
-    // are fetched: per hit, its light choice's, light point's and BSDF direction's pairs (lanePairs).
+    // are fetched: every hit's light point pair (the light's choice and point), then per hit its
+    // other pairs (lanePairs).
     struct SobolRequests {
+      uint32_t lightPoints = 0;
       std::vector<uint64_t> pixelKey;
       std::vector<uint32_t> index, dimension;
       std::vector<float> x, y;
@@ -254,11 +256,14 @@ class PathTracer {
       w.textured.clear();
       w.otherLights.clear();
       const bool drawnInLanes = drawDiffuseLaneNumbers(w);
-      uint32_t drawn = 0;  // the next lane's first pair in w.sobol
+      // The next lane's light point pair and other pairs in w.sobol.
+      DrawnPairs drawn{0, w.sobol.lightPoints};
       for (const uint32_t i : w.active) {
         if (const LaneKind kind = laneKind(w.paths[i], w.hits[i]); kind != LaneKind::None) {
           fetchDiffuseLane(w.paths[i], w.hits[i], kind, i, lanes, w.textured, w.otherLights,
-                           drawnInLanes ? std::exchange(drawn, drawn + lanePairs(w.paths[i], kind)) : kNotDrawn, w.sobol);
+                           drawnInLanes ? std::exchange(drawn, {drawn.lightPoint + 1, drawn.rest + lanePairs(w.paths[i], kind) - 1})
+                                        : DrawnPairs{kNotDrawn, 0},
+                           w.sobol);
           continue;
         }
         ShadowQuery shadow;
@@ -361,7 +366,8 @@ class PathTracer {
   }
 
   // With the Sobol sampler, the numbers fetchDiffuseLane takes for every Lambertian and glTF hit of
-  // the bounce, drawn in lanes (in the order of the hits; their pairs one after the other). False with
+  // the bounce, drawn in lanes: the hits' light points, then their other pairs, each in the order of
+  // the hits (light points take more work, which a batch of them alone pays: sobolPairs). False with
   // the independent sampler, whose numbers come in sequence from each path's generator, and without
   // laneShading, where each path draws its own as shade() does.
   static constexpr uint32_t kNotDrawn = ~0u;
@@ -369,25 +375,37 @@ class PathTracer {
     if (opt_.sampler != SamplerKind::Sobol || !opt_.laneShading) return false;
     Wave::SobolRequests& r = w.sobol;
     r.pixelKey.clear(), r.index.clear(), r.dimension.clear();
+    auto request = [&](const Path& path, uint32_t dimension) {
+      r.pixelKey.push_back(path.sampler.pixelKey());
+      r.index.push_back(path.sampler.index());
+      r.dimension.push_back(dimension);
+    };
+    for (const uint32_t i : w.active)
+      if (laneKind(w.paths[i], w.hits[i]) != LaneKind::None)
+        request(w.paths[i], PathSampler::dimension(w.paths[i].bounce, SampleUse::LightPoint));
+    r.lightPoints = uint32_t(r.index.size());
     for (const uint32_t i : w.active) {
       const Path& path = w.paths[i];
       const LaneKind kind = laneKind(path, w.hits[i]);
       if (kind == LaneKind::None) continue;
       const uint32_t lobe = PathSampler::dimension(path.bounce, SampleUse::Lobe) & ~1u;  // the pair holding it
       const uint32_t roulette = PathSampler::dimension(path.bounce + 1, SampleUse::Roulette);
-      const uint32_t dimensions[] = {PathSampler::dimension(path.bounce, SampleUse::LightPoint),
-                                     PathSampler::dimension(path.bounce, SampleUse::BsdfDirection),
+      const uint32_t dimensions[] = {PathSampler::dimension(path.bounce, SampleUse::BsdfDirection),
                                      kind == LaneKind::Gltf ? lobe : roulette, roulette};
-      for (uint32_t k = 0; k < lanePairs(path, kind); ++k) {
-        r.pixelKey.push_back(path.sampler.pixelKey());
-        r.index.push_back(path.sampler.index());
-        r.dimension.push_back(dimensions[k]);
-      }
+      for (uint32_t k = 0; k + 1 < lanePairs(path, kind); ++k) request(path, dimensions[k]);
     }
-    r.x.resize(r.index.size()), r.y.resize(r.index.size());
-    sobolPairs(r.pixelKey.data(), r.index.data(), r.dimension.data(), uint32_t(r.index.size()), r.x.data(), r.y.data());
+    const uint32_t all = uint32_t(r.index.size()), lights = r.lightPoints;
+    r.x.resize(all), r.y.resize(all);
+    sobolPairs(r.pixelKey.data(), r.index.data(), r.dimension.data(), lights, r.x.data(), r.y.data());
+    sobolPairs(r.pixelKey.data() + lights, r.index.data() + lights, r.dimension.data() + lights, all - lights,
+               r.x.data() + lights, r.y.data() + lights);
     return true;
   }
+  // Where a lane hit's pairs are in the wave's SobolRequests: its light point's, and its other
+  // pairs' from `rest` on (the BSDF direction's, a glTF hit's lobe choice's, the roulette's).
+  struct DrawnPairs {
+    uint32_t lightPoint, rest;
+  };
 
   // The Sobol pairs drawn in lanes for a hit: its light point's and BSDF direction's, a glTF hit's
   // lobe choice's (the second of its bounce's roulette pair), and where roulette may end the path on
@@ -408,7 +426,7 @@ class PathTracer {
   // independent sampler's from the path's generator, the Sobol sampler's drawn beforehand (its
   // lanePairs at `drawn` in `sobol`).
   void fetchDiffuseLane(Path& path, const Hit& hit, LaneKind kind, uint32_t pathIndex, DiffuseLanes& l,
-                        std::vector<TexturedLane>& textured, std::vector<uint32_t>& otherLights, uint32_t drawn,
+                        std::vector<TexturedLane>& textured, std::vector<uint32_t>& otherLights, DrawnPairs drawn,
                         const Wave::SobolRequests& sobol) const {
     const bool gltf = kind == LaneKind::Gltf;
     const uint32_t k = gltf ? --l.gltfFirst : l.count++;
@@ -417,13 +435,14 @@ class PathTracer {
     if (gltf) fetchGltfSurface(s, hit, path.ray.direction, l, k, textured);
     else fetchLambertianSurface(s, hit, path.ray.direction, l, k, textured);
     const Vec3 position{l.posX[k], l.posY[k], l.posZ[k]};
-    if (drawn != kNotDrawn) {
-      l.uLightX[k] = sobol.x[drawn], l.uLightY[k] = sobol.y[drawn];
-      l.uBsdfX[k] = sobol.x[drawn + 1], l.uBsdfY[k] = sobol.y[drawn + 1];
-      const uint32_t next = drawn + 2 + (gltf ? 1 : 0);
-      if (gltf) l.uLobe[k] = sobol.y[drawn + 2];
+    if (drawn.lightPoint != kNotDrawn) {
+      const uint32_t rest = drawn.rest;
+      l.uLightX[k] = sobol.x[drawn.lightPoint], l.uLightY[k] = sobol.y[drawn.lightPoint];
+      l.uBsdfX[k] = sobol.x[rest], l.uBsdfY[k] = sobol.y[rest];
+      const uint32_t next = rest + 1 + (gltf ? 1 : 0);
+      if (gltf) l.uLobe[k] = sobol.y[rest + 1];
       // The next bounce's roulette pair holds its lobe choice too, which shade draws itself.
-      l.uRoulette[k] = next < drawn + lanePairs(path, kind) ? sobol.x[next] : kDrawLater;
+      l.uRoulette[k] = next < rest + lanePairs(path, kind) - 1 ? sobol.x[next] : kDrawLater;
     } else {
       l.uRoulette[k] = kDrawLater;
       // shade's numbers, its lobe choice among them (which a Lambertian surface does not use).
