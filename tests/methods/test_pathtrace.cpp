@@ -14,7 +14,7 @@
 #include "lucent/scene/loader.h"
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"
-#include "methods/pathtrace/diffuse_lanes.h"
+#include "methods/pathtrace/surface_lanes.h"
 #include "methods/pathtrace/shading_steps.h"
 #include "test_bsdfs.h"
 #include "test_scenes.h"
@@ -197,7 +197,7 @@ TEST_CASE("A Lambertian lane holds surfaceAt's, bsdfAt's and sampleChosenLight's
   // The Cornell box's light's triangles; the point, directional and environment lights are not.
   REQUIRE(!laneLights.empty());
   REQUIRE(laneLights.size() + 3 == scene.lights.size());
-  const auto lanes = std::make_unique<DiffuseLanes>();
+  const auto lanes = std::make_unique<SurfaceLanes>();
   std::vector<TexturedLane> textured;
   std::vector<Hit> hits;
   Rng rng(5);
@@ -219,7 +219,7 @@ TEST_CASE("A Lambertian lane holds surfaceAt's, bsdfAt's and sampleChosenLight's
   REQUIRE(hits.size() == uint32_t(kMaxLanes));
   readLaneTextures(*lanes, textured);
   shadeDiffuseLanes(*lanes, 0, lanes->count);
-  const DiffuseLanes& l = *lanes;
+  const SurfaceLanes& l = *lanes;
   int interpolated = 0, queued = 0;
   for (uint32_t k = 0; k < l.count; ++k) {
     INFO("lane " << k << ", triangle " << hits[k].triangle);
@@ -264,7 +264,7 @@ TEST_CASE("A glTF lane holds surfaceAt's, bsdfAt's, hitFrameNormal's and the lob
   // Hits at scattered barycentrics, seen from every direction, on the glTF triangles of the scene
   // with every material, lit by its lights in turn.
   const Scene scene = everyMaterialAndLight();
-  const auto lanes = std::make_unique<DiffuseLanes>();
+  const auto lanes = std::make_unique<SurfaceLanes>();
   lanes->strategy = PathStrategy::Mis;
   std::vector<TexturedLane> textured;
   std::vector<Hit> hits;
@@ -291,7 +291,7 @@ TEST_CASE("A glTF lane holds surfaceAt's, bsdfAt's, hitFrameNormal's and the lob
   REQUIRE(hits.size() == uint32_t(kMaxLanes));
   readLaneTextures(*lanes, textured);
   shadeGltfLanes(*lanes, lanes->gltfFirst, kMaxLanes);
-  const DiffuseLanes& l = *lanes;
+  const SurfaceLanes& l = *lanes;
   int mapped = 0, bent = 0, queued = 0, glossy = 0, scattered = 0;
   for (uint32_t k = l.gltfFirst; k < uint32_t(kMaxLanes); ++k) {
     const Hit& hit = hits[kMaxLanes - 1 - k];

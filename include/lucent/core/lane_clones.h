@@ -24,10 +24,10 @@ const char* laneIsaName(LaneIsa isa);
 
 // A lane loop in three versions, selected by laneIsa() at each call: the body, then the versions.
 //
-//   LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l)) {
+//   LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (SurfaceLanes& l)) {
 //     for (uint32_t k = 0; k < l.count; ++k) ...
 //   }
-//   LUCENT_LANE_VERSIONS(void, shadeDiffuseLanes, (DiffuseLanes& l), (l))
+//   LUCENT_LANE_VERSIONS(void, shadeDiffuseLanes, (SurfaceLanes& l), (l))
 //
 // The body is name##Loop, forced inline into a function per instruction set (a baseline function
 // may be inlined into an AVX2 or AVX-512 one, which then vectorizes it for its target); `name`

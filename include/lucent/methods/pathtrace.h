@@ -45,7 +45,7 @@ struct PathTraceOptions {
   // images are point samples of the image, not its pixels' averages.
   bool pixelCentres = false;
   // Camera rays are started and Lambertian hits shaded many at a time in vectorized loops
-  // (CameraLanes, DiffuseLanes), other hits one by one. False runs the same loops one path at a
+  // (CameraLanes, SurfaceLanes), other hits one by one. False runs the same loops one path at a
   // time, and draws each path's Sobol numbers by itself, for tests that the lanes change nothing.
   bool laneShading = true;
   // An Owen-scrambled Sobol sequence padded per bounce and purpose, each light point stratified with

@@ -17,7 +17,7 @@
 #include "lucent/scene/light_sampling.h"
 #include "lucent/scene/surface.h"
 #include "methods/pathtrace/contribution_roulette.h"
-#include "methods/pathtrace/diffuse_lanes.h"
+#include "methods/pathtrace/surface_lanes.h"
 #include "methods/pathtrace/error_target.h"
 #include "methods/pathtrace/shading_steps.h"
 
@@ -43,7 +43,7 @@ struct Counters {
 };
 
 // One camera path in flight. Paths advance together, one bounce per stage (a wavefront), so that
-// their hits can be shaded many at a time (DiffuseLanes).
+// their hits can be shaded many at a time (SurfaceLanes).
 struct Path {
   uint64_t pixel = 0;
   Ray ray;
@@ -204,7 +204,7 @@ class PathTracer {
     std::vector<uint8_t> ghost;  // per path, whether the pass takes its sample (0) or only traces it (1)
     std::vector<uint32_t> active, next;
     std::vector<ShadowQuery> shadows;
-    std::unique_ptr<DiffuseLanes> lanes = std::make_unique<DiffuseLanes>();  // zeroed
+    std::unique_ptr<SurfaceLanes> lanes = std::make_unique<SurfaceLanes>();  // zeroed
     std::unique_ptr<CameraLanes> camera = std::make_unique<CameraLanes>();
     std::vector<TexturedLane> textured;
     std::vector<uint32_t> otherLights;  // lanes whose light is not a triangle
@@ -249,18 +249,18 @@ class PathTracer {
       counters.rays += live;
       w.next.clear();
       w.shadows.clear();
-      DiffuseLanes& lanes = *w.lanes;
+      SurfaceLanes& lanes = *w.lanes;
       lanes.count = 0;
       lanes.gltfFirst = kMaxLanes;
       lanes.strategy = opt_.strategy;
       w.textured.clear();
       w.otherLights.clear();
-      const bool drawnInLanes = drawDiffuseLaneNumbers(w);
+      const bool drawnInLanes = drawLaneNumbers(w);
       // The next lane's light point pair and other pairs in w.sobol.
       DrawnPairs drawn{0, w.sobol.lightPoints};
       for (const uint32_t i : w.active) {
         if (const LaneKind kind = laneKind(w.paths[i], w.hits[i]); kind != LaneKind::None) {
-          fetchDiffuseLane(w.paths[i], w.hits[i], kind, i, lanes, w.textured, w.otherLights,
+          fetchLane(w.paths[i], w.hits[i], kind, i, lanes, w.textured, w.otherLights,
                            drawnInLanes ? std::exchange(drawn, {drawn.lightPoint + 1, drawn.rest + lanePairs(w.paths[i], kind) - 1})
                                         : DrawnPairs{kNotDrawn, 0},
                            w.sobol);
@@ -315,7 +315,7 @@ class PathTracer {
       }
       if (prefetchSceneData_) {
         // The run's triangle records now, the vertices of the run before (their indices have
-        // arrived): both are in cache when fetchDiffuseLane reads them, one Embree query later.
+        // arrived): both are in cache when fetchLane reads them, one Embree query later.
         for (size_t j = first; j < last; ++j) prefetchTriangle(w.hits[live[j]]);
         for (size_t j = previousRun; j < first; ++j) prefetchVertices(w.hits[live[j]]);
       }
@@ -345,7 +345,7 @@ class PathTracer {
   // other than LaneLights, the lanes' shading (all at once, or one lane at a time without
   // laneShading), and what it gives their paths; the lanes are then empty.
   void shadeLanes(Wave& w, Counters& counters) const {
-    DiffuseLanes& lanes = *w.lanes;
+    SurfaceLanes& lanes = *w.lanes;
     const uint32_t gltfFirst = lanes.gltfFirst, gltfEnd = kMaxLanes;
     if (lanes.count == 0 && gltfFirst == gltfEnd) return;
     counters.laneShadedHits += lanes.count + (gltfEnd - gltfFirst);
@@ -358,20 +358,20 @@ class PathTracer {
       for (uint32_t k = 0; k < lanes.count; ++k) shadeDiffuseLanes(lanes, k, k + 1);
       for (uint32_t k = gltfFirst; k < gltfEnd; ++k) shadeGltfLanes(lanes, k, k + 1);
     }
-    finishDiffuseLanes(lanes, w);
+    finishLanes(lanes, w);
     lanes.count = 0;
     lanes.gltfFirst = kMaxLanes;
     w.textured.clear();
     w.otherLights.clear();
   }
 
-  // With the Sobol sampler, the numbers fetchDiffuseLane takes for every Lambertian and glTF hit of
+  // With the Sobol sampler, the numbers fetchLane takes for every Lambertian and glTF hit of
   // the bounce, drawn in lanes: the hits' light points, then their other pairs, each in the order of
   // the hits (light points take more work, which a batch of them alone pays: sobolPairs). False with
   // the independent sampler, whose numbers come in sequence from each path's generator, and without
   // laneShading, where each path draws its own as shade() does.
   static constexpr uint32_t kNotDrawn = ~0u;
-  bool drawDiffuseLaneNumbers(Wave& w) const {
+  bool drawLaneNumbers(Wave& w) const {
     if (opt_.sampler != SamplerKind::Sobol || !opt_.laneShading) return false;
     Wave::SobolRequests& r = w.sobol;
     r.pixelKey.clear(), r.index.clear(), r.dimension.clear();
@@ -425,7 +425,7 @@ class PathTracer {
   // The lane's surface data and the random numbers shade draws (drawBounceNumbers): the
   // independent sampler's from the path's generator, the Sobol sampler's drawn beforehand (its
   // lanePairs at `drawn` in `sobol`).
-  void fetchDiffuseLane(Path& path, const Hit& hit, LaneKind kind, uint32_t pathIndex, DiffuseLanes& l,
+  void fetchLane(Path& path, const Hit& hit, LaneKind kind, uint32_t pathIndex, SurfaceLanes& l,
                         std::vector<TexturedLane>& textured, std::vector<uint32_t>& otherLights, DrawnPairs drawn,
                         const Wave::SobolRequests& sobol) const {
     const bool gltf = kind == LaneKind::Gltf;
@@ -471,7 +471,7 @@ class PathTracer {
 
   // Point, directional and environment lights and two-sided or textured emitters: the light each lane
   // chose, sampled at its surface point.
-  void sampleOtherLights(DiffuseLanes& l, const std::vector<uint32_t>& lanes) const {
+  void sampleOtherLights(SurfaceLanes& l, const std::vector<uint32_t>& lanes) const {
     for (const uint32_t k : lanes) {
       const LightSample ls = scene_.lights.empty() ? LightSample{}
                                                    : sampleChosenLight(scene_, l.light[k], l.lightPmf[k], {l.posX[k], l.posY[k], l.posZ[k]},
@@ -487,11 +487,11 @@ class PathTracer {
   // What shade does with the lanes' results: emission, first-hit layers, the shadow query, the
   // next ray and Russian roulette; Lambertian lanes first, then glTF lanes, each in the order of
   // their paths.
-  void finishDiffuseLanes(const DiffuseLanes& l, Wave& w) const {
+  void finishLanes(const SurfaceLanes& l, Wave& w) const {
     for (uint32_t k = 0; k < l.count; ++k) finishLane(l, k, false, w);
     for (uint32_t k = kMaxLanes; k-- > l.gltfFirst;) finishLane(l, k, true, w);
   }
-  void finishLane(const DiffuseLanes& l, uint32_t k, bool gltf, Wave& w) const {
+  void finishLane(const SurfaceLanes& l, uint32_t k, bool gltf, Wave& w) const {
     const uint32_t i = l.path[k];
     Path& path = w.paths[i];
     const Hit& hit = w.hits[i];

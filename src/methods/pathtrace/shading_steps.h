@@ -50,7 +50,7 @@ inline NextEventSample weighLightSample(PathStrategy strategy, float lightPdf, b
 }
 
 // The numbers a bounce at a surface draws, in the one order that PathTracer::shade (every material)
-// and fetchDiffuseLane (Lambertian hits, for the lanes) both take them in: the light point's pair
+// and fetchLane (Lambertian hits, for the lanes) both take them in: the light point's pair
 // where the surface takes a light sample (not at a mirror or glass), the lobe's choice, the BSDF
 // direction's pair. With the independent sampler this is the order of the path's generator.
 struct BounceNumbers {

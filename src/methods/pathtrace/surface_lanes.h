@@ -32,11 +32,11 @@ inline constexpr int kLaneSlots = kMaxLanes + 16;
 
 // Lambertian hits fill the lanes from the first up ([0, count)), glTF hits from the last down
 // ([gltfFirst, kMaxLanes)): a wave's hits are at most kMaxLanes, so the two never meet.
-struct DiffuseLanes {
+struct SurfaceLanes {
   uint32_t count = 0;
   uint32_t gltfFirst = kMaxLanes;
   PathStrategy strategy = PathStrategy::Mis;  // how light is found, the same for every lane
-  // Fetched per lane (PathTracer::fetchDiffuseLane). Normals: ng* the triangle's geometric one,
+  // Fetched per lane (PathTracer::fetchLane). Normals: ng* the triangle's geometric one,
   // normal* the vertex normals interpolated (not yet normalized).
   alignas(64) float dirX[kLaneSlots], dirY[kLaneSlots], dirZ[kLaneSlots];  // the incoming ray
   alignas(64) float posX[kLaneSlots], posY[kLaneSlots], posZ[kLaneSlots];           // the hit point
@@ -51,7 +51,7 @@ struct DiffuseLanes {
   alignas(64) uint32_t path[kLaneSlots];  // the wave's path in this lane
   alignas(64) uint32_t light[kLaneSlots];  // the light sampled (for the pilot's light moments)
 
-  // The light sample. Triangle lights (fetchDiffuseLane): vertices q*, normal, area and pmf; the
+  // The light sample. Triangle lights (fetchLane): vertices q*, normal, area and pmf; the
   // lanes sample the point. Other lights (sampleOtherLights): the finished sample, wi* to lightDelta.
   alignas(64) int32_t lightIsTriangle[kLaneSlots];
   alignas(64) float q0x[kLaneSlots], q0y[kLaneSlots], q0z[kLaneSlots], q1x[kLaneSlots], q1y[kLaneSlots],
@@ -125,7 +125,7 @@ struct TexturedLane {
 // surfaceAt does; the geometric normal; whether it emits; the albedo, or where a texture scales it,
 // its texels requested (prefetched, and added to `textured` for readLaneTextures once every lane
 // is fetched: a texel from memory then no longer holds up the next lane).
-void fetchLambertianSurface(const Scene& scene, const Hit& hit, Vec3 direction, DiffuseLanes& lanes, uint32_t k,
+void fetchLambertianSurface(const Scene& scene, const Hit& hit, Vec3 direction, SurfaceLanes& lanes, uint32_t k,
                             std::vector<TexturedLane>& textured);
 
 // The glTF materials shadeGltfLanes shades: Appendix B's metal/dielectric mix with KHR_materials_ior
@@ -136,15 +136,15 @@ bool gltfShadedInLanes(const Material& m);
 // Lane k's surface at a hit of such a material, as surfaceAt and bsdfAt give it: what
 // fetchLambertianSurface fetches, the texture coordinates interpolated once for the textures, the
 // material's factors and tangents.
-void fetchGltfSurface(const Scene& scene, const Hit& hit, Vec3 direction, DiffuseLanes& lanes, uint32_t k,
+void fetchGltfSurface(const Scene& scene, const Hit& hit, Vec3 direction, SurfaceLanes& lanes, uint32_t k,
                       std::vector<TexturedLane>& textured);
 // Lane k's lobe (in its shading frame's coordinates), as bsdfAt gives it. Inlined: a call would keep
 // shadeGltfLanes' loop from vectorizing.
-[[gnu::always_inline]] inline GltfMetalRoughLobe gltfLaneLobe(const DiffuseLanes& l, uint32_t k) {
+[[gnu::always_inline]] inline GltfMetalRoughLobe gltfLaneLobe(const SurfaceLanes& l, uint32_t k) {
   return metalRoughLobe({l.kdR[k], l.kdG[k], l.kdB[k]}, l.metallic[k], l.roughness[k], {l.f0R[k], l.f0G[k], l.f0B[k]},
                         l.specular[k], l.heightCorrelated[k] != 0 ? GgxMasking::HeightCorrelated : GgxMasking::Separable);
 }
-void readLaneTextures(DiffuseLanes& lanes, std::span<const TexturedLane> textured);
+void readLaneTextures(SurfaceLanes& lanes, std::span<const TexturedLane> textured);
 
 // What a lane needs of a light to sample it itself: an emitting triangle seen from one side, of
 // constant radiance le, not under a clear coat (sampleChosenLight's triangle case then). Other lights have isTriangle false.
@@ -154,15 +154,15 @@ struct LaneLight {
   bool isTriangle = false;
 };
 LaneLight laneLight(const Scene& scene, uint32_t light);
-void fetchLaneLight(const LaneLight& light, DiffuseLanes& lanes, uint32_t k);
+void fetchLaneLight(const LaneLight& light, SurfaceLanes& lanes, uint32_t k);
 
 // Lanes [first, last): each lane's shading normal and frame, its light sample's shadow ray and what
 // it brings, and the cosine-distributed next direction. One lane at a time ([k, k + 1)) the same
 // loop shades single paths, with the same arithmetic.
-void shadeDiffuseLanes(DiffuseLanes& lanes, uint32_t first, uint32_t last);
+void shadeDiffuseLanes(SurfaceLanes& lanes, uint32_t first, uint32_t last);
 // The same for glTF lanes: the normal texture's shading normal and its frame (bent one lane at a
 // time where it must be), next-event estimation and the next direction from the GGX or the cosine
 // lobe.
-void shadeGltfLanes(DiffuseLanes& lanes, uint32_t first, uint32_t last);
+void shadeGltfLanes(SurfaceLanes& lanes, uint32_t first, uint32_t last);
 
 }  // namespace lucent

@@ -1,4 +1,4 @@
-#include "diffuse_lanes.h"
+#include "surface_lanes.h"
 
 #include "lucent/core/math.h"
 #include "lucent/core/lane_clones.h"
@@ -54,7 +54,7 @@ struct FetchedHit {
   SurfacePoint sp;
   Rgb factor;
 };
-FetchedHit fetchHit(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k) {
+FetchedHit fetchHit(const Scene& s, const Hit& hit, Vec3 direction, SurfaceLanes& l, uint32_t k) {
   const uint32_t* v = &s.indices[3 * size_t(hit.triangle)];
   storeLane(direction, l.dirX, l.dirY, l.dirZ, k);
   storeLane(barycentric(s.positions[v[0]], s.positions[v[1]], s.positions[v[2]], hit.b1, hit.b2), l.posX, l.posY, l.posZ, k);
@@ -80,7 +80,7 @@ void requestTexture(const Scene& s, const Texture& t, Vec2 uv, uint32_t k, LaneT
 }
 }  // namespace
 
-void fetchLambertianSurface(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k,
+void fetchLambertianSurface(const Scene& s, const Hit& hit, Vec3 direction, SurfaceLanes& l, uint32_t k,
                             std::vector<TexturedLane>& textured) {
   const FetchedHit h = fetchHit(s, hit, direction, l, k);
   if (h.m.kdTexture < 0) return;
@@ -93,7 +93,7 @@ bool gltfShadedInLanes(const Material& m) {
          m.boundsVolume == 0 && m.specularTexture < 0 && m.specularColorTexture < 0;
 }
 
-void fetchGltfSurface(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLanes& l, uint32_t k,
+void fetchGltfSurface(const Scene& s, const Hit& hit, Vec3 direction, SurfaceLanes& l, uint32_t k,
                       std::vector<TexturedLane>& textured) {
   const FetchedHit h = fetchHit(s, hit, direction, l, k);
   const Material& m = h.m;
@@ -122,7 +122,7 @@ void fetchGltfSurface(const Scene& s, const Hit& hit, Vec3 direction, DiffuseLan
   request(m.normalTexture, LaneTexture::Normal, {});
 }
 
-void readLaneTextures(DiffuseLanes& l, std::span<const TexturedLane> textured) {
+void readLaneTextures(SurfaceLanes& l, std::span<const TexturedLane> textured) {
   for (const TexturedLane& t : textured) {
     const uint32_t k = t.lane;
     switch (t.use) {
@@ -155,7 +155,7 @@ LaneLight laneLight(const Scene& scene, uint32_t light) {
   return {e, m.ke, !e.twoSided && m.emissiveTexture < 0 && !(m.clearcoat > 0)};
 }
 
-void fetchLaneLight(const LaneLight& light, DiffuseLanes& l, uint32_t k) {
+void fetchLaneLight(const LaneLight& light, SurfaceLanes& l, uint32_t k) {
   const EmittingTriangle& e = light.triangle;
   storeLane(e.q0, l.q0x, l.q0y, l.q0z, k);
   storeLane(e.q1, l.q1x, l.q1y, l.q1z, k);
@@ -174,7 +174,7 @@ struct LaneLightSample {
   bool delta;
   Rgb le;
 };
-[[gnu::always_inline]] inline LaneLightSample laneLightSample(const DiffuseLanes& l, uint32_t k, Vec3 position) {
+[[gnu::always_inline]] inline LaneLightSample laneLightSample(const SurfaceLanes& l, uint32_t k, Vec3 position) {
   const TrianglePointSample q = sampleTrianglePoint(
       {l.q0x[k], l.q0y[k], l.q0z[k]}, {l.q1x[k], l.q1y[k], l.q1z[k]}, {l.q2x[k], l.q2y[k], l.q2z[k]},
       {l.lightNx[k], l.lightNy[k], l.lightNz[k]}, l.lightArea[k], l.lightPmf[k], position, {l.uLightX[k], l.uLightY[k]});
@@ -188,7 +188,7 @@ struct LaneLightSample {
 }
 
 // The light sample's shadow ray and what it brings.
-[[gnu::always_inline]] inline void storeNextEvent(DiffuseLanes& l, uint32_t k, NextEventSample direct, Ray shadow) {
+[[gnu::always_inline]] inline void storeNextEvent(SurfaceLanes& l, uint32_t k, NextEventSample direct, Ray shadow) {
   l.shadowQueued[k] = direct.queued;
   storeLane(shadow.origin, l.shadowOx, l.shadowOy, l.shadowOz, k);
   storeLane(shadow.direction, l.shadowDx, l.shadowDy, l.shadowDz, k);
@@ -198,7 +198,7 @@ struct LaneLightSample {
 
 // The next ray, leaving `position` along wiWorld, and the sample's weight and density; `scattered`:
 // a valid sample that does not leak through the surface.
-[[gnu::always_inline]] inline void storeNextRay(DiffuseLanes& l, uint32_t k, bool scattered, Rgb weight, float pdf,
+[[gnu::always_inline]] inline void storeNextRay(SurfaceLanes& l, uint32_t k, bool scattered, Rgb weight, float pdf,
                                                 Vec3 position, Vec3 ng, Vec3 wiWorld) {
   l.scattered[k] = scattered;
   l.weightR[k] = weight.r, l.weightG[k] = weight.g, l.weightB[k] = weight.b;
@@ -211,7 +211,7 @@ struct LaneLightSample {
 // What PathTracer::shade does at a hit, for a Lambertian surface: the shading normal (surfaceAt's)
 // and frame, next-event estimation (sampleDirect, with sampleChosenLight's triangle case where the
 // light is a LaneLight), and the next direction (sampleBsdf).
-LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint32_t last)) {
+LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (SurfaceLanes& l, uint32_t first, uint32_t last)) {
   const PathStrategy strategy = l.strategy;
   for (uint32_t k = first; k < last; ++k) {
     const Vec3 ng{l.ngx[k], l.ngy[k], l.ngz[k]};
@@ -235,12 +235,12 @@ LUCENT_LANE_LOOP(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint
                  position, ng, wiWorld);
   }
 }
-LUCENT_LANE_VERSIONS(void, shadeDiffuseLanes, (DiffuseLanes& l, uint32_t first, uint32_t last), (l, first, last))
+LUCENT_LANE_VERSIONS(void, shadeDiffuseLanes, (SurfaceLanes& l, uint32_t first, uint32_t last), (l, first, last))
 
 // surfaceAt's shading normal at a glTF hit (the normal texture's about the unit interpolated normal,
 // or that normal) and hitFrameNormal's frame seen from the ray's origin, unbent; `bent` where
 // bentForReflection has to bend it.
-LUCENT_LANE_LOOP(void, gltfShadingFrames, (DiffuseLanes& l, uint32_t first, uint32_t last)) {
+LUCENT_LANE_LOOP(void, gltfShadingFrames, (SurfaceLanes& l, uint32_t first, uint32_t last)) {
   for (uint32_t k = first; k < last; ++k) {
     const Vec3 ng{l.ngx[k], l.ngy[k], l.ngz[k]};
     const Vec3 interpolated{l.normalX[k], l.normalY[k], l.normalZ[k]};
@@ -260,12 +260,12 @@ LUCENT_LANE_LOOP(void, gltfShadingFrames, (DiffuseLanes& l, uint32_t first, uint
     l.bent[k] = bends == 0 ? 0 : reflectsTooLow(wo, n, g) ? 1 : 0;
   }
 }
-LUCENT_LANE_VERSIONS(void, gltfShadingFrames, (DiffuseLanes& l, uint32_t first, uint32_t last), (l, first, last))
+LUCENT_LANE_VERSIONS(void, gltfShadingFrames, (SurfaceLanes& l, uint32_t first, uint32_t last), (l, first, last))
 
 // The rest of what PathTracer::shade does at such a hit, in the frame: next-event estimation with
 // the lobe's value, and the next direction from the GGX visible normals or the cosine lobe, chosen
 // by their weights at n.wo (GltfMetalRoughLobe::sample).
-LUCENT_LANE_LOOP(void, shadeGltfInFrames, (DiffuseLanes& l, uint32_t first, uint32_t last)) {
+LUCENT_LANE_LOOP(void, shadeGltfInFrames, (SurfaceLanes& l, uint32_t first, uint32_t last)) {
   const PathStrategy strategy = l.strategy;
   for (uint32_t k = first; k < last; ++k) {
     const Vec3 ng{l.ngx[k], l.ngy[k], l.ngz[k]};
@@ -292,9 +292,9 @@ LUCENT_LANE_LOOP(void, shadeGltfInFrames, (DiffuseLanes& l, uint32_t first, uint
                  value.f * (std::abs(wi.z) / value.pdf), value.pdf, position, ng, wiWorld);
   }
 }
-LUCENT_LANE_VERSIONS(void, shadeGltfInFrames, (DiffuseLanes& l, uint32_t first, uint32_t last), (l, first, last))
+LUCENT_LANE_VERSIONS(void, shadeGltfInFrames, (SurfaceLanes& l, uint32_t first, uint32_t last), (l, first, last))
 
-void shadeGltfLanes(DiffuseLanes& l, uint32_t first, uint32_t last) {
+void shadeGltfLanes(SurfaceLanes& l, uint32_t first, uint32_t last) {
   gltfShadingFrames(l, first, last);
   for (uint32_t k = first; k < last; ++k) {
     if (!l.bent[k]) continue;
