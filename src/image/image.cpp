@@ -17,6 +17,8 @@
 #include <utility>
 #include <vector>
 
+#include <tbb/global_control.h>
+
 #include "lucent/core/files.h"
 #include "lucent/core/memory.h"
 #include "lucent/core/srgb.h"
@@ -58,8 +60,10 @@ FileToWrite exrFile(const Image& image, const std::string& path, const ImageMeta
   checkPixelCount(image, path);
   const ImageWriter& writer = imageWriter();  // loaded before any file of the set is written
   return {path, "image", [&image, metadata, &writer](const fs::path& tmp) {
+            // The threads oneTBB may use (--threads), which the writer's compression keeps to.
+            const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
             const std::string why = writer.writeExr(tmp.string(), image.width(), image.height(), image.channels(),
-                                                    metadata, image.pixels().data());
+                                                    metadata, image.pixels().data(), threads);
             if (!why.empty()) throw WriteFailure(why);
           }};
 }

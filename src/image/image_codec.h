@@ -21,9 +21,10 @@ using CodecAttributes = std::vector<std::pair<std::string, std::string>>;
 struct ImageWriter {
   uint32_t interfaceVersion;  // kImageWriterInterface: a module of another build is refused
   // A 32-bit float EXR of interleaved `pixels`, zip-compressed, its channels named, with the string
-  // attributes (none of them one of the header's standard attributes).
+  // attributes (none of them one of the header's standard attributes), compressed by at most
+  // `threads` threads at once.
   std::string (*writeExr)(const std::string& path, int width, int height, const std::vector<std::string>& channels,
-                          const CodecAttributes& attributes, const float* pixels);
+                          const CodecAttributes& attributes, const float* pixels, int threads);
   // 8-bit sRGB-encoded RGB, interleaved, as a PNG in memory, marked sRGB.
   std::string (*encodePng)(int width, int height, const unsigned char* rgb, std::vector<unsigned char>& png);
 };
@@ -54,7 +55,7 @@ struct ImageReader {
   void (*close)(void* image);
 };
 
-inline constexpr uint32_t kImageWriterInterface = 1;
+inline constexpr uint32_t kImageWriterInterface = 2;
 inline constexpr uint32_t kImageReaderInterface = 2;
 
 // Each module's functions, loaded on the first call (thread-safe); throws std::runtime_error where

@@ -7,6 +7,7 @@
 #include <OpenEXR/ImfThreading.h>
 #include <png.h>
 
+#include <algorithm>
 #include <cstring>
 #include <exception>
 #include <new>
@@ -23,7 +24,7 @@ namespace {
 constexpr size_t kValuesWorthThreads = size_t(1) << 20;
 
 std::string writeExr(const std::string& path, int width, int height, const std::vector<std::string>& channels,
-                     const CodecAttributes& attributes, const float* pixels) {
+                     const CodecAttributes& attributes, const float* pixels, int threads) {
   try {
     Imf::Header header(width, height);  // the standard attributes: windows, aspect, line order
     header.compression() = Imf::ZIP_COMPRESSION;
@@ -40,9 +41,11 @@ std::string writeExr(const std::string& path, int width, int height, const std::
       if (header.find(key) != header.end()) return "the attribute '" + key + "' is one of the EXR header's own";
       header.insert(key, Imf::StringAttribute(value));
     }
-    const bool threaded = size_t(width) * size_t(height) * count >= kValuesWorthThreads;
+    // OpenEXR's pool is started once with a thread per core; a file keeps at most `threads` of
+    // them busy (its line buffers in flight), so that --threads bounds the writing too.
+    const bool threaded = threads > 1 && size_t(width) * size_t(height) * count >= kValuesWorthThreads;
     if (threaded && Imf::globalThreadCount() == 0) Imf::setGlobalThreadCount(int(std::thread::hardware_concurrency()));
-    Imf::OutputFile file(path.c_str(), header, threaded ? Imf::globalThreadCount() : 0);
+    Imf::OutputFile file(path.c_str(), header, threaded ? std::min(threads, Imf::globalThreadCount()) : 0);
     file.setFrameBuffer(frame);
     file.writePixels(height);
     return "";
