@@ -1,3 +1,4 @@
+#include "lucent/core/parallel.h"
 #include "lucent/pipeline/film.h"
 
 #include <tbb/blocked_range.h>
@@ -125,7 +126,7 @@ void Film::add(const EyePaths& band, const PointRadiance& light) {
     throw std::logic_error("a film with layers takes camera paths traced with layers");
   // Pixels are independent, and a pixel's points are consecutive (by tile, then pixel): both loops
   // run in parallel, the points' in chunks cut where the pixel changes.
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, band.pixels.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, band.pixels.size(), kItemsPerTask), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const EyePixel& px = band.pixels[i];
       const uint64_t p = band.imagePixel(i, width_);
@@ -215,7 +216,7 @@ Image Film::image() const {
   const size_t nc = channels.size(), pixels = region_.pixelCount();
   Image image(region_.width(), region_.height(), channels);
   float* out = image.pixels().data();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels, 4096), [&](const tbb::blocked_range<size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels, kItemsPerTask), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t p = r.begin(); p != r.end(); ++p) {
       const ExactSum* sum = &sums_[p * size_t(stride_)];
       const double n = std::max<uint32_t>(1, samples_[p]);

@@ -1,5 +1,6 @@
 // Thread-count control and per-thread floating-point set-up for oneTBB workers.
 #pragma once
+#include <cstddef>
 #include <memory>
 
 namespace lucent {
@@ -11,6 +12,11 @@ void retainFreedMemory();
 
 // Flushes denormals to zero on the calling thread (Embree is slow and warns otherwise).
 void flushDenormals();
+
+// Items per oneTBB task where each item is a few hundred nanoseconds of work (a pixel's sums, a
+// photon, a point): enough to amortize a task's scheduling, small enough that a few thousand items
+// still spread over every core. Results never depend on it.
+inline constexpr size_t kItemsPerTask = 4096;
 
 // The most worker threads a render may ask for.
 inline constexpr int kMaxThreads = 4096;

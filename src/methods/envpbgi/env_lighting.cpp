@@ -53,7 +53,7 @@ void renderBuffers(const MicroHierarchy& hierarchy, const MicroRenderSettings& s
   Bounds3 bounds;
   for (size_t k = 0; k < count; ++k) origins[k] = origin(k), bounds.extend(origins[k].position);
   std::vector<uint64_t> order(count);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 4096), [&](const tbb::blocked_range<size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, kItemsPerTask), [&](const tbb::blocked_range<size_t>& r) {
     stopPoint();
     for (size_t k = r.begin(); k != r.end(); ++k)
       order[k] = facingMortonKey(origins[k].position, origins[k].normal, bounds) << 31 | uint64_t(k);

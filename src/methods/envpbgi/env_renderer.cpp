@@ -277,7 +277,7 @@ class EnvPbgiRender {
     interpolation.maxAngle = o_.cacheMaxAngle * kPi / 180.0f;
     // Each receiver's tile and view depth, then the band's tile lists cut to its depths.
     tileOfPoint_.resize(n), depthOfPoint_.resize(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kItemsPerTask), [&](const tbb::blocked_range<size_t>& r) {
       stopPoint();
       for (size_t i = r.begin(); i != r.end(); ++i) {
         const ShadingPoint& p = eye.points[i];

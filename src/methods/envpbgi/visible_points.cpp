@@ -106,7 +106,7 @@ std::vector<uint32_t> selectPrimaryPoints(EnvHierarchy& h, const Camera& cameraS
 }
 
 void markSecondaryPoints(EnvHierarchy& h, std::span<const uint32_t> texels) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, texels.size(), kItemsPerTask), [&](const tbb::blocked_range<size_t>& r) {
     stopPoint();
     for (size_t t = r.begin(); t != r.end(); ++t)
       if (microPixelShowsNode(texels[t]))

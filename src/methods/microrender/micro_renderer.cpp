@@ -128,7 +128,7 @@ struct GatherPass {
     Stopwatch clock;
     if (order.size() >= (size_t(1) << 31)) throw std::logic_error("micro: at most 2^31 - 1 gather points at once");
     std::vector<uint64_t> keys(order.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4096), [&](const auto& r) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), kItemsPerTask), [&](const auto& r) {
       stopPoint();
       for (size_t k = r.begin(); k != r.end(); ++k) {
         const ShadingPoint& p = points[order[k]];

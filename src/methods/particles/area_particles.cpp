@@ -9,6 +9,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "lucent/core/parallel.h"
 #include "lucent/core/morton.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/sampling.h"
@@ -22,7 +23,7 @@ namespace {
 // Surface points in the 3-D Morton order of their positions (ties by their former order).
 void sortByMortonCode(const Scene& scene, std::vector<PointSample>& samples) {
   std::vector<std::pair<uint32_t, uint32_t>> order(samples.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), kItemsPerTask), [&](const tbb::blocked_range<size_t>& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i)
       order[i] = {mortonCode(pointPosition(scene, samples[i]), scene.bounds), uint32_t(i)};

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lucent/core/parallel.h"
 #include "lucent/core/rng.h"
 #include "lucent/core/stop.h"
 #include "lucent/pipeline/direct_light.h"
@@ -20,7 +21,7 @@ std::vector<Rgb> emitLight(const Scene& scene, const Visibility& vis, std::span<
   // Each particle as a white Lambertian point seen along its normal: the radiance it reflects is
   // its irradiance over pi.
   std::vector<ShadingPoint> points(particles.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.size(), kItemsPerTask), [&](const tbb::blocked_range<size_t>& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const AreaParticle& p = particles[i];
@@ -43,7 +44,7 @@ std::vector<Rgb> emitLight(const Scene& scene, const Visibility& vis, std::span<
   else
     analyticDirectLight(scene, vis, points, reflected, rays);
   std::vector<Rgb> flux(particles.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.size(), kItemsPerTask), [&](const tbb::blocked_range<size_t>& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) flux[i] = reflected[i] * (kPi * particles[i].area);
   });

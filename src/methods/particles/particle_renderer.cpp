@@ -15,6 +15,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "lucent/core/parallel.h"
 #include "lucent/core/dump.h"
 #include "lucent/core/memory.h"
 #include "lucent/core/stop.h"
@@ -175,7 +176,7 @@ class ParticleRender {
     flux_ = scatterLight(particles(), directFlux_, scatterLinks_, o_.bounces,
                          particleSeed(o_.common.seed, ParticleStream::Scattering), scattered_);
     radiance_.resize(particles().size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, particles().size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, particles().size(), kItemsPerTask), [&](const tbb::blocked_range<size_t>& r) {
       stopPoint();
       for (size_t i = r.begin(); i != r.end(); ++i) radiance_[i] = particleRadiance(particles()[i], flux_[i]);
     });

@@ -186,7 +186,7 @@ inline void pointsByCell(const UniformGrid& g, std::span<const ShadingPoint> poi
                          std::vector<uint32_t>& groupStart) {
   const size_t n = points.size();
   std::vector<uint32_t> cellOfPoint(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kItemsPerTask), [&](const tbb::blocked_range<size_t>& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) cellOfPoint[i] = g.cellIndex(g.cellOf(points[i].position));
   });
@@ -393,7 +393,7 @@ void estimateAtPoints(const Map* map, std::span<const ShadingPoint> points, cons
     std::vector<uint32_t> order, groupStart;
     pointsByCell(g, points, order, groupStart);
     UninitializedVector<CellQuery> queries(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kItemsPerTask), [&](const tbb::blocked_range<size_t>& r) {
       stopPoint();
       for (size_t j = r.begin(); j != r.end(); ++j) {
         const ShadingPoint& p = points[order[j]];

@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "knn_grid.h"
+#include "lucent/core/parallel.h"
 #include "lucent/core/lane_clones.h"
 #include "lucent/core/octahedral.h"
 #include "lucent/core/stop.h"
@@ -17,7 +18,7 @@ PhotonColumns photonColumns(std::span<const Photon> listed) {
   PhotonColumns c;
   // Every entry is written once: the photons by the parallel fill, the padding by resizeColumns.
   resizeColumns(c, uint32_t(listed.size()));
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, listed.size(), 4096), [&](const auto& range) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, listed.size(), kItemsPerTask), [&](const auto& range) {
     stopPoint();
     for (size_t i = range.begin(); i != range.end(); ++i) {
       const Photon& p = listed[i];

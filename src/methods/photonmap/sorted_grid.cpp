@@ -7,6 +7,7 @@
 #include <bit>
 #include <stdexcept>
 
+#include "lucent/core/parallel.h"
 #include "lucent/core/stop.h"
 
 #include "bitonic_sort.h"
@@ -14,7 +15,6 @@
 namespace lucent {
 namespace {
 
-constexpr size_t kSortGrain = 4096;
 
 // Sorts (key, photon index) pairs with the bitonic sort and finds the start of every key's run by
 // binary search, one work item per key (Fig. 4). keys.size() photons, keyCount possible keys.
@@ -25,13 +25,13 @@ void sortAndIndex(const std::vector<uint32_t>& keys, uint32_t keyCount, std::vec
   beginStage("bitonic_sort");
   Stopwatch sortClock;
   std::vector<uint64_t> sorted(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kSortGrain), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) sorted[i] = packSortKey(keys[i], uint32_t(i));
   });
   bitonicSort(sorted);
   photonList.resize(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kSortGrain), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) photonList[i] = sortIndexOf(sorted[i]);
   });
@@ -41,7 +41,7 @@ void sortAndIndex(const std::vector<uint32_t>& keys, uint32_t keyCount, std::vec
   beginStage("binary_search");
   Stopwatch searchClock;
   firstPhoton.resize(size_t(keyCount) + 1);
-  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, keyCount + 1, kSortGrain), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, keyCount + 1, kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (uint32_t c = r.begin(); c != r.end(); ++c) {
       if (c == keyCount) {
@@ -70,7 +70,7 @@ SortedGrid buildSortedGrid(std::vector<Photon> photons, const GridOptions& optio
   Stopwatch keyClock;
   map.grid = makeUniformGrid(map.photons, options, std::min<uint64_t>(options.maxCells, UINT32_MAX - 1));
   std::vector<uint32_t> keys(map.photons.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, keys.size(), kSortGrain), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, keys.size(), kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) keys[i] = map.grid.cellIndex(map.grid.cellOf(map.photons[i].position));
   });
@@ -101,7 +101,7 @@ HashedGrid buildHashedGrid(std::vector<Photon> photons, const GridOptions& optio
   map.bucketMask = uint32_t(buckets - 1);
   std::vector<uint32_t> keys(n);
   std::vector<uint64_t> cellKeys(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kSortGrain), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) {
       cellKeys[i] = UniformGrid::cellKey(map.grid.cellOf(map.photons[i].position));
@@ -111,7 +111,7 @@ HashedGrid buildHashedGrid(std::vector<Photon> photons, const GridOptions& optio
   if (stats) stats->addStage("grid_keys", keyClock.seconds());
   sortAndIndex(keys, uint32_t(buckets), map.photonList, map.firstPhoton, stats);
   map.cellKeys.resize(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kSortGrain), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) map.cellKeys[i] = cellKeys[map.photonList[i]];
   });

@@ -18,12 +18,12 @@
 #include <atomic>
 #include <stdexcept>
 
+#include "lucent/core/parallel.h"
 #include "lucent/core/stop.h"
 
 namespace lucent {
 namespace {
 
-constexpr size_t kStencilGrain = 4096;
 
 // The scale of each stored photon's power in a cell whose arrivals, in index order, are `ids`.
 Rgb redistributionScale(const std::vector<Photon>& photons, const uint32_t* ids, uint32_t arrived,
@@ -57,7 +57,7 @@ StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& opt
   map.grid = makeUniformGrid(map.photons, options, std::min<uint64_t>(maxCells, UINT32_MAX - 1));
   const uint32_t cells = uint32_t(map.grid.cellCount());
   std::vector<uint32_t> cellOfPhoton(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kStencilGrain), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) cellOfPhoton[i] = map.grid.cellIndex(map.grid.cellOf(map.photons[i].position));
   });
@@ -66,7 +66,7 @@ StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& opt
   beginStage("stencil_count");
   Stopwatch countClock;
   map.arrived.assign(cells, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kStencilGrain), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i)
       std::atomic_ref<uint32_t>(map.arrived[cellOfPhoton[i]]).fetch_add(1, std::memory_order_relaxed);
@@ -78,7 +78,7 @@ StencilGrid buildStencilGrid(std::vector<Photon> photons, const GridOptions& opt
   std::vector<uint32_t> offset(size_t(cells) + 1, 0);
   for (uint32_t c = 0; c < cells; ++c) offset[c + 1] = offset[c] + map.arrived[c];
   std::vector<uint32_t> cursor(offset.begin(), offset.end() - 1), arrivals(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kStencilGrain), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i)
       arrivals[std::atomic_ref<uint32_t>(cursor[cellOfPhoton[i]]).fetch_add(1, std::memory_order_relaxed)] = uint32_t(i);

@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "lucent/core/parallel.h"
 #include "lucent/core/stop.h"
 
 namespace lucent {
@@ -13,7 +14,7 @@ namespace {
 
 Bounds3 photonBounds(std::span<const Photon> photons) {
   return tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, photons.size(), 4096), Bounds3{},
+      tbb::blocked_range<size_t>(0, photons.size(), kItemsPerTask), Bounds3{},
       [&](const auto& r, Bounds3 b) {
         for (size_t i = r.begin(); i != r.end(); ++i) b.extend(photons[i].position);
         return b;
@@ -129,7 +130,7 @@ CellCountTable buildCellCountTable(const UniformGrid& grid, const std::function<
 
 std::vector<Photon> gatherPhotons(const std::vector<Photon>& photons, const std::vector<uint32_t>& ids) {
   std::vector<Photon> gathered(ids.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 4096), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (size_t i = r.begin(); i != r.end(); ++i) gathered[i] = photons[ids[i]];
   });

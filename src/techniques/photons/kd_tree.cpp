@@ -1,3 +1,4 @@
+#include "lucent/core/parallel.h"
 #include "lucent/techniques/photons/kd_tree.h"
 
 #include "lucent/core/dump.h"
@@ -129,7 +130,7 @@ PhotonKdTree buildPhotonKdTree(std::span<const Photon> photons, RenderStats* sta
   PhotonKdTree tree;
   tree.photons.resize(n);
   tree.sourceIndex = std::move(order);
-  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 4096), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (uint32_t i = r.begin(); i != r.end(); ++i) {
       Photon p = photons[tree.sourceIndex[i]];

@@ -37,6 +37,7 @@
 #include <string>
 
 #include "best_candidate_tiles.h"
+#include "lucent/core/parallel.h"
 #include "lucent/core/sobol.h"
 #include "lucent/core/stop.h"
 #include "radix_sort.h"
@@ -46,7 +47,6 @@ namespace lucent {
 namespace {
 constexpr uint32_t kMaxPoints = 1u << 26;
 constexpr uint32_t kMaxCandidates = 64;
-constexpr size_t kGrain = 4096;
 }  // namespace
 
 namespace {
@@ -58,7 +58,7 @@ std::vector<PointSample> sampleLowDiscrepancy(const Distribution1D& areas, uint3
   std::vector<PointSample> points(count);
   uint32_t scramble[3];
   for (int d = 0; d < 3; ++d) scramble[d] = uint32_t(hashKey(seed, 0x50b01u, uint64_t(d)));
-  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, count, kGrain), [&](const auto& r) {
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, count, kItemsPerTask), [&](const auto& r) {
     stopPoint();
     for (uint32_t i = r.begin(); i != r.end(); ++i) {
       const uint32_t triangle = areas.pick(sobolSample(i, 0, scramble[0]));
@@ -161,19 +161,19 @@ std::vector<PointSample> sampleBestCandidate(const Scene& scene, uint32_t count,
     // equal keys stay in index order.
     placedKeys.resize(placed);
     placedIndices.resize(placed);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, placed, kGrain), [&](const auto& r) {
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, placed, kItemsPerTask), [&](const auto& r) {
       stopPoint();
       for (uint32_t i = r.begin(); i != r.end(); ++i) placedKeys[i] = grid.keyOf(positions[i]), placedIndices[i] = i;
     });
     radixSortByKey(placedKeys, placedIndices, grid.keyBits(), keyScratch, indexScratch);
     placedByTile.resize(placed);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, placed, kGrain), [&](const auto& r) {
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, placed, kItemsPerTask), [&](const auto& r) {
       stopPoint();
       for (uint32_t i = r.begin(); i != r.end(); ++i) placedByTile[i] = positions[placedIndices[i]];
     });
     candKeys.resize(candCount);
     candIndices.resize(candCount);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, candCount, kGrain), [&](const auto& r) {
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, candCount, kItemsPerTask), [&](const auto& r) {
       stopPoint();
       for (uint32_t i = r.begin(); i != r.end(); ++i) {
         const PointSample s = candidateAt(areas, options.seed, level, i);
