@@ -4,11 +4,11 @@
 // are the points of a 2D Sobol sequence per pair of dimensions, each pair with its own shuffle of
 // the sample index and each dimension its own Owen scramble, all keyed by (seed, pixel); but a
 // bounce's light point and the direction the path arrived along share one shuffle, the four
-// dimensions of one 4D Sobol sequence (sobolPair). Every other pair of a pixel's first 2^k samples
-// is then stratified in every elementary interval of area 2^-k, a light point in every one of area
-// 2^(2-k) and with its arrival in every 4D one of volume 2^(3-k); different sets, pixels and seeds
-// are independent; and a sample's numbers depend on its index only, so an image does not change
-// with the thread count, the tiles or a split of the samples.
+// dimensions of one 4D Sobol sequence (sobolPair). A pixel's first 2^k samples then put one point
+// of every other pair in every elementary box of area 2^-k, four light points in every box of area
+// 2^(2-k), and eight of the light points with their arrivals in every 4D box of volume 2^(3-k);
+// different sets, pixels and seeds are independent; and a sample's numbers depend on its index
+// only, so an image does not change with the thread count, the tiles or a split of the samples.
 #pragma once
 #include <cstdint>
 
@@ -88,8 +88,8 @@ class PathSampler {
   // The same, `second` being isLightPoint(d) (a constant where lanes of one kind are drawn together).
   [[gnu::always_inline]] static Vec2 sobolPair(uint64_t pixelKey, uint32_t index, uint32_t d, bool second) {
     // The set's seeds: the index's shuffle, then each dimension's scramble, each hashed from the one
-    // before by 32-bit arithmetic (64-bit multiplies are emulated in AVX2 lanes: a second 64-bit
-    // hash took a fifth of the time of sobolPairs).
+    // before in 32-bit arithmetic (64-bit multiplies, which a second 64-bit hash would take, are
+    // emulated in AVX2 lanes).
     const uint64_t a = mix64(pixelKey + (second ? d - kLightPointAfterArrival : d));
     const uint32_t seedX = uint32_t(a >> 32), seedY = mix32(seedX), seedZ = mix32(seedY), seedW = mix32(seedZ);
     const std::array<uint32_t, 2> v =
