@@ -625,17 +625,6 @@ std::vector<Vec2> pixelPairs(uint64_t seed, uint64_t pixel, int bounce, SampleUs
   }
   return points;
 }
-// Whether the first n = 2^m points put one in every box 2^-a x 2^-(m - a).
-bool stratified(const std::vector<Vec2>& points, int m) {
-  for (int a = 0; a <= m; ++a) {
-    std::set<uint64_t> boxes;
-    for (size_t i = 0; i < (size_t(1) << m); ++i)
-      boxes.insert(uint64_t(points[i].x * float(1u << a)) << 32 | uint64_t(points[i].y * float(1u << (m - a))));
-    if (boxes.size() != size_t(1) << m) return false;
-  }
-  return true;
-}
-
 // Whether the first n = 2^m points are a (t, m, s)-net in base 2: 2^t of them in every box of
 // volume 2^(t - m) whose sides are powers of two (s = 2 and t = 0: one in every elementary box).
 template <size_t S>
@@ -658,6 +647,12 @@ bool isNet(const std::vector<std::array<float, S>>& points, int m, int t) {
     return true;
   };
   return each(each, 0, m - t);
+}
+// Whether the first n = 2^m points put one in every box 2^-a x 2^-(m - a).
+bool stratified(const std::vector<Vec2>& points, int m) {
+  std::vector<std::array<float, 2>> pairs;
+  for (const Vec2 p : points) pairs.push_back({p.x, p.y});
+  return isNet(pairs, m, 0);
 }
 }  // namespace
 

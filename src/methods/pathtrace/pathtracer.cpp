@@ -211,7 +211,7 @@ class PathTracer {
     LightMoments lightMoments;          // while the pilot learns the light choice
     // The Sobol sampler's numbers of a bounce's lane hits, drawn together in lanes before the hits
     // are fetched: every hit's light point pair (the light's choice and point), then per hit its
-    // other pairs (lanePairs).
+    // other pairs (otherLanePairs).
     struct SobolRequests {
       uint32_t lightPoints = 0;
       std::vector<uint64_t> pixelKey;
@@ -260,10 +260,10 @@ class PathTracer {
       DrawnPairs drawn{0, w.sobol.lightPoints};
       for (const uint32_t i : w.active) {
         if (const LaneKind kind = laneKind(w.paths[i], w.hits[i]); kind != LaneKind::None) {
-          fetchLane(w.paths[i], w.hits[i], kind, i, lanes, w.textured, w.otherLights,
-                           drawnInLanes ? std::exchange(drawn, {drawn.lightPoint + 1, drawn.rest + lanePairs(w.paths[i], kind) - 1})
-                                        : DrawnPairs{kNotDrawn, 0},
-                           w.sobol);
+          const DrawnPairs pairs =
+              drawnInLanes ? std::exchange(drawn, {drawn.lightPoint + 1, drawn.rest + otherLanePairs(w.paths[i], kind)})
+                           : DrawnPairs{kNotDrawn, 0};
+          fetchLane(w.paths[i], w.hits[i], kind, i, lanes, w.textured, w.otherLights, pairs, w.sobol);
           continue;
         }
         ShadowQuery shadow;
@@ -392,7 +392,7 @@ class PathTracer {
       const uint32_t roulette = PathSampler::dimension(path.bounce + 1, SampleUse::Roulette);
       const uint32_t dimensions[] = {PathSampler::dimension(path.bounce, SampleUse::BsdfDirection),
                                      kind == LaneKind::Gltf ? lobe : roulette, roulette};
-      for (uint32_t k = 0; k + 1 < lanePairs(path, kind); ++k) request(path, dimensions[k]);
+      for (uint32_t k = 0; k < otherLanePairs(path, kind); ++k) request(path, dimensions[k]);
     }
     const uint32_t all = uint32_t(r.index.size()), lights = r.lightPoints;
     r.x.resize(all), r.y.resize(all);
@@ -407,11 +407,11 @@ class PathTracer {
     uint32_t lightPoint, rest;
   };
 
-  // The Sobol pairs drawn in lanes for a hit: its light point's and BSDF direction's, a glTF hit's
-  // lobe choice's (the second of its bounce's roulette pair), and where roulette may end the path on
-  // the next bounce, that bounce's roulette pair.
-  uint32_t lanePairs(const Path& path, LaneKind kind) const {
-    return 2 + (kind == LaneKind::Gltf ? 1 : 0) + (path.bounce + 1 >= opt_.rouletteDepth ? 1 : 0);
+  // The Sobol pairs drawn in lanes for a hit besides its light point's: its BSDF direction's, a glTF
+  // hit's lobe choice's (the second of its bounce's roulette pair), and where roulette may end the
+  // path on the next bounce, that bounce's roulette pair.
+  uint32_t otherLanePairs(const Path& path, LaneKind kind) const {
+    return 1 + (kind == LaneKind::Gltf ? 1 : 0) + (path.bounce + 1 >= opt_.rouletteDepth ? 1 : 0);
   }
 
   // Which lanes shade a hit: Lambertian surfaces and the glTF materials of gltfShadedInLanes below
@@ -423,8 +423,8 @@ class PathTracer {
   }
 
   // The lane's surface data and the random numbers shade draws (drawBounceNumbers): the
-  // independent sampler's from the path's generator, the Sobol sampler's drawn beforehand (its
-  // lanePairs at `drawn` in `sobol`).
+  // independent sampler's from the path's generator, the Sobol sampler's drawn beforehand (at
+  // `drawn` in `sobol`).
   void fetchLane(Path& path, const Hit& hit, LaneKind kind, uint32_t pathIndex, SurfaceLanes& l,
                         std::vector<TexturedLane>& textured, std::vector<uint32_t>& otherLights, DrawnPairs drawn,
                         const Wave::SobolRequests& sobol) const {
@@ -442,7 +442,7 @@ class PathTracer {
       const uint32_t next = rest + 1 + (gltf ? 1 : 0);
       if (gltf) l.uLobe[k] = sobol.y[rest + 1];
       // The next bounce's roulette pair holds its lobe choice too, which shade draws itself.
-      l.uRoulette[k] = next < rest + lanePairs(path, kind) - 1 ? sobol.x[next] : kDrawLater;
+      l.uRoulette[k] = next < rest + otherLanePairs(path, kind) ? sobol.x[next] : kDrawLater;
     } else {
       l.uRoulette[k] = kDrawLater;
       // shade's numbers, its lobe choice among them (which a Lambertian surface does not use).
