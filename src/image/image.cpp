@@ -287,17 +287,19 @@ std::string lowercase(std::string text) {
 // The formats Lucent reads, by extension (docs/scene-format.md, map_Kd).
 constexpr std::string_view kReadableExtensions[] = {".exr", ".hdr", ".pfm", ".png", ".jpg", ".jpeg", ".tif", ".tiff"};
 
-// An opened image: the codec's handle, its header, and the bytes it reads where they are in memory.
+// An opened image: its reader and the reader's handle, its header, and the bytes it reads where they
+// are in memory.
 struct OpenedImage {
   std::vector<unsigned char> bytes;  // what the reader reads, where the file was read whole first
   CodecImageInfo info;
+  const ImageReader* reader = nullptr;
   void* handle = nullptr;
   OpenedImage() = default;
   OpenedImage(OpenedImage&& o) noexcept
-      : bytes(std::move(o.bytes)), info(std::move(o.info)), handle(std::exchange(o.handle, nullptr)) {}
+      : bytes(std::move(o.bytes)), info(std::move(o.info)), reader(o.reader), handle(std::exchange(o.handle, nullptr)) {}
   OpenedImage& operator=(OpenedImage&&) = delete;
   ~OpenedImage() {
-    if (handle) imageReader().close(handle);
+    if (handle) reader->close(handle);
   }
 };
 
@@ -316,9 +318,12 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
   OpenedImage opened;
   static const unsigned char kNoBytes = 0;  // an empty memory is still read from memory
   std::string error;
-  opened.handle = imageReader().open(name, extension.substr(1),
-                                     memory ? (memory->empty() ? &kNoBytes : memory->data()) : nullptr,
-                                     memory ? memory->size() : 0, opened.info, error);
+  opened.reader = &imageReader(extension.substr(1));
+  // The threads oneTBB may use (--threads), which decoding keeps to.
+  const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  opened.handle = opened.reader->open(name, extension.substr(1),
+                                      memory ? (memory->empty() ? &kNoBytes : memory->data()) : nullptr,
+                                      memory ? memory->size() : sourceBytes, threads, opened.info, error);
   if (!opened.handle) throw std::runtime_error("cannot read image '" + name + "': " + error);
   const CodecImageInfo& spec = opened.info;
   // The header's size is checked before any pixel is allocated (a 69-byte PNG may claim 20,000 x
@@ -419,7 +424,7 @@ Image readOpened(OpenedImage opened, const std::string& name, ImageMetadata* met
   requireMemory(floats * sizeof(float) * (isGreyPfm(spec) ? 4 : 1) + 256 * uint64_t(spec.width) * uint64_t(spec.channelCount) * 8,
                 "the image '" + name + "'", "raise --memory-limit if the machine has the memory");
   Image image(spec.width, spec.height, channelNames(spec));
-  if (const std::string why = imageReader().readPixels(opened.handle, image.pixels().data()); !why.empty())
+  if (const std::string why = opened.reader->readPixels(opened.handle, image.pixels().data()); !why.empty())
     throw std::runtime_error("cannot read image '" + name + "': " + why);
   if (isGreyPfm(spec)) {
     Image rgb(spec.width, spec.height, {"R", "G", "B"});
@@ -428,7 +433,7 @@ Image readOpened(OpenedImage opened, const std::string& name, ImageMetadata* met
         for (int c = 0; c < 3; ++c) rgb.at(x, y, c) = image.at(x, y, 0);
     image = std::move(rgb);
   }
-  if (metadata) *metadata = imageReader().stringAttributes(opened.handle);
+  if (metadata) *metadata = opened.reader->stringAttributes(opened.handle);
   return image;
 }
 

@@ -40,17 +40,21 @@ const Functions* loadModule(const char* module, const char* entry, uint32_t inte
 }  // namespace
 
 const ImageWriter& imageWriter() {
-  static const ImageWriter* writer =
-      loadModule<ImageWriter>("liblucent_image_writer.so", "lucentImageWriter", kImageWriterInterface,
-                              "writer, which writes image files");
+  static const ImageWriter* writer = loadModule<ImageWriter>("liblucent_image_exr.so", "lucentImageWriter",
+                                                             kImageWriterInterface, "writer, which writes image files");
   return *writer;
 }
 
-const ImageReader& imageReader() {
-  static const ImageReader* reader =
-      loadModule<ImageReader>("liblucent_image_reader.so", "lucentImageReader", kImageReaderInterface,
-                              "reader, which reads image files");
-  return *reader;
+const ImageReader& imageReader(const std::string& format) {
+  if (format == "exr") {
+    static const ImageReader* exr = loadModule<ImageReader>("liblucent_image_exr.so", "lucentImageReader",
+                                                            kImageReaderInterface, "reader, which reads EXR files");
+    return *exr;
+  }
+  static const ImageReader* others =
+      loadModule<ImageReader>("liblucent_image_oiio.so", "lucentImageReader", kImageReaderInterface,
+                              "reader, which reads HDR, PFM, PNG, JPEG and TIFF files");
+  return *others;
 }
 
 }  // namespace lucent

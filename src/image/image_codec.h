@@ -1,11 +1,12 @@
 // The image file formats' encoders and decoders, in two modules of their own, each loaded the first
-// time it is needed: liblucent_image_writer.so writes EXR and PNG with OpenEXR and libpng, and
-// liblucent_image_reader.so reads every format Lucent reads with OpenImageIO. OpenImageIO brings
-// about 260 shared libraries, whose loading takes a process 0.3 s of CPU (the writer's libraries a
-// few milliseconds): paid only by a process that reads an image (a textured scene, compare, report),
-// not by each render that writes one, each command that refuses its input, or each test. image.cpp
-// makes every check and decision; the modules only call their libraries. Their interfaces hold only
-// standard types and plain records: the modules link nothing of Lucent's.
+// time it is needed: liblucent_image_exr.so writes EXR and PNG and reads EXR with OpenEXR and
+// libpng, and liblucent_image_oiio.so reads the other formats Lucent reads (HDR, PFM, PNG, JPEG,
+// TIFF) with OpenImageIO. OpenImageIO brings about 260 shared libraries, whose loading takes a
+// process 0.3 s of CPU (OpenEXR's and libpng's a few milliseconds): paid only by a process that reads
+// one of those formats (a textured scene, an image another renderer wrote), not by each render that
+// writes an image, each compare or report of EXRs, each command that refuses its input, or each
+// test. image.cpp makes every check and decision; the modules only call their libraries. Their
+// interfaces hold only standard types and plain records: the modules link nothing of Lucent's.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -29,7 +30,7 @@ struct ImageWriter {
   std::string (*encodePng)(int width, int height, const unsigned char* rgb, std::vector<unsigned char>& png);
 };
 
-// What an opened image's header says, as OpenImageIO gives it.
+// What an opened image's header says, as OpenImageIO gives it (the EXR reader gives the same).
 struct CodecImageInfo {
   int width = 0, height = 0, depth = 1, channelCount = 0;
   std::vector<std::string> channelNames;  // may be fewer than channelCount
@@ -40,14 +41,15 @@ struct CodecImageInfo {
   bool floatFormat = false;               // the image's format is 32-bit float
 };
 
-// The reader's functions. Each returns "" or says why it failed (OpenImageIO's message).
+// A reader's functions. Each returns "" or says why it failed (its library's message).
 struct ImageReader {
   uint32_t interfaceVersion;  // kImageReaderInterface
-  // Opens `name` with the reader of `format` ("exr", "png"...) and only that one, reading `bytes`
-  // from `memory` where it is not null (which must outlive the handle), colour unassociated from
-  // alpha; the handle, or null with `error` set.
+  // Opens `name` with the reader of `format` ("exr", "png"...) and only that one, reading from
+  // `memory` where it is not null (which must outlive the handle), colour unassociated from alpha,
+  // decoded by at most `threads` threads at once; `bytes` is the size of the memory or the file. The
+  // handle, or null with `error` set.
   void* (*open)(const std::string& name, const std::string& format, const unsigned char* memory, size_t bytes,
-                CodecImageInfo& info, std::string& error);
+                int threads, CodecImageInfo& info, std::string& error);
   // Every channel of the opened image as float, interleaved.
   std::string (*readPixels)(void* image, float* pixels);
   // Its string attributes.
@@ -56,15 +58,16 @@ struct ImageReader {
 };
 
 inline constexpr uint32_t kImageWriterInterface = 2;
-inline constexpr uint32_t kImageReaderInterface = 2;
+inline constexpr uint32_t kImageReaderInterface = 3;
 
 // Each module's functions, loaded on the first call (thread-safe); throws std::runtime_error where
-// the module cannot be loaded.
+// the module cannot be loaded. The reader of `format` ("exr", "png"...): OpenEXR's for EXR,
+// OpenImageIO's for the others.
 const ImageWriter& imageWriter();
-const ImageReader& imageReader();
+const ImageReader& imageReader(const std::string& format);
 
 }  // namespace lucent
 
-// Each module's one export.
+// The modules' exports: liblucent_image_exr.so has both, liblucent_image_oiio.so the reader.
 extern "C" const lucent::ImageWriter* lucentImageWriter();
 extern "C" const lucent::ImageReader* lucentImageReader();

@@ -1,4 +1,4 @@
-// liblucent_image_reader.so: image_codec.h's ImageReader on OpenImageIO.
+// liblucent_image_oiio.so: image_codec.h's ImageReader on OpenImageIO, for every format but EXR.
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
@@ -18,8 +18,9 @@ struct Opened {
   std::unique_ptr<OIIO::ImageInput> in;
 };
 
-void* open(const std::string& name, const std::string& format, const unsigned char* memory, size_t bytes,
+void* open(const std::string& name, const std::string& format, const unsigned char* memory, size_t bytes, int threads,
            CodecImageInfo& info, std::string& error) {
+  OIIO::attribute("threads", threads);  // its conversions keep to --threads
   auto opened = std::make_unique<Opened>();
   // Created by the format's name: given the path, create() also tries every other reader when the
   // file is not valid for its own.

@@ -1,4 +1,4 @@
-// liblucent_image_writer.so: image_codec.h's ImageWriter on OpenEXR and libpng.
+// liblucent_image_exr.so's writer: image_codec.h's ImageWriter on OpenEXR and libpng.
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>

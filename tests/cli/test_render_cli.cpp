@@ -79,17 +79,26 @@ TEST_CASE("render: the JSON's seconds are its stages', not the process's set-up"
   CHECK(summary["seconds"].get<double>() - stages < 0.15);
 }
 
-TEST_CASE("render: an untextured scene's EXR and PNG are written without loading OpenImageIO", "[cli][render]") {
-  // OpenImageIO's 260 libraries take a process 0.3 s of CPU to load; the writer's (OpenEXR,
-  // libpng) a few milliseconds. The dynamic loader names every object it opens (LD_DEBUG=files).
+TEST_CASE("render: an untextured scene's EXR and PNG are written, and EXRs compared, without loading OpenImageIO", "[cli][render]") {
+  // OpenImageIO's 260 libraries take a process 0.3 s of CPU to load; OpenEXR's and libpng's a few
+  // milliseconds. The dynamic loader names every object it opens (LD_DEBUG=files).
   const test::TempDir dir("render-writer");
   const test::CliRun r = test::runCommand("LD_DEBUG=files " + test::quoted(LUCENT_CLI) + " render " + kScene +
                                           " --spp 1 --resolution 8x8 -q -o " + (dir / "out.exr") + " --png " +
                                           (dir / "out.png"));
   INFO(r.output.substr(0, 2000));
   REQUIRE(r.status == 0);
-  CHECK(r.output.find("liblucent_image_writer.so") != std::string::npos);
+  CHECK(r.output.find("liblucent_image_exr.so") != std::string::npos);
   CHECK(r.output.find("libOpenImageIO") == std::string::npos);
+  const test::CliRun compare = test::runCommand("LD_DEBUG=files " + test::quoted(LUCENT_CLI) + " compare " +
+                                                (dir / "out.exr") + " " + (dir / "out.exr"));
+  CHECK(compare.status == 0);
+  CHECK(compare.output.find("\"relmse\":0") != std::string::npos);
+  CHECK(compare.output.find("libOpenImageIO") == std::string::npos);
+  // The PNG is read by OpenImageIO: the check above can fail.
+  const test::CliRun png = test::runCommand("LD_DEBUG=files " + test::quoted(LUCENT_CLI) + " compare --ldr " +
+                                            (dir / "out.png") + " " + (dir / "out.exr"));
+  CHECK(png.output.find("libOpenImageIO") != std::string::npos);
   CHECK(readImage(dir / "out.png").width() == 8);
   CHECK(readImage(dir / "out.exr").channelIndex("R") >= 0);
 }

@@ -45,11 +45,11 @@ class Image {
 // String attributes stored in the EXR header (e.g. "lucent:method" -> "pt").
 using ImageMetadata = std::vector<std::pair<std::string, std::string>>;
 
-// Loads the module that writes image files (liblucent_image_writer.so, found through the program's
+// Loads the module that writes image files (liblucent_image_exr.so, found through the program's
 // run path or LD_LIBRARY_PATH), which the functions below load on first use: a scene opened for
 // rendering (OpenScene) loads it first, so that a missing module stops a render before it starts,
-// not when its image is written. Throws std::runtime_error where it cannot be loaded. (Images are
-// read by liblucent_image_reader.so, loaded by the first read.)
+// not when its image is written. Throws std::runtime_error where it cannot be loaded. (It reads
+// EXRs too; the other formats are read by liblucent_image_oiio.so, loaded by the first read of one.)
 void loadImageWriter();
 
 // Writes 32-bit float EXR with every channel and the metadata. The file is written under a
