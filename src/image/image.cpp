@@ -120,7 +120,7 @@ void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageM
 
 namespace {
 
-// The most bytes of pixel data, as OpenImageIO hands them over, that a byte of a compressed file
+// The most bytes of pixel data, as the readers hand them over, that a byte of a compressed file
 // decodes to: deflate's limit is 1,032 (EXR's zip and pxr24, PNG, TIFF's deflate), and a PNG's
 // 1-bit palette indices become 3 bytes of RGB each: 1,032 x 8 x 3 = 24,768 below 2^15.
 constexpr uint64_t kMostDecodedPerByte = uint64_t(1) << 15;
@@ -417,9 +417,9 @@ namespace {
 
 Image readOpened(OpenedImage opened, const std::string& name, ImageMetadata* metadata) {
   const CodecImageInfo& spec = opened.info;
-  // The pixels as floats, and OpenImageIO's scanlines, which it decodes up to 256 at a time in
-  // their stored format (up to 8 bytes a channel): for a Radiance header claiming 19,854,521 x 2
-  // pixels it asked for 61 GB (found by fuzzing).
+  // The pixels as floats, and the decoder's scanlines: OpenImageIO decodes up to 256 at a time in
+  // their stored format (up to 8 bytes a channel; for a Radiance header claiming 19,854,521 x 2
+  // pixels it asked for 61 GB, found by fuzzing), OpenEXR fewer.
   const uint64_t floats = uint64_t(spec.width) * uint64_t(spec.height) * uint64_t(spec.channelCount);
   requireMemory(floats * sizeof(float) * (isGreyPfm(spec) ? 4 : 1) + 256 * uint64_t(spec.width) * uint64_t(spec.channelCount) * 8,
                 "the image '" + name + "'", "raise --memory-limit if the machine has the memory");

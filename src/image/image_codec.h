@@ -45,9 +45,9 @@ struct CodecImageInfo {
 struct ImageReader {
   uint32_t interfaceVersion;  // kImageReaderInterface
   // Opens `name` with the reader of `format` ("exr", "png"...) and only that one, reading from
-  // `memory` where it is not null (which must outlive the handle), colour unassociated from alpha,
-  // decoded by at most `threads` threads at once; `bytes` is the size of the memory or the file. The
-  // handle, or null with `error` set.
+  // `memory` where it is not null (which must outlive the handle; the EXR reader reads files only),
+  // colour unassociated from alpha, decoded by at most `threads` threads at once; `bytes` is the
+  // size of the memory or the file. The handle, or null with `error` set.
   void* (*open)(const std::string& name, const std::string& format, const unsigned char* memory, size_t bytes,
                 int threads, CodecImageInfo& info, std::string& error);
   // Every channel of the opened image as float, interleaved.

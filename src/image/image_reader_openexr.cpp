@@ -10,17 +10,18 @@
 #include <OpenEXR/ImfMultiPartInputFile.h>
 #include <OpenEXR/ImfPartType.h>
 #include <OpenEXR/ImfStringAttribute.h>
-#include <OpenEXR/ImfThreading.h>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cstring>
 #include <exception>
 #include <memory>
+#include <span>
 #include <string_view>
-#include <thread>
 
 #include "image/image_codec.h"
+#include "image/openexr_threads.h"
 
 namespace lucent {
 namespace {
@@ -49,8 +50,8 @@ struct ChannelName {
 // position or normal, and X, Y, Z come right after the colours.
 constexpr std::array kColourOrder = {"R",  "Red", "G",  "Green", "B",  "Blue", "Y",  "real", "imag", "A",
                                      "Alpha", "AR", "RA", "AG", "GA", "AB", "BA", "Z", "Depth", "Zback"};
-constexpr std::array kVectorOrder = {"R",    "Red",  "G",     "Green", "B",  "Blue", "X",  "Y",  "Z",     "real",
-                                     "imag", "A",    "Alpha", "AR",    "RA", "AG",   "GA", "AB", "Depth", "Zback"};
+constexpr std::array kVectorOrder = {"R",  "Red",  "G",  "Green", "B",  "Blue", "X",  "Y",  "Z",     "real",
+                                     "imag", "A", "Alpha", "AR", "RA", "AG", "GA", "AB", "BA", "Depth", "Zback"};
 
 bool hasSuffix(const std::vector<ChannelName>& channels, size_t begin, size_t end, std::string_view suffix) {
   for (size_t i = begin; i < end; ++i)
@@ -75,7 +76,7 @@ std::vector<ChannelName> channelsInOrder(const Imf::ChannelList& list) {
     const bool vector = hasSuffix(channels, begin, end, "X") &&
                         (hasSuffix(channels, begin, end, "Y") || hasSuffix(channels, begin, end, "Z"));
     for (size_t i = begin; i < end; ++i) {
-      const auto& order = vector ? kVectorOrder : kColourOrder;
+      const std::span<const char* const> order = vector ? std::span<const char* const>(kVectorOrder) : kColourOrder;
       const auto place = std::find_if(order.begin(), order.end(), [&](const char* s) { return sameLetters(channels[i].suffix, s); });
       if (place != order.end()) channels[i].rank = int(place - order.begin());
     }
@@ -118,12 +119,7 @@ void* open(const std::string& name, const std::string& format, const unsigned ch
   }
   try {
     auto opened = std::make_unique<Opened>();
-    // OpenEXR's pool is started once with a thread per core; a file keeps at most `threads` of them
-    // busy, so that --threads bounds the reading too.
-    if (threads > 1 && bytes >= kBytesWorthThreads) {
-      if (Imf::globalThreadCount() == 0) Imf::setGlobalThreadCount(int(std::thread::hardware_concurrency()));
-      opened->threads = std::min(threads, Imf::globalThreadCount());
-    }
+    if (bytes >= kBytesWorthThreads) opened->threads = openexrThreads(threads);
     opened->file = std::make_unique<Imf::MultiPartInputFile>(name.c_str(), opened->threads);
     const Imf::Header& header = opened->file->header(0);
     if (header.hasType() && Imf::isDeepData(header.type())) {
@@ -176,29 +172,23 @@ std::string readPixels(void* image, float* pixels) {
     const size_t width = size_t(opened.window.max.x - opened.window.min.x + 1);
     const size_t height = size_t(opened.window.max.y - opened.window.min.y + 1);
     const size_t count = opened.channels.size();
-    // OpenEXR addresses a slice from the data window's origin, which may lie far from (0, 0).
-    const long origin = long(opened.window.min.x) + long(opened.window.min.y) * long(width);
-    // Unsigned integers are read apart and scaled to [0, 1], as OpenImageIO converts them to float.
-    std::vector<size_t> integerChannels;
-    for (size_t c = 0; c < count; ++c)
-      if (opened.channels[c].type == Imf::UINT) integerChannels.push_back(c);
-    std::vector<uint32_t> integers(integerChannels.size() * width * height);
+    // Unsigned integers are read into their float's place and converted there, scaled to [0, 1] as
+    // OpenImageIO converts them (in float arithmetic, by 1 / (2^32 - 1) rounded to a float).
     Imf::FrameBuffer frame;
     for (size_t c = 0; c < count; ++c)
-      if (opened.channels[c].type != Imf::UINT)
-        frame.insert(opened.channels[c].name,
-                     Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(pixels + c - origin * long(count)),
-                                sizeof(float) * count, sizeof(float) * count * width));
-    for (size_t i = 0; i < integerChannels.size(); ++i)
-      frame.insert(opened.channels[integerChannels[i]].name,
-                   Imf::Slice(Imf::UINT, reinterpret_cast<char*>(integers.data() + i * width * height - origin),
-                              sizeof(uint32_t), sizeof(uint32_t) * width));
+      frame.insert(opened.channels[c].name,
+                   Imf::Slice::Make(opened.channels[c].type == Imf::UINT ? Imf::UINT : Imf::FLOAT, pixels + c,
+                                    opened.window, sizeof(float) * count, sizeof(float) * count * width));
     Imf::InputPart part(*opened.file, 0);
     part.setFrameBuffer(frame);
     part.readPixels(opened.window.min.y, opened.window.max.y);
-    for (size_t i = 0; i < integerChannels.size(); ++i)
-      for (size_t p = 0; p < width * height; ++p)
-        pixels[p * count + integerChannels[i]] = float(double(integers[i * width * height + p]) / 4294967295.0);
+    for (size_t c = 0; c < count; ++c)
+      if (opened.channels[c].type == Imf::UINT)
+        for (size_t p = 0; p < width * height; ++p) {
+          uint32_t stored;
+          std::memcpy(&stored, pixels + p * count + c, sizeof stored);
+          pixels[p * count + c] = float(stored) * (1.0f / 4294967295.0f);
+        }
     return "";
   } catch (const std::exception& e) {
     return e.what()[0] ? e.what() : "its pixels cannot be read: truncated or damaged";
@@ -208,10 +198,18 @@ std::string readPixels(void* image, float* pixels) {
 CodecAttributes stringAttributes(void* image) {
   CodecAttributes attributes;
   const Imf::Header& header = static_cast<Opened*>(image)->file->header(0);
-  // Not the part's type ("scanlineimage"), which OpenEXR adds to every header it reads.
-  for (auto a = header.begin(); a != header.end(); ++a)
-    if (const auto* text = dynamic_cast<const Imf::StringAttribute*>(&a.attribute()); text && a.name() != std::string("type"))
-      attributes.emplace_back(a.name(), text->value());
+  // As OpenImageIO names them: three standard ones renamed, none empty, and not the part's type
+  // ("scanlineimage"), which OpenEXR adds to every header it reads.
+  static const std::pair<std::string_view, const char*> kRenamed[] = {
+      {"capDate", "DateTime"}, {"comments", "ImageDescription"}, {"owner", "Copyright"}};
+  for (auto a = header.begin(); a != header.end(); ++a) {
+    const auto* text = dynamic_cast<const Imf::StringAttribute*>(&a.attribute());
+    if (!text || text->value().empty() || a.name() == std::string_view("type")) continue;
+    std::string name = a.name();
+    for (const auto& [exr, oiio] : kRenamed)
+      if (name == exr) name = oiio;
+    attributes.emplace_back(name, text->value());
+  }
   return attributes;
 }
 

@@ -4,7 +4,6 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
-#include <OpenEXR/ImfThreading.h>
 #include <png.h>
 
 #include <algorithm>
@@ -12,9 +11,9 @@
 #include <exception>
 #include <new>
 #include <set>
-#include <thread>
 
 #include "image/image_codec.h"
+#include "image/openexr_threads.h"
 
 namespace lucent {
 namespace {
@@ -41,11 +40,8 @@ std::string writeExr(const std::string& path, int width, int height, const std::
       if (header.find(key) != header.end()) return "the attribute '" + key + "' is one of the EXR header's own";
       header.insert(key, Imf::StringAttribute(value));
     }
-    // OpenEXR's pool is started once with a thread per core; a file keeps at most `threads` of
-    // them busy (its line buffers in flight), so that --threads bounds the writing too.
-    const bool threaded = threads > 1 && size_t(width) * size_t(height) * count >= kValuesWorthThreads;
-    if (threaded && Imf::globalThreadCount() == 0) Imf::setGlobalThreadCount(int(std::thread::hardware_concurrency()));
-    Imf::OutputFile file(path.c_str(), header, threaded ? std::min(threads, Imf::globalThreadCount()) : 0);
+    const bool threaded = size_t(width) * size_t(height) * count >= kValuesWorthThreads;
+    Imf::OutputFile file(path.c_str(), header, threaded ? openexrThreads(threads) : 0);
     file.setFrameBuffer(frame);
     file.writePixels(height);
     return "";

@@ -89,8 +89,9 @@ Image readImage(const std::string& path, ImageMetadata* metadata = nullptr);
 // glTF file), checked alike; `name` names it in messages.
 Image readImageFromMemory(const std::string& name, const std::string& extension, std::span<const unsigned char> bytes,
                           ImageMetadata* metadata = nullptr);
-// Whether stored values are sRGB-encoded: the colour space OpenImageIO reports for the file (sRGB
-// for 8-bit JPEG, PNG, TIFF...; linear for EXR and HDR), or, where it reports none, the extension.
+// Whether stored values are sRGB-encoded: the colour space the file's metadata names
+// ("oiio:ColorSpace", which OpenImageIO reports: sRGB for 8-bit JPEG, PNG, TIFF...; linear for HDR),
+// or, where it names none (an EXR), the extension (sRGB for .png, .jpg and .jpeg).
 bool isSrgbEncoded(const std::string& path, const ImageMetadata& metadata);
 // readImage with sRGB-encoded values decoded to linear (every channel but alpha).
 Image readLinearImage(const std::string& path, ImageMetadata* metadata = nullptr);
