@@ -56,14 +56,15 @@ void checkPixelCount(const Image& image, const std::string& path) {
 
 namespace {
 
+// The threads oneTBB may use (--threads), which the codecs' compression and decoding keep to.
+int threadsAllowed() { return int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)); }
+
 FileToWrite exrFile(const Image& image, const std::string& path, const ImageMetadata& metadata) {
   checkPixelCount(image, path);
   const ImageWriter& writer = imageWriter();  // loaded before any file of the set is written
   return {path, "image", [&image, metadata, &writer](const fs::path& tmp) {
-            // The threads oneTBB may use (--threads), which the writer's compression keeps to.
-            const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
             const std::string why = writer.writeExr(tmp.string(), image.width(), image.height(), image.channels(),
-                                                    metadata, image.pixels().data(), threads);
+                                                    metadata, image.pixels().data(), threadsAllowed());
             if (!why.empty()) throw WriteFailure(why);
           }};
 }
@@ -318,12 +319,10 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
   OpenedImage opened;
   static const unsigned char kNoBytes = 0;  // an empty memory is still read from memory
   std::string error;
-  opened.reader = &imageReader(extension.substr(1));
-  // The threads oneTBB may use (--threads), which decoding keeps to.
-  const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
-  opened.handle = opened.reader->open(name, extension.substr(1),
-                                      memory ? (memory->empty() ? &kNoBytes : memory->data()) : nullptr,
-                                      memory ? memory->size() : sourceBytes, threads, opened.info, error);
+  const std::string format = extension.substr(1);
+  opened.reader = &imageReader(format);
+  opened.handle = opened.reader->open(name, format, memory ? (memory->empty() ? &kNoBytes : memory->data()) : nullptr,
+                                      memory ? memory->size() : sourceBytes, threadsAllowed(), opened.info, error);
   if (!opened.handle) throw std::runtime_error("cannot read image '" + name + "': " + error);
   const CodecImageInfo& spec = opened.info;
   // The header's size is checked before any pixel is allocated (a 69-byte PNG may claim 20,000 x

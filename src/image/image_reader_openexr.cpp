@@ -105,7 +105,6 @@ const char* compressionName(Imf::Compression compression) {
 }
 
 struct Opened {
-  int threads = 0;
   std::unique_ptr<Imf::MultiPartInputFile> file;
   std::vector<ChannelName> channels;
   Imath::Box2i window;
@@ -119,8 +118,8 @@ void* open(const std::string& name, const std::string& format, const unsigned ch
   }
   try {
     auto opened = std::make_unique<Opened>();
-    if (bytes >= kBytesWorthThreads) opened->threads = openexrThreads(threads);
-    opened->file = std::make_unique<Imf::MultiPartInputFile>(name.c_str(), opened->threads);
+    opened->file = std::make_unique<Imf::MultiPartInputFile>(name.c_str(),
+                                                             bytes >= kBytesWorthThreads ? openexrThreads(threads) : 0);
     const Imf::Header& header = opened->file->header(0);
     if (header.hasType() && Imf::isDeepData(header.type())) {
       error = "it holds deep data (samples per pixel), not an image";
