@@ -5,7 +5,8 @@ knob (samples, gather rays, photons, micro-buffer size). A curve that keeps fall
 that flattens has met its bias, and the height of the flat part is the method's failure on that
 scene. Each point is the median of --seeds runs (3), with bars spanning them. Writes
 docs/charts/<scene>.png, docs/charts/summary.png (seconds to relMSE 0.01 and 0.001, per method and
-scene) and prints every point.
+scene), the tables of docs/speed-accuracy.md (each between a `<!-- SCENE: written by ... -->` line
+and `<!-- end -->`, and the summary's) and prints every point.
 
 The path tracer averages its pixels (box filter) and is compared with a reference that does too;
 purcell, pmfg, micro and particles take one camera ray through each pixel's centre and are compared with a
@@ -25,6 +26,7 @@ import argparse
 import json
 import math
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -32,6 +34,8 @@ import sys
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LUCENT = os.path.join(ROOT, "build", "lucent")
 CACHE = os.path.join(ROOT, "out", "charts")
+CHARTS = os.path.join(ROOT, "docs", "charts")
+DOC = os.path.join(ROOT, "docs", "speed-accuracy.md")
 
 # Each method's knob swept: (label, options) per setting.
 def pt_samples(extra=()):
@@ -319,6 +323,41 @@ def family(curve):
     return curve.split(" ")[0]
 
 
+def times_to_targets(everything, targets=(1e-2, 1e-3)):
+    """Per scene (in SCENES' order) and curve family, the seconds to reach each target: (seconds,
+    how) from time_to_reach, "never" where no curve of the family gets there, absent where the family
+    is not charted on the scene. Returns the scenes, the families and {scene: {family: {target:
+    cell}}}."""
+    scenes = [scene for scene in SCENES if scene in everything]
+    columns = []
+    for scene in scenes:
+        for curve in everything[scene]:
+            if family(curve) not in columns:
+                columns.append(family(curve))
+    table = {}
+    for scene in scenes:
+        for column in columns:
+            curves = [points for curve, points in everything[scene].items() if family(curve) == column]
+            if not curves:
+                continue
+            # The error target's curve is not extended: where its estimate is low (caustics), its
+            # points stop above their targets and do not fall as 1 / time.
+            unbiased = column.startswith("pt") and "target error" not in column
+            for target in targets:
+                reached = [r for r in (time_to_reach(points, target, unbiased) for points in curves) if r]
+                table.setdefault(scene, {}).setdefault(column, {})[f"{target:g}"] = min(reached) if reached else "never"
+    return scenes, columns, table
+
+
+def cell_text(cell):
+    """A summary cell as text: "never", or its seconds, marked "≤" where at most that long and "~"
+    where extrapolated."""
+    if cell == "never":
+        return "never"
+    seconds, how = cell
+    return {"at most": "≤", "extrapolated": "~", "": ""}[how] + (f"{seconds:.2g}" if seconds < 10 else f"{seconds:.0f}")
+
+
 def summary_chart(everything, out, targets=(1e-2, 1e-3)):
     """Time to reach each target per method and scene: a table of coloured cells; 'never' where no
     setting of the method gets there, blank where the method is not charted on the scene."""
@@ -326,40 +365,18 @@ def summary_chart(everything, out, targets=(1e-2, 1e-3)):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm
-    scenes = [scene for scene in SCENES if scene in everything]
-    columns = []
-    for scene in scenes:
-        for curve in everything[scene]:
-            if family(curve) not in columns:
-                columns.append(family(curve))
+    scenes, columns, table = times_to_targets(everything, targets)
     fig, axes = plt.subplots(1, len(targets), figsize=(6.5 * len(targets), 0.42 * len(scenes) + 2.2), dpi=110)
-    table = {}
     for ax, target in zip(axes, targets):
-        cells = [[None] * len(columns) for _ in scenes]
-        for i, scene in enumerate(scenes):
-            for j, column in enumerate(columns):
-                curves = [points for curve, points in everything[scene].items() if family(curve) == column]
-                if not curves:
-                    continue
-                # The error target's curve is not extended: where its estimate is low (caustics),
-                # its points stop above their targets and do not fall as 1 / time.
-                unbiased = column.startswith("pt") and "target error" not in column
-                reached = [r for r in (time_to_reach(points, target, unbiased) for points in curves) if r]
-                cells[i][j] = min(reached) if reached else "never"
-                table.setdefault(scene, {}).setdefault(column, {})[f"{target:g}"] = (
-                    cells[i][j] if cells[i][j] == "never" else {"seconds": cells[i][j][0], "how": cells[i][j][1]})
+        cells = [[table[scene].get(column, {}).get(f"{target:g}") for column in columns] for scene in scenes]
         times = [[c[0] if isinstance(c, tuple) else math.nan for c in row] for row in cells]
         colours, norm = plt.get_cmap("viridis_r"), LogNorm(vmin=0.01, vmax=1000)
         ax.imshow(times, cmap=colours, norm=norm, aspect="auto")
         for i, row in enumerate(cells):
             for j, c in enumerate(row):
-                if c == "never":
-                    text = "never"
-                elif c:
-                    text = {"at most": "≤", "extrapolated": "~", "": ""}[c[1]] + (f"{c[0]:.2g}" if c[0] < 10 else
-                                                                                       f"{c[0]:.0f}")
-                else:
+                if not c:
                     continue
+                text = cell_text(c)
                 r, g, b, _ = colours(norm(c[0])) if c != "never" else (1, 1, 1, 1)
                 ax.text(j, i, text, ha="center", va="center", fontsize=6.5,
                         color="white" if 0.3 * r + 0.59 * g + 0.11 * b < 0.5 else "black")
@@ -376,6 +393,64 @@ def summary_chart(everything, out, targets=(1e-2, 1e-3)):
     return path, table
 
 
+def compact_settings(labels):
+    """A curve's settings in one cell: "4 / 16 / 64 spp" where the labels share all but their first
+    word, "n_b 1 / 2 / 4" where all but their last, else the labels joined by " / "."""
+    words = [label.split(" ") for label in labels]
+    if len(labels) > 1 and len({len(w) for w in words}) == 1 and len(words[0]) > 1:
+        if all(w[1:] == words[0][1:] for w in words):
+            return " / ".join(w[0] for w in words) + " " + " ".join(words[0][1:])
+        if all(w[:-1] == words[0][:-1] for w in words):
+            return " ".join(words[0][:-1]) + " " + " / ".join(w[-1] for w in words)
+    return " / ".join(labels)
+
+
+def points_table(curves):
+    """A scene's points as a Markdown table: per curve its settings, and the medians of their seconds
+    and relMSE (3 and 2 significant digits)."""
+    rows = ["| curve | settings | seconds | relMSE |", "| --- | --- | ---: | ---: |"]
+    for curve, points in curves.items():
+        rows.append(f"| {curve} | {compact_settings([p['setting'] for p in points])} | "
+                    + " / ".join(f"{p['seconds']:.3g}" for p in points) + " | "
+                    + " / ".join(f"{p['relmse']:.2g}" for p in points) + " |")
+    return rows
+
+
+def summary_table(table):
+    """times_to_targets' table in Markdown: per scene and curve family, the seconds to each target."""
+    columns = []
+    for times in table.values():
+        columns += [c for c in times if c not in columns]
+    rows = ["| scene | " + " | ".join(columns) + " |", "| --- |" + " ---: |" * len(columns)]
+    for scene, times in table.items():
+        rows.append(f"| {scene} | " + " | ".join(", ".join(cell_text(c) for c in times[column].values())
+                                                  if column in times else "" for column in columns) + " |")
+    return rows
+
+
+def block(key):
+    return f"<!-- {key}: written by scripts/chart-speed-accuracy.py from docs/charts/speed-accuracy.json -->"
+
+
+END_BLOCK = "<!-- end -->"
+
+
+def doc_with_tables(doc, everything, table):
+    """The document with each of its generated blocks (`block(scene)` ... END_BLOCK, and
+    `block("summary")`) holding what the JSON gives; a block whose scene the JSON lacks is an error."""
+    def replace(match):
+        key = match.group(1)
+        if key == "summary":
+            rows = summary_table(table)
+        elif key in everything:
+            rows = points_table(everything[key])
+        else:
+            sys.exit(f"chart-speed-accuracy: docs/speed-accuracy.md has a table for '{key}', which the JSON lacks")
+        return block(key) + "\n" + "\n".join(rows) + "\n" + END_BLOCK
+    pattern = re.escape(block("KEY")).replace("KEY", "([^:]+)") + r"\n.*?" + re.escape(END_BLOCK)
+    return re.sub(pattern, replace, doc, flags=re.S)
+
+
 def save(everything, path):
     """Writes the points of every scene, in SCENES' order, replacing the file only once written."""
     with open(path + ".tmp", "w") as f:
@@ -387,7 +462,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
     parser.add_argument("--threads", type=int, default=2)
-    parser.add_argument("--out", default=os.path.join(ROOT, "docs", "charts"))
+    parser.add_argument("--out", default=CHARTS,
+                        help="where the charts and their JSON go; only with the default are the tables of "
+                             "docs/speed-accuracy.md rewritten")
     parser.add_argument("--methods", nargs="+", metavar="NAME",
                         help="measure only these methods (pt, pmfg, particles, ...: every curve of the method); "
                              "the others keep the points of the last run")
@@ -453,10 +530,16 @@ def main():
                 print(f"  chart: {chart(scene, everything[scene], args.out)}", flush=True)
     path, table = summary_chart(everything, args.out)
     print(f"  summary: {path}")
+    if os.path.abspath(args.out) == CHARTS:  # the document shows these charts: its tables too
+        with open(DOC) as f:
+            doc = f.read()
+        with open(DOC + ".tmp", "w") as f:
+            f.write(doc_with_tables(doc, everything, table))
+        os.replace(DOC + ".tmp", DOC)
+        print(f"  tables: {DOC}")
     for scene, columns in table.items():
-        print(f"  {scene:22s} " + "  ".join(f"{c}: " + ", ".join(
-            f"{t} {'never' if v == 'never' else v['how'] + ' ' + format(v['seconds'], '.3g') + ' s'}"
-            for t, v in times.items()) for c, times in columns.items()))
+        print(f"  {scene:22s} " + "  ".join(f"{c}: " + ", ".join(f"{t} {cell_text(v)}" for t, v in times.items())
+                                            for c, times in columns.items()))
     return 0
 
 

@@ -1,7 +1,7 @@
 """scripts/chart-speed-accuracy.py's arithmetic and labels, without rendering: the summary's seconds
-to reach a relMSE, each point's bars, the summary's columns, and labels that overlap neither each
-other nor the markers. The label test needs matplotlib (Debian: python3-matplotlib) and is skipped
-without it, as the script itself needs it to draw.
+to reach a relMSE, each point's bars, the summary's columns, labels that overlap neither each other
+nor the markers, and the document's tables written from the JSON. The label test needs matplotlib
+(Debian: python3-matplotlib) and is skipped without it, as the script itself needs it to draw.
 
   python3 -m pytest -q tests/chart_test.py
 """
@@ -110,3 +110,36 @@ def test_labels_overlap_neither_each_other_nor_markers(offsets, monkeypatch):
         assert clashes
     else:
         assert not clashes
+
+
+def test_settings_share_their_unit_in_one_cell():
+    assert chart.compact_settings(["4 spp", "16 spp", "64 spp"]) == "4 / 16 / 64 spp"
+    assert chart.compact_settings(["8x8 buffers", "16x16 buffers"]) == "8x8 / 16x16 buffers"
+    assert chart.compact_settings(["n_b 1", "n_b 2", "n_b 4"]) == "n_b 1 / 2 / 4"
+    assert chart.compact_settings(["8x8, 4x4", "16x16, 8x8"]) == "8x8, 4x4 / 16x16, 8x8"
+    assert chart.compact_settings(["E 0.01", "E 0.003"]) == "E 0.01 / 0.003"
+    assert chart.compact_settings(["1k photons"]) == "1k photons"
+
+
+def test_tables_are_written_between_their_markers_from_the_json():
+    everything = {"cornell-box": {"pt": [{"setting": "4 spp", "seconds": 0.0612, "relmse": 0.16675},
+                                         {"setting": "16 spp", "seconds": 0.18, "relmse": 0.029851}],
+                                  "purcell": [{"setting": "16k photons", "seconds": 0.24, "relmse": 0.0140}]}}
+    _, _, table = chart.times_to_targets(everything)
+    stale = "| curve | settings | seconds | relMSE |\n| old | row | 1 | 2 |"
+    doc = ("# Title\n\n" + chart.block("cornell-box") + "\n" + stale + "\n" + chart.END_BLOCK + "\n\nprose\n\n"
+           + chart.block("summary") + "\n" + chart.END_BLOCK + "\n")
+    written = chart.doc_with_tables(doc, everything, table)
+    assert "| old | row |" not in written
+    assert "| pt | 4 / 16 spp | 0.0612 / 0.18 | 0.17 / 0.03 |" in written
+    assert "| purcell | 16k photons | 0.24 | 0.014 |" in written
+    # purcell reaches 0.01 nowhere (biased), the path tracer's curve is extended as 1 / time.
+    assert "| scene | pt | purcell |" in written
+    assert "| cornell-box | ~0.54, ~5.4 | never, never |" in written
+    assert written.endswith("prose\n\n" + chart.block("summary") + "\n" + "\n".join(chart.summary_table(table))
+                            + "\n" + chart.END_BLOCK + "\n")
+    # Written again, nothing changes; a table of a scene the JSON lacks is refused.
+    assert chart.doc_with_tables(written, everything, table) == written
+    with pytest.raises(SystemExit):
+        chart.doc_with_tables(chart.block("maze") + "\n" + chart.END_BLOCK, everything, table)
+
