@@ -120,10 +120,10 @@ const OptionTable<RenderArgs>& renderFlags() {
     t.flag("strict", &A::strict,
            "refuse a scene whose files hold what the render would leave out (a glTF material's occlusion texture "
            "or volume: the JSON line's \"ignored\")");
-    t.choice<bool>("gltf_masking", &A::gltfHeightCorrelated, {{"separable", false}, {"height-correlated", true}},
-                   "Smith masking-shadowing of glTF materials: Appendix B's separable form, or the height-correlated "
-                   "one of the Khronos sample renderer and many GPU engines (a scene file's glTF entry may set its "
-                   "own)");
+    t.choice<bool>("gltf_masking", &A::gltfHeightCorrelated, {{"height-correlated", true}, {"separable", false}},
+                   "Smith masking-shadowing of glTF materials: the height-correlated form of Appendix B and most GPU "
+                   "engines, or the separable one the appendix gave before its 2026 revision (a scene file's glTF "
+                   "entry may set its own)");
     t.choice<bool>("gltf_normal_maps", &A::gltfBendNormalMaps, {{"bend", true}, {"as-given", false}},
                    "glTF normal maps: bent per viewing direction so that mirror reflections stay above the surface, "
                    "as production renderers do, or as the texture gives them (reflections below the surface are "

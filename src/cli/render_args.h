@@ -25,7 +25,7 @@ struct RenderArgs {
   bool resume = false;
   uint64_t memoryLimit = 0;  // 0: the available memory
   bool quiet = false, robust = false, help = false, logStages = false, strict = false;
-  bool gltfHeightCorrelated = false;
+  bool gltfHeightCorrelated = true;
   bool gltfBendNormalMaps = true;
   double lumensPerWatt = GltfOptions{}.lumensPerWatt;
   std::string gltfCamera;

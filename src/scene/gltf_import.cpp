@@ -745,8 +745,10 @@ struct NodeWalk {
     // Tangents for the normal textures, the base's or (without one) the clear coat's: the two share
     // their tangent space (KHR_materials_clearcoat says they should use the same coordinates).
     const bool normalMapped = !spec.normal.empty() || !spec.clearcoatNormalTexture.empty();
+    // Without NORMAL the file's tangents are ignored (the glTF specification: the normals are the
+    // faces', the tangents made from them).
     std::vector<double> tangents;
-    if (normalMapped && attribute("TANGENT") >= 0)
+    if (normalMapped && attribute("TANGENT") >= 0 && !normals.empty())
       tangents = readAccessor(c, attribute("TANGENT"), path + ".attributes.TANGENT", TINYGLTF_TYPE_VEC4,
                               {TINYGLTF_COMPONENT_TYPE_FLOAT});
     // TEXCOORD_0, and TEXCOORD_1 where one of the material's textures reads it.
@@ -839,10 +841,10 @@ struct NodeWalk {
   }
 
   // The tangents of the vertices from `first` on: the file's (placed by the node's transform, the
-  // sign turned over by a mirroring one), or, where it gives none, from the texture coordinates,
-  // each triangle's dP/du and dP/dv summed at its corners (Lengyel's construction; MikkTSpace's
-  // without its splitting of vertices), the sign where the summed bitangent lies against
-  // cross(normal, tangent).
+  // sign turned over by a mirroring one), or, where it gives none or no normals, from the texture
+  // coordinates, each triangle's dP/du and dP/dv summed at its corners (Lengyel's construction;
+  // MikkTSpace's without its splitting of vertices), the sign where the summed bitangent lies
+  // against cross(normal, tangent).
   void placeTangents(const std::vector<double>& given, const Matrix4& world, bool mirrored, uint32_t first,
                      const std::vector<uint32_t>& corners, const TextureFile& normalTexture) {
     scene.tangents.resize(scene.positions.size());
@@ -862,10 +864,15 @@ struct NodeWalk {
     const auto uvOf = [&](uint32_t k) {
       return normalTexture.transformed ? transformedUv(normalTexture.transform.data(), set[k]) : set[k];
     };
-    std::vector<Vec3> bitangents(vertices, Vec3{0, 0, 0});
+    // Without vertex normals a face's own normal frames its normal texture (the triangle's as stored:
+    // wound the other way under a mirroring node), and the faces' normals summed at a vertex decide
+    // its sign.
+    std::vector<Vec3> bitangents(vertices, Vec3{0, 0, 0}), faceNormals(vertices, Vec3{0, 0, 0});
     for (size_t t = 0; t + 2 < corners.size(); t += 3) {
       const uint32_t i[3] = {first + corners[t], first + corners[t + 1], first + corners[t + 2]};
       const Vec3 e1 = scene.positions[i[1]] - scene.positions[i[0]], e2 = scene.positions[i[2]] - scene.positions[i[0]];
+      const Vec3 faceNormal = cross(e1, e2) * (mirrored ? -1.0f : 1.0f);
+      for (const uint32_t k : i) faceNormals[k - first] = faceNormals[k - first] + faceNormal;
       const Vec2 uv0 = uvOf(i[0]), uv1 = uvOf(i[1]), uv2 = uvOf(i[2]);
       const float du1 = uv1.x - uv0.x, dv1 = uv1.y - uv0.y, du2 = uv2.x - uv0.x, dv2 = uv2.y - uv0.y;
       const float det = du1 * dv2 - du2 * dv1;
@@ -886,7 +893,7 @@ struct NodeWalk {
         continue;
       }
       t.direction = t.direction / len;
-      const Vec3 n = scene.normals[first + v] == Vec3{0, 0, 0} ? t.direction : scene.normals[first + v];
+      const Vec3 n = scene.normals[first + v] == Vec3{0, 0, 0} ? faceNormals[v] : scene.normals[first + v];
       t.sign = dot(cross(n, t.direction), bitangents[v]) < 0 ? -1.0f : 1.0f;
     }
   }

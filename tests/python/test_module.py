@@ -254,14 +254,18 @@ def test_gltf_choices_load_as_lucent_renders_options_read_them(tmp_path):
     """gltf_masking and gltf_normal_maps give the image the CLI's options of those names give (the
     exported Cornell box read directly: its materials are glTF's), and bad values are refused."""
     box = os.path.join(SOURCE, "scenes", "gltf", "cornell-box.glb")
-    code, _, err = cli("render", box, "--resolution", "16x16", "--spp", "4", "--gltf-masking", "height-correlated",
+    code, _, err = cli("render", box, "--resolution", "16x16", "--spp", "4", "--gltf-masking", "separable",
                        "--gltf-normal-maps", "as-given", "--quiet", "-o", tmp_path / "box.exr")
     assert code == 0, err
-    scene = lucent.load_scene(box, resolution=(16, 16), gltf_masking="height-correlated", gltf_normal_maps="as-given")
+    scene = lucent.load_scene(box, resolution=(16, 16), gltf_masking="separable", gltf_normal_maps="as-given")
     module = lucent.render(scene, spp=4)
     assert np.array_equal(module["image"], lucent.read_image(str(tmp_path / "box.exr"))["image"])
-    separable = lucent.render(lucent.load_scene(box, resolution=(16, 16)), spp=4)
-    assert not np.array_equal(separable["image"], module["image"])
+    # The defaults, height-correlated and bent, as the CLI's.
+    code, _, err = cli("render", box, "--resolution", "16x16", "--spp", "4", "--quiet", "-o", tmp_path / "plain.exr")
+    assert code == 0, err
+    plain = lucent.render(lucent.load_scene(box, resolution=(16, 16)), spp=4)
+    assert np.array_equal(plain["image"], lucent.read_image(str(tmp_path / "plain.exr"))["image"])
+    assert not np.array_equal(plain["image"], module["image"])
     with pytest.raises(ValueError, match="gltf_masking: expected separable or height-correlated"):
         lucent.load_scene(box, gltf_masking="smooth")
     with pytest.raises(ValueError, match="gltf_normal_maps: expected bend or as-given"):

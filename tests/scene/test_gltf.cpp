@@ -866,6 +866,17 @@ TEST_CASE("glTF normal and metallic-roughness textures are read as linear data, 
     const Scene scene = loadWrapped(dir.path, f);
     const SurfacePoint sp = surfaceAt(scene, 0, 1 / 3.0f, 1 / 3.0f);
     CHECK(sp.shadingNormal.y > 0);
+    // Without NORMAL the file's tangents are ignored (the specification: flat normals, tangents
+    // made from them): the sign comes from the texture coordinates about the faces' normal again.
+    f["meshes"][0]["primitives"][0]["attributes"].erase("NORMAL");
+    expectNormal(loadWrapped(dir.path, f), 1, 2);
+  }
+  SECTION("tangents from the texture coordinates about the faces' normal, without NORMAL") {
+    f["meshes"][0]["primitives"][0]["attributes"].erase("NORMAL");
+    expectNormal(loadWrapped(dir.path, f), 1, 2);
+    // Mirrored by its node, the faces turn over with it: the tilt mirrors with the surface.
+    f["nodes"][0]["scale"] = {-1, 1, 1};
+    expectNormal(loadWrapped(dir.path, f), -1, 2);
   }
 }
 
@@ -1459,17 +1470,19 @@ TEST_CASE("A glTF entry's masking, normal maps and lumens per watt, and the load
   };
   const Scene plain = load({{"gltf", file}}, LoadOptions(true));
   REQUIRE(plain.materials[0].normalTexture >= 0);
-  CHECK(plain.materials[0].masking == GgxMasking::Separable);
+  // Height-correlated by default, as Appendix B gives it since its revision of January 2026.
+  CHECK(plain.materials[0].masking == GgxMasking::HeightCorrelated);
   CHECK(plain.materials[0].bendsNormalMap == 1);  // bent by default
   CHECK(plain.lights[0].value.g == Approx(1.0f));
-  const Scene flagged = load({{"gltf", file}}, LoadOptions(true, {true, false, 341.5, ""}));
-  CHECK(flagged.materials[0].masking == GgxMasking::HeightCorrelated);
+  const Scene flagged = load({{"gltf", file}}, LoadOptions(true, {false, false, 341.5, ""}));
+  CHECK(flagged.materials[0].masking == GgxMasking::Separable);
   CHECK(flagged.materials[0].bendsNormalMap == 0);
   CHECK(flagged.lights[0].value.g == Approx(2.0f));
   // The entry's own fields win over the load options.
-  const Scene own = load({{"gltf", file}, {"masking", "separable"}, {"normal_maps", "bend"}, {"lumens_per_watt", 68.3}},
-                         LoadOptions(true, {true, false, 341.5, ""}));
-  CHECK(own.materials[0].masking == GgxMasking::Separable);
+  const Scene own = load({{"gltf", file}, {"masking", "height-correlated"}, {"normal_maps", "bend"},
+                          {"lumens_per_watt", 68.3}},
+                         LoadOptions(true, {false, false, 341.5, ""}));
+  CHECK(own.materials[0].masking == GgxMasking::HeightCorrelated);
   CHECK(own.materials[0].bendsNormalMap == 1);
   CHECK(own.lights[0].value.g == Approx(10.0f));
   CHECK(load({{"gltf", file}, {"normal_maps", "as-given"}}, LoadOptions(true)).materials[0].bendsNormalMap == 0);

@@ -1,8 +1,8 @@
 // The GGX (Trowbridge-Reitz) microfacet distribution that glTF's metallic-roughness material uses
 // (glTF 2.0 specification, Appendix B), in the local shading frame (normal on +z), with alpha =
 // roughness^2: the distribution D, Smith's masking function in both forms a backend may implement
-// (the separable product that Appendix B gives, and the height-correlated form of the Khronos sample
-// renderer), and the sampling of visible normals (Heitz 2018, "Sampling the GGX Distribution of
+// (the height-correlated form that Appendix B gives since its revision of January 2026, and the
+// separable product it gave before), and the sampling of visible normals (Heitz 2018, "Sampling the GGX Distribution of
 // Visible Normals", JCGT 7(4)) with its density. The functions the path tracer's lane loop calls
 // are written with selects only (no early return), so that it vectorizes.
 #pragma once
@@ -46,8 +46,8 @@ inline float ggxD(float alpha, float cosM) {
   return 2.0f * c / (c + std::sqrt(alpha * alpha + (1.0f - alpha * alpha) * c * c));
 }
 
-// Masking-shadowing of the pair of directions: Appendix B's separable product G1(o) G1(i), or the
-// height-correlated 1 / (1 + Lambda(o) + Lambda(i)), never smaller.
+// Masking-shadowing of the pair of directions: the separable product G1(o) G1(i) (glTF's Appendix B
+// before 2026), or the height-correlated 1 / (1 + Lambda(o) + Lambda(i)) (Appendix B now), never smaller.
 [[gnu::always_inline]]
 inline float smithSeparable(float alpha, float cosO, float cosI) { return smithG1(alpha, cosO) * smithG1(alpha, cosI); }
 [[gnu::always_inline]] inline float smithHeightCorrelated(float alpha, float cosO, float cosI) {

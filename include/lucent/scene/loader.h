@@ -16,10 +16,10 @@ class SceneError : public std::runtime_error {
 
 // How glTF files are read where the file leaves a choice to the renderer.
 struct GltfOptions {
-  // Smith's masking-shadowing term: Appendix B's separable product, or the height-correlated form
-  // of the Khronos sample renderer and many GPU engines (to compare a backend with the model it
-  // implements).
-  bool heightCorrelated = false;
+  // Smith's masking-shadowing term: the height-correlated form of Appendix B (since the
+  // specification's revision of January 2026) and of most GPU engines, or the separable product
+  // the appendix gave before (to compare a backend with the model it implements).
+  bool heightCorrelated = true;
   // Normal-mapped shading normals bent, per viewing direction, just enough that the mirror
   // direction stays above the surface (bentForReflection, surface.h), as production renderers do;
   // false: as the texture gives them, where reflections below the surface are lost (dark rims).

@@ -42,7 +42,7 @@ struct Material {
   int32_t kdTexture = -1;  // index into Scene::textures, -1 for none
   // glTF only.
   float metallic = 0.0f, roughness = 1.0f;
-  GgxMasking masking = GgxMasking::Separable;  // Smith's form (ggx.h): Appendix B's, or --height-correlated
+  GgxMasking masking = GgxMasking::Separable;  // Smith's form (ggx.h): --gltf-masking's
   float specular = 1.0f;                   // KHR_materials_specular's specularFactor
   int32_t metallicRoughnessTexture = -1;   // linear; B scales metallic, G roughness
   int32_t normalTexture = -1;              // linear tangent-space normals, x and y scaled by normalScale
