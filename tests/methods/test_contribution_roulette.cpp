@@ -60,6 +60,16 @@ TEST_CASE("Roulette scales are K M / (I + 0.01), I over the pixel's 5 x 5 neighb
       CHECK(crop.at(uint64_t(y) * 24 + uint64_t(x)).g == at(x, y).g);
     }
 
+  // A pixel filter's negative lobes can make pixel means negative: I counts as zero there, so that
+  // every path keeps a chance to go on (a scale of zero or less would end them all: bias).
+  const Image lobed = test::rgbImage(24, 16, [](int x, int) { return x < 12 ? Rgb(-0.05f, 0.01f, -0.002f) : Rgb(1.0f); });
+  const RouletteScales lobes(lobed, {0, 0, 24, 16});
+  const float lobedMean = (3 * (-0.05f + 0.01f - 0.002f) / 3 + 3 * 1.0f) / 6;
+  const Rgb darkSide = lobes.at(8 * 24 + 3);
+  CHECK(darkSide.r == Approx(2 * lobedMean / 0.01f).epsilon(1e-5));
+  CHECK(darkSide.g == Approx(2 * lobedMean / (0.01f + 0.01f)).epsilon(1e-5));
+  CHECK(darkSide.b == Approx(2 * lobedMean / 0.01f).epsilon(1e-5));
+
   // A pilot that met no light gives throughput roulette.
   const RouletteScales dark(test::rgbImage(8, 8, [](int, int) { return Rgb(0.0f); }), {0, 0, 8, 8});
   CHECK(dark.at(27).r == 1.0f);

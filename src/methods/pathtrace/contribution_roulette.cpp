@@ -54,8 +54,11 @@ RouletteScales::RouletteScales(const Image& pilotMeans, const PixelRect& region)
         for (int nx = std::max(0, x - kNeighbourhood); nx <= std::min(width - 1, x + kNeighbourhood); ++nx, ++n)
           value += Rgb(pilotMeans.at(nx, ny, 0), pilotMeans.at(nx, ny, 1), pilotMeans.at(nx, ny, 2));
       value *= 1.0f / float(n);
+      // A pixel filter's negative lobes (Mitchell's) can make the neighbourhood's mean negative: as
+      // dark as a pixel can be, never a scale of zero or less, which would end its paths for certain.
+      const auto scaleOf = [&](float v) { return k / (std::max(v, 0.0f) + kRelMseFloor); };
       scale_[size_t(y - region.y0) * size_t(region.width()) + size_t(x - region.x0)] =
-          Rgb(k / (value.r + kRelMseFloor), k / (value.g + kRelMseFloor), k / (value.b + kRelMseFloor));
+          Rgb(scaleOf(value.r), scaleOf(value.g), scaleOf(value.b));
     }
 }
 

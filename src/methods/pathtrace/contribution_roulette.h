@@ -62,8 +62,8 @@ std::vector<uint32_t> pilotPixels(int width, int height, const PixelRect& region
 // seen from the galleries through the courtyard's opening, takes 14% of its samples and brings
 // less than BSDF sampling finds of it, while the sun's samples carry the galleries' bounced light.
 // The variance of a choice among groups of lights is smallest with each group chosen in proportion
-// to the square root of the second moment of what its samples bring, f^2 / q: per kind of light
-// (emitting triangles, the environment, point, spot and directional lights), the pilot's lattice
+// to the square root of the second moment of what its samples bring, f^2 / q: per group (emitting
+// triangles; the environment; point, spot and directional lights together), the pilot's lattice
 // pixels add each unoccluded light sample's contribution squared, whose mean times the group's
 // probability under the pilot's choice estimates it. Within a group lights keep their power's
 // shares; a tenth of each group's probability stays its power's, so that a group the pilot did not
