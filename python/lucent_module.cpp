@@ -259,15 +259,28 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
   settings.metric = metric, settings.maxError = maxError, settings.test = test, settings.block = block;
   settings.within = within, settings.alpha = alpha, settings.layer = layer, settings.imageLayer = imageLayer;
   settings.pixelsPerDegree = ppd, settings.startExposure = startExposure, settings.stopExposure = stopExposure;
+  // Arrays of half floats (NumPy's float16) are rounded as an EXR's half channels are.
+  const auto roundingOf = [](const py::handle& value) {
+    const py::object a = py::isinstance<py::dict>(value) ? py::object(value.cast<py::dict>()["image"])
+                                                         : py::reinterpret_borrow<py::object>(value);
+    const py::array array = py::array::ensure(a);
+    return array && array.dtype().kind() == 'f' && array.dtype().itemsize() == 2 ? kHalfRounding : kFloatRounding;
+  };
   // A list or tuple of arrays: independent runs of one renderer.
   std::vector<Image> runs;
+  double rounding = kFloatRounding;
   if (py::isinstance<py::list>(image) || py::isinstance<py::tuple>(image)) {
-    for (const py::handle run : image) runs.push_back(imageFrom(run, "run " + std::to_string(runs.size() + 1)));
+    for (const py::handle run : image) {
+      runs.push_back(imageFrom(run, "run " + std::to_string(runs.size() + 1)));
+      rounding = std::max(rounding, roundingOf(run));
+    }
     if (runs.size() < 2) throw std::invalid_argument("runs: give two or more arrays, or one array");
   } else {
     runs.push_back(imageFrom(image, "image"));
+    rounding = roundingOf(image);
   }
   Image b = imageFrom(reference, "reference");
+  const double referenceRounding = roundingOf(reference);
   // A reference dict's material names (render's and read_image's "materials") name the breakdown by surface.
   if (py::isinstance<py::dict>(reference) && reference.cast<py::dict>().contains("materials"))
     settings.materialNames = reference.cast<py::dict>()["materials"].cast<std::vector<std::string>>();
@@ -276,6 +289,7 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
     py::gil_scoped_release release;
     const KeepFloatingPointMode keep;
     Candidate candidate = runs.size() == 1 ? Candidate(std::move(runs[0])) : Candidate(std::move(runs));
+    candidate.rounding = rounding, candidate.referenceRounding = referenceRounding;
     result = compareImagePair(std::move(candidate), std::move(b), settings, imageSrgb, referenceSrgb);
   }
   return py::module_::import("json").attr("loads")(result.json);
@@ -394,7 +408,7 @@ PYBIND11_MODULE(lucent, m) {
       .def_property_readonly("triangles", [](const OpenScene& s) { return s.scene().indices.size() / 3; });
   m.def("load_scene", &openScene, py::arg("path"), py::arg("resolution") = py::none(), py::arg("strict") = false,
         py::arg("isa") = py::none(), py::arg("robust") = false, py::arg("memory_limit") = py::none(),
-        py::arg("gltf_masking") = "separable", py::arg("gltf_normal_maps") = "bend",
+        py::arg("gltf_masking") = "height-correlated", py::arg("gltf_normal_maps") = "bend",
         py::arg("lumens_per_watt") = GltfOptions{}.lumensPerWatt, py::arg("gltf_camera") = "",
         "Loads a scene file or a glTF file as `lucent render` does: resolution=(width, height) overrides the "
         "camera's; strict refuses a scene whose files hold what a render would leave out; isa names the "

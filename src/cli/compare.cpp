@@ -53,12 +53,14 @@ int runCompare(const CompareOptions& opt) {
   // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
   const bool statistical = s.test || s.within.has_value();
   const std::string pair = "'" + runs[0] + (runs.size() > 1 ? "' (and its other runs)" : "'") + " vs '" + referencePath + "': ";
-  bool halfVariance = false;
+  bool halfVariance = false, halfColour = false, referenceHalfColour = false;
   {
     const ImageHeader reference = readImageHeader(referencePath);
+    referenceHalfColour = reference.hasHalfColour();
     for (const std::string& path : runs) {
       const ImageHeader image = readImageHeader(path);
       halfVariance = halfVariance || image.hasHalfVariance();
+      halfColour = halfColour || image.hasHalfColour();
       try {
         checkComparable(image, reference, statistical || !s.layer.empty());
       } catch (const std::invalid_argument& e) {
@@ -75,6 +77,8 @@ int runCompare(const CompareOptions& opt) {
   }
   Image reference = readLinearImage(referencePath, &referenceMetadata);
   Candidate candidate = images.size() == 1 ? Candidate(std::move(images[0]), halfVariance) : Candidate(std::move(images));
+  candidate.rounding = halfColour ? kHalfRounding : kFloatRounding;
+  candidate.referenceRounding = referenceHalfColour ? kHalfRounding : kFloatRounding;
   ComparisonSettings settings = s;
   settings.heatmap = !opt.heatmap.empty();
   ImageComparison result;

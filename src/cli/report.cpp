@@ -403,7 +403,9 @@ void candidateSection(std::ostringstream& html, const ReportOptions& opt, const 
   if (c.test) {
     const NoiseTest& t = *c.test;
     html << "<p>Relative difference Σ(c − r) / Σr (bias) and z per region; rejected regions in red"
-         << (c.equivalence ? "; with --within, its (1 − 2α) interval, red where it leaves ±" + number(*opt.within) : "")
+         << (c.equivalence ? "; with --within, the (1 − 2α) interval of its deciding channel (R, G or B), red where it "
+                             "leaves ±" + number(*opt.within)
+                           : "")
          << ". Blocks of "
          << t.block << " x " << t.block << " pixels rejected: " << t.blocksRejected << " of " << t.blocks
          << "; least block p-value " << number(t.minBlockPValue) << ".</p>\n";
@@ -424,7 +426,7 @@ void candidateSection(std::ostringstream& html, const ReportOptions& opt, const 
              << "</span><br>z <span data-key=\"region-" << k << "-z\">" << number(r.z) << "</span>";
         if (c.equivalence) {
           const EquivalenceRegion& e = c.equivalence->regions[k];
-          html << "<br><span class=\"" << verdictClass(e.verdict) << "\">[<span data-key=\"region-" << k
+          html << "<br><span class=\"" << verdictClass(e.verdict) << "\">" << "RGB"[e.channel] << " [<span data-key=\"region-" << k
                << "-interval_low\">" << number(e.low) << "</span>, <span data-key=\"region-" << k
                << "-interval_high\">" << number(e.high) << "</span>]</span>";
         }
@@ -578,10 +580,11 @@ int runReport(const ReportOptions& opt) {
   checkOutputFile(opt.output, ".html", "-o", inputs);
   // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
   const ImageHeader referenceHeader = readImageHeader(opt.reference);
-  std::vector<bool> halfVariance;
+  std::vector<bool> halfVariance, halfColour;
   for (const std::string& path : opt.candidates) {
     const ImageHeader header = readImageHeader(path);
     halfVariance.push_back(header.hasHalfVariance());
+    halfColour.push_back(header.hasHalfColour());
     try {
       checkComparable(header, referenceHeader, true);
     } catch (const std::invalid_argument& e) {
@@ -641,8 +644,11 @@ int runReport(const ReportOptions& opt) {
       runImages.push_back(std::move(run));
     }
     c.seconds = !opt.seconds.empty() ? std::optional<double>(opt.seconds[i]) : runSeconds;
-    const Candidate candidate = runs == 1 ? Candidate(std::move(runImages[0]), halfVariance[i])
-                                          : Candidate(std::move(runImages));
+    Candidate candidate = runs == 1 ? Candidate(std::move(runImages[0]), halfVariance[i]) : Candidate(std::move(runImages));
+    const bool anyHalfColour = std::any_of(halfColour.begin() + ptrdiff_t(i * runs),
+                                           halfColour.begin() + ptrdiff_t((i + 1) * runs), [](bool b) { return b; });
+    candidate.rounding = anyHalfColour ? kHalfRounding : kFloatRounding;
+    candidate.referenceRounding = referenceHeader.hasHalfColour() ? kHalfRounding : kFloatRounding;
     const Image file = candidateImage(candidate);
     const Image image = rgbChannels(file);
     const bool candidateIsSrgb = isSrgbEncoded(c.path, c.metadata);

@@ -41,6 +41,8 @@ nlohmann::ordered_json testJson(const NoiseTest& t) {
   for (const RegionTest& r : t.regions)
     out["regions"].push_back({{"region", {r.x0, r.y0, r.x1, r.y1}},
                               {"relative_difference", r.relativeDifference},
+                              {"channel", std::string(1, "RGB"[r.channel])},
+                              {"channel_relative_difference", r.channelDifference},
                               {"z", r.z},
                               {"p_value", r.pValue},
                               {"rejected", r.rejected}});
@@ -58,6 +60,7 @@ nlohmann::ordered_json equivalenceJson(const EquivalenceTest& t) {
   out["regions"] = nlohmann::ordered_json::array();
   for (const EquivalenceRegion& r : t.regions)
     out["regions"].push_back({{"region", {r.x0, r.y0, r.x1, r.y1}},
+                              {"channel", std::string(1, "RGB"[r.channel])},
                               {"relative_difference", r.relativeDifference},
                               {"interval", {r.low, r.high}},
                               {"verdict", verdictName(r.verdict)}});
@@ -108,14 +111,16 @@ std::string verdictWords(Verdict verdict, int width, int height, uint64_t nonFin
     for (const RegionTest& r : test->regions)
       if (r.rejected)
         s << "    " << regionName(r.x0, r.y0, r.x1, r.y1, width, height) << ": " << percent(r.relativeDifference)
-          << " (p-value " << std::setprecision(3) << r.pValue << ")\n";
+          << ", " << "RGB"[r.channel] << " " << percent(r.channelDifference) << " (p-value " << std::setprecision(3)
+          << r.pValue << ")\n";
   }
   if (equivalence) {
     s << "  --within " << equivalence->within << ": " << verdictName(equivalence->verdict) << "\n";
     for (const EquivalenceRegion& r : equivalence->regions)
       if (r.verdict != Verdict::Pass || &r == &equivalence->regions.front())
-        s << "    " << regionName(r.x0, r.y0, r.x1, r.y1, width, height) << ": " << percent(r.relativeDifference)
-          << " [" << percent(r.low) << ", " << percent(r.high) << "] " << verdictName(r.verdict) << "\n";
+        s << "    " << regionName(r.x0, r.y0, r.x1, r.y1, width, height) << ", " << "RGB"[r.channel] << ": "
+          << percent(r.relativeDifference) << " [" << percent(r.low) << ", " << percent(r.high) << "] "
+          << verdictName(r.verdict) << "\n";
   }
   if (!surfaces.empty()) {
     s << "  by surface (what each pixel's centre shows in the reference; " << std::setprecision(3)

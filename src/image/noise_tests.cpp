@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "image/channel_indices.h"
 #include "lucent/core/memory.h"
@@ -140,6 +141,7 @@ class TestPixels {
                          "with other seeds), or an image with variance layers (render --variance)";
     }
     values_.resize(candidate.runs.size());
+    checkVariances();
     if (runs) floorPixelVariances();
   }
 
@@ -151,10 +153,25 @@ class TestPixels {
   // Pixel (x, y): the candidate's mean and the variance of that mean (0 where unknown), the
   // reference's value and variance, and each run's values (values()).
   void read(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance) {
+    readValues(x, y, mean, variance, reference, referenceVariance);
+  }
+  // The same with the rounding the two values may differ by (Candidate::rounding).
+  void read(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance, Quad& rounding) {
+    readValues(x, y, mean, variance, reference, referenceVariance);
+    rounding[kSum] = 0;
+    for (size_t c = 0; c < 3; ++c) {
+      rounding[c] = candidate_.rounding * std::abs(mean[c]) + candidate_.referenceRounding * std::abs(reference[c]);
+      rounding[kSum] += rounding[c];
+    }
+  }
+  const std::vector<Quad>& values() const { return values_; }
+
+ private:
+  void readValues(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance) {
     double deviations = 0;
     for (int c = 0; c < 3; ++c) {
       reference[size_t(c)] = reference_.at(x, y, referenceValue_[size_t(c)]);
-      referenceVariance[size_t(c)] = std::max(0.0f, reference_.at(x, y, referenceVariance_[size_t(c)]));
+      referenceVariance[size_t(c)] = knownVariance(reference_.at(x, y, referenceVariance_[size_t(c)]));
       deviations += std::sqrt(referenceVariance[size_t(c)]);
     }
     reference[kSum] = reference[0] + reference[1] + reference[2];
@@ -172,7 +189,7 @@ class TestPixels {
       if (noise_.source == NoiseSource::VarianceLayer) {
         double sum = 0;
         for (int c = 0; c < 3; ++c) {
-          variance[size_t(c)] = std::max(0.0f, candidate_.runs[0].at(x, y, runs_[0].variance[size_t(c)]));
+          variance[size_t(c)] = knownVariance(candidate_.runs[0].at(x, y, runs_[0].variance[size_t(c)]));
           sum += std::sqrt(variance[size_t(c)]);
         }
         variance[kSum] = sum * sum;
@@ -182,9 +199,41 @@ class TestPixels {
     spreadOfRuns(mean, variance);
     for (size_t c = 0; c < 4; ++c) variance[c] = std::max(variance[c], floor_[c] * referenceVariance[c]);
   }
-  const std::vector<Quad>& values() const { return values_; }
 
- private:
+  // A variance layer's value where it is one: finite and not negative. Infinity (a pixel of fewer
+  // than 2 samples), NaN (another renderer's M2 / (n - 1) at n = 1) or a negative value make the
+  // verdict inconclusive (checkVariances); read as 0, they keep the sums finite.
+  static double knownVariance(float v) { return v >= 0 && v <= std::numeric_limits<float>::max() ? v : 0.0; }
+
+  // Every pixel's variance known, in the reference and (where the candidate's noise is its variance
+  // layers) in the candidate: otherwise a block holding one would be tested against a variance that
+  // is infinite (passing whatever its difference) or taken as nought (failing at any).
+  void checkVariances() {
+    const bool candidateLayers = noise_.source == NoiseSource::VarianceLayer;
+    struct Unknown {
+      uint64_t count = 0;
+      int x = 0, y = 0;
+    } reference, candidate;
+    const auto note = [](Unknown& u, int x, int y) {
+      if (u.count++ == 0) u.x = x, u.y = y;
+    };
+    for (int y = 0; y < height(); ++y)
+      for (int x = 0; x < width(); ++x)
+        for (size_t c = 0; c < 3; ++c) {
+          const float r = reference_.at(x, y, referenceVariance_[c]);
+          if (!(r == knownVariance(r))) note(reference, x, y);
+          if (!candidateLayers) continue;
+          const float v = candidate_.runs[0].at(x, y, runs_[0].variance[c]);
+          if (!(v == knownVariance(v))) note(candidate, x, y);
+        }
+    for (const auto& [u, whose] : {std::pair{&reference, "the reference"}, std::pair{&candidate, "the image"}})
+      if (u->count > 0 && noise_.undecided.empty())
+        noise_.undecided = std::string(whose) + "'s variance is infinite, NaN or negative at " +
+                           std::to_string(u->count) + (u->count == 1 ? " value" : " values") + " (the first at x " +
+                           std::to_string(u->x) + ", y " + std::to_string(u->y) + "): such a pixel's noise is unknown (a "
+                           "pixel of fewer than 2 samples has none); render it with more samples";
+  }
+
   // The runs' mean at the pixel last read, and the variance of that mean from their spread.
   void spreadOfRuns(Quad& mean, Quad& variance) const {
     const size_t n = values_.size();
@@ -213,6 +262,9 @@ class TestPixels {
         for (size_t c = 0; c < 4; ++c) spreads[c] += variance[c], references[c] += referenceVariance[c];
       }
     for (size_t c = 0; c < 4; ++c) floor_[c] = references[c] > 0 ? spreads[c] / references[c] : 0.0;
+    if (spreads[kSum] == 0 && references[kSum] > 0 && noise_.undecided.empty())
+      noise_.undecided = "the runs are the same image, pixel for pixel, so their spread says nothing of their noise "
+                         "(rendered with one seed?): give runs rendered with different seeds";
   }
 
   struct Channels {
@@ -229,11 +281,13 @@ class TestPixels {
 
 // The sums over a set of pixels (a block, a region, the image) that the tests need.
 struct UnitSums {
-  Quad difference{}, reference{}, candidate{}, pixelVariance{}, referenceVariance{};
+  Quad difference{}, reference{}, candidate{}, pixelVariance{}, referenceVariance{}, rounding{};
   std::vector<Quad> runs;  // each run's sum, where there are runs
 
-  void add(const Quad& mean, const Quad& variance, const Quad& ref, const Quad& refVariance, const std::vector<Quad>& values) {
+  void add(const Quad& mean, const Quad& variance, const Quad& ref, const Quad& refVariance, const std::vector<Quad>& values,
+           const Quad& pixelRounding = {}) {
     for (size_t c = 0; c < 4; ++c) {
+      rounding[c] += pixelRounding[c];
       difference[c] += mean[c] - ref[c];
       reference[c] += ref[c];
       candidate[c] += mean[c];
@@ -260,7 +314,7 @@ struct UnitSums {
 
 // What a block keeps for the test once its pixels are summed.
 struct BlockSums {
-  std::array<double, 3> difference{}, pixelVariance{}, referenceVariance{}, spread{};
+  std::array<double, 3> difference{}, pixelVariance{}, referenceVariance{}, spread{}, rounding{};
 };
 
 // The region a tile index stands for: 0 the whole image, k > 0 the grid's tile k - 1, row by row.
@@ -269,11 +323,15 @@ void regionBounds(size_t k, int tiles, int w, int h, int& x0, int& y0, int& x1, 
     x0 = 0, y0 = 0, x1 = w, y1 = h;
     return;
   }
+  // tileOf puts pixel x in tile floor(x tiles / w): tile t holds x from ceil(t w / tiles) on.
   const int tx = int(k - 1) % tiles, ty = int(k - 1) / tiles;
-  x0 = tx * w / tiles, y0 = ty * h / tiles, x1 = (tx + 1) * w / tiles, y1 = (ty + 1) * h / tiles;
+  const auto start = [tiles](int t, int size) { return int((int64_t(t) * size + tiles - 1) / tiles); };
+  x0 = start(tx, w), y0 = start(ty, h), x1 = start(tx + 1, w), y1 = start(ty + 1, h);
 }
 
-size_t tileOf(int x, int y, int tiles, int w, int h) { return size_t(1 + (y * tiles / h) * tiles + (x * tiles / w)); }
+size_t tileOf(int x, int y, int tiles, int w, int h) {
+  return size_t(1 + int64_t(y) * tiles / h * tiles + int64_t(x) * tiles / w);
+}
 
 // Sums every pixel into the regions (the whole image, then the tiles) and, with block > 0, into
 // blocks of block x block pixels (row by row).
@@ -287,22 +345,23 @@ void sumImage(TestPixels& pixels, int tiles, int block, std::vector<UnitSums>& r
                   "use larger blocks (--block) or raise --memory-limit");
     blocks.assign(size_t(blocksX) * size_t(blocksY), BlockSums{});
   }
-  Quad mean, variance, reference, referenceVariance;
+  Quad mean, variance, reference, referenceVariance, rounding;
   for (int by = 0; by < blocksY; ++by)
     for (int bx = 0; bx < blocksX; ++bx) {
       UnitSums sums;
       const int x0 = bx * side, y0 = by * side, x1 = std::min(w, x0 + side), y1 = std::min(h, y0 + side);
       for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
-          pixels.read(x, y, mean, variance, reference, referenceVariance);
+          pixels.read(x, y, mean, variance, reference, referenceVariance, rounding);
           for (UnitSums* s : {&regions[0], &regions[tileOf(x, y, tiles, w, h)], &sums})
-            s->add(mean, variance, reference, referenceVariance, pixels.values());
+            s->add(mean, variance, reference, referenceVariance, pixels.values(), rounding);
         }
       if (block <= 0) continue;
       BlockSums& b = blocks[size_t(by) * size_t(blocksX) + size_t(bx)];
       for (size_t c = 0; c < 3; ++c) {
         b.difference[c] = sums.difference[c], b.pixelVariance[c] = sums.pixelVariance[c];
         b.referenceVariance[c] = sums.referenceVariance[c], b.spread[c] = sums.spread(c);
+        b.rounding[c] = sums.rounding[c];
       }
     }
 }
@@ -333,17 +392,19 @@ double welchDegreesOfFreedom(double candidate, double total, double dof) {
   return dof * (total / candidate) * (total / candidate);
 }
 
-// A set of pixels' relative difference d = C / R - 1 over R + G + B, and its (1 - 2 alpha)
-// interval d +- q se, var(d) = var(C) / R^2 + C^2 var(R) / R^4 (the delta method); R > 0.
+// A set of pixels' relative difference d = C / R - 1 in channel `channel` (kSum: over R + G + B),
+// and its (1 - 2 alpha) interval d +- q se, var(d) = var(C) / R^2 + C^2 var(R) / R^4 (the delta
+// method); R > 0.
 struct RelativeInterval {
   double difference = 0, low = 0, high = 0;
   double candidateHalfWidth = 0;  // the candidate's noise's share of the half width
 };
-RelativeInterval relativeInterval(const UnitSums& s, NoiseSource source, const CandidateNoise::Scale& scale, double alpha) {
-  const double c = s.candidate[kSum], r = s.reference[kSum];
+RelativeInterval relativeInterval(const UnitSums& s, size_t channel, NoiseSource source, const CandidateNoise::Scale& scale,
+                                  double alpha) {
+  const double c = s.candidate[channel], r = s.reference[channel];
   const double ratio = c / r;
-  const double cv = candidateVariance(source, scale, s.pixelVariance[kSum], s.spread(kSum));
-  const double total = cv + ratio * ratio * s.referenceVariance[kSum];
+  const double cv = candidateVariance(source, scale, s.pixelVariance[channel], s.spread(channel));
+  const double total = cv + ratio * ratio * s.referenceVariance[channel];
   const double se = std::sqrt(total) / r;
   const double q = studentTwoSidedQuantile(2 * alpha, welchDegreesOfFreedom(cv, total, scale.degreesOfFreedom));
   return {ratio - 1, ratio - 1 - q * se, ratio - 1 + q * se, q * std::sqrt(cv) / r};
@@ -352,15 +413,21 @@ RelativeInterval relativeInterval(const UnitSums& s, NoiseSource source, const C
 // The correlation of the noise of sums of regions' size over their pixels' own (see noise_tests.h),
 // pooled over a grid x grid of tiles, and of the image.
 std::array<CandidateNoise::Scale, 2> regionScales(const std::vector<UnitSums>& regions, int runs) {
-  double tileSpread = 0, tilePixels = 0;
-  for (size_t k = 1; k < regions.size(); ++k) tileSpread += regions[k].spread(kSum), tilePixels += regions[k].pixelVariance[kSum];
+  double tileSpread = 0, tilePixels = 0, imageSpread = 0, imagePixels = 0;
+  for (size_t c = 0; c < 3; ++c) {
+    for (size_t k = 1; k < regions.size(); ++k) tileSpread += regions[k].spread(c), tilePixels += regions[k].pixelVariance[c];
+    imageSpread += regions[0].spread(c), imagePixels += regions[0].pixelVariance[c];
+  }
   return {poolScale("regions", tileSpread, tilePixels, regions.size() - 1, runs),
-          poolScale("image", regions[0].spread(kSum), regions[0].pixelVariance[kSum], 1, runs)};
+          poolScale("image", imageSpread, imagePixels, 1, runs)};
 }
 
-double statistic(double difference, double variance) {
-  if (variance > 0) return difference / std::sqrt(variance);
-  return difference == 0 ? 0.0 : std::copysign(kInfinity, difference);
+// The test statistic of a sum's difference beyond its rounding, against its variance.
+double statistic(double difference, double rounding, double variance) {
+  if (std::isnan(difference)) return difference;  // a candidate's NaN: a difference no noise explains
+  const double beyond = std::max(0.0, std::abs(difference) - rounding);
+  if (variance > 0) return std::copysign(beyond / std::sqrt(variance), difference);
+  return beyond == 0 ? 0.0 : std::copysign(kInfinity, difference);
 }
 
 }  // namespace
@@ -397,16 +464,11 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
   t.blocks = blocks.size();
   CandidateNoise& noise = pixels.noise();
   const int runs = noise.runs;
-  double blockSpread = 0, blockPixels = 0, tileSpread = 0, tilePixels = 0;
+  double blockSpread = 0, blockPixels = 0;
   for (const BlockSums& b : blocks)
     for (size_t c = 0; c < 3; ++c) blockSpread += b.spread[c], blockPixels += b.pixelVariance[c];
-  for (size_t k = 1; k < regions.size(); ++k)
-    for (size_t c = 0; c < 3; ++c) tileSpread += regions[k].spread(c), tilePixels += regions[k].pixelVariance[c];
-  double imageSpread = 0, imagePixels = 0;
-  for (size_t c = 0; c < 3; ++c) imageSpread += regions[0].spread(c), imagePixels += regions[0].pixelVariance[c];
-  noise.scales = {poolScale("blocks", blockSpread, blockPixels, blocks.size(), runs),
-                  poolScale("regions", tileSpread, tilePixels, regions.size() - 1, runs),
-                  poolScale("image", imageSpread, imagePixels, 1, runs)};
+  const auto scales = regionScales(regions, runs);
+  noise.scales = {poolScale("blocks", blockSpread, blockPixels, blocks.size(), runs), scales[0], scales[1]};
 
   t.statistic = Image(w, h, {"z"});
   const double blockThreshold = alpha / (2.0 * 3.0 * double(t.blocks));
@@ -416,7 +478,7 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
     for (size_t c = 0; c < 3; ++c) {
       const double cv = candidateVariance(noise.source, noise.scales[0], b.pixelVariance[c], b.spread[c]);
       const double total = cv + b.referenceVariance[c];
-      const double z = statistic(b.difference[c], total);
+      const double z = statistic(b.difference[c], b.rounding[c], total);
       largest = std::max(largest, std::abs(z));
       minP = std::min(minP, studentTwoSidedP(z, welchDegreesOfFreedom(cv, total, noise.scales[0].degreesOfFreedom)));
     }
@@ -437,11 +499,13 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
     for (size_t c = 0; c < 3; ++c) {
       const double cv = candidateVariance(noise.source, scale, s.pixelVariance[c], s.spread(c));
       const double total = cv + s.referenceVariance[c];
-      const double z = statistic(s.difference[c], total);
+      const double z = statistic(s.difference[c], s.rounding[c], total);
       const double p = studentTwoSidedP(z, welchDegreesOfFreedom(cv, total, scale.degreesOfFreedom));
-      if (p <= r.pValue) r.pValue = p, r.z = z;
+      if (p <= r.pValue) r.pValue = p, r.z = z, r.channel = int(c);
     }
     r.relativeDifference = s.reference[kSum] != 0 ? s.difference[kSum] / s.reference[kSum] : 0;
+    const size_t tested = size_t(r.channel);
+    r.channelDifference = s.reference[tested] != 0 ? s.difference[tested] / s.reference[tested] : 0;
     r.rejected = r.pValue < regionThreshold;
     rejected = rejected || r.rejected;
     t.regions.push_back(r);
@@ -468,32 +532,51 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
   t.verdict = Verdict::Pass;
   for (size_t k = 0; k < regions.size(); ++k) {
     const CandidateNoise::Scale& scale = noise.scales[k == 0 ? 1 : 0];
-    EquivalenceRegion e;
-    regionBounds(k, tiles, w, h, e.x0, e.y0, e.x1, e.y1);
     const UnitSums& s = regions[k];
-    const double c = s.candidate[kSum], r = s.reference[kSum];
-    if (r > 0) {
-      const RelativeInterval interval = relativeInterval(s, noise.source, scale, alpha);
-      e.relativeDifference = interval.difference;
-      e.low = interval.low, e.high = interval.high;
-      if (!std::isfinite(e.high - e.low)) e.verdict = Verdict::Inconclusive;
-      else if (e.low > -within && e.high < within) e.verdict = Verdict::Pass;
-      else if (e.low >= within || e.high <= -within) e.verdict = Verdict::Fail;
-      else {
-        e.verdict = Verdict::Inconclusive;
-        // The candidate's share of the interval must narrow to the margin between d and +-D.
-        const double margin = std::abs(std::abs(e.relativeDifference) - within);
-        const double candidateHalfWidth = interval.candidateHalfWidth;
-        t.samplesToDecide = std::max(t.samplesToDecide, margin > 0 ? std::pow(candidateHalfWidth / margin, 2) : kInfinity);
+    // Each channel within the margin: a shift of colour (red up, blue down) is a difference even
+    // where R + G + B keeps its sum. The region is reported by its deciding channel: the one of the
+    // worst verdict, of those the one whose interval reaches farthest from 0.
+    EquivalenceRegion e;
+    for (size_t c = 0; c < 3; ++c) {
+      EquivalenceRegion channel;
+      channel.channel = int(c);
+      const double r = s.reference[c];
+      if (r > 0) {
+        const RelativeInterval interval = relativeInterval(s, c, noise.source, scale, alpha);
+        channel.relativeDifference = interval.difference;
+        channel.low = interval.low, channel.high = interval.high;
+        if (!std::isfinite(channel.high - channel.low)) channel.verdict = Verdict::Inconclusive;
+        else if (channel.low > -within && channel.high < within) channel.verdict = Verdict::Pass;
+        else if (channel.low >= within || channel.high <= -within) channel.verdict = Verdict::Fail;
+        else {
+          channel.verdict = Verdict::Inconclusive;
+          // The candidate's share of the interval must narrow to the margin between d and +-D.
+          const double margin = std::abs(std::abs(channel.relativeDifference) - within);
+          t.samplesToDecide = std::max(t.samplesToDecide,
+                                       margin > 0 ? std::pow(interval.candidateHalfWidth / margin, 2) : kInfinity);
+        }
+      } else if (r == 0) {
+        // A black reference region: equivalent only to a black candidate.
+        channel.verdict = s.candidate[c] == 0 ? Verdict::Pass : Verdict::Fail;
+      } else {
+        // Negative (a pixel filter's negative lobes over a dark region): no relative difference.
+        channel.verdict = Verdict::Inconclusive;
+        t.negativeReference = true;
       }
-    } else {
-      // A black reference region: equivalent only to a black candidate.
-      e.verdict = c == 0 ? Verdict::Pass : Verdict::Fail;
+      const auto rank = [](Verdict v) { return v == Verdict::Fail ? 2 : v == Verdict::Inconclusive ? 1 : 0; };
+      const auto reach = [](const EquivalenceRegion& x) { return std::max(std::abs(x.low), std::abs(x.high)); };
+      if (c == 0 || rank(channel.verdict) > rank(e.verdict) ||
+          (rank(channel.verdict) == rank(e.verdict) && reach(channel) > reach(e)))
+        e = channel;
     }
+    regionBounds(k, tiles, w, h, e.x0, e.y0, e.x1, e.y1);
     t.verdict = combineVerdicts(t.verdict, e.verdict);
     t.regions.push_back(e);
   }
   if (!noise.undecided.empty()) t.verdict = Verdict::Inconclusive;
+  else if (t.verdict == Verdict::Inconclusive && t.negativeReference)
+    noise.undecided = "a region's reference sum is negative in a channel (a pixel filter's negative lobes over a dark "
+                      "region), so it has no relative difference there: compare with a pixel filter of no negative lobes";
   else if (t.verdict == Verdict::Inconclusive) {
     std::ostringstream why;
     why << "an interval reaches across +-" << within << ": ";
@@ -568,7 +651,7 @@ std::vector<SurfaceDifference> differenceBySurface(const Candidate& candidate, c
       d.kind = SurfaceDifference::Kind::NonEmitters, d.name = "all but emitters";
     }
     if (s.reference[kSum] > 0) {
-      const RelativeInterval interval = relativeInterval(s, noise.source, scale, alpha);
+      const RelativeInterval interval = relativeInterval(s, kSum, noise.source, scale, alpha);
       d.relativeDifference = interval.difference, d.low = interval.low, d.high = interval.high;
     } else {
       // A black reference: no relative difference, only none or some light.

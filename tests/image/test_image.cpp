@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
@@ -535,11 +536,100 @@ TEST_CASE("testWithinNoise: the reference plus noise passes, a bias below a pixe
   CHECK(withoutVariance.blocksRejectedAtAlpha > same.blocksRejectedAtAlpha);
 }
 
+TEST_CASE("testWithinNoise: a variance it cannot trust or identical runs leave it undecided, rounding is no difference",
+          "[compare]") {
+  const int w = 32, h = 32;
+  auto mean = [](int x, int y, int c) { return 1.0f + 0.5f * std::sin(0.1f * float(x + 2 * y + c)); };
+  const Image reference = noisyImage(w, h, mean, 0.005f, 1);
+  // Infinite variances (a pixel of fewer than 2 samples) would test any difference against
+  // infinity: a candidate half as bright again passed. Now: inconclusive, naming the first.
+  Image unknown = noisyImage(w, h, [&](int x, int y, int c) { return 1.5f * mean(x, y, c); }, 0.005f, 2);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) unknown.at(x, y, 3) = std::numeric_limits<float>::infinity();
+  NoiseTest t = testWithinNoise(unknown, reference, 0.01);
+  CHECK(t.verdict == Verdict::Inconclusive);
+  CHECK_THAT(t.noise.undecided, Catch::Contains("the image's variance is infinite, NaN or negative at 1024 values (the first at x 0, y 0)"));
+  // One NaN (another renderer's M2 / (n - 1) at n = 1) and a negative variance, in a correct candidate.
+  Image nan = noisyImage(w, h, mean, 0.005f, 2);
+  nan.at(5, 7, 4) = std::numeric_limits<float>::quiet_NaN();
+  nan.at(9, 7, 5) = -1e-3f;
+  t = testWithinNoise(nan, reference, 0.01);
+  CHECK(t.verdict == Verdict::Inconclusive);
+  CHECK_THAT(t.noise.undecided, Catch::Contains("the image's variance") && Catch::Contains("at 2 values (the first at x 5, y 7)"));
+  // The reference's too.
+  Image badReference = reference;
+  badReference.at(3, 30, 3) = std::numeric_limits<float>::infinity();
+  t = testWithinNoise(noisyImage(w, h, mean, 0.005f, 2), badReference, 0.01);
+  CHECK(t.verdict == Verdict::Inconclusive);
+  CHECK_THAT(t.noise.undecided, Catch::Contains("the reference's variance") && Catch::Contains("at 1 value (the first at x 3, y 30)"));
+  // Runs that are one image (one seed) have no spread: unknown noise, not a noise-free candidate.
+  const Image run = rgbChannels(noisyImage(w, h, mean, 0.005f, 3));
+  t = testWithinNoise(Candidate(std::vector<Image>{run, run, run}), reference, 0.01);
+  CHECK(t.verdict == Verdict::Inconclusive);
+  CHECK_THAT(t.noise.undecided, Catch::Contains("the same image"));
+
+  // Where neither image has noise (an emitter seen directly), a difference within the values'
+  // rounding counts as none: two units in the last place of 17, and 0.7 stored as a half float
+  // (0.7001953125); 1e-4 of 17 is a difference.
+  const auto flat = [&](float value) {
+    Image image(w, h, {"R", "G", "B", "variance.R", "variance.G", "variance.B"});
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) image.at(x, y, c) = value;
+    return image;
+  };
+  const float ulps = std::nextafter(std::nextafter(17.0f, 18.0f), 18.0f);
+  CHECK(testWithinNoise(flat(ulps), flat(17.0f), 0.01).verdict == Verdict::Pass);
+  CHECK(testWithinNoise(flat(17.0f * (1 + 1e-4f)), flat(17.0f), 0.01).verdict == Verdict::Fail);
+  Candidate halves(flat(0.7001953125f));
+  CHECK(testWithinNoise(halves, flat(0.7f), 0.01).verdict == Verdict::Fail);  // as 32-bit floats: a difference
+  halves.rounding = kHalfRounding;
+  CHECK(testWithinNoise(halves, flat(0.7f), 0.01).verdict == Verdict::Pass);
+  halves.runs[0] = flat(0.7f * (1 + 1e-3f));
+  CHECK(testWithinNoise(halves, flat(0.7f), 0.01).verdict == Verdict::Fail);  // beyond a half's rounding
+
+  // A shift of colour that keeps R + G + B (red up 10%, blue down 10% on grey): --within judges
+  // each channel (it passed on the sum), --test names the channel it rejects.
+  auto grey = [](int x, int y, int) { return 1.0f + 0.5f * std::sin(0.1f * float(x + 2 * y)); };
+  const Image greyReference = noisyImage(w, h, grey, 0.0005f, 1);
+  const Image shifted = noisyImage(w, h, [&](int x, int y, int c) { return grey(x, y, c) * (c == 0 ? 1.1f : c == 2 ? 0.9f : 1.0f); },
+                                   0.0005f, 2);
+  const EquivalenceTest within = testEquivalence(shifted, greyReference, 0.05, 0.01);
+  CHECK(within.verdict == Verdict::Fail);
+  CHECK(within.regions[0].channel != 1);
+  CHECK(std::abs(within.regions[0].relativeDifference) == Approx(0.1).margin(0.01));
+  CHECK(testEquivalence(noisyImage(w, h, grey, 0.0005f, 2), greyReference, 0.05, 0.01).verdict == Verdict::Pass);
+  const NoiseTest shift = testWithinNoise(shifted, greyReference, 0.01);
+  CHECK(shift.verdict == Verdict::Fail);
+  CHECK(std::abs(shift.regions[0].relativeDifference) < 0.01);
+  CHECK(shift.regions[0].channel != 1);
+  CHECK(std::abs(shift.regions[0].channelDifference) == Approx(0.1).margin(0.01));
+
+  // Tiles are named by the pixels summed in them: at 10 pixels and 4 tiles, x 0-2, 3-4, 5-7, 8-9.
+  const NoiseTest narrow = testWithinNoise(noisyImage(10, 10, mean, 0.005f, 2), noisyImage(10, 10, mean, 0.005f, 1), 0.01);
+  REQUIRE(narrow.regions.size() == 17);
+  for (int t = 0; t < 4; ++t) {
+    CHECK(narrow.regions[size_t(1 + t)].x0 == std::array{0, 3, 5, 8}[size_t(t)]);
+    CHECK(narrow.regions[size_t(1 + t)].x1 == std::array{3, 5, 8, 10}[size_t(t)]);
+  }
+}
+
+TEST_CASE("An image header's half colour channels: R, G, B and layers' colours, not variances", "[compare]") {
+  const auto half = [](std::vector<std::string> names) {
+    ImageHeader header;
+    header.halfChannels = std::move(names);
+    return header.hasHalfColour();
+  };
+  CHECK(half({"R"}));
+  CHECK(half({"A", "diffuse.G"}));
+  CHECK_FALSE(half({"variance.R", "diffuse.variance.B", "Z", "A"}));
+  CHECK_FALSE(half({}));
+}
+
 TEST_CASE("testEquivalence: per region, an interval from both images' variance inside the margin", "[compare]") {
   // Gaussian noise of variance 0.001 per channel about a mean near 1, candidate and reference alike,
-  // channels independent. A region of 32 x 32 pixels then has the relative standard error 0.08%;
-  // the test bounds each pixel's sum of channels by full correlation, a variance 3 times the true
-  // one, so its intervals are d +- 2.33 x 0.14%, wider than need be. The candidate scaled by 1.01
+  // channels independent. A region of 32 x 32 pixels then has the relative standard error 0.1% per
+  // channel and image, so each channel's interval is about d +- 2.33 x 0.14%. The candidate scaled by 1.01
   // is within 0.02 and not within 0.005; the unscaled one within 0.02; and over 20 seeds the
   // intervals of all 17 regions cover the true bias 0.01 at least 1 - 2 alpha of the time (336 of
   // 340 expected at the least, 4 standard deviations of the binomial below: 325).
@@ -693,11 +783,11 @@ TEST_CASE("lucent compare --test: a path-traced candidate passes its reference, 
   CHECK(failed["test"]["passed"] == false);
   CHECK(failed["test"]["regions"][0]["rejected"] == true);
   CHECK(failed["test"]["regions"][0]["relative_difference"].get<double>() == Approx(0.01).margin(0.004));
-  // --within: the candidate is within 0.03 of the reference (its regions' intervals reach 2.3%: at
-  // 64 x 64 and 1,024 samples a region of 16 x 16 pixels in the blocks' shadow has a relative
-  // standard error of 0.56% per image), the scaled one not within 0.005; a photon map is biased
-  // by design: it fails --test, and --within tells by how much (the whole image 4.4% dark, the
-  // shadow of the tall block 16% bright): within 0.2, not within 0.1.
+  // --within, per channel: the candidate is within 0.04 of the reference (its regions' intervals
+  // reach 3.3%: at 64 x 64 and 1,024 samples the blue of a region of 16 x 16 pixels in the tall
+  // block's shadow has a relative standard error of 1.2% per image), the scaled one not within
+  // 0.005; a photon map is biased by design: it fails --test, and --within tells by how much (the
+  // whole image's blue 5% dark, the tall block's shadow's 22% bright): within 0.25, not within 0.1.
   // A photon map has no variance layer: one render alone is inconclusive (exit 3), its runs (other
   // seeds) decide.
   const auto within = [&](const std::string& images, const char* margin) {
@@ -709,7 +799,7 @@ TEST_CASE("lucent compare --test: a path-traced candidate passes its reference, 
     CHECK(out["equivalence"]["regions"].size() == 17);
     return r.status;
   };
-  CHECK(within(quoted(dir / "candidate.exr"), "0.03") == 0);
+  CHECK(within(quoted(dir / "candidate.exr"), "0.04") == 0);
   CHECK(within(quoted(dir / "scaled.exr"), "0.005") == 1);
   std::string pmfgRuns;
   for (int seed = 1; seed <= 4; ++seed) {
@@ -724,9 +814,9 @@ TEST_CASE("lucent compare --test: a path-traced candidate passes its reference, 
   const test::CliRun alone = runLucent("compare " + pmfgOne + " " + quoted(dir / "reference.exr") + " --test");
   CHECK(alone.status == 3);
   CHECK_THAT(alone.output, Catch::Contains("no variance layers") && Catch::Contains("runs"));
-  CHECK(within(pmfgOne, "0.2") == 3);
+  CHECK(within(pmfgOne, "0.25") == 3);
   CHECK(runLucent("compare" + pmfgRuns + " " + quoted(dir / "reference.exr") + " --test").status == 1);
-  CHECK(within(pmfgRuns, "0.2") == 0);
+  CHECK(within(pmfgRuns, "0.25") == 0);
   CHECK(within(pmfgRuns, "0.1") == 1);
   // A reference without variance layers is bad input (exit 2); --alpha needs --test or --within.
   CHECK(runLucent("compare " + quoted(dir / "candidate.exr") + " " + quoted(dir / "z.png") + " --test").status == 2);

@@ -76,6 +76,16 @@ struct ImageHeader {
       if (name.find("variance.") != std::string::npos) return true;
     return false;
   }
+  // Whether a colour channel (R, G, B, LAYER.R, ...; not a variance) is among them: its values are
+  // then rounded to 11 significant bits.
+  bool hasHalfColour() const {
+    for (const std::string& name : halfChannels) {
+      const bool colour = name == "R" || name == "G" || name == "B" ||
+                          (name.size() > 2 && name[name.size() - 2] == '.' && std::string("RGB").find(name.back()) != std::string::npos);
+      if (colour && name.find("variance.") == std::string::npos) return true;
+    }
+    return false;
+  }
 };
 // The header of an image in a format Lucent reads (EXR, Radiance HDR, PNG, JPEG, TIFF, by the
 // extension; its content must be that format), checked as readImage checks it (a regular file, at most

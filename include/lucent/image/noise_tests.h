@@ -37,11 +37,19 @@ int verdictExitStatus(Verdict verdict);
 Verdict combineVerdicts(Verdict a, Verdict b);
 
 // What is compared with the reference: one image, or two or more runs (same size; their R, G, B).
+// The relative rounding of stored R, G, B values that the noise tests allow: a half float's unit
+// roundoff, and for 32-bit floats sixteen units, room for the rounding of the few dozen operations
+// by which two renderers may compute one value (an emitter's radiance seen directly, which has no
+// noise). A block's or region's difference within the sum of its pixels' allowances counts as none.
+constexpr double kHalfRounding = 0x1p-11, kFloatRounding = 0x1p-20;
+
 struct Candidate {
   Candidate(Image image, bool halfVariance = false) : runs{std::move(image)}, halfVariance(halfVariance) {}
   explicit Candidate(std::vector<Image> runs) : runs(std::move(runs)) {}
   std::vector<Image> runs;
   bool halfVariance = false;  // the one image's variance layers were stored as half floats
+  // The relative rounding of the runs' and of the reference's R, G, B as stored.
+  double rounding = kFloatRounding, referenceRounding = kFloatRounding;
 };
 
 enum class NoiseSource { VarianceLayer, Runs, Unknown };
@@ -80,12 +88,17 @@ Image candidateImage(const Candidate& candidate);
 // none (0.8 times); at 16 samples 8 x 8 rejects none (2 times alpha's share below alpha), 4 x 4
 // 2 and 4; at 256 samples both none. Hence 8 x 8 by default. A block or region is rejected when its
 // p-value is below alpha / (2 * 3 * blocks) or alpha / (2 * 3 * regions) (Bonferroni over the
-// channels, the blocks and the regions, alpha split between the two families). Verdict: fail when
-// one is rejected, pass when none is, inconclusive when the candidate's noise is unknown.
+// channels, the blocks and the regions, alpha split between the two families). A difference within
+// the values' rounding (Candidate::rounding) counts as none: t = sign(d) max(0, |d| - m) / sd, m the
+// sum of the pixels' allowances. Verdict: fail when one is rejected, pass when none is, inconclusive
+// when the candidate's noise is unknown, a variance in either image is infinite, NaN or negative, or
+// the runs are one image.
 struct RegionTest {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   double relativeDifference = 0;  // sum(c - r) / sum(r) over the region's R, G, B: its bias
-  double z = 0, pValue = 1;       // of the channel with the least p-value
+  int channel = 0;                // the channel with the least p-value (0 R, 1 G, 2 B), and its
+  double channelDifference = 0;   // sum(c - r) / sum(r), z and p-value
+  double z = 0, pValue = 1;
   bool rejected = false;
 };
 struct NoiseTest {
@@ -104,18 +117,19 @@ struct NoiseTest {
 NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, double alpha, int grid = 4, int block = 8);
 
 // An equivalence verdict for a biased candidate (lucent compare --within D): per region (the whole
-// image, then a grid x grid of tiles) its relative difference from the reference,
-// d = sum(c) / sum(r) - 1 over the region's R, G and B, and the (1 - 2 alpha) confidence interval
+// image, then a grid x grid of tiles) and channel its relative difference from the reference,
+// d = sum(c) / sum(r) - 1 over the region's R, G or B, and the (1 - 2 alpha) confidence interval
 // d +- q se (q the normal quantile with variance layers, Student's t with runs), se by the delta
-// method from both images' noise (a variance layer's channels taken as fully correlated,
-// (sum of the channels' standard deviations)^2, which bounds their sum's variance whatever their
-// correlation; runs give the sum's spread itself). Verdict: pass when every interval lies inside
-// (-D, D) (two one-sided tests per region at level alpha, intersection-union over the regions),
-// fail when an interval lies wholly outside it (a bias beyond D shown at level alpha), else
+// method from both images' noise (runs give the sum's spread itself). Per channel, so that a shift
+// of colour that keeps R + G + B is a difference. Verdict: pass when every interval lies inside
+// (-D, D) (two one-sided tests per region and channel at level alpha, intersection-union over
+// them), fail when an interval lies wholly outside it (a bias beyond D shown at level alpha), else
 // inconclusive, with the factor of samples that would decide it; inconclusive too when the
-// candidate's noise is unknown.
+// candidate's noise is unknown, or a region's reference sum is negative in a channel (a pixel
+// filter's negative lobes).
 struct EquivalenceRegion {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  int channel = 0;  // the deciding channel (0 R, 1 G, 2 B): its difference and interval
   double relativeDifference = 0, low = 0, high = 0;
   Verdict verdict = Verdict::Inconclusive;  // pass: inside +-D; fail: wholly outside
 };
@@ -126,6 +140,7 @@ struct EquivalenceTest {
   // Where the verdict is inconclusive for want of samples: about this many times the candidate's
   // samples (or runs) would narrow every undecided interval enough to decide it.
   double samplesToDecide = 0;
+  bool negativeReference = false;  // a region's reference sum is negative in a channel: inconclusive there
   Verdict verdict = Verdict::Inconclusive;
 };
 EquivalenceTest testEquivalence(const Candidate& candidate, const Image& reference, double within, double alpha,
