@@ -2,12 +2,17 @@
 
 #include <dlfcn.h>
 
+#include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <stdexcept>
 
 namespace lucent {
 
 namespace {
+
+// Nanoseconds spent loading modules (codecLoadingSeconds).
+std::atomic<uint64_t> loadingNanoseconds{0};
 
 // The module by its name (the library path: the caller's run path, which the build and the install
 // give every program linking Lucent, LD_LIBRARY_PATH, the system's directories), else beside the
@@ -26,8 +31,11 @@ void* openModule(const char* module, std::string& why) {
 // The functions `entry` of `module` returns, checked to be this build's.
 template <typename Functions>
 const Functions* loadModule(const char* module, const char* entry, uint32_t interfaceVersion, const char* role) {
+  const auto start = std::chrono::steady_clock::now();
   std::string why;
   void* handle = openModule(module, why);
+  loadingNanoseconds += uint64_t(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start).count());
   std::string message = std::string("cannot load Lucent's image ") + role + ": ";
   if (!handle) throw std::runtime_error(message.append(why));
   const auto function = reinterpret_cast<const Functions* (*)()>(dlsym(handle, entry));
@@ -38,6 +46,8 @@ const Functions* loadModule(const char* module, const char* entry, uint32_t inte
 }
 
 }  // namespace
+
+double codecLoadingSeconds() { return double(loadingNanoseconds.load()) * 1e-9; }
 
 const ImageWriter& imageWriter() {
   static const ImageWriter* writer = loadModule<ImageWriter>("liblucent_image_exr.so", "lucentImageWriter",

@@ -79,6 +79,27 @@ TEST_CASE("render: the JSON's seconds are its stages', not the process's set-up"
   CHECK(summary["seconds"].get<double>() - stages < 0.15);
 }
 
+TEST_CASE("render: loading the texture reader is set-up, left out of load_scene", "[cli][render]") {
+  // A quad with a PNG texture: its first read loads OpenImageIO (about 0.25 s of dynamic linking
+  // in a new process), far more than the scene's own loading; the JSON gives it as setup_seconds.
+  const test::TempDir dir("render-setup");
+  Image texel(2, 2, {"R", "G", "B"});
+  writePng(texel, dir / "texture.png");
+  std::ofstream(dir / "quad.mtl") << "newmtl textured\nKd 1 1 1\nmap_Kd texture.png\n";
+  std::ofstream(dir / "quad.obj") << "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+                                     "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl textured\nf 1/1 2/2 3/3 4/4\n";
+  std::ofstream(dir / "scene.json") << R"({"camera": {"eye": [0, 0, 3], "look_at": [0, 0, 0], "up": [0, 1, 0],
+    "fov_y": 40, "resolution": [8, 8]}, "meshes": [{"obj": "quad.obj"}],
+    "lights": [{"type": "point", "position": [0, 0, 2], "power": [10, 10, 10]}]})";
+  const test::CliRun r = runLucent("render " + (dir / "scene.json") + " --spp 1 -q -o " + (dir / "out.exr"));
+  INFO(r.output);
+  REQUIRE(r.status == 0);
+  const auto summary = nlohmann::json::parse(r.output);
+  const double setup = summary["setup_seconds"].get<double>(), load = summary["stages"]["load_scene"].get<double>();
+  CHECK(setup > 0.02);
+  CHECK(load < setup);
+}
+
 TEST_CASE("render: an untextured scene's EXR and PNG are written, and EXRs compared, without loading OpenImageIO", "[cli][render]") {
   // OpenImageIO's 260 libraries take a process 0.3 s of CPU to load; OpenEXR's and libpng's a few
   // milliseconds. The dynamic loader names every object it opens (LD_DEBUG=files).

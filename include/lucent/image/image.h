@@ -51,6 +51,11 @@ using ImageMetadata = std::vector<std::pair<std::string, std::string>>;
 // not when its image is written. Throws std::runtime_error where it cannot be loaded. (It reads
 // EXRs too; the other formats are read by liblucent_image_oiio.so, loaded by the first read of one.)
 void loadImageWriter();
+// Seconds this process has spent loading the image modules (dynamic linking, their static
+// initialisers): set-up, which a scene's clock leaves out. The reader of textures
+// (liblucent_image_oiio.so and OpenImageIO's 260 libraries, about 0.25 s) loads with the first
+// texture, inside a scene's loading.
+double codecLoadingSeconds();
 
 // Writes 32-bit float EXR with every channel and the metadata. The file is written under a
 // temporary name in the same directory and renamed, so no partial file is ever visible.
