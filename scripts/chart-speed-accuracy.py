@@ -54,7 +54,7 @@ def gather_rays(*counts):
 
 def photons(flags, label, *counts):
     """Photon counts given to every option in `flags` at once (purcell's global and caustic maps)."""
-    return [(f"{n // 1000}k {label}", [arg for flag in flags for arg in (flag, str(n))]) for n in counts]
+    return [(f"{n / 1000:g}k {label}", [arg for flag in flags for arg in (flag, str(n))]) for n in counts]
 
 
 def buffers(*sides):
@@ -66,7 +66,7 @@ def particle_knobs(particles, counts, bounces=None):
     bounces, 16 x 16 gathering links, subtriangles 3 spacings wide); with `bounces` fixed, the others."""
     fixed = ["--bounces", str(bounces)] if bounces is not None else []
     base = ["--area-particles", str(particles)] + fixed
-    knobs = {"particles (area particles)": [(f"{n // 1000}k particles", ["--area-particles", str(n)] + fixed)
+    knobs = {"particles (area particles)": [(f"{n / 1000:g}k particles", ["--area-particles", str(n)] + fixed)
                                             for n in counts],
              "particles (bounces)": [(f"n_b {b}", base + ["--bounces", str(b)]) for b in (1, 2, 4, 8, 16)],
              "particles (gather links)": [(f"{n}x{n} links", base + ["--gather-links", str(n)]) for n in (4, 8, 16, 24)],
