@@ -421,7 +421,7 @@ def summary_table(table):
     columns = []
     for times in table.values():
         columns += [c for c in times if c not in columns]
-    rows = ["| scene | " + " | ".join(columns) + " |", "| --- |" + " ---: |" * len(columns)]
+    rows = ["| seconds to relMSE 0.01, 0.001 | " + " | ".join(columns) + " |", "| --- |" + " ---: |" * len(columns)]
     for scene, times in table.items():
         rows.append(f"| {scene} | " + " | ".join(", ".join(cell_text(c) for c in times[column].values())
                                                   if column in times else "" for column in columns) + " |")

@@ -6,6 +6,7 @@ nor the markers, and the document's tables written from the JSON. The label test
   python3 -m pytest -q tests/chart_test.py
 """
 import importlib.util
+import json
 import math
 import os
 
@@ -134,7 +135,7 @@ def test_tables_are_written_between_their_markers_from_the_json():
     assert "| pt | 4 / 16 spp | 0.0612 / 0.18 | 0.17 / 0.03 |" in written
     assert "| purcell | 16k photons | 0.24 | 0.014 |" in written
     # purcell reaches 0.01 nowhere (biased), the path tracer's curve is extended as 1 / time.
-    assert "| scene | pt | purcell |" in written
+    assert "| seconds to relMSE 0.01, 0.001 | pt | purcell |" in written
     assert "| cornell-box | ~0.54, ~5.4 | never, never |" in written
     assert written.endswith("prose\n\n" + chart.block("summary") + "\n" + "\n".join(chart.summary_table(table))
                             + "\n" + chart.END_BLOCK + "\n")
@@ -143,3 +144,14 @@ def test_tables_are_written_between_their_markers_from_the_json():
     with pytest.raises(SystemExit):
         chart.doc_with_tables(chart.block("maze") + "\n" + chart.END_BLOCK, everything, table)
 
+
+def test_the_documents_tables_are_those_of_the_json():
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    with open(os.path.join(root, "docs", "charts", "speed-accuracy.json")) as f:
+        everything = json.load(f)
+    with open(os.path.join(root, "docs", "speed-accuracy.md")) as f:
+        doc = f.read()
+    # Every scene charted, and the summary, has its table in the document, as the JSON gives it.
+    for key in list(everything) + ["summary"]:
+        assert chart.block(key) in doc, key
+    assert chart.doc_with_tables(doc, everything, chart.times_to_targets(everything)[2]) == doc
