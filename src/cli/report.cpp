@@ -497,7 +497,7 @@ std::string reportPage(const ReportOptions& opt, const Image& reference, const I
     }
     if (c.equivalence) {
       const EquivalenceTest& e = *c.equivalence;
-      html << verdictCell("equivalent", e.verdict) << "<td>"
+      html << verdictCell("equivalent", e.verdict) << "<td>" << "RGB"[e.regions[0].channel] << " "
            << "<span data-key=\"interval_low\">" << number(e.regions[0].low) << "</span> to <span data-key=\"interval_high\">"
            << number(e.regions[0].high) << "</span></td>";
     }

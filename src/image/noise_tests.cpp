@@ -153,21 +153,6 @@ class TestPixels {
   // Pixel (x, y): the candidate's mean and the variance of that mean (0 where unknown), the
   // reference's value and variance, and each run's values (values()).
   void read(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance) {
-    readValues(x, y, mean, variance, reference, referenceVariance);
-  }
-  // The same with the rounding the two values may differ by (Candidate::rounding).
-  void read(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance, Quad& rounding) {
-    readValues(x, y, mean, variance, reference, referenceVariance);
-    rounding[kSum] = 0;
-    for (size_t c = 0; c < 3; ++c) {
-      rounding[c] = candidate_.rounding * std::abs(mean[c]) + candidate_.referenceRounding * std::abs(reference[c]);
-      rounding[kSum] += rounding[c];
-    }
-  }
-  const std::vector<Quad>& values() const { return values_; }
-
- private:
-  void readValues(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance) {
     double deviations = 0;
     for (int c = 0; c < 3; ++c) {
       reference[size_t(c)] = reference_.at(x, y, referenceValue_[size_t(c)]);
@@ -199,6 +184,37 @@ class TestPixels {
     spreadOfRuns(mean, variance);
     for (size_t c = 0; c < 4; ++c) variance[c] = std::max(variance[c], floor_[c] * referenceVariance[c]);
   }
+  // The same with the two values' rounding (Candidate::rounding) allowed for: where neither has
+  // noise, the candidate's mean is moved towards the reference by as much as the two may differ by;
+  // elsewhere the rounding counts as noise, a uniform error of variance m^2 / 3 added to the
+  // reference's (known) variance. Per pixel, so that bright exact pixels (an emitter) lend no
+  // allowance to the difference of others.
+  void readRounded(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance) {
+    read(x, y, mean, variance, reference, referenceVariance);
+    double deviations = 0;
+    for (size_t c = 0; c < 3; ++c) {
+      const double d = mean[c] - reference[c];
+      if (std::isfinite(d)) {  // a non-finite candidate stays as it is: no noise explains it
+        const double m = roundingOf(candidate_.rounding, mean[c]) + roundingOf(candidate_.referenceRounding, reference[c]);
+        if (variance[c] == 0 && referenceVariance[c] == 0)
+          mean[c] = reference[c] + std::copysign(std::max(0.0, std::abs(d) - m), d);
+        else
+          referenceVariance[c] += m * m / 3;
+      }
+      deviations += std::sqrt(referenceVariance[c]);
+    }
+    mean[kSum] = mean[0] + mean[1] + mean[2];
+    referenceVariance[kSum] = deviations * deviations;
+  }
+  const std::vector<Quad>& values() const { return values_; }
+
+ private:
+  // The most a value v stored with relative rounding u is off by: u |v|, and for half floats at
+  // least half their smallest subnormal, 2^-25, below 2^-14 (where their spacing stops shrinking).
+  static double roundingOf(double u, double v) {
+    return std::max(u * std::abs(v), u == kHalfRounding ? 0x1p-25 : 0.0);
+  }
+
 
   // A variance layer's value where it is one: finite and not negative. Infinity (a pixel of fewer
   // than 2 samples), NaN (another renderer's M2 / (n - 1) at n = 1) or a negative value make the
@@ -281,13 +297,11 @@ class TestPixels {
 
 // The sums over a set of pixels (a block, a region, the image) that the tests need.
 struct UnitSums {
-  Quad difference{}, reference{}, candidate{}, pixelVariance{}, referenceVariance{}, rounding{};
+  Quad difference{}, reference{}, candidate{}, pixelVariance{}, referenceVariance{};
   std::vector<Quad> runs;  // each run's sum, where there are runs
 
-  void add(const Quad& mean, const Quad& variance, const Quad& ref, const Quad& refVariance, const std::vector<Quad>& values,
-           const Quad& pixelRounding = {}) {
+  void add(const Quad& mean, const Quad& variance, const Quad& ref, const Quad& refVariance, const std::vector<Quad>& values) {
     for (size_t c = 0; c < 4; ++c) {
-      rounding[c] += pixelRounding[c];
       difference[c] += mean[c] - ref[c];
       reference[c] += ref[c];
       candidate[c] += mean[c];
@@ -314,7 +328,7 @@ struct UnitSums {
 
 // What a block keeps for the test once its pixels are summed.
 struct BlockSums {
-  std::array<double, 3> difference{}, pixelVariance{}, referenceVariance{}, spread{}, rounding{};
+  std::array<double, 3> difference{}, pixelVariance{}, referenceVariance{}, spread{};
 };
 
 // The region a tile index stands for: 0 the whole image, k > 0 the grid's tile k - 1, row by row.
@@ -345,23 +359,22 @@ void sumImage(TestPixels& pixels, int tiles, int block, std::vector<UnitSums>& r
                   "use larger blocks (--block) or raise --memory-limit");
     blocks.assign(size_t(blocksX) * size_t(blocksY), BlockSums{});
   }
-  Quad mean, variance, reference, referenceVariance, rounding;
+  Quad mean, variance, reference, referenceVariance;
   for (int by = 0; by < blocksY; ++by)
     for (int bx = 0; bx < blocksX; ++bx) {
       UnitSums sums;
       const int x0 = bx * side, y0 = by * side, x1 = std::min(w, x0 + side), y1 = std::min(h, y0 + side);
       for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
-          pixels.read(x, y, mean, variance, reference, referenceVariance, rounding);
+          pixels.readRounded(x, y, mean, variance, reference, referenceVariance);
           for (UnitSums* s : {&regions[0], &regions[tileOf(x, y, tiles, w, h)], &sums})
-            s->add(mean, variance, reference, referenceVariance, pixels.values(), rounding);
+            s->add(mean, variance, reference, referenceVariance, pixels.values());
         }
       if (block <= 0) continue;
       BlockSums& b = blocks[size_t(by) * size_t(blocksX) + size_t(bx)];
       for (size_t c = 0; c < 3; ++c) {
         b.difference[c] = sums.difference[c], b.pixelVariance[c] = sums.pixelVariance[c];
         b.referenceVariance[c] = sums.referenceVariance[c], b.spread[c] = sums.spread(c);
-        b.rounding[c] = sums.rounding[c];
       }
     }
 }
@@ -422,12 +435,10 @@ std::array<CandidateNoise::Scale, 2> regionScales(const std::vector<UnitSums>& r
           poolScale("image", imageSpread, imagePixels, 1, runs)};
 }
 
-// The test statistic of a sum's difference beyond its rounding, against its variance.
-double statistic(double difference, double rounding, double variance) {
-  if (std::isnan(difference)) return difference;  // a candidate's NaN: a difference no noise explains
-  const double beyond = std::max(0.0, std::abs(difference) - rounding);
-  if (variance > 0) return std::copysign(beyond / std::sqrt(variance), difference);
-  return beyond == 0 ? 0.0 : std::copysign(kInfinity, difference);
+double statistic(double difference, double variance) {
+  if (!std::isfinite(difference)) return difference;  // a candidate's NaN or infinity: no noise explains it
+  if (variance > 0) return difference / std::sqrt(variance);
+  return difference == 0 ? 0.0 : std::copysign(kInfinity, difference);
 }
 
 }  // namespace
@@ -478,7 +489,7 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
     for (size_t c = 0; c < 3; ++c) {
       const double cv = candidateVariance(noise.source, noise.scales[0], b.pixelVariance[c], b.spread[c]);
       const double total = cv + b.referenceVariance[c];
-      const double z = statistic(b.difference[c], b.rounding[c], total);
+      const double z = statistic(b.difference[c], total);
       largest = std::max(largest, std::abs(z));
       minP = std::min(minP, studentTwoSidedP(z, welchDegreesOfFreedom(cv, total, noise.scales[0].degreesOfFreedom)));
     }
@@ -499,9 +510,10 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
     for (size_t c = 0; c < 3; ++c) {
       const double cv = candidateVariance(noise.source, scale, s.pixelVariance[c], s.spread(c));
       const double total = cv + s.referenceVariance[c];
-      const double z = statistic(s.difference[c], s.rounding[c], total);
+      const double z = statistic(s.difference[c], total);
       const double p = studentTwoSidedP(z, welchDegreesOfFreedom(cv, total, scale.degreesOfFreedom));
-      if (p <= r.pValue) r.pValue = p, r.z = z, r.channel = int(c);
+      // The channel of the least p-value; of those with equal ones (0 beyond |z| 38), the largest |z|.
+      if (p < r.pValue || (p == r.pValue && std::abs(z) > std::abs(r.z))) r.pValue = p, r.z = z, r.channel = int(c);
     }
     r.relativeDifference = s.reference[kSum] != 0 ? s.difference[kSum] / s.reference[kSum] : 0;
     const size_t tested = size_t(r.channel);

@@ -97,7 +97,7 @@ TEST_CASE("render: loading the texture reader is set-up, left out of load_scene"
   const auto summary = nlohmann::json::parse(r.output);
   const double setup = summary["setup_seconds"].get<double>(), load = summary["stages"]["load_scene"].get<double>();
   CHECK(setup > 0.02);
-  CHECK(load < setup);
+  CHECK(load < 0.5 * setup);  // with OpenImageIO's loading in it, load_scene would exceed setup
 }
 
 TEST_CASE("render: an untextured scene's EXR and PNG are written, and EXRs compared, without loading OpenImageIO", "[cli][render]") {

@@ -587,6 +587,27 @@ TEST_CASE("testWithinNoise: a variance it cannot trust or identical runs leave i
   CHECK(testWithinNoise(halves, flat(0.7f), 0.01).verdict == Verdict::Pass);
   halves.runs[0] = flat(0.7f * (1 + 1e-3f));
   CHECK(testWithinNoise(halves, flat(0.7f), 0.01).verdict == Verdict::Fail);  // beyond a half's rounding
+  // Pixel by pixel: a bright exact emitter (5e4, a quarter of the image) lends no allowance to the
+  // noisy pixels beside it, whose 5% bias fails (their sum 0.2 x 768, the emitter's allowance
+  // 5e4 x 256 x 2^-11 = 6,250, would have hidden it); a correct candidate passes.
+  const auto lamp = [&](float bias, uint64_t seed) {
+    Image image = noisyImage(w, h, [&](int, int, int) { return 0.2f * bias; }, 1e-4f, seed);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < 8; ++x)
+        for (int c = 0; c < 3; ++c) image.at(x, y, c) = 5e4f, image.at(x, y, 3 + c) = 0;
+    return image;
+  };
+  Candidate lit(lamp(1.05f, 2));
+  lit.rounding = kHalfRounding;
+  CHECK(testWithinNoise(lit, lamp(1, 1), 0.01).verdict == Verdict::Fail);
+  lit.runs[0] = lamp(1, 2);
+  CHECK(testWithinNoise(lit, lamp(1, 1), 0.01).verdict == Verdict::Pass);
+  // An infinite pixel is a difference no noise or rounding explains.
+  Image infinite = noisyImage(w, h, mean, 0.005f, 2);
+  infinite.at(7, 7, 1) = std::numeric_limits<float>::infinity();
+  t = testWithinNoise(infinite, reference, 0.01);
+  CHECK(t.verdict == Verdict::Fail);
+  CHECK(t.regions[0].rejected);
 
   // A shift of colour that keeps R + G + B (red up 10%, blue down 10% on grey): --within judges
   // each channel (it passed on the sum), --test names the channel it rejects.
@@ -604,6 +625,14 @@ TEST_CASE("testWithinNoise: a variance it cannot trust or identical runs leave i
   CHECK(std::abs(shift.regions[0].relativeDifference) < 0.01);
   CHECK(shift.regions[0].channel != 1);
   CHECK(std::abs(shift.regions[0].channelDifference) == Approx(0.1).margin(0.01));
+  // Where p-values underflow to 0 (|z| beyond 38) the channel named is the one of the largest |z|:
+  // red 50% bright (z about 11,000), blue 1% (z about 230).
+  const Image apart = noisyImage(w, h, [&](int x, int y, int c) { return grey(x, y, c) * (c == 0 ? 1.5f : c == 2 ? 1.01f : 1.0f); },
+                                 1e-6f, 2);
+  const NoiseTest far = testWithinNoise(apart, noisyImage(w, h, grey, 1e-6f, 1), 0.01);
+  CHECK(far.regions[0].pValue == 0);
+  CHECK(far.regions[0].channel == 0);
+  CHECK(far.regions[0].channelDifference == Approx(0.5).margin(0.01));
 
   // Tiles are named by the pixels summed in them: at 10 pixels and 4 tiles, x 0-2, 3-4, 5-7, 8-9.
   const NoiseTest narrow = testWithinNoise(noisyImage(10, 10, mean, 0.005f, 2), noisyImage(10, 10, mean, 0.005f, 1), 0.01);

@@ -38,9 +38,11 @@ Verdict combineVerdicts(Verdict a, Verdict b);
 
 // What is compared with the reference: one image, or two or more runs (same size; their R, G, B).
 // The relative rounding of stored R, G, B values that the noise tests allow: a half float's unit
-// roundoff, and for 32-bit floats sixteen units, room for the rounding of the few dozen operations
-// by which two renderers may compute one value (an emitter's radiance seen directly, which has no
-// noise). A block's or region's difference within the sum of its pixels' allowances counts as none.
+// roundoff (and half its smallest subnormal, 2^-25, below 2^-14), and for 32-bit floats sixteen
+// units, room for the rounding of the few dozen operations by which two renderers may compute one
+// value (an emitter's radiance seen directly, which has no noise). Per pixel: where neither image
+// has noise a difference within the two values' allowances counts as none; elsewhere the rounding
+// counts as noise, uniform over +-m (variance m^2 / 3).
 constexpr double kHalfRounding = 0x1p-11, kFloatRounding = 0x1p-20;
 
 struct Candidate {
@@ -88,9 +90,8 @@ Image candidateImage(const Candidate& candidate);
 // none (0.8 times); at 16 samples 8 x 8 rejects none (2 times alpha's share below alpha), 4 x 4
 // 2 and 4; at 256 samples both none. Hence 8 x 8 by default. A block or region is rejected when its
 // p-value is below alpha / (2 * 3 * blocks) or alpha / (2 * 3 * regions) (Bonferroni over the
-// channels, the blocks and the regions, alpha split between the two families). A difference within
-// the values' rounding (Candidate::rounding) counts as none: t = sign(d) max(0, |d| - m) / sd, m the
-// sum of the pixels' allowances. Verdict: fail when one is rejected, pass when none is, inconclusive
+// channels, the blocks and the regions, alpha split between the two families), the values' rounding
+// allowed for pixel by pixel (kHalfRounding). Verdict: fail when one is rejected, pass when none is, inconclusive
 // when the candidate's noise is unknown, a variance in either image is infinite, NaN or negative, or
 // the runs are one image.
 struct RegionTest {
@@ -123,7 +124,8 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
 // method from both images' noise (runs give the sum's spread itself). Per channel, so that a shift
 // of colour that keeps R + G + B is a difference. Verdict: pass when every interval lies inside
 // (-D, D) (two one-sided tests per region and channel at level alpha, intersection-union over
-// them), fail when an interval lies wholly outside it (a bias beyond D shown at level alpha), else
+// them), fail when an interval lies wholly outside it (a bias beyond D shown at level alpha for that
+// interval: where a bias lies at D itself, each of the 3 x 17 may fail by chance), else
 // inconclusive, with the factor of samples that would decide it; inconclusive too when the
 // candidate's noise is unknown, or a region's reference sum is negative in a channel (a pixel
 // filter's negative lobes).
