@@ -264,7 +264,7 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
     const py::object a = py::isinstance<py::dict>(value) ? py::object(value.cast<py::dict>()["image"])
                                                          : py::reinterpret_borrow<py::object>(value);
     const py::array array = py::array::ensure(a);
-    return array && array.dtype().kind() == 'f' && array.dtype().itemsize() == 2 ? kHalfRounding : kFloatRounding;
+    return colourRounding(array && array.dtype().kind() == 'f' && array.dtype().itemsize() == 2);
   };
   // A list or tuple of arrays: independent runs of one renderer.
   std::vector<Image> runs;

@@ -113,6 +113,12 @@ def test_labels_overlap_neither_each_other_nor_markers(offsets, monkeypatch):
         assert not clashes
 
 
+def test_counts_are_labelled_with_their_fraction_of_a_thousand():
+    assert [label for label, _ in chart.photons(["--photons"], "photons", 12500, 1040000)] == ["12.5k photons",
+                                                                                                "1040k photons"]
+    assert chart.particle_knobs(37500, (37500,))["particles (area particles)"][0][0] == "37.5k particles"
+
+
 def test_settings_share_their_unit_in_one_cell():
     assert chart.compact_settings(["4 spp", "16 spp", "64 spp"]) == "4 / 16 / 64 spp"
     assert chart.compact_settings(["8x8 buffers", "16x16 buffers"]) == "8x8 / 16x16 buffers"

@@ -77,8 +77,8 @@ int runCompare(const CompareOptions& opt) {
   }
   Image reference = readLinearImage(referencePath, &referenceMetadata);
   Candidate candidate = images.size() == 1 ? Candidate(std::move(images[0]), halfVariance) : Candidate(std::move(images));
-  candidate.rounding = halfColour ? kHalfRounding : kFloatRounding;
-  candidate.referenceRounding = referenceHalfColour ? kHalfRounding : kFloatRounding;
+  candidate.rounding = colourRounding(halfColour);
+  candidate.referenceRounding = colourRounding(referenceHalfColour);
   ComparisonSettings settings = s;
   settings.heatmap = !opt.heatmap.empty();
   ImageComparison result;

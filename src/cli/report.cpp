@@ -647,8 +647,8 @@ int runReport(const ReportOptions& opt) {
     Candidate candidate = runs == 1 ? Candidate(std::move(runImages[0]), halfVariance[i]) : Candidate(std::move(runImages));
     const bool anyHalfColour = std::any_of(halfColour.begin() + ptrdiff_t(i * runs),
                                            halfColour.begin() + ptrdiff_t((i + 1) * runs), [](bool b) { return b; });
-    candidate.rounding = anyHalfColour ? kHalfRounding : kFloatRounding;
-    candidate.referenceRounding = referenceHeader.hasHalfColour() ? kHalfRounding : kFloatRounding;
+    candidate.rounding = colourRounding(anyHalfColour);
+    candidate.referenceRounding = colourRounding(referenceHeader.hasHalfColour());
     const Image file = candidateImage(candidate);
     const Image image = rgbChannels(file);
     const bool candidateIsSrgb = isSrgbEncoded(c.path, c.metadata);

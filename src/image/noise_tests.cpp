@@ -113,6 +113,13 @@ namespace {
 constexpr int kSum = 3;
 using Quad = std::array<double, 4>;
 
+// The variance of R + G + B from the channels' as if they were fully correlated, (the sum of their
+// standard deviations)^2: a bound whatever their correlation.
+double sumVarianceBound(const Quad& variance) {
+  const double deviations = std::sqrt(variance[0]) + std::sqrt(variance[1]) + std::sqrt(variance[2]);
+  return deviations * deviations;
+}
+
 // The candidate and the reference as the tests read them, pixel by pixel.
 class TestPixels {
  public:
@@ -153,15 +160,12 @@ class TestPixels {
   // Pixel (x, y): the candidate's mean and the variance of that mean (0 where unknown), the
   // reference's value and variance, and each run's values (values()).
   void read(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance) {
-    double deviations = 0;
     for (int c = 0; c < 3; ++c) {
       reference[size_t(c)] = reference_.at(x, y, referenceValue_[size_t(c)]);
       referenceVariance[size_t(c)] = knownVariance(reference_.at(x, y, referenceVariance_[size_t(c)]));
-      deviations += std::sqrt(referenceVariance[size_t(c)]);
     }
     reference[kSum] = reference[0] + reference[1] + reference[2];
-    // The channels' variances summed as if fully correlated: a bound whatever their correlation.
-    referenceVariance[kSum] = deviations * deviations;
+    referenceVariance[kSum] = sumVarianceBound(referenceVariance);
     const size_t n = candidate_.runs.size();
     for (size_t i = 0; i < n; ++i) {
       const Image& run = candidate_.runs[i];
@@ -172,12 +176,9 @@ class TestPixels {
       mean = values_[0];
       variance = {};
       if (noise_.source == NoiseSource::VarianceLayer) {
-        double sum = 0;
-        for (int c = 0; c < 3; ++c) {
+        for (int c = 0; c < 3; ++c)
           variance[size_t(c)] = knownVariance(candidate_.runs[0].at(x, y, runs_[0].variance[size_t(c)]));
-          sum += std::sqrt(variance[size_t(c)]);
-        }
-        variance[kSum] = sum * sum;
+        variance[kSum] = sumVarianceBound(variance);
       }
       return;
     }
@@ -191,7 +192,6 @@ class TestPixels {
   // allowance to the difference of others.
   void readRounded(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance) {
     read(x, y, mean, variance, reference, referenceVariance);
-    double deviations = 0;
     for (size_t c = 0; c < 3; ++c) {
       const double d = mean[c] - reference[c];
       if (std::isfinite(d)) {  // a non-finite candidate stays as it is: no noise explains it
@@ -201,10 +201,9 @@ class TestPixels {
         else
           referenceVariance[c] += m * m / 3;
       }
-      deviations += std::sqrt(referenceVariance[c]);
     }
     mean[kSum] = mean[0] + mean[1] + mean[2];
-    referenceVariance[kSum] = deviations * deviations;
+    referenceVariance[kSum] = sumVarianceBound(referenceVariance);
   }
   const std::vector<Quad>& values() const { return values_; }
 
@@ -542,6 +541,7 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
   const auto scales = regionScales(regions, noise.runs);
   noise.scales = {scales[0], scales[1]};
   t.verdict = Verdict::Pass;
+  bool negativeReference = false;  // a region's reference sum is negative in a channel
   for (size_t k = 0; k < regions.size(); ++k) {
     const CandidateNoise::Scale& scale = noise.scales[k == 0 ? 1 : 0];
     const UnitSums& s = regions[k];
@@ -573,7 +573,7 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
       } else {
         // Negative (a pixel filter's negative lobes over a dark region): no relative difference.
         channel.verdict = Verdict::Inconclusive;
-        t.negativeReference = true;
+        negativeReference = true;
       }
       const auto rank = [](Verdict v) { return v == Verdict::Fail ? 2 : v == Verdict::Inconclusive ? 1 : 0; };
       const auto reach = [](const EquivalenceRegion& x) { return std::max(std::abs(x.low), std::abs(x.high)); };
@@ -586,7 +586,7 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
     t.regions.push_back(e);
   }
   if (!noise.undecided.empty()) t.verdict = Verdict::Inconclusive;
-  else if (t.verdict == Verdict::Inconclusive && t.negativeReference)
+  else if (t.verdict == Verdict::Inconclusive && negativeReference)
     noise.undecided = "a region's reference sum is negative in a channel (a pixel filter's negative lobes over a dark "
                       "region), so it has no relative difference there: compare with a pixel filter of no negative lobes";
   else if (t.verdict == Verdict::Inconclusive) {

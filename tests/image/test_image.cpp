@@ -643,6 +643,43 @@ TEST_CASE("testWithinNoise: a variance it cannot trust or identical runs leave i
   }
 }
 
+TEST_CASE("lucent compare allows for a file's half-float colour channels", "[compare][cli]") {
+  // Flat 0.7 with no noise in either image (an emitter seen directly): the candidate's R, G, B
+  // stored as half floats (0.7001953125) pass; the same values written as 32-bit floats differ.
+  test::TempDir dir("compare-half");
+  const int w = 16, h = 16;
+  Image flat(w, h, {"R", "G", "B", "variance.R", "variance.G", "variance.B"});
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) flat.at(x, y, c) = 0.7f;
+  writeExr(flat, dir / "reference.exr");
+  {
+    Imf::Header header(w, h);
+    Imf::FrameBuffer frame;
+    std::vector<half> colour(size_t(w * h), half(0.7f));
+    std::vector<float> nought(size_t(w * h), 0.0f);
+    for (const char* name : {"R", "G", "B"}) {
+      header.channels().insert(name, Imf::Channel(Imf::HALF));
+      frame.insert(name, Imf::Slice(Imf::HALF, (char*)colour.data(), sizeof(half), sizeof(half) * size_t(w)));
+    }
+    for (const char* name : {"variance.R", "variance.G", "variance.B"}) {
+      header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+      frame.insert(name, Imf::Slice(Imf::FLOAT, (char*)nought.data(), sizeof(float), sizeof(float) * size_t(w)));
+    }
+    Imf::OutputFile out((dir / "half.exr").c_str(), header);
+    out.setFrameBuffer(frame);
+    out.writePixels(h);
+  }
+  writeExr(readImage(dir / "half.exr"), dir / "float.exr");
+  const std::string reference = " " + quoted(dir / "reference.exr") + " --test";
+  const test::CliRun halfRun = runLucent("compare " + quoted(dir / "half.exr") + reference);
+  INFO(halfRun.output);
+  CHECK(halfRun.status == 0);
+  const test::CliRun floatRun = runLucent("compare " + quoted(dir / "float.exr") + reference);
+  INFO(floatRun.output);
+  CHECK(floatRun.status == 1);
+}
+
 TEST_CASE("An image header's half colour channels: R, G, B and layers' colours, not variances", "[compare]") {
   const auto half = [](std::vector<std::string> names) {
     ImageHeader header;

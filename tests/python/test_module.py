@@ -250,6 +250,17 @@ def test_write_dump_writes_what_read_dump_and_check_dump_read(tmp_path):
         lucent.write_dump(str(candidate / "x.bin"), np.zeros(3, dtype=np.int16))
 
 
+def test_compare_allows_for_float16_arrays_rounding():
+    """Flat 0.7 without noise in either image: a float16 candidate (0.7001953125) passes --test, the
+    same values as float32 differ, as lucent compare treats a half-float EXR's colour."""
+    zeros = np.zeros((8, 8, 3), dtype=np.float32)
+    reference = {"image": np.full((8, 8, 3), 0.7, dtype=np.float32), "variance": zeros}
+    halves = np.full((8, 8, 3), 0.7, dtype=np.float16)
+    assert lucent.compare({"image": halves, "variance": zeros}, reference, test=True)["test"]["verdict"] == "pass"
+    widened = halves.astype(np.float32)
+    assert lucent.compare({"image": widened, "variance": zeros}, reference, test=True)["test"]["verdict"] == "fail"
+
+
 def test_gltf_choices_load_as_lucent_renders_options_read_them(tmp_path):
     """gltf_masking and gltf_normal_maps give the image the CLI's options of those names give (the
     exported Cornell box read directly: its materials are glTF's), and bad values are refused."""

@@ -44,6 +44,7 @@ Verdict combineVerdicts(Verdict a, Verdict b);
 // has noise a difference within the two values' allowances counts as none; elsewhere the rounding
 // counts as noise, uniform over +-m (variance m^2 / 3).
 constexpr double kHalfRounding = 0x1p-11, kFloatRounding = 0x1p-20;
+inline double colourRounding(bool halfFloats) { return halfFloats ? kHalfRounding : kFloatRounding; }
 
 struct Candidate {
   Candidate(Image image, bool halfVariance = false) : runs{std::move(image)}, halfVariance(halfVariance) {}
@@ -142,7 +143,6 @@ struct EquivalenceTest {
   // Where the verdict is inconclusive for want of samples: about this many times the candidate's
   // samples (or runs) would narrow every undecided interval enough to decide it.
   double samplesToDecide = 0;
-  bool negativeReference = false;  // a region's reference sum is negative in a channel: inconclusive there
   Verdict verdict = Verdict::Inconclusive;
 };
 EquivalenceTest testEquivalence(const Candidate& candidate, const Image& reference, double within, double alpha,
