@@ -120,10 +120,17 @@ double sumVarianceBound(const Quad& variance) {
   return deviations * deviations;
 }
 
+// The region (1-based, row by row) of a grid of tiles x tiles that pixel (x, y) of a w x h image lies in.
+size_t tileOf(int x, int y, int tiles, int w, int h) {
+  return size_t(1 + int64_t(y) * tiles / h * tiles + int64_t(x) * tiles / w);
+}
+
 // The candidate and the reference as the tests read them, pixel by pixel.
 class TestPixels {
  public:
-  TestPixels(const Candidate& candidate, const Image& reference) : candidate_(candidate), reference_(reference) {
+  // `tiles`: the grid over whose tiles the variance floor takes its median (floorPixelVariances).
+  TestPixels(const Candidate& candidate, const Image& reference, int tiles)
+      : candidate_(candidate), reference_(reference), tiles_(std::max(1, tiles)) {
     if (candidate.runs.empty()) throw std::invalid_argument("no image to compare");
     for (const Image& run : candidate.runs) requireSameSize(run, reference);
     referenceValue_ = rgbIndices(reference, "", "the reference");
@@ -267,16 +274,33 @@ class TestPixels {
   // missed its rare large values) and now and then far too large: a block whose pixels all missed
   // them looks both dark and quiet, and would be rejected (2 to 8 runs of a Pareto-tailed
   // estimator: 12-16% false rejections at alpha 0.05). So each pixel's variance is at least the
-  // reference's (whose many samples see the tail) times the ratio of the two over the image.
+  // reference's (whose many samples see the tail) times the ratio of the two over the image, the
+  // sum of spreads over the sum of reference variances; but at most kFloorOverMedian times the
+  // median of that ratio over the grid's tiles, so that one firefly (one pixel of one run, far
+  // brighter than the rest) cannot raise every pixel's variance and hide a bias anywhere.
   void floorPixelVariances() {
+    constexpr double kFloorOverMedian = 4;
     Quad mean, variance, reference, referenceVariance, spreads{}, references{};
-    floor_ = {};
+    std::vector<Quad> tileSpreads(size_t(tiles_) * size_t(tiles_)), tileReferences = tileSpreads;
     for (int y = 0; y < height(); ++y)
       for (int x = 0; x < width(); ++x) {
         read(x, y, mean, variance, reference, referenceVariance);
-        for (size_t c = 0; c < 4; ++c) spreads[c] += variance[c], references[c] += referenceVariance[c];
+        const size_t tile = tileOf(x, y, tiles_, width(), height()) - 1;
+        for (size_t c = 0; c < 4; ++c) {
+          spreads[c] += variance[c], references[c] += referenceVariance[c];
+          tileSpreads[tile][c] += variance[c], tileReferences[tile][c] += referenceVariance[c];
+        }
       }
-    for (size_t c = 0; c < 4; ++c) floor_[c] = references[c] > 0 ? spreads[c] / references[c] : 0.0;
+    for (size_t c = 0; c < 4; ++c) {
+      std::vector<double> ratios;
+      for (size_t k = 0; k < tileSpreads.size(); ++k)
+        if (tileReferences[k][c] > 0) ratios.push_back(tileSpreads[k][c] / tileReferences[k][c]);
+      if (ratios.empty()) continue;
+      std::sort(ratios.begin(), ratios.end());
+      const size_t middle = ratios.size() / 2;
+      const double median = ratios.size() % 2 ? ratios[middle] : 0.5 * (ratios[middle - 1] + ratios[middle]);
+      floor_[c] = std::min(spreads[c] / references[c], kFloorOverMedian * median);
+    }
     if (spreads[kSum] == 0 && references[kSum] > 0 && noise_.undecided.empty())
       noise_.undecided = "the runs are the same image, pixel for pixel, so their spread says nothing of their noise "
                          "(rendered with one seed?): give runs rendered with different seeds";
@@ -290,7 +314,8 @@ class TestPixels {
   std::array<int, 3> referenceValue_{}, referenceVariance_{};
   std::vector<Channels> runs_;
   std::vector<Quad> values_;
-  Quad floor_{};  // the runs' pixel variances over the reference's, over the image
+  int tiles_;
+  Quad floor_{};  // the least ratio of a pixel's variance to the reference's (floorPixelVariances)
   CandidateNoise noise_;
 };
 
@@ -340,10 +365,6 @@ void regionBounds(size_t k, int tiles, int w, int h, int& x0, int& y0, int& x1, 
   const int tx = int(k - 1) % tiles, ty = int(k - 1) / tiles;
   const auto start = [tiles](int t, int size) { return int((int64_t(t) * size + tiles - 1) / tiles); };
   x0 = start(tx, w), y0 = start(ty, h), x1 = start(tx + 1, w), y1 = start(ty + 1, h);
-}
-
-size_t tileOf(int x, int y, int tiles, int w, int h) {
-  return size_t(1 + int64_t(y) * tiles / h * tiles + int64_t(x) * tiles / w);
 }
 
 // Sums every pixel into the regions (the whole image, then the tiles) and, with block > 0, into
@@ -461,11 +482,12 @@ Image candidateImage(const Candidate& candidate) {
 NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, double alpha, int grid, int block) {
   if (!(alpha > 0 && alpha < 1)) throw std::invalid_argument("the significance must be in (0, 1)");
   if (block < 1) throw std::invalid_argument("the block side must be at least 1 pixel");
-  TestPixels pixels(candidate, reference);
+  const int tiles = std::max(1, grid);
+  TestPixels pixels(candidate, reference, tiles);
   NoiseTest t;
   t.alpha = alpha;
   t.block = block;
-  const int w = pixels.width(), h = pixels.height(), tiles = std::max(1, grid);
+  const int w = pixels.width(), h = pixels.height();
   const int blocksX = (w + block - 1) / block;
   std::vector<UnitSums> regions;
   std::vector<BlockSums> blocks;
@@ -529,11 +551,12 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
 EquivalenceTest testEquivalence(const Candidate& candidate, const Image& reference, double within, double alpha, int grid) {
   if (!(alpha > 0 && alpha < 0.5)) throw std::invalid_argument("the significance must be in (0, 0.5)");
   if (!(within > 0) || !std::isfinite(within)) throw std::invalid_argument("the equivalence margin must be positive");
-  TestPixels pixels(candidate, reference);
+  const int tiles = std::max(1, grid);
+  TestPixels pixels(candidate, reference, tiles);
   EquivalenceTest t;
   t.within = within;
   t.alpha = alpha;
-  const int w = pixels.width(), h = pixels.height(), tiles = std::max(1, grid);
+  const int w = pixels.width(), h = pixels.height();
   std::vector<UnitSums> regions;
   std::vector<BlockSums> noBlocks;
   sumImage(pixels, tiles, 0, regions, noBlocks);
@@ -617,7 +640,7 @@ std::vector<SurfaceDifference> differenceBySurface(const Candidate& candidate, c
   if (!(alpha > 0 && alpha < 0.5)) throw std::invalid_argument("the significance must be in (0, 0.5)");
   const int materialAt = reference.channelIndex("surface.material"), emitterAt = reference.channelIndex("surface.emitter");
   if (materialAt < 0 || emitterAt < 0) return {};
-  TestPixels pixels(candidate, reference);
+  TestPixels pixels(candidate, reference, kRegionGrid);
   const int w = pixels.width(), h = pixels.height();
   const CandidateNoise& noise = pixels.noise();
   // With runs, each surface's sum by its own spread (Student's t, n - 1 degrees of freedom): its

@@ -536,6 +536,34 @@ TEST_CASE("testWithinNoise: the reference plus noise passes, a bias below a pixe
   CHECK(withoutVariance.blocksRejectedAtAlpha > same.blocksRejectedAtAlpha);
 }
 
+TEST_CASE("testWithinNoise with runs: one firefly does not raise every pixel's variance floor and hide a bias", "[compare]") {
+  // Two runs of 10% noise per pixel against a reference of 64 times their samples, a 3% bias in
+  // the sixth region (x 32-63, y 32-63: its sum's z about 14), and in run 1 one white pixel of
+  // another region 200 times too bright, as a firefly of a rare path is. Measured over the whole
+  // image, the floor on each pixel's variance (the runs' spread over the reference's variance)
+  // was 240 times a pixel's own variance everywhere, and the bias passed (z 1.8); capped at 4
+  // times the tiles' median it is found (z 9.9). The firefly, alone, is within its own spread.
+  const int w = 128, h = 128;
+  auto mean = [](int x, int y, int c) { return 1.0f + 0.5f * std::sin(0.1f * float(x + 2 * y + c)); };
+  auto biasedMean = [&](int x, int y, int c) {
+    return (x >= 32 && x < 64 && y >= 32 && y < 64 ? 1.03f : 1.0f) * mean(x, y, c);
+  };
+  const Image reference = noisyImage(w, h, mean, 0.005f / 64, 1);
+  for (const bool biased : {false, true}) {
+    std::vector<Image> runs;
+    for (uint64_t seed : {2, 3}) runs.push_back(rgbChannels(noisyImage(
+          w, h, [&](int x, int y, int c) { return biased ? biasedMean(x, y, c) : mean(x, y, c); }, 0.005f, seed)));
+    for (int c = 0; c < 3; ++c) runs[0].at(100, 110, c) = 200.0f;
+    const NoiseTest t = testWithinNoise(Candidate(std::move(runs)), reference, 0.01);
+    INFO((biased ? "biased" : "unbiased") << ": region 6's z " << t.regions[6].z << ", region 16's " << t.regions[16].z);
+    CHECK(t.noise.source == NoiseSource::Runs);
+    CHECK(t.verdict == (biased ? Verdict::Fail : Verdict::Pass));
+    CHECK(t.regions[6].rejected == biased);
+    CHECK_FALSE(t.regions[16].rejected);
+    if (biased) CHECK(t.regions[6].relativeDifference == Approx(0.03).margin(0.005));
+  }
+}
+
 TEST_CASE("testWithinNoise: a variance it cannot trust or identical runs leave it undecided, rounding is no difference",
           "[compare]") {
   const int w = 32, h = 32;

@@ -55,6 +55,9 @@ struct Candidate {
   double rounding = kFloatRounding, referenceRounding = kFloatRounding;
 };
 
+// The regions' grid by default: the whole image, then 4 x 4 tiles.
+constexpr int kRegionGrid = 4;
+
 enum class NoiseSource { VarianceLayer, Runs, Unknown };
 // "variance layer", "runs", "unknown".
 const char* noiseSourceName(NoiseSource source);
@@ -116,7 +119,8 @@ struct NoiseTest {
   Verdict verdict = Verdict::Inconclusive;
   Image statistic;                     // one channel "z": per pixel its block's largest |t| of the channels
 };
-NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, double alpha, int grid = 4, int block = 8);
+NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, double alpha, int grid = kRegionGrid,
+                          int block = 8);
 
 // An equivalence verdict for a biased candidate (lucent compare --within D): per region (the whole
 // image, then a grid x grid of tiles) and channel its relative difference from the reference,
@@ -146,7 +150,7 @@ struct EquivalenceTest {
   Verdict verdict = Verdict::Inconclusive;
 };
 EquivalenceTest testEquivalence(const Candidate& candidate, const Image& reference, double within, double alpha,
-                                int grid = 4);
+                                int grid = kRegionGrid);
 
 // Where a difference lies: the candidate's relative difference from the reference over the pixels
 // of each surface the reference's surface layers tell apart (render --layers: surface.material,
