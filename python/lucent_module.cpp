@@ -264,15 +264,16 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
     const py::object a = py::isinstance<py::dict>(value) ? py::object(value.cast<py::dict>()["image"])
                                                          : py::reinterpret_borrow<py::object>(value);
     const py::array array = py::array::ensure(a);
-    return colourRounding(array && array.dtype().kind() == 'f' && array.dtype().itemsize() == 2);
+    const bool half = array && array.dtype().kind() == 'f' && array.dtype().itemsize() == 2;
+    return StoredRounding{half ? ColourEncoding::Half : ColourEncoding::Float, false};
   };
   // A list or tuple of arrays: independent runs of one renderer.
   std::vector<Image> runs;
-  double rounding = kFloatRounding;
+  StoredRounding rounding;
   if (py::isinstance<py::list>(image) || py::isinstance<py::tuple>(image)) {
     for (const py::handle run : image) {
       runs.push_back(imageFrom(run, "run " + std::to_string(runs.size() + 1)));
-      rounding = std::max(rounding, roundingOf(run));
+      rounding = coarserRounding(rounding, roundingOf(run));
     }
     if (runs.size() < 2) throw std::invalid_argument("runs: give two or more arrays, or one array");
   } else {
@@ -280,7 +281,7 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
     rounding = roundingOf(image);
   }
   Image b = imageFrom(reference, "reference");
-  const double referenceRounding = roundingOf(reference);
+  const StoredRounding referenceRounding = roundingOf(reference);
   // A reference dict's material names (render's and read_image's "materials") name the breakdown by surface.
   if (py::isinstance<py::dict>(reference) && reference.cast<py::dict>().contains("materials"))
     settings.materialNames = reference.cast<py::dict>()["materials"].cast<std::vector<std::string>>();

@@ -53,14 +53,15 @@ int runCompare(const CompareOptions& opt) {
   // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
   const bool statistical = s.test || s.within.has_value();
   const std::string pair = "'" + runs[0] + (runs.size() > 1 ? "' (and its other runs)" : "'") + " vs '" + referencePath + "': ";
-  bool halfVariance = false, halfColour = false, referenceHalfColour = false;
+  bool halfVariance = false;
+  StoredRounding rounding, referenceRounding;
   {
     const ImageHeader reference = readImageHeader(referencePath);
-    referenceHalfColour = reference.hasHalfColour();
+    referenceRounding.encoding = reference.colourEncoding;
     for (const std::string& path : runs) {
       const ImageHeader image = readImageHeader(path);
       halfVariance = halfVariance || image.hasHalfVariance();
-      halfColour = halfColour || image.hasHalfColour();
+      rounding.encoding = std::max(rounding.encoding, image.colourEncoding);
       try {
         checkComparable(image, reference, statistical || !s.layer.empty());
       } catch (const std::invalid_argument& e) {
@@ -77,8 +78,9 @@ int runCompare(const CompareOptions& opt) {
   }
   Image reference = readLinearImage(referencePath, &referenceMetadata);
   Candidate candidate = images.size() == 1 ? Candidate(std::move(images[0]), halfVariance) : Candidate(std::move(images));
-  candidate.rounding = colourRounding(halfColour);
-  candidate.referenceRounding = colourRounding(referenceHalfColour);
+  rounding.srgb = candidateIsSrgb;
+  referenceRounding.srgb = isSrgbEncoded(referencePath, referenceMetadata);
+  candidate.rounding = rounding, candidate.referenceRounding = referenceRounding;
   ComparisonSettings settings = s;
   settings.heatmap = !opt.heatmap.empty();
   ImageComparison result;

@@ -580,11 +580,12 @@ int runReport(const ReportOptions& opt) {
   checkOutputFile(opt.output, ".html", "-o", inputs);
   // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
   const ImageHeader referenceHeader = readImageHeader(opt.reference);
-  std::vector<bool> halfVariance, halfColour;
+  std::vector<bool> halfVariance;
+  std::vector<ColourEncoding> encodings;
   for (const std::string& path : opt.candidates) {
     const ImageHeader header = readImageHeader(path);
     halfVariance.push_back(header.hasHalfVariance());
-    halfColour.push_back(header.hasHalfColour());
+    encodings.push_back(header.colourEncoding);
     try {
       checkComparable(header, referenceHeader, true);
     } catch (const std::invalid_argument& e) {
@@ -645,13 +646,12 @@ int runReport(const ReportOptions& opt) {
     }
     c.seconds = !opt.seconds.empty() ? std::optional<double>(opt.seconds[i]) : runSeconds;
     Candidate candidate = runs == 1 ? Candidate(std::move(runImages[0]), halfVariance[i]) : Candidate(std::move(runImages));
-    const bool anyHalfColour = std::any_of(halfColour.begin() + ptrdiff_t(i * runs),
-                                           halfColour.begin() + ptrdiff_t((i + 1) * runs), [](bool b) { return b; });
-    candidate.rounding = colourRounding(anyHalfColour);
-    candidate.referenceRounding = colourRounding(referenceHeader.hasHalfColour());
+    const bool candidateIsSrgb = isSrgbEncoded(c.path, c.metadata);
+    candidate.rounding = {*std::max_element(encodings.begin() + ptrdiff_t(i * runs), encodings.begin() + ptrdiff_t((i + 1) * runs)),
+                          candidateIsSrgb};
+    candidate.referenceRounding = {referenceHeader.colourEncoding, referenceIsSrgb};
     const Image file = candidateImage(candidate);
     const Image image = rgbChannels(file);
-    const bool candidateIsSrgb = isSrgbEncoded(c.path, c.metadata);
     // An 8-bit candidate against the reference clipped to [0, 1] (--ldr), as lucent compare does.
     std::optional<Image> clippedFile, clipped;
     try {

@@ -407,8 +407,17 @@ ImageHeader readImageHeader(const std::string& path) {
   const OpenedImage opened = openChecked(path);
   const CodecImageInfo& spec = opened.info;
   ImageHeader header{spec.width, spec.height, channelsAsRead(spec), {}};
-  for (int c = 0; c < spec.channelCount && size_t(c) < header.channels.size(); ++c)
-    if (spec.channelIsHalf[size_t(c)]) header.halfChannels.push_back(header.channels[size_t(c)]);
+  int leastColourBytes = 4;
+  for (int c = 0; c < spec.channelCount && size_t(c) < header.channels.size(); ++c) {
+    const std::string& name = header.channels[size_t(c)];
+    if (spec.channelIsHalf[size_t(c)]) header.halfChannels.push_back(name);
+    else if (name == "R" || name == "G" || name == "B") leastColourBytes = std::min(leastColourBytes, spec.channelBytes[size_t(c)]);
+  }
+  if (spec.formatName == "jpeg") header.colourEncoding = ColourEncoding::Lossy;
+  else if (spec.formatName == "hdr") header.colourEncoding = ColourEncoding::SharedExponent;
+  else if (leastColourBytes == 1) header.colourEncoding = ColourEncoding::Integer8;
+  else if (leastColourBytes == 2) header.colourEncoding = ColourEncoding::Integer16;
+  else if (header.hasHalfColour()) header.colourEncoding = ColourEncoding::Half;
   return header;
 }
 

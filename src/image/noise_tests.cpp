@@ -11,6 +11,7 @@
 
 #include "image/channel_indices.h"
 #include "lucent/core/memory.h"
+#include "lucent/core/srgb.h"
 
 namespace lucent {
 
@@ -107,6 +108,10 @@ double normalUpperQuantile(double alpha) {
   return 0.5 * (lo + hi);
 }
 
+StoredRounding coarserRounding(const StoredRounding& a, const StoredRounding& b) {
+  return {std::max(a.encoding, b.encoding), a.srgb || b.srgb};
+}
+
 namespace {
 
 // R, G, B and their sum (the equivalence test's quantity).
@@ -154,6 +159,10 @@ class TestPixels {
       noise_.undecided = "the image has no variance layers, so its noise is unknown: give two or more runs (renders "
                          "with other seeds), or an image with variance layers (render --variance)";
     }
+    for (const auto& [rounding, whose] : {std::pair{candidate.rounding, "the image"}, std::pair{candidate.referenceRounding, "the reference"}})
+      if (rounding.encoding == ColourEncoding::Lossy && noise_.undecided.empty())
+        noise_.undecided = std::string(whose) + " is stored lossily (JPEG), whose compression changes values by more "
+                           "than their noise: compare a lossless file (EXR, PFM, PNG)";
     values_.resize(candidate.runs.size());
     checkVariances();
     if (runs) floorPixelVariances();
@@ -192,22 +201,25 @@ class TestPixels {
     spreadOfRuns(mean, variance);
     for (size_t c = 0; c < 4; ++c) variance[c] = std::max(variance[c], floor_[c] * referenceVariance[c]);
   }
-  // The same with the two values' rounding (Candidate::rounding) allowed for: where neither has
-  // noise, the candidate's mean is moved towards the reference by as much as the two may differ by;
-  // elsewhere the rounding counts as noise, a uniform error of variance m^2 / 3 added to the
-  // reference's (known) variance. Per pixel, so that bright exact pixels (an emitter) lend no
-  // allowance to the difference of others.
+  // The same with the two values' rounding (Candidate::rounding) allowed for, per pixel, so that
+  // bright exact pixels (an emitter) lend no allowance to the difference of others: the candidate's
+  // mean is moved towards the reference by as much as truncation may have moved the two apart, and
+  // by their rounding to the nearest too where neither has noise; elsewhere that rounding counts as
+  // noise, a uniform error of variance m^2 / 3 added to the reference's (known) variance.
   void readRounded(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance) {
     read(x, y, mean, variance, reference, referenceVariance);
+    const double candidateLargest = std::max({mean[0], mean[1], mean[2]});
+    const double referenceLargest = std::max({reference[0], reference[1], reference[2]});
     for (size_t c = 0; c < 3; ++c) {
       const double d = mean[c] - reference[c];
-      if (std::isfinite(d)) {  // a non-finite candidate stays as it is: no noise explains it
-        const double m = roundingOf(candidate_.rounding, mean[c]) + roundingOf(candidate_.referenceRounding, reference[c]);
-        if (variance[c] == 0 && referenceVariance[c] == 0)
-          mean[c] = reference[c] + std::copysign(std::max(0.0, std::abs(d) - m), d);
-        else
-          referenceVariance[c] += m * m / 3;
-      }
+      if (!std::isfinite(d)) continue;  // a non-finite candidate stays as it is: no noise explains it
+      const Allowance a = allowanceOf(candidate_.rounding, mean[c], candidateLargest);
+      const Allowance b = allowanceOf(candidate_.referenceRounding, reference[c], referenceLargest);
+      double shift = a.truncated + b.truncated;
+      const double nearest = a.nearest + b.nearest;
+      if (variance[c] == 0 && referenceVariance[c] == 0) shift += nearest;
+      else referenceVariance[c] += nearest * nearest / 3;
+      mean[c] = reference[c] + std::copysign(std::max(0.0, std::abs(d) - shift), d);
     }
     mean[kSum] = mean[0] + mean[1] + mean[2];
     referenceVariance[kSum] = sumVarianceBound(referenceVariance);
@@ -215,12 +227,30 @@ class TestPixels {
   const std::vector<Quad>& values() const { return values_; }
 
  private:
-  // The most a value v stored with relative rounding u is off by: u |v|, and for half floats at
-  // least half their smallest subnormal, 2^-25, below 2^-14 (where their spacing stops shrinking).
-  static double roundingOf(double u, double v) {
-    return std::max(u * std::abs(v), u == kHalfRounding ? 0x1p-25 : 0.0);
+  // The most a value v, of a pixel whose largest channel is `largest`, may differ from the value
+  // written, by its file's encoding: rounded to the nearest (a float), or perhaps truncated.
+  struct Allowance {
+    double nearest = 0, truncated = 0;
+  };
+  static Allowance allowanceOf(const StoredRounding& r, double v, double largest) {
+    switch (r.encoding) {
+      case ColourEncoding::Float: return {kFloatRounding * std::abs(v), 0};
+      // Below 2^-14 a half float's spacing stops shrinking: at least half its smallest subnormal.
+      case ColourEncoding::Half: return {std::max(kHalfRounding * std::abs(v), 0x1p-25), 0};
+      case ColourEncoding::Integer16: return {0, codeStep(65535, r.srgb, v)};
+      case ColourEncoding::Integer8: return {0, codeStep(255, r.srgb, v)};
+      case ColourEncoding::SharedExponent: return {0, kSharedExponentRounding * std::abs(largest)};
+      case ColourEncoding::Lossy: return {};  // undecided (see the constructor)
+    }
+    return {};
   }
-
+  // One step of an integer code of `levels` steps at the value v, in linear terms: through the
+  // sRGB curve the step above v's code, the larger of the two about it (the curve is convex).
+  static double codeStep(double levels, bool srgb, double v) {
+    if (!srgb) return 1 / levels;
+    const double code = std::min(double(linearToSrgb(float(std::clamp(v, 0.0, 1.0)))), 1 - 1 / levels);
+    return double(srgbToLinear(float(code + 1 / levels))) - double(srgbToLinear(float(code)));
+  }
 
   // A variance layer's value where it is one: finite and not negative. Infinity (a pixel of fewer
   // than 2 samples), NaN (another renderer's M2 / (n - 1) at n = 1) or a negative value make the

@@ -611,7 +611,7 @@ TEST_CASE("testWithinNoise: a variance it cannot trust or identical runs leave i
   CHECK(testWithinNoise(flat(17.0f * (1 + 1e-4f)), flat(17.0f), 0.01).verdict == Verdict::Fail);
   Candidate halves(flat(0.7001953125f));
   CHECK(testWithinNoise(halves, flat(0.7f), 0.01).verdict == Verdict::Fail);  // as 32-bit floats: a difference
-  halves.rounding = kHalfRounding;
+  halves.rounding.encoding = ColourEncoding::Half;
   CHECK(testWithinNoise(halves, flat(0.7f), 0.01).verdict == Verdict::Pass);
   halves.runs[0] = flat(0.7f * (1 + 1e-3f));
   CHECK(testWithinNoise(halves, flat(0.7f), 0.01).verdict == Verdict::Fail);  // beyond a half's rounding
@@ -626,7 +626,7 @@ TEST_CASE("testWithinNoise: a variance it cannot trust or identical runs leave i
     return image;
   };
   Candidate lit(lamp(1.05f, 2));
-  lit.rounding = kHalfRounding;
+  lit.rounding.encoding = ColourEncoding::Half;
   CHECK(testWithinNoise(lit, lamp(1, 1), 0.01).verdict == Verdict::Fail);
   lit.runs[0] = lamp(1, 2);
   CHECK(testWithinNoise(lit, lamp(1, 1), 0.01).verdict == Verdict::Pass);
@@ -706,6 +706,93 @@ TEST_CASE("lucent compare allows for a file's half-float colour channels", "[com
   const test::CliRun floatRun = runLucent("compare " + quoted(dir / "float.exr") + reference);
   INFO(floatRun.output);
   CHECK(floatRun.status == 1);
+}
+
+namespace {
+// Writes R, G, B as Radiance RGBE the way stb_image_write and Radiance's own writer do: 8-bit
+// mantissas under the pixel's largest channel's exponent, truncated; flat scanlines.
+void writeTruncatedRgbe(const Image& image, const fs::path& path) {
+  std::ofstream out(path, std::ios::binary);
+  out << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y " << image.height() << " +X " << image.width() << "\n";
+  for (int y = 0; y < image.height(); ++y)
+    for (int x = 0; x < image.width(); ++x) {
+      const float largest = std::max({image.at(x, y, 0), image.at(x, y, 1), image.at(x, y, 2)});
+      unsigned char rgbe[4] = {0, 0, 0, 0};
+      if (largest > 1e-32f) {
+        int exponent = 0;
+        const float scale = std::frexp(largest, &exponent) * 256.0f / largest;
+        for (int c = 0; c < 3; ++c) rgbe[c] = static_cast<unsigned char>(image.at(x, y, c) * scale);
+        rgbe[3] = static_cast<unsigned char>(exponent + 128);
+      }
+      out.write(reinterpret_cast<const char*>(rgbe), 4);
+    }
+}
+}  // namespace
+
+TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation everywhere, and leaves a JPEG undecided",
+          "[compare][cli]") {
+  // Two runs of 0.7 with 0.3% noise per pixel, written as RGBE by truncation (0.7's step is 2^-8,
+  // so every value falls by 0.2% on average: over the image's 1,024 pixels 45 times its noise),
+  // against a float reference of 0.7 with 0.07% noise. Allowed a step of 2^-7 of each pixel's
+  // largest channel they pass; the same values as 32-bit floats fail; runs 3% bright fail as RGBE.
+  test::TempDir dir("compare-rgbe");
+  const int w = 32, h = 32;
+  const auto flat = [&](float value, float variance, uint64_t seed) {
+    return noisyImage(w, h, [&](int, int, int) { return value; }, variance, seed);
+  };
+  writeExr(flat(0.7f, 0.0005f * 0.0005f, 1), dir / "reference.exr");
+  const std::string reference = " " + quoted(dir / "reference.exr") + " --test";
+  std::string rgbe, floats, bright;
+  for (uint64_t seed : {2, 3}) {
+    const std::string name = "run" + std::to_string(seed);
+    writeTruncatedRgbe(flat(0.7f, 0.002f * 0.002f, seed), dir / (name + ".hdr"));
+    writeExr(rgbChannels(readImage(dir / (name + ".hdr"))), dir / (name + ".exr"));
+    writeTruncatedRgbe(flat(0.7f * 1.03f, 0.002f * 0.002f, seed), dir / (name + "-bright.hdr"));
+    rgbe += " " + quoted(dir / (name + ".hdr")), floats += " " + quoted(dir / (name + ".exr"));
+    bright += " " + quoted(dir / (name + "-bright.hdr"));
+  }
+  CHECK(readImageHeader(dir / "run2.hdr").colourEncoding == ColourEncoding::SharedExponent);
+  CHECK(readImageHeader(dir / "run2.exr").colourEncoding == ColourEncoding::Float);
+  const test::CliRun asRgbe = runLucent("compare" + rgbe + reference);
+  INFO(asRgbe.output);
+  CHECK(asRgbe.status == 0);
+  const test::CliRun asFloats = runLucent("compare" + floats + reference);
+  INFO(asFloats.output);
+  CHECK(asFloats.status == 1);
+  CHECK(runLucent("compare" + bright + reference).status == 1);
+
+  // 8-bit sRGB codes, no noise (an emitter seen directly): linear 0.5 is stored as code 188, read
+  // back as 0.5029; within a code's step that is no difference, 1% beyond it is.
+  Image grey(w, h, {"R", "G", "B"});
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) grey.at(x, y, c) = 0.5f;
+  writePng(grey, dir / "grey.png");
+  CHECK(readImageHeader(dir / "grey.png").colourEncoding == ColourEncoding::Integer8);
+  const auto noNoise = [&](const Image& rgb) {  // R, G, B and variance layers of 0
+    Image image(w, h, {"R", "G", "B", "variance.R", "variance.G", "variance.B"});
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) image.at(x, y, c) = rgb.at(x, y, c);
+    return image;
+  };
+  const Image exact = noNoise(grey);
+  Candidate codes(noNoise(readLinearImage(dir / "grey.png")));
+  CHECK(testWithinNoise(codes, exact, 0.01).verdict == Verdict::Fail);  // as 32-bit floats
+  codes.rounding = {ColourEncoding::Integer8, true};
+  CHECK(testWithinNoise(codes, exact, 0.01).verdict == Verdict::Pass);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) codes.runs[0].at(x, y, c) *= 1.01f;
+  CHECK(testWithinNoise(codes, exact, 0.01).verdict == Verdict::Fail);
+
+  // A JPEG's compression is no noise: undecided, whatever the values.
+  CHECK(readImageHeader(LUCENT_SOURCE_DIR "/scenes/ring/wood-floorboards-texture.jpg").colourEncoding == ColourEncoding::Lossy);
+  Candidate lossy(exact);
+  lossy.rounding.encoding = ColourEncoding::Lossy;
+  const NoiseTest t = testWithinNoise(lossy, exact, 0.01);
+  CHECK(t.verdict == Verdict::Inconclusive);
+  CHECK_THAT(t.noise.undecided, Catch::Contains("JPEG"));
 }
 
 TEST_CASE("An image header's half colour channels: R, G, B and layers' colours, not variances", "[compare]") {

@@ -69,11 +69,17 @@ std::vector<unsigned char> encodePng(const Image& image);
 // written as one: if any cannot be written, none exists afterwards.
 void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageMetadata& metadata,
                     const std::string& pngPath, std::vector<FileToWrite> alsoWrite = {});
+// How a file stores its colour values, from the least rounded to the most: 32-bit floats, half
+// floats, integer codes of 16 or 8 bits, Radiance's RGBE (8-bit mantissas under one exponent per
+// pixel), or lossily (JPEG).
+enum class ColourEncoding { Float, Half, Integer16, Integer8, SharedExponent, Lossy };
+
 // What an image file's header says, read without its pixels.
 struct ImageHeader {
   int width = 0, height = 0;
   std::vector<std::string> channels;
   std::vector<std::string> halfChannels;  // those stored as 16-bit floats (EXR half)
+  ColourEncoding colourEncoding = ColourEncoding::Float;  // of R, G, B (Half: of any colour channel)
   // Whether a variance channel (variance.R, LAYER.variance.R, ...) is among them: small variances
   // are then 0, and the noise they describe unknown.
   bool hasHalfVariance() const {

@@ -36,23 +36,34 @@ int verdictExitStatus(Verdict verdict);
 // The verdict of two verdicts together: fail over inconclusive over pass.
 Verdict combineVerdicts(Verdict a, Verdict b);
 
-// What is compared with the reference: one image, or two or more runs (same size; their R, G, B).
-// The relative rounding of stored R, G, B values that the noise tests allow: a half float's unit
-// roundoff (and half its smallest subnormal, 2^-25, below 2^-14), and for 32-bit floats sixteen
-// units, room for the rounding of the few dozen operations by which two renderers may compute one
-// value (an emitter's radiance seen directly, which has no noise). Per pixel: where neither image
-// has noise a difference within the two values' allowances counts as none; elsewhere the rounding
-// counts as noise, uniform over +-m (variance m^2 / 3).
-constexpr double kHalfRounding = 0x1p-11, kFloatRounding = 0x1p-20;
-inline double colourRounding(bool halfFloats) { return halfFloats ? kHalfRounding : kFloatRounding; }
+// How much the noise tests allow for the rounding of stored R, G, B values, by the file's encoding.
+// Floats round to the nearest: a half float's unit roundoff (and half its smallest subnormal,
+// 2^-25, below 2^-14), and for 32-bit floats sixteen units, room for the rounding of the few dozen
+// operations by which two renderers may compute one value (an emitter's radiance seen directly,
+// which has no noise). Where neither image has noise a difference within the two values'
+// allowances counts as none; elsewhere it counts as noise, uniform over +-m (variance m^2 / 3).
+// Integer codes and RGBE may have been truncated (stb_image_write's and Radiance's RGBE writers
+// truncate, and their readers add no half step), a bias of one sign that sums over a region where
+// noise would average out: one code's step (in linear terms, through the sRGB curve where the codes
+// are sRGB) or RGBE's 2^-7 of the pixel's largest channel is allowed everywhere, as a difference
+// that counts as none. A lossy encoding (JPEG) changes values by more than any noise: the verdict is
+// then inconclusive.
+constexpr double kHalfRounding = 0x1p-11, kFloatRounding = 0x1p-20, kSharedExponentRounding = 0x1p-7;
+struct StoredRounding {
+  ColourEncoding encoding = ColourEncoding::Float;
+  bool srgb = false;  // integer codes of sRGB-encoded values
+};
+// The more rounded of two encodings (runs stored differently): the one later in ColourEncoding.
+StoredRounding coarserRounding(const StoredRounding& a, const StoredRounding& b);
 
+// What is compared with the reference: one image, or two or more runs (same size; their R, G, B).
 struct Candidate {
   Candidate(Image image, bool halfVariance = false) : runs{std::move(image)}, halfVariance(halfVariance) {}
   explicit Candidate(std::vector<Image> runs) : runs(std::move(runs)) {}
   std::vector<Image> runs;
   bool halfVariance = false;  // the one image's variance layers were stored as half floats
-  // The relative rounding of the runs' and of the reference's R, G, B as stored.
-  double rounding = kFloatRounding, referenceRounding = kFloatRounding;
+  // How the runs' and the reference's R, G, B were stored.
+  StoredRounding rounding, referenceRounding;
 };
 
 // The regions' grid by default: the whole image, then 4 x 4 tiles.
@@ -95,9 +106,9 @@ Image candidateImage(const Candidate& candidate);
 // 2 and 4; at 256 samples both none. Hence 8 x 8 by default. A block or region is rejected when its
 // p-value is below alpha / (2 * 3 * blocks) or alpha / (2 * 3 * regions) (Bonferroni over the
 // channels, the blocks and the regions, alpha split between the two families), the values' rounding
-// allowed for pixel by pixel (kHalfRounding). Verdict: fail when one is rejected, pass when none is, inconclusive
-// when the candidate's noise is unknown, a variance in either image is infinite, NaN or negative, or
-// the runs are one image.
+// allowed for pixel by pixel (StoredRounding). Verdict: fail when one is rejected, pass when none
+// is, inconclusive when the candidate's noise is unknown, a variance in either image is infinite,
+// NaN or negative, the runs are one image, or either image is a JPEG.
 struct RegionTest {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   double relativeDifference = 0;  // sum(c - r) / sum(r) over the region's R, G, B: its bias
