@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -165,7 +166,8 @@ class TestPixels {
                            "than their noise: compare a lossless file (EXR, PFM, PNG)";
     values_.resize(candidate.runs.size());
     checkVariances();
-    if (runs) floorPixelVariances();
+    if (noise_.source != NoiseSource::Unknown) floorPixelVariances();
+    if (noise_.source == NoiseSource::VarianceLayer && noise_.undecided.empty()) measureNeighbourCorrelation();
   }
 
   const CandidateNoise& noise() const { return noise_; }
@@ -196,9 +198,9 @@ class TestPixels {
           variance[size_t(c)] = knownVariance(candidate_.runs[0].at(x, y, runs_[0].variance[size_t(c)]));
         variance[kSum] = sumVarianceBound(variance);
       }
-      return;
+    } else {
+      spreadOfRuns(mean, variance);
     }
-    spreadOfRuns(mean, variance);
     for (size_t c = 0; c < 4; ++c) variance[c] = std::max(variance[c], floor_[c] * referenceVariance[c]);
   }
   // The same with the two values' rounding (Candidate::rounding) allowed for, per pixel, so that
@@ -286,6 +288,45 @@ class TestPixels {
                            "pixel of fewer than 2 samples has none); render it with more samples";
   }
 
+  // CandidateNoise::neighbourCorrelation. Differences of neighbours leave a smooth bias out, and
+  // a bias that changes between them only lowers rho. Over disjoint pairs (in each 2 x 2 cell the
+  // two rows or, in every other cell, the two columns), d the difference of the pair's residuals
+  // (candidate - reference) and w the sum of their variances (the layers' and the reference's), R,
+  // G and B summed: rho = 1 - sum d^2 / sum w, its standard error from the pairs' spread about
+  // that ratio.
+  void measureNeighbourCorrelation() {
+    std::vector<Quad> residual(size_t(width()) * size_t(height())), variance = residual;
+    Quad mean, pixelVariance, reference, referenceVariance;
+    for (int y = 0; y < height(); ++y)
+      for (int x = 0; x < width(); ++x) {
+        read(x, y, mean, pixelVariance, reference, referenceVariance);
+        const size_t i = size_t(y) * size_t(width()) + size_t(x);
+        for (size_t c = 0; c < 3; ++c)
+          residual[i][c] = mean[c] - reference[c], variance[i][c] = pixelVariance[c] + referenceVariance[c];
+      }
+    double squares = 0, variances = 0, squares2 = 0, cross = 0, variances2 = 0;
+    const auto pair = [&](int x0, int y0, int x1, int y1) {
+      if (x1 >= width() || y1 >= height()) return;
+      const size_t a = size_t(y0) * size_t(width()) + size_t(x0), b = size_t(y1) * size_t(width()) + size_t(x1);
+      double d2 = 0, w = 0;
+      for (size_t c = 0; c < 3; ++c) {
+        const double d = residual[a][c] - residual[b][c];
+        d2 += d * d, w += variance[a][c] + variance[b][c];
+      }
+      if (!(w > 0) || !std::isfinite(d2)) return;
+      squares += d2, variances += w, squares2 += d2 * d2, cross += d2 * w, variances2 += w * w;
+    };
+    for (int y = 0; y < height(); y += 2)
+      for (int x = 0; x < width(); x += 2)
+        if ((x / 2 + y / 2) % 2 == 0) pair(x, y, x + 1, y), pair(x, y + 1, x + 1, y + 1);
+        else pair(x, y, x, y + 1), pair(x + 1, y, x + 1, y + 1);
+    if (!(variances > 0)) return;
+    const double q = squares / variances;
+    const double spread = std::sqrt(std::max(0.0, squares2 - 2 * q * cross + q * q * variances2)) / variances;
+    noise_.neighbourCorrelation = 1 - q;
+    noise_.neighbourCorrelationZ = spread > 0 ? (1 - q) / spread : 0.0;
+  }
+
   // The runs' mean at the pixel last read, and the variance of that mean from their spread.
   void spreadOfRuns(Quad& mean, Quad& variance) const {
     const size_t n = values_.size();
@@ -300,14 +341,15 @@ class TestPixels {
     }
   }
 
-  // A pixel's spread over a few runs of a heavy-tailed estimator is mostly too small (the runs
-  // missed its rare large values) and now and then far too large: a block whose pixels all missed
-  // them looks both dark and quiet, and would be rejected (2 to 8 runs of a Pareto-tailed
-  // estimator: 12-16% false rejections at alpha 0.05). So each pixel's variance is at least the
-  // reference's (whose many samples see the tail) times the ratio of the two over the image, the
-  // sum of spreads over the sum of reference variances; but at most kFloorOverMedian times the
-  // median of that ratio over the grid's tiles, so that one firefly (one pixel of one run, far
-  // brighter than the rest) cannot raise every pixel's variance and hide a bias anywhere.
+  // A pixel's variance from a few samples or runs of a heavy-tailed estimator is mostly too small
+  // (they missed its rare large values) and now and then far too large: a block whose pixels all
+  // missed them looks both dark and quiet, and would be rejected (2 to 8 runs of a Pareto-tailed
+  // estimator: 12-16% false rejections at alpha 0.05; one image with its 4 samples' variance as
+  // layers: 77%). So each pixel's variance is at least the reference's (whose many samples see the
+  // tail) times the ratio of the two over the image, the sum of the candidate's pixel variances
+  // over the sum of the reference's; but at most kFloorOverMedian times the median of that ratio
+  // over the grid's tiles, so that one firefly (one pixel far brighter than the rest) cannot raise
+  // every pixel's variance and hide a bias anywhere.
   void floorPixelVariances() {
     constexpr double kFloorOverMedian = 4;
     Quad mean, variance, reference, referenceVariance, spreads{}, references{};
@@ -331,7 +373,7 @@ class TestPixels {
       const double median = ratios.size() % 2 ? ratios[middle] : 0.5 * (ratios[middle - 1] + ratios[middle]);
       floor_[c] = std::min(spreads[c] / references[c], kFloorOverMedian * median);
     }
-    if (spreads[kSum] == 0 && references[kSum] > 0 && noise_.undecided.empty())
+    if (noise_.source == NoiseSource::Runs && spreads[kSum] == 0 && references[kSum] > 0 && noise_.undecided.empty())
       noise_.undecided = "the runs are the same image, pixel for pixel, so their spread says nothing of their noise "
                          "(rendered with one seed?): give runs rendered with different seeds";
   }
@@ -491,6 +533,29 @@ double statistic(double difference, double variance) {
   return difference == 0 ? 0.0 : std::copysign(kInfinity, difference);
 }
 
+// A verdict from variance layers, where neighbouring pixels' noise is correlated
+// (CandidateNoise::neighbourCorrelation): what the layers cannot support becomes inconclusive,
+// saying why. `intervals`: --within's, which correlation of either sign makes unsure if positive.
+Verdict throughNeighbours(CandidateNoise& noise, Verdict verdict, bool intervals) {
+  const double rho = noise.neighbourCorrelation;
+  if (noise.source != NoiseSource::VarianceLayer || verdict == Verdict::Inconclusive ||
+      std::abs(rho) < kNeighbourCorrelation || std::abs(noise.neighbourCorrelationZ) < kNeighbourCorrelationZ)
+    return verdict;
+  const bool more = rho > 0;  // sums of pixels vary more than the layers say
+  if (intervals ? !more : (more ? verdict != Verdict::Fail : verdict != Verdict::Pass)) return verdict;
+  std::ostringstream why;
+  why << std::setprecision(2) << "neighbouring pixels' differences from the reference are "
+      << (more ? "correlated" : "anticorrelated") << " (rho " << rho << ", z " << std::setprecision(3)
+      << noise.neighbourCorrelationZ << "), which variance layers cannot say: sums of pixels vary "
+      << (more ? "more than the layers tell (a pixel filter that splats samples into several pixels, random "
+                 "numbers shared by pixels), so "
+               : "less than the layers tell (blue-noise sampling), so ")
+      << (intervals ? "the intervals are too narrow" : more ? "the failure may be noise" : "a bias may hide in the noise they claim")
+      << ": give two or more runs (renders with other seeds)";
+  noise.undecided = why.str();
+  return Verdict::Inconclusive;
+}
+
 }  // namespace
 
 Image candidateImage(const Candidate& candidate) {
@@ -573,8 +638,9 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
     rejected = rejected || r.rejected;
     t.regions.push_back(r);
   }
-  t.noise = noise;
   t.verdict = !noise.undecided.empty() ? Verdict::Inconclusive : rejected ? Verdict::Fail : Verdict::Pass;
+  t.verdict = throughNeighbours(noise, t.verdict, false);
+  t.noise = noise;
   return t;
 }
 
@@ -639,10 +705,11 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
     t.regions.push_back(e);
   }
   if (!noise.undecided.empty()) t.verdict = Verdict::Inconclusive;
-  else if (t.verdict == Verdict::Inconclusive && negativeReference)
+  else if (t.verdict != Verdict::Inconclusive) t.verdict = throughNeighbours(noise, t.verdict, true);
+  else if (negativeReference)
     noise.undecided = "a region's reference sum is negative in a channel (a pixel filter's negative lobes over a dark "
                       "region), so it has no relative difference there: compare with a pixel filter of no negative lobes";
-  else if (t.verdict == Verdict::Inconclusive) {
+  else {
     std::ostringstream why;
     why << "an interval reaches across +-" << within << ": ";
     if (std::isfinite(t.samplesToDecide) && t.samplesToDecide < 1e9)

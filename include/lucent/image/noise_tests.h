@@ -85,8 +85,16 @@ struct CandidateNoise {
     double correlation = 1, degreesOfFreedom = 0;
   };
   std::vector<Scale> scales;
+  // With variance layers, which count pixels as independent: the correlation of neighbouring
+  // pixels' differences from the reference, and its z. A renderer that splats each sample into
+  // several pixels correlates them (sums of pixels then vary more than the layers say), blue-noise
+  // sampling anticorrelates them (less). Where it is at least kNeighbourCorrelation and z at least
+  // kNeighbourCorrelationZ, the verdicts the layers cannot support are inconclusive: a failure of
+  // --test and any verdict of --within where rho > 0, a pass of --test where rho < 0.
+  double neighbourCorrelation = 0, neighbourCorrelationZ = 0;
   std::string undecided;  // why the verdict cannot be pass or fail, and what would decide it
 };
+constexpr double kNeighbourCorrelation = 0.05, kNeighbourCorrelationZ = 4;
 
 // The mean of the runs' R, G, B (the one image's R, G, B and variance layers where there is one run).
 Image candidateImage(const Candidate& candidate);
