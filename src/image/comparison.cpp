@@ -21,7 +21,7 @@ nlohmann::ordered_json noiseJson(const CandidateNoise& noise) {
   if (noise.source == NoiseSource::Runs)
     for (const CandidateNoise::Scale& scale : noise.scales)
       out["correlation"][scale.name] = {{"factor", scale.correlation}, {"degrees_of_freedom", scale.degreesOfFreedom}};
-  if (noise.source == NoiseSource::VarianceLayer)
+  if (noise.neighboursMeasured)
     out["neighbour_correlation"] = {{"rho", noise.neighbourCorrelation}, {"z", noise.neighbourCorrelationZ}};
   if (!noise.undecided.empty()) out["undecided"] = noise.undecided;
   return out;

@@ -166,8 +166,9 @@ class TestPixels {
                            "than their noise: compare a lossless file (EXR, PFM, PNG)";
     values_.resize(candidate.runs.size());
     checkVariances();
-    if (noise_.source != NoiseSource::Unknown) floorPixelVariances();
+    // Before the floor, which raises the variances (w below) of pixels whose layers are low by chance.
     if (noise_.source == NoiseSource::VarianceLayer && noise_.undecided.empty()) measureNeighbourCorrelation();
+    if (noise_.source != NoiseSource::Unknown) floorPixelVariances();
   }
 
   const CandidateNoise& noise() const { return noise_; }
@@ -201,7 +202,9 @@ class TestPixels {
     } else {
       spreadOfRuns(mean, variance);
     }
-    for (size_t c = 0; c < 4; ++c) variance[c] = std::max(variance[c], floor_[c] * referenceVariance[c]);
+    if (floors_.empty()) return;
+    const Quad& floor = floors_[tileOf(x, y, tiles_, width(), height()) - 1];
+    for (size_t c = 0; c < 4; ++c) variance[c] = std::max(variance[c], floor[c] * referenceVariance[c]);
   }
   // The same with the two values' rounding (Candidate::rounding) allowed for, per pixel, so that
   // bright exact pixels (an emitter) lend no allowance to the difference of others: the candidate's
@@ -295,23 +298,16 @@ class TestPixels {
   // G and B summed: rho = 1 - sum d^2 / sum w, its standard error from the pairs' spread about
   // that ratio.
   void measureNeighbourCorrelation() {
-    std::vector<Quad> residual(size_t(width()) * size_t(height())), variance = residual;
-    Quad mean, pixelVariance, reference, referenceVariance;
-    for (int y = 0; y < height(); ++y)
-      for (int x = 0; x < width(); ++x) {
-        read(x, y, mean, pixelVariance, reference, referenceVariance);
-        const size_t i = size_t(y) * size_t(width()) + size_t(x);
-        for (size_t c = 0; c < 3; ++c)
-          residual[i][c] = mean[c] - reference[c], variance[i][c] = pixelVariance[c] + referenceVariance[c];
-      }
     double squares = 0, variances = 0, squares2 = 0, cross = 0, variances2 = 0;
+    Quad meanA, varianceA, referenceA, referenceVarianceA, meanB, varianceB, referenceB, referenceVarianceB;
     const auto pair = [&](int x0, int y0, int x1, int y1) {
       if (x1 >= width() || y1 >= height()) return;
-      const size_t a = size_t(y0) * size_t(width()) + size_t(x0), b = size_t(y1) * size_t(width()) + size_t(x1);
+      readRounded(x0, y0, meanA, varianceA, referenceA, referenceVarianceA);
+      readRounded(x1, y1, meanB, varianceB, referenceB, referenceVarianceB);
       double d2 = 0, w = 0;
       for (size_t c = 0; c < 3; ++c) {
-        const double d = residual[a][c] - residual[b][c];
-        d2 += d * d, w += variance[a][c] + variance[b][c];
+        const double d = (meanA[c] - referenceA[c]) - (meanB[c] - referenceB[c]);
+        d2 += d * d, w += varianceA[c] + referenceVarianceA[c] + varianceB[c] + referenceVarianceB[c];
       }
       if (!(w > 0) || !std::isfinite(d2)) return;
       squares += d2, variances += w, squares2 += d2 * d2, cross += d2 * w, variances2 += w * w;
@@ -325,6 +321,7 @@ class TestPixels {
     const double spread = std::sqrt(std::max(0.0, squares2 - 2 * q * cross + q * q * variances2)) / variances;
     noise_.neighbourCorrelation = 1 - q;
     noise_.neighbourCorrelationZ = spread > 0 ? (1 - q) / spread : 0.0;
+    noise_.neighboursMeasured = true;
   }
 
   // The runs' mean at the pixel last read, and the variance of that mean from their spread.
@@ -346,12 +343,14 @@ class TestPixels {
   // missed them looks both dark and quiet, and would be rejected (2 to 8 runs of a Pareto-tailed
   // estimator: 12-16% false rejections at alpha 0.05; one image with its 4 samples' variance as
   // layers: 77%). So each pixel's variance is at least the reference's (whose many samples see the
-  // tail) times the ratio of the two over the image, the sum of the candidate's pixel variances
-  // over the sum of the reference's; but at most kFloorOverMedian times the median of that ratio
-  // over the grid's tiles, so that one firefly (one pixel far brighter than the rest) cannot raise
-  // every pixel's variance and hide a bias anywhere.
+  // tail) times the ratio of the two over the image (the sum of the candidate's pixel variances over
+  // the reference's, where the reference has noise); but that ratio counts at most kFloorOverMedian
+  // times its median over the grid's tiles, so that one firefly (one pixel far brighter than the
+  // rest) cannot raise every pixel's variance and hide a bias anywhere, and at most kFloorOverTile
+  // times the pixel's own tile's, so that where a candidate is legitimately quieter than elsewhere
+  // (adaptive sampling, another renderer's better strategy there) a bias is not hidden either.
   void floorPixelVariances() {
-    constexpr double kFloorOverMedian = 4;
+    constexpr double kFloorOverMedian = 4, kFloorOverTile = 4;
     Quad mean, variance, reference, referenceVariance, spreads{}, references{};
     std::vector<Quad> tileSpreads(size_t(tiles_) * size_t(tiles_)), tileReferences = tileSpreads;
     for (int y = 0; y < height(); ++y)
@@ -359,10 +358,12 @@ class TestPixels {
         read(x, y, mean, variance, reference, referenceVariance);
         const size_t tile = tileOf(x, y, tiles_, width(), height()) - 1;
         for (size_t c = 0; c < 4; ++c) {
+          if (!(referenceVariance[c] > 0) || !std::isfinite(variance[c])) continue;  // no floor to set there
           spreads[c] += variance[c], references[c] += referenceVariance[c];
           tileSpreads[tile][c] += variance[c], tileReferences[tile][c] += referenceVariance[c];
         }
       }
+    floors_.assign(tileSpreads.size(), Quad{});
     for (size_t c = 0; c < 4; ++c) {
       std::vector<double> ratios;
       for (size_t k = 0; k < tileSpreads.size(); ++k)
@@ -371,7 +372,10 @@ class TestPixels {
       std::sort(ratios.begin(), ratios.end());
       const size_t middle = ratios.size() / 2;
       const double median = ratios.size() % 2 ? ratios[middle] : 0.5 * (ratios[middle - 1] + ratios[middle]);
-      floor_[c] = std::min(spreads[c] / references[c], kFloorOverMedian * median);
+      const double image = std::min(spreads[c] / references[c], kFloorOverMedian * median);
+      for (size_t k = 0; k < tileSpreads.size(); ++k)
+        if (tileReferences[k][c] > 0)
+          floors_[k][c] = std::min(image, kFloorOverTile * tileSpreads[k][c] / tileReferences[k][c]);
     }
     if (noise_.source == NoiseSource::Runs && spreads[kSum] == 0 && references[kSum] > 0 && noise_.undecided.empty())
       noise_.undecided = "the runs are the same image, pixel for pixel, so their spread says nothing of their noise "
@@ -387,7 +391,7 @@ class TestPixels {
   std::vector<Channels> runs_;
   std::vector<Quad> values_;
   int tiles_;
-  Quad floor_{};  // the least ratio of a pixel's variance to the reference's (floorPixelVariances)
+  std::vector<Quad> floors_;  // per tile: the least ratio of a pixel's variance to the reference's
   CandidateNoise noise_;
 };
 

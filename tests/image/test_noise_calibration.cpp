@@ -93,29 +93,35 @@ Image simulatedRun(Model model, double bias, bool whole, Random& rng, bool offse
   return run;
 }
 
-// One image with variance layers, as a renderer writes it: the independent and correlated models
-// with each pixel's exact variance (the correlated one's 0.16^2 x 0.140625, its tent's weights
-// squared, + 0.05^2) and without the correlated model's per-run offset (a renderer that splats
-// samples but draws its own random numbers per pixel); the heavy-tailed one with its 4 samples'
-// variance over 4 (their spread, which is large where a sample is).
+// One image with variance layers, as a renderer writes it: the independent model as the mean of 16
+// samples and the heavy-tailed one of 4, each with its samples' variance over n (their spread,
+// which is large where a large sample is); the correlated model with each pixel's exact variance
+// (0.16^2 x 0.140625, its tent's weights squared, + 0.05^2) and without its per-run offset (a
+// renderer that splats samples but draws its own random numbers per pixel).
 Image simulatedImageWithLayers(Model model, double bias, Random& rng) {
   const Image run = simulatedRun(model, bias, false, rng, false);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::normal_distribution<double> normal(0.0, 1.0);
   Image image(kSide, kSide, {"R", "G", "B", "variance.R", "variance.G", "variance.B"});
   for (int y = 0; y < kSide; ++y)
     for (int x = 0; x < kSide; ++x)
       for (int c = 0; c < 3; ++c) {
         const double mean = trueMean(x, y, c) * (1 + (inBiasedTile(x, y) ? bias : 0.0));
-        if (model != Model::HeavyTailed) {
-          const double relative = model == Model::Independent ? 0.01 : 0.0256 * 0.140625 + 0.0025;
+        if (model == Model::Correlated) {
+          const double relative = 0.0256 * 0.140625 + 0.0025;
           image.at(x, y, c) = run.at(x, y, c), image.at(x, y, 3 + c) = float(relative * mean * mean);
           continue;
         }
+        // The mean of n samples and their variance over n: 16 Gaussian samples of 40% (the mean's
+        // 10%), or 4 Pareto samples of shape 2.5.
         constexpr double shape = 2.5, scale = (shape - 1) / shape;
-        double samples[4], sum = 0, squares = 0;
-        for (double& v : samples) sum += v = mean * scale * std::exp(-std::log(1 - uniform(rng)) / shape);
-        for (double v : samples) squares += (v - sum / 4) * (v - sum / 4);
-        image.at(x, y, c) = float(sum / 4), image.at(x, y, 3 + c) = float(squares / 3 / 4);
+        const int n = model == Model::Independent ? 16 : 4;
+        double samples[16], sum = 0, squares = 0;
+        for (int k = 0; k < n; ++k)
+          sum += samples[k] = model == Model::Independent ? mean * (1 + 0.4 * normal(rng))
+                                                          : mean * scale * std::exp(-std::log(1 - uniform(rng)) / shape);
+        for (int k = 0; k < n; ++k) squares += (samples[k] - sum / n) * (samples[k] - sum / n);
+        image.at(x, y, c) = float(sum / n), image.at(x, y, 3 + c) = float(squares / (n - 1) / n);
       }
   return image;
 }

@@ -92,6 +92,7 @@ struct CandidateNoise {
   // kNeighbourCorrelationZ, the verdicts the layers cannot support are inconclusive: a failure of
   // --test and any verdict of --within where rho > 0, a pass of --test where rho < 0.
   double neighbourCorrelation = 0, neighbourCorrelationZ = 0;
+  bool neighboursMeasured = false;  // false where the verdict was undecided first, or no pair has noise
   std::string undecided;  // why the verdict cannot be pass or fail, and what would decide it
 };
 constexpr double kNeighbourCorrelation = 0.05, kNeighbourCorrelationZ = 4;
