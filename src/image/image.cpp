@@ -413,11 +413,16 @@ ImageHeader readImageHeader(const std::string& path) {
     if (spec.channelIsHalf[size_t(c)]) header.halfChannels.push_back(name);
     else if (name == "R" || name == "G" || name == "B") leastColourBytes = std::min(leastColourBytes, spec.channelBytes[size_t(c)]);
   }
-  if (spec.formatName == "jpeg") header.colourEncoding = ColourEncoding::Lossy;
+  // EXR's DWA compressions are lossy, B44 for half channels; PXR24 rounds floats to 24 bits (half
+  // floats' allowance is the nearest above it). A TIFF may hold JPEG data.
+  const std::string& compression = spec.compression;
+  const bool lossy = spec.formatName == "jpeg" || compression == "jpeg" || compression == "dwaa" || compression == "dwab" ||
+                     ((compression == "b44" || compression == "b44a") && header.hasHalfColour());
+  if (lossy) header.colourEncoding = ColourEncoding::Lossy;
   else if (spec.formatName == "hdr") header.colourEncoding = ColourEncoding::SharedExponent;
   else if (leastColourBytes == 1) header.colourEncoding = ColourEncoding::Integer8;
   else if (leastColourBytes == 2) header.colourEncoding = ColourEncoding::Integer16;
-  else if (header.hasHalfColour()) header.colourEncoding = ColourEncoding::Half;
+  else if (header.hasHalfColour() || compression == "pxr24") header.colourEncoding = ColourEncoding::Half;
   return header;
 }
 

@@ -206,36 +206,46 @@ class TestPixels {
     const Quad& floor = floors_[tileOf(x, y, tiles_, width(), height()) - 1];
     for (size_t c = 0; c < 4; ++c) variance[c] = std::max(variance[c], floor[c] * referenceVariance[c]);
   }
-  // The same with the two values' rounding (Candidate::rounding) allowed for, per pixel, so that
-  // bright exact pixels (an emitter) lend no allowance to the difference of others: the candidate's
-  // mean is moved towards the reference by as much as truncation may have moved the two apart, and
-  // by their rounding to the nearest too where neither has noise; elsewhere that rounding counts as
-  // noise, a uniform error of variance m^2 / 3 added to the reference's (known) variance.
-  void readRounded(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance) {
+  // The same with the two values' rounding (Candidate::rounding) allowed for. Rounding to the
+  // nearest (floats), per pixel, so that bright exact pixels (an emitter) lend no allowance to the
+  // difference of others: where neither value has noise the candidate's mean is moved towards the
+  // reference by as much as the two may differ by; elsewhere the rounding counts as noise, a
+  // uniform error of variance m^2 / 3 added to the reference's (known) variance. Integer codes and
+  // RGBE, which may be truncated (a value stored up to a step low, or half a step high where the
+  // writer rounds or the reader adds half a step), are a bias of one sign that sums over pixels:
+  // `low` and `high` are how far below and above the true difference the stored one may lie, for
+  // the tests to allow over each sum (Allowances).
+  void readRounded(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance, Quad& low,
+                   Quad& high) {
     read(x, y, mean, variance, reference, referenceVariance);
     const double candidateLargest = std::max({mean[0], mean[1], mean[2]});
     const double referenceLargest = std::max({reference[0], reference[1], reference[2]});
+    low = {}, high = {};
     for (size_t c = 0; c < 3; ++c) {
       const double d = mean[c] - reference[c];
       if (!std::isfinite(d)) continue;  // a non-finite candidate stays as it is: no noise explains it
       const Allowance a = allowanceOf(candidate_.rounding, mean[c], candidateLargest);
       const Allowance b = allowanceOf(candidate_.referenceRounding, reference[c], referenceLargest);
-      double shift = a.truncated + b.truncated;
       const double nearest = a.nearest + b.nearest;
-      if (variance[c] == 0 && referenceVariance[c] == 0) shift += nearest;
-      else referenceVariance[c] += nearest * nearest / 3;
-      mean[c] = reference[c] + std::copysign(std::max(0.0, std::abs(d) - shift), d);
+      if (variance[c] == 0 && referenceVariance[c] == 0)
+        mean[c] = reference[c] + std::copysign(std::max(0.0, std::abs(d) - nearest), d);
+      else
+        referenceVariance[c] += nearest * nearest / 3;
+      // The candidate's value low by up to a step, high by up to half; the reference's likewise.
+      low[c] = a.step + 0.5 * b.step, high[c] = 0.5 * a.step + b.step;
     }
     mean[kSum] = mean[0] + mean[1] + mean[2];
     referenceVariance[kSum] = sumVarianceBound(referenceVariance);
+    low[kSum] = low[0] + low[1] + low[2], high[kSum] = high[0] + high[1] + high[2];
   }
   const std::vector<Quad>& values() const { return values_; }
 
  private:
-  // The most a value v, of a pixel whose largest channel is `largest`, may differ from the value
-  // written, by its file's encoding: rounded to the nearest (a float), or perhaps truncated.
+  // How a value v, of a pixel whose largest channel is `largest`, may differ from the value
+  // written, by its file's encoding: by up to `nearest` either way (a float), or within its code's
+  // `step` (an integer code, RGBE).
   struct Allowance {
-    double nearest = 0, truncated = 0;
+    double nearest = 0, step = 0;
   };
   static Allowance allowanceOf(const StoredRounding& r, double v, double largest) {
     switch (r.encoding) {
@@ -244,7 +254,12 @@ class TestPixels {
       case ColourEncoding::Half: return {std::max(kHalfRounding * std::abs(v), 0x1p-25), 0};
       case ColourEncoding::Integer16: return {0, codeStep(65535, r.srgb, v)};
       case ColourEncoding::Integer8: return {0, codeStep(255, r.srgb, v)};
-      case ColourEncoding::SharedExponent: return {0, kSharedExponentRounding * std::abs(largest)};
+      case ColourEncoding::SharedExponent: {
+        // 8-bit mantissas under the exponent of the largest channel, m 2^e with m in [0.5, 1).
+        int exponent = 0;
+        std::frexp(std::abs(largest), &exponent);
+        return {0, largest != 0 && std::isfinite(largest) ? std::ldexp(1.0, exponent - 8) : 0.0};
+      }
       case ColourEncoding::Lossy: return {};  // undecided (see the constructor)
     }
     return {};
@@ -299,11 +314,11 @@ class TestPixels {
   // that ratio.
   void measureNeighbourCorrelation() {
     double squares = 0, variances = 0, squares2 = 0, cross = 0, variances2 = 0;
-    Quad meanA, varianceA, referenceA, referenceVarianceA, meanB, varianceB, referenceB, referenceVarianceB;
+    Quad meanA, varianceA, referenceA, referenceVarianceA, meanB, varianceB, referenceB, referenceVarianceB, low, high;
     const auto pair = [&](int x0, int y0, int x1, int y1) {
       if (x1 >= width() || y1 >= height()) return;
-      readRounded(x0, y0, meanA, varianceA, referenceA, referenceVarianceA);
-      readRounded(x1, y1, meanB, varianceB, referenceB, referenceVarianceB);
+      readRounded(x0, y0, meanA, varianceA, referenceA, referenceVarianceA, low, high);
+      readRounded(x1, y1, meanB, varianceB, referenceB, referenceVarianceB, low, high);
       double d2 = 0, w = 0;
       for (size_t c = 0; c < 3; ++c) {
         const double d = (meanA[c] - referenceA[c]) - (meanB[c] - referenceB[c]);
@@ -398,10 +413,13 @@ class TestPixels {
 // The sums over a set of pixels (a block, a region, the image) that the tests need.
 struct UnitSums {
   Quad difference{}, reference{}, candidate{}, pixelVariance{}, referenceVariance{};
+  Quad low{}, high{};  // how far below and above the true difference truncation may put it
   std::vector<Quad> runs;  // each run's sum, where there are runs
 
-  void add(const Quad& mean, const Quad& variance, const Quad& ref, const Quad& refVariance, const std::vector<Quad>& values) {
+  void add(const Quad& mean, const Quad& variance, const Quad& ref, const Quad& refVariance, const std::vector<Quad>& values,
+           const Quad& lowBy = {}, const Quad& highBy = {}) {
     for (size_t c = 0; c < 4; ++c) {
+      low[c] += lowBy[c], high[c] += highBy[c];
       difference[c] += mean[c] - ref[c];
       reference[c] += ref[c];
       candidate[c] += mean[c];
@@ -431,6 +449,12 @@ struct BlockSums {
   std::array<double, 3> difference{}, pixelVariance{}, referenceVariance{}, spread{};
 };
 
+// A sum's difference nearest 0 that truncation (UnitSums::low, high) allows: the stored difference
+// may lie up to `low` below the true one and `high` above it.
+double allowedDifference(double difference, double low, double high) {
+  return difference - std::clamp(difference, -low, high);
+}
+
 // The region a tile index stands for: 0 the whole image, k > 0 the grid's tile k - 1, row by row.
 void regionBounds(size_t k, int tiles, int w, int h, int& x0, int& y0, int& x1, int& y1) {
   if (k == 0) {
@@ -455,21 +479,22 @@ void sumImage(TestPixels& pixels, int tiles, int block, std::vector<UnitSums>& r
                   "use larger blocks (--block) or raise --memory-limit");
     blocks.assign(size_t(blocksX) * size_t(blocksY), BlockSums{});
   }
-  Quad mean, variance, reference, referenceVariance;
+  Quad mean, variance, reference, referenceVariance, low, high;
   for (int by = 0; by < blocksY; ++by)
     for (int bx = 0; bx < blocksX; ++bx) {
       UnitSums sums;
       const int x0 = bx * side, y0 = by * side, x1 = std::min(w, x0 + side), y1 = std::min(h, y0 + side);
       for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
-          pixels.readRounded(x, y, mean, variance, reference, referenceVariance);
+          pixels.readRounded(x, y, mean, variance, reference, referenceVariance, low, high);
           for (UnitSums* s : {&regions[0], &regions[tileOf(x, y, tiles, w, h)], &sums})
-            s->add(mean, variance, reference, referenceVariance, pixels.values());
+            s->add(mean, variance, reference, referenceVariance, pixels.values(), low, high);
         }
       if (block <= 0) continue;
       BlockSums& b = blocks[size_t(by) * size_t(blocksX) + size_t(bx)];
       for (size_t c = 0; c < 3; ++c) {
-        b.difference[c] = sums.difference[c], b.pixelVariance[c] = sums.pixelVariance[c];
+        b.difference[c] = allowedDifference(sums.difference[c], sums.low[c], sums.high[c]);
+        b.pixelVariance[c] = sums.pixelVariance[c];
         b.referenceVariance[c] = sums.referenceVariance[c], b.spread[c] = sums.spread(c);
       }
     }
@@ -516,7 +541,9 @@ RelativeInterval relativeInterval(const UnitSums& s, size_t channel, NoiseSource
   const double total = cv + ratio * ratio * s.referenceVariance[channel];
   const double se = std::sqrt(total) / r;
   const double q = studentTwoSidedQuantile(2 * alpha, welchDegreesOfFreedom(cv, total, scale.degreesOfFreedom));
-  return {ratio - 1, ratio - 1 - q * se, ratio - 1 + q * se, q * std::sqrt(cv) / r};
+  // The true difference lies up to `high` below the stored one and `low` above it (truncation).
+  return {ratio - 1, ratio - 1 - q * se - s.high[channel] / r, ratio - 1 + q * se + s.low[channel] / r,
+          q * std::sqrt(cv) / r};
 }
 
 // The correlation of the noise of sums of regions' size over their pixels' own (see noise_tests.h),
@@ -630,7 +657,7 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
     for (size_t c = 0; c < 3; ++c) {
       const double cv = candidateVariance(noise.source, scale, s.pixelVariance[c], s.spread(c));
       const double total = cv + s.referenceVariance[c];
-      const double z = statistic(s.difference[c], total);
+      const double z = statistic(allowedDifference(s.difference[c], s.low[c], s.high[c]), total);
       const double p = studentTwoSidedP(z, welchDegreesOfFreedom(cv, total, scale.degreesOfFreedom));
       // The channel of the least p-value; of those with equal ones (0 beyond |z| 38), the largest |z|.
       if (p < r.pValue || (p == r.pValue && std::abs(z) > std::abs(r.z))) r.pValue = p, r.z = z, r.channel = int(c);

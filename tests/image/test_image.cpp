@@ -21,6 +21,7 @@
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
 
+#include "lucent/core/srgb.h"
 #include "lucent/image/comparison.h"
 #include "lucent/image/image.h"
 #include "lucent/image/metrics.h"
@@ -757,40 +758,70 @@ void writeTruncatedRgbe(const Image& image, const fs::path& path) {
 }
 }  // namespace
 
-TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation everywhere, and leaves a JPEG undecided",
+TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation, darker only, and leaves a JPEG undecided",
           "[compare][cli]") {
-  // Two runs of 0.7 with 0.3% noise per pixel, written as RGBE by truncation (0.7's step is 2^-8,
-  // so every value falls by 0.2% on average: over the image's 1,024 pixels 45 times its noise),
-  // against a float reference of 0.7 with 0.07% noise. Allowed a step of 2^-7 of each pixel's
-  // largest channel they pass; the same values as 32-bit floats fail; runs 3% bright fail as RGBE.
+  // Runs of 0.7 written as RGBE by truncation (0.7's step is 2^-8, so every value falls by 0.2% on
+  // average) against a float reference of 0.7 with 0.07% noise, 64 x 64: with 0.3% noise per
+  // pixel the fall is 90 times the image's noise, with 5% noise (8 runs) 7 times, and per pixel
+  // far below it, where a shift of each pixel's difference by its step left the sum's fall as it
+  // was. Allowed over each sum (below by the pixels' steps, above by half) both pass; the same
+  // values as 32-bit floats fail; runs 3% bright fail as RGBE.
   test::TempDir dir("compare-rgbe");
-  const int w = 32, h = 32;
+  const int w = 64, h = 64;
   const auto flat = [&](float value, float variance, uint64_t seed) {
     return noisyImage(w, h, [&](int, int, int) { return value; }, variance, seed);
   };
   writeExr(flat(0.7f, 0.0005f * 0.0005f, 1), dir / "reference.exr");
   const std::string reference = " " + quoted(dir / "reference.exr") + " --test";
-  std::string rgbe, floats, bright;
-  for (uint64_t seed : {2, 3}) {
-    const std::string name = "run" + std::to_string(seed);
-    writeTruncatedRgbe(flat(0.7f, 0.002f * 0.002f, seed), dir / (name + ".hdr"));
-    writeExr(rgbChannels(readImage(dir / (name + ".hdr"))), dir / (name + ".exr"));
-    writeTruncatedRgbe(flat(0.7f * 1.03f, 0.002f * 0.002f, seed), dir / (name + "-bright.hdr"));
-    rgbe += " " + quoted(dir / (name + ".hdr")), floats += " " + quoted(dir / (name + ".exr"));
-    bright += " " + quoted(dir / (name + "-bright.hdr"));
+  for (const float noise : {0.002f, 0.035f}) {
+    std::string rgbe, floats, bright;
+    for (uint64_t seed = 2; seed < (noise < 0.01f ? 4u : 10u); ++seed) {
+      const std::string name = "run" + std::to_string(seed);
+      writeTruncatedRgbe(flat(0.7f, noise * noise, seed), dir / (name + ".hdr"));
+      writeExr(rgbChannels(readImage(dir / (name + ".hdr"))), dir / (name + ".exr"));
+      writeTruncatedRgbe(flat(0.7f * 1.03f, noise * noise, seed), dir / (name + "-bright.hdr"));
+      rgbe += " " + quoted(dir / (name + ".hdr")), floats += " " + quoted(dir / (name + ".exr"));
+      bright += " " + quoted(dir / (name + "-bright.hdr"));
+    }
+    INFO("noise " << noise);
+    CHECK(readImageHeader(dir / "run2.hdr").colourEncoding == ColourEncoding::SharedExponent);
+    CHECK(readImageHeader(dir / "run2.exr").colourEncoding == ColourEncoding::Float);
+    const test::CliRun asRgbe = runLucent("compare" + rgbe + reference);
+    INFO(asRgbe.output);
+    CHECK(asRgbe.status == 0);
+    const test::CliRun asFloats = runLucent("compare" + floats + reference);
+    INFO(asFloats.output);
+    CHECK(asFloats.status == 1);
+    CHECK(runLucent("compare" + bright + reference).status == 1);
   }
-  CHECK(readImageHeader(dir / "run2.hdr").colourEncoding == ColourEncoding::SharedExponent);
-  CHECK(readImageHeader(dir / "run2.exr").colourEncoding == ColourEncoding::Float);
-  const test::CliRun asRgbe = runLucent("compare" + rgbe + reference);
-  INFO(asRgbe.output);
-  CHECK(asRgbe.status == 0);
-  const test::CliRun asFloats = runLucent("compare" + floats + reference);
-  INFO(asFloats.output);
-  CHECK(asFloats.status == 1);
-  CHECK(runLucent("compare" + bright + reference).status == 1);
+  // No noise (an emitter seen directly), RGBE: 0.705 is stored as 0.703125 (code 180), brighter
+  // than 0.7 by more than half a step, which truncation cannot make: a difference; 0.7 itself,
+  // stored as 0.69921875, is a step's truncation.
+  const auto constant = [&](float value) {  // R, G, B and variance layers of 0
+    Image image(w, h, {"R", "G", "B", "variance.R", "variance.G", "variance.B"});
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) image.at(x, y, c) = value;
+    return image;
+  };
+  const auto exactRgbe = [&](float value) {
+    writeTruncatedRgbe(constant(value), dir / "exact.hdr");
+    Image image(w, h, {"R", "G", "B", "variance.R", "variance.G", "variance.B"});
+    const Image stored = readImage(dir / "exact.hdr");
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) image.at(x, y, c) = stored.at(x, y, c);
+    Candidate candidate(std::move(image));
+    candidate.rounding.encoding = ColourEncoding::SharedExponent;
+    return candidate;
+  };
+  const Image exactReference = constant(0.7f);
+  CHECK(testWithinNoise(exactRgbe(0.7f), exactReference, 0.01).verdict == Verdict::Pass);
+  CHECK(testWithinNoise(exactRgbe(0.705f), exactReference, 0.01).verdict == Verdict::Fail);
 
-  // 8-bit sRGB codes, no noise (an emitter seen directly): linear 0.5 is stored as code 188, read
-  // back as 0.5029; within a code's step that is no difference, 1% beyond it is.
+  // 8-bit sRGB codes, no noise: linear 0.5 is stored as code 188 (rounded), read back as 0.50289,
+  // within half the code's step (0.0030) above; a truncating writer's code 187 (0.49726) within a
+  // step below; 1% beyond either is a difference.
   Image grey(w, h, {"R", "G", "B"});
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
@@ -809,9 +840,16 @@ TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation everywhe
   CHECK(testWithinNoise(codes, exact, 0.01).verdict == Verdict::Fail);  // as 32-bit floats
   codes.rounding = {ColourEncoding::Integer8, true};
   CHECK(testWithinNoise(codes, exact, 0.01).verdict == Verdict::Pass);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      for (int c = 0; c < 3; ++c) codes.runs[0].at(x, y, c) *= 1.01f;
+  const auto every = [&](Candidate& candidate, float value) {
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) candidate.runs[0].at(x, y, c) = value;
+  };
+  every(codes, 0.50289f * 1.01f);
+  CHECK(testWithinNoise(codes, exact, 0.01).verdict == Verdict::Fail);
+  every(codes, srgbToLinear(187.0f / 255));
+  CHECK(testWithinNoise(codes, exact, 0.01).verdict == Verdict::Pass);
+  every(codes, srgbToLinear(187.0f / 255) * 0.99f);
   CHECK(testWithinNoise(codes, exact, 0.01).verdict == Verdict::Fail);
 
   // A JPEG's compression is no noise: undecided, whatever the values.

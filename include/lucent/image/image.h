@@ -69,9 +69,9 @@ std::vector<unsigned char> encodePng(const Image& image);
 // written as one: if any cannot be written, none exists afterwards.
 void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageMetadata& metadata,
                     const std::string& pngPath, std::vector<FileToWrite> alsoWrite = {});
-// How a file stores its colour values, from the least rounded to the most: 32-bit floats, half
-// floats, integer codes of 16 or 8 bits, Radiance's RGBE (8-bit mantissas under one exponent per
-// pixel), or lossily (JPEG).
+// How a file stores its colour values: 32-bit floats, half floats (or floats cut to 24 bits),
+// integer codes of 16 or 8 bits, Radiance's RGBE (8-bit mantissas under one exponent per pixel),
+// or lossily (JPEG; EXR's DWA compressions, B44 of half floats).
 enum class ColourEncoding { Float, Half, Integer16, Integer8, SharedExponent, Lossy };
 
 // What an image file's header says, read without its pixels.

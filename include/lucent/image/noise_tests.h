@@ -42,13 +42,14 @@ Verdict combineVerdicts(Verdict a, Verdict b);
 // operations by which two renderers may compute one value (an emitter's radiance seen directly,
 // which has no noise). Where neither image has noise a difference within the two values'
 // allowances counts as none; elsewhere it counts as noise, uniform over +-m (variance m^2 / 3).
-// Integer codes and RGBE may have been truncated (stb_image_write's and Radiance's RGBE writers
-// truncate, and their readers add no half step), a bias of one sign that sums over a region where
-// noise would average out: one code's step (in linear terms, through the sRGB curve where the codes
-// are sRGB) or RGBE's 2^-7 of the pixel's largest channel is allowed everywhere, as a difference
-// that counts as none. A lossy encoding (JPEG) changes values by more than any noise: the verdict is
-// then inconclusive.
-constexpr double kHalfRounding = 0x1p-11, kFloatRounding = 0x1p-20, kSharedExponentRounding = 0x1p-7;
+// Integer codes and RGBE may be truncated (stb_image_write's RGBE and many renderers' 8-bit
+// writers truncate; stb's and OpenImageIO's RGBE readers add no half step): a value stored up to
+// one step of its code low (for RGBE, 2^(e-8) under the largest channel's exponent e), or half a
+// step high where it was rounded. That is a bias of one sign that sums over pixels, so each sum
+// the tests take (a block, a region) may lie below the true one by its pixels' steps and above it
+// by their half steps. A lossy encoding (JPEG; EXR's DWA and B44 compressions) changes values by
+// more than any noise: the verdict is then inconclusive.
+constexpr double kHalfRounding = 0x1p-11, kFloatRounding = 0x1p-20;
 struct StoredRounding {
   ColourEncoding encoding = ColourEncoding::Float;
   bool srgb = false;  // integer codes of sRGB-encoded values
