@@ -22,7 +22,8 @@ nlohmann::ordered_json noiseJson(const CandidateNoise& noise) {
     for (const CandidateNoise::Scale& scale : noise.scales)
       out["correlation"][scale.name] = {{"factor", scale.correlation}, {"degrees_of_freedom", scale.degreesOfFreedom}};
   if (noise.neighboursMeasured)
-    out["neighbour_correlation"] = {{"rho", noise.neighbourCorrelation}, {"z", noise.neighbourCorrelationZ}};
+    out["neighbour_correlation"] = {{"rho", noise.neighbourCorrelation}, {"z", noise.neighbourCorrelationZ},
+                                    {"squares_over_layers", noise.layerLevel}, {"squares_over_layers_z", noise.layerLevelZ}};
   if (!noise.undecided.empty()) out["undecided"] = noise.undecided;
   return out;
 }

@@ -593,6 +593,52 @@ TEST_CASE("testWithinNoise with runs: where a candidate is quieter than elsewher
   for (size_t k : {1, 2, 5, 6, 16}) CHECK_FALSE(t.regions[k].rejected);
 }
 
+TEST_CASE("testWithinNoise with variance layers: correlated neighbours leave a failure to runs unless it is gross, "
+          "overstated layers a pass", "[compare]") {
+  const int w = 64, h = 64;
+  auto mean = [](int x, int y, int c) { return 1.0f + 0.5f * std::sin(0.1f * float(x + 2 * y + c)); };
+  const Image reference = noisyImage(w, h, mean, 0.01f / 64, 1);
+  // Each pixel's noise the mean of a 3 x 3 window of white noise (10% of the mean): neighbours
+  // share 6 of 9 cells (rho 0.67), a region's sum varies 9 times what the layers say.
+  const auto splatted = [&](float bias) {
+    std::mt19937_64 rng(7);
+    std::normal_distribution<float> white(0.0f, 1.0f);
+    std::vector<float> field(size_t(w + 2) * size_t(h + 2) * 3);
+    for (float& f : field) f = white(rng);
+    Image image(w, h, {"R", "G", "B", "variance.R", "variance.G", "variance.B"});
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) {
+          float shared = 0;
+          for (int dy = 0; dy < 3; ++dy)
+            for (int dx = 0; dx < 3; ++dx) shared += field[(size_t(y + dy) * size_t(w + 2) + size_t(x + dx)) * 3 + size_t(c)] / 3;
+          const float m = mean(x, y, c) * (x >= 16 && x < 32 && y >= 16 && y < 32 ? 1 + bias : 1.0f);
+          image.at(x, y, c) = m + 0.1f * m * shared, image.at(x, y, 3 + c) = 0.01f * m * m;
+        }
+    return image;
+  };
+  const NoiseTest correct = testWithinNoise(splatted(0), reference, 0.01);
+  INFO("rho " << correct.noise.neighbourCorrelation << ", z " << correct.noise.neighbourCorrelationZ);
+  CHECK(correct.noise.neighbourCorrelation == Approx(0.67).margin(0.05));
+  CHECK(correct.verdict != Verdict::Fail);
+  // 20% bright in one region: z 32 by the layers, 11 by the true noise, 7.8 with every variance
+  // 1 + 24 rho = 17 times as large: it fails.
+  CHECK(testWithinNoise(splatted(0.2f), reference, 0.01).verdict == Verdict::Fail);
+  // Layers 16 times the noise (a renderer writing its samples' variance, not its mean's) hide a 2%
+  // bias over the whole image (z 12.8 by the true noise, 3.2 by the layers): a pass is inconclusive.
+  Image overstated = noisyImage(w, h, [&](int x, int y, int c) { return 1.02f * mean(x, y, c); }, 0.01f, 2);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 3; c < 6; ++c) overstated.at(x, y, c) *= 16;
+  const NoiseTest hidden = testWithinNoise(overstated, reference, 0.01);
+  INFO(hidden.noise.undecided);
+  CHECK(hidden.noise.layerLevel == Approx(1.0 / 16).margin(0.03));
+  CHECK(hidden.verdict == Verdict::Inconclusive);
+  CHECK_THAT(hidden.noise.undecided, Catch::Contains("larger than"));
+  // Layers that fit pass as they did.
+  CHECK(testWithinNoise(noisyImage(w, h, mean, 0.01f, 3), reference, 0.01).verdict == Verdict::Pass);
+}
+
 TEST_CASE("testWithinNoise: a variance it cannot trust or identical runs leave it undecided, rounding is no difference",
           "[compare]") {
   const int w = 32, h = 32;

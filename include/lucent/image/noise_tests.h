@@ -91,8 +91,13 @@ struct CandidateNoise {
   // several pixels correlates them (sums of pixels then vary more than the layers say), blue-noise
   // sampling anticorrelates them (less). Where it is at least kNeighbourCorrelation and z at least
   // kNeighbourCorrelationZ, the verdicts the layers cannot support are inconclusive: a failure of
-  // --test and any verdict of --within where rho > 0, a pass of --test where rho < 0.
+  // --test (unless it stands with every variance 1 + 24 rho times as large) and any verdict of
+  // --within where rho > 0, a pass of --test where rho < 0.
   double neighbourCorrelation = 0, neighbourCorrelationZ = 0;
+  // And the sum of the pixels' squared differences over that of their variances, and its z: about
+  // 1 where the layers are right, above it with a bias, below it where the layers overstate the
+  // noise (which also makes rho positive): then a pass of --test is inconclusive instead.
+  double layerLevel = 1, layerLevelZ = 0;
   bool neighboursMeasured = false;  // false where the verdict was undecided first, or no pair has noise
   std::string undecided;  // why the verdict cannot be pass or fail, and what would decide it
 };
