@@ -259,8 +259,18 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
   settings.metric = metric, settings.maxError = maxError, settings.test = test, settings.block = block;
   settings.within = within, settings.alpha = alpha, settings.layer = layer, settings.imageLayer = imageLayer;
   settings.pixelsPerDegree = ppd, settings.startExposure = startExposure, settings.stopExposure = stopExposure;
-  // Arrays of half floats (NumPy's float16) are rounded as an EXR's half channels are.
+  // How the values were stored: a dict's "encoding" and "srgb" (read_image's, from the file), else
+  // half floats for NumPy's float16 (rounded as an EXR's half channels are) and floats otherwise.
   const auto roundingOf = [](const py::handle& value) {
+    if (py::isinstance<py::dict>(value)) {
+      const py::dict d = value.cast<py::dict>();
+      if (d.contains("encoding")) {
+        const std::string name = d["encoding"].cast<std::string>();
+        const std::optional<ColourEncoding> encoding = colourEncodingNamed(name);
+        if (!encoding) throw std::invalid_argument("unknown encoding '" + name + "' (read_image gives one)");
+        return StoredRounding{*encoding, d.contains("srgb") && d["srgb"].cast<bool>()};
+      }
+    }
     const py::object a = py::isinstance<py::dict>(value) ? py::object(value.cast<py::dict>()["image"])
                                                          : py::reinterpret_borrow<py::object>(value);
     const py::array array = py::array::ensure(a);
@@ -449,12 +459,14 @@ PYBIND11_MODULE(lucent, m) {
     const Image image = readLinearImage(path, &metadata);
     py::dict out = imageArrays(image);
     out["srgb"] = isSrgbEncoded(path, metadata);  // pass as compare's image_srgb / reference_srgb
+    out["encoding"] = colourEncodingName(readImageHeader(path).colourEncoding);  // compare allows for its rounding
     const std::vector<std::string> materials = materialNamesOf(metadata);
     if (!materials.empty()) out["materials"] = materials;
     out["channels"] = image.channels();
     return out;
-  }, py::arg("path"), "An image file (EXR, HDR, PNG, ...) as a dict like render's: image, variance, layers, and "
-                      "srgb (an 8-bit sRGB file, decoded to linear)");
+  }, py::arg("path"), "An image file (EXR, HDR, PNG, ...) as a dict like render's: image, variance, layers, "
+                      "srgb (an 8-bit sRGB file, decoded to linear) and encoding (how its values were stored, whose "
+                      "rounding compare allows for: float, half, integer16, integer8, rgbe or lossy)");
   m.def("record_types", [] {
     std::vector<std::string> names;
     for (const auto& [name, type] : dumpRecordTypes()) names.push_back(name);

@@ -403,6 +403,25 @@ std::vector<std::string> channelsAsRead(const CodecImageInfo& info) {
 
 }  // namespace
 
+const char* colourEncodingName(ColourEncoding encoding) {
+  switch (encoding) {
+    case ColourEncoding::Float: return "float";
+    case ColourEncoding::Half: return "half";
+    case ColourEncoding::Integer16: return "integer16";
+    case ColourEncoding::Integer8: return "integer8";
+    case ColourEncoding::SharedExponent: return "rgbe";
+    case ColourEncoding::Lossy: return "lossy";
+  }
+  return "float";
+}
+
+std::optional<ColourEncoding> colourEncodingNamed(const std::string& name) {
+  for (const ColourEncoding e : {ColourEncoding::Float, ColourEncoding::Half, ColourEncoding::Integer16,
+                                 ColourEncoding::Integer8, ColourEncoding::SharedExponent, ColourEncoding::Lossy})
+    if (name == colourEncodingName(e)) return e;
+  return std::nullopt;
+}
+
 ImageHeader readImageHeader(const std::string& path) {
   const OpenedImage opened = openChecked(path);
   const CodecImageInfo& spec = opened.info;

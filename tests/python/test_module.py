@@ -261,6 +261,22 @@ def test_compare_allows_for_float16_arrays_rounding():
     assert lucent.compare({"image": widened, "variance": zeros}, reference, test=True)["test"]["verdict"] == "fail"
 
 
+def test_read_image_gives_the_encoding_compare_allows_for():
+    """read_image says how a file stored its values, and compare honours it as lucent compare does:
+    a JPEG (lossy) is inconclusive even against its own values; without the encoding it passes."""
+    jpeg = lucent.read_image(os.path.join(SOURCE, "scenes", "ring", "wood-floorboards-texture.jpg"))
+    assert jpeg["encoding"] == "lossy" and jpeg["srgb"]
+    zeros = np.zeros_like(jpeg["image"])
+    reference = {"image": jpeg["image"].copy(), "variance": zeros}
+    candidate = dict(jpeg, variance=zeros)
+    assert lucent.compare(candidate, reference, test=True)["test"]["verdict"] == "inconclusive"
+    assert lucent.compare({"image": jpeg["image"], "variance": zeros}, reference, test=True)["test"]["verdict"] == "pass"
+    with pytest.raises(ValueError, match="unknown encoding 'png'"):
+        lucent.compare(dict(candidate, encoding="png"), reference, test=True)
+    exr = lucent.read_image(os.path.join(SOURCE, "references", "cornell-box.exr"))
+    assert exr["encoding"] == "float" and not exr["srgb"]
+
+
 def test_gltf_choices_load_as_lucent_renders_options_read_them(tmp_path):
     """gltf_masking and gltf_normal_maps give the image the CLI's options of those names give (the
     exported Cornell box read directly: its materials are glTF's), and bad values are refused."""

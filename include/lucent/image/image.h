@@ -2,6 +2,7 @@
 #pragma once
 #include <cstdint>
 #include <span>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -73,6 +74,9 @@ void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageM
 // integer codes of 16 or 8 bits, Radiance's RGBE (8-bit mantissas under one exponent per pixel),
 // or lossily (JPEG; EXR's DWA compressions, B44 of half floats).
 enum class ColourEncoding { Float, Half, Integer16, Integer8, SharedExponent, Lossy };
+// "float", "half", "integer16", "integer8", "rgbe", "lossy"; and back (std::nullopt for another name).
+const char* colourEncodingName(ColourEncoding encoding);
+std::optional<ColourEncoding> colourEncodingNamed(const std::string& name);
 
 // What an image file's header says, read without its pixels.
 struct ImageHeader {
