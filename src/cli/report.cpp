@@ -634,9 +634,11 @@ int runReport(const ReportOptions& opt) {
     // records summed, where every run has one.
     std::vector<Image> runImages;
     std::optional<double> runSeconds = 0.0;
+    bool candidateIsSrgb = false;  // any run's values sRGB-encoded (as lucent compare takes it)
     for (size_t k = 0; k < runs; ++k) {
       ImageMetadata metadata;
       Image run = readLinearImage(c.runs[k], &metadata);
+      candidateIsSrgb = candidateIsSrgb || isSrgbEncoded(c.runs[k], metadata);
       if (!opt.layer.empty()) run = chosen(run, c.runs[k]).candidate;
       const std::optional<Sidecar> sidecar = k == 0 ? c.sidecar : readSidecar(c.runs[k]);
       const std::optional<double> seconds = sidecar && sidecar->seconds ? sidecar->seconds : renderSeconds(metadata);
@@ -646,7 +648,6 @@ int runReport(const ReportOptions& opt) {
     }
     c.seconds = !opt.seconds.empty() ? std::optional<double>(opt.seconds[i]) : runSeconds;
     Candidate candidate = runs == 1 ? Candidate(std::move(runImages[0]), halfVariance[i]) : Candidate(std::move(runImages));
-    const bool candidateIsSrgb = isSrgbEncoded(c.path, c.metadata);
     candidate.rounding = {*std::max_element(encodings.begin() + ptrdiff_t(i * runs), encodings.begin() + ptrdiff_t((i + 1) * runs)),
                           candidateIsSrgb};
     candidate.referenceRounding = {referenceHeader.colourEncoding, referenceIsSrgb};
