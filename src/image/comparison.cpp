@@ -303,6 +303,14 @@ ImageComparison compareImagePair(Candidate candidate, Image referenceFile, const
   if (opt.maxError) out["max_error"] = *opt.maxError;
   if (test) out["test"] = testJson(*test);
   if (equivalence) out["equivalence"] = equivalenceJson(*equivalence);
+  // The rounding the tests allowed for, by each image's encoding (StoredRounding).
+  const auto roundingJson = [](const StoredRounding& r) {
+    nlohmann::ordered_json j = {{"encoding", colourEncodingName(r.encoding)}};
+    if (r.encoding == ColourEncoding::Integer8 || r.encoding == ColourEncoding::Integer16) j["srgb"] = r.srgb;
+    return j;
+  };
+  if (statistical)
+    out["stored_rounding"] = {{"image", roundingJson(candidate.rounding)}, {"reference", roundingJson(candidate.referenceRounding)}};
   if (flipResult) out["flip"] = flipJson(*flipResult, opt.pixelsPerDegree);
   if (!surfaces.empty())
     out["by_surface"] = {{"confidence", 1 - 2 * opt.alpha},

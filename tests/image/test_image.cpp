@@ -835,6 +835,9 @@ TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation, darker 
     const test::CliRun asRgbe = runLucent("compare" + rgbe + reference);
     INFO(asRgbe.output);
     CHECK(asRgbe.status == 0);
+    const auto rounding = nlohmann::json::parse(asRgbe.output)["stored_rounding"];
+    CHECK(rounding["image"]["encoding"] == "rgbe");
+    CHECK(rounding["reference"]["encoding"] == "float");
     const test::CliRun asFloats = runLucent("compare" + floats + reference);
     INFO(asFloats.output);
     CHECK(asFloats.status == 1);
