@@ -18,7 +18,10 @@ method, not the aliasing of point samples at edges.
                                                    [--out DIR] [--redraw]
 
 The references (path tracer, 16,384 samples per pixel, box-filtered and through the pixel centres)
-are rendered once per scene content (its `scene_hash`, in their file names) and kept in out/charts/.
+are rendered once per scene content (its `scene_hash`, in their file names) and kept, as half
+floats (written by oiiotool, which scripts/setup.sh installs) with a JSON of how they were made, in
+references/charts/: a run then renders only its points. `--references` renders the missing ones
+and nothing else (they are not timed: another job may run beside it).
 Needs matplotlib (Debian: python3-matplotlib); run with /usr/bin/python3. One seed over twelve
 scenes took 80 minutes on 2 cores (gltf/extensions-sky alone: 13); run on an otherwise idle machine.
 """
@@ -34,6 +37,7 @@ import sys
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LUCENT = os.path.join(ROOT, "build", "lucent")
 CACHE = os.path.join(ROOT, "out", "charts")
+REFERENCES = os.path.join(ROOT, "references", "charts")
 CHARTS = os.path.join(ROOT, "docs", "charts")
 DOC = os.path.join(ROOT, "docs", "speed-accuracy.md")
 
@@ -182,15 +186,35 @@ def scene_hash(scene, hashes={}):
     return hashes[scene]
 
 
+def commit():
+    """The checkout's commit (whose build/lucent renders)."""
+    done = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
+    return done.stdout.strip() or None
+
+
 def reference(scene, resolution, centres, max_depth):
     kind = "centres" if centres else "box"
     depth = f"-depth{max_depth}" if max_depth else ""
-    path = os.path.join(CACHE, f"{file_name(scene)}-{scene_hash(scene)}-{resolution}-pt{depth}-{REFERENCE_SPP}spp-{kind}.exr")
+    name = f"{file_name(scene)}-{scene_hash(scene)}-{resolution}-pt{depth}-{REFERENCE_SPP}spp-{kind}.exr"
+    path = os.path.join(REFERENCES, name)
     if not os.path.exists(path):
-        print(f"  (path-tracing the reference {os.path.basename(path)})", flush=True)
-        run(["render", scene_path(scene), "--method", "pt", "--spp", str(REFERENCE_SPP), "--seed", "1",
-             "--resolution", resolution, "--quiet", "-o", path] + (["--pixel-centres"] if centres else []) +
-            (["--max-depth", str(max_depth)] if max_depth else []))
+        print(f"  (path-tracing the reference {name})", flush=True)
+        rendered = os.path.join(CACHE, f"reference-{os.getpid()}.exr")
+        options = (["--method", "pt", "--spp", str(REFERENCE_SPP), "--seed", "1", "--resolution", resolution] +
+                   (["--pixel-centres"] if centres else []) + (["--max-depth", str(max_depth)] if max_depth else []))
+        summary = run(["render", scene_path(scene), "--quiet", "-o", rendered] + options)
+        # Half floats: their rounding (2^-11 of the value, relMSE 8e-8) is far below the charts' errors.
+        os.makedirs(REFERENCES, exist_ok=True)
+        subprocess.run(["oiiotool", rendered, "-d", "half", "--compression", "zip", "-o", path + ".tmp.exr"], check=True)
+        os.replace(path + ".tmp.exr", path)
+        os.remove(rendered)
+        with open(os.path.splitext(path)[0] + ".json", "w") as f:
+            json.dump({"scene": os.path.relpath(scene_path(scene), ROOT),
+                       "command": "build/lucent render " + os.path.relpath(scene_path(scene), ROOT) + " " +
+                                  " ".join(options) + " -o IMAGE.exr, then oiiotool IMAGE.exr -d half -o REFERENCE",
+                       "commit": commit(), "scene_hash": scene_hash(scene),
+                       "seconds": summary.get("seconds"), "threads": summary.get("threads")}, f, indent=2)
+            f.write("\n")
     return path
 
 
@@ -473,16 +497,25 @@ def main():
                              "median, its bars their range")
     parser.add_argument("--redraw", action="store_true",
                         help="render nothing: draw the charts and the summary again from the JSON")
+    parser.add_argument("--references", action="store_true",
+                        help="render the scenes' missing references (references/charts/) and nothing else")
     parser.add_argument("--pt-build", nargs=2, metavar=("LABEL", "LUCENT"),
                         help="also draw the path tracer's curve as another build renders it (an older commit's "
                              "build/lucent), labelled 'pt (LABEL)'")
     args = parser.parse_args()
+    os.makedirs(CACHE, exist_ok=True)
+    if args.references:
+        for scene in args.scenes:
+            setup = SCENES[scene]
+            kinds = {not method.startswith("pt") for method in setup["methods"]}
+            for centres in sorted(kinds):
+                print(f"  {reference(scene, setup['resolution'], centres, setup['max_depth'])}", flush=True)
+        return 0
     try:
         import matplotlib  # noqa: F401 (checked before anything is rendered)
     except ImportError:
         sys.exit("chart-speed-accuracy: needs matplotlib (Debian: apt-get install python3-matplotlib; "
                  "run with /usr/bin/python3)")
-    os.makedirs(CACHE, exist_ok=True)
     os.makedirs(args.out, exist_ok=True)
     data = os.path.join(args.out, "speed-accuracy.json")
     everything = {}
