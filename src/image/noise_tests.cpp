@@ -215,7 +215,7 @@ class TestPixels {
   // RGBE, which may be truncated (a value stored up to a step low, or half a step high where the
   // writer rounds or the reader adds half a step), are a bias of one sign that sums over pixels:
   // `low` and `high` are how far below and above the true difference the stored one may lie, for
-  // the tests to allow over each sum (Allowances).
+  // the tests to allow over each sum (UnitSums::low, high).
   void readRounded(int x, int y, Quad& mean, Quad& variance, Quad& reference, Quad& referenceVariance, Quad& low,
                    Quad& high) {
     read(x, y, mean, variance, reference, referenceVariance);
@@ -310,7 +310,7 @@ class TestPixels {
   // CandidateNoise::neighbourCorrelation. Differences of neighbours leave a smooth bias out, and
   // a bias that changes between them only lowers rho. Over disjoint pairs (in each 2 x 2 cell the
   // two rows or, in every other cell, the two columns), d the difference of the pair's residuals
-  // (candidate - reference) and w the sum of their variances (the layers' and the reference's), R,
+  // (candidate - reference) and w the sum of their variances (the layers', the reference's, rounding), R,
   // G and B summed: rho = 1 - sum d^2 / sum w, its standard error from the pairs' spread about
   // that ratio.
   void measureNeighbourCorrelation() {
