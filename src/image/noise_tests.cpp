@@ -132,6 +132,20 @@ size_t tileOf(int x, int y, int tiles, int w, int h) {
   return size_t(1 + int64_t(y) * tiles / h * tiles + int64_t(x) * tiles / w);
 }
 
+// The ratio sum a / sum w of terms (a_k, w_k), and its standard error from the terms' spread about
+// it: sqrt(sum (a_k - q w_k)^2) / sum w.
+struct RatioOfSums {
+  double numerator = 0, denominator = 0, numerator2 = 0, cross = 0, denominator2 = 0;
+  void add(double a, double w) {
+    numerator += a, denominator += w, numerator2 += a * a, cross += a * w, denominator2 += w * w;
+  }
+  double ratio() const { return numerator / denominator; }
+  double spread() const {
+    const double q = ratio();
+    return std::sqrt(std::max(0.0, numerator2 - 2 * q * cross + q * q * denominator2)) / denominator;
+  }
+};
+
 // The candidate and the reference as the tests read them, pixel by pixel.
 class TestPixels {
  public:
@@ -314,8 +328,7 @@ class TestPixels {
   // G and B summed: rho = 1 - sum d^2 / sum w, its standard error from the pairs' spread about
   // that ratio.
   void measureNeighbourCorrelation() {
-    double squares = 0, variances = 0, squares2 = 0, cross = 0, variances2 = 0;
-    double level = 0, levelW = 0, level2 = 0, levelCross = 0, levelW2 = 0;  // the same of each pixel alone
+    RatioOfSums pairs, pixels;  // the pairs' d^2 over w; each pixel's r^2 over its variance
     Quad meanA, varianceA, referenceA, referenceVarianceA, meanB, varianceB, referenceB, referenceVarianceB, low, high;
     const auto pair = [&](int x0, int y0, int x1, int y1) {
       if (x1 >= width() || y1 >= height()) return;
@@ -329,24 +342,20 @@ class TestPixels {
         v[0] += varianceA[c] + referenceVarianceA[c], v[1] += varianceB[c] + referenceVarianceB[c];
       }
       if (!(w > 0) || !std::isfinite(d2)) return;
-      squares += d2, variances += w, squares2 += d2 * d2, cross += d2 * w, variances2 += w * w;
-      for (int i = 0; i < 2; ++i)
-        level += r2[i], levelW += v[i], level2 += r2[i] * r2[i], levelCross += r2[i] * v[i], levelW2 += v[i] * v[i];
+      pairs.add(d2, w);
+      for (int i = 0; i < 2; ++i) pixels.add(r2[i], v[i]);
     };
     for (int y = 0; y < height(); y += 2)
       for (int x = 0; x < width(); x += 2)
         if ((x / 2 + y / 2) % 2 == 0) pair(x, y, x + 1, y), pair(x, y + 1, x + 1, y + 1);
         else pair(x, y, x, y + 1), pair(x + 1, y, x + 1, y + 1);
-    if (!(variances > 0)) return;
-    const double q = squares / variances;
-    const double spread = std::sqrt(std::max(0.0, squares2 - 2 * q * cross + q * q * variances2)) / variances;
+    if (!(pairs.denominator > 0)) return;
+    const double q = pairs.ratio(), spread = pairs.spread();
     noise_.neighbourCorrelation = 1 - q;
     noise_.neighbourCorrelationZ = spread > 0 ? (1 - q) / spread : 0.0;
     // The pixels' terms as if independent; where neighbours share noise their squares do too, by at
     // most 1 + 24 rho over the 24 pixels within 2 of each.
-    const double l = level / levelW;
-    const double levelSpread = std::sqrt(std::max(0.0, level2 - 2 * l * levelCross + l * l * levelW2) *
-                                         (1 + 24 * std::max(0.0, 1 - q))) / levelW;
+    const double l = pixels.ratio(), levelSpread = pixels.spread() * std::sqrt(1 + 24 * std::max(0.0, 1 - q));
     noise_.layerLevel = l;
     noise_.layerLevelZ = levelSpread > 0 ? (l - 1) / levelSpread : 0.0;
     noise_.neighboursMeasured = true;
