@@ -259,8 +259,9 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
   settings.metric = metric, settings.maxError = maxError, settings.test = test, settings.block = block;
   settings.within = within, settings.alpha = alpha, settings.layer = layer, settings.imageLayer = imageLayer;
   settings.pixelsPerDegree = ppd, settings.startExposure = startExposure, settings.stopExposure = stopExposure;
-  // How the values were stored: a dict's "encoding" and "srgb" (read_image's, from the file), else
-  // half floats for NumPy's float16 (rounded as an EXR's half channels are) and floats otherwise.
+  // How the values were stored: a dict's "encoding", "largest_code" and "srgb" (read_image's, from
+  // the file), else half floats for NumPy's float16 (rounded as an EXR's half channels are) and
+  // floats otherwise.
   const auto roundingOf = [](const py::handle& value) {
     if (py::isinstance<py::dict>(value)) {
       const py::dict d = value.cast<py::dict>();
@@ -268,7 +269,14 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
         const std::string name = d["encoding"].cast<std::string>();
         const std::optional<ColourEncoding> encoding = colourEncodingNamed(name);
         if (!encoding) throw std::invalid_argument("unknown encoding '" + name + "' (read_image gives one)");
-        return StoredRounding{*encoding, d.contains("srgb") && d["srgb"].cast<bool>()};
+        ImageHeader header;
+        header.colourEncoding = *encoding;
+        if (*encoding == ColourEncoding::Integer) {
+          header.largestCode = d.contains("largest_code") ? d["largest_code"].cast<double>() : 0.0;
+          if (!(header.largestCode >= 1 && header.largestCode < 0x1p32))
+            throw std::invalid_argument("an integer encoding needs its largest_code, from 1 to 2^32 - 1 (read_image gives it)");
+        }
+        return storedRoundingOf(header, d.contains("srgb") && d["srgb"].cast<bool>());
       }
     }
     const py::object a = py::isinstance<py::dict>(value) ? py::object(value.cast<py::dict>()["image"])
@@ -279,16 +287,16 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
   };
   // A list or tuple of arrays: independent runs of one renderer.
   std::vector<Image> runs;
-  StoredRounding rounding;
+  std::vector<StoredRounding> rounding;
   if (py::isinstance<py::list>(image) || py::isinstance<py::tuple>(image)) {
     for (const py::handle run : image) {
       runs.push_back(imageFrom(run, "run " + std::to_string(runs.size() + 1)));
-      rounding = coarserRounding(rounding, roundingOf(run));
+      addRounding(rounding, roundingOf(run));
     }
     if (runs.size() < 2) throw std::invalid_argument("runs: give two or more arrays, or one array");
   } else {
     runs.push_back(imageFrom(image, "image"));
-    rounding = roundingOf(image);
+    rounding = {roundingOf(image)};
   }
   Image b = imageFrom(reference, "reference");
   const StoredRounding referenceRounding = roundingOf(reference);
@@ -300,7 +308,7 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
     py::gil_scoped_release release;
     const KeepFloatingPointMode keep;
     Candidate candidate = runs.size() == 1 ? Candidate(std::move(runs[0])) : Candidate(std::move(runs));
-    candidate.rounding = rounding, candidate.referenceRounding = referenceRounding;
+    candidate.rounding = std::move(rounding), candidate.referenceRounding = referenceRounding;
     result = compareImagePair(std::move(candidate), std::move(b), settings, imageSrgb, referenceSrgb);
   }
   return py::module_::import("json").attr("loads")(result.json);
@@ -459,14 +467,17 @@ PYBIND11_MODULE(lucent, m) {
     const Image image = readLinearImage(path, &metadata);
     py::dict out = imageArrays(image);
     out["srgb"] = isSrgbEncoded(path, metadata);  // pass as compare's image_srgb / reference_srgb
-    out["encoding"] = colourEncodingName(readImageHeader(path).colourEncoding);  // compare allows for its rounding
+    const ImageHeader header = readImageHeader(path);
+    out["encoding"] = colourEncodingName(header.colourEncoding);  // compare allows for its rounding
+    if (header.colourEncoding == ColourEncoding::Integer) out["largest_code"] = header.largestCode;
     const std::vector<std::string> materials = materialNamesOf(metadata);
     if (!materials.empty()) out["materials"] = materials;
     out["channels"] = image.channels();
     return out;
   }, py::arg("path"), "An image file (EXR, HDR, PNG, ...) as a dict like render's: image, variance, layers, "
                       "srgb (an 8-bit sRGB file, decoded to linear) and encoding (how its values were stored, whose "
-                      "rounding compare allows for: float, half, integer16, integer8, rgbe or lossy)");
+                      "rounding compare allows for: float, half, integer (with largest_code, 255 for 8-bit codes), rgbe "
+                      "or lossy)");
   m.def("record_types", [] {
     std::vector<std::string> names;
     for (const auto& [name, type] : dumpRecordTypes()) names.push_back(name);

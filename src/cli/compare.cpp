@@ -54,33 +54,31 @@ int runCompare(const CompareOptions& opt) {
   const bool statistical = s.test || s.within.has_value();
   const std::string pair = "'" + runs[0] + (runs.size() > 1 ? "' (and its other runs)" : "'") + " vs '" + referencePath + "': ";
   bool halfVariance = false;
-  StoredRounding rounding, referenceRounding;
-  {
-    const ImageHeader reference = readImageHeader(referencePath);
-    referenceRounding.encoding = reference.colourEncoding;
-    for (const std::string& path : runs) {
-      const ImageHeader image = readImageHeader(path);
-      halfVariance = halfVariance || image.hasHalfVariance();
-      rounding.encoding = std::max(rounding.encoding, image.colourEncoding);
-      try {
-        checkComparable(image, reference, statistical || !s.layer.empty());
-      } catch (const std::invalid_argument& e) {
-        throw std::invalid_argument("'" + path + "' vs '" + referencePath + "': " + e.what());
-      }
+  const ImageHeader referenceHeader = readImageHeader(referencePath);
+  std::vector<ImageHeader> headers;
+  for (const std::string& path : runs) {
+    const ImageHeader& image = headers.emplace_back(readImageHeader(path));
+    halfVariance = halfVariance || image.hasHalfVariance();
+    try {
+      checkComparable(image, referenceHeader, statistical || !s.layer.empty());
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("'" + path + "' vs '" + referencePath + "': " + e.what());
     }
   }
   ImageMetadata candidateMetadata, referenceMetadata;
   std::vector<Image> images;
   bool candidateIsSrgb = false;
-  for (const std::string& path : runs) {
-    images.push_back(readLinearImage(path, &candidateMetadata));
-    candidateIsSrgb = candidateIsSrgb || isSrgbEncoded(path, candidateMetadata);
+  std::vector<StoredRounding> rounding;
+  for (size_t k = 0; k < runs.size(); ++k) {
+    images.push_back(readLinearImage(runs[k], &candidateMetadata));
+    const bool srgb = isSrgbEncoded(runs[k], candidateMetadata);
+    candidateIsSrgb = candidateIsSrgb || srgb;
+    addRounding(rounding, storedRoundingOf(headers[k], srgb));
   }
   Image reference = readLinearImage(referencePath, &referenceMetadata);
   Candidate candidate = images.size() == 1 ? Candidate(std::move(images[0]), halfVariance) : Candidate(std::move(images));
-  rounding.srgb = candidateIsSrgb;
-  referenceRounding.srgb = isSrgbEncoded(referencePath, referenceMetadata);
-  candidate.rounding = rounding, candidate.referenceRounding = referenceRounding;
+  candidate.rounding = std::move(rounding);
+  candidate.referenceRounding = storedRoundingOf(referenceHeader, isSrgbEncoded(referencePath, referenceMetadata));
   ComparisonSettings settings = s;
   settings.heatmap = !opt.heatmap.empty();
   ImageComparison result;

@@ -581,11 +581,10 @@ int runReport(const ReportOptions& opt) {
   // Sizes and channels from the headers first: a mismatch is reported before any pixel is decoded.
   const ImageHeader referenceHeader = readImageHeader(opt.reference);
   std::vector<bool> halfVariance;
-  std::vector<ColourEncoding> encodings;
+  std::vector<ImageHeader> headers;
   for (const std::string& path : opt.candidates) {
-    const ImageHeader header = readImageHeader(path);
+    const ImageHeader& header = headers.emplace_back(readImageHeader(path));
     halfVariance.push_back(header.hasHalfVariance());
-    encodings.push_back(header.colourEncoding);
     try {
       checkComparable(header, referenceHeader, true);
     } catch (const std::invalid_argument& e) {
@@ -635,10 +634,13 @@ int runReport(const ReportOptions& opt) {
     std::vector<Image> runImages;
     std::optional<double> runSeconds = 0.0;
     bool candidateIsSrgb = false;  // any run's values sRGB-encoded (as lucent compare takes it)
+    std::vector<StoredRounding> rounding;
     for (size_t k = 0; k < runs; ++k) {
       ImageMetadata metadata;
       Image run = readLinearImage(c.runs[k], &metadata);
-      candidateIsSrgb = candidateIsSrgb || isSrgbEncoded(c.runs[k], metadata);
+      const bool srgb = isSrgbEncoded(c.runs[k], metadata);
+      candidateIsSrgb = candidateIsSrgb || srgb;
+      addRounding(rounding, storedRoundingOf(headers[i * runs + k], srgb));
       if (!opt.layer.empty()) run = chosen(run, c.runs[k]).candidate;
       const std::optional<Sidecar> sidecar = k == 0 ? c.sidecar : readSidecar(c.runs[k]);
       const std::optional<double> seconds = sidecar && sidecar->seconds ? sidecar->seconds : renderSeconds(metadata);
@@ -648,9 +650,8 @@ int runReport(const ReportOptions& opt) {
     }
     c.seconds = !opt.seconds.empty() ? std::optional<double>(opt.seconds[i]) : runSeconds;
     Candidate candidate = runs == 1 ? Candidate(std::move(runImages[0]), halfVariance[i]) : Candidate(std::move(runImages));
-    candidate.rounding = {*std::max_element(encodings.begin() + ptrdiff_t(i * runs), encodings.begin() + ptrdiff_t((i + 1) * runs)),
-                          candidateIsSrgb};
-    candidate.referenceRounding = {referenceHeader.colourEncoding, referenceIsSrgb};
+    candidate.rounding = std::move(rounding);
+    candidate.referenceRounding = storedRoundingOf(referenceHeader, referenceIsSrgb);
     const Image file = candidateImage(candidate);
     const Image image = rgbChannels(file);
     // An 8-bit candidate against the reference clipped to [0, 1] (--ldr), as lucent compare does.

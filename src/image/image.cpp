@@ -337,9 +337,9 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
                              " slices, not an image");
   // And against the source's size: a 4.6 KB EXR claiming 8192 x 8192 pixels of 10 float channels
   // would have 2.7 GB allocated and filled before its missing data failed the read.
-  uint64_t pixelBytes = 0;
-  for (const int bytes : spec.channelBytes) pixelBytes += uint64_t(bytes);
-  const uint64_t stored = uint64_t(spec.width) * uint64_t(spec.height) * pixelBytes;
+  uint64_t pixelBits = 0;
+  for (const int bits : spec.channelBits) pixelBits += uint64_t(bits);
+  const uint64_t stored = (uint64_t(spec.width) * uint64_t(spec.height) * pixelBits + 7) / 8;
   const std::string& compression = spec.compression;
   // A PFM's floats are stored as they are.
   const bool raw = compression == "none" || extension == ".pfm";
@@ -407,8 +407,7 @@ const char* colourEncodingName(ColourEncoding encoding) {
   switch (encoding) {
     case ColourEncoding::Float: return "float";
     case ColourEncoding::Half: return "half";
-    case ColourEncoding::Integer16: return "integer16";
-    case ColourEncoding::Integer8: return "integer8";
+    case ColourEncoding::Integer: return "integer";
     case ColourEncoding::SharedExponent: return "rgbe";
     case ColourEncoding::Lossy: return "lossy";
   }
@@ -416,8 +415,8 @@ const char* colourEncodingName(ColourEncoding encoding) {
 }
 
 std::optional<ColourEncoding> colourEncodingNamed(const std::string& name) {
-  for (const ColourEncoding e : {ColourEncoding::Float, ColourEncoding::Half, ColourEncoding::Integer16,
-                                 ColourEncoding::Integer8, ColourEncoding::SharedExponent, ColourEncoding::Lossy})
+  for (const ColourEncoding e : {ColourEncoding::Float, ColourEncoding::Half, ColourEncoding::Integer,
+                                 ColourEncoding::SharedExponent, ColourEncoding::Lossy})
     if (name == colourEncodingName(e)) return e;
   return std::nullopt;
 }
@@ -426,11 +425,12 @@ ImageHeader readImageHeader(const std::string& path) {
   const OpenedImage opened = openChecked(path);
   const CodecImageInfo& spec = opened.info;
   ImageHeader header{spec.width, spec.height, channelsAsRead(spec), {}};
-  int leastColourBytes = 4;
   for (int c = 0; c < spec.channelCount && size_t(c) < header.channels.size(); ++c) {
     const std::string& name = header.channels[size_t(c)];
+    const double largestCode = spec.channelLargestCode[size_t(c)];
     if (spec.channelIsHalf[size_t(c)]) header.halfChannels.push_back(name);
-    else if (name == "R" || name == "G" || name == "B") leastColourBytes = std::min(leastColourBytes, spec.channelBytes[size_t(c)]);
+    else if ((name == "R" || name == "G" || name == "B") && largestCode > 0)
+      header.largestCode = header.largestCode > 0 ? std::min(header.largestCode, largestCode) : largestCode;
   }
   // EXR's DWA compressions are lossy, B44 for half channels; PXR24 rounds floats to 24 bits (half
   // floats' allowance is the nearest above it). A TIFF may hold JPEG data.
@@ -439,8 +439,7 @@ ImageHeader readImageHeader(const std::string& path) {
                      ((compression == "b44" || compression == "b44a") && header.hasHalfColour());
   if (lossy) header.colourEncoding = ColourEncoding::Lossy;
   else if (spec.formatName == "hdr") header.colourEncoding = ColourEncoding::SharedExponent;
-  else if (leastColourBytes == 1) header.colourEncoding = ColourEncoding::Integer8;
-  else if (leastColourBytes == 2) header.colourEncoding = ColourEncoding::Integer16;
+  else if (header.largestCode > 0) header.colourEncoding = ColourEncoding::Integer;
   else if (header.hasHalfColour() || compression == "pxr24") header.colourEncoding = ColourEncoding::Half;
   return header;
 }

@@ -34,8 +34,11 @@ struct ImageWriter {
 struct CodecImageInfo {
   int width = 0, height = 0, depth = 1, channelCount = 0;
   std::vector<std::string> channelNames;  // may be fewer than channelCount
-  std::vector<int> channelBytes;          // per channel: its stored value's size
+  std::vector<int> channelBits;           // per channel: its stored value's size (12 in a 12-bit TIFF)
   std::vector<uint8_t> channelIsHalf;     // per channel: stored as a 16-bit float
+  // Per channel: for integer codes the largest, which reads as 1 (255 for 8 bits, 4,095 for 12,
+  // 32,767 for signed 16-bit codes); 0 for floats.
+  std::vector<double> channelLargestCode;
   std::string compression;                // its "compression" attribute, "" where none
   std::string formatName;                 // OpenImageIO's name of the format ("openexr", "pnm"...)
   bool floatFormat = false;               // the image's format is 32-bit float
@@ -58,7 +61,7 @@ struct ImageReader {
 };
 
 inline constexpr uint32_t kImageWriterInterface = 2;
-inline constexpr uint32_t kImageReaderInterface = 3;
+inline constexpr uint32_t kImageReaderInterface = 4;
 
 // Each module's functions, loaded on the first call (thread-safe); throws std::runtime_error where
 // the module cannot be loaded. The reader of `format` ("exr", "png"...): OpenEXR's for EXR,

@@ -2,6 +2,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <cmath>
 #include <memory>
 
 #include "image/image_codec.h"
@@ -42,9 +43,16 @@ void* open(const std::string& name, const std::string& format, const unsigned ch
   const OIIO::ImageSpec& spec = in->spec();
   info.width = spec.width, info.height = spec.height, info.depth = spec.depth, info.channelCount = spec.nchannels;
   info.channelNames = spec.channelnames;
+  // A TIFF or PNM of 10 or 12 bits is read as 16-bit codes, scaled to their full range: its steps
+  // are those of its own bits.
+  const int bitsPerSample = spec.get_int_attribute("oiio:BitsPerSample", 0);
   for (int c = 0; c < spec.nchannels; ++c) {
-    info.channelBytes.push_back(int(spec.channelformat(c).size()));
-    info.channelIsHalf.push_back(spec.channelformat(c) == OIIO::TypeDesc::HALF);
+    const OIIO::TypeDesc type = spec.channelformat(c);
+    const int bits = bitsPerSample > 0 && bitsPerSample < int(8 * type.size()) ? bitsPerSample : int(8 * type.size());
+    info.channelBits.push_back(bits);
+    info.channelIsHalf.push_back(type == OIIO::TypeDesc::HALF);
+    const bool integer = !type.is_floating_point();
+    info.channelLargestCode.push_back(!integer ? 0.0 : std::ldexp(1.0, type.is_signed() ? bits - 1 : bits) - 1);
   }
   info.compression = spec.get_string_attribute("compression", "");
   info.formatName = in->format_name();

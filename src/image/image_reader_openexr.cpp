@@ -149,8 +149,9 @@ void* open(const std::string& name, const std::string& format, const unsigned ch
     for (const ChannelName& c : opened->channels) {
       const bool half = c.type == Imf::HALF;
       info.channelNames.push_back(c.name);
-      info.channelBytes.push_back(half ? 2 : 4);
+      info.channelBits.push_back(half ? 16 : 32);
       info.channelIsHalf.push_back(half);
+      info.channelLargestCode.push_back(c.type == Imf::UINT ? 4294967295.0 : 0.0);  // as readPixels scales them
       anyFloat = anyFloat || c.type == Imf::FLOAT;
       mixed = mixed || c.type != opened->channels[0].type;
     }

@@ -110,8 +110,13 @@ double normalUpperQuantile(double alpha) {
   return 0.5 * (lo + hi);
 }
 
-StoredRounding coarserRounding(const StoredRounding& a, const StoredRounding& b) {
-  return {std::max(a.encoding, b.encoding), a.srgb || b.srgb};
+StoredRounding storedRoundingOf(const ImageHeader& header, bool srgb) {
+  return {header.colourEncoding, header.colourEncoding == ColourEncoding::Integer && srgb,
+          header.colourEncoding == ColourEncoding::Integer ? header.largestCode : 0};
+}
+
+void addRounding(std::vector<StoredRounding>& roundings, const StoredRounding& rounding) {
+  if (std::find(roundings.begin(), roundings.end(), rounding) == roundings.end()) roundings.push_back(rounding);
 }
 
 namespace {
@@ -175,10 +180,12 @@ class TestPixels {
       noise_.undecided = "the image has no variance layers, so its noise is unknown: give two or more runs (renders "
                          "with other seeds), or an image with variance layers (render --variance)";
     }
-    for (const auto& [rounding, whose] : {std::pair{candidate.rounding, "the image"}, std::pair{candidate.referenceRounding, "the reference"}})
-      if (rounding.encoding == ColourEncoding::Lossy && noise_.undecided.empty())
-        noise_.undecided = std::string(whose) + " is stored lossily (JPEG), whose compression changes values by more "
-                           "than their noise: compare a lossless file (EXR, PFM, PNG)";
+    const auto lossy = [](const StoredRounding& r) { return r.encoding == ColourEncoding::Lossy; };
+    const bool candidateLossy = std::any_of(candidate.rounding.begin(), candidate.rounding.end(), lossy);
+    if ((candidateLossy || lossy(candidate.referenceRounding)) && noise_.undecided.empty())
+      noise_.undecided = std::string(candidateLossy ? runs ? "a run" : "the image" : "the reference") +
+                         " is stored lossily (JPEG), whose compression changes values by more than their noise: "
+                         "compare a lossless file (EXR, PFM, PNG)";
     values_.resize(candidate.runs.size());
     checkVariances();
     // Before the floor, which raises the variances (w below) of pixels whose layers are low by chance.
@@ -239,7 +246,11 @@ class TestPixels {
     for (size_t c = 0; c < 3; ++c) {
       const double d = mean[c] - reference[c];
       if (!std::isfinite(d)) continue;  // a non-finite candidate stays as it is: no noise explains it
-      const Allowance a = allowanceOf(candidate_.rounding, mean[c], candidateLargest);
+      Allowance a;
+      for (const StoredRounding& r : candidate_.rounding) {
+        const Allowance run = allowanceOf(r, mean[c], candidateLargest);
+        a.nearest = std::max(a.nearest, run.nearest), a.step = std::max(a.step, run.step);
+      }
       const Allowance b = allowanceOf(candidate_.referenceRounding, reference[c], referenceLargest);
       const double nearest = a.nearest + b.nearest;
       if (variance[c] == 0 && referenceVariance[c] == 0)
@@ -267,8 +278,8 @@ class TestPixels {
       case ColourEncoding::Float: return {kFloatRounding * std::abs(v), 0};
       // Below 2^-14 a half float's spacing stops shrinking: at least half its smallest subnormal.
       case ColourEncoding::Half: return {std::max(kHalfRounding * std::abs(v), 0x1p-25), 0};
-      case ColourEncoding::Integer16: return {0, codeStep(65535, r.srgb, v)};
-      case ColourEncoding::Integer8: return {0, codeStep(255, r.srgb, v)};
+      // Read as code / largest in float arithmetic (which counts beside 32-bit codes' steps).
+      case ColourEncoding::Integer: return {kFloatRounding * std::abs(v), codeStep(r.largestCode, r.srgb, v)};
       case ColourEncoding::SharedExponent: {
         // 8-bit mantissas under the exponent of the largest channel, m 2^e with m in [0.5, 1).
         int exponent = 0;

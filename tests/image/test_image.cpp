@@ -686,7 +686,7 @@ TEST_CASE("testWithinNoise: a variance it cannot trust or identical runs leave i
   CHECK(testWithinNoise(flat(17.0f * (1 + 1e-4f)), flat(17.0f), 0.01).verdict == Verdict::Fail);
   Candidate halves(flat(0.7001953125f));
   CHECK(testWithinNoise(halves, flat(0.7f), 0.01).verdict == Verdict::Fail);  // as 32-bit floats: a difference
-  halves.rounding.encoding = ColourEncoding::Half;
+  halves.rounding = {{ColourEncoding::Half}};
   CHECK(testWithinNoise(halves, flat(0.7f), 0.01).verdict == Verdict::Pass);
   halves.runs[0] = flat(0.7f * (1 + 1e-3f));
   CHECK(testWithinNoise(halves, flat(0.7f), 0.01).verdict == Verdict::Fail);  // beyond a half's rounding
@@ -701,7 +701,7 @@ TEST_CASE("testWithinNoise: a variance it cannot trust or identical runs leave i
     return image;
   };
   Candidate lit(lamp(1.05f, 2));
-  lit.rounding.encoding = ColourEncoding::Half;
+  lit.rounding = {{ColourEncoding::Half}};
   CHECK(testWithinNoise(lit, lamp(1, 1), 0.01).verdict == Verdict::Fail);
   lit.runs[0] = lamp(1, 2);
   CHECK(testWithinNoise(lit, lamp(1, 1), 0.01).verdict == Verdict::Pass);
@@ -802,6 +802,46 @@ void writeTruncatedRgbe(const Image& image, const fs::path& path) {
       out.write(reinterpret_cast<const char*>(rgbe), 4);
     }
 }
+
+// Writes an uncompressed RGB TIFF of `bits` bits a sample (12: packed, as scanners and film
+// pipelines write them; 16, signed where `signedCodes`), every sample the integer code `code`.
+void writeTiffCodes(const fs::path& path, int w, int h, int bits, bool signedCodes, int code) {
+  std::vector<unsigned char> pixels;
+  for (int y = 0; y < h; ++y) {
+    uint64_t buffer = 0;
+    int held = 0;  // bits in the buffer, packed from the most significant; rows end on a byte
+    for (int sample = 0; sample < 3 * w; ++sample) {
+      // Packed samples run from the most significant bit; 16-bit ones are in the file's byte order.
+      const uint32_t stored = uint32_t(code) & ((1u << bits) - 1);
+      buffer = (buffer << bits) | (bits == 16 ? (stored >> 8) | ((stored & 0xff) << 8) : stored);
+      for (held += bits; held >= 8; held -= 8) pixels.push_back((unsigned char)(buffer >> (held - 8)));
+    }
+    if (held > 0) pixels.push_back((unsigned char)(buffer << (8 - held)));
+  }
+  std::vector<unsigned char> file;
+  const auto put = [&](uint32_t v, int bytes) {
+    for (int i = 0; i < bytes; ++i) file.push_back((unsigned char)(v >> (8 * i)));
+  };
+  const uint16_t format = signedCodes ? 2 : 1;
+  // Tag, type (3 short, 4 long), count, value; counts of 3 point past the directory (extra).
+  const std::vector<std::array<uint32_t, 4>> entries = {
+      {256, 4, 1, uint32_t(w)}, {257, 4, 1, uint32_t(h)}, {258, 3, 3, 0}, {259, 3, 1, 1}, {262, 3, 1, 2},
+      {273, 4, 1, 0},           {277, 3, 1, 3},           {278, 4, 1, uint32_t(h)}, {279, 4, 1, uint32_t(pixels.size())},
+      {284, 3, 1, 1},           {339, 3, 3, 0}};
+  const uint32_t directory = 8, extra = directory + 2 + 12 * uint32_t(entries.size()) + 4, data = extra + 12;
+  file.insert(file.end(), {'I', 'I', 42, 0});
+  put(directory, 4);
+  put(uint32_t(entries.size()), 2);
+  for (const auto& [tag, type, count, value] : entries) {
+    put(tag, 2), put(type, 2), put(count, 4);
+    put(tag == 258 ? extra : tag == 339 ? extra + 6 : tag == 273 ? data : value, 4);
+  }
+  put(0, 4);
+  for (int i = 0; i < 3; ++i) put(uint32_t(bits), 2);
+  for (int i = 0; i < 3; ++i) put(format, 2);
+  file.insert(file.end(), pixels.begin(), pixels.end());
+  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(file.data()), std::streamsize(file.size()));
+}
 }  // namespace
 
 TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation, darker only, and leaves a JPEG undecided",
@@ -836,7 +876,7 @@ TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation, darker 
     INFO(asRgbe.output);
     CHECK(asRgbe.status == 0);
     const auto rounding = nlohmann::json::parse(asRgbe.output)["stored_rounding"];
-    CHECK(rounding["image"]["encoding"] == "rgbe");
+    CHECK(rounding["image"] == nlohmann::json::parse(R"([{"encoding": "rgbe"}])"));
     CHECK(rounding["reference"]["encoding"] == "float");
     const test::CliRun asFloats = runLucent("compare" + floats + reference);
     INFO(asFloats.output);
@@ -861,7 +901,7 @@ TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation, darker 
       for (int x = 0; x < w; ++x)
         for (int c = 0; c < 3; ++c) image.at(x, y, c) = stored.at(x, y, c);
     Candidate candidate(std::move(image));
-    candidate.rounding.encoding = ColourEncoding::SharedExponent;
+    candidate.rounding = {{ColourEncoding::SharedExponent}};
     return candidate;
   };
   const Image exactReference = constant(0.7f);
@@ -876,7 +916,8 @@ TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation, darker 
     for (int x = 0; x < w; ++x)
       for (int c = 0; c < 3; ++c) grey.at(x, y, c) = 0.5f;
   writePng(grey, dir / "grey.png");
-  CHECK(readImageHeader(dir / "grey.png").colourEncoding == ColourEncoding::Integer8);
+  CHECK(readImageHeader(dir / "grey.png").colourEncoding == ColourEncoding::Integer);
+  CHECK(readImageHeader(dir / "grey.png").largestCode == 255);
   const auto noNoise = [&](const Image& rgb) {  // R, G, B and variance layers of 0
     Image image(w, h, {"R", "G", "B", "variance.R", "variance.G", "variance.B"});
     for (int y = 0; y < h; ++y)
@@ -887,7 +928,7 @@ TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation, darker 
   const Image exact = noNoise(grey);
   Candidate codes(noNoise(readLinearImage(dir / "grey.png")));
   CHECK(testWithinNoise(codes, exact, 0.01).verdict == Verdict::Fail);  // as 32-bit floats
-  codes.rounding = {ColourEncoding::Integer8, true};
+  codes.rounding = {{ColourEncoding::Integer, true, 255}};
   CHECK(testWithinNoise(codes, exact, 0.01).verdict == Verdict::Pass);
   const auto every = [&](Candidate& candidate, float value) {
     for (int y = 0; y < h; ++y)
@@ -901,10 +942,39 @@ TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation, darker 
   every(codes, srgbToLinear(187.0f / 255) * 0.99f);
   CHECK(testWithinNoise(codes, exact, 0.01).verdict == Verdict::Fail);
 
+  // A 12-bit TIFF is read as 16-bit codes scaled to their range: its step is 1/4,095, 16 times a
+  // 16-bit code's. 0.5 truncated to code 2,047 (0.49988) lies half a step below: within its own
+  // step, not a 16-bit one's. Signed 16-bit codes read as code / 32,767.
+  writeTiffCodes(dir / "twelve.tif", w, h, 12, false, 2047);
+  const ImageHeader twelve = readImageHeader(dir / "twelve.tif");
+  CHECK(twelve.colourEncoding == ColourEncoding::Integer);
+  CHECK(twelve.largestCode == 4095);
+  Candidate twelveBits(noNoise(readImage(dir / "twelve.tif")));
+  CHECK(twelveBits.runs[0].at(1, 2, 1) == Approx(2047.0 / 4095).margin(1.0 / 65535));  // through 16 bits
+  twelveBits.rounding = {storedRoundingOf(twelve, false)};
+  CHECK(testWithinNoise(twelveBits, exact, 0.01).verdict == Verdict::Pass);
+  twelveBits.rounding = {{ColourEncoding::Integer, false, 65535}};
+  CHECK(testWithinNoise(twelveBits, exact, 0.01).verdict == Verdict::Fail);
+  writeTiffCodes(dir / "signed.tif", w, h, 16, true, 16383);
+  CHECK(readImageHeader(dir / "signed.tif").largestCode == 32767);
+  CHECK(readImage(dir / "signed.tif").at(0, 0, 0) == Approx(16383.0 / 32767).epsilon(1e-6));
+
+  // Runs stored in different ways (addRounding) are allowed the largest of their roundings at each
+  // value: at linear 0.002 an 8-bit sRGB code's step (0.00030) is 20 times RGBE's (2^-16), and 0.002
+  // truncated to sRGB code 6 (0.00182) lies within the first, not the second.
+  const Image dark = constant(0.002f);
+  Candidate mixed(constant(srgbToLinear(6.0f / 255)));
+  mixed.rounding = {{ColourEncoding::SharedExponent}};
+  CHECK(testWithinNoise(mixed, dark, 0.01).verdict == Verdict::Fail);
+  addRounding(mixed.rounding, {ColourEncoding::Integer, true, 255});
+  addRounding(mixed.rounding, {ColourEncoding::SharedExponent});
+  CHECK(mixed.rounding.size() == 2);
+  CHECK(testWithinNoise(mixed, dark, 0.01).verdict == Verdict::Pass);
+
   // A JPEG's compression is no noise: undecided, whatever the values.
   CHECK(readImageHeader(LUCENT_SOURCE_DIR "/scenes/ring/wood-floorboards-texture.jpg").colourEncoding == ColourEncoding::Lossy);
   Candidate lossy(exact);
-  lossy.rounding.encoding = ColourEncoding::Lossy;
+  lossy.rounding = {{ColourEncoding::Lossy}};
   const NoiseTest t = testWithinNoise(lossy, exact, 0.01);
   CHECK(t.verdict == Verdict::Inconclusive);
   CHECK_THAT(t.noise.undecided, Catch::Contains("JPEG"));

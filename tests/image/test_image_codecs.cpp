@@ -116,7 +116,8 @@ void checkSameAsOpenImageIO(const std::string& path, int threads = 1) {
   CHECK(exr.info.height == oiio.info.height);
   CHECK(exr.info.channelCount == oiio.info.channelCount);
   CHECK(exr.info.channelNames == oiio.info.channelNames);
-  CHECK(exr.info.channelBytes == oiio.info.channelBytes);
+  CHECK(exr.info.channelBits == oiio.info.channelBits);
+  CHECK(exr.info.channelLargestCode == oiio.info.channelLargestCode);
   CHECK(exr.info.channelIsHalf == oiio.info.channelIsHalf);
   CHECK(exr.info.compression == oiio.info.compression);
   CHECK(exr.info.formatName == oiio.info.formatName);

@@ -277,6 +277,26 @@ def test_read_image_gives_the_encoding_compare_allows_for():
     assert exr["encoding"] == "float" and not exr["srgb"]
 
 
+def test_integer_codes_are_allowed_their_own_step(tmp_path):
+    """An 8-bit PNG reads as integer codes of largest code 255; compare allows a truncated code's
+    step below (linear 0.5 as sRGB code 187, 0.49726) for them, not for floats, and an integer
+    encoding without its largest code is refused."""
+    grey = np.full((8, 8, 3), 0.5, dtype=np.float32)
+    code, _, err = cli("render", os.path.join(SOURCE, "scenes", "cornell-box.json"), "--resolution", "8x8",
+                       "--spp", "1", "--quiet", "-o", tmp_path / "box.exr", "--png", tmp_path / "box.png")
+    assert code == 0, err
+    png = lucent.read_image(str(tmp_path / "box.png"))
+    assert png["encoding"] == "integer" and png["largest_code"] == 255 and png["srgb"]
+    zeros = np.zeros_like(grey)
+    reference = {"image": grey, "variance": zeros}
+    truncated = np.full_like(grey, (187 / 255 / 1.055 + 0.055 / 1.055) ** 2.4)
+    codes = {"image": truncated, "variance": zeros, "encoding": "integer", "largest_code": 255, "srgb": True}
+    assert lucent.compare(codes, reference, test=True)["test"]["verdict"] == "pass"
+    assert lucent.compare({"image": truncated, "variance": zeros}, reference, test=True)["test"]["verdict"] == "fail"
+    with pytest.raises(ValueError, match="largest_code"):
+        lucent.compare({k: v for k, v in codes.items() if k != "largest_code"}, reference, test=True)
+
+
 def test_gltf_choices_load_as_lucent_renders_options_read_them(tmp_path):
     """gltf_masking and gltf_normal_maps give the image the CLI's options of those names give (the
     exported Cornell box read directly: its materials are glTF's), and bad values are refused."""

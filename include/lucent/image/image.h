@@ -71,10 +71,10 @@ std::vector<unsigned char> encodePng(const Image& image);
 void writeExrAndPng(const Image& image, const std::string& exrPath, const ImageMetadata& metadata,
                     const std::string& pngPath, std::vector<FileToWrite> alsoWrite = {});
 // How a file stores its colour values: 32-bit floats, half floats (or floats cut to 24 bits),
-// integer codes of 16 or 8 bits, Radiance's RGBE (8-bit mantissas under one exponent per pixel),
-// or lossily (JPEG; EXR's DWA compressions, B44 of half floats).
-enum class ColourEncoding { Float, Half, Integer16, Integer8, SharedExponent, Lossy };
-// "float", "half", "integer16", "integer8", "rgbe", "lossy"; and back (std::nullopt for another name).
+// integer codes (ImageHeader::largestCode), Radiance's RGBE (8-bit mantissas under one exponent per
+// pixel), or lossily (JPEG; EXR's DWA compressions, B44 of half floats).
+enum class ColourEncoding { Float, Half, Integer, SharedExponent, Lossy };
+// "float", "half", "integer", "rgbe", "lossy"; and back (std::nullopt for another name).
 const char* colourEncodingName(ColourEncoding encoding);
 std::optional<ColourEncoding> colourEncodingNamed(const std::string& name);
 
@@ -84,6 +84,9 @@ struct ImageHeader {
   std::vector<std::string> channels;
   std::vector<std::string> halfChannels;  // those stored as 16-bit floats (EXR half)
   ColourEncoding colourEncoding = ColourEncoding::Float;  // of R, G, B (Half: of any colour channel)
+  // Integer codes: the largest code of R, G and B, which reads as 1 (the fewest of their steps:
+  // 255 for 8 bits, 4,095 for 12, 32,767 for signed 16-bit codes).
+  double largestCode = 0;
   // Whether a variance channel (variance.R, LAYER.variance.R, ...) is among them: small variances
   // are then 0, and the noise they describe unknown.
   bool hasHalfVariance() const {

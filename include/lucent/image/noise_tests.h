@@ -52,10 +52,16 @@ Verdict combineVerdicts(Verdict a, Verdict b);
 constexpr double kHalfRounding = 0x1p-11, kFloatRounding = 0x1p-20;
 struct StoredRounding {
   ColourEncoding encoding = ColourEncoding::Float;
-  bool srgb = false;  // integer codes of sRGB-encoded values
+  bool srgb = false;       // integer codes of sRGB-encoded values
+  double largestCode = 0;  // integer codes: the largest, which reads as 1 (ImageHeader::largestCode)
+  bool operator==(const StoredRounding&) const = default;
 };
-// The more rounded of two encodings (runs stored differently): the one later in ColourEncoding.
-StoredRounding coarserRounding(const StoredRounding& a, const StoredRounding& b);
+// How a file's R, G, B were stored, from its header; `srgb` as the caller decodes it.
+StoredRounding storedRoundingOf(const ImageHeader& header, bool srgb);
+// Runs stored in different ways (an RGBE run and an 8-bit one) are each rounded in their own: the
+// tests allow, value by value, for the largest of their roundings. Adds `rounding` to `roundings`
+// unless it is among them.
+void addRounding(std::vector<StoredRounding>& roundings, const StoredRounding& rounding);
 
 // What is compared with the reference: one image, or two or more runs (same size; their R, G, B).
 struct Candidate {
@@ -63,8 +69,9 @@ struct Candidate {
   explicit Candidate(std::vector<Image> runs) : runs(std::move(runs)) {}
   std::vector<Image> runs;
   bool halfVariance = false;  // the one image's variance layers were stored as half floats
-  // How the runs' and the reference's R, G, B were stored.
-  StoredRounding rounding, referenceRounding;
+  // How the runs' R, G, B were stored (each way once: addRounding), and the reference's.
+  std::vector<StoredRounding> rounding{StoredRounding{}};
+  StoredRounding referenceRounding;
 };
 
 // The regions' grid by default: the whole image, then 4 x 4 tiles.
