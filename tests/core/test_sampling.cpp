@@ -118,6 +118,24 @@ TEST_CASE("sampleConcentricDisk maps the square's border to the unit circle, sec
   CHECK(sampleConcentricDisk({0.5f, 0.5f}).x == 0.0f);
 }
 
+TEST_CASE("powerHeuristic: a^2 / (a^2 + b^2), the two weights summing to 1, at any densities", "[sampling]") {
+  CHECK(powerHeuristic(1.0f, 0.0f) == 1.0f);
+  CHECK(powerHeuristic(0.0f, 1.0f) == 0.0f);
+  CHECK(powerHeuristic(0.0f, 0.0f) == 0.0f);
+  CHECK(powerHeuristic(3.0f, 1.0f) == Approx(0.9));
+  CHECK(powerHeuristic(1.0f, 3.0f) == Approx(0.1));
+  // Densities whose squares overflow a float (a near-mirror lobe), and infinite ones.
+  for (const float scale : {1.0f, 1e10f, 1e20f, 1e30f, 1e-30f}) {
+    INFO("scale " << scale);
+    CHECK(powerHeuristic(3 * scale, scale) == Approx(0.9));
+    CHECK(powerHeuristic(scale, 3 * scale) + powerHeuristic(3 * scale, scale) == Approx(1.0));
+  }
+  const float inf = std::numeric_limits<float>::infinity();
+  CHECK(powerHeuristic(inf, 1e30f) == 1.0f);
+  CHECK(powerHeuristic(1e30f, inf) == 0.0f);
+  CHECK(powerHeuristic(inf, inf) == 0.5f);
+}
+
 TEST_CASE("sampleCosineHemisphere", "[sampling]") {
   SECTION("around +z") {
     auto pdf = [](Vec3 d) { return cosineHemispherePdf(d.z); };

@@ -97,10 +97,18 @@ inline bool survivesRussianRoulette(Rgb& beta, float u, Rgb scale = Rgb(1.0f)) {
   return true;
 }
 
-// Multiple importance sampling weight, power heuristic with beta = 2 (Veach 1997).
+// Multiple importance sampling weight, power heuristic with beta = 2 (Veach 1997): a^2 / (a^2 +
+// b^2), from the ratio of the smaller density to the larger, whose square cannot overflow (a
+// density's square does above 1.8e19, a near-mirror lobe's, and a^2 / (a^2 + b^2) is then NaN).
 inline float powerHeuristic(float pdfA, float pdfB) {
-  const float a = pdfA * pdfA, b = pdfB * pdfB;
-  return a + b > 0 ? a / (a + b) : 0.0f;
+  if (!(pdfA > 0)) return 0.0f;
+  if (pdfA == pdfB) return 0.5f;  // infinite ones too
+  if (pdfA > pdfB) {
+    const float r = pdfB / pdfA;
+    return 1.0f / (1.0f + r * r);
+  }
+  const float r = pdfA / pdfB;
+  return r * r / (1.0f + r * r);
 }
 
 // Direction <-> (u, v) in [0,1)^2 for latitude-longitude maps: u along phi, v from +y down.
