@@ -797,6 +797,8 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
   else if (negativeReference)
     noise.undecided = "a region's reference sum is negative in a channel (a pixel filter's negative lobes over a dark "
                       "region), so it has no relative difference there: compare with a pixel filter of no negative lobes";
+  else if (CandidateNoise correlated = noise; throughNeighbours(correlated, Verdict::Pass, true) == Verdict::Inconclusive)
+    noise.undecided = correlated.undecided;  // more samples would not widen the intervals: runs decide
   else {
     std::ostringstream why;
     why << "an interval reaches across +-" << within << ": ";

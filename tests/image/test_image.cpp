@@ -624,6 +624,33 @@ TEST_CASE("testWithinNoise with variance layers: correlated neighbours leave a f
   // 20% bright in one region: z 32 by the layers, 11 by the true noise, 7.8 with every variance
   // 1 + 24 rho = 17 times as large: it fails.
   CHECK(testWithinNoise(splatted(0.2f), reference, 0.01).verdict == Verdict::Fail);
+  // --within's intervals across the margin, correlation shown: runs decide it, not more samples
+  // (which would narrow intervals already too narrow). Each pixel's noise shares 0.35 of its right
+  // neighbour's white noise (rho 0.31 across x), so sums vary at most 1.7 times what the layers say
+  // and no interval lies beyond a margin of 1e-6 (at alpha 1e-4 each reaches 4 of the sums' true
+  // deviations).
+  const auto shared = [&] {
+    std::mt19937_64 rng(11);
+    std::normal_distribution<float> white(0.0f, 1.0f);
+    std::vector<float> field(size_t(w + 1) * size_t(h) * 3);
+    for (float& f : field) f = white(rng);
+    Image image(w, h, {"R", "G", "B", "variance.R", "variance.G", "variance.B"});
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const size_t i = (size_t(y) * size_t(w + 1) + size_t(x)) * 3 + size_t(c);
+          const float m = mean(x, y, c);
+          image.at(x, y, c) = m + 0.1f * m * (field[i] + 0.35f * field[i + 3]) / std::sqrt(1.1225f);
+          image.at(x, y, 3 + c) = 0.01f * m * m;
+        }
+    return image;
+  }();
+  const EquivalenceTest across = testEquivalence(Candidate(shared), reference, 1e-6, 1e-4);
+  INFO(across.noise.undecided);
+  CHECK(across.noise.neighbourCorrelation > 0.05);
+  CHECK(across.verdict == Verdict::Inconclusive);
+  CHECK_THAT(across.noise.undecided, Catch::Contains("correlated") && Catch::Contains("give two or more runs"));
+  CHECK_THAT(across.noise.undecided, !Catch::Contains("times the candidate's samples"));
   // Layers 16 times the noise (a renderer writing its samples' variance, not its mean's) hide a 2%
   // bias over the whole image (z 12.8 by the true noise, 3.2 by the layers): a pass is inconclusive.
   Image overstated = noisyImage(w, h, [&](int x, int y, int c) { return 1.02f * mean(x, y, c); }, 0.01f, 2);
