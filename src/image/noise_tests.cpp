@@ -546,7 +546,7 @@ CandidateNoise::Scale poolScale(const std::string& name, double spread, double p
 double candidateVariance(NoiseSource source, const CandidateNoise::Scale& scale, double pixelVariance, double spread) {
   switch (source) {
     case NoiseSource::Runs: return std::max(scale.correlation * pixelVariance, spread);
-    case NoiseSource::VarianceLayer: return pixelVariance;
+    case NoiseSource::VarianceLayer: return scale.correlation * pixelVariance;
     case NoiseSource::Unknown: return 0;
   }
   return 0;
@@ -833,22 +833,27 @@ std::vector<SurfaceDifference> differenceBySurface(const Candidate& candidate, c
   // With runs, each surface's sum by its own spread (Student's t, n - 1 degrees of freedom): its
   // pixels lie all over the image, and noise shared over long ranges (a per-run offset, a random
   // sequence shared by every pixel) makes their sums vary more than a pool over tiles would say.
+  // With variance layers whose neighbours are shown correlated, by variances 1 + 24 rho times the
+  // layers' (as a failure of --test must survive): intervals wide enough to locate a gross error.
+  const double rho = noise.neighbourCorrelation;
+  const bool correlated = noise.source == NoiseSource::VarianceLayer && noise.neighboursMeasured && rho >= kNeighbourCorrelation &&
+                          noise.neighbourCorrelationZ >= kNeighbourCorrelationZ;
   const CandidateNoise::Scale scale = noise.source == NoiseSource::Runs
                                           ? CandidateNoise::Scale{"surfaces", 0.0, double(noise.runs - 1)}
-                                          : CandidateNoise::Scale{"surfaces", 1.0, kInfinity};
+                                          : CandidateNoise::Scale{"surfaces", correlated ? 1 + 24 * rho : 1.0, kInfinity};
   // Units: the materials present by index (those the names do not reach named by their index),
   // then the background, the emitters, all but the emitters: keys past any material index.
   constexpr uint64_t kBackground = uint64_t(1) << 32, kEmitters = kBackground + 1, kNonEmitters = kBackground + 2;
   std::map<uint64_t, std::pair<UnitSums, uint64_t>> units;  // and each one's pixels
-  Quad mean, variance, value, referenceVariance;
+  Quad mean, variance, value, referenceVariance, low, high;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const float material = reference.at(x, y, materialAt);
       const bool emits = reference.at(x, y, emitterAt) != 0;
-      pixels.read(x, y, mean, variance, value, referenceVariance);
+      pixels.readRounded(x, y, mean, variance, value, referenceVariance, low, high);
       auto add = [&](uint64_t unit) {
         auto& [sums, count] = units[unit];
-        sums.add(mean, variance, value, referenceVariance, pixels.values());
+        sums.add(mean, variance, value, referenceVariance, pixels.values(), low, high);
         ++count;
       };
       // A value that is no material index (another renderer's IDs, a pixel not traced) counts
@@ -879,7 +884,9 @@ std::vector<SurfaceDifference> differenceBySurface(const Candidate& candidate, c
       // A black reference: no relative difference, only none or some light.
       d.relativeDifference = s.candidate[kSum] == 0 ? 0.0 : kInfinity, d.low = d.high = d.relativeDifference;
     }
-    if (noise.source == NoiseSource::Unknown) d.low = d.high = std::numeric_limits<double>::quiet_NaN();
+    // No interval where the noise tests are undecided (no noise known, a lossy file, a variance
+    // unknown somewhere).
+    if (!noise.undecided.empty()) d.low = d.high = std::numeric_limits<double>::quiet_NaN();
     out.push_back(d);
   }
   return out;

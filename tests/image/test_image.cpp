@@ -600,8 +600,8 @@ TEST_CASE("testWithinNoise with variance layers: correlated neighbours leave a f
   const Image reference = noisyImage(w, h, mean, 0.01f / 64, 1);
   // Each pixel's noise the mean of a 3 x 3 window of white noise (10% of the mean): neighbours
   // share 6 of 9 cells (rho 0.67), a region's sum varies 9 times what the layers say.
-  const auto splatted = [&](float bias) {
-    std::mt19937_64 rng(7);
+  const auto splatted = [&](float bias, uint64_t seed = 7) {
+    std::mt19937_64 rng(seed);
     std::normal_distribution<float> white(0.0f, 1.0f);
     std::vector<float> field(size_t(w + 2) * size_t(h + 2) * 3);
     for (float& f : field) f = white(rng);
@@ -651,6 +651,31 @@ TEST_CASE("testWithinNoise with variance layers: correlated neighbours leave a f
   CHECK(across.verdict == Verdict::Inconclusive);
   CHECK_THAT(across.noise.undecided, Catch::Contains("correlated") && Catch::Contains("give two or more runs"));
   CHECK_THAT(across.noise.undecided, !Catch::Contains("times the candidate's samples"));
+  // By surface (a material per quadrant, and all but emitters): the correct image's intervals cover
+  // no difference as often as variances 1 + 24 rho times the layers' make them. A sum's true
+  // variance is 9 times the layers' per channel, and R + G + B's is bounded as if its channels
+  // were fully correlated (3 times the independent channels' variance): by the layers alone 16 of
+  // 40 seeds' 200 intervals at 98% missed 0; by 17 times they cover at 99.9% (0.3 misses
+  // expected, at most 2 allowed). 20% bright in one quadrant is still found there.
+  Image surfaces(w, h, {"R", "G", "B", "variance.R", "variance.G", "variance.B", "surface.material", "surface.emitter"});
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      for (int c = 0; c < 6; ++c) surfaces.at(x, y, c) = reference.at(x, y, c);
+      surfaces.at(x, y, 6) = float(2 * (y >= h / 2) + (x >= w / 2)), surfaces.at(x, y, 7) = 0;
+    }
+  int missed = 0;
+  for (uint64_t seed = 20; seed < 60; ++seed)
+    for (const SurfaceDifference& d : differenceBySurface(Candidate(splatted(0, seed)), surfaces, {}, 0.01))
+      missed += d.low > 0 || d.high < 0;
+  CHECK(missed <= 2);
+  Image brightQuadrant = splatted(0);
+  for (int y = 0; y < h / 2; ++y)
+    for (int x = 0; x < w / 2; ++x)
+      for (int c = 0; c < 3; ++c) brightQuadrant.at(x, y, c) *= 1.2f;
+  const std::vector<SurfaceDifference> located = differenceBySurface(Candidate(brightQuadrant), surfaces, {}, 0.01);
+  REQUIRE(located.size() == 5);
+  CHECK(located[0].name == "material 0");
+  CHECK(located[0].low > 0.1);
   // Layers 16 times the noise (a renderer writing its samples' variance, not its mean's) hide a 2%
   // bias over the whole image (z 12.8 by the true noise, 3.2 by the layers): a pass is inconclusive.
   Image overstated = noisyImage(w, h, [&](int x, int y, int c) { return 1.02f * mean(x, y, c); }, 0.01f, 2);
@@ -997,6 +1022,21 @@ TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation, darker 
   addRounding(mixed.rounding, {ColourEncoding::SharedExponent});
   CHECK(mixed.rounding.size() == 2);
   CHECK(testWithinNoise(mixed, dark, 0.01).verdict == Verdict::Pass);
+
+  // The breakdown by surface allows for the codes' step too, and gives no interval for a JPEG.
+  Image exactSurfaces(w, h, {"R", "G", "B", "variance.R", "variance.G", "variance.B", "surface.material", "surface.emitter"});
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) exactSurfaces.at(x, y, c) = 0.5f;
+  every(codes, srgbToLinear(187.0f / 255));  // a truncated code
+  const SurfaceDifference stepped = differenceBySurface(codes, exactSurfaces, {}, 0.01)[0];
+  INFO(stepped.relativeDifference << ": " << stepped.low << " to " << stepped.high);
+  CHECK(stepped.relativeDifference < -0.005);  // within the code's step (0.6% of 0.5)
+  CHECK(stepped.low <= 0);
+  CHECK(stepped.high >= 0);
+  Candidate jpegLike = codes;
+  jpegLike.rounding = {{ColourEncoding::Lossy}};
+  CHECK(std::isnan(differenceBySurface(jpegLike, exactSurfaces, {}, 0.01)[0].low));
 
   // A JPEG's compression is no noise: undecided, whatever the values.
   CHECK(readImageHeader(LUCENT_SOURCE_DIR "/scenes/ring/wood-floorboards-texture.jpg").colourEncoding == ColourEncoding::Lossy);
