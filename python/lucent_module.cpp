@@ -291,7 +291,7 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
   if (py::isinstance<py::list>(image) || py::isinstance<py::tuple>(image)) {
     for (const py::handle run : image) {
       runs.push_back(imageFrom(run, "run " + std::to_string(runs.size() + 1)));
-      addRounding(rounding, roundingOf(run));
+      rounding.push_back(roundingOf(run));
     }
     if (runs.size() < 2) throw std::invalid_argument("runs: give two or more arrays, or one array");
   } else {
@@ -307,6 +307,7 @@ py::object compare(const py::handle& image, const py::handle& reference, const s
   {
     py::gil_scoped_release release;
     const KeepFloatingPointMode keep;
+    flushDenormals();  // as lucent compare computes: a denormal variance reads as none there
     Candidate candidate = runs.size() == 1 ? Candidate(std::move(runs[0])) : Candidate(std::move(runs));
     candidate.rounding = std::move(rounding), candidate.referenceRounding = referenceRounding;
     result = compareImagePair(std::move(candidate), std::move(b), settings, imageSrgb, referenceSrgb);

@@ -73,7 +73,7 @@ int runCompare(const CompareOptions& opt) {
     images.push_back(readLinearImage(runs[k], &candidateMetadata));
     const bool srgb = isSrgbEncoded(runs[k], candidateMetadata);
     candidateIsSrgb = candidateIsSrgb || srgb;
-    addRounding(rounding, storedRoundingOf(headers[k], srgb));
+    rounding.push_back(storedRoundingOf(headers[k], srgb));
   }
   Image reference = readLinearImage(referencePath, &referenceMetadata);
   Candidate candidate = images.size() == 1 ? Candidate(std::move(images[0]), halfVariance) : Candidate(std::move(images));

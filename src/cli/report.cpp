@@ -640,7 +640,7 @@ int runReport(const ReportOptions& opt) {
       Image run = readLinearImage(c.runs[k], &metadata);
       const bool srgb = isSrgbEncoded(c.runs[k], metadata);
       candidateIsSrgb = candidateIsSrgb || srgb;
-      addRounding(rounding, storedRoundingOf(headers[i * runs + k], srgb));
+      rounding.push_back(storedRoundingOf(headers[i * runs + k], srgb));
       if (!opt.layer.empty()) run = chosen(run, c.runs[k]).candidate;
       const std::optional<Sidecar> sidecar = k == 0 ? c.sidecar : readSidecar(c.runs[k]);
       const std::optional<double> seconds = sidecar && sidecar->seconds ? sidecar->seconds : renderSeconds(metadata);

@@ -163,7 +163,7 @@ std::string surfaceDifferencesJson(const std::vector<SurfaceDifference>& surface
     entry["name"] = d.name;
     entry["pixels"] = d.pixels;
     entry["relative_difference"] = d.relativeDifference;
-    entry["interval"] = {d.low, d.high};  // null bounds: the candidate's noise is unknown
+    entry["interval"] = {d.low, d.high};  // null bounds: the noise tests are undecided
     out.push_back(entry);
   }
   return jsonText(out);

@@ -439,8 +439,11 @@ ImageHeader readImageHeader(const std::string& path) {
                      ((compression == "b44" || compression == "b44a") && header.hasHalfColour());
   if (lossy) header.colourEncoding = ColourEncoding::Lossy;
   else if (spec.formatName == "hdr") header.colourEncoding = ColourEncoding::SharedExponent;
-  else if (header.largestCode > 0) header.colourEncoding = ColourEncoding::Integer;
+  // Half floats before integer codes: an EXR may mix half channels with 32-bit unsigned ones, whose
+  // steps are far finer.
   else if (header.hasHalfColour() || compression == "pxr24") header.colourEncoding = ColourEncoding::Half;
+  else if (header.largestCode > 0) header.colourEncoding = ColourEncoding::Integer;
+  if (header.colourEncoding != ColourEncoding::Integer) header.largestCode = 0;
   return header;
 }
 

@@ -43,7 +43,7 @@ void* open(const std::string& name, const std::string& format, const unsigned ch
   const OIIO::ImageSpec& spec = in->spec();
   info.width = spec.width, info.height = spec.height, info.depth = spec.depth, info.channelCount = spec.nchannels;
   info.channelNames = spec.channelnames;
-  // A TIFF or PNM of 10 or 12 bits is read as 16-bit codes, scaled to their full range: its steps
+  // A TIFF of 10, 12 or 14 bits is read as 16-bit codes, scaled to their full range: its steps
   // are those of its own bits.
   const int bitsPerSample = spec.get_int_attribute("oiio:BitsPerSample", 0);
   for (int c = 0; c < spec.nchannels; ++c) {

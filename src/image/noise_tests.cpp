@@ -115,9 +115,6 @@ StoredRounding storedRoundingOf(const ImageHeader& header, bool srgb) {
           header.colourEncoding == ColourEncoding::Integer ? header.largestCode : 0};
 }
 
-void addRounding(std::vector<StoredRounding>& roundings, const StoredRounding& rounding) {
-  if (std::find(roundings.begin(), roundings.end(), rounding) == roundings.end()) roundings.push_back(rounding);
-}
 
 namespace {
 
@@ -249,7 +246,7 @@ class TestPixels {
       Allowance a;
       for (const StoredRounding& r : candidate_.rounding) {
         const Allowance run = allowanceOf(r, mean[c], candidateLargest);
-        a.nearest = std::max(a.nearest, run.nearest), a.step = std::max(a.step, run.step);
+        a.nearest += run.nearest / double(candidate_.rounding.size()), a.step += run.step / double(candidate_.rounding.size());
       }
       const Allowance b = allowanceOf(candidate_.referenceRounding, reference[c], referenceLargest);
       const double nearest = a.nearest + b.nearest;
@@ -546,7 +543,7 @@ CandidateNoise::Scale poolScale(const std::string& name, double spread, double p
 double candidateVariance(NoiseSource source, const CandidateNoise::Scale& scale, double pixelVariance, double spread) {
   switch (source) {
     case NoiseSource::Runs: return std::max(scale.correlation * pixelVariance, spread);
-    case NoiseSource::VarianceLayer: return scale.correlation * pixelVariance;
+    case NoiseSource::VarianceLayer: return pixelVariance;
     case NoiseSource::Unknown: return 0;
   }
   return 0;
@@ -561,17 +558,17 @@ double welchDegreesOfFreedom(double candidate, double total, double dof) {
 
 // A set of pixels' relative difference d = C / R - 1 in channel `channel` (kSum: over R + G + B),
 // and its (1 - 2 alpha) interval d +- q se, var(d) = var(C) / R^2 + C^2 var(R) / R^4 (the delta
-// method); R > 0.
+// method), both variances `inflation` times as large; R > 0.
 struct RelativeInterval {
   double difference = 0, low = 0, high = 0;
   double candidateHalfWidth = 0;  // the candidate's noise's share of the half width
 };
 RelativeInterval relativeInterval(const UnitSums& s, size_t channel, NoiseSource source, const CandidateNoise::Scale& scale,
-                                  double alpha) {
+                                  double alpha, double inflation) {
   const double c = s.candidate[channel], r = s.reference[channel];
   const double ratio = c / r;
-  const double cv = candidateVariance(source, scale, s.pixelVariance[channel], s.spread(channel));
-  const double total = cv + ratio * ratio * s.referenceVariance[channel];
+  const double cv = inflation * candidateVariance(source, scale, s.pixelVariance[channel], s.spread(channel));
+  const double total = cv + inflation * ratio * ratio * s.referenceVariance[channel];
   const double se = std::sqrt(total) / r;
   const double q = studentTwoSidedQuantile(2 * alpha, welchDegreesOfFreedom(cv, total, scale.degreesOfFreedom));
   // The true difference lies up to `high` below the stored one and `low` above it (truncation).
@@ -761,7 +758,7 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
       channel.channel = int(c);
       const double r = s.reference[c];
       if (r > 0) {
-        const RelativeInterval interval = relativeInterval(s, c, noise.source, scale, alpha);
+        const RelativeInterval interval = relativeInterval(s, c, noise.source, scale, alpha, 1.0);
         channel.relativeDifference = interval.difference;
         channel.low = interval.low, channel.high = interval.high;
         if (!std::isfinite(channel.high - channel.low)) channel.verdict = Verdict::Inconclusive;
@@ -797,8 +794,10 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
   else if (negativeReference)
     noise.undecided = "a region's reference sum is negative in a channel (a pixel filter's negative lobes over a dark "
                       "region), so it has no relative difference there: compare with a pixel filter of no negative lobes";
-  else if (CandidateNoise correlated = noise; throughNeighbours(correlated, Verdict::Pass, true) == Verdict::Inconclusive)
+  else if (CandidateNoise correlated = noise; throughNeighbours(correlated, Verdict::Pass, true) == Verdict::Inconclusive) {
     noise.undecided = correlated.undecided;  // more samples would not widen the intervals: runs decide
+    t.samplesToDecide = 0;
+  }
   else {
     std::ostringstream why;
     why << "an interval reaches across +-" << within << ": ";
@@ -833,14 +832,16 @@ std::vector<SurfaceDifference> differenceBySurface(const Candidate& candidate, c
   // With runs, each surface's sum by its own spread (Student's t, n - 1 degrees of freedom): its
   // pixels lie all over the image, and noise shared over long ranges (a per-run offset, a random
   // sequence shared by every pixel) makes their sums vary more than a pool over tiles would say.
-  // With variance layers whose neighbours are shown correlated, by variances 1 + 24 rho times the
-  // layers' (as a failure of --test must survive): intervals wide enough to locate a gross error.
+  // With variance layers whose neighbours' differences are shown correlated, by variances (the
+  // candidate's and the reference's) 1 + 24 rho times as large, as a failure of --test must
+  // survive: intervals wide enough to locate a gross error.
   const double rho = noise.neighbourCorrelation;
   const bool correlated = noise.source == NoiseSource::VarianceLayer && noise.neighboursMeasured && rho >= kNeighbourCorrelation &&
                           noise.neighbourCorrelationZ >= kNeighbourCorrelationZ;
+  const double inflation = correlated ? 1 + 24 * rho : 1.0;
   const CandidateNoise::Scale scale = noise.source == NoiseSource::Runs
                                           ? CandidateNoise::Scale{"surfaces", 0.0, double(noise.runs - 1)}
-                                          : CandidateNoise::Scale{"surfaces", correlated ? 1 + 24 * rho : 1.0, kInfinity};
+                                          : CandidateNoise::Scale{"surfaces", 1.0, kInfinity};
   // Units: the materials present by index (those the names do not reach named by their index),
   // then the background, the emitters, all but the emitters: keys past any material index.
   constexpr uint64_t kBackground = uint64_t(1) << 32, kEmitters = kBackground + 1, kNonEmitters = kBackground + 2;
@@ -878,7 +879,7 @@ std::vector<SurfaceDifference> differenceBySurface(const Candidate& candidate, c
       d.kind = SurfaceDifference::Kind::NonEmitters, d.name = "all but emitters";
     }
     if (s.reference[kSum] > 0) {
-      const RelativeInterval interval = relativeInterval(s, kSum, noise.source, scale, alpha);
+      const RelativeInterval interval = relativeInterval(s, kSum, noise.source, scale, alpha, inflation);
       d.relativeDifference = interval.difference, d.low = interval.low, d.high = interval.high;
     } else {
       // A black reference: no relative difference, only none or some light.

@@ -279,7 +279,7 @@ def test_read_image_gives_the_encoding_compare_allows_for():
 
 def test_integer_codes_are_allowed_their_own_step(tmp_path):
     """An 8-bit PNG reads as integer codes of largest code 255; compare allows a truncated code's
-    step below (linear 0.5 as sRGB code 187, 0.49726) for them, not for floats, and an integer
+    step below (linear 0.5 as sRGB code 187, 0.49693) for them, not for floats, and an integer
     encoding without its largest code is refused."""
     grey = np.full((8, 8, 3), 0.5, dtype=np.float32)
     code, _, err = cli("render", os.path.join(SOURCE, "scenes", "cornell-box.json"), "--resolution", "8x8",

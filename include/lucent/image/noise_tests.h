@@ -54,14 +54,9 @@ struct StoredRounding {
   ColourEncoding encoding = ColourEncoding::Float;
   bool srgb = false;       // integer codes of sRGB-encoded values
   double largestCode = 0;  // integer codes: the largest, which reads as 1 (ImageHeader::largestCode)
-  bool operator==(const StoredRounding&) const = default;
 };
 // How a file's R, G, B were stored, from its header; `srgb` as the caller decodes it.
 StoredRounding storedRoundingOf(const ImageHeader& header, bool srgb);
-// Runs stored in different ways (an RGBE run and an 8-bit one) are each rounded in their own: the
-// tests allow, value by value, for the largest of their roundings. Adds `rounding` to `roundings`
-// unless it is among them.
-void addRounding(std::vector<StoredRounding>& roundings, const StoredRounding& rounding);
 
 // What is compared with the reference: one image, or two or more runs (same size; their R, G, B).
 struct Candidate {
@@ -69,7 +64,9 @@ struct Candidate {
   explicit Candidate(std::vector<Image> runs) : runs(std::move(runs)) {}
   std::vector<Image> runs;
   bool halfVariance = false;  // the one image's variance layers were stored as half floats
-  // How the runs' R, G, B were stored (each way once: addRounding), and the reference's.
+  // How the runs' R, G, B were stored, run by run (or one for all), and the reference's. The runs'
+  // mean is allowed the mean of their allowances: runs stored in different ways (an RGBE run and
+  // an 8-bit one) are each rounded in their own.
   std::vector<StoredRounding> rounding{StoredRounding{}};
   StoredRounding referenceRounding;
 };
@@ -192,9 +189,11 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
 // but the emitters; each with its (1 - 2 alpha) confidence interval as testEquivalence's regions
 // have it, except that with runs a surface's variance is its own sum's spread, with n - 1 degrees
 // of freedom (a surface's pixels lie all over the image, where noise shared over long ranges, such
-// as a per-run offset, adds more than a pool over tiles would say). The interval is absent (NaN)
-// where the candidate's noise is unknown. Empty where the reference has no surface layers. The
-// reference needs variance layers.
+// as a per-run offset, adds more than a pool over tiles would say), and with variance layers whose
+// neighbours are shown correlated both variances are 1 + 24 rho times as large (see
+// CandidateNoise). The interval is absent (NaN) where the noise tests are undecided (the candidate's
+// noise unknown, a lossy file). Empty where the reference has no surface layers. The reference
+// needs variance layers.
 struct SurfaceDifference {
   enum class Kind { Material, Background, Emitters, NonEmitters };
   Kind kind = Kind::Material;
