@@ -834,6 +834,25 @@ TEST_CASE("lucent compare allows for a file's half-float colour channels", "[com
   const test::CliRun floatRun = runLucent("compare " + quoted(dir / "float.exr") + reference);
   INFO(floatRun.output);
   CHECK(floatRun.status == 1);
+  // R and G half, B a 32-bit unsigned integer (EXR may mix them): rounded as half floats, the
+  // coarser, not as integer codes.
+  {
+    Imf::Header header(w, h);
+    Imf::FrameBuffer frame;
+    std::vector<half> colour(size_t(w * h), half(0.7f));
+    std::vector<uint32_t> codes(size_t(w * h), 3006477107u);  // 0.7 of 2^32 - 1
+    for (const char* name : {"R", "G"}) {
+      header.channels().insert(name, Imf::Channel(Imf::HALF));
+      frame.insert(name, Imf::Slice(Imf::HALF, (char*)colour.data(), sizeof(half), sizeof(half) * size_t(w)));
+    }
+    header.channels().insert("B", Imf::Channel(Imf::UINT));
+    frame.insert("B", Imf::Slice(Imf::UINT, (char*)codes.data(), sizeof(uint32_t), sizeof(uint32_t) * size_t(w)));
+    Imf::OutputFile out((dir / "mixed.exr").c_str(), header);
+    out.setFrameBuffer(frame);
+    out.writePixels(h);
+  }
+  CHECK(readImageHeader(dir / "mixed.exr").colourEncoding == ColourEncoding::Half);
+  CHECK(readImageHeader(dir / "mixed.exr").largestCode == 0);
 }
 
 namespace {
