@@ -470,7 +470,7 @@ PYBIND11_MODULE(lucent, m) {
     out["srgb"] = isSrgbEncoded(path, metadata);  // pass as compare's image_srgb / reference_srgb
     const ImageHeader header = readImageHeader(path);
     out["encoding"] = colourEncodingName(header.colourEncoding);  // compare allows for its rounding
-    if (header.colourEncoding == ColourEncoding::Integer) out["largest_code"] = header.largestCode;
+    if (header.colourEncoding == ColourEncoding::Integer) out["largest_code"] = uint64_t(header.largestCode);
     const std::vector<std::string> materials = materialNamesOf(metadata);
     if (!materials.empty()) out["materials"] = materials;
     out["channels"] = image.channels();

@@ -306,11 +306,11 @@ ImageComparison compareImagePair(Candidate candidate, Image referenceFile, const
   // The rounding the tests allowed for, by each image's encoding (StoredRounding).
   const auto roundingJson = [](const StoredRounding& r) {
     nlohmann::ordered_json j = {{"encoding", colourEncodingName(r.encoding)}};
-    if (r.encoding == ColourEncoding::Integer) j["largest_code"] = r.largestCode, j["srgb"] = r.srgb;
+    if (r.encoding == ColourEncoding::Integer) j["largest_code"] = uint64_t(r.largestCode), j["srgb"] = r.srgb;
     return j;
   };
   if (statistical) {
-    nlohmann::ordered_json image = nlohmann::ordered_json::array();  // each way the runs were stored, once
+    nlohmann::ordered_json image = nlohmann::ordered_json::array();  // the image's, or each run's
     for (const StoredRounding& r : candidate.rounding) image.push_back(roundingJson(r));
     out["stored_rounding"] = {{"image", image}, {"reference", roundingJson(candidate.referenceRounding)}};
   }
