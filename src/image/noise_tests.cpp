@@ -115,7 +115,6 @@ StoredRounding storedRoundingOf(const ImageHeader& header, bool srgb) {
           header.colourEncoding == ColourEncoding::Integer ? header.largestCode : 0};
 }
 
-
 namespace {
 
 // R, G, B and their sum (the equivalence test's quantity).
@@ -183,6 +182,15 @@ class TestPixels {
       noise_.undecided = std::string(candidateLossy ? runs ? "a run" : "the image" : "the reference") +
                          " is stored lossily (JPEG), whose compression changes values by more than their noise: "
                          "compare a lossless file (EXR, PFM, PNG)";
+    // Each way the runs were stored once, with its share of them: readRounded weighs their allowances.
+    for (const StoredRounding& r : candidate.rounding) {
+      const auto same = [&](const RoundingShare& s) {
+        return s.rounding.encoding == r.encoding && s.rounding.srgb == r.srgb && s.rounding.largestCode == r.largestCode;
+      };
+      const auto found = std::find_if(roundings_.begin(), roundings_.end(), same);
+      (found != roundings_.end() ? *found : roundings_.emplace_back(RoundingShare{r, 0.0})).share +=
+          1.0 / double(candidate.rounding.size());
+    }
     values_.resize(candidate.runs.size());
     checkVariances();
     // Before the floor, which raises the variances (w below) of pixels whose layers are low by chance.
@@ -244,9 +252,9 @@ class TestPixels {
       const double d = mean[c] - reference[c];
       if (!std::isfinite(d)) continue;  // a non-finite candidate stays as it is: no noise explains it
       Allowance a;
-      for (const StoredRounding& r : candidate_.rounding) {
-        const Allowance run = allowanceOf(r, mean[c], candidateLargest);
-        a.nearest += run.nearest / double(candidate_.rounding.size()), a.step += run.step / double(candidate_.rounding.size());
+      for (const auto& [rounding, share] : roundings_) {
+        const Allowance each = allowanceOf(rounding, mean[c], candidateLargest);
+        a.nearest += share * each.nearest, a.step += share * each.step;
       }
       const Allowance b = allowanceOf(candidate_.referenceRounding, reference[c], referenceLargest);
       const double nearest = a.nearest + b.nearest;
@@ -430,7 +438,12 @@ class TestPixels {
   struct Channels {
     std::array<int, 3> value, variance;
   };
+  struct RoundingShare {
+    StoredRounding rounding;
+    double share = 0;  // of the runs
+  };
   const Candidate& candidate_;
+  std::vector<RoundingShare> roundings_;
   const Image& reference_;
   std::array<int, 3> referenceValue_{}, referenceVariance_{};
   std::vector<Channels> runs_;
@@ -594,6 +607,14 @@ double statistic(double difference, double variance) {
   return difference == 0 ? 0.0 : std::copysign(kInfinity, difference);
 }
 
+// Whether the variance layers' neighbours are shown correlated (or anticorrelated): rho and its z
+// beyond kNeighbourCorrelation and kNeighbourCorrelationZ.
+bool neighbourCorrelationShown(const CandidateNoise& noise) {
+  return noise.source == NoiseSource::VarianceLayer && noise.neighboursMeasured &&
+         std::abs(noise.neighbourCorrelation) >= kNeighbourCorrelation &&
+         std::abs(noise.neighbourCorrelationZ) >= kNeighbourCorrelationZ;
+}
+
 // A verdict from variance layers, where the differences from the reference say the layers do not
 // describe the noise (CandidateNoise: neighbours correlated, or the layers above the differences'
 // spread): what the layers cannot support becomes inconclusive, saying why. `intervals`: --within's,
@@ -605,7 +626,7 @@ Verdict throughNeighbours(CandidateNoise& noise, Verdict verdict, bool intervals
   if (noise.source != NoiseSource::VarianceLayer || !noise.neighboursMeasured || verdict == Verdict::Inconclusive)
     return verdict;
   const double rho = noise.neighbourCorrelation;
-  const bool shown = std::abs(rho) >= kNeighbourCorrelation && std::abs(noise.neighbourCorrelationZ) >= kNeighbourCorrelationZ;
+  const bool shown = neighbourCorrelationShown(noise);
   // Squared differences below the layers' sum (a bias only raises them): the layers are too large,
   // which also shows as rho > 0.
   const bool overstated = noise.layerLevel <= 1 - kNeighbourCorrelation && noise.layerLevelZ <= -kNeighbourCorrelationZ;
@@ -836,9 +857,7 @@ std::vector<SurfaceDifference> differenceBySurface(const Candidate& candidate, c
   // candidate's and the reference's) 1 + 24 rho times as large, as a failure of --test must
   // survive: intervals wide enough to locate a gross error.
   const double rho = noise.neighbourCorrelation;
-  const bool correlated = noise.source == NoiseSource::VarianceLayer && noise.neighboursMeasured && rho >= kNeighbourCorrelation &&
-                          noise.neighbourCorrelationZ >= kNeighbourCorrelationZ;
-  const double inflation = correlated ? 1 + 24 * rho : 1.0;
+  const double inflation = neighbourCorrelationShown(noise) && rho > 0 ? 1 + 24 * rho : 1.0;
   const CandidateNoise::Scale scale = noise.source == NoiseSource::Runs
                                           ? CandidateNoise::Scale{"surfaces", 0.0, double(noise.runs - 1)}
                                           : CandidateNoise::Scale{"surfaces", 1.0, kInfinity};
