@@ -6,26 +6,33 @@
 
 namespace lucent {
 
-Distribution1D::Distribution1D(std::span<const float> weights) : func_(weights.begin(), weights.end()) {
+Distribution1D::Distribution1D(std::span<const float> weights, std::span<const uint8_t> ownCell)
+    : func_(weights.begin(), weights.end()) {
   if (func_.empty()) throw std::invalid_argument("Distribution1D: no weights");
-  cdf_.resize(func_.size() + 1);
-  double sum = 0;
-  cdf_[0] = 0;
+  if (!ownCell.empty() && ownCell.size() != func_.size())
+    throw std::invalid_argument("Distribution1D: one own-cell flag per weight");
+  std::vector<double> sums(func_.size() + 1, 0.0);
+  uint64_t owners = 0;
   for (size_t i = 0; i < func_.size(); ++i) {
     if (!(func_[i] >= 0) || !std::isfinite(func_[i]))
       throw std::invalid_argument("Distribution1D: negative or non-finite weight");
-    sum += func_[i];
-    cdf_[i + 1] = sum;
+    sums[i + 1] = sums[i] + func_[i];
+    owners += !ownCell.empty() && ownCell[i] && func_[i] > 0;
   }
+  if (owners > kCells) throw std::invalid_argument("Distribution1D: more bins that need a cell than cells");
+  const double sum = sums.back();
   total_ = static_cast<float>(sum);
+  cells_.resize(func_.size() + 1);
   if (sum == 0) {
-    for (size_t i = 0; i <= func_.size(); ++i) cdf_[i] = double(i) / func_.size();
-    weightedTotal_ = 0;
-  } else {
-    for (auto& c : cdf_) c /= sum;
-    weightedTotal_ = total_;
+    for (size_t i = 0; i <= func_.size(); ++i) cells_[i] = uint32_t(std::ceil(double(i) * kCells / func_.size()));
+    return;
   }
-  cdf_.back() = 1.0;
+  uint32_t ownersBefore = 0;
+  for (size_t i = 0; i <= func_.size(); ++i) {
+    cells_[i] = sharedCell(sums[i], sum, ownersBefore, uint32_t(owners), kCells);
+    if (i < func_.size()) ownersBefore += !ownCell.empty() && ownCell[i] && func_[i] > 0;
+  }
+  cells_.back() = kCells;
 }
 
 uint32_t Distribution1D::sampleDiscrete(float u, float* pmfOut, float* remapped) const {
@@ -50,9 +57,7 @@ float Distribution1D::sampleContinuous(float u, float* pdfOut, uint32_t* bin) co
 
 uint32_t Distribution1D::binOf(float x) const { return std::min(static_cast<uint32_t>(x * size()), size() - 1); }
 
-float Distribution1D::pdfContinuous(float x) const {
-  return weightedTotal_ > 0 ? func_[binOf(x)] * size() / weightedTotal_ : 1.0f;
-}
+float Distribution1D::pdfContinuous(float x) const { return pmf(binOf(x)) * float(size()); }
 
 Distribution2D::Distribution2D(std::span<const float> weights, uint32_t nu, uint32_t nv) : nu_(nu), nv_(nv) {
   if (weights.size() != size_t(nu) * nv) throw std::invalid_argument("Distribution2D: size mismatch");

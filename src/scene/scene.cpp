@@ -125,26 +125,21 @@ void finalizeScene(Scene& scene) {
     std::vector<float> weights(power.size());
     for (size_t i = 0; i < power.size(); ++i)
       weights[i] = power[i] > 0 ? std::max(float(power[i] * scale), FLT_MIN) : 0.0f;
-    scene.lightDistribution = Distribution1D(weights);
+    scene.lightDistribution = lightChoiceOf(scene.lights, weights);
   }
-  scene.nearbyLights.clear(), scene.farLights.clear();
-  scene.nearbyLightShare = 0;
-  scene.farLightDistribution = {};
-  std::vector<uint32_t> nearby, far;
+  std::vector<uint32_t> nearby;
   for (uint32_t i = 0; i < uint32_t(scene.lights.size()); ++i)
-    (scene.lights[i].type == LightType::Point || scene.lights[i].type == LightType::Spot ? nearby : far).push_back(i);
-  if (nearby.size() >= 2 && nearby.size() <= kMostNearbyLights) {
-    scene.nearbyLights = nearby;
-    scene.farLights = far;
-    double share = 0;
-    std::vector<float> farWeights;
-    for (const uint32_t i : nearby) share += scene.lightDistribution.pmf(i);
-    for (const uint32_t i : far) farWeights.push_back(scene.lightDistribution.pmf(i));
-    scene.nearbyLightShare = far.empty() ? 1.0f : float(share);
-    if (!far.empty()) scene.farLightDistribution = Distribution1D(farWeights);
-  }
+    if (scene.lights[i].type == LightType::Point || scene.lights[i].type == LightType::Spot) nearby.push_back(i);
+  scene.nearbyLights.clear();
+  if (nearby.size() >= 2 && nearby.size() <= kMostNearbyLights) scene.nearbyLights = std::move(nearby);
 
   scene.contentHash = sceneContentHash(scene);
+}
+
+Distribution1D lightChoiceOf(std::span<const Light> lights, std::span<const float> weights) {
+  std::vector<uint8_t> delta(lights.size());
+  for (size_t i = 0; i < lights.size(); ++i) delta[i] = isDeltaLight(lights[i]);
+  return Distribution1D(weights, delta);
 }
 
 uint64_t sceneContentHash(const Scene& scene) {

@@ -262,8 +262,11 @@ TEST_CASE("Distribution1D::sampleDiscrete", "[sampling][distribution]") {
   }
 }
 
-TEST_CASE("Distribution1D::pick is the first bin whose upper CDF value exceeds u", "[sampling][distribution]") {
-  // The reference: std::upper_bound over the normalized running sums, clamped to the last bin.
+TEST_CASE("Distribution1D::pick is the first bin whose upper CDF value exceeds u, on the 2^-24 grid",
+          "[sampling][distribution]") {
+  // The reference: std::upper_bound over the normalized running sums, clamped to the last bin, for
+  // every u a sampler can draw (k 2^-24) next to each CDF value, and a finer u below a cell's
+  // upper end, which picks what its cell's u does.
   for (const uint32_t n : {1u, 2u, 3u, 5u, 8u, 13u, 37u}) {
     auto w = randomWeights(n, 100 + n);
     if (n > 3) w[1] = w[2] = 0;  // a run of zero-weight bins
@@ -272,10 +275,10 @@ TEST_CASE("Distribution1D::pick is the first bin whose upper CDF value exceeds u
     for (uint32_t i = 0; i < n; ++i) cdf[i + 1] = cdf[i] + w[i];
     for (auto& c : cdf) c /= cdf[n];
     cdf[n] = 1.0;
-    std::vector<float> us = {0.0f, 0x1.fffffep-1f};
-    for (uint32_t i = 0; i <= n; ++i)  // every boundary and its neighbours
-      for (float u = std::nextafter(float(cdf[i]), 0.0f), k = 0; k < 3; ++k, u = std::nextafter(u, 1.0f))
-        if (u >= 0 && u < 1) us.push_back(u);
+    std::vector<float> us = {0.0f, 1 - 0x1p-24f};
+    for (uint32_t i = 0; i <= n; ++i)  // every boundary and its neighbours on the grid
+      for (int64_t k = int64_t(std::floor(cdf[i] * 0x1p24)) - 1, last = k + 3; k < last; ++k)
+        if (k >= 0 && k < int64_t(Distribution1D::kCells)) us.push_back(float(k) * 0x1p-24f);
     Rng rng(n);
     for (int k = 0; k < 1000; ++k) us.push_back(rng.uniform());
     for (const float u : us) {
@@ -283,7 +286,65 @@ TEST_CASE("Distribution1D::pick is the first bin whose upper CDF value exceeds u
       const auto expected = uint32_t(std::min<ptrdiff_t>(it - cdf.begin() - 1, n - 1));
       REQUIRE(dist.pick(u) == expected);
       if (dist.total() > 0) REQUIRE(dist.weight(dist.pick(u)) > 0);
+      if (u > 0) REQUIRE(dist.pick(std::nextafter(u + 0x1p-24f, 0.0f)) == expected);
     }
+  }
+}
+
+TEST_CASE("Distribution1D: the pmf is the probability of the pick over the 2^-24 grid, however small a weight",
+          "[sampling][distribution]") {
+  // Weights down to 1e-12 of the heaviest, where a bin is narrower than a cell of u's grid: every
+  // u a sampler can draw, k 2^-24, is picked once, and each bin's count must be its pmf x 2^24
+  // exactly (weight / total would be an estimator's divisor that its samples do not follow).
+  const std::vector<float> weights = {1.0f, 1e-9f, 3e-8f, 0.0f, 0.5f, 1e-7f, 2.0f, 1e-12f, 4e-6f};
+  const auto n = uint32_t(weights.size());
+  double total = 0;
+  for (const float w : weights) total += w;
+  auto counts = [&](const Distribution1D& dist) {
+    std::vector<uint64_t> count(n, 0);
+    for (uint32_t k = 0; k < Distribution1D::kCells; ++k) ++count[dist.pick(float(k) * 0x1p-24f)];
+    return count;
+  };
+  for (const bool owned : {false, true}) {
+    INFO((owned ? "bins 1 and 7 own a cell" : "no bin owns a cell"));
+    std::vector<uint8_t> ownCell(n, 0);
+    if (owned) ownCell[1] = ownCell[7] = ownCell[3] = 1;  // bin 3 weighs nothing: it still gets none
+    const Distribution1D dist(weights, owned ? std::span<const uint8_t>(ownCell) : std::span<const uint8_t>());
+    const std::vector<uint64_t> count = counts(dist);
+    const uint32_t owners = owned ? 2 : 0;
+    double sum = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      INFO("bin " << i << " weight " << weights[i] << ": " << count[i] << " cells, pmf " << dist.pmf(i));
+      CHECK(double(count[i]) == double(dist.pmf(i)) * 0x1p24);
+      CHECK(count[i] == dist.cellCount(i));
+      // About its share: off by less than a cell and the owners' cells.
+      CHECK(std::abs(double(dist.pmf(i)) - weights[i] / total) <= (1 + owners) * 0x1p-24);
+      sum += dist.pmf(i);
+      // Within a bin, u's remapped values are its cells' starts over the bin: uniform over [0, 1).
+      if (count[i] > 0 && count[i] < 64) {
+        std::set<float> remapped;
+        for (uint32_t k = dist.firstCell(i); k < dist.firstCell(i) + dist.cellCount(i); ++k)
+          remapped.insert(dist.remap(i, float(k) * 0x1p-24f));
+        CHECK(remapped.size() == count[i]);
+        CHECK(*remapped.begin() == 0.0f);
+        CHECK(*remapped.rbegin() == Approx(double(count[i] - 1) / count[i]));
+      }
+    }
+    CHECK(sum == 1.0);
+    CHECK(count[3] == 0);
+    if (owned) {
+      CHECK(count[1] >= 1);
+      CHECK(count[7] >= 1);
+    } else {
+      // Negative control: the 1e-12 bin is narrower than a cell, so never picked, and its pmf says so;
+      // its share of the weights, 2.9e-13, would not.
+      CHECK(count[7] == 0);
+      CHECK(dist.pmf(7) == 0.0f);
+      CHECK(double(count[7]) != weights[7] / total * 0x1p24);
+    }
+  }
+  SECTION("impossible flags are refused") {
+    CHECK_THROWS(Distribution1D(weights, std::vector<uint8_t>(n - 1, 1)));
   }
 }
 

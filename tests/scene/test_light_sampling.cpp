@@ -323,6 +323,15 @@ struct EnvironmentReference {
     if (!(sinTheta > 0)) return 0;
     return pmf * weights[i] / total * env.width * env.height / (2 * kPi * kPi * sinTheta);
   }
+  // How far pdf may be off, relatively, where the sampler's probabilities are those of whole cells of
+  // u's 2^-24 grid (Distribution1D): its row's and, within it, its texel's each by a cell at most.
+  double cellTolerance(Vec3 direction) const {
+    const uint32_t i = texel(direction).first, row = i / env.width;
+    if (weights[i] == 0) return 0;  // then exactly 0
+    double rowWeight = 0;
+    for (uint32_t x = 0; x < env.width; ++x) rowWeight += weights[row * env.width + x];
+    return 0x1p-24 * (total / rowWeight + rowWeight / weights[i]);
+  }
 };
 
 }  // namespace
@@ -365,7 +374,7 @@ TEST_CASE("Environment map: sampled directions against the map's density", "[lig
     SampleChecks checks;
     for (Vec3 d : directions) {
       const double expected = reference.pdf(d), got = environmentLightPdf(scene, d);
-      if (!relClose(got, expected, 1e-4))
+      if (!relClose(got, expected, 1e-4 + reference.cellTolerance(d)))
         checks.fail("environmentLightPdf " + std::to_string(got) + " but " + std::to_string(expected) + " at " +
                     chi2::detail::str(d));
     }
@@ -587,6 +596,59 @@ TEST_CASE("Light choice: each light as often as its share of the estimated power
     for (uint32_t i = 0; i < n; ++i) weights.push_back(float(power[i] * (i == 4 ? 1.05 : 1.0)));
     wrong.lightDistribution = Distribution1D(weights);
     CHECK_CHI2_REJECT(chi2::testDiscrete(sampler(wrong), visiblePmf, n, {.seed = 5, .mass = std::nullopt}));
+  }
+}
+
+TEST_CASE("Light choice: a light's probability is its share of u's grid exactly, and no delta light goes unchosen",
+          "[lights]") {
+  // mixedLightScene with a third point light and a second directional light of 1e-12 the others'
+  // power, each narrower than a cell of u's 2^-24 grid by power. Every u a sampler can draw,
+  // k 2^-24, is chosen once: a light's count must be the pmf that chooseLight returns with it x 2^24,
+  // the same for each of its u; the lights other than the nearby point lights keep the pmf that MIS
+  // reads back (lightDistribution's); each delta light is chosen at least once.
+  Scene scene = mixedLightScene();
+  scene.lights.push_back({LightType::Point, 0, {40, 30, -20}, Rgb(1e-12f)});
+  scene.lights.push_back({LightType::Directional, 0, normalize(Vec3(0, -1, 0.1f)), Rgb(1e-12f)});
+  finalizeScene(scene);
+  const auto n = uint32_t(scene.lights.size());
+  REQUIRE(n == 10);
+  REQUIRE(scene.nearbyLights == std::vector<uint32_t>{4, 5, 7});
+  const Distribution1D& power = scene.lightDistribution;
+  for (const Vec3 receiver : {Vec3(0, 0, 0), Vec3(39, 29, -19)}) {
+    INFO("receiver " << chi2::detail::str(receiver));
+    std::vector<uint64_t> count(n, 0);
+    std::vector<float> pmf(n, -1.0f);
+    uint64_t inconsistent = 0, outside = 0;
+    for (uint32_t k = 0; k < Distribution1D::kCells; ++k) {
+      float remapped = -1;
+      const LightChoice c = chooseLight(scene, receiver, float(k) * 0x1p-24f, &remapped);
+      if (pmf[c.light] < 0) pmf[c.light] = c.pmf;
+      inconsistent += pmf[c.light] != c.pmf;
+      outside += !(remapped >= 0 && remapped < 1);
+      ++count[c.light];
+    }
+    CHECK(inconsistent == 0);
+    CHECK(outside == 0);
+    double nearbyWeight[3], nearbyTotal = 0;
+    uint64_t nearbyCells = 0;
+    for (int j = 0; j < 3; ++j) {
+      const uint32_t i = scene.nearbyLights[size_t(j)];
+      nearbyCells += power.cellCount(i);
+      nearbyTotal += nearbyWeight[j] = power.pmf(i) / nearbyWeightDistance2(scene.lights[i], receiver);
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+      INFO("light " << i << ": chosen " << count[i] << " times, pmf " << pmf[i]);
+      if (isDeltaLight(scene.lights[i])) CHECK(count[i] >= 1);
+      if (count[i] == 0) continue;
+      CHECK(double(count[i]) == double(pmf[i]) * 0x1p24);
+      const auto near = std::find(scene.nearbyLights.begin(), scene.nearbyLights.end(), i);
+      if (near == scene.nearbyLights.end()) {
+        CHECK(pmf[i] == power.pmf(i));
+      } else {  // the nearby lights' cells shared by power over squared distance, one at least each
+        const double share = double(nearbyCells) * nearbyWeight[near - scene.nearbyLights.begin()] / nearbyTotal;
+        CHECK(std::abs(double(count[i]) - share) <= 4);
+      }
+    }
   }
 }
 

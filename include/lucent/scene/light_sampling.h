@@ -50,10 +50,6 @@ inline double nearbyWeightDistance2(const Light& light, Vec3 receiver) {
   return std::max(double(dot(d, d)), 1e-12 * scale * scale);
 }
 
-inline bool isDeltaLight(const Light& light) {
-  return light.type == LightType::Point || light.type == LightType::Directional || light.type == LightType::Spot;
-}
-
 // A uniformly chosen point on an emitting triangle (vertices q0, q1, q2, unit normal, area) seen
 // from receiver, chosen with probability pmf: the point and its barycentrics, the unit direction
 // and distance to it, and the density (solid angle, times pmf); the density is 0 where the receiver
@@ -137,49 +133,50 @@ struct LightChoice {
   float pmf = 0;
 };
 
-// Whether chooseLight chooses among the nearby lights (point and spot lights: never a triangle).
-inline bool choosesNearbyLight(const Scene& scene, float u) { return !scene.nearbyLights.empty() && u < scene.nearbyLightShare; }
-
 // The light a receiver samples (of a scene with lights), by the scene's light distribution (by
-// power). Where the scene has two or more point and spot lights (Scene::nearbyLights), those
-// together keep their share of it, but among them a light is chosen in proportion to its power over
-// its squared distance from the receiver, its unoccluded light's share there: in the maze, the
-// light beyond a corridor's wall takes most of the samples where it is near, not half everywhere.
-// The other lights keep their probabilities, which MIS reads back at emitter hits
-// (triangleLightPdf, environmentLightPdf), so their weights do not change. `remapped`, if given,
-// receives u rescaled to [0, 1) within the chosen light's share of it: a number as uniform as u,
-// and independent of the choice.
+// power): the grid cell of u picks it (Distribution1D). Where the scene has two or more point and
+// spot lights (Scene::nearbyLights), their cells together are shared out again for each receiver, in
+// proportion to each one's power over its squared distance from the receiver, its unoccluded
+// light's share there, and at least one cell each (a point light is never lost, however far): in
+// the maze, the light beyond a corridor's wall takes most of the samples where it is near, not half
+// everywhere. The other lights keep their cells, so their probabilities, which MIS reads back at
+// emitter hits (triangleLightPdf, environmentLightPdf). `remapped`, if given, receives u rescaled to
+// [0, 1) within the chosen light's cells: a number as uniform as u, and independent of the choice.
 inline LightChoice chooseLight(const Scene& scene, Vec3 receiver, float u, float* remapped = nullptr) {
-  if (scene.nearbyLights.empty()) {
-    const uint32_t li = scene.lightDistribution.pick(u);
-    if (remapped) *remapped = scene.lightDistribution.remap(li, u);
-    return {li, scene.lightDistribution.pmf(li)};
+  const Distribution1D& power = scene.lightDistribution;
+  const uint32_t cell = Distribution1D::cellOf(u);
+  const uint32_t li = power.pickCell(cell);
+  const bool nearby = std::binary_search(scene.nearbyLights.begin(), scene.nearbyLights.end(), li);
+  double weights[kMostNearbyLights], total = 0;
+  uint32_t cells = 0, place = 0, owners = 0;
+  const size_t count = nearby ? scene.nearbyLights.size() : 0;
+  for (size_t k = 0; k < count; ++k) {  // u's place among the nearby lights' cells laid side by side
+    const uint32_t i = scene.nearbyLights[k];
+    if (i == li) place = cells + (cell - power.firstCell(i));
+    cells += power.cellCount(i);
+    total += weights[k] = power.pmf(i) / nearbyWeightDistance2(scene.lights[i], receiver);
+    owners += weights[k] > 0;
   }
-  const float share = scene.nearbyLightShare;
-  if (choosesNearbyLight(scene, u)) {
-    // Each weight once (at most kMostNearbyLights), then the pick along their running sum.
-    double weights[kMostNearbyLights], total = 0;
-    const size_t count = scene.nearbyLights.size();
-    for (size_t k = 0; k < count; ++k) {
-      const uint32_t i = scene.nearbyLights[k];
-      total += weights[k] = scene.lightDistribution.pmf(i) / nearbyWeightDistance2(scene.lights[i], receiver);
-    }
-    const double target = double(u / share) * total;
-    double sum = 0;
-    for (size_t k = 0; k < count; ++k) {
-      sum += weights[k];
-      if (target < sum || k + 1 == count) {
-        if (remapped)
-          *remapped = std::clamp(float((target - (sum - weights[k])) / weights[k]), 0.0f, 0x1.fffffep-1f);
-        return {scene.nearbyLights[k], float(share * (weights[k] / total))};
+  if (!(total > 0)) {  // a far light, or no nearby light weighs anything here: by power alone
+    if (remapped) *remapped = power.remap(li, u);
+    return {li, power.pmf(li)};
+  }
+  double before = 0;
+  uint32_t ownersBefore = 0, first = 0;
+  for (size_t k = 0; k < count; ++k) {
+    const uint32_t last = k + 1 == count ? cells
+                                         : Distribution1D::sharedCell(before + weights[k], total,
+                                                                      ownersBefore + (weights[k] > 0), owners, cells);
+    if (place < last) {
+      if (remapped) {
+        const double position = double(place) + (double(u) * Distribution1D::kCells - cell);
+        *remapped = std::clamp(float((position - first) / (last - first)), 0.0f, 0x1.fffffep-1f);
       }
+      return {scene.nearbyLights[k], float(last - first) * 0x1p-24f};
     }
+    before += weights[k], ownersBefore += weights[k] > 0, first = last;
   }
-  const float v = std::min((u - share) / (1 - share), 0x1.fffffep-1f);
-  const uint32_t far = scene.farLightDistribution.pick(v);
-  if (remapped) *remapped = scene.farLightDistribution.remap(far, v);
-  const uint32_t li = scene.farLights[far];
-  return {li, scene.lightDistribution.pmf(li)};
+  return {li, power.pmf(li)};  // not reached: `place` lies below `cells`
 }
 
 // chooseLight by the distribution `choice` over the scene's lights (the path tracer's learnt one,

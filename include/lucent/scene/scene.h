@@ -2,6 +2,7 @@
 #pragma once
 #include <algorithm>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -133,6 +134,11 @@ struct Light {
   float angleScale = 0, angleOffset = 1;
 };
 
+// A light that only next-event estimation samples: no ray hits a point, spot or directional light.
+inline bool isDeltaLight(const Light& light) {
+  return light.type == LightType::Point || light.type == LightType::Directional || light.type == LightType::Spot;
+}
+
 // A spot light's share of its axial intensity in direction d (unit, away from the light).
 inline float spotFalloff(const Light& light, Vec3 d) {
   const float a = std::clamp(dot(d, light.axis) * light.angleScale + light.angleOffset, 0.0f, 1.0f);
@@ -214,15 +220,11 @@ struct Scene {
   std::vector<uint32_t> texels;
   // Lights: one per emissive triangle, then point and directional lights, then the environment.
   std::vector<Light> lights;
-  Distribution1D lightDistribution;       // proportional to each light's estimated power
-  // Where a scene has from two to kMostNearbyLights point and spot lights, the path tracer chooses
-  // among them by power over squared distance from the receiver, within their share of
-  // lightDistribution (chooseLight, which weighs each of them per choice): these lights, their
-  // share, and the others' distribution by power.
+  Distribution1D lightDistribution;       // by each light's estimated power (lightChoiceOf)
+  // Where a scene has from two to kMostNearbyLights point and spot lights, these (ascending): light
+  // choice shares their cells of lightDistribution among them by power over squared distance from
+  // the receiver (chooseLight, which weighs each of them per choice).
   std::vector<uint32_t> nearbyLights;
-  float nearbyLightShare = 0;
-  std::vector<uint32_t> farLights;
-  Distribution1D farLightDistribution;
   std::vector<int32_t> triangleLight;     // light index of each triangle, -1 if not emissive
   Environment environment;
   Camera camera;
@@ -263,6 +265,11 @@ inline bool hasCutOutSurfaces(const Scene& scene) {
 // once geometry and materials are set.
 // Used by the loader and by tests that build scenes in code.
 void finalizeScene(Scene& scene);
+
+// A distribution over `lights` by `weights` (one each) in which every delta light of positive
+// weight owns a grid cell (Distribution1D): however small its weight, it is chosen now and then, as
+// it must be, next-event estimation being its only strategy.
+Distribution1D lightChoiceOf(std::span<const Light> lights, std::span<const float> weights);
 
 // A triangle's unit counter-clockwise normal and area from its corners, as faceNormals and
 // faceAreas hold them: in float, and in double where the float cross product's squared length

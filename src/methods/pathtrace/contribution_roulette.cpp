@@ -100,7 +100,7 @@ Distribution1D learntLightChoice(const Scene& scene, const LightMoments& moments
     const double groupShare = (1 - kPowerShare) * learnt[g] / total + kPowerShare * share[g];
     weights[i] = share[g] > 0 ? float(power.pmf(i) * groupShare / share[g]) : 0.0f;
   }
-  return Distribution1D(weights);
+  return lightChoiceOf(scene.lights, weights);
 }
 
 }  // namespace lucent
