@@ -337,8 +337,9 @@ OpenedImage openWithReader(const std::string& name, const std::string& extension
                              " slices, not an image");
   // And against the source's size: a 4.6 KB EXR claiming 8192 x 8192 pixels of 10 float channels
   // would have 2.7 GB allocated and filled before its missing data failed the read.
-  uint64_t pixelBits = 0;
-  for (const int bits : spec.channelBits) pixelBits += uint64_t(bits);
+  uint64_t pixelBits = uint64_t(spec.storedPixelBits);
+  if (pixelBits == 0)
+    for (const int bits : spec.channelBits) pixelBits += uint64_t(bits);
   const uint64_t stored = (uint64_t(spec.width) * uint64_t(spec.height) * pixelBits + 7) / 8;
   const std::string& compression = spec.compression;
   // A PFM's floats are stored as they are.

@@ -35,6 +35,9 @@ struct CodecImageInfo {
   int width = 0, height = 0, depth = 1, channelCount = 0;
   std::vector<std::string> channelNames;  // may be fewer than channelCount
   std::vector<int> channelBits;           // per channel: its stored value's size (12 in a 12-bit TIFF)
+  // The bits a pixel takes in the file where not the channels' sum (0): a palette image's index,
+  // which the reader hands over as RGB codes of the palette's.
+  int storedPixelBits = 0;
   std::vector<uint8_t> channelIsHalf;     // per channel: stored as a 16-bit float
   // Per channel: for integer codes the largest, which reads as 1 (255 for 8 bits, 4,095 for 12,
   // 32,767 for signed 16-bit codes); 0 for floats.
@@ -61,7 +64,7 @@ struct ImageReader {
 };
 
 inline constexpr uint32_t kImageWriterInterface = 2;
-inline constexpr uint32_t kImageReaderInterface = 4;
+inline constexpr uint32_t kImageReaderInterface = 5;
 
 // Each module's functions, loaded on the first call (thread-safe); throws std::runtime_error where
 // the module cannot be loaded. The reader of `format` ("exr", "png"...): OpenEXR's for EXR,

@@ -2,6 +2,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -44,11 +45,15 @@ void* open(const std::string& name, const std::string& format, const unsigned ch
   info.width = spec.width, info.height = spec.height, info.depth = spec.depth, info.channelCount = spec.nchannels;
   info.channelNames = spec.channelnames;
   // A TIFF of 10, 12 or 14 bits is read as 16-bit codes, scaled to their full range: its steps
-  // are those of its own bits.
+  // are those of its own bits. A palette TIFF's bits are its index's: its colours are the
+  // palette's codes, of the channels' size (TIFF's PhotometricInterpretation 3).
   const int bitsPerSample = spec.get_int_attribute("oiio:BitsPerSample", 0);
+  const bool palette = std::string(in->format_name()) == "tiff" && spec.get_int_attribute("tiff:PhotometricInterpretation", -1) == 3;
+  if (palette) info.storedPixelBits = std::max(bitsPerSample, 1);
   for (int c = 0; c < spec.nchannels; ++c) {
     const OIIO::TypeDesc type = spec.channelformat(c);
-    const int bits = bitsPerSample > 0 && bitsPerSample < int(8 * type.size()) ? bitsPerSample : int(8 * type.size());
+    const int bits = !palette && bitsPerSample > 0 && bitsPerSample < int(8 * type.size()) ? bitsPerSample
+                                                                                          : int(8 * type.size());
     info.channelBits.push_back(bits);
     info.channelIsHalf.push_back(type == OIIO::TypeDesc::HALF);
     const bool integer = !type.is_floating_point();

@@ -914,6 +914,46 @@ void writeTiffCodes(const fs::path& path, int w, int h, int bits, bool signedCod
   file.insert(file.end(), pixels.begin(), pixels.end());
   std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(file.data()), std::streamsize(file.size()));
 }
+
+// Writes an uncompressed palette TIFF of `bits`-bit indices (rows padded to a byte), pixel (x, y)
+// showing entry index(x, y) of the palette, whose 16-bit entries are `levels` x 257 (8-bit code
+// v as 16 bits: read as v / 255 whichever way a reader narrows them).
+void writePaletteTiff(const fs::path& path, int w, int h, int bits, const std::function<int(int, int)>& index,
+                      const std::vector<std::array<uint16_t, 3>>& levels) {
+  std::vector<unsigned char> pixels;
+  for (int y = 0; y < h; ++y) {
+    uint32_t buffer = 0;
+    int held = 0;
+    for (int x = 0; x < w; ++x) {
+      buffer = (buffer << bits) | uint32_t(index(x, y));
+      for (held += bits; held >= 8; held -= 8) pixels.push_back((unsigned char)(buffer >> (held - 8)));
+    }
+    if (held > 0) pixels.push_back((unsigned char)(buffer << (8 - held)));
+  }
+  std::vector<unsigned char> file;
+  const auto put = [&](uint32_t v, int bytes) {
+    for (int i = 0; i < bytes; ++i) file.push_back((unsigned char)(v >> (8 * i)));
+  };
+  const uint32_t entries = 1u << bits;
+  const std::vector<std::array<uint32_t, 4>> tags = {
+      {256, 4, 1, uint32_t(w)}, {257, 4, 1, uint32_t(h)}, {258, 3, 1, uint32_t(bits)}, {259, 3, 1, 1},
+      {262, 3, 1, 3},           {273, 4, 1, 0},           {277, 3, 1, 1},                {278, 4, 1, uint32_t(h)},
+      {279, 4, 1, uint32_t(pixels.size())},               {320, 3, 3 * entries, 0}};
+  const uint32_t directory = 8, colourMap = directory + 2 + 12 * uint32_t(tags.size()) + 4,
+                 data = colourMap + 6 * entries;
+  file.insert(file.end(), {'I', 'I', 42, 0});
+  put(directory, 4);
+  put(uint32_t(tags.size()), 2);
+  for (const auto& [tag, type, count, value] : tags) {
+    put(tag, 2), put(type, 2), put(count, 4);
+    put(tag == 320 ? colourMap : tag == 273 ? data : value, 4);
+  }
+  put(0, 4);
+  for (int c = 0; c < 3; ++c)  // the red entries, then the green, then the blue
+    for (uint32_t i = 0; i < entries; ++i) put(i < levels.size() ? levels[i][size_t(c)] * 257u : 0u, 2);
+  file.insert(file.end(), pixels.begin(), pixels.end());
+  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(file.data()), std::streamsize(file.size()));
+}
 }  // namespace
 
 TEST_CASE("lucent compare allows for RGBE's and 8-bit codes' truncation, darker only, and leaves a JPEG undecided",
@@ -1394,4 +1434,30 @@ TEST_CASE("A correct foreign render, with another pixel filter and noise shared 
   CHECK(verdict("tent.exr", "--test") == 0);
   CHECK(verdict("tent.exr", "--within 0.05") != 1);
   CHECK(verdict("box.exr", "--test") == 1);
+}
+
+TEST_CASE("A palette TIFF is read: an index a pixel in the file, the palette's 8-bit codes on screen", "[image]") {
+  // Uncompressed, its file holds a 4- or 8-bit index a pixel, not three channels' codes (the size
+  // check once refused every such file as claiming more than it held), and its colours are the
+  // palette's codes, of 8 bits: their step is 1/255 however few bits the index has.
+  TempDir dir;
+  const std::vector<std::array<uint16_t, 3>> levels = {{0, 0, 0}, {255, 128, 7}, {12, 200, 99}, {77, 77, 250}};
+  const auto index = [](int x, int y) { return (x + 2 * y) % 4; };
+  for (const int bits : {4, 8}) {
+    INFO(bits << "-bit indices");
+    const std::string path = dir / ("palette" + std::to_string(bits) + ".tif");
+    writePaletteTiff(path, 21, 9, bits, index, levels);
+    const ImageHeader header = readImageHeader(path);
+    CHECK(header.colourEncoding == ColourEncoding::Integer);
+    CHECK(header.largestCode == 255);
+    const Image image = readImage(path);
+    REQUIRE(image.width() == 21);
+    REQUIRE(image.height() == 9);
+    uint64_t wrong = 0;
+    for (int y = 0; y < 9; ++y)
+      for (int x = 0; x < 21; ++x)
+        for (int c = 0; c < 3; ++c)
+          wrong += std::abs(image.at(x, y, c) - levels[size_t(index(x, y))][size_t(c)] / 255.0f) > 1e-6f;
+    CHECK(wrong == 0);
+  }
 }
