@@ -15,14 +15,16 @@
 namespace lucent {
 
 DirectLights::DirectLights(const Scene& scene) {
-  for (uint32_t i = 0; i < uint32_t(scene.lights.size()); ++i)
-    if (isDeltaLight(scene.lights[i])) delta.push_back(i);
-  anySampled = delta.size() < scene.lights.size();
-  if (delta.empty()) return;  // the scene's own distribution, untouched
   std::vector<float> weights;
   for (uint32_t i = 0; i < uint32_t(scene.lights.size()); ++i)
-    if (!isDeltaLight(scene.lights[i])) sampled.push_back(i), weights.push_back(scene.lightDistribution.pmf(i));
-  if (anySampled) choice = Distribution1D(weights);
+    if (isDeltaLight(scene.lights[i])) delta.push_back(i);
+    else sampled.push_back(i), weights.push_back(scene.lightDistribution.weight(i));
+  anySampled = !sampled.empty();
+  if (!anySampled) return;
+  // Shadow rays are these methods' only way to direct light: a light that owned no cell of the
+  // choice's grid would be missing from it (where the lights are more than the cells, some must be).
+  const std::vector<uint8_t> ownCell(weights.size() <= Distribution1D::kCells ? weights.size() : 0, 1);
+  choice = Distribution1D(weights, ownCell);
 }
 
 namespace {
@@ -61,13 +63,8 @@ void shadowSamples(const Scene& scene, const DirectLights& lights, const Shading
   for (int i = 0; i < samples; ++i) {
     const float uLight = rng.uniform();
     const Vec2 u = stratifiedSample2D(uint32_t(i), uint32_t(samples), rng.uniform2());
-    LightSample ls;
-    if (lights.delta.empty()) {
-      ls = sampleLight(scene, point.position, uLight, u);
-    } else {
-      const uint32_t k = lights.choice.pick(uLight);
-      ls = sampleChosenLight(scene, lights.sampled[k], lights.choice.pmf(k), point.position, u);
-    }
+    const uint32_t k = lights.choice.pick(uLight);
+    const LightSample ls = sampleChosenLight(scene, lights.sampled[k], lights.choice.pmf(k), point.position, u);
     emitLightSample(scene, point, frame, woLocal, ls, [&](const Ray& ray, Rgb c) { emit(ray, c, false); });
   }
 }

@@ -618,6 +618,34 @@ TEST_CASE("Direct light: one exact shadow ray per point light, samples for the a
   CHECK(lit > n / 2);
 }
 
+TEST_CASE("Direct light: every area light owns a share of the light samples, however dim", "[photonmap-render]") {
+  // The Cornell box with a second emitter of 1e-9 its light's radiance on a hundredth of its area:
+  // by power alone its share of the samples (about 1e-13) would be narrower than a cell of the
+  // choice's 2^-24 grid, so never drawn, and shadow rays are these methods' only way to its light.
+  Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + "/scenes/cornell-box.json", {true});
+  Material dim;
+  dim.kd = Rgb(0.0f);
+  dim.ke = Rgb(1e-9f);
+  test::addQuad(scene, {-0.01f, 0.5f, -0.01f}, {-0.01f, 0.5f, 0.01f}, {0.01f, 0.5f, 0.01f}, {0.01f, 0.5f, -0.01f},
+                test::addMaterial(scene, dim, "dim"));
+  finalizeScene(scene);
+  const DirectLights lights(scene);
+  REQUIRE(lights.delta.empty());
+  REQUIRE(lights.sampled.size() == scene.lights.size());
+  uint32_t dimLights = 0;
+  for (uint32_t k = 0; k < lights.sampled.size(); ++k) {
+    const Light& light = scene.lights[lights.sampled[k]];
+    const bool isDim = scene.materialNames[scene.materialIds[light.triangle]] == "dim";
+    INFO("light " << k << (isDim ? " (dim)" : ""));
+    CHECK(lights.choice.cellCount(k) >= 1);
+    if (isDim) {
+      ++dimLights;
+      CHECK(scene.lightDistribution.cellCount(lights.sampled[k]) == 0);  // by power alone: none
+    }
+  }
+  CHECK(dimLights == 2);
+}
+
 TEST_CASE("A flat mirror's caustic equals the mirrored light's illumination", "[photonmap-render][caustic]") {
   // A floor (y = 0, Kd 0.5) under a mirror (y = 4, 3 x 3, facing down, Ks 0.8) and between them
   // a small emitter (y = 1, 0.4 x 0.4) facing the mirror, outside the mirror's bounding sphere, so

@@ -13,14 +13,14 @@
 namespace lucent {
 
 // The scene's lights as the direct-light estimates take them: one shadow ray to each point and
-// directional light (exact but for its visibility), light samples among the others, chosen by the
-// scene's light distribution restricted to them (by the scene's own where it has no delta light).
+// directional light (exact but for its visibility), light samples among the others, chosen by their
+// estimated power, each owning a cell of the choice's grid however dim (Distribution1D).
 struct DirectLights {
   explicit DirectLights(const Scene& scene);
-  std::vector<uint32_t> delta;    // the point and directional lights
+  std::vector<uint32_t> delta;    // the point, spot and directional lights
   bool anySampled = false;        // whether there are other lights
-  std::vector<uint32_t> sampled;  // with delta lights: the others
-  Distribution1D choice;          // with delta lights: over `sampled`
+  std::vector<uint32_t> sampled;  // the others
+  Distribution1D choice;          // over `sampled`
 };
 
 // Stage "trace_rays" (shadow rays): direct light reflected towards the viewer at every point: one
