@@ -195,13 +195,13 @@ TEST_CASE("A closed box lit only from outside is black inside, with every method
     // Particle spaces: a link's particle and a list's particles face the way of the surface they
     // stand for, so the two sides of a wall never mix; one-sided particles (--sides front) give a
     // point seen from behind no light. What does leak is a surface just beyond a wall that faces the
-    // same way within a link's or a list's radius: the emitter's underside 0.01 above the lid, lit
-    // by the lid's top, gives its light to links that hit the lid's inside, and two-sided walls
-    // 0.1 apart, about one particle spacing, mix their gap's faces with the inside (README,
-    // "Limits"). Bounded: direct light exactly nothing, the image's mean at most a thousandth of
-    // the outside's light with one-sided walls (measured: 4.2e-4 for the area light, exactly 0 for
-    // the others), two hundredths with two-sided walls and particles on both sides (measured
-    // 1.3e-2 under the environment).
+    // same way within a link's or a list's radius: two-sided walls 0.1 apart, about one particle
+    // spacing, mix their gap's faces with the inside (README, "Limits"); the emitter's underside
+    // 0.01 above the lid is covered (coveredParticles), so no link that hits the lid's inside picks
+    // it. Bounded: direct light exactly nothing, the image's mean at most a thousandth of the
+    // outside's light with one-sided walls (measured: 1.0e-5 for the area light, exactly 0 for the
+    // others), two hundredths with two-sided walls and particles on both sides (measured 8.5e-3
+    // under the environment).
     for (ParticleSides sides : {ParticleSides::Both, ParticleSides::Front}) {
       ParticleOptions particles;
       particles.sides = sides;

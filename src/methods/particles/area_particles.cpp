@@ -71,9 +71,32 @@ AreaParticles distributeAreaParticles(const Scene& scene, const AreaParticleOpti
   return out;
 }
 
-OrientedPointGrid buildParticleGrid(std::span<const AreaParticle> particles, float cellSize) {
-  std::vector<OrientedPoint> points(particles.size());
-  for (uint32_t i = 0; i < uint32_t(particles.size()); ++i) points[i] = {particles[i].position, particles[i].normal, i};
+std::vector<uint8_t> coveredParticles(const Visibility& vis, std::span<const AreaParticle> particles, float reach) {
+  std::vector<uint8_t> covered(particles.size(), 0);
+  constexpr size_t kPacket = 16;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    stopPoint();
+    for (size_t first = r.begin(); first < r.end(); first += kPacket) {
+      const int count = int(std::min(kPacket, r.end() - first));
+      bool occluded[kPacket];
+      occludedPacket<int(kPacket)>(vis, count, [&](int k) {
+        const AreaParticle& p = particles[first + size_t(k)];
+        Ray ray{offsetOrigin(p.position, p.normal, p.normal), p.normal};
+        ray.tMax = reach;
+        return ray;
+      }, occluded);
+      for (int k = 0; k < count; ++k) covered[first + size_t(k)] = occluded[k];
+    }
+  });
+  return covered;
+}
+
+OrientedPointGrid buildParticleGrid(std::span<const AreaParticle> particles, float cellSize,
+                                    std::span<const uint8_t> left) {
+  std::vector<OrientedPoint> points;
+  points.reserve(particles.size());
+  for (uint32_t i = 0; i < uint32_t(particles.size()); ++i)
+    if (left.empty() || !left[i]) points.push_back({particles[i].position, particles[i].normal, i});
   return buildOrientedPointGrid(points, cellSize);
 }
 

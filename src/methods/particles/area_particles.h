@@ -13,6 +13,7 @@
 #include "lucent/methods/particles_records.h"
 #include "lucent/scene/scene.h"
 #include "lucent/techniques/points/point_hierarchy.h"
+#include "lucent/trace/visibility.h"
 
 namespace lucent {
 
@@ -50,8 +51,18 @@ struct CatchmentCounters {
 void measureCatchments(const Scene& scene, AreaParticles& area, const OrientedPointGrid& grid, float radius,
                        uint32_t samplesPerPosition, uint64_t seed, CatchmentCounters& counters);
 
-// The particles' positions and normals in a grid of cells about `cellSize` wide.
-OrientedPointGrid buildParticleGrid(std::span<const AreaParticle> particles, float cellSize);
+// Which particles face another surface nearer than `reach` along their normal (with `reach` a
+// particle spacing: the ceiling above a two-sided lamp hung just beneath it, a floor under a box
+// standing on it). The light between such surfaces is held in a gap that the particles cannot
+// resolve: a covered particle's light (above the lamp, the back face's L pi) would reach the room
+// through the links that end at it and the estimation lists that hold it, where the gap lets out
+// almost none. One ray each along the normal, in packets.
+std::vector<uint8_t> coveredParticles(const Visibility& vis, std::span<const AreaParticle> particles, float reach);
+
+// The particles' positions and normals in a grid of cells about `cellSize` wide, less those marked
+// in `left` (empty: none), which nothing then finds.
+OrientedPointGrid buildParticleGrid(std::span<const AreaParticle> particles, float cellSize,
+                                    std::span<const uint8_t> left = {});
 
 // The particle nearest to `point` of those that face the way `side` does (normal . side > 0),
 // within `radius`; kNoParticle if there is none. Of equally near ones, the lowest index. With

@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <memory>
@@ -122,7 +123,9 @@ class ParticleRender {
     linkRadius_ = o_.linkRadius * spacing_;
     {
       StageTimer timer(stats_, "particle_grid");
-      linkGrid_ = buildParticleGrid(area_.particles, linkRadius_);
+      covered_ = coveredParticles(vis_, area_.particles, spacing_);
+      stats_.addCounter("covered_particles", uint64_t(std::count(covered_.begin(), covered_.end(), uint8_t(1))));
+      linkGrid_ = buildParticleGrid(area_.particles, linkRadius_, covered_);
     }
     if (o_.particleArea == ParticleArea::Catchment) {
       StageTimer timer(stats_, "particle_areas");
@@ -155,7 +158,7 @@ class ParticleRender {
     listCosine_ = std::cos(o_.listAngle * kPi / 180.0f);
     {
       StageTimer timer(stats_, "list_grid");
-      listGrid_ = buildParticleGrid(particles(), listRadius_);
+      listGrid_ = buildParticleGrid(particles(), listRadius_, covered_);
     }
     if (everything_) {
       StageTimer timer(stats_, "estimation_lists");
@@ -384,6 +387,7 @@ class ParticleRender {
   // Geometry.
   AreaParticles area_;
   float spacing_ = 0, linkRadius_ = 0, listRadius_ = 0, listCosine_ = 0;
+  std::vector<uint8_t> covered_;  // coveredParticles: in no grid, so in no link's end and no list
   OrientedPointGrid linkGrid_, listGrid_;
   ParticleLinks scatterLinks_, gatherLinks_;
   Tessellation tess_;
