@@ -58,10 +58,8 @@ class Distribution1D {
   }
   // u, picked as bin i, rescaled to [0,1) within the bin's cells. It takes as many values as the
   // bin has cells (u's own): a bin of few cells, one of a tiny probability, gets a coarse number.
-  float remap(uint32_t i, float u) const { return remapPosition(i, double(u) * kCells); }
-  // The same for a position on the grid (cells from the start, with its fraction).
-  float remapPosition(uint32_t i, double position) const {
-    const double r = (position - cells_[i]) / double(cells_[i + 1] - cells_[i]);
+  float remap(uint32_t i, float u) const {
+    const double r = (double(u) * kCells - cells_[i]) / double(cells_[i + 1] - cells_[i]);
     return std::clamp(static_cast<float>(r), 0.0f, 0x1.fffffep-1f);
   }
   float pmf(uint32_t i) const { return float(cellCount(i)) * 0x1p-24f; }
