@@ -73,20 +73,17 @@ AreaParticles distributeAreaParticles(const Scene& scene, const AreaParticleOpti
 
 std::vector<uint8_t> coveredParticles(const Visibility& vis, std::span<const AreaParticle> particles, float reach) {
   std::vector<uint8_t> covered(particles.size(), 0);
-  constexpr size_t kPacket = 16;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
     stopPoint();
-    for (size_t first = r.begin(); first < r.end(); first += kPacket) {
-      const int count = int(std::min(kPacket, r.end() - first));
-      bool occluded[kPacket];
-      occludedPacket<int(kPacket)>(vis, count, [&](int k) {
-        const AreaParticle& p = particles[first + size_t(k)];
-        Ray ray{offsetOrigin(p.position, p.normal, p.normal), p.normal};
-        ray.tMax = reach;
-        return ray;
-      }, occluded);
-      for (int k = 0; k < count; ++k) covered[first + size_t(k)] = occluded[k];
+    std::vector<Ray> rays;
+    rays.reserve(r.size());
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const AreaParticle& p = particles[i];
+      rays.push_back({offsetOrigin(p.position, p.normal, p.normal), p.normal});
+      rays.back().tMax = reach;
     }
+    occludedInPackets(vis, rays.size(), [&](size_t k) -> const Ray& { return rays[k]; },
+                      [&](size_t k, bool blocked) { covered[r.begin() + k] = blocked; });
   });
   return covered;
 }
