@@ -766,6 +766,9 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
   const auto scales = regionScales(regions, noise.runs);
   noise.scales = {scales[0], scales[1]};
   t.verdict = Verdict::Pass;
+  // A pass needs every interval inside the margin, so each at level alpha keeps the pass's at
+  // alpha; a failure needs only one outside it, so each is tested at alpha over their number.
+  const double failAlpha = alpha / (3.0 * double(regions.size()));
   bool negativeReference = false;  // a region's reference sum is negative in a channel
   for (size_t k = 0; k < regions.size(); ++k) {
     const CandidateNoise::Scale& scale = noise.scales[k == 0 ? 1 : 0];
@@ -780,17 +783,20 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
       const double r = s.reference[c];
       if (r > 0) {
         const RelativeInterval interval = relativeInterval(s, c, noise.source, scale, alpha, 1.0);
+        const RelativeInterval failing = relativeInterval(s, c, noise.source, scale, failAlpha, 1.0);
         channel.relativeDifference = interval.difference;
         channel.low = interval.low, channel.high = interval.high;
         if (!std::isfinite(channel.high - channel.low)) channel.verdict = Verdict::Inconclusive;
         else if (channel.low > -within && channel.high < within) channel.verdict = Verdict::Pass;
-        else if (channel.low >= within || channel.high <= -within) channel.verdict = Verdict::Fail;
+        else if (failing.low >= within || failing.high <= -within) channel.verdict = Verdict::Fail;
         else {
           channel.verdict = Verdict::Inconclusive;
-          // The candidate's share of the interval must narrow to the margin between d and +-D.
+          // The candidate's share of the interval must narrow to the margin between d and +-D (the
+          // failing interval's where d lies beyond it).
           const double margin = std::abs(std::abs(channel.relativeDifference) - within);
-          t.samplesToDecide = std::max(t.samplesToDecide,
-                                       margin > 0 ? std::pow(interval.candidateHalfWidth / margin, 2) : kInfinity);
+          const double halfWidth = std::abs(channel.relativeDifference) > within ? failing.candidateHalfWidth
+                                                                                   : interval.candidateHalfWidth;
+          t.samplesToDecide = std::max(t.samplesToDecide, margin > 0 ? std::pow(halfWidth / margin, 2) : kInfinity);
         }
       } else if (r == 0) {
         // A black reference region: equivalent only to a black candidate.
