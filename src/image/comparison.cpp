@@ -23,6 +23,7 @@ nlohmann::ordered_json noiseJson(const CandidateNoise& noise) {
       out["correlation"][scale.name] = {{"factor", scale.correlation}, {"degrees_of_freedom", scale.degreesOfFreedom}};
   if (noise.neighboursMeasured)
     out["neighbour_correlation"] = {{"rho", noise.neighbourCorrelation}, {"z", noise.neighbourCorrelationZ},
+                                    {"inflation", noise.neighbourInflation},
                                     {"squares_over_layers", noise.layerLevel}, {"squares_over_layers_z", noise.layerLevelZ}};
   if (!noise.undecided.empty()) out["undecided"] = noise.undecided;
   return out;

@@ -369,12 +369,57 @@ class TestPixels {
     const double q = pairs.ratio(), spread = pairs.spread();
     noise_.neighbourCorrelation = 1 - q;
     noise_.neighbourCorrelationZ = spread > 0 ? (1 - q) / spread : 0.0;
+    noise_.neighboursMeasured = true;
+    const double rho = noise_.neighbourCorrelation;
+    if (rho >= kNeighbourCorrelation && noise_.neighbourCorrelationZ >= kNeighbourCorrelationZ)
+      noise_.neighbourInflation = 1 + 24 * rho + fartherNeighbourCorrelation();
     // The pixels' terms as if independent; where neighbours share noise their squares do too, by at
-    // most 1 + 24 rho over the 24 pixels within 2 of each.
-    const double l = pixels.ratio(), levelSpread = pixels.spread() * std::sqrt(1 + 24 * std::max(0.0, 1 - q));
+    // most 1 + 24 rho over the 24 pixels within 2 of each, or the inflation.
+    const double l = pixels.ratio();
+    const double levelSpread = pixels.spread() * std::sqrt(std::max(1 + 24 * std::max(0.0, rho), noise_.neighbourInflation));
     noise_.layerLevel = l;
     noise_.layerLevelZ = levelSpread > 0 ? (l - 1) / levelSpread : 0.0;
-    noise_.neighboursMeasured = true;
+  }
+
+  // CandidateNoise::neighbourInflation beyond 2 pixels: for each lag k from 3 to a block's side, the
+  // correlation rho_k of pixels k apart along a row or a column (as rho, over disjoint pairs), 8 k
+  // rho_k for the 8 k pixels at that distance, while rho_k is shown at z 2. A separable filter's
+  // correlation is largest along the axes at a given distance, so the sum bounds theirs.
+  double fartherNeighbourCorrelation() {
+    constexpr int kFarthest = 8;
+    const int w = width(), h = height();
+    std::vector<std::array<double, 4>> residuals(size_t(w) * size_t(h));  // R, G, B and the variances' sum
+    Quad mean, variance, reference, referenceVariance, low, high;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        readRounded(x, y, mean, variance, reference, referenceVariance, low, high);
+        auto& r = residuals[size_t(y) * size_t(w) + size_t(x)];
+        r = {mean[0] - reference[0], mean[1] - reference[1], mean[2] - reference[2], 0.0};
+        for (size_t c = 0; c < 3; ++c) r[3] += variance[c] + referenceVariance[c];
+      }
+    double added = 0;
+    for (int k = 3; k <= kFarthest; ++k) {
+      RatioOfSums pairs;
+      const auto pair = [&](size_t a, size_t b) {
+        double d2 = 0;
+        for (size_t c = 0; c < 3; ++c) d2 += (residuals[a][c] - residuals[b][c]) * (residuals[a][c] - residuals[b][c]);
+        const double v = residuals[a][3] + residuals[b][3];
+        if (v > 0 && std::isfinite(d2)) pairs.add(d2, v);
+      };
+      // Rows of even y pair along x, columns of odd x along y: every pixel is in at most one pair of
+      // each, x and x + k for x mod 2k below k.
+      for (int y = 0; y < h; y += 2)
+        for (int x = 0; x + k < w; ++x)
+          if (x % (2 * k) < k) pair(size_t(y) * size_t(w) + size_t(x), size_t(y) * size_t(w) + size_t(x + k));
+      for (int x = 1; x < w; x += 2)
+        for (int y = 0; y + k < h; ++y)
+          if (y % (2 * k) < k) pair(size_t(y) * size_t(w) + size_t(x), size_t(y + k) * size_t(w) + size_t(x));
+      if (!(pairs.denominator > 0)) break;
+      const double rho = 1 - pairs.ratio(), se = pairs.spread();
+      if (!(rho >= 2 * se) || !(rho > 0)) break;
+      added += 8 * k * rho;
+    }
+    return added;
   }
 
   // The runs' mean at the pixel last read, and the variance of that mean from their spread.
@@ -619,8 +664,8 @@ bool neighbourCorrelationShown(const CandidateNoise& noise) {
 // describe the noise (CandidateNoise: neighbours correlated, or the layers above the differences'
 // spread): what the layers cannot support becomes inconclusive, saying why. `intervals`: --within's,
 // which positive correlation narrows. `failsInflated(k)`: whether --test still fails with every
-// variance k times as large; correlated neighbours raise a sum's variance at most 1 + 24 rho
-// times (the 24 pixels within 2 of each, all at rho), so a failure beyond that stands.
+// variance k times as large; correlated neighbours raise a sum's variance at most
+// CandidateNoise::neighbourInflation times, so a failure beyond that stands.
 Verdict throughNeighbours(CandidateNoise& noise, Verdict verdict, bool intervals,
                           const std::function<bool(double)>& failsInflated = {}) {
   if (noise.source != NoiseSource::VarianceLayer || !noise.neighboursMeasured || verdict == Verdict::Inconclusive)
@@ -633,7 +678,7 @@ Verdict throughNeighbours(CandidateNoise& noise, Verdict verdict, bool intervals
   const bool more = shown && rho > 0 && !overstated, less = (shown && rho < 0) || overstated;
   std::ostringstream why;
   why << std::setprecision(2);
-  if (intervals ? more : verdict == Verdict::Fail ? more && !(failsInflated && failsInflated(1 + 24 * rho))
+  if (intervals ? more : verdict == Verdict::Fail ? more && !(failsInflated && failsInflated(noise.neighbourInflation))
                                                   : less) {
     if (overstated)
       why << "the variance layers are larger than the differences from the reference say (their squares sum to "
@@ -860,10 +905,9 @@ std::vector<SurfaceDifference> differenceBySurface(const Candidate& candidate, c
   // pixels lie all over the image, and noise shared over long ranges (a per-run offset, a random
   // sequence shared by every pixel) makes their sums vary more than a pool over tiles would say.
   // With variance layers whose neighbours' differences are shown correlated, by variances (the
-  // candidate's and the reference's) 1 + 24 rho times as large, as a failure of --test must
-  // survive: intervals wide enough to locate a gross error.
-  const double rho = noise.neighbourCorrelation;
-  const double inflation = neighbourCorrelationShown(noise) && rho > 0 ? 1 + 24 * rho : 1.0;
+  // candidate's and the reference's) CandidateNoise::neighbourInflation times as large, as a
+  // failure of --test must survive: intervals wide enough to locate a gross error.
+  const double inflation = noise.neighbourInflation;
   const CandidateNoise::Scale scale = noise.source == NoiseSource::Runs
                                           ? CandidateNoise::Scale{"surfaces", 0.0, double(noise.runs - 1)}
                                           : CandidateNoise::Scale{"surfaces", 1.0, kInfinity};

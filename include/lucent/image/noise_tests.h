@@ -95,9 +95,14 @@ struct CandidateNoise {
   // several pixels correlates them (sums of pixels then vary more than the layers say), blue-noise
   // sampling anticorrelates them (less). Where it is at least kNeighbourCorrelation and z at least
   // kNeighbourCorrelationZ, the verdicts the layers cannot support are inconclusive: a failure of
-  // --test (unless it stands with every variance 1 + 24 rho times as large) and any verdict of
-  // --within where rho > 0, a pass of --test where rho < 0.
+  // --test (unless it stands with every variance neighbourInflation times as large) and any
+  // verdict of --within where rho > 0, a pass of --test where rho < 0.
   double neighbourCorrelation = 0, neighbourCorrelationZ = 0;
+  // Where rho is shown and positive, how many times a sum's variance may exceed the layers' sum: 1 +
+  // 24 rho (the 24 pixels within 2 of each, at rho), plus 8 k rho_k for each lag k from 3 to 8 while
+  // the correlation of pixels k apart along a row or a column is shown at z 2 (a pixel filter that
+  // splats into pixels up to 8 apart); 1 elsewhere.
+  double neighbourInflation = 1;
   // And the sum of the pixels' squared differences over that of their variances, and its z: about
   // 1 where the layers are right, above it with a bias, below it where the layers overstate the
   // noise (which also makes rho positive): then a pass of --test is inconclusive instead.
@@ -189,7 +194,7 @@ EquivalenceTest testEquivalence(const Candidate& candidate, const Image& referen
 // have it, except that with runs a surface's variance is its own sum's spread, with n - 1 degrees
 // of freedom (a surface's pixels lie all over the image, where noise shared over long ranges, such
 // as a per-run offset, adds more than a pool over tiles would say), and with variance layers whose
-// neighbours are shown correlated both variances are 1 + 24 rho times as large (see
+// neighbours are shown correlated both variances are neighbourInflation times as large (see
 // CandidateNoise). The interval is absent (NaN) where the noise tests are undecided (the candidate's
 // noise unknown, a lossy file). Empty where the reference has no surface layers. The reference
 // needs variance layers.
