@@ -8,7 +8,8 @@
 // has NaN or infinite values, --test finds it differs from the reference by more than their
 // noise, or --within shows it outside +-D; 2 bad input (the reference's NaN or infinite values
 // among them); 3 inconclusive: the candidate's noise is unknown (one image without variance
-// layers, or with half-float ones) or a --within interval reaches across +-D.
+// layers, or with half-float ones) or --within neither passes nor fails (an interval reaches across
+// +-D, or lies beyond it at alpha but not at alpha over both sides of every interval).
 // Prints the verdict in words when stdout is a terminal, compare's JSON line otherwise or with
 // --json. 8-bit images (PNG, JPEG) are decoded from sRGB to linear before they are compared. FLIP
 // is LDR-FLIP where both images are 8-bit sRGB files, HDR-FLIP otherwise.

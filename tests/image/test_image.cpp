@@ -622,7 +622,7 @@ TEST_CASE("testWithinNoise with variance layers: correlated neighbours leave a f
   CHECK(correct.noise.neighbourCorrelation == Approx(0.67).margin(0.05));
   CHECK(correct.verdict != Verdict::Fail);
   // 20% bright in one region: z 32 by the layers, 11 by the true noise, 7.8 with every variance
-  // 1 + 24 rho = 17 times as large: it fails.
+  // neighbourInflation = 1 + 24 rho = 17 times as large (pixels 3 apart share nothing): it fails.
   CHECK(testWithinNoise(splatted(0.2f), reference, 0.01).verdict == Verdict::Fail);
   // --within's intervals across the margin, correlation shown: runs decide it, not more samples
   // (which would narrow intervals already too narrow). Each pixel's noise shares 0.35 of its right
@@ -652,7 +652,7 @@ TEST_CASE("testWithinNoise with variance layers: correlated neighbours leave a f
   CHECK_THAT(across.noise.undecided, Catch::Contains("correlated") && Catch::Contains("give two or more runs"));
   CHECK_THAT(across.noise.undecided, !Catch::Contains("times the candidate's samples"));
   // By surface (a material per quadrant, and all but emitters): the correct image's intervals cover
-  // no difference as often as variances 1 + 24 rho times the layers' make them. A sum's true
+  // no difference as often as variances neighbourInflation (1 + 24 rho) times the layers' make them. A sum's true
   // variance is 9 times the layers' per channel, and R + G + B's is bounded as if its channels
   // were fully correlated (3 times the independent channels' variance): by the layers alone 16 of
   // 40 seeds' 200 intervals at 98% missed 0; with both variances 17 times as large they reach more
@@ -688,6 +688,18 @@ TEST_CASE("testWithinNoise with variance layers: correlated neighbours leave a f
   CHECK(hidden.noise.layerLevel == Approx(1.0 / 16).margin(0.03));
   CHECK(hidden.verdict == Verdict::Inconclusive);
   CHECK_THAT(hidden.noise.undecided, Catch::Contains("larger than"));
+  // Layers 1.3 times the noise make the correlation positive at every lag (about 0.23): the
+  // squares' level counts the 24 nearest pixels only (z -9.0), not the farther lags that the
+  // inflation adds (68.8 here against 6.5: z -2.8, and the pass would stand).
+  Image mildly = noisyImage(w, h, mean, 0.01f, 4);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 3; c < 6; ++c) mildly.at(x, y, c) *= 1.3f;
+  const NoiseTest mild = testWithinNoise(mildly, reference, 0.01);
+  INFO(mild.noise.undecided);
+  CHECK(mild.noise.neighbourInflation > 1 + 24 * mild.noise.neighbourCorrelation);
+  CHECK(mild.verdict == Verdict::Inconclusive);
+  CHECK_THAT(mild.noise.undecided, Catch::Contains("larger than"));
   // Layers that fit pass as they did.
   CHECK(testWithinNoise(noisyImage(w, h, mean, 0.01f, 3), reference, 0.01).verdict == Verdict::Pass);
 }

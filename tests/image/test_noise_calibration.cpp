@@ -301,9 +301,9 @@ Image splattedImageWithLayers(int radius, double bias, Random& rng) {
 
 TEST_CASE("One image with variance layers: noise shared up to 8 pixels apart leaves a failure inconclusive",
           "[compare][calibration]") {
-  // Counting the 24 pixels within 2 of each at the neighbours' rho, a tent of radius 4 failed
-  // --test 34 times in 200 (radius 2: 1, radius 3: 6): its blocks' sums vary more than 1 + 24 rho
-  // times the layers' sum. The correlations of pixels 3 to 8 apart raise the bound.
+  // Counting the 24 pixels within 2 of each at the neighbours' rho, tents of radius 2, 3 and 4
+  // failed --test 0, 7 and 35 times in 200: their blocks' sums vary more than 1 + 24 rho times the
+  // layers' sum. The correlations of pixels 3 to 8 apart raise the bound.
   constexpr double alpha = 0.05;
   constexpr int trials = 200;
   std::printf("tent radius  --test: fails  inconclusive  passes   30%% bias in one region found   (of %d)\n", trials);

@@ -164,10 +164,11 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
 // method from both images' noise (runs give the sum's spread itself). Per channel, so that a shift
 // of colour that keeps R + G + B is a difference. Verdict: pass when every interval lies inside
 // (-D, D) (two one-sided tests per region and channel at level alpha, intersection-union over
-// them), fail when an interval at level alpha / (3 x regions) lies wholly outside it (a bias beyond
-// D shown at level alpha over all the intervals, Bonferroni), else inconclusive, with the factor of
-// samples that would decide it; inconclusive too when the candidate's noise is unknown, or a
-// region's reference sum is negative in a channel (a pixel filter's negative lobes).
+// them), fail when an interval lies wholly outside it at level alpha / (2 x 3 x regions) (a bias
+// beyond D shown at level alpha over both sides of all the intervals, Bonferroni), else
+// inconclusive, with the factor of samples that would decide it; inconclusive too when the
+// candidate's noise is unknown, or a region's reference sum is negative in a channel (a pixel
+// filter's negative lobes).
 struct EquivalenceRegion {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   int channel = 0;  // the deciding channel (0 R, 1 G, 2 B): its difference and interval
