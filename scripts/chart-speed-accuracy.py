@@ -125,8 +125,10 @@ SCENES = {
                                  photons(["--photons", "--caustic-photons"], "photons", *MILLION), (8, 16, 24)),
     "cornell-box-glossy": scene("128x128", 256, (16, 64, 256, 1024), photons(["--photons"], "photons", *MILLION),
                                 (8, 16, 24)),
+    # The caustic through the ring comes by rare paths, which the error target's estimate misses (0.078
+    # at E = 0.003 after 150 s): its smaller targets would take hours.
     "ring-area": scene("128x96", 256, (16, 64, 256),
-                       photons(["--caustic-photons"], "caustic photons", *MILLION), (8, 16, 24)),
+                       photons(["--caustic-photons"], "caustic photons", *MILLION), (8, 16, 24), targets=(1e-2, 3e-3)),
     "sponza": scene("160x100", 1024, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
                     (8, 16, 24), (150000, (37500, 75000, 150000, 300000)), (3e-2, 1e-2, 3e-3)),
     "maze": scene("128x128", 64, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
@@ -135,7 +137,7 @@ SCENES = {
     # the sky, glTF's metals and rough dielectrics with a spot light and the sun, and its material
     # extensions (sheen, clear coat, thin-walled transmission) in the same room.
     "gltf/sponza-sky": scene("160x100", 1024, (16, 64, 256), photons(["--photons"], "photons", 65000, 260000, 1040000),
-                             (8, 16, 24), (150000, (37500, 75000, 150000, 300000))),
+                             (8, 16, 24), (150000, (37500, 75000, 150000, 300000)), (3e-2, 1e-2, 3e-3)),
     "gltf/materials-sky": scene("160x80", 256, (16, 64, 256), photons(["--photons"], "photons", *MILLION),
                                 (8, 16, 24)),
     "gltf/extensions-sky": scene("160x80", 256, (16, 64, 256), photons(["--photons"], "photons", *MILLION),
