@@ -147,6 +147,14 @@ struct RatioOfSums {
   }
 };
 
+// Whether the variance layers' neighbours are shown correlated (or anticorrelated): rho and its z
+// beyond kNeighbourCorrelation and kNeighbourCorrelationZ.
+bool neighbourCorrelationShown(const CandidateNoise& noise) {
+  return noise.source == NoiseSource::VarianceLayer && noise.neighboursMeasured &&
+         std::abs(noise.neighbourCorrelation) >= kNeighbourCorrelation &&
+         std::abs(noise.neighbourCorrelationZ) >= kNeighbourCorrelationZ;
+}
+
 // The candidate and the reference as the tests read them, pixel by pixel.
 class TestPixels {
  public:
@@ -371,7 +379,7 @@ class TestPixels {
     noise_.neighbourCorrelationZ = spread > 0 ? (1 - q) / spread : 0.0;
     noise_.neighboursMeasured = true;
     const double rho = noise_.neighbourCorrelation;
-    if (rho >= kNeighbourCorrelation && noise_.neighbourCorrelationZ >= kNeighbourCorrelationZ)
+    if (neighbourCorrelationShown(noise_) && rho > 0)
       noise_.neighbourInflation = 1 + 24 * rho + fartherNeighbourCorrelation();
     // The pixels' terms as if independent; where neighbours share noise their squares do too, by at
     // most 1 + 24 rho over the 24 pixels within 2 of each. (Not the inflation: layers too large
@@ -659,14 +667,6 @@ double statistic(double difference, double variance) {
   if (!std::isfinite(difference)) return difference;  // a candidate's NaN or infinity: no noise explains it
   if (variance > 0) return difference / std::sqrt(variance);
   return difference == 0 ? 0.0 : std::copysign(kInfinity, difference);
-}
-
-// Whether the variance layers' neighbours are shown correlated (or anticorrelated): rho and its z
-// beyond kNeighbourCorrelation and kNeighbourCorrelationZ.
-bool neighbourCorrelationShown(const CandidateNoise& noise) {
-  return noise.source == NoiseSource::VarianceLayer && noise.neighboursMeasured &&
-         std::abs(noise.neighbourCorrelation) >= kNeighbourCorrelation &&
-         std::abs(noise.neighbourCorrelationZ) >= kNeighbourCorrelationZ;
 }
 
 // A verdict from variance layers, where the differences from the reference say the layers do not
