@@ -183,7 +183,8 @@ EyePaths traceEyePaths(const Scene& scene, const Visibility& vis, const EyePathS
       int queued = 0;
       auto traceBatch = [&] {
         Hit hits[kWidestPacket];
-        intersectPacket<kWidestPacket>(vis, queued, [&](int j) -> const Ray& { return batch[j].ray; }, hits);
+        intersectPacket<kWidestPacket>(vis, queued, [&](int j) -> const Ray& { return batch[j].ray; }, hits,
+                                       RayKind::Camera);
         for (int j = 0; j < queued; ++j) {
           CameraSample& cs = batch[j];
           const Hit& hit = hits[j];
@@ -252,7 +253,7 @@ std::vector<uint32_t> tracePixelSurfaces(const Scene& scene, const Visibility& v
     for (int y = rows.begin(); y != rows.end(); ++y)
       for (int x = region.x0; x < region.x1; ++x) {
         const Ray ray = camera.generate(float(x) + 0.5f, float(y) + 0.5f);
-        const Hit hit = vis.intersect(ray);
+        const Hit hit = vis.intersect(ray, RayKind::Camera);
         uint32_t code = PixelSurface::code(-1, environmentEmits);
         if (hit.found()) {
           const bool emits = !emittedRadiance(scene, hit.triangle, hit.b1, hit.b2, -ray.direction).isBlack();

@@ -3,9 +3,11 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
+#include <type_traits>
 
 #include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
@@ -24,10 +26,10 @@ struct EmbreeError {
 }  // namespace
 
 // The triangles that are not everywhere for every ray: with holes (glTF alpha masks and blending) or
-// single-sided (glTF doubleSided false: not there from behind). They are in an Embree geometry of
-// their own whose filter rejects the hits where the surface is not: every query, camera, shadow,
-// photon, gather, link, honours them, and scenes without such triangles trace as before, without a
-// filter.
+// single-sided (glTF doubleSided false: not there from behind for camera rays, RayKind). They are in
+// an Embree geometry of their own whose filter rejects the hits where the surface is not: every
+// query, camera, shadow, photon, gather, link, honours the holes, and scenes without such triangles
+// trace as before, without a filter.
 struct FilteredTriangles {
   const Scene* scene = nullptr;
   std::vector<uint32_t> triangle;  // the geometry's primitive -> the scene's triangle
@@ -57,17 +59,27 @@ bool surfaceIsThere(const Scene& scene, uint32_t tri, float u, float v, Vec3 ori
   return float(key >> 40) * 0x1p-24f < alpha;
 }
 
+// Embree's context of a query, with the kind of its rays: the filter reads it back from the context
+// it is given.
+struct QueryContext {
+  RTCIntersectContext embree;
+  RayKind kind = RayKind::Secondary;
+  explicit QueryContext(RayKind k) : kind(k) { rtcInitIntersectContext(&embree); }
+};
+static_assert(std::is_standard_layout_v<QueryContext> && offsetof(QueryContext, embree) == 0);
+
 void surfaceFilter(const RTCFilterFunctionNArguments* args) {
   const auto& filtered = *static_cast<const FilteredTriangles*>(args->geometryUserPtr);
   const Scene& scene = *filtered.scene;
+  const bool camera = reinterpret_cast<const QueryContext*>(args->context)->kind == RayKind::Camera;
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     const uint32_t tri = filtered.triangle[RTCHitN_primID(args->hit, args->N, i)];
     const Material& m = scene.materials[scene.materialIds[tri]];
     const Vec3 direction{RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
                          RTCRayN_dir_z(args->ray, args->N, i)};
-    // From behind (or along it), a single-sided face is not there.
-    if (m.culledBehind != 0 && !(dot(direction, scene.geometricNormal(tri)) < 0)) {
+    // From behind (or along it), a single-sided face is not there for the camera.
+    if (camera && m.culledBehind != 0 && !(dot(direction, scene.geometricNormal(tri)) < 0)) {
       args->valid[i] = 0;
       continue;
     }
@@ -211,10 +223,9 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
 
 Visibility::~Visibility() = default;
 
-Hit Visibility::intersect(const Ray& ray) const {
+Hit Visibility::intersect(const Ray& ray, RayKind kind) const {
   if (!traceable(ray)) return Hit{};
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
+  QueryContext context(kind);
   RTCRayHit rh;
   rh.ray.org_x = ray.origin.x;
   rh.ray.org_y = ray.origin.y;
@@ -229,7 +240,7 @@ Hit Visibility::intersect(const Ray& ray) const {
   rh.ray.id = 0;
   rh.ray.flags = 0;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(impl_->scene, &context, &rh);
+  rtcIntersect1(impl_->scene, &context.embree, &rh);
   Hit hit;
   if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
     hit.t = rh.ray.tfar;
@@ -242,8 +253,7 @@ Hit Visibility::intersect(const Ray& ray) const {
 
 bool Visibility::occluded(const Ray& ray) const {
   if (!traceable(ray)) return false;
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
+  QueryContext context(RayKind::Secondary);
   RTCRay r;
   r.org_x = ray.origin.x;
   r.org_y = ray.origin.y;
@@ -257,19 +267,18 @@ bool Visibility::occluded(const Ray& ray) const {
   r.mask = 0xffffffffu;
   r.id = 0;
   r.flags = 0;
-  rtcOccluded1(impl_->scene, &context, &r);
+  rtcOccluded1(impl_->scene, &context.embree, &r);
   return r.tfar < 0;  // Embree sets tfar to -inf on a hit
 }
 
 #define LUCENT_PACKET_QUERIES(N)                                                                   \
-  void Visibility::intersect(const RayPacket<N>& rays, HitPacket<N>& hits) const {                 \
-    RTCIntersectContext context;                                                                   \
-    rtcInitIntersectContext(&context);                                                             \
+  void Visibility::intersect(const RayPacket<N>& rays, HitPacket<N>& hits, RayKind kind) const {  \
+    QueryContext context(kind);                                                                    \
     RTCRayHit##N rh;                                                                               \
     alignas(64) int32_t valid[N];                                                                  \
     toEmbree(rays, rh, valid);                                                                     \
     for (int i = 0; i < N; ++i) rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;                        \
-    rtcIntersect##N(valid, impl_->scene, &context, &rh);                                           \
+    rtcIntersect##N(valid, impl_->scene, &context.embree, &rh);                                    \
     for (int i = 0; i < N; ++i) {                                                                  \
       const bool found = valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;                  \
       hits.t[i] = found ? rh.ray.tfar[i] : kInf;                                                   \
@@ -279,12 +288,11 @@ bool Visibility::occluded(const Ray& ray) const {
     }                                                                                              \
   }                                                                                                \
   void Visibility::occluded(const RayPacket<N>& rays, bool occluded[N]) const {                    \
-    RTCIntersectContext context;                                                                   \
-    rtcInitIntersectContext(&context);                                                             \
+    QueryContext context(RayKind::Secondary);                                                      \
     RTCRayHit##N rh;                                                                               \
     alignas(64) int32_t valid[N];                                                                  \
     toEmbree(rays, rh, valid);                                                                     \
-    rtcOccluded##N(valid, impl_->scene, &context, &rh.ray);                                        \
+    rtcOccluded##N(valid, impl_->scene, &context.embree, &rh.ray);                                 \
     for (int i = 0; i < N; ++i) occluded[i] = valid[i] && rh.ray.tfar[i] < 0;                      \
   }
 LUCENT_PACKET_QUERIES(8)

@@ -28,8 +28,9 @@ namespace {
 enum class Outside { Sun, PointLight, AreaLightFacingAway, Environment };
 // The walls' faces: towards the inside (front faces seen from inside), towards the outside (back
 // faces seen from inside: one-sided surfaces from behind), or both, as two boxes 0.02 apart (a wall
-// with two sides).
-enum class Walls { Inward, Outward, TwoSided };
+// with two sides); or towards the inside and single-sided (glTF doubleSided false), which only the
+// camera's rays may pass from behind: light from outside meets their backs.
+enum class Walls { Inward, Outward, TwoSided, SingleSidedInward };
 
 // The box [-1, 1]^3 above a ground plane, the camera inside; the light outside. The area light lies
 // just above the box's lid, facing away from it, under a ceiling that sends its light back down
@@ -40,7 +41,11 @@ Scene closedBox(Outside light, Walls faces) {
   Material wall;
   wall.kd = Rgb(0.7f);
   const uint32_t walls = test::addMaterial(scene, wall, "walls");
-  if (faces != Walls::Outward) test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, walls, true);
+  Material singleSided = wall;
+  singleSided.culledBehind = 1;
+  if (faces == Walls::SingleSidedInward)
+    test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, test::addMaterial(scene, singleSided, "single-sided walls"), true);
+  if (faces == Walls::Inward || faces == Walls::TwoSided) test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, walls, true);
   if (faces == Walls::Outward) test::addBox(scene, {-1, -1, -1}, {1, 1, 1}, walls, false);
   if (faces == Walls::TwoSided) test::addBox(scene, {-1.1f, -1.1f, -1.1f}, {1.1f, 1.1f, 1.1f}, walls, false);
   test::addQuad(scene, {-3, -3, -3}, {-3, -3, 3}, {3, -3, 3}, {3, -3, -3}, walls);  // the ground
@@ -71,6 +76,7 @@ const char* name(Walls faces) {
     case Walls::Inward: return "inward walls";
     case Walls::Outward: return "outward walls";
     case Walls::TwoSided: return "two-sided walls";
+    case Walls::SingleSidedInward: return "single-sided inward walls";
   }
   return "";
 }
@@ -85,13 +91,15 @@ const char* name(Outside light) {
   return "";
 }
 
-// The largest value of any channel of light in the image (the albedo, normal and depth layers
-// aside).
+// The largest value of any channel of light in the image (the albedo, normal, depth and surface
+// layers aside).
 float largestLight(const Image& image) {
   float largest = 0;
   for (int c = 0; c < image.channelCount(); ++c) {
     const std::string& channel = image.channels()[size_t(c)];
-    if (channel.rfind("albedo", 0) == 0 || channel.rfind("normal", 0) == 0 || channel.rfind("depth", 0) == 0) continue;
+    if (channel.rfind("albedo", 0) == 0 || channel.rfind("normal", 0) == 0 || channel.rfind("depth", 0) == 0 ||
+        channel.rfind("surface", 0) == 0)
+      continue;
     for (int y = 0; y < image.height(); ++y)
       for (int x = 0; x < image.width(); ++x) largest = std::max(largest, image.at(x, y, c));
   }
@@ -117,13 +125,15 @@ LightInside lightInside(const Image& image) {
 }  // namespace
 
 TEST_CASE("A closed box lit only from outside is black inside, with every method", "[leaks]") {
-  for (Walls faces : {Walls::Inward, Walls::Outward, Walls::TwoSided})
+  for (Walls faces : {Walls::Inward, Walls::Outward, Walls::TwoSided, Walls::SingleSidedInward})
   for (Outside light : {Outside::Sun, Outside::PointLight, Outside::AreaLightFacingAway, Outside::Environment}) {
     const Scene scene = closedBox(light, faces);
     const Visibility vis(scene);
     INFO(name(faces));
-    // The same lights do reach the outside: a camera above the box sees them.
-    Scene outside = scene;
+    // The same lights do reach the outside: a camera above the box sees them. (Single-sided walls
+    // show their backs to it, which camera rays pass: the box of the same walls two-sided shows it
+    // the light that reaches their outsides.)
+    Scene outside = faces == Walls::SingleSidedInward ? closedBox(light, Walls::Inward) : scene;
     outside.camera = test::testCamera({0.3f, 2.5f, 2.5f}, {0, 0, 0}, 12, 12, 60);
     const Visibility outsideVis(outside);
     PathTraceOptions pt;

@@ -818,6 +818,30 @@ TEST_CASE("A thin-walled transmitting plane lit from below: purcell and pmfg ren
   }
 }
 
+TEST_CASE("A single-sided floor under the sky: purcell and pmfg render the light above it as the path tracer does",
+          "[photonmap-render][gltf]") {
+  // A floor that is glTF doubleSided false (culledBehind), a wide box floating above it, a constant
+  // sky all round, the camera under the box, seeing its underside and the floor beneath it. The path
+  // tracer's rays from there down to the sky meet the floor's front and stop; the sky's photons from
+  // below meet its back. Culled for every ray, the floor let them pass onto the box's underside and
+  // from there back onto the floor's shadowed front. Only the camera's rays may cull it (glTF's
+  // back-face culling), so that a segment is blocked both ways.
+  Scene scene;
+  Material floor;
+  floor.kd = Rgb(0.6f);
+  floor.culledBehind = 1;
+  test::addQuad(scene, {-10, 0, -10}, {-10, 0, 10}, {10, 0, 10}, {10, 0, -10}, test::addMaterial(scene, floor, "floor"));
+  Material box;
+  box.kd = Rgb(0.7f);
+  test::addBox(scene, {-3, 1, -3}, {3, 2, 3}, test::addMaterial(scene, box, "box"), false);
+  scene.environment.present = true;
+  scene.environment.radiance = {0.5f, 0.6f, 0.8f};
+  scene.camera = test::testCamera({0.3f, 0.35f, 2.2f}, {0, 0.8f, 0}, 24, 24, 40);
+  finalizeScene(scene);
+  const Visibility vis(scene);
+  checkPhotonMethodsAgainstPathTracer(scene, vis, 0.3f, "single-sided floor");
+}
+
 namespace {
 
 // A ball of KHR_materials_volume (index 1.5, its medium keeping `attenuation` of light over 0.8)

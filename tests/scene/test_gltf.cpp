@@ -1321,7 +1321,8 @@ TEST_CASE("EXT_mesh_gpu_instancing places a node's mesh once per instance, at th
   refusedWith({{"ROTATION", 5}}, ".attributes.ROTATION: instance 0 is a zero quaternion");
 }
 
-TEST_CASE("glTF single-sided faces (doubleSided false) are not there from behind for any query, two-sided ones are",
+TEST_CASE("glTF single-sided faces (doubleSided false) are not there from behind for camera rays but there both "
+          "ways for every other ray, two-sided ones there for all",
           "[gltf][loader][visibility]") {
   const test::TempDir dir;
   // The quad in z = 0, its counter-clockwise normal +z: a ray from z = 1 meets its front, one from
@@ -1329,21 +1330,28 @@ TEST_CASE("glTF single-sided faces (doubleSided false) are not there from behind
   json f = quadFile({{{"mesh", 0}}}, {0});
   const auto front = [](float tMax = 1e30f) { return Ray{{0.5f, 0.5f, 1}, {0, 0, -1}, 0, tMax}; };
   const auto back = [](float tMax = 1e30f) { return Ray{{0.5f, 0.5f, -1}, {0, 0, 1}, 0, tMax}; };
-  const auto check = [&](const Scene& scene, bool seenFromBehind) {
+  const auto check = [&](const Scene& scene, bool cameraSeesBack) {
     const Visibility vis(scene);
-    const Hit fromFront = vis.intersect(front()), fromBehind = vis.intersect(back());
-    REQUIRE(fromFront.found());
-    CHECK(fromFront.t == Approx(1));
-    CHECK(fromBehind.found() == seenFromBehind);
+    for (const RayKind kind : {RayKind::Camera, RayKind::Secondary}) {
+      const bool seenFromBehind = kind == RayKind::Secondary || cameraSeesBack;
+      INFO((kind == RayKind::Camera ? "camera rays" : "secondary rays"));
+      const Hit fromFront = vis.intersect(front(), kind), fromBehind = vis.intersect(back(), kind);
+      REQUIRE(fromFront.found());
+      CHECK(fromFront.t == Approx(1));
+      CHECK(fromBehind.found() == seenFromBehind);
+      // Packets of 16 and 8, front and back rays in turn, give the single rays' answers.
+      Hit hits16[16], hits8[8];
+      intersectPacket<16>(vis, 16, [&](int i) { return i % 2 ? back() : front(); }, hits16, kind);
+      for (int i = 0; i < 16; ++i) CHECK(hits16[i].found() == (i % 2 == 0 || seenFromBehind));
+      intersectPacket<8>(vis, 8, [&](int i) { return i % 2 ? back() : front(); }, hits8, kind);
+      for (int i = 0; i < 8; ++i) CHECK(hits8[i].found() == (i % 2 == 0 || seenFromBehind));
+    }
+    // Occlusion is a secondary query, the same both ways along a segment.
     CHECK(vis.occluded(front(2)));
-    CHECK(vis.occluded(back(2)) == seenFromBehind);
-    // Packets of 16 and 8, front and back rays in turn, give the single rays' answers.
-    Hit hits[16];
-    intersectPacket<16>(vis, 16, [&](int i) { return i % 2 ? back() : front(); }, hits);
-    for (int i = 0; i < 16; ++i) CHECK(hits[i].found() == (i % 2 == 0 || seenFromBehind));
+    CHECK(vis.occluded(back(2)));
     bool blocked[8];
     occludedPacket<8>(vis, 8, [&](int i) { return i % 2 ? back(2) : front(2); }, blocked);
-    for (int i = 0; i < 8; ++i) CHECK(blocked[i] == (i % 2 == 0 || seenFromBehind));
+    for (int i = 0; i < 8; ++i) CHECK(blocked[i]);
   };
   const Scene singleSided = loadWrapped(dir.path, f);
   REQUIRE(singleSided.materials[0].culledBehind == 1);

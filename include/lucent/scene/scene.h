@@ -56,9 +56,9 @@ struct Material {
   // emitsBackFace is 1 (glTF's doubleSided).
   int32_t emissiveTexture = -1;
   uint32_t emitsBackFace = 0;
-  // glTF's doubleSided false: seen from behind (against the counter-clockwise winding normal) the
-  // surface is not there, for every visibility query (Visibility's filter): camera, shadow, photon,
-  // gather and link rays pass through its back.
+  // glTF's doubleSided false: seen by the camera from behind (against the counter-clockwise winding
+  // normal) the surface is not there (Visibility's filter, RayKind::Camera); every other ray meets
+  // both sides.
   uint32_t culledBehind = 0;
   // 1: the normal texture's shading normal is bent towards the geometric one, per viewing
   // direction, so that the mirror direction stays above the surface (bentForReflection,

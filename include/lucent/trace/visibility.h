@@ -50,6 +50,13 @@ struct VisibilityOptions {
   std::string isa;
 };
 
+// Who looks along a ray. glTF's doubleSided false is back-face culling, a rasterizer's rule for what
+// the camera sees: a single-sided face is not there from behind for camera rays. Every other ray
+// (reflected, shadow, photon, gather, link) meets both sides, so that visibility is reciprocal: a
+// segment blocked one way is blocked the other, and the methods that follow light from the lights
+// (photons, particles' links) see the scene the path tracer sees from the surfaces.
+enum class RayKind : uint8_t { Camera, Secondary };
+
 // The instruction sets Embree's kernels can be asked for, oldest first.
 inline constexpr const char* kEmbreeIsas[] = {"sse4.2", "avx", "avx2", "avx512"};
 // Those of kEmbreeIsas that this CPU runs.
@@ -92,10 +99,10 @@ class Visibility {
   Visibility(const Visibility&) = delete;
   Visibility& operator=(const Visibility&) = delete;
 
-  Hit intersect(const Ray& ray) const;
+  Hit intersect(const Ray& ray, RayKind kind = RayKind::Secondary) const;
   bool occluded(const Ray& ray) const;
-  void intersect(const RayPacket<8>& rays, HitPacket<8>& hits) const;
-  void intersect(const RayPacket<16>& rays, HitPacket<16>& hits) const;
+  void intersect(const RayPacket<8>& rays, HitPacket<8>& hits, RayKind kind = RayKind::Secondary) const;
+  void intersect(const RayPacket<16>& rays, HitPacket<16>& hits, RayKind kind = RayKind::Secondary) const;
   // occluded[i] is true for active, traceable rays that hit something.
   void occluded(const RayPacket<8>& rays, bool occluded[8]) const;
   void occluded(const RayPacket<16>& rays, bool occluded[16]) const;
@@ -111,11 +118,11 @@ class Visibility {
 
 // The closest hits of rays rayOf(0) .. rayOf(count - 1), 1 <= count <= N, traced as one packet.
 template <int N, class RayOf>
-void intersectPacket(const Visibility& vis, int count, RayOf rayOf, Hit hits[]) {
+void intersectPacket(const Visibility& vis, int count, RayOf rayOf, Hit hits[], RayKind kind = RayKind::Secondary) {
   RayPacket<N> packet;
   packet.assign(count, rayOf);
   HitPacket<N> h;
-  vis.intersect(packet, h);
+  vis.intersect(packet, h, kind);
   for (int j = 0; j < count; ++j) hits[j] = {h.t[j], h.triangle[j], h.b1[j], h.b2[j]};
 }
 

@@ -38,7 +38,7 @@ CameraDepth traceCameraDepth(const Scene& scene, const Visibility& vis) {
       Ray rays[kWidestPacket];
       for (int j = 0; j < count; ++j) rays[j] = camera.generate(float(x0 + j) + 0.5f, float(y) + 0.5f);
       Hit hits[kWidestPacket];
-      intersectPacket<kWidestPacket>(vis, count, [&](int j) { return rays[j]; }, hits);
+      intersectPacket<kWidestPacket>(vis, count, [&](int j) { return rays[j]; }, hits, RayKind::Camera);
       for (int j = 0; j < count; ++j) d.depth[size_t(y) * size_t(d.width) + size_t(x0 + j)] = hits[j].t;
     }
   });

@@ -233,8 +233,8 @@ class PathTracer {
     w.hits.resize(w.paths.size());
     w.active.resize(w.paths.size());
     for (uint32_t i = 0; i < w.paths.size(); ++i) w.active[i] = i;
-    while (!w.active.empty()) {
-      traceClosestHits(w);
+    for (RayKind kind = RayKind::Camera; !w.active.empty(); kind = RayKind::Secondary) {
+      traceClosestHits(w, kind);
       size_t live = 0;
       for (const uint32_t i : w.active) {
         Path& path = w.paths[i];
@@ -299,18 +299,19 @@ class PathTracer {
 
   // The closest hits of the wave's live paths, the live paths of a run in one packet (a lone one as
   // a single ray, as in every render).
-  void traceClosestHits(Wave& w) const {
+  void traceClosestHits(Wave& w, RayKind kind) const {
     const std::vector<uint32_t>& live = w.active;
     size_t previousRun = 0;
     for (size_t first = 0; first < live.size();) {
       size_t last = first + 1;
       while (last < live.size() && last - first < kPacketWidth && w.run[live[last]] == w.run[live[first]]) ++last;
       if (last - first == 1) {
-        w.hits[live[first]] = vis_.intersect(w.paths[live[first]].ray);
+        w.hits[live[first]] = vis_.intersect(w.paths[live[first]].ray, kind);
       } else {
         Hit hits[kPacketWidth];
         intersectPacket<kPacketWidth>(
-            vis_, int(last - first), [&](int j) -> const Ray& { return w.paths[live[first + size_t(j)]].ray; }, hits);
+            vis_, int(last - first), [&](int j) -> const Ray& { return w.paths[live[first + size_t(j)]].ray; }, hits,
+            kind);
         for (size_t j = first; j < last; ++j) w.hits[live[j]] = hits[j - first];
       }
       if (prefetchSceneData_) {
