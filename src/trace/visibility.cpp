@@ -3,11 +3,9 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
-#include <cstddef>
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
-#include <type_traits>
 
 #include "lucent/core/memory.h"
 #include "lucent/core/parallel.h"
@@ -25,17 +23,27 @@ struct EmbreeError {
 };
 }  // namespace
 
-// The triangles that are not everywhere for every ray: with holes (glTF alpha masks and blending) or
-// single-sided (glTF doubleSided false: not there from behind for camera rays, RayKind). They are in
-// an Embree geometry of their own whose filter rejects the hits where the surface is not: every
-// query, camera, shadow, photon, gather, link, honours the holes, and scenes without such triangles
-// trace as before, without a filter.
-struct FilteredTriangles {
-  const Scene* scene = nullptr;
-  std::vector<uint32_t> triangle;  // the geometry's primitive -> the scene's triangle
-};
+// The scene's triangles in up to three Embree geometries, by what a ray must ask of them: those
+// there for every ray (geometry 0; in a scene of only these, all of them, numbered as the scene
+// numbers them, traced without a filter); the single-sided ones (glTF doubleSided false), there for
+// every ray but a camera ray from behind (RayKind), which camera queries reject by a filter of their
+// context (cullBehind), so that other rays meet them without one; and those with holes (glTF alpha
+// masks and blending), whose geometry filter (surfaceFilter) rejects the hits where the surface is
+// not, for every query.
+enum class TriangleGroup { Everywhere, SingleSided, Holes };
 
-bool needsFilter(const Material& m) { return m.alphaMode != AlphaMode::Opaque || m.culledBehind != 0; }
+TriangleGroup groupOf(const Material& m) {
+  return m.alphaMode != AlphaMode::Opaque ? TriangleGroup::Holes
+         : m.culledBehind != 0           ? TriangleGroup::SingleSided
+                                         : TriangleGroup::Everywhere;
+}
+
+// An Embree geometry's user data: its scene and its triangles.
+struct GeometryTriangles {
+  const Scene* scene = nullptr;
+  std::vector<uint32_t> triangle;  // the geometry's primitive -> the scene's triangle; empty: the same
+  uint32_t sceneTriangle(unsigned primitive) const { return triangle.empty() ? primitive : triangle[primitive]; }
+};
 
 // Whether the surface is at barycentrics (u, v) of triangle `tri`, for a ray from `origin` along
 // `direction`: where its alpha reaches the cutoff (masks), or with probability alpha, decided by a
@@ -59,35 +67,35 @@ bool surfaceIsThere(const Scene& scene, uint32_t tri, float u, float v, Vec3 ori
   return float(key >> 40) * 0x1p-24f < alpha;
 }
 
-// Embree's context of a query, with the kind of its rays: the filter reads it back from the context
-// it is given.
-struct QueryContext {
-  RTCIntersectContext embree;
-  RayKind kind = RayKind::Secondary;
-  explicit QueryContext(RayKind k) : kind(k) { rtcInitIntersectContext(&embree); }
-};
-static_assert(std::is_standard_layout_v<QueryContext> && offsetof(QueryContext, embree) == 0);
+Vec3 directionOf(const RTCFilterFunctionNArguments* args, unsigned i) {
+  return {RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
+          RTCRayN_dir_z(args->ray, args->N, i)};
+}
 
+// The holes' geometry filter, for every query.
 void surfaceFilter(const RTCFilterFunctionNArguments* args) {
-  const auto& filtered = *static_cast<const FilteredTriangles*>(args->geometryUserPtr);
-  const Scene& scene = *filtered.scene;
-  const bool camera = reinterpret_cast<const QueryContext*>(args->context)->kind == RayKind::Camera;
+  const auto& triangles = *static_cast<const GeometryTriangles*>(args->geometryUserPtr);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
-    const uint32_t tri = filtered.triangle[RTCHitN_primID(args->hit, args->N, i)];
-    const Material& m = scene.materials[scene.materialIds[tri]];
-    const Vec3 direction{RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
-                         RTCRayN_dir_z(args->ray, args->N, i)};
-    // From behind (or along it), a single-sided face is not there for the camera.
-    if (camera && m.culledBehind != 0 && !(dot(direction, scene.geometricNormal(tri)) < 0)) {
-      args->valid[i] = 0;
-      continue;
-    }
-    if (m.alphaMode == AlphaMode::Opaque) continue;
     const Vec3 origin{RTCRayN_org_x(args->ray, args->N, i), RTCRayN_org_y(args->ray, args->N, i),
                       RTCRayN_org_z(args->ray, args->N, i)};
-    if (!surfaceIsThere(scene, tri, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i), origin,
-                        direction))
+    if (!surfaceIsThere(*triangles.scene, triangles.sceneTriangle(RTCHitN_primID(args->hit, args->N, i)),
+                        RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i), origin,
+                        directionOf(args, i)))
+      args->valid[i] = 0;
+  }
+}
+
+// Camera queries' context filter, for every geometry's hits: from behind (or along it), a
+// single-sided face is not there.
+void cullBehind(const RTCFilterFunctionNArguments* args) {
+  const auto& triangles = *static_cast<const GeometryTriangles*>(args->geometryUserPtr);
+  const Scene& scene = *triangles.scene;
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const uint32_t tri = triangles.sceneTriangle(RTCHitN_primID(args->hit, args->N, i));
+    if (scene.materials[scene.materialIds[tri]].culledBehind != 0 &&
+        !(dot(directionOf(args, i), scene.geometricNormal(tri)) < 0))
       args->valid[i] = 0;
   }
 }
@@ -97,18 +105,24 @@ struct Visibility::Impl {
   RTCScene scene = nullptr;
   std::string isa;
   EmbreeError error;
-  unsigned filteredGeometry = RTC_INVALID_GEOMETRY_ID;
-  FilteredTriangles filtered;
-  std::vector<uint32_t> opaqueTriangle;  // the opaque geometry's primitive -> the scene's triangle; empty: the same
+  std::vector<GeometryTriangles> geometries;  // by Embree's geometry id
+  bool culls = false;                         // whether the scene has single-sided faces
   // A hit's triangle in the scene.
   uint32_t triangle(unsigned geometry, unsigned primitive) const {
-    return geometry == filteredGeometry ? filtered.triangle[primitive]
-           : opaqueTriangle.empty()   ? primitive
-                                      : opaqueTriangle[primitive];
+    return geometries[geometry].sceneTriangle(primitive);
   }
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
+  }
+};
+
+// Embree's context of a query: camera queries in a scene with single-sided faces carry cullBehind.
+struct QueryContext {
+  RTCIntersectContext embree;
+  QueryContext(RayKind kind, bool sceneCulls) {
+    rtcInitIntersectContext(&embree);
+    if (kind == RayKind::Camera && sceneCulls) embree.filter = cullBehind;
   }
 };
 
@@ -181,15 +195,23 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
                            " triangles (Embree's BVH)";
   rtcSetDeviceMemoryMonitorFunction(impl_->device, monitorMemory, &impl_->error);
   impl_->scene = rtcNewScene(impl_->device);
-  rtcSetSceneFlags(impl_->scene, options.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+  // Camera queries' culling is a filter of their context, which Embree calls only in a scene that
+  // asks for it.
+  const bool culls = std::any_of(scene.materialIds.begin(), scene.materialIds.end(),
+                                 [&](uint32_t m) { return scene.materials[m].culledBehind != 0; });
+  rtcSetSceneFlags(impl_->scene, RTCSceneFlags((options.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE) |
+                                               (culls ? RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION : RTC_SCENE_FLAG_NONE)));
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
 
-  // The triangles that are there for every ray first, as geometry 0 (in a scene without holes or
-  // single-sided faces, all of them, numbered as the scene numbers them), then the filtered ones.
-  std::vector<uint32_t> opaque;
+  // The groups' geometries in order, empty ones left out (but for a scene of no triangles).
+  std::vector<uint32_t> groups[3];
   for (uint32_t t = 0; t < scene.triangleCount(); ++t)
-    (needsFilter(scene.materials[scene.materialIds[t]]) ? impl_->filtered.triangle : opaque).push_back(t);
-  const auto attach = [&](const std::vector<uint32_t>& triangles, bool withFilter) {
+    groups[int(groupOf(scene.materials[scene.materialIds[t]]))].push_back(t);
+  const bool allEverywhere = groups[int(TriangleGroup::Everywhere)].size() == scene.triangleCount();
+  impl_->geometries.reserve(3);  // their addresses are the geometries' user data
+  for (const TriangleGroup group : {TriangleGroup::Everywhere, TriangleGroup::SingleSided, TriangleGroup::Holes}) {
+    std::vector<uint32_t>& triangles = groups[int(group)];
+    if (triangles.empty() && !(allEverywhere && group == TriangleGroup::Everywhere)) continue;
     RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                                  3 * sizeof(float), scene.positions.size()));
@@ -200,22 +222,20 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
       for (size_t i = 0; i < triangles.size(); ++i)
         std::memcpy(indices + 3 * i, &scene.indices[3 * size_t(triangles[i])], 3 * sizeof(uint32_t));
     }
-    if (withFilter) {
-      rtcSetGeometryUserData(geom, &impl_->filtered);
+    GeometryTriangles& user = impl_->geometries.emplace_back();
+    user.scene = &scene;
+    if (!allEverywhere) user.triangle = std::move(triangles);
+    rtcSetGeometryUserData(geom, &user);
+    if (group == TriangleGroup::Holes) {
       rtcSetGeometryIntersectFilterFunction(geom, surfaceFilter);
       rtcSetGeometryOccludedFilterFunction(geom, surfaceFilter);
     }
     rtcCommitGeometry(geom);
     const unsigned id = rtcAttachGeometry(impl_->scene, geom);
     rtcReleaseGeometry(geom);
-    return id;
-  };
-  if (!opaque.empty() || impl_->filtered.triangle.empty()) attach(opaque, false);
-  if (!impl_->filtered.triangle.empty()) {
-    impl_->opaqueTriangle = std::move(opaque);
-    impl_->filtered.scene = &scene;
-    impl_->filteredGeometry = attach(impl_->filtered.triangle, true);
+    if (id + 1 != impl_->geometries.size()) throw std::logic_error("Embree numbered the geometries out of order");
   }
+  impl_->culls = culls;
   rtcCommitScene(impl_->scene);
   if (!impl_->error.overMemoryLimit.empty()) throw MemoryLimitError(impl_->error.overMemoryLimit);
   if (!impl_->error.message.empty()) throw std::runtime_error(impl_->error.message);
@@ -225,7 +245,7 @@ Visibility::~Visibility() = default;
 
 Hit Visibility::intersect(const Ray& ray, RayKind kind) const {
   if (!traceable(ray)) return Hit{};
-  QueryContext context(kind);
+  QueryContext context(kind, impl_->culls);
   RTCRayHit rh;
   rh.ray.org_x = ray.origin.x;
   rh.ray.org_y = ray.origin.y;
@@ -253,7 +273,7 @@ Hit Visibility::intersect(const Ray& ray, RayKind kind) const {
 
 bool Visibility::occluded(const Ray& ray) const {
   if (!traceable(ray)) return false;
-  QueryContext context(RayKind::Secondary);
+  QueryContext context(RayKind::Secondary, impl_->culls);
   RTCRay r;
   r.org_x = ray.origin.x;
   r.org_y = ray.origin.y;
@@ -273,7 +293,7 @@ bool Visibility::occluded(const Ray& ray) const {
 
 #define LUCENT_PACKET_QUERIES(N)                                                                   \
   void Visibility::intersect(const RayPacket<N>& rays, HitPacket<N>& hits, RayKind kind) const {  \
-    QueryContext context(kind);                                                                    \
+    QueryContext context(kind, impl_->culls);                                                      \
     RTCRayHit##N rh;                                                                               \
     alignas(64) int32_t valid[N];                                                                  \
     toEmbree(rays, rh, valid);                                                                     \
@@ -288,7 +308,7 @@ bool Visibility::occluded(const Ray& ray) const {
     }                                                                                              \
   }                                                                                                \
   void Visibility::occluded(const RayPacket<N>& rays, bool occluded[N]) const {                    \
-    QueryContext context(RayKind::Secondary);                                                      \
+    QueryContext context(RayKind::Secondary, impl_->culls);                                        \
     RTCRayHit##N rh;                                                                               \
     alignas(64) int32_t valid[N];                                                                  \
     toEmbree(rays, rh, valid);                                                                     \

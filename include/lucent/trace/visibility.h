@@ -92,8 +92,9 @@ struct alignas(64) HitPacket {
 
 class Visibility {
  public:
-  // The scene's triangles; one with holes (a material's alphaMode) keeps a reference to `scene`, to
-  // look its alpha up at each candidate hit, and must outlive this.
+  // The scene's triangles; one with holes (a material's alphaMode) or single-sided faces keeps a
+  // reference to `scene`, to look its alpha and its faces' sides up at candidate hits, and must
+  // outlive this.
   explicit Visibility(const Scene& scene, const VisibilityOptions& options = {});
   ~Visibility();
   Visibility(const Visibility&) = delete;
