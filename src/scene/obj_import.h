@@ -52,7 +52,7 @@ struct MaterialSpec {
   TextureFile emissive;              // glTF only (sRGB), multiplies ke
   TextureFile specularTexture, specularColourTexture;  // glTF only: KHR_materials_specular's (A linear; sRGB)
   bool doubleSided = false;          // an emitter's back faces emit too (glTF's doubleSided, a scene file's double_sided)
-  bool singleSided = false;          // glTF's doubleSided false: the back faces are not there (Material::culledBehind)
+  bool singleSided = false;          // glTF's doubleSided false: camera rays do not see the back faces (Material::culledBehind)
   AlphaMode alphaMode = AlphaMode::Opaque;  // glTF only
   float alphaCutoff = 0.5f, baseAlpha = 1.0f;
   std::string origin;                // "file:line" of its definition, for error messages
