@@ -41,6 +41,7 @@ TriangleGroup groupOf(const Material& m) {
 // An Embree geometry's user data: its scene and its triangles.
 struct GeometryTriangles {
   const Scene* scene = nullptr;
+  bool mayBeSingleSided = false;  // the single-sided and the holes' geometries: cullBehind looks at their hits
   std::vector<uint32_t> triangle;  // the geometry's primitive -> the scene's triangle; empty: the same
   uint32_t sceneTriangle(unsigned primitive) const { return triangle.empty() ? primitive : triangle[primitive]; }
 };
@@ -90,6 +91,7 @@ void surfaceFilter(const RTCFilterFunctionNArguments* args) {
 // single-sided face is not there.
 void cullBehind(const RTCFilterFunctionNArguments* args) {
   const auto& triangles = *static_cast<const GeometryTriangles*>(args->geometryUserPtr);
+  if (!triangles.mayBeSingleSided) return;
   const Scene& scene = *triangles.scene;
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
@@ -224,6 +226,7 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
     }
     GeometryTriangles& user = impl_->geometries.emplace_back();
     user.scene = &scene;
+    user.mayBeSingleSided = group != TriangleGroup::Everywhere;
     if (!allEverywhere) user.triangle = std::move(triangles);
     rtcSetGeometryUserData(geom, &user);
     if (group == TriangleGroup::Holes) {
