@@ -211,19 +211,24 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
     groups[int(groupOf(scene.materials[scene.materialIds[t]]))].push_back(t);
   const bool allEverywhere = groups[int(TriangleGroup::Everywhere)].size() == scene.triangleCount();
   impl_->geometries.reserve(3);  // their addresses are the geometries' user data
+  // One copy of the vertices for all geometries, 4 bytes over: Embree reads each vertex as 16 bytes.
+  static_assert(sizeof(Vec3) == 3 * sizeof(float), "scene.positions is Embree's RTC_FORMAT_FLOAT3");
+  const size_t vertexBytes = scene.positions.size() * sizeof(Vec3);
+  RTCBuffer vertexBuffer = rtcNewBuffer(impl_->device, vertexBytes + sizeof(float));
+  if (void* vertices = vertexBuffer ? rtcGetBufferData(vertexBuffer) : nullptr)
+    std::memcpy(vertices, scene.positions.data(), vertexBytes);
   for (const TriangleGroup group : {TriangleGroup::Everywhere, TriangleGroup::SingleSided, TriangleGroup::Holes}) {
     std::vector<uint32_t>& triangles = groups[int(group)];
     if (triangles.empty() && !(allEverywhere && group == TriangleGroup::Everywhere)) continue;
     RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                                 3 * sizeof(float), scene.positions.size()));
+    if (vertexBuffer)
+      rtcSetGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertexBuffer, 0, sizeof(Vec3),
+                           scene.positions.size());
     auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                                    3 * sizeof(uint32_t), triangles.size()));
-    if (vertices && indices) {
-      std::memcpy(vertices, scene.positions.data(), scene.positions.size() * sizeof(Vec3));
+    if (indices)
       for (size_t i = 0; i < triangles.size(); ++i)
         std::memcpy(indices + 3 * i, &scene.indices[3 * size_t(triangles[i])], 3 * sizeof(uint32_t));
-    }
     GeometryTriangles& user = impl_->geometries.emplace_back();
     user.scene = &scene;
     user.mayBeSingleSided = group != TriangleGroup::Everywhere;
@@ -238,6 +243,7 @@ Visibility::Visibility(const Scene& scene, const VisibilityOptions& options) : i
     rtcReleaseGeometry(geom);
     if (id + 1 != impl_->geometries.size()) throw std::logic_error("Embree numbered the geometries out of order");
   }
+  if (vertexBuffer) rtcReleaseBuffer(vertexBuffer);  // the geometries hold it
   impl_->culls = culls;
   rtcCommitScene(impl_->scene);
   if (!impl_->error.overMemoryLimit.empty()) throw MemoryLimitError(impl_->error.overMemoryLimit);
