@@ -25,6 +25,9 @@ nlohmann::ordered_json noiseJson(const CandidateNoise& noise) {
     out["neighbour_correlation"] = {{"rho", noise.neighbourCorrelation}, {"z", noise.neighbourCorrelationZ},
                                     {"inflation", noise.neighbourInflation},
                                     {"squares_over_layers", noise.layerLevel}, {"squares_over_layers_z", noise.layerLevelZ}};
+  if (noise.blockDispersionMeasured)
+    out["block_dispersion"] = {{"factor", noise.blockDispersion}, {"z", noise.blockDispersionZ},
+                               {"low", noise.blockDispersionLow}, {"high", noise.blockDispersionHigh}};
   if (!noise.undecided.empty()) out["undecided"] = noise.undecided;
   return out;
 }

@@ -202,7 +202,10 @@ class TestPixels {
     values_.resize(candidate.runs.size());
     checkVariances();
     // Before the floor, which raises the variances (w below) of pixels whose layers are low by chance.
-    if (noise_.source == NoiseSource::VarianceLayer && noise_.undecided.empty()) measureNeighbourCorrelation();
+    if (noise_.source == NoiseSource::VarianceLayer && noise_.undecided.empty()) {
+      measureNeighbourCorrelation();
+      measureBlockDispersion();
+    }
     if (noise_.source != NoiseSource::Unknown) floorPixelVariances();
   }
 
@@ -387,6 +390,70 @@ class TestPixels {
     const double l = pixels.ratio(), levelSpread = pixels.spread() * std::sqrt(1 + 24 * std::max(0.0, rho));
     noise_.layerLevel = l;
     noise_.layerLevelZ = levelSpread > 0 ? (l - 1) / levelSpread : 0.0;
+  }
+
+  // CandidateNoise::blockDispersion. Blocks of kDispersionBlock pixels a side (whole ones only),
+  // paired two apart: in each cell of 4 x 4 blocks the two left columns with the two right or, in
+  // every other cell, the two top rows with the two bottom, so that no block is in two pairs. The
+  // differences are from the reference times the candidate's scale over the image (per channel, the
+  // sum of the candidate over the reference's): a candidate too bright or too dark everywhere (a
+  // light's power, an exposure) would otherwise raise the dispersion wherever the image has
+  // contrast, and pass for noise shared by its pixels.
+  void measureBlockDispersion() {
+    constexpr int side = kDispersionBlock;
+    const int blocksX = width() / side, blocksY = height() / side;
+    // Per block and channel: the candidate's and the reference's sums, and their variances' sum.
+    requireMemory(uint64_t(blocksX) * uint64_t(blocksY) * 9 * sizeof(double), "the blocks' dispersion",
+                  "compare crops of the images");
+    std::vector<std::array<double, 9>> sums(size_t(blocksX) * size_t(blocksY));
+    std::array<double, 3> candidateTotal{}, referenceTotal{};
+    Quad mean, variance, reference, referenceVariance, low, high;
+    for (int y = 0; y < blocksY * side; ++y)
+      for (int x = 0; x < blocksX * side; ++x) {
+        readRounded(x, y, mean, variance, reference, referenceVariance, low, high);
+        auto& b = sums[size_t(y / side) * size_t(blocksX) + size_t(x / side)];
+        for (size_t c = 0; c < 3; ++c) {
+          b[c] += mean[c], b[3 + c] += reference[c], b[6 + c] += variance[c] + referenceVariance[c];
+          candidateTotal[c] += mean[c], referenceTotal[c] += reference[c];
+        }
+      }
+    std::array<double, 3> scale{1, 1, 1};
+    for (size_t c = 0; c < 3; ++c)
+      if (const double s = candidateTotal[c] / referenceTotal[c]; std::isfinite(s) && s > 0) scale[c] = s;
+    std::vector<double> ratios;
+    size_t pairs = 0;
+    const auto pair = [&](int xa, int ya, int xb, int yb) {
+      if (xb >= blocksX || yb >= blocksY) return;
+      const auto& a = sums[size_t(ya) * size_t(blocksX) + size_t(xa)];
+      const auto& b = sums[size_t(yb) * size_t(blocksX) + size_t(xb)];
+      bool any = false;
+      for (size_t c = 0; c < 3; ++c) {
+        const double d = (a[c] - scale[c] * a[3 + c]) - (b[c] - scale[c] * b[3 + c]), w = a[6 + c] + b[6 + c];
+        if (!(w > 0) || !std::isfinite(d) || !std::isfinite(w)) continue;
+        ratios.push_back(d * d / w);
+        any = true;
+      }
+      pairs += any;
+    };
+    for (int by = 0; by < blocksY; ++by)
+      for (int bx = 0; bx < blocksX; ++bx) {
+        const bool alongX = (bx / 4 + by / 4) % 2 == 0;
+        if (alongX && bx % 4 < 2) pair(bx, by, bx + 2, by);
+        if (!alongX && by % 4 < 2) pair(bx, by, bx, by + 2);
+      }
+    if (pairs < size_t(kDispersionPairs)) return;  // fewer stray too far (docs/validation.md)
+    const auto middle = ratios.begin() + std::ptrdiff_t(ratios.size() / 2);
+    std::nth_element(ratios.begin(), middle, ratios.end());
+    // chi-square with 1 degree of freedom: median 0.45494, density there 0.47107; the sample
+    // median's standard error 1 / (2 f sqrt(n)), n the pairs.
+    constexpr double kChiSquareMedian = 0.454936, kDensityAtMedian = 0.471069;
+    noise_.blockDispersion = *middle / kChiSquareMedian;
+    const double se = 1 / (2 * kDensityAtMedian * std::sqrt(double(pairs))) / kChiSquareMedian;
+    noise_.blockDispersionZ = (noise_.blockDispersion - 1) / se;
+    // The median's relative standard error is the same whatever the factor: bounds 2 of them away.
+    noise_.blockDispersionLow = noise_.blockDispersion / (1 + 2 * se);
+    noise_.blockDispersionHigh = noise_.blockDispersion * (1 + 2 * se);
+    noise_.blockDispersionMeasured = true;
   }
 
   // CandidateNoise::neighbourInflation beyond 2 pixels: for each lag k from 3 to 8, the correlation
@@ -669,16 +736,39 @@ double statistic(double difference, double variance) {
   return difference == 0 ? 0.0 : std::copysign(kInfinity, difference);
 }
 
+// Whether blocks' sums are shown to vary more than the layers and the neighbours' correlation say
+// (CandidateNoise::blockDispersion): noise shared farther than neighbours.
+bool sharedFartherShown(const CandidateNoise& noise) {
+  return noise.source == NoiseSource::VarianceLayer && noise.blockDispersionMeasured &&
+         !neighbourCorrelationShown(noise) && noise.blockDispersion >= kBlockDispersion && noise.blockDispersionLow > 1;
+}
+
 // A verdict from variance layers, where the differences from the reference say the layers do not
-// describe the noise (CandidateNoise: neighbours correlated, or the layers above the differences'
-// spread): what the layers cannot support becomes inconclusive, saying why. `intervals`: --within's,
-// which positive correlation narrows. `failsInflated(k)`: whether --test still fails with every
-// variance k times as large; correlated neighbours raise a sum's variance at most
-// CandidateNoise::neighbourInflation times, so a failure beyond that stands.
+// describe the noise (CandidateNoise: neighbours correlated, noise shared farther, or the layers
+// above the differences' spread): what the layers cannot support becomes inconclusive, saying why.
+// `intervals`: --within's, which positive correlation narrows. `failsInflated(k, blocksOnly)`:
+// whether --test still fails with every variance k times as large (counting only the blocks);
+// correlated neighbours raise a sum's variance at most CandidateNoise::neighbourInflation times, so
+// a failure beyond that stands; where noise is shared farther, a block's failure beyond the blocks'
+// dispersion.
 Verdict throughNeighbours(CandidateNoise& noise, Verdict verdict, bool intervals,
-                          const std::function<bool(double)>& failsInflated = {}) {
+                          const std::function<bool(double, bool)>& failsInflated = {}) {
   if (noise.source != NoiseSource::VarianceLayer || !noise.neighboursMeasured || verdict == Verdict::Inconclusive)
     return verdict;
+  if (sharedFartherShown(noise) && (intervals || verdict == Verdict::Fail) &&
+      !(!intervals && failsInflated && failsInflated(noise.blockDispersionHigh, true))) {
+    std::ostringstream why;
+    why << std::setprecision(2) << "blocks of " << kDispersionBlock << " x " << kDispersionBlock
+        << " pixels differ from the reference by more than their variance layers tell, beyond what neighbouring "
+           "pixels' correlation explains (their sums vary "
+        << noise.blockDispersion << " times as much, z " << std::setprecision(3) << noise.blockDispersionZ
+        << "): noise is shared over more than a few pixels (random numbers shared by tiles of pixels), which "
+           "variance layers cannot say, so "
+        << (intervals ? "the intervals are too narrow" : "the failure may be noise")
+        << ": give two or more runs (renders with other seeds)";
+    noise.undecided = why.str();
+    return Verdict::Inconclusive;
+  }
   const double rho = noise.neighbourCorrelation;
   const bool shown = neighbourCorrelationShown(noise);
   // Squared differences below the layers' sum (a bias only raises them): the layers are too large,
@@ -687,7 +777,7 @@ Verdict throughNeighbours(CandidateNoise& noise, Verdict verdict, bool intervals
   const bool more = shown && rho > 0 && !overstated, less = (shown && rho < 0) || overstated;
   std::ostringstream why;
   why << std::setprecision(2);
-  if (intervals ? more : verdict == Verdict::Fail ? more && !(failsInflated && failsInflated(noise.neighbourInflation))
+  if (intervals ? more : verdict == Verdict::Fail ? more && !(failsInflated && failsInflated(noise.neighbourInflation, false))
                                                   : less) {
     if (overstated)
       why << "the variance layers are larger than the differences from the reference say (their squares sum to "
@@ -795,9 +885,11 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
   t.verdict = !noise.undecided.empty() ? Verdict::Inconclusive : rejected ? Verdict::Fail : Verdict::Pass;
   // With variance layers p-values are normal: a failure stands with variances k times as large
   // where a |z| / sqrt(k) is still rejected.
-  const auto failsInflated = [&](double k) {
+  // The blocks' dispersion is measured over blocks of kDispersionBlock pixels: larger ones may vary more.
+  const auto failsInflated = [&](double k, bool blocksOnly) {
+    if (blocksOnly && block > kDispersionBlock) return false;
     return studentTwoSidedP(largestBlockZ / std::sqrt(k), kInfinity) < blockThreshold ||
-           studentTwoSidedP(largestRegionZ / std::sqrt(k), kInfinity) < regionThreshold;
+           (!blocksOnly && studentTwoSidedP(largestRegionZ / std::sqrt(k), kInfinity) < regionThreshold);
   };
   t.verdict = throughNeighbours(noise, t.verdict, false, failsInflated);
   t.noise = noise;

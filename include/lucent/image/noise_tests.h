@@ -108,9 +108,32 @@ struct CandidateNoise {
   // noise (which also makes rho positive): then a pass of --test is inconclusive instead.
   double layerLevel = 1, layerLevelZ = 0;
   bool neighboursMeasured = false;  // false where the verdict was undecided first, or no pair has noise
+  // Noise shared farther than neighbours reach (random numbers shared by a tile of pixels) can be
+  // too weak between any two pixels for rho to show it, yet make a block's sum vary several times
+  // what its layers say (pixels of 16 x 16 tiles sharing 3% of their variance: 8 x 8 blocks' sums
+  // 2.9 times, the tiles' 8.7 times). Hence the dispersion of blocks of kDispersionBlock pixels a
+  // side, two blocks apart: for disjoint pairs (A, B) and each channel, (A's difference from the
+  // reference minus B's)^2 over their variances' sum (the layers' and the reference's), whose median
+  // over the pairs and channels, divided by chi-square's with 1 degree of freedom, is the factor by
+  // which the layers understate a block's variance (about 1 where they are right; the median keeps a
+  // bias in a few blocks from raising it, differences leave a smooth bias out, and the reference is
+  // first scaled by the candidate's brightness over it, channel by channel, so that a candidate too
+  // bright everywhere does not raise it where the image has contrast); its z against 1
+  // and its bounds (Low, High) 2 standard errors of the median away, counting a pair's three
+  // channels as one. Where rho does not show, the factor is at least kBlockDispersion and its lower
+  // bound above 1, the noise is shared farther than the layers tell, and no one image bounds how much
+  // a region's sum then varies: a failure of --test stands only where a block (of at most
+  // kDispersionBlock pixels a side) fails with variances the upper bound times as large, and
+  // --within is inconclusive. Measured (blockDispersionMeasured) where the image holds at least
+  // kDispersionPairs pairs (about 128 x 128 pixels): with 32 pairs (64 x 64) the lower bound passed 1
+  // in 1.5% of images of independent noise with a 2% bias in one region.
+  double blockDispersion = 1, blockDispersionZ = 0, blockDispersionLow = 1, blockDispersionHigh = 1;
+  bool blockDispersionMeasured = false;
   std::string undecided;  // why the verdict cannot be pass or fail, and what would decide it
 };
 constexpr double kNeighbourCorrelation = 0.05, kNeighbourCorrelationZ = 4;
+constexpr int kDispersionBlock = 8, kDispersionPairs = 64;
+constexpr double kBlockDispersion = 1.2;
 
 // The mean of the runs' R, G, B (the one image's R, G, B and variance layers where there is one run).
 Image candidateImage(const Candidate& candidate);
