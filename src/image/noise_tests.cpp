@@ -417,9 +417,15 @@ class TestPixels {
           candidateTotal[c] += mean[c], referenceTotal[c] += reference[c];
         }
       }
+    // The scale where the reference's total stands well above the noise of the two totals (a channel
+    // near black, or a pixel filter's negative lobes cancelling, would give it at random).
     std::array<double, 3> scale{1, 1, 1};
-    for (size_t c = 0; c < 3; ++c)
-      if (const double s = candidateTotal[c] / referenceTotal[c]; std::isfinite(s) && s > 0) scale[c] = s;
+    for (size_t c = 0; c < 3; ++c) {
+      double noise = 0;
+      for (const auto& b : sums) noise += b[6 + c];
+      const double s = candidateTotal[c] / referenceTotal[c];
+      if (std::isfinite(s) && candidateTotal[c] > 0 && referenceTotal[c] > 10 * std::sqrt(noise)) scale[c] = s;
+    }
     std::vector<double> ratios;
     size_t pairs = 0;
     const auto pair = [&](int xa, int ya, int xb, int yb) {
@@ -444,15 +450,16 @@ class TestPixels {
     if (pairs < size_t(kDispersionPairs)) return;  // fewer stray too far (docs/validation.md)
     const auto middle = ratios.begin() + std::ptrdiff_t(ratios.size() / 2);
     std::nth_element(ratios.begin(), middle, ratios.end());
-    // chi-square with 1 degree of freedom: median 0.45494, density there 0.47107; the sample
+    // chi-square with 1 degree of freedom: median 0.454936, density there 0.471136; the sample
     // median's standard error 1 / (2 f sqrt(n)), n the pairs.
-    constexpr double kChiSquareMedian = 0.454936, kDensityAtMedian = 0.471069;
+    constexpr double kChiSquareMedian = 0.454936, kDensityAtMedian = 0.471136;
     noise_.blockDispersion = *middle / kChiSquareMedian;
     const double se = 1 / (2 * kDensityAtMedian * std::sqrt(double(pairs))) / kChiSquareMedian;
     noise_.blockDispersionZ = (noise_.blockDispersion - 1) / se;
-    // The median's relative standard error is the same whatever the factor: bounds 2 of them away.
+    // The median's relative standard error is the same whatever the factor k: the estimate lies
+    // within k (1 +- 2 se), so k within estimate / (1 +- 2 se).
     noise_.blockDispersionLow = noise_.blockDispersion / (1 + 2 * se);
-    noise_.blockDispersionHigh = noise_.blockDispersion * (1 + 2 * se);
+    noise_.blockDispersionHigh = 2 * se < 1 ? noise_.blockDispersion / (1 - 2 * se) : kInfinity;
     noise_.blockDispersionMeasured = true;
   }
 
@@ -840,6 +847,7 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
 
   t.statistic = Image(w, h, {"z"});
   double largestBlockZ = 0, largestRegionZ = 0;  // |z|, for failures with inflated variances
+  bool nonFinite = false;  // a NaN z (a candidate's NaN): a failure no inflation undoes
   const double blockThreshold = alpha / (2.0 * 3.0 * double(t.blocks));
   for (size_t k = 0; k < blocks.size(); ++k) {
     const BlockSums& b = blocks[k];
@@ -849,6 +857,7 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
       const double total = cv + b.referenceVariance[c];
       const double z = statistic(b.difference[c], total);
       largest = std::max(largest, std::abs(z));
+      nonFinite = nonFinite || std::isnan(z);
       minP = std::min(minP, studentTwoSidedP(z, welchDegreesOfFreedom(cv, total, noise.scales[0].degreesOfFreedom)));
     }
     const int x0 = int(k % size_t(blocksX)) * block, y0 = int(k / size_t(blocksX)) * block;
@@ -879,6 +888,7 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
     r.channelDifference = s.reference[tested] != 0 ? s.difference[tested] / s.reference[tested] : 0;
     r.rejected = r.pValue < regionThreshold;
     largestRegionZ = std::max(largestRegionZ, std::abs(r.z));
+    nonFinite = nonFinite || std::isnan(r.z);
     rejected = rejected || r.rejected;
     t.regions.push_back(r);
   }
@@ -887,6 +897,7 @@ NoiseTest testWithinNoise(const Candidate& candidate, const Image& reference, do
   // where a |z| / sqrt(k) is still rejected.
   // The blocks' dispersion is measured over blocks of kDispersionBlock pixels: larger ones may vary more.
   const auto failsInflated = [&](double k, bool blocksOnly) {
+    if (nonFinite) return true;
     if (blocksOnly && block > kDispersionBlock) return false;
     return studentTwoSidedP(largestBlockZ / std::sqrt(k), kInfinity) < blockThreshold ||
            (!blocksOnly && studentTwoSidedP(largestRegionZ / std::sqrt(k), kInfinity) < regionThreshold);

@@ -118,15 +118,16 @@ struct CandidateNoise {
   // which the layers understate a block's variance (about 1 where they are right; the median keeps a
   // bias in a few blocks from raising it, differences leave a smooth bias out, and the reference is
   // first scaled by the candidate's brightness over it, channel by channel, so that a candidate too
-  // bright everywhere does not raise it where the image has contrast); its z against 1
-  // and its bounds (Low, High) 2 standard errors of the median away, counting a pair's three
-  // channels as one. Where rho does not show, the factor is at least kBlockDispersion and its lower
+  // bright everywhere does not raise it where the image has contrast); its z against 1 and its
+  // bounds (Low, High: the factor over 1 +- 2 standard errors of the median, counting a pair's three
+  // channels as one). Where rho does not show, the factor is at least kBlockDispersion and its lower
   // bound above 1, the noise is shared farther than the layers tell, and no one image bounds how much
   // a region's sum then varies: a failure of --test stands only where a block (of at most
   // kDispersionBlock pixels a side) fails with variances the upper bound times as large, and
   // --within is inconclusive. Measured (blockDispersionMeasured) where the image holds at least
-  // kDispersionPairs pairs (about 128 x 128 pixels): with 32 pairs (64 x 64) the lower bound passed 1
-  // in 1.5% of images of independent noise with a 2% bias in one region.
+  // kDispersionPairs pairs (96 x 96 pixels hold 72): with 32 pairs (64 x 64) 3 of 200 images of
+  // independent noise with a 2% bias in one region had a lower bound above 1. Tiles of 32 pixels or
+  // more that hold both blocks of most pairs escape it: runs find them.
   double blockDispersion = 1, blockDispersionZ = 0, blockDispersionLow = 1, blockDispersionHigh = 1;
   bool blockDispersionMeasured = false;
   std::string undecided;  // why the verdict cannot be pass or fail, and what would decide it
