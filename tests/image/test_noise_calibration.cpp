@@ -11,6 +11,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <tbb/parallel_for.h>
 #include <string>
@@ -383,6 +384,19 @@ TEST_CASE("One image with variance layers: noise shared by tiles of pixels leave
     CHECK(count(tests, Verdict::Inconclusive) <= 2);
     CHECK(count(brighter, Verdict::Fail) >= 0.9 * trials);
   }
+}
+
+TEST_CASE("One image with variance layers: a NaN fails however widely its noise is shared", "[compare]") {
+  // Noise shared by tiles makes a failure stand only where it survives the blocks' dispersion; a
+  // NaN, which no noise explains, fails whatever the inflation.
+  Random rng{59001};
+  const Image reference = simulatedReference(rng, 128);
+  Image image = tileSharedImageWithLayers(128, 0.03, 0.0, rng);
+  image.at(70, 40, 1) = std::numeric_limits<float>::quiet_NaN();
+  const NoiseTest test = testWithinNoise(Candidate(image), reference, 0.05);
+  INFO(test.noise.undecided);
+  CHECK(test.noise.blockDispersionLow > 1);  // the shared noise is shown
+  CHECK(test.verdict == Verdict::Fail);
 }
 
 TEST_CASE("Student's t: p-values and quantiles", "[compare]") {
