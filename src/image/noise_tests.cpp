@@ -135,6 +135,19 @@ size_t tileOf(int x, int y, int tiles, int w, int h) {
 
 // The ratio sum a / sum w of terms (a_k, w_k), and its standard error from the terms' spread about
 // it: sqrt(sum (a_k - q w_k)^2) / sum w.
+// Disjoint pairs of units k apart on a w x h grid, row by row: in each cell of 2k x 2k units the
+// units k apart along x or, in every other cell, along y, so that no unit is in two pairs.
+// `pair(xa, ya, xb, yb)` is called for each pair whose second unit lies on the grid.
+template <class Pair>
+void forDisjointPairs(int w, int h, int k, const Pair& pair) {
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool alongX = (x / (2 * k) + y / (2 * k)) % 2 == 0;
+      if (alongX && x % (2 * k) < k && x + k < w) pair(x, y, x + k, y);
+      if (!alongX && y % (2 * k) < k && y + k < h) pair(x, y, x, y + k);
+    }
+}
+
 struct RatioOfSums {
   double numerator = 0, denominator = 0, numerator2 = 0, cross = 0, denominator2 = 0;
   void add(double a, double w) {
@@ -393,8 +406,7 @@ class TestPixels {
   }
 
   // CandidateNoise::blockDispersion. Blocks of kDispersionBlock pixels a side (whole ones only),
-  // paired two apart: in each cell of 4 x 4 blocks the two left columns with the two right or, in
-  // every other cell, the two top rows with the two bottom, so that no block is in two pairs. The
+  // paired two apart (forDisjointPairs: no block is in two pairs). The
   // differences are from the reference times the candidate's scale over the image (per channel, the
   // sum of the candidate over the reference's): a candidate too bright or too dark everywhere (a
   // light's power, an exposure) would otherwise raise the dispersion wherever the image has
@@ -406,7 +418,7 @@ class TestPixels {
     requireMemory(uint64_t(blocksX) * uint64_t(blocksY) * 9 * sizeof(double), "the blocks' dispersion",
                   "compare crops of the images");
     std::vector<std::array<double, 9>> sums(size_t(blocksX) * size_t(blocksY));
-    std::array<double, 3> candidateTotal{}, referenceTotal{};
+    std::array<double, 3> candidateTotal{}, referenceTotal{}, varianceTotal{};
     Quad mean, variance, reference, referenceVariance, low, high;
     for (int y = 0; y < blocksY * side; ++y)
       for (int x = 0; x < blocksX * side; ++x) {
@@ -415,21 +427,19 @@ class TestPixels {
         for (size_t c = 0; c < 3; ++c) {
           b[c] += mean[c], b[3 + c] += reference[c], b[6 + c] += variance[c] + referenceVariance[c];
           candidateTotal[c] += mean[c], referenceTotal[c] += reference[c];
+          varianceTotal[c] += variance[c] + referenceVariance[c];
         }
       }
     // The scale where the reference's total stands well above the noise of the two totals (a channel
     // near black, or a pixel filter's negative lobes cancelling, would give it at random).
     std::array<double, 3> scale{1, 1, 1};
     for (size_t c = 0; c < 3; ++c) {
-      double noise = 0;
-      for (const auto& b : sums) noise += b[6 + c];
       const double s = candidateTotal[c] / referenceTotal[c];
-      if (std::isfinite(s) && candidateTotal[c] > 0 && referenceTotal[c] > 10 * std::sqrt(noise)) scale[c] = s;
+      if (std::isfinite(s) && candidateTotal[c] > 0 && referenceTotal[c] > 10 * std::sqrt(varianceTotal[c])) scale[c] = s;
     }
     std::vector<double> ratios;
     size_t pairs = 0;
-    const auto pair = [&](int xa, int ya, int xb, int yb) {
-      if (xb >= blocksX || yb >= blocksY) return;
+    forDisjointPairs(blocksX, blocksY, 2, [&](int xa, int ya, int xb, int yb) {
       const auto& a = sums[size_t(ya) * size_t(blocksX) + size_t(xa)];
       const auto& b = sums[size_t(yb) * size_t(blocksX) + size_t(xb)];
       bool any = false;
@@ -440,13 +450,7 @@ class TestPixels {
         any = true;
       }
       pairs += any;
-    };
-    for (int by = 0; by < blocksY; ++by)
-      for (int bx = 0; bx < blocksX; ++bx) {
-        const bool alongX = (bx / 4 + by / 4) % 2 == 0;
-        if (alongX && bx % 4 < 2) pair(bx, by, bx + 2, by);
-        if (!alongX && by % 4 < 2) pair(bx, by, bx, by + 2);
-      }
+    });
     if (pairs < size_t(kDispersionPairs)) return;  // fewer stray too far (docs/validation.md)
     const auto middle = ratios.begin() + std::ptrdiff_t(ratios.size() / 2);
     std::nth_element(ratios.begin(), middle, ratios.end());
@@ -464,10 +468,9 @@ class TestPixels {
   }
 
   // CandidateNoise::neighbourInflation beyond 2 pixels: for each lag k from 3 to 8, the correlation
-  // rho_k of pixels k apart along a row or a column (as rho, over disjoint pairs: in each 2k x 2k
-  // cell the pixels k apart along x or, in every other cell, along y), 8 k rho_k for the 8 k pixels
-  // at that distance, while rho_k is shown at z 2. A separable filter of no negative lobes
-  // correlates pixels most along the axes at a given distance, so the sum bounds theirs.
+  // rho_k of pixels k apart along a row or a column (as rho, over forDisjointPairs), 8 k rho_k for
+  // the 8 k pixels at that distance, while rho_k is shown at z 2. A separable filter of no negative
+  // lobes correlates pixels most along the axes at a given distance, so the sum bounds theirs.
   double fartherNeighbourCorrelation() {
     constexpr int kFarthest = 8;
     const int w = width(), h = height();
@@ -487,8 +490,7 @@ class TestPixels {
     double added = 0;
     for (int k = 3; k <= kFarthest; ++k) {
       RatioOfSums pairs;
-      const auto pair = [&](int xa, int ya, int xb, int yb) {
-        if (xb >= w || yb >= h) return;
+      forDisjointPairs(w, h, k, [&](int xa, int ya, int xb, int yb) {
         const auto& a = residuals[size_t(ya) * size_t(w) + size_t(xa)];
         const auto& b = residuals[size_t(yb) * size_t(w) + size_t(xb)];
         double d2 = 0;
@@ -498,13 +500,7 @@ class TestPixels {
         }
         const double v = double(a[3]) + double(b[3]);  // infinite where a float overflowed: left out
         if (v > 0 && std::isfinite(v) && std::isfinite(d2)) pairs.add(d2, v);
-      };
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-          const bool alongX = (x / (2 * k) + y / (2 * k)) % 2 == 0;
-          if (alongX && x % (2 * k) < k) pair(x, y, x + k, y);
-          if (!alongX && y % (2 * k) < k) pair(x, y, x, y + k);
-        }
+      });
       if (!(pairs.denominator > 0)) break;
       const double rho = 1 - pairs.ratio(), se = pairs.spread();
       if (!(rho >= 2 * se) || !(rho > 0)) break;

@@ -399,6 +399,21 @@ TEST_CASE("One image with variance layers: a NaN fails however widely its noise 
   CHECK(test.verdict == Verdict::Fail);
 }
 
+TEST_CASE("One image with variance layers: under noise shared by tiles, only blocks of at most 8 x 8 carry a failure",
+          "[compare]") {
+  // The blocks' dispersion is measured over 8 x 8 blocks: a larger block's sum may vary more, so a
+  // failure that blocks of 16 x 16 find is inconclusive, one that blocks of 8 x 8 find stands.
+  Random rng{59002};
+  const Image reference = simulatedReference(rng, 128);
+  const Candidate image(tileSharedImageWithLayers(128, 0.03, 0.3, rng));
+  const NoiseTest small = testWithinNoise(image, reference, 0.05, kRegionGrid, 8);
+  const NoiseTest large = testWithinNoise(image, reference, 0.05, kRegionGrid, 16);
+  CHECK(large.noise.blockDispersionLow > 1);  // the shared noise is shown
+  CHECK(small.verdict == Verdict::Fail);
+  INFO(large.noise.undecided);
+  CHECK(large.verdict == Verdict::Inconclusive);
+}
+
 TEST_CASE("Student's t: p-values and quantiles", "[compare]") {
   // Known values: t = 12.706 has two-sided p 0.05 at 1 degree of freedom, 2.262 at 9, 1.960 for
   // the normal distribution; t = 1 at 1 degree of freedom has p 0.5 (Cauchy).
